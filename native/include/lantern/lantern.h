@@ -1,0 +1,262 @@
+/* Lantern's C ABI: the only surface the add-on, the CLI and the tests see.
+ *
+ * Conventions (see DESIGN.md):
+ *  - opaque handles, plain structs, int status codes; lt_last_error() returns the message of the
+ *    last failing call on the calling thread;
+ *  - every bulk array is copied by the core; the caller keeps ownership;
+ *  - transforms are row-major 3x4 (object to world), Blender's world space, metres;
+ *  - colours are linear RGB; light "color" is Blender's colour x energy (W, or W/m^2 for sun).
+ */
+#ifndef LANTERN_H
+#define LANTERN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(_WIN32)
+#define LT_API __declspec(dllexport)
+#else
+#define LT_API __attribute__((visibility("default")))
+#endif
+
+#define LT_ABI_VERSION 1
+
+enum lt_status {
+  LT_OK = 0,
+  LT_ERROR_INVALID_ARGUMENT = 1,
+  LT_ERROR_OUT_OF_MEMORY = 2,
+  LT_ERROR_IO = 3,
+  LT_ERROR_STATE = 4,
+  LT_ERROR_INTERNAL = 5
+};
+
+typedef struct lt_scene lt_scene;
+typedef struct lt_render lt_render;
+
+LT_API int lt_abi_version(void);
+LT_API const char* lt_version(void);
+LT_API const char* lt_last_error(void);
+
+/* ---- scene ------------------------------------------------------------------------------- */
+
+LT_API int lt_scene_create(lt_scene** out);
+LT_API void lt_scene_destroy(lt_scene* scene);
+
+/* Warnings collected while building the scene (degenerate triangles dropped, zero-area light...). */
+LT_API int lt_scene_warning_count(const lt_scene* scene);
+LT_API const char* lt_scene_warning(const lt_scene* scene, int index);
+
+/* Images (textures, environment maps). pixels: width*height*channels floats, rows bottom to top
+ * as Blender stores them. channels 1, 3 or 4. srgb != 0: values are sRGB-encoded and are decoded
+ * to linear when loaded. */
+enum lt_interpolation { LT_INTERP_LINEAR = 0, LT_INTERP_CLOSEST = 1 };
+enum lt_extension { LT_EXTENSION_REPEAT = 0, LT_EXTENSION_EXTEND = 1, LT_EXTENSION_CLIP = 2 };
+typedef struct lt_image_desc {
+  int width, height, channels;
+  const float* pixels;
+  int srgb;
+  int interpolation; /* lt_interpolation */
+  int extension;     /* lt_extension */
+} lt_image_desc;
+LT_API int lt_scene_add_image(lt_scene* scene, const lt_image_desc* desc, int* out_id);
+
+/* Materials are small shader trees flattened into an array of nodes; children refer to indices in
+ * the same array. A texture-able input is a constant value or an image looked up at the UV. */
+typedef struct lt_input {
+  float value[3]; /* colour, or value[0] for scalars */
+  int image;      /* -1: constant; else image id. Scalars read the image's first channel */
+} lt_input;
+
+enum lt_node_type {
+  LT_NODE_DIFFUSE = 0,    /* color, roughness (Oren-Nayar above 0) */
+  LT_NODE_GLOSSY = 1,     /* color, roughness (GGX, alpha = roughness^2) */
+  LT_NODE_GLASS = 2,      /* color, roughness, ior */
+  LT_NODE_EMISSION = 3,   /* color, strength */
+  LT_NODE_MIX = 4,        /* fac, child[0], child[1] */
+  LT_NODE_ADD = 5,        /* child[0], child[1] */
+  LT_NODE_PRINCIPLED = 6, /* color (base), metallic, roughness, specular, transmission, ior,
+                             emission (colour), strength (emission strength) */
+  LT_NODE_TRANSPARENT = 7,/* color */
+  LT_NODE_COUNT = 8
+};
+
+typedef struct lt_shader_node {
+  int type; /* lt_node_type */
+  lt_input color;
+  lt_input roughness;
+  lt_input fac;
+  lt_input metallic;
+  lt_input specular;
+  lt_input transmission;
+  lt_input emission;
+  lt_input strength;
+  float ior;
+  int child[2];
+} lt_shader_node;
+
+/* root: index of the node that feeds the Surface output. */
+LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_node* nodes, int node_count,
+                                 int root, int* out_id);
+
+/* A mesh of triangles. corner_normals (9 floats per triangle) and corner_uvs (6 per triangle) may
+ * be NULL; material_slots (one per triangle, index into the instance's material list) may be NULL. */
+typedef struct lt_mesh_desc {
+  const float* positions; /* 3 * vertex_count */
+  int vertex_count;
+  const int* triangles; /* 3 * triangle_count vertex indices */
+  int triangle_count;
+  const float* corner_normals;
+  const float* corner_uvs;
+  const int* material_slots;
+} lt_mesh_desc;
+LT_API int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* desc, int* out_id);
+
+/* Ray visibility flags (Cycles' Object > Visibility > Ray Visibility). */
+enum lt_visibility {
+  LT_VISIBLE_CAMERA = 1,
+  LT_VISIBLE_DIFFUSE = 2,
+  LT_VISIBLE_GLOSSY = 4,
+  LT_VISIBLE_TRANSMISSION = 8,
+  LT_VISIBLE_SHADOW = 16,
+  LT_VISIBLE_ALL = 31
+};
+
+typedef struct lt_instance_desc {
+  int mesh;
+  float transform[12];
+  const int* materials; /* material id per slot; -1 or slot past the end: default material */
+  int material_count;
+  unsigned visibility; /* lt_visibility bits */
+} lt_instance_desc;
+LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
+
+enum lt_light_type { LT_LIGHT_POINT = 0, LT_LIGHT_SPOT = 1, LT_LIGHT_AREA = 2, LT_LIGHT_SUN = 3 };
+enum lt_area_shape {
+  LT_AREA_SQUARE = 0,
+  LT_AREA_RECTANGLE = 1,
+  LT_AREA_DISK = 2,
+  LT_AREA_ELLIPSE = 3
+};
+typedef struct lt_light_desc {
+  int type;
+  float color[3]; /* Blender colour x energy */
+  float transform[12];
+  float radius;     /* point, spot: shadow_soft_size */
+  float spot_size;  /* full cone angle, radians */
+  float spot_blend; /* 0..1 */
+  int shape;        /* lt_area_shape */
+  float size_x, size_y;
+  float angle; /* sun: angular diameter, radians */
+  unsigned visibility;
+} lt_light_desc;
+LT_API int lt_scene_add_light(lt_scene* scene, const lt_light_desc* desc);
+
+enum lt_camera_type { LT_CAMERA_PERSPECTIVE = 0, LT_CAMERA_ORTHOGRAPHIC = 1 };
+enum lt_sensor_fit { LT_SENSOR_AUTO = 0, LT_SENSOR_HORIZONTAL = 1, LT_SENSOR_VERTICAL = 2 };
+typedef struct lt_camera_desc {
+  int type;
+  float transform[12]; /* camera looks down local -Z, +Y up */
+  float focal_length;  /* mm */
+  float sensor_width, sensor_height; /* mm */
+  int sensor_fit;
+  float ortho_scale;
+  float shift_x, shift_y;
+  float clip_start, clip_end;
+  float pixel_aspect; /* pixel_aspect_y / pixel_aspect_x, 1 for square pixels */
+} lt_camera_desc;
+LT_API int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* desc);
+
+/* World: colour x strength, optionally multiplied by an equirectangular image (image >= 0),
+ * rotated about Z by rotation_z. */
+typedef struct lt_world_desc {
+  float color[3];
+  float strength;
+  int image;
+  float rotation_z;
+  unsigned visibility; /* camera visibility of the background */
+} lt_world_desc;
+LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
+
+/* Builds acceleration structures and light samplers. Must be called before rendering; scene
+ * edits after commit are refused with LT_ERROR_STATE. */
+LT_API int lt_scene_commit(lt_scene* scene);
+
+/* ---- rendering ---------------------------------------------------------------------------- */
+
+enum lt_integrator { LT_INTEGRATOR_PATH = 0, LT_INTEGRATOR_COUNT = 1 };
+enum lt_filter { LT_FILTER_BOX = 0, LT_FILTER_GAUSSIAN = 1, LT_FILTER_BLACKMAN_HARRIS = 2 };
+
+typedef struct lt_render_settings {
+  int width, height;
+  /* Border / crop window in pixels of the full frame: [x0, x1) x [y0, y1), y from the bottom.
+   * All zero: the full frame. */
+  int border[4];
+  int samples;
+  unsigned seed;
+  int integrator;
+  int max_bounces;
+  int diffuse_bounces, glossy_bounces, transmission_bounces, transparent_bounces;
+  float clamp_direct, clamp_indirect; /* 0: off */
+  int threads;                        /* 0: all cores */
+  int filter;                         /* lt_filter */
+  float filter_width;                 /* pixels */
+  int transparent_background;         /* Film > Transparent: background alpha 0 */
+} lt_render_settings;
+
+LT_API void lt_render_settings_default(lt_render_settings* settings);
+
+/* Starts rendering on the core's own threads and returns at once. The scene must be committed and
+ * must outlive the render. */
+LT_API int lt_render_start(lt_scene* scene, const lt_render_settings* settings, lt_render** out);
+
+enum lt_render_state {
+  LT_STATE_RUNNING = 0,
+  LT_STATE_DONE = 1,
+  LT_STATE_CANCELLED = 2,
+  LT_STATE_FAILED = 3
+};
+typedef struct lt_render_status {
+  int state;
+  int samples_done;  /* complete passes over the image */
+  int samples_total;
+  double elapsed_seconds;
+  double remaining_seconds; /* estimate; negative when unknown */
+  uint64_t nan_samples;     /* samples discarded because they were not finite */
+  uint64_t rays;            /* rays traced so far */
+} lt_render_status;
+LT_API int lt_render_poll(lt_render* render, lt_render_status* status);
+
+/* Requests cancellation; lt_render_wait returns within the time one pixel's sample takes. */
+LT_API int lt_render_cancel(lt_render* render);
+LT_API int lt_render_wait(lt_render* render);
+
+enum lt_pass {
+  LT_PASS_COMBINED = 0, /* RGBA */
+  LT_PASS_DEPTH = 1,    /* 1 channel: distance along the camera axis (Blender's Z) */
+  LT_PASS_NORMAL = 2,   /* 3 channels: world-space shading normal of the first hit */
+  LT_PASS_ALBEDO = 3,   /* 3 channels: colour of the first non-specular hit */
+  LT_PASS_VARIANCE = 4, /* 3 channels: variance of the Combined pixel mean, per channel */
+  LT_PASS_SAMPLE_COUNT = 5, /* 1 channel: samples accumulated in the pixel */
+  LT_PASS_COUNT = 6
+};
+LT_API int lt_pass_channels(int pass);
+
+/* Copies a pass of the render region (width*height*channels floats, rows bottom to top, as
+ * Blender's RenderResult stores them). Can be called while rendering: gives the samples
+ * accumulated so far. */
+LT_API int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count);
+
+LT_API void lt_render_destroy(lt_render* render);
+
+/* Writes the given render's passes to a 32-bit float OpenEXR file. */
+LT_API int lt_render_write_exr(lt_render* render, const char* path);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

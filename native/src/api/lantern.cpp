@@ -1,0 +1,468 @@
+// The C ABI: validates every input before it reaches the core, turns exceptions into status codes
+// and lt_last_error() messages. No exception crosses this boundary.
+#include "lantern/lantern.h"
+
+#include <cstring>
+#include <new>
+#include <string>
+
+#include "core/error.h"
+#include "core/render.h"
+#include "io/exr.h"
+#include "scene/scene.h"
+
+struct lt_scene {
+  lt::Scene scene;
+};
+struct lt_render {
+  std::unique_ptr<lt::RenderJob> job;
+};
+
+namespace {
+
+using lt::InvalidArgument;
+
+template <class F>
+int guarded(F f) {
+  try {
+    f();
+    return LT_OK;
+  } catch (const lt::InvalidArgument& e) {
+    lt::set_last_error(e.what());
+    return LT_ERROR_INVALID_ARGUMENT;
+  } catch (const lt::StateError& e) {
+    lt::set_last_error(e.what());
+    return LT_ERROR_STATE;
+  } catch (const lt::IoError& e) {
+    lt::set_last_error(e.what());
+    return LT_ERROR_IO;
+  } catch (const std::bad_alloc&) {
+    lt::set_last_error("out of memory");
+    return LT_ERROR_OUT_OF_MEMORY;
+  } catch (const std::exception& e) {
+    lt::set_last_error(std::string("internal error: ") + e.what());
+    return LT_ERROR_INTERNAL;
+  } catch (...) {
+    lt::set_last_error("internal error");
+    return LT_ERROR_INTERNAL;
+  }
+}
+
+void require(bool ok, const std::string& message) {
+  if (!ok) throw InvalidArgument(message);
+}
+
+bool finite_array(const float* v, size_t n) {
+  for (size_t i = 0; i < n; ++i)
+    if (!std::isfinite(v[i])) return false;
+  return true;
+}
+
+lt::Transform to_transform(const float* m, const char* what) {
+  require(finite_array(m, 12), std::string(what) + " transform is not finite");
+  lt::Transform t;
+  std::memcpy(t.m, m, sizeof(t.m));
+  return t;
+}
+
+lt::Input to_input(const lt_input& in, size_t image_count, const char* what, int node) {
+  if (!finite_array(in.value, 3))
+    throw InvalidArgument("material node " + std::to_string(node) + ": " + what + " is not finite");
+  if (in.image < -1 || in.image >= int(image_count))
+    throw InvalidArgument("material node " + std::to_string(node) + ": " + what + " refers to image " +
+                          std::to_string(in.image) + ", which does not exist");
+  lt::Input r;
+  r.value = lt::Vec3(in.value[0], in.value[1], in.value[2]);
+  r.image = in.image;
+  return r;
+}
+
+constexpr int kMaxDimension = 65536;
+constexpr long long kMaxPixels = 1LL << 28;  // 268 M pixels: beyond this a render is a mistake
+
+}  // namespace
+
+extern "C" {
+
+int lt_abi_version(void) { return LT_ABI_VERSION; }
+const char* lt_version(void) { return "0.1.0"; }
+const char* lt_last_error(void) { return lt::last_error(); }
+
+int lt_scene_create(lt_scene** out) {
+  return guarded([&] {
+    require(out != nullptr, "lt_scene_create: out is NULL");
+    *out = new lt_scene();
+  });
+}
+
+void lt_scene_destroy(lt_scene* scene) { delete scene; }
+
+int lt_scene_warning_count(const lt_scene* scene) { return scene ? int(scene->scene.warnings.size()) : 0; }
+
+const char* lt_scene_warning(const lt_scene* scene, int index) {
+  if (!scene || index < 0 || index >= int(scene->scene.warnings.size())) return "";
+  return scene->scene.warnings[index].c_str();
+}
+
+int lt_scene_add_image(lt_scene* scene, const lt_image_desc* d, int* out_id) {
+  return guarded([&] {
+    require(scene && d && out_id, "lt_scene_add_image: NULL argument");
+    scene->scene.require_editable();
+    require(d->width > 0 && d->height > 0 && d->width <= kMaxDimension && d->height <= kMaxDimension,
+            "image size " + std::to_string(d->width) + "x" + std::to_string(d->height) + " is out of range");
+    require(d->channels == 1 || d->channels == 3 || d->channels == 4,
+            "image has " + std::to_string(d->channels) + " channels; 1, 3 or 4 are supported");
+    require(d->pixels != nullptr, "image pixels are NULL");
+    require(d->interpolation == LT_INTERP_LINEAR || d->interpolation == LT_INTERP_CLOSEST, "unknown image interpolation");
+    require(d->extension >= LT_EXTENSION_REPEAT && d->extension <= LT_EXTENSION_CLIP, "unknown image extension");
+    auto& images = scene->scene.images;
+    images.push_back(std::make_unique<lt::Image>(
+        d->width, d->height, d->channels, d->pixels, d->srgb != 0,
+        d->interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest : lt::Interpolation::Linear,
+        lt::Extension(d->extension)));
+    *out_id = int(images.size()) - 1;
+  });
+}
+
+int lt_scene_add_material(lt_scene* scene, const lt_shader_node* nodes, int node_count, int root, int* out_id) {
+  return guarded([&] {
+    require(scene && nodes && out_id, "lt_scene_add_material: NULL argument");
+    scene->scene.require_editable();
+    require(node_count > 0 && node_count <= 4096, "material node count " + std::to_string(node_count) + " is out of range");
+    const size_t images = scene->scene.images.size();
+    std::vector<lt::ShaderNode> v(node_count);
+    for (int i = 0; i < node_count; ++i) {
+      const lt_shader_node& n = nodes[i];
+      if (n.type < 0 || n.type >= LT_NODE_COUNT)
+        throw InvalidArgument("material node " + std::to_string(i) + " has unknown type " + std::to_string(n.type) +
+                              "; valid types are DIFFUSE, GLOSSY, GLASS, EMISSION, MIX, ADD, PRINCIPLED, TRANSPARENT");
+      lt::ShaderNode& s = v[i];
+      s.type = lt::NodeType(n.type);
+      s.color = to_input(n.color, images, "color", i);
+      s.roughness = to_input(n.roughness, images, "roughness", i);
+      s.fac = to_input(n.fac, images, "fac", i);
+      s.metallic = to_input(n.metallic, images, "metallic", i);
+      s.specular = to_input(n.specular, images, "specular", i);
+      s.transmission = to_input(n.transmission, images, "transmission", i);
+      s.emission = to_input(n.emission, images, "emission", i);
+      s.strength = to_input(n.strength, images, "strength", i);
+      require(std::isfinite(n.ior), "material node " + std::to_string(i) + ": ior is not finite");
+      s.ior = n.ior;
+      s.child[0] = n.child[0];
+      s.child[1] = n.child[1];
+    }
+    scene->scene.materials.emplace_back(std::move(v), root, images);
+    *out_id = int(scene->scene.materials.size()) - 1;
+  });
+}
+
+int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* d, int* out_id) {
+  return guarded([&] {
+    require(scene && d && out_id, "lt_scene_add_mesh: NULL argument");
+    scene->scene.require_editable();
+    require(d->vertex_count >= 0 && d->triangle_count >= 0, "mesh counts must not be negative");
+    require(d->vertex_count <= (1 << 28) && d->triangle_count <= (1 << 28), "mesh is too large");
+    require(d->vertex_count == 0 || d->positions, "mesh positions are NULL");
+    require(d->triangle_count == 0 || d->triangles, "mesh triangles are NULL");
+    lt::Mesh m;
+    m.positions.resize(d->vertex_count);
+    for (int i = 0; i < d->vertex_count; ++i)
+      m.positions[i] = lt::Vec3(d->positions[3 * i], d->positions[3 * i + 1], d->positions[3 * i + 2]);
+    const size_t corners = size_t(d->triangle_count) * 3;
+    m.indices.resize(corners);
+    for (size_t c = 0; c < corners; ++c) {
+      int idx = d->triangles[c];
+      if (idx < 0 || idx >= d->vertex_count)
+        throw InvalidArgument("mesh triangle " + std::to_string(c / 3) + " has vertex index " + std::to_string(idx) +
+                              " out of range [0, " + std::to_string(d->vertex_count) + ")");
+      m.indices[c] = uint32_t(idx);
+    }
+    if (d->corner_normals && corners) {
+      m.corner_normals.resize(corners);
+      for (size_t c = 0; c < corners; ++c)
+        m.corner_normals[c] = lt::Vec3(d->corner_normals[3 * c], d->corner_normals[3 * c + 1], d->corner_normals[3 * c + 2]);
+    }
+    if (d->corner_uvs && corners) {
+      m.corner_uvs.resize(corners);
+      for (size_t c = 0; c < corners; ++c) {
+        float u = d->corner_uvs[2 * c], v = d->corner_uvs[2 * c + 1];
+        m.corner_uvs[c] = {std::isfinite(u) ? u : 0.0f, std::isfinite(v) ? v : 0.0f};
+      }
+    }
+    if (d->material_slots && d->triangle_count) {
+      m.slots.assign(d->material_slots, d->material_slots + d->triangle_count);
+      for (int& s : m.slots) s = s < 0 ? 0 : s;  // Blender's indices are never negative; be safe
+    }
+    *out_id = scene->scene.geometry.add_mesh(std::move(m), scene->scene.warnings);
+  });
+}
+
+int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_id) {
+  return guarded([&] {
+    require(scene && d && out_id, "lt_scene_add_instance: NULL argument");
+    scene->scene.require_editable();
+    require(d->mesh >= 0 && d->mesh < int(scene->scene.geometry.mesh_count()),
+            "instance refers to mesh " + std::to_string(d->mesh) + ", which does not exist");
+    require(d->material_count >= 0 && (d->material_count == 0 || d->materials), "instance materials are NULL");
+    lt::Instance inst;
+    inst.mesh = d->mesh;
+    bool finite = finite_array(d->transform, 12);
+    if (finite) std::memcpy(inst.xf.m, d->transform, sizeof(inst.xf.m));
+    else std::memset(inst.xf.m, 0, sizeof(inst.xf.m));  // left out by the geometry, with a warning
+    for (int i = 0; i < d->material_count; ++i) {
+      int m = d->materials[i];
+      require(m >= -1 && m < int(scene->scene.materials.size()),
+              "instance material " + std::to_string(m) + " does not exist");
+      inst.materials.push_back(m);
+    }
+    inst.visibility = d->visibility & LT_VISIBLE_ALL;
+    *out_id = scene->scene.geometry.add_instance(std::move(inst), scene->scene.warnings);
+  });
+}
+
+int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
+  return guarded([&] {
+    require(scene && d, "lt_scene_add_light: NULL argument");
+    scene->scene.require_editable();
+    require(d->type >= LT_LIGHT_POINT && d->type <= LT_LIGHT_SUN,
+            "unknown light type " + std::to_string(d->type) + "; valid types are POINT, SPOT, AREA, SUN");
+    require(finite_array(d->color, 3) && d->color[0] >= 0 && d->color[1] >= 0 && d->color[2] >= 0,
+            "light colour x energy must be finite and non-negative");
+    lt::Transform xf = to_transform(d->transform, "light");
+    lt::Light l;
+    l.power = lt::Spectrum(d->color[0], d->color[1], d->color[2]);
+    l.position = xf.point(lt::Vec3(0.0f));
+    l.direction = normalize(xf.vector(lt::Vec3(0, 0, -1)));
+    l.visibility = d->visibility & LT_VISIBLE_ALL;
+    auto& warnings = scene->scene.warnings;
+    const std::string name = "light " + std::to_string(scene->scene.lamp_lights.size());
+    if (lt::is_black(l.power)) {
+      warnings.push_back(name + " emits nothing; left out");
+      return;
+    }
+    switch (d->type) {
+      case LT_LIGHT_POINT:
+      case LT_LIGHT_SPOT:
+        require(std::isfinite(d->radius) && d->radius >= 0, name + ": radius must be finite and >= 0");
+        l.type = d->type == LT_LIGHT_POINT ? lt::LightType::Point : lt::LightType::Spot;
+        l.radius = d->radius;
+        if (l.type == lt::LightType::Spot) {
+          require(std::isfinite(d->spot_size) && std::isfinite(d->spot_blend), name + ": spot size/blend not finite");
+          float size = lt::clamp(d->spot_size, 0.0f, lt::kPi);
+          l.cos_half_angle = std::cos(0.5f * size);
+          l.smooth = (1 - l.cos_half_angle) * lt::clamp(d->spot_blend, 0.0f, 1.0f);
+          require(lt::is_finite(l.direction), name + ": the spot's transform has no direction");
+        }
+        break;
+      case LT_LIGHT_AREA: {
+        require(d->shape >= LT_AREA_SQUARE && d->shape <= LT_AREA_ELLIPSE, name + ": unknown area shape");
+        require(std::isfinite(d->size_x) && std::isfinite(d->size_y), name + ": size not finite");
+        l.type = lt::LightType::Area;
+        bool square = d->shape == LT_AREA_SQUARE || d->shape == LT_AREA_DISK;
+        float sx = std::abs(d->size_x), sy = square ? sx : std::abs(d->size_y);
+        l.shape = (d->shape == LT_AREA_DISK || d->shape == LT_AREA_ELLIPSE) ? lt::AreaShape::Ellipse : lt::AreaShape::Rectangle;
+        l.axis_u = xf.vector(lt::Vec3(1, 0, 0)) * (0.5f * sx);
+        l.axis_v = xf.vector(lt::Vec3(0, 1, 0)) * (0.5f * sy);
+        float a = length(cross(l.axis_u, l.axis_v));
+        l.area = l.shape == lt::AreaShape::Rectangle ? 4 * a : lt::kPi * a;
+        l.direction = normalize(cross(l.axis_u, l.axis_v)) * -1.0f;
+        if (!(l.area > 1e-12f) || !std::isfinite(l.area) || !lt::is_finite(l.direction)) {
+          warnings.push_back(name + " (area) has zero area; left out");
+          return;
+        }
+        break;
+      }
+      case LT_LIGHT_SUN: {
+        require(std::isfinite(d->angle) && d->angle >= 0, name + ": sun angle must be finite and >= 0");
+        require(lt::is_finite(l.direction), name + ": the sun's transform has no direction");
+        l.type = lt::LightType::Sun;
+        float half = 0.5f * std::min(d->angle, 3.0f);  // Blender caps the angle at 180 degrees
+        l.tan_half_angle = half > 1e-6f ? std::tan(half) : 0.0f;
+        l.cos_half_angle_sun = std::cos(half);
+        break;
+      }
+    }
+    scene->scene.lamp_lights.push_back(l);
+  });
+}
+
+int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
+  return guarded([&] {
+    require(scene && d, "lt_scene_set_camera: NULL argument");
+    scene->scene.require_editable();
+    require(d->type == LT_CAMERA_PERSPECTIVE || d->type == LT_CAMERA_ORTHOGRAPHIC, "unknown camera type");
+    require(d->sensor_fit >= LT_SENSOR_AUTO && d->sensor_fit <= LT_SENSOR_VERTICAL, "unknown sensor fit");
+    const float values[] = {d->focal_length, d->sensor_width, d->sensor_height, d->ortho_scale, d->shift_x,
+                            d->shift_y,      d->clip_start,   d->clip_end,      d->pixel_aspect};
+    require(finite_array(values, 9), "camera parameters must be finite");
+    require(d->focal_length > 0 && d->sensor_width > 0 && d->sensor_height > 0 && d->ortho_scale > 0 &&
+                d->pixel_aspect > 0,
+            "camera focal length, sensor size, ortho scale and pixel aspect must be positive");
+    require(d->clip_start >= 0 && d->clip_end > d->clip_start, "camera clip end must exceed clip start >= 0");
+    lt::CameraDesc& c = scene->scene.camera;
+    c.orthographic = d->type == LT_CAMERA_ORTHOGRAPHIC;
+    c.xf = to_transform(d->transform, "camera");
+    require(std::abs(c.xf.determinant()) > 1e-30f, "camera transform is singular");
+    c.focal_length = d->focal_length;
+    c.sensor_width = d->sensor_width;
+    c.sensor_height = d->sensor_height;
+    c.sensor_fit = d->sensor_fit;
+    c.ortho_scale = d->ortho_scale;
+    c.shift_x = d->shift_x;
+    c.shift_y = d->shift_y;
+    c.clip_start = d->clip_start;
+    c.clip_end = d->clip_end;
+    c.pixel_aspect = d->pixel_aspect;
+    scene->scene.camera_set = true;
+  });
+}
+
+int lt_scene_set_world(lt_scene* scene, const lt_world_desc* d) {
+  return guarded([&] {
+    require(scene && d, "lt_scene_set_world: NULL argument");
+    scene->scene.require_editable();
+    require(finite_array(d->color, 3) && std::isfinite(d->strength) && std::isfinite(d->rotation_z),
+            "world colour, strength and rotation must be finite");
+    require(d->image >= -1 && d->image < int(scene->scene.images.size()), "world image does not exist");
+    lt::World& w = scene->scene.world;
+    w.color = lt::vmax(lt::Vec3(0.0f), lt::Vec3(d->color[0], d->color[1], d->color[2]) * std::max(0.0f, d->strength));
+    w.image = d->image >= 0 ? scene->scene.images[d->image].get() : nullptr;
+    w.rotation_z = d->rotation_z;
+    w.camera_visible = (d->visibility & LT_VISIBLE_CAMERA) != 0;
+    scene->scene.world_set = true;
+  });
+}
+
+int lt_scene_commit(lt_scene* scene) {
+  return guarded([&] {
+    require(scene != nullptr, "lt_scene_commit: NULL scene");
+    scene->scene.commit();
+  });
+}
+
+void lt_render_settings_default(lt_render_settings* s) {
+  if (!s) return;
+  std::memset(s, 0, sizeof(*s));
+  s->width = 640;
+  s->height = 480;
+  s->samples = 16;
+  s->integrator = LT_INTEGRATOR_PATH;
+  s->max_bounces = 12;
+  s->diffuse_bounces = 4;
+  s->glossy_bounces = 4;
+  s->transmission_bounces = 12;
+  s->transparent_bounces = 8;
+  s->filter = LT_FILTER_BLACKMAN_HARRIS;
+  s->filter_width = 1.5f;
+}
+
+int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** out) {
+  return guarded([&] {
+    require(scene && s && out, "lt_render_start: NULL argument");
+    if (!scene->scene.committed()) throw lt::StateError("the scene must be committed before rendering");
+    require(scene->scene.camera_set, "the scene has no camera");
+    require(s->width > 0 && s->height > 0 && s->width <= kMaxDimension && s->height <= kMaxDimension &&
+                (long long)s->width * s->height <= kMaxPixels,
+            "resolution " + std::to_string(s->width) + "x" + std::to_string(s->height) + " is out of range (at most " +
+                std::to_string(kMaxDimension) + " per side and " + std::to_string(kMaxPixels) + " pixels)");
+    require(s->samples > 0 && s->samples <= (1 << 24), "samples must be in [1, 16777216]");
+    require(s->integrator >= 0 && s->integrator < LT_INTEGRATOR_COUNT,
+            "unknown integrator " + std::to_string(s->integrator) + "; valid: PATH");
+    require(s->max_bounces >= 0 && s->diffuse_bounces >= 0 && s->glossy_bounces >= 0 && s->transmission_bounces >= 0 &&
+                s->transparent_bounces >= 0 && s->max_bounces <= 1024,
+            "bounce limits must be in [0, 1024]");
+    require(std::isfinite(s->clamp_direct) && std::isfinite(s->clamp_indirect) && s->clamp_direct >= 0 &&
+                s->clamp_indirect >= 0,
+            "clamp values must be finite and >= 0");
+    require(s->threads >= 0 && s->threads <= 4096, "threads must be in [0, 4096]");
+    require(s->filter >= LT_FILTER_BOX && s->filter <= LT_FILTER_BLACKMAN_HARRIS, "unknown pixel filter");
+    require(std::isfinite(s->filter_width) && s->filter_width > 0 && s->filter_width <= 100, "filter width must be in (0, 100]");
+    lt::RenderSettings rs;
+    rs.width = s->width;
+    rs.height = s->height;
+    bool full = s->border[0] == 0 && s->border[1] == 0 && s->border[2] == 0 && s->border[3] == 0;
+    if (full) {
+      rs.x0 = 0; rs.y0 = 0; rs.x1 = s->width; rs.y1 = s->height;
+    } else {
+      require(s->border[0] >= 0 && s->border[0] < s->border[1] && s->border[1] <= s->width && s->border[2] >= 0 &&
+                  s->border[2] < s->border[3] && s->border[3] <= s->height,
+              "render border is outside the frame or empty");
+      rs.x0 = s->border[0]; rs.x1 = s->border[1]; rs.y0 = s->border[2]; rs.y1 = s->border[3];
+    }
+    rs.samples = s->samples;
+    rs.seed = s->seed;
+    rs.integrator = lt::IntegratorType(s->integrator);
+    auto& is = rs.integrator_settings;
+    is.max_bounces = s->max_bounces;
+    is.diffuse_bounces = s->diffuse_bounces;
+    is.glossy_bounces = s->glossy_bounces;
+    is.transmission_bounces = s->transmission_bounces;
+    is.transparent_bounces = s->transparent_bounces;
+    is.clamp_direct = s->clamp_direct;
+    is.clamp_indirect = s->clamp_indirect;
+    is.transparent_background = s->transparent_background != 0;
+    rs.threads = s->threads;
+    rs.filter = lt::FilterType(s->filter);
+    rs.filter_width = s->filter_width;
+    auto r = std::make_unique<lt_render>();
+    r->job = std::make_unique<lt::RenderJob>(scene->scene, rs);
+    r->job->start();
+    *out = r.release();
+  });
+}
+
+int lt_render_poll(lt_render* render, lt_render_status* st) {
+  return guarded([&] {
+    require(render && st, "lt_render_poll: NULL argument");
+    lt::RenderStatus s = render->job->status();
+    st->state = int(s.state);
+    st->samples_done = s.samples_done;
+    st->samples_total = s.samples_total;
+    st->elapsed_seconds = s.elapsed;
+    st->remaining_seconds = s.remaining;
+    st->nan_samples = s.nan_samples;
+    st->rays = s.rays;
+  });
+}
+
+int lt_render_cancel(lt_render* render) {
+  return guarded([&] {
+    require(render != nullptr, "lt_render_cancel: NULL render");
+    render->job->cancel();
+  });
+}
+
+int lt_render_wait(lt_render* render) {
+  return guarded([&] {
+    require(render != nullptr, "lt_render_wait: NULL render");
+    render->job->wait();
+  });
+}
+
+int lt_pass_channels(int pass) {
+  if (pass < 0 || pass >= LT_PASS_COUNT) return 0;
+  return lt::pass_channels(lt::Pass(pass));
+}
+
+int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count) {
+  return guarded([&] {
+    require(render && out, "lt_render_read_pass: NULL argument");
+    require(pass >= 0 && pass < LT_PASS_COUNT, "unknown pass " + std::to_string(pass));
+    const auto& film = render->job->film();
+    size_t need = size_t(film.width()) * film.height() * lt::pass_channels(lt::Pass(pass));
+    require(float_count == need, "pass buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) +
+                                     " are needed");
+    film.read(lt::Pass(pass), out);
+  });
+}
+
+void lt_render_destroy(lt_render* render) { delete render; }
+
+int lt_render_write_exr(lt_render* render, const char* path) {
+  return guarded([&] {
+    require(render && path, "lt_render_write_exr: NULL argument");
+    lt::write_render_exr(path, *render->job);
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,71 @@
+// The film: per-pixel accumulators for every pass (double precision), the pixel filter, and a
+// published copy that readers see while rendering goes on.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <vector>
+
+#include "core/distribution.h"
+#include "core/math.h"
+
+namespace lt {
+
+enum class FilterType { Box = 0, Gaussian = 1, BlackmanHarris = 2 };
+
+// Importance-samples the pixel filter, as Cycles does (film.cpp: filter_table): each sample lands
+// in exactly one pixel with weight 1, at an offset drawn from the filter's 1D profile, separably
+// in x and y. Blackman-Harris spans [-w, w], Gaussian [-1.5w, 1.5w] (sigma w/4), Box [-w/2, w/2].
+class FilterSampler {
+ public:
+  FilterSampler(FilterType type, float width);
+  float sample(float u) const;  // offset from the pixel centre, in pixels
+
+ private:
+  Distribution1D table_;
+  float half_range_ = 0.5f;
+};
+
+struct SampleValue {
+  Spectrum radiance{0.0f};
+  float alpha = 0;
+  float depth = 1e10f;  // Blender's background depth
+  Vec3 normal{0.0f};
+  Spectrum albedo{0.0f};
+};
+
+struct PixelAccum {
+  double rgb[3] = {0, 0, 0};
+  double rgb2[3] = {0, 0, 0};
+  double alpha = 0;
+  double normal[3] = {0, 0, 0};
+  double albedo[3] = {0, 0, 0};
+  float depth = 1e10f;
+  uint32_t count = 0;
+};
+
+enum class Pass { Combined = 0, Depth = 1, Normal = 2, Albedo = 3, Variance = 4, SampleCount = 5, Count = 6 };
+int pass_channels(Pass pass);
+
+class Film {
+ public:
+  Film(int width, int height) : width_(width), height_(height), accum_(size_t(width) * height) {}
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // Only the thread that owns the pixel in the current pass writes it.
+  void add(int x, int y, const SampleValue& s);
+  // Copies the accumulators to the published buffer readers use.
+  void publish();
+  // Resolves a pass of the published buffer: width*height*channels floats, rows bottom to top.
+  void read(Pass pass, float* out) const;
+  uint64_t total_samples() const;
+
+ private:
+  int width_, height_;
+  std::vector<PixelAccum> accum_;
+  std::vector<PixelAccum> published_;
+  mutable std::mutex mutex_;
+};
+
+}  // namespace lt

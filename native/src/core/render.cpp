@@ -1,0 +1,112 @@
+#include "core/render.h"
+
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cstdio>
+
+namespace lt {
+
+namespace {
+constexpr int kTile = 16;
+// Readers see a new image at most this often while rendering (publishing copies the film).
+constexpr double kPublishInterval = 0.25;
+}  // namespace
+
+RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
+    : scene_(scene),
+      settings_(s),
+      camera_(scene.camera, s.width, s.height),
+      filter_(s.filter, s.filter_width),
+      film_(s.x1 - s.x0, s.y1 - s.y0) {}
+
+RenderJob::~RenderJob() {
+  cancel();
+  wait();
+}
+
+void RenderJob::start() {
+  start_ = std::chrono::steady_clock::now();
+  thread_ = std::thread([this] { run(); });
+}
+
+void RenderJob::wait() {
+  if (thread_.joinable()) thread_.join();
+}
+
+void RenderJob::render_pass(int sample_index) {
+  const int w = film_.width(), h = film_.height();
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
+    SampleStats stats;
+    uint64_t nans = 0;
+    for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
+      for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) {
+        if (cancel_.load(std::memory_order_relaxed)) break;
+        for (int y = ty * kTile; y < std::min(h, (ty + 1) * kTile); ++y)
+          for (int x = tx * kTile; x < std::min(w, (tx + 1) * kTile); ++x) {
+            const int fx = x + settings_.x0, fy = y + settings_.y0;
+            // Random numbers depend only on (seed, pixel of the full frame, sample index).
+            Sampler sampler(settings_.seed, uint32_t(fy) * uint32_t(settings_.width) + uint32_t(fx), uint32_t(sample_index));
+            float ox = filter_.sample(sampler.next_1d()), oy = filter_.sample(sampler.next_1d());
+            Ray ray = camera_.generate(fx + 0.5f + ox, fy + 0.5f + oy);
+            SampleValue v = trace_path(scene_, settings_.integrator_settings, ray, sampler, stats);
+            if (!is_finite(v.radiance) || !std::isfinite(v.alpha) || !is_finite(v.albedo) || !is_finite(v.normal)) {
+              ++nans;  // never written into the film; counted in the render statistics
+              continue;
+            }
+            if (v.depth < 1e10f) v.depth = camera_.depth(ray.o + ray.d * v.depth);
+            film_.add(x, y, v);
+          }
+      }
+    rays_.fetch_add(stats.rays, std::memory_order_relaxed);
+    if (nans) nan_samples_.fetch_add(nans, std::memory_order_relaxed);
+  });
+}
+
+void RenderJob::run() {
+  if (start_ == std::chrono::steady_clock::time_point()) start_ = std::chrono::steady_clock::now();
+  try {
+    tbb::task_arena arena(settings_.threads > 0 ? settings_.threads : tbb::task_arena::automatic);
+    auto last_publish = std::chrono::steady_clock::now();
+    arena.execute([&] {
+      for (int s = 0; s < settings_.samples; ++s) {
+        if (cancel_.load()) break;
+        render_pass(s);
+        if (cancel_.load()) break;
+        samples_done_.store(s + 1);
+        auto now = std::chrono::steady_clock::now();
+        if (std::chrono::duration<double>(now - last_publish).count() >= kPublishInterval) {
+          film_.publish();
+          last_publish = now;
+        }
+      }
+    });
+    film_.publish();
+    finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+    state_.store(cancel_.load() ? int(RenderState::Cancelled) : int(RenderState::Done));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lantern: render failed: %s\n", e.what());
+    error_ = e.what();
+    film_.publish();
+    finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+    state_.store(int(RenderState::Failed));
+  }
+}
+
+RenderStatus RenderJob::status() const {
+  RenderStatus st;
+  st.state = RenderState(state_.load());
+  st.samples_done = samples_done_.load();
+  st.samples_total = settings_.samples;
+  double fin = finished_elapsed_.load();
+  st.elapsed = fin >= 0 ? fin : std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  if (st.state != RenderState::Running) st.remaining = 0;
+  else if (st.samples_done > 0) st.remaining = st.elapsed / st.samples_done * (st.samples_total - st.samples_done);
+  st.nan_samples = nan_samples_.load();
+  st.rays = rays_.load();
+  return st;
+}
+
+}  // namespace lt

@@ -1,0 +1,71 @@
+// A render job: passes over the image on the core's own TBB threads, progress, cancellation and
+// the film readers poll. Nothing here calls back into the caller.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <thread>
+
+#include "core/film.h"
+#include "integrators/integrator.h"
+#include "scene/scene.h"
+
+namespace lt {
+
+enum class IntegratorType { Path = 0, Count = 1 };
+
+struct RenderSettings {
+  int width = 640, height = 480;
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // region of the full frame; x1 == 0: all
+  int samples = 16;
+  uint32_t seed = 0;
+  IntegratorType integrator = IntegratorType::Path;
+  IntegratorSettings integrator_settings;
+  int threads = 0;
+  FilterType filter = FilterType::BlackmanHarris;
+  float filter_width = 1.5f;
+};
+
+enum class RenderState { Running = 0, Done = 1, Cancelled = 2, Failed = 3 };
+
+struct RenderStatus {
+  RenderState state = RenderState::Running;
+  int samples_done = 0, samples_total = 0;
+  double elapsed = 0, remaining = -1;
+  uint64_t nan_samples = 0, rays = 0;
+};
+
+class RenderJob {
+ public:
+  RenderJob(const Scene& scene, const RenderSettings& settings);
+  ~RenderJob();
+  void start();
+  void cancel() { cancel_.store(true); }
+  void wait();
+  RenderStatus status() const;
+  const Film& film() const { return film_; }
+  const RenderSettings& settings() const { return settings_; }
+  int region_width() const { return film_.width(); }
+  int region_height() const { return film_.height(); }
+  // Renders synchronously on the calling thread's arena (tests, CLI).
+  void run();
+
+ private:
+  void render_pass(int sample_index);
+  const Scene& scene_;
+  RenderSettings settings_;
+  Camera camera_;
+  FilterSampler filter_;
+  Film film_;
+  std::thread thread_;
+  std::atomic<bool> cancel_{false};
+  std::atomic<int> state_{0};
+  std::atomic<int> samples_done_{0};
+  std::atomic<uint64_t> nan_samples_{0}, rays_{0};
+  std::chrono::steady_clock::time_point start_;
+  std::atomic<double> finished_elapsed_{-1};
+  std::string error_;
+};
+
+}  // namespace lt

@@ -1,0 +1,118 @@
+// Warps from the unit square to directions and shapes, their pdfs, MIS heuristics and the
+// counter-based random numbers that make renders independent of thread count and tile order.
+#pragma once
+
+#include "core/math.h"
+
+namespace lt {
+
+struct Vec2 {
+  float x = 0, y = 0;
+};
+
+// Shirley & Chiu's concentric map of the square to the unit disk.
+inline Vec2 sample_disk_concentric(Vec2 u) {
+  float a = 2 * u.x - 1, b = 2 * u.y - 1;
+  if (a == 0 && b == 0) return {0, 0};
+  float r, phi;
+  if (std::abs(a) > std::abs(b)) {
+    r = a;
+    phi = (kPi / 4) * (b / a);
+  } else {
+    r = b;
+    phi = (kPi / 2) - (kPi / 4) * (a / b);
+  }
+  return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+inline Vec3 sample_cosine_hemisphere(Vec2 u) {
+  Vec2 d = sample_disk_concentric(u);
+  return {d.x, d.y, safe_sqrt(1 - d.x * d.x - d.y * d.y)};
+}
+inline float cosine_hemisphere_pdf(float cos_theta) { return cos_theta > 0 ? cos_theta * kInvPi : 0; }
+
+inline Vec3 sample_uniform_sphere(Vec2 u) {
+  float z = 1 - 2 * u.x;
+  float r = safe_sqrt(1 - z * z);
+  float phi = 2 * kPi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+inline float uniform_sphere_pdf() { return kInv4Pi; }
+
+// Uniform direction in the cone around +Z with the given cos of the half angle.
+inline Vec3 sample_uniform_cone(Vec2 u, float cos_max) {
+  float cos_theta = 1 - u.x * (1 - cos_max);
+  float sin_theta = safe_sqrt(1 - cos_theta * cos_theta);
+  float phi = 2 * kPi * u.y;
+  return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+}
+inline float uniform_cone_pdf(float cos_max) { return 1 / (2 * kPi * (1 - cos_max)); }
+
+// Barycentrics (b1, b2) uniform over a triangle (Heitz 2019, "A Low-Distortion Map Between
+// Triangle and Square").
+inline Vec2 sample_triangle(Vec2 u) {
+  float b0, b1;
+  if (u.x < u.y) {
+    b0 = u.x / 2;
+    b1 = u.y - b0;
+  } else {
+    b1 = u.y / 2;
+    b0 = u.x - b1;
+  }
+  return {b1, 1 - b0 - b1};
+}
+
+inline float power_heuristic(float pdf_a, float pdf_b) {
+  if (std::isinf(pdf_a)) return 1;
+  float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
+  return a > 0 ? a / (a + b) : 0;
+}
+
+// ---- random numbers ----------------------------------------------------------------------
+
+inline uint32_t hash_u32(uint32_t x) {  // lowbias32 (Chris Wellons' hash prospector)
+  x ^= x >> 16;
+  x *= 0x7feb352dU;
+  x ^= x >> 15;
+  x *= 0x846ca68bU;
+  x ^= x >> 16;
+  return x;
+}
+
+inline uint64_t mix_u64(uint64_t z) {  // splitmix64 finaliser
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+// PCG32 (O'Neill 2014). A sample's stream is keyed by (seed, pixel, sample index) only, so the
+// numbers a sample sees never depend on threads, tiles or on which samples ran before it.
+class Sampler {
+ public:
+  Sampler(uint32_t seed, uint32_t pixel, uint32_t sample_index) {
+    uint64_t key = mix_u64((uint64_t(seed) << 32) ^ pixel);
+    uint64_t stream = mix_u64(key ^ (uint64_t(sample_index) * 0x9e3779b97f4a7c15ULL));
+    state_ = 0;
+    inc_ = (stream << 1u) | 1u;
+    next_u32();
+    state_ += key;
+    next_u32();
+  }
+  uint32_t next_u32() {
+    uint64_t old = state_;
+    state_ = old * 6364136223846793005ULL + inc_;
+    uint32_t xorshifted = uint32_t(((old >> 18u) ^ old) >> 27u);
+    uint32_t rot = uint32_t(old >> 59u);
+    return (xorshifted >> rot) | (xorshifted << ((-rot) & 31));
+  }
+  float next_1d() { return std::min(kOneMinusEpsilon, float(next_u32()) * 0x1p-32f); }
+  Vec2 next_2d() {
+    float a = next_1d();
+    return {a, next_1d()};
+  }
+
+ private:
+  uint64_t state_, inc_;
+};
+
+}  // namespace lt

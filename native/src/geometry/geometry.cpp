@@ -1,0 +1,260 @@
+#include "geometry/geometry.h"
+
+#include <cstdio>
+
+#include "core/error.h"
+
+namespace lt {
+
+namespace {
+
+struct VisibilityContext {
+  RTCIntersectContext ctx;  // must be first: Embree hands this pointer back to the filter
+  const unsigned* visibility;
+  unsigned mask;
+};
+
+// Rejects hits on instances that this kind of ray must not see (Cycles' ray visibility). Only
+// installed when some instance hides from some ray kind, so other scenes pay nothing.
+void visibility_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* c = reinterpret_cast<const VisibilityContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    unsigned inst = RTCHitN_instID(args->hit, args->N, i, 0);
+    if (!(c->visibility[inst] & c->mask)) args->valid[i] = 0;
+  }
+}
+
+void embree_error(void*, RTCError code, const char* message) {
+  std::fprintf(stderr, "lantern: embree error %d: %s\n", int(code), message ? message : "");
+}
+
+}  // namespace
+
+Geometry::Geometry() {
+  device_ = rtcNewDevice(nullptr);
+  if (!device_) throw std::runtime_error("could not create the Embree device");
+  rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
+}
+
+Geometry::~Geometry() {
+  for (auto& m : meshes_)
+    if (m.rtc) rtcReleaseScene(m.rtc);
+  if (top_) rtcReleaseScene(top_);
+  rtcReleaseDevice(device_);
+}
+
+int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
+  if (committed_) throw StateError("the scene is committed; meshes can no longer be added");
+  const size_t n = mesh.triangle_count();
+  const int id = int(meshes_.size());
+  // Drop triangles with non-finite or coincident corners: they have no area and no normal.
+  size_t kept = 0, dropped = 0;
+  for (size_t t = 0; t < n; ++t) {
+    Vec3 p0 = mesh.positions[mesh.indices[3 * t]], p1 = mesh.positions[mesh.indices[3 * t + 1]],
+         p2 = mesh.positions[mesh.indices[3 * t + 2]];
+    float area2 = length(cross(p1 - p0, p2 - p0));
+    if (!(area2 > 0) || !std::isfinite(area2) || !is_finite(p0) || !is_finite(p1) || !is_finite(p2)) {
+      ++dropped;
+      continue;
+    }
+    if (kept != t) {
+      for (int c = 0; c < 3; ++c) {
+        mesh.indices[3 * kept + c] = mesh.indices[3 * t + c];
+        if (!mesh.corner_normals.empty()) mesh.corner_normals[3 * kept + c] = mesh.corner_normals[3 * t + c];
+        if (!mesh.corner_uvs.empty()) mesh.corner_uvs[3 * kept + c] = mesh.corner_uvs[3 * t + c];
+      }
+      if (!mesh.slots.empty()) mesh.slots[kept] = mesh.slots[t];
+    }
+    ++kept;
+  }
+  if (dropped) {
+    warnings.push_back("mesh " + std::to_string(id) + ": dropped " + std::to_string(dropped) +
+                       " degenerate or non-finite triangle(s)");
+    mesh.indices.resize(3 * kept);
+    if (!mesh.corner_normals.empty()) mesh.corner_normals.resize(3 * kept);
+    if (!mesh.corner_uvs.empty()) mesh.corner_uvs.resize(3 * kept);
+    if (!mesh.slots.empty()) mesh.slots.resize(kept);
+  }
+  // Non-finite corner normals would poison shading: fall back to flat shading for the mesh.
+  for (const Vec3& cn : mesh.corner_normals)
+    if (!is_finite(cn) || length_squared(cn) == 0) {
+      warnings.push_back("mesh " + std::to_string(id) + ": invalid normals, using flat shading");
+      mesh.corner_normals.clear();
+      break;
+    }
+  for (Vec3& cn : mesh.corner_normals) cn = normalize(cn);
+  if (kept == 0) {
+    if (n == 0) warnings.push_back("mesh " + std::to_string(id) + " has no triangles");
+    meshes_.push_back(std::move(mesh));
+    return id;
+  }
+  // Non-finite positions unreferenced by kept triangles are still read by Embree's BVH build.
+  for (Vec3& p : mesh.positions)
+    if (!is_finite(p)) p = Vec3(0.0f);
+
+  mesh.rtc = rtcNewScene(device_);
+  RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+  float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), mesh.positions.size()));
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    v[3 * i] = mesh.positions[i].x;
+    v[3 * i + 1] = mesh.positions[i].y;
+    v[3 * i + 2] = mesh.positions[i].z;
+  }
+  unsigned* idx = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), kept));
+  std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
+  rtcCommitGeometry(g);
+  rtcAttachGeometryByID(mesh.rtc, g, 0);
+  rtcReleaseGeometry(g);
+  meshes_.push_back(std::move(mesh));
+  return id;
+}
+
+int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
+  if (committed_) throw StateError("the scene is committed; instances can no longer be added");
+  const int id = int(instances_.size());
+  float det = inst.xf.determinant();
+  inst.flipped = det < 0;
+  instances_.push_back(inst);
+  instance_visibility_.push_back(inst.visibility & 31u);
+  if ((inst.visibility & 31u) != 31u) partial_visibility_ = true;
+  const Mesh& m = meshes_[inst.mesh];
+  if (!m.rtc) return id;  // empty mesh: nothing to trace
+  bool finite = true;
+  for (float x : inst.xf.m) finite = finite && std::isfinite(x);
+  if (!finite || !(std::abs(det) > 1e-30f)) {
+    warnings.push_back("instance " + std::to_string(id) + " has a zero-scale or non-finite transform; left out");
+    return id;
+  }
+  return id;
+}
+
+void Geometry::commit() {
+  if (committed_) return;
+  top_ = rtcNewScene(device_);
+  if (partial_visibility_) rtcSetSceneFlags(top_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  for (auto& m : meshes_) {
+    if (!m.rtc) continue;
+    if (partial_visibility_) rtcSetSceneFlags(m.rtc, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+    rtcCommitScene(m.rtc);
+  }
+  for (size_t i = 0; i < instances_.size(); ++i) {
+    const Instance& inst = instances_[i];
+    const Mesh& m = meshes_[inst.mesh];
+    if (!m.rtc) continue;
+    float det = inst.xf.determinant();
+    bool finite = std::isfinite(det);
+    for (float x : inst.xf.m) finite = finite && std::isfinite(x);
+    if (!finite || !(std::abs(det) > 1e-30f)) continue;
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, m.rtc);
+    float xf[12];  // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout
+    std::copy(inst.xf.m, inst.xf.m + 12, xf);
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xf);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(top_, g, unsigned(i));
+    rtcReleaseGeometry(g);
+    for (const Vec3& p : m.positions) bounds_.extend(inst.xf.point(p));
+  }
+  rtcCommitScene(top_);
+  committed_ = true;
+}
+
+bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
+  VisibilityContext c;
+  rtcInitIntersectContext(&c.ctx);
+  if (partial_visibility_) {
+    c.ctx.filter = visibility_filter;
+    c.visibility = instance_visibility_.data();
+    c.mask = visibility;
+  }
+  RTCRayHit rh;
+  rh.ray.org_x = ray.o.x;
+  rh.ray.org_y = ray.o.y;
+  rh.ray.org_z = ray.o.z;
+  rh.ray.dir_x = ray.d.x;
+  rh.ray.dir_y = ray.d.y;
+  rh.ray.dir_z = ray.d.z;
+  rh.ray.tnear = ray.tmin;
+  rh.ray.tfar = ray.tmax;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.flags = 0;
+  rh.ray.time = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(top_, &c.ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  hit->t = rh.ray.tfar;
+  hit->instance = int(rh.hit.instID[0]);
+  hit->primitive = int(rh.hit.primID);
+  hit->u = rh.hit.u;
+  hit->v = rh.hit.v;
+  return true;
+}
+
+bool Geometry::occluded(const Ray& ray) const {
+  VisibilityContext c;
+  rtcInitIntersectContext(&c.ctx);
+  if (partial_visibility_) {
+    c.ctx.filter = visibility_filter;
+    c.visibility = instance_visibility_.data();
+    c.mask = 16u;  // LT_VISIBLE_SHADOW
+  }
+  RTCRay r;
+  r.org_x = ray.o.x;
+  r.org_y = ray.o.y;
+  r.org_z = ray.o.z;
+  r.dir_x = ray.d.x;
+  r.dir_y = ray.d.y;
+  r.dir_z = ray.d.z;
+  r.tnear = ray.tmin;
+  r.tfar = ray.tmax;
+  r.mask = 0xffffffffu;
+  r.flags = 0;
+  r.time = 0;
+  rtcOccluded1(top_, &c.ctx, &r);
+  return r.tfar < 0;  // Embree sets tfar to -inf on a hit
+}
+
+void Geometry::triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2) const {
+  const Instance& inst = instances_[instance];
+  const Mesh& m = meshes_[inst.mesh];
+  *p0 = inst.xf.point(m.positions[m.indices[3 * prim]]);
+  *p1 = inst.xf.point(m.positions[m.indices[3 * prim + 1]]);
+  *p2 = inst.xf.point(m.positions[m.indices[3 * prim + 2]]);
+}
+
+SurfacePoint Geometry::surface(const Hit& hit) const {
+  SurfacePoint sp;
+  const Instance& inst = instances_[hit.instance];
+  const Mesh& m = meshes_[inst.mesh];
+  const int t = hit.primitive;
+  Vec3 p0, p1, p2;
+  triangle(hit.instance, t, &p0, &p1, &p2);
+  const float b1 = hit.u, b2 = hit.v, b0 = 1 - b1 - b2;
+  sp.p = p0 * b0 + p1 * b1 + p2 * b2;
+  Vec3 n = cross(p1 - p0, p2 - p0);
+  if (inst.flipped) n = -n;  // a mirroring transform reverses the winding, not the surface
+  sp.area = 0.5f * length(n);
+  sp.ng = normalize(n);
+  if (!m.corner_normals.empty()) {
+    Vec3 ns = m.corner_normals[3 * t] * b0 + m.corner_normals[3 * t + 1] * b1 + m.corner_normals[3 * t + 2] * b2;
+    ns = normalize(inst.xf.normal(ns));
+    sp.ns = is_finite(ns) ? ns : sp.ng;
+    if (dot(sp.ns, sp.ng) < 0) sp.ns = -sp.ns;  // keep the shading normal on the geometric side
+  } else {
+    sp.ns = sp.ng;
+  }
+  if (!m.corner_uvs.empty()) {
+    const Vec2* uv = &m.corner_uvs[3 * t];
+    sp.uv = {uv[0].x * b0 + uv[1].x * b1 + uv[2].x * b2, uv[0].y * b0 + uv[1].y * b1 + uv[2].y * b2};
+  }
+  sp.material = inst.material_for(m.slots.empty() ? 0 : m.slots[t]);
+  sp.instance = hit.instance;
+  sp.primitive = t;
+  return sp;
+}
+
+}  // namespace lt

@@ -1,0 +1,80 @@
+// Triangle meshes and their instances in an Embree 3 two-level BVH. Integrators reach geometry
+// only through intersect(), occluded() and surface().
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+#include "geometry/hit.h"
+
+namespace lt {
+
+struct Mesh {
+  std::vector<Vec3> positions;
+  std::vector<uint32_t> indices;     // 3 per triangle
+  std::vector<Vec3> corner_normals;  // 3 per triangle, or empty (flat)
+  std::vector<Vec2> corner_uvs;      // 3 per triangle, or empty
+  std::vector<int> slots;            // per triangle, or empty
+  RTCScene rtc = nullptr;
+  size_t triangle_count() const { return indices.size() / 3; }
+};
+
+struct Instance {
+  int mesh = -1;
+  Transform xf;
+  std::vector<int> materials;  // material id per slot
+  unsigned visibility = 31;
+  bool flipped = false;        // negative determinant: winding flips the geometric normal
+  int material_for(int slot) const {
+    return slot >= 0 && slot < int(materials.size()) ? materials[slot] : -1;
+  }
+};
+
+struct Bounds {
+  Vec3 lo{INFINITY}, hi{-INFINITY};
+  void extend(const Vec3& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
+  bool empty() const { return lo.x > hi.x; }
+};
+
+class Geometry {
+ public:
+  Geometry();
+  ~Geometry();
+  Geometry(const Geometry&) = delete;
+  Geometry& operator=(const Geometry&) = delete;
+
+  // Takes a validated mesh (see api/): drops degenerate triangles and reports them in warnings.
+  int add_mesh(Mesh mesh, std::vector<std::string>& warnings);
+  int add_instance(Instance instance, std::vector<std::string>& warnings);
+  void commit();
+
+  // Closest hit among instances visible to rays of the given visibility bit.
+  bool intersect(const Ray& ray, unsigned visibility, Hit* hit) const;
+  // Any hit among instances that cast shadows.
+  bool occluded(const Ray& ray) const;
+  SurfacePoint surface(const Hit& hit) const;
+
+  size_t mesh_count() const { return meshes_.size(); }
+  size_t instance_count() const { return instances_.size(); }
+  const Mesh& mesh(int i) const { return meshes_[i]; }
+  const Instance& instance(int i) const { return instances_[i]; }
+  Bounds bounds() const { return bounds_; }
+  // World-space triangle corners of an instance's triangle.
+  void triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2) const;
+
+ private:
+  RTCDevice device_ = nullptr;
+  RTCScene top_ = nullptr;
+  std::vector<Mesh> meshes_;
+  std::vector<Instance> instances_;
+  std::vector<unsigned> rtc_to_instance_;  // Embree instance geometry id -> our instance index
+  std::vector<unsigned> instance_visibility_;
+  Bounds bounds_;
+  bool partial_visibility_ = false;
+  bool committed_ = false;
+};
+
+}  // namespace lt

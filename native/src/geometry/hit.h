@@ -1,0 +1,55 @@
+// What an intersection tells the integrator, and the robust offset that starts the next ray.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+
+#include "core/math.h"
+#include "core/sampling.h"
+
+namespace lt {
+
+struct Hit {
+  float t = INFINITY;
+  int instance = -1;
+  int primitive = -1;
+  float u = 0, v = 0;  // barycentrics of vertices 1 and 2
+  bool valid() const { return instance >= 0; }
+};
+
+// Everything shading needs at a surface point, in world space.
+struct SurfacePoint {
+  Vec3 p;
+  Vec3 ng;         // geometric normal (unit), as wound by the mesh
+  Vec3 ns;         // shading normal (unit), on ng's side
+  Vec2 uv;
+  int material = -1;
+  int instance = -1, primitive = -1;
+  float area = 0;  // world-space area of the triangle (for emissive triangles)
+};
+
+// Offsets a ray origin off a surface along the geometric normal by an amount that scales with the
+// position's magnitude (Waechter & Binder, "A Fast and Robust Method for Avoiding
+// Self-Intersection", Ray Tracing Gems ch. 6).
+inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& n) {
+  constexpr float kOrigin = 1.0f / 32.0f, kFloatScale = 1.0f / 65536.0f, kIntScale = 256.0f;
+  Vec3 r;
+  for (int i = 0; i < 3; ++i) {
+    int32_t of = int32_t(kIntScale * n[i]);
+    int32_t bits;
+    float pc = p[i];
+    std::memcpy(&bits, &pc, 4);
+    bits += p[i] < 0 ? -of : of;
+    float pi;
+    std::memcpy(&pi, &bits, 4);
+    r[i] = std::abs(p[i]) < kOrigin ? p[i] + kFloatScale * n[i] : pi;
+  }
+  return r;
+}
+
+// Origin for a ray leaving the surface towards direction d (above or below it).
+inline Vec3 spawn_origin(const SurfacePoint& sp, const Vec3& d) {
+  return offset_ray_origin(sp.p, dot(d, sp.ng) >= 0 ? sp.ng : -sp.ng);
+}
+
+}  // namespace lt

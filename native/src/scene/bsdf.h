@@ -1,0 +1,95 @@
+// Scattering at a surface point as a weighted sum of lobes, like Cycles' closures: a material's
+// shader tree is flattened into at most kMaxLobes lobes with RGB weights (mix factors folded in).
+//
+// All directions are in the local shading frame: +Z is the shading normal, flipped by the caller
+// to face the side wo arrives from, so wo.z >= 0 except where shading normals bend it. eta is the
+// relative index of refraction inside/outside as seen from wo's side (the caller passes 1/ior on
+// back faces). f() values exclude the cosine; the integrator multiplies |wi.z|.
+#pragma once
+
+#include <cstdint>
+
+#include "core/math.h"
+#include "core/sampling.h"
+
+namespace lt {
+
+enum LobeFlags : uint32_t {
+  kLobeReflection = 1,
+  kLobeTransmission = 2,
+  kLobeDiffuse = 4,
+  kLobeGlossy = 8,
+  kLobeSpecular = 16,  // delta distribution: eval() and pdf() are zero; only sample() reaches it
+};
+
+enum class LobeType : uint8_t {
+  Diffuse,     // Lambert (roughness 0) or Oren-Nayar as Cycles' Diffuse BSDF
+  GlossyGGX,   // GGX reflection, colour as constant reflectance (Cycles' Glossy BSDF, no Fresnel)
+  Dielectric,  // Fresnel-weighted GGX reflection + refraction (Cycles' Glass BSDF); delta at alpha 0
+  SpecularGGX, // GGX reflection with Schlick Fresnel from f0 to 1 (Principled BSDF's specular)
+  Transparent, // straight pass-through (delta transmission)
+};
+
+struct Lobe {
+  LobeType type = LobeType::Diffuse;
+  Spectrum weight{1.0f};  // colour x mix weight
+  float roughness = 0;    // Diffuse: Oren-Nayar sigma; microfacet: unused (see alpha)
+  float alpha = 0;        // GGX alpha = roughness^2; below kSmoothAlpha the lobe is delta
+  float eta = 1.5f;       // Dielectric: relative IOR across the surface from wo's side
+  Spectrum f0{0.04f};     // SpecularGGX: reflectance at normal incidence
+};
+
+struct BsdfSample {
+  Vec3 wi;
+  Spectrum f;      // BSDF value (cosine excluded); for delta lobes f*|wi.z|/pdf is the weight
+  float pdf = 0;   // solid-angle pdf of the whole mixture, or the discrete probability if delta
+  uint32_t flags = 0;  // the sampled lobe's LobeFlags
+  float eta = 1;   // relative IOR crossed (1 for reflection)
+};
+
+constexpr int kMaxLobes = 8;
+constexpr float kSmoothAlpha = 1e-4f;
+
+class Bsdf {
+ public:
+  void clear() {
+    count_ = 0;
+    overflowed_ = false;
+  }
+  // Adds a lobe; lobes whose weight is zero are dropped, lobes past kMaxLobes merge into nothing
+  // and are reported through overflowed().
+  void add(const Lobe& lobe);
+  int count() const { return count_; }
+  const Lobe& lobe(int i) const { return lobes_[i]; }
+  bool overflowed() const { return overflowed_; }
+
+  // Sum of the non-delta lobes' f, and the mixture pdf of sampling wi with sample().
+  Spectrum eval(const Vec3& wo, const Vec3& wi, float* pdf) const;
+  // Picks a lobe with probability proportional to its weight's luminance-ish estimate, samples it,
+  // then (for non-delta lobes) evaluates all non-delta lobes for f and the mixture pdf.
+  bool sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const;
+  // Directional albedo estimate of the lobes' weights (for the Albedo pass and Russian roulette).
+  Spectrum albedo() const;
+  uint32_t flags() const;  // union of lobe flags
+  bool has_non_delta() const;
+
+ private:
+  float selection_weight(int i) const;
+  Lobe lobes_[kMaxLobes];
+  int count_ = 0;
+  bool overflowed_ = false;
+};
+
+// ---- single-lobe routines, exposed for the chi-square tests ----------------------------------
+Spectrum lobe_eval(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
+float lobe_pdf(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
+bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out);
+uint32_t lobe_flags(const Lobe& lobe);
+
+// GGX (Trowbridge-Reitz) microfacet distribution with visible-normal sampling (Heitz 2018).
+float ggx_D(const Vec3& m, float alpha);
+float ggx_G1(const Vec3& w, float alpha);
+Vec3 ggx_sample_visible_normal(const Vec3& wo, float alpha, Vec2 u);
+float fresnel_dielectric(float cos_i, float eta);
+
+}  // namespace lt

@@ -1,0 +1,180 @@
+#include "scene/material.h"
+
+#include <string>
+
+#include "core/error.h"
+
+namespace lt {
+
+namespace {
+
+Vec3 color_of(const Input& in, const std::vector<std::unique_ptr<Image>>& images, Vec2 uv) {
+  return in.image >= 0 ? images[in.image]->lookup(uv) : in.value;
+}
+float value_of(const Input& in, const std::vector<std::unique_ptr<Image>>& images, Vec2 uv) {
+  return in.image >= 0 ? images[in.image]->lookup_value(uv) : in.value.x;
+}
+float unit(float x) { return std::isfinite(x) ? clamp(x, 0.0f, 1.0f) : 0.0f; }
+Vec3 non_negative(Vec3 c) {
+  for (int k = 0; k < 3; ++k) c[k] = std::isfinite(c[k]) ? std::max(0.0f, c[k]) : 0.0f;
+  return c;
+}
+
+constexpr int kMaxDepth = 64;
+
+}  // namespace
+
+Material::Material(std::vector<ShaderNode> nodes, int root, size_t image_count) : nodes_(std::move(nodes)), root_(root) {
+  const int n = int(nodes_.size());
+  if (n == 0) throw InvalidArgument("material has no nodes");
+  if (root < 0 || root >= n) throw InvalidArgument("material root " + std::to_string(root) + " is out of range");
+  for (int i = 0; i < n; ++i) {
+    const ShaderNode& s = nodes_[i];
+    if (int(s.type) < 0 || s.type >= NodeType::Count)
+      throw InvalidArgument("material node " + std::to_string(i) + " has an unknown type " + std::to_string(int(s.type)));
+    for (const Input* in : {&s.color, &s.roughness, &s.fac, &s.metallic, &s.specular, &s.transmission, &s.emission, &s.strength})
+      if (in->image >= int(image_count))
+        throw InvalidArgument("material node " + std::to_string(i) + " refers to image " + std::to_string(in->image) +
+                              " which does not exist");
+    int kids = s.type == NodeType::Mix || s.type == NodeType::Add ? 2 : 0;
+    for (int c = 0; c < kids; ++c)
+      if (s.child[c] < 0 || s.child[c] >= n)
+        throw InvalidArgument("material node " + std::to_string(i) + " has child " + std::to_string(s.child[c]) + " out of range");
+  }
+  // Reject cycles and trees deeper than the evaluator walks (depth-first with colours).
+  std::vector<int> state(n, 0);
+  std::vector<std::pair<int, int>> stack{{root, 0}};
+  bool emissive = false;
+  float estimate = 0;
+  while (!stack.empty()) {
+    auto [i, depth] = stack.back();
+    stack.pop_back();
+    if (i < 0) { state[-i - 1] = 2; continue; }
+    if (state[i] == 1) throw InvalidArgument("material node graph has a cycle through node " + std::to_string(i));
+    if (depth > kMaxDepth) throw InvalidArgument("material node tree is deeper than " + std::to_string(kMaxDepth));
+    if (state[i] == 2) continue;
+    state[i] = 1;
+    stack.push_back({-i - 1, depth});
+    const ShaderNode& s = nodes_[i];
+    if (s.type == NodeType::Mix || s.type == NodeType::Add) {
+      stack.push_back({s.child[0], depth + 1});
+      stack.push_back({s.child[1], depth + 1});
+    }
+    if (s.type == NodeType::Emission || s.type == NodeType::Principled) {
+      Input c = s.type == NodeType::Emission ? s.color : s.emission;
+      float strength = s.strength.image >= 0 ? 1.0f : s.strength.value.x;
+      float e = (c.image >= 0 ? 1.0f : max_component(non_negative(c.value))) * std::max(0.0f, strength);
+      if (std::isfinite(e) && e > 0) {
+        emissive = true;
+        estimate = std::max(estimate, e);
+      }
+    }
+  }
+  emissive_ = emissive;
+  emission_estimate_ = estimate;
+}
+
+Material Material::default_surface() {
+  Material m;
+  ShaderNode d;
+  d.type = NodeType::Diffuse;
+  d.color.value = Vec3(0.8f);
+  m.nodes_ = {d};
+  return m;
+}
+
+template <bool kLobes>
+Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface, Bsdf* bsdf) const {
+  struct Item { int node; Vec3 weight; };
+  Item stack[kMaxDepth + 2];
+  int top = 0;
+  stack[top++] = {root_, Vec3(1.0f)};
+  Spectrum emitted(0.0f);
+  while (top > 0) {
+    Item it = stack[--top];
+    if (is_black(it.weight)) continue;
+    const ShaderNode& s = nodes_[it.node];
+    switch (s.type) {
+      case NodeType::Mix: {
+        float f = unit(value_of(s.fac, images, uv));
+        stack[top++] = {s.child[0], it.weight * (1 - f)};
+        stack[top++] = {s.child[1], it.weight * f};
+        break;
+      }
+      case NodeType::Add:
+        stack[top++] = {s.child[0], it.weight};
+        stack[top++] = {s.child[1], it.weight};
+        break;
+      case NodeType::Emission:
+        emitted += it.weight * non_negative(color_of(s.color, images, uv)) * std::max(0.0f, value_of(s.strength, images, uv));
+        break;
+      case NodeType::Principled:
+        if (s.emission.image >= 0 || !is_black(s.emission.value))
+          emitted += it.weight * non_negative(color_of(s.emission, images, uv)) * std::max(0.0f, value_of(s.strength, images, uv));
+        if constexpr (kLobes) {
+          // Cycles 3.x Principled v1, reduced to its main lobes (README: departures): Lambert
+          // diffuse (no retro-reflection, sheen, subsurface or clearcoat), a GGX specular layer with
+          // Schlick Fresnel from f0 = mix(0.08 specular, base, metallic), and a GGX glass lobe.
+          Vec3 base = non_negative(color_of(s.color, images, uv));
+          float metallic = unit(value_of(s.metallic, images, uv));
+          float transmission = unit(value_of(s.transmission, images, uv)) * (1 - metallic);
+          float r = unit(value_of(s.roughness, images, uv));
+          float spec = std::max(0.0f, value_of(s.specular, images, uv));
+          Lobe d;
+          d.type = LobeType::Diffuse;
+          d.weight = it.weight * base * ((1 - metallic) * (1 - transmission));
+          bsdf->add(d);
+          Lobe g;
+          g.type = LobeType::SpecularGGX;
+          g.weight = it.weight * (1 - transmission);
+          g.alpha = r * r;
+          g.f0 = lerp(metallic, Vec3(std::min(1.0f, 0.08f * spec)), base);
+          bsdf->add(g);
+          if (transmission > 0) {
+            Lobe t;
+            t.type = LobeType::Dielectric;
+            t.weight = it.weight * base * transmission;
+            t.alpha = r * r;
+            float ior = std::max(1.0f + 1e-4f, s.ior);
+            t.eta = backface ? 1 / ior : ior;
+            bsdf->add(t);
+          }
+        }
+        break;
+      default:
+        if constexpr (kLobes) {
+          Lobe l;
+          l.weight = it.weight * non_negative(color_of(s.color, images, uv));
+          float r = unit(value_of(s.roughness, images, uv));
+          switch (s.type) {
+            case NodeType::Diffuse: l.type = LobeType::Diffuse; l.roughness = r; break;
+            case NodeType::Glossy: l.type = LobeType::GlossyGGX; l.alpha = r * r; break;
+            case NodeType::Glass: {
+              l.type = LobeType::Dielectric;
+              l.alpha = r * r;
+              float ior = std::max(1.0f + 1e-4f, s.ior);
+              l.eta = backface ? 1 / ior : ior;
+              break;
+            }
+            case NodeType::Transparent: l.type = LobeType::Transparent; break;
+            default: break;
+          }
+          bsdf->add(l);
+        }
+        break;
+    }
+  }
+  return emitted;
+}
+
+Spectrum Material::evaluate(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface, Bsdf* bsdf) const {
+  bsdf->clear();
+  return walk<true>(images, uv, backface, bsdf);
+}
+
+Spectrum Material::emission(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv) const {
+  if (!emissive_) return Spectrum(0.0f);
+  return walk<false>(images, uv, false, nullptr);
+}
+
+}  // namespace lt

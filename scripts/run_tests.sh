@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Builds everything (scripts/setup.sh) and runs the whole test suite: the native GoogleTest suite
+# under ctest, then the add-on's pytest suite inside `blender -b`. Exits non-zero on any failure.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+BUILD_DIR=${LANTERN_BUILD_DIR:-build}
+
+echo "== native tests (ctest) =="
+(cd "$BUILD_DIR" && ctest --output-on-failure -j2 "$@")
+
+echo "== Blender tests (pytest inside blender -b) =="
+# The tests use this checkout's add-on and library, not an installed copy.
+export LANTERN_LIBRARY="$PWD/$BUILD_DIR/liblantern.so"
+blender -b --factory-startup --python-exit-code 1 --python tests/blender/run_pytest.py -- -q

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs what Lantern needs from Debian's apt (when missing), builds the native library, the CLI
+# and the tests in Release, and installs the add-on where Blender finds it. Idempotent.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(blender cmake g++ make libembree-dev libtbb-dev libopenexr-dev libopenvdb-dev libnanovdb-dev
+          libgtest-dev libbenchmark-dev python3-numpy python3-pytest)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "lantern: installing ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+BUILD_DIR=${LANTERN_BUILD_DIR:-build}
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$BUILD_DIR" -j"$(nproc)"
+
+# Install the add-on into the user's Blender scripts folder, with the library beside it, and enable it.
+SCRIPTS=$(blender -b --factory-startup --python-expr \
+  "import bpy; print('LANTERN_SCRIPTS=' + bpy.utils.user_resource('SCRIPTS'))" 2>/dev/null |
+  sed -n 's/^LANTERN_SCRIPTS=//p')
+[ -n "$SCRIPTS" ] || { echo "lantern: could not ask Blender for its scripts folder" >&2; exit 1; }
+DEST="$SCRIPTS/addons/lantern"
+rm -rf "$DEST"
+mkdir -p "$DEST"
+cp -r addon/lantern/. "$DEST/"
+find "$DEST" -name __pycache__ -prune -exec rm -rf {} +
+cp "$BUILD_DIR/liblantern.so" "$DEST/"
+blender -b --python-expr "import bpy; bpy.ops.preferences.addon_enable(module='lantern'); bpy.ops.wm.save_userpref()" \
+  >/dev/null 2>&1
+echo "lantern: add-on installed in $DEST and enabled"
