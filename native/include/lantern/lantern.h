@@ -187,7 +187,8 @@ LT_API int lt_scene_commit(lt_scene* scene);
 
 /* ---- rendering ---------------------------------------------------------------------------- */
 
-enum lt_integrator { LT_INTEGRATOR_PATH = 0, LT_INTEGRATOR_COUNT = 1 };
+enum lt_integrator { LT_INTEGRATOR_PATH = 0, LT_INTEGRATOR_BIDIRECTIONAL = 1, LT_INTEGRATOR_COUNT = 2 };
+enum lt_mis { LT_MIS_POWER = 0, LT_MIS_BALANCE = 1, LT_MIS_UNIFORM = 2 };
 enum lt_filter { LT_FILTER_BOX = 0, LT_FILTER_GAUSSIAN = 1, LT_FILTER_BLACKMAN_HARRIS = 2 };
 
 typedef struct lt_render_settings {
@@ -205,6 +206,11 @@ typedef struct lt_render_settings {
   int filter;                         /* lt_filter */
   float filter_width;                 /* pixels */
   int transparent_background;         /* Film > Transparent: background alpha 0 */
+  /* Bidirectional: vertices of the camera subpath after the camera, vertices of the light
+   * subpath including the one on the light (1: only the light vertex, which makes BDPT equal to
+   * path tracing with next-event estimation), and the MIS heuristic (lt_mis). */
+  int max_camera_length, max_light_length;
+  int mis_heuristic;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);

@@ -290,7 +290,8 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
   return guarded([&] {
     require(scene && d, "lt_scene_set_camera: NULL argument");
     scene->scene.require_editable();
-    require(d->type == LT_CAMERA_PERSPECTIVE || d->type == LT_CAMERA_ORTHOGRAPHIC, "unknown camera type");
+    require(d->type == LT_CAMERA_PERSPECTIVE || d->type == LT_CAMERA_ORTHOGRAPHIC,
+            "unknown camera type " + std::to_string(d->type) + "; valid types are PERSPECTIVE, ORTHOGRAPHIC");
     require(d->sensor_fit >= LT_SENSOR_AUTO && d->sensor_fit <= LT_SENSOR_VERTICAL, "unknown sensor fit");
     const float values[] = {d->focal_length, d->sensor_width, d->sensor_height, d->ortho_scale, d->shift_x,
                             d->shift_y,      d->clip_start,   d->clip_end,      d->pixel_aspect};
@@ -299,7 +300,7 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
                 d->pixel_aspect > 0,
             "camera focal length, sensor size, ortho scale and pixel aspect must be positive");
     require(d->clip_start >= 0 && d->clip_end > d->clip_start, "camera clip end must exceed clip start >= 0");
-    lt::CameraDesc& c = scene->scene.camera;
+    lt::CameraDesc c = scene->scene.camera;  // assigned only once valid: a refused call changes nothing
     c.orthographic = d->type == LT_CAMERA_ORTHOGRAPHIC;
     c.xf = to_transform(d->transform, "camera");
     require(std::abs(c.xf.determinant()) > 1e-30f, "camera transform is singular");
@@ -313,6 +314,7 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     c.clip_start = d->clip_start;
     c.clip_end = d->clip_end;
     c.pixel_aspect = d->pixel_aspect;
+    scene->scene.camera = c;
     scene->scene.camera_set = true;
   });
 }
@@ -323,7 +325,8 @@ int lt_scene_set_world(lt_scene* scene, const lt_world_desc* d) {
     scene->scene.require_editable();
     require(finite_array(d->color, 3) && std::isfinite(d->strength) && std::isfinite(d->rotation_z),
             "world colour, strength and rotation must be finite");
-    require(d->image >= -1 && d->image < int(scene->scene.images.size()), "world image does not exist");
+    require(d->image >= -1 && d->image < int(scene->scene.images.size()),
+            "world refers to image " + std::to_string(d->image) + ", which does not exist");
     lt::World& w = scene->scene.world;
     w.color = lt::vmax(lt::Vec3(0.0f), lt::Vec3(d->color[0], d->color[1], d->color[2]) * std::max(0.0f, d->strength));
     w.image = d->image >= 0 ? scene->scene.images[d->image].get() : nullptr;
@@ -354,6 +357,9 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->transparent_bounces = 8;
   s->filter = LT_FILTER_BLACKMAN_HARRIS;
   s->filter_width = 1.5f;
+  s->max_camera_length = 64;
+  s->max_light_length = 64;
+  s->mis_heuristic = LT_MIS_POWER;
 }
 
 int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** out) {
@@ -367,7 +373,13 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
                 std::to_string(kMaxDimension) + " per side and " + std::to_string(kMaxPixels) + " pixels)");
     require(s->samples > 0 && s->samples <= (1 << 24), "samples must be in [1, 16777216]");
     require(s->integrator >= 0 && s->integrator < LT_INTEGRATOR_COUNT,
-            "unknown integrator " + std::to_string(s->integrator) + "; valid: PATH");
+            "unknown integrator " + std::to_string(s->integrator) + "; valid: PATH, BIDIRECTIONAL");
+    require(s->integrator != LT_INTEGRATOR_BIDIRECTIONAL ||
+                (s->max_camera_length >= 1 && s->max_camera_length <= 1024 && s->max_light_length >= 0 &&
+                 s->max_light_length <= 1024),
+            "bidirectional path lengths must be in [1, 1024] (camera) and [0, 1024] (light)");
+    require(s->mis_heuristic >= LT_MIS_POWER && s->mis_heuristic <= LT_MIS_UNIFORM,
+            "unknown MIS heuristic " + std::to_string(s->mis_heuristic) + "; valid: POWER, BALANCE, UNIFORM");
     require(s->max_bounces >= 0 && s->diffuse_bounces >= 0 && s->glossy_bounces >= 0 && s->transmission_bounces >= 0 &&
                 s->transparent_bounces >= 0 && s->max_bounces <= 1024,
             "bounce limits must be in [0, 1024]");
@@ -401,6 +413,9 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.clamp_direct = s->clamp_direct;
     is.clamp_indirect = s->clamp_indirect;
     is.transparent_background = s->transparent_background != 0;
+    is.max_camera_length = s->max_camera_length;
+    is.max_light_length = s->max_light_length;
+    is.mis = lt::MisHeuristic(s->mis_heuristic);
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;

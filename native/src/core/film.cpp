@@ -39,6 +39,14 @@ float FilterSampler::sample(float u) const {
   return sign * half_range_ * table_.sample_continuous(std::min(r, kOneMinusEpsilon), &pdf);
 }
 
+float FilterSampler::pdf(float offset) const {
+  float a = std::abs(offset) / half_range_;
+  if (!(a < 1)) return 0;
+  int bin = std::min(int(a * table_.size()), int(table_.size()) - 1);
+  double integral = table_.integral();
+  return integral > 0 ? float(table_.func(bin) / integral) * 0.5f / half_range_ : 0.0f;
+}
+
 int pass_channels(Pass pass) {
   switch (pass) {
     case Pass::Combined: return 4;
@@ -66,6 +74,8 @@ void Film::add(int x, int y, const SampleValue& s) {
 void Film::publish() {
   std::lock_guard<std::mutex> lock(mutex_);
   published_ = accum_;
+  published_splat_ = splat_;
+  published_light_paths_ = light_paths_;
 }
 
 uint64_t Film::total_samples() const {
@@ -79,6 +89,7 @@ void Film::read(Pass pass, float* out) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const int c = pass_channels(pass);
   const size_t n = size_t(width_) * height_;
+  const double splat_scale = published_light_paths_ ? 1.0 / double(published_light_paths_) : 0.0;
   for (size_t i = 0; i < n; ++i) {
     float* o = out + i * c;
     if (published_.empty()) {
@@ -89,7 +100,7 @@ void Film::read(Pass pass, float* out) const {
     const double inv = a.count ? 1.0 / a.count : 0.0;
     switch (pass) {
       case Pass::Combined:
-        for (int k = 0; k < 3; ++k) o[k] = float(a.rgb[k] * inv);
+        for (int k = 0; k < 3; ++k) o[k] = float(a.rgb[k] * inv + published_splat_[3 * i + k] * splat_scale);
         o[3] = float(a.alpha * inv);
         break;
       case Pass::Depth: o[0] = a.depth; break;

@@ -21,6 +21,8 @@ class FilterSampler {
  public:
   FilterSampler(FilterType type, float width);
   float sample(float u) const;  // offset from the pixel centre, in pixels
+  float pdf(float offset) const;  // density of sample() at an offset (normalised: integrates to 1)
+  float radius() const { return half_range_; }
 
  private:
   Distribution1D table_;
@@ -50,11 +52,18 @@ int pass_channels(Pass pass);
 
 class Film {
  public:
-  Film(int width, int height) : width_(width), height_(height), accum_(size_t(width) * height) {}
+  Film(int width, int height)
+      : width_(width), height_(height), accum_(size_t(width) * height), splat_(size_t(width) * height * 3, 0.0) {}
   int width() const { return width_; }
   int height() const { return height_; }
   // Only the thread that owns the pixel in the current pass writes it.
   void add(int x, int y, const SampleValue& s);
+  // Light-tracing contributions (BDPT's t = 1): summed per pixel and divided, when read, by the
+  // number of light paths traced for the whole region (each one may reach any pixel).
+  void add_splat(uint32_t pixel, const Spectrum& v) {
+    for (int k = 0; k < 3; ++k) splat_[3 * size_t(pixel) + k] += v[k];
+  }
+  void add_light_paths(uint64_t n) { light_paths_ += n; }
   // Copies the accumulators to the published buffer readers use.
   void publish();
   // Resolves a pass of the published buffer: width*height*channels floats, rows bottom to top.
@@ -65,6 +74,8 @@ class Film {
   int width_, height_;
   std::vector<PixelAccum> accum_;
   std::vector<PixelAccum> published_;
+  std::vector<double> splat_, published_splat_;
+  uint64_t light_paths_ = 0, published_light_paths_ = 0;
   mutable std::mutex mutex_;
 };
 

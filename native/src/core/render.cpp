@@ -36,27 +36,55 @@ void RenderJob::wait() {
 }
 
 void RenderJob::render_pass(int sample_index) {
+  if (settings_.integrator == IntegratorType::Bidirectional) {
+    RenderContext ctx{scene_, camera_, filter_, settings_.integrator_settings,
+                      settings_.x0, settings_.y0, film_.width(), film_.height()};
+    render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>& splats) {
+      return trace_bdpt(ctx, cs, sampler, stats, splats);
+    });
+    // Merge the splats tile by tile in a fixed order (deterministic for any thread count).
+    for (auto& list : tile_splats_) {
+      for (const Splat& sp : list) film_.add_splat(sp.pixel, sp.value);
+      list.clear();
+    }
+    film_.add_light_paths(uint64_t(film_.width()) * film_.height());
+  } else {
+    render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) {
+      return trace_path(scene_, settings_.integrator_settings, cs.ray, sampler, stats);
+    });
+  }
+}
+
+template <class Trace>
+void RenderJob::render_pass_with(int sample_index, Trace trace) {
   const int w = film_.width(), h = film_.height();
   const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  tile_splats_.resize(size_t(tiles_x) * tiles_y);
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
     SampleStats stats;
     uint64_t nans = 0;
     for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
       for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) {
         if (cancel_.load(std::memory_order_relaxed)) break;
+        std::vector<Splat>& splats = tile_splats_[size_t(ty) * tiles_x + tx];
         for (int y = ty * kTile; y < std::min(h, (ty + 1) * kTile); ++y)
           for (int x = tx * kTile; x < std::min(w, (tx + 1) * kTile); ++x) {
             const int fx = x + settings_.x0, fy = y + settings_.y0;
             // Random numbers depend only on (seed, pixel of the full frame, sample index).
             Sampler sampler(settings_.seed, uint32_t(fy) * uint32_t(settings_.width) + uint32_t(fx), uint32_t(sample_index));
             float ox = filter_.sample(sampler.next_1d()), oy = filter_.sample(sampler.next_1d());
-            Ray ray = camera_.generate(fx + 0.5f + ox, fy + 0.5f + oy);
-            SampleValue v = trace_path(scene_, settings_.integrator_settings, ray, sampler, stats);
+            CameraSample cs;
+            cs.film = {fx + 0.5f + ox, fy + 0.5f + oy};
+            cs.film_pdf = filter_.pdf(ox) * filter_.pdf(oy);
+            cs.ray = camera_.generate(cs.film.x, cs.film.y);
+            size_t splat_mark = splats.size();
+            SampleValue v = trace(cs, sampler, stats, splats);
             if (!is_finite(v.radiance) || !std::isfinite(v.alpha) || !is_finite(v.albedo) || !is_finite(v.normal)) {
               ++nans;  // never written into the film; counted in the render statistics
+              splats.resize(splat_mark);
               continue;
             }
-            if (v.depth < 1e10f) v.depth = camera_.depth(ray.o + ray.d * v.depth);
+            if (v.depth < 1e10f) v.depth = camera_.depth(cs.ray.o + cs.ray.d * v.depth);
             film_.add(x, y, v);
           }
       }

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <memory>
 #include <thread>
+#include <vector>
 
 #include "core/film.h"
 #include "integrators/integrator.h"
@@ -13,7 +14,7 @@
 
 namespace lt {
 
-enum class IntegratorType { Path = 0, Count = 1 };
+enum class IntegratorType { Path = 0, Bidirectional = 1, Count = 2 };
 
 struct RenderSettings {
   int width = 640, height = 480;
@@ -53,6 +54,8 @@ class RenderJob {
 
  private:
   void render_pass(int sample_index);
+  template <class Trace>
+  void render_pass_with(int sample_index, Trace trace);
   const Scene& scene_;
   RenderSettings settings_;
   Camera camera_;
@@ -66,6 +69,9 @@ class RenderJob {
   std::chrono::steady_clock::time_point start_;
   std::atomic<double> finished_elapsed_{-1};
   std::string error_;
+  // Light-tracing splats of the current pass, one list per tile, merged in tile order so that
+  // the image does not depend on the thread count.
+  std::vector<std::vector<Splat>> tile_splats_;
 };
 
 }  // namespace lt

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "core/film.h"
 #include "core/sampling.h"
@@ -9,8 +10,14 @@
 
 namespace lt {
 
+enum class MisHeuristic { Power = 0, Balance = 1, Uniform = 2 };
+
 struct IntegratorSettings {
   int max_bounces = 12;
+  // Bidirectional: vertex limits of the two subpaths (the camera's own vertex and the light's
+  // vertex count) and the MIS heuristic.
+  int max_camera_length = 64, max_light_length = 64;
+  MisHeuristic mis = MisHeuristic::Power;
   int diffuse_bounces = 4, glossy_bounces = 4, transmission_bounces = 12, transparent_bounces = 8;
   float clamp_direct = 0, clamp_indirect = 0;  // 0: off
   bool transparent_background = false;
@@ -19,6 +26,33 @@ struct IntegratorSettings {
 struct SampleStats {
   uint64_t rays = 0;
 };
+
+// A camera ray with where it crosses the film (full-frame pixels, y up) and the density, per unit
+// film area, with which the pixel's filter chose that position.
+struct CameraSample {
+  Ray ray;
+  Vec2 film;
+  float film_pdf = 1;
+};
+
+// A light-tracing contribution to a pixel of the render region (BDPT's t = 1).
+struct Splat {
+  uint32_t pixel;
+  Spectrum value;
+};
+
+struct RenderContext {
+  const Scene& scene;
+  const Camera& camera;
+  const FilterSampler& filter;
+  IntegratorSettings settings;
+  int x0, y0, width, height;  // render region in full-frame pixels
+};
+
+// Bidirectional path tracing: one camera subpath and one light subpath per sample, every
+// connection strategy weighted by MIS; t = 1 contributions go to `splats`.
+SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
+                       std::vector<Splat>& splats);
 
 // Radiance along a camera ray, plus the first-hit data passes. One call is one sample.
 SampleValue trace_path(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,

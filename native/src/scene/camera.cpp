@@ -19,10 +19,28 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : d_(desc), width_
   x1_ = (0.5f * winx + dx) * pixsize;
   y0_ = (-0.5f * ycor * winy + dy) * pixsize;
   y1_ = (0.5f * ycor * winy + dy) * pixsize;
+  pixel_area_ = ((x1_ - x0_) / winx) * ((y1_ - y0_) / winy);
   origin_ = desc.xf.point(Vec3(0.0f));
   right_ = normalize(desc.xf.vector(Vec3(1, 0, 0)));
   up_ = normalize(desc.xf.vector(Vec3(0, 1, 0)));
   forward_neg_ = normalize(desc.xf.vector(Vec3(0, 0, 1)));
+}
+
+bool Camera::project(const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance) const {
+  if (d_.orthographic) return false;  // a delta direction: no point connects to it
+  Vec3 v = p - origin_;
+  float z = -dot(v, forward_neg_);
+  if (!(z > 0)) return false;
+  float dist = length(v);
+  // Clipping planes are perpendicular to the axis.
+  if (z < d_.clip_start || z > d_.clip_end) return false;
+  float px = dot(v, right_) / z, py = dot(v, up_) / z;
+  film->x = (px - x0_) / (x1_ - x0_) * width_;
+  film->y = (py - y0_) / (y1_ - y0_) * height_;
+  if (film->x < -margin || film->x > width_ + margin || film->y < -margin || film->y > height_ + margin) return false;
+  *dir = v / dist;
+  *distance = dist;
+  return true;
 }
 
 Ray Camera::generate(float x, float y) const {

@@ -55,6 +55,7 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Geomet
   lights_ = std::move(lights);
   Bounds b = geometry.bounds();
   scene_radius_ = b.empty() ? 1.0f : std::max(1e-3f, 0.5f * length(b.hi - b.lo));
+  scene_center_ = b.empty() ? Vec3(0.0f) : (b.lo + b.hi) * 0.5f;
   std::vector<float> power(lights_.size());
   for (size_t i = 0; i < lights_.size(); ++i) {
     const Light& l = lights_[i];
@@ -251,6 +252,175 @@ float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, fl
     }
   }
   return 0;
+}
+
+bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, EmissionSample* e) const {
+  const Light& l = lights_[i];
+  e->delta_pos = e->delta_dir = false;
+  switch (l.type) {
+    case LightType::Point:
+    case LightType::Spot: {
+      Vec3 dir;
+      if (l.type == LightType::Spot) {
+        // Directions inside the cone only: outside it the spot emits nothing.
+        dir = Frame(l.direction).to_world(sample_uniform_cone(ud, l.cos_half_angle));
+        e->pdf_dir = uniform_cone_pdf(l.cos_half_angle);
+      } else {
+        dir = sample_uniform_sphere(ud);
+        e->pdf_dir = uniform_sphere_pdf();
+      }
+      e->ray.o = l.position;
+      e->ray.d = dir;
+      if (l.radius > 0) {
+        // Cycles 3.4's disk of radius r facing the receiver: emit from the disk facing `dir`.
+        Vec2 d = sample_disk_concentric(up);
+        e->ray.o = l.position + Frame(dir).to_world(Vec3(d.x * l.radius, d.y * l.radius, 0));
+        e->n = dir;
+        e->pdf_pos = 1 / (kPi * l.radius * l.radius);
+        e->radiance = l.power * (spot_attenuation(l, dir) / (4 * kPi * kPi * l.radius * l.radius));
+      } else {
+        e->n = Vec3(0.0f);
+        e->pdf_pos = 1;
+        e->delta_pos = true;
+        e->radiance = l.power * (spot_attenuation(l, dir) * kInv4Pi);
+      }
+      return !is_black(e->radiance);
+    }
+    case LightType::Area: {
+      Vec3 q;
+      if (l.shape == AreaShape::Rectangle) {
+        q = l.position + l.axis_u * (2 * up.x - 1) + l.axis_v * (2 * up.y - 1);
+      } else {
+        Vec2 d = sample_disk_concentric(up);
+        q = l.position + l.axis_u * d.x + l.axis_v * d.y;
+      }
+      Vec3 local = sample_cosine_hemisphere(ud);
+      e->ray.o = q;
+      e->ray.d = Frame(l.direction).to_world(local);
+      e->n = l.direction;
+      e->pdf_pos = 1 / l.area;
+      e->pdf_dir = cosine_hemisphere_pdf(local.z);
+      e->radiance = l.power * (0.25f / l.area);
+      return e->pdf_dir > 0;
+    }
+    case LightType::Triangle: {
+      Vec3 p0, p1, p2;
+      scene.geometry.triangle(l.instance, l.primitive, &p0, &p1, &p2);
+      Vec2 b = sample_triangle(up);
+      Vec3 ng = normalize(cross(p1 - p0, p2 - p0));
+      // Mesh lights emit from both sides: pick a side with the first half of u.
+      float ux = ud.x < 0.5f ? 2 * ud.x : 2 * ud.x - 1;
+      Vec3 n = ud.x < 0.5f ? ng : -ng;
+      Vec3 local = sample_cosine_hemisphere({std::min(ux, kOneMinusEpsilon), ud.y});
+      Hit h;
+      h.instance = l.instance;
+      h.primitive = l.primitive;
+      h.u = b.x;
+      h.v = b.y;
+      SurfacePoint sp = scene.geometry.surface(h);
+      e->ray.o = sp.p;
+      e->ray.d = Frame(n).to_world(local);
+      e->n = n;
+      e->pdf_pos = 1 / l.area;
+      e->pdf_dir = 0.5f * cosine_hemisphere_pdf(local.z);
+      e->radiance = scene.material(sp.material).emission(scene.images, sp.uv);
+      return e->pdf_dir > 0 && !is_black(e->radiance);
+    }
+    case LightType::Sun:
+    case LightType::World: {
+      Vec3 dir;  // direction light travels
+      if (l.type == LightType::Sun) {
+        if (l.tan_half_angle == 0) {
+          dir = l.direction;
+          e->pdf_dir = 1;
+          e->delta_dir = true;
+          e->radiance = l.power;
+        } else {
+          LightSample ls;
+          sample(scene, i, Vec3(0.0f), ud, &ls);
+          dir = -ls.wi;
+          e->pdf_dir = ls.pdf;
+          e->radiance = ls.radiance;
+        }
+      } else {
+        LightSample ls;
+        if (!sample(scene, i, Vec3(0.0f), ud, &ls)) return false;
+        dir = -ls.wi;
+        e->pdf_dir = ls.pdf;
+        e->radiance = ls.radiance;
+      }
+      Frame f(dir);
+      Vec2 d = sample_disk_concentric(up);
+      e->ray.o = scene_center_ + (f.to_world(Vec3(d.x, d.y, 0)) - dir) * scene_radius_;
+      e->ray.d = dir;
+      e->n = dir;
+      e->pdf_pos = 1 / (kPi * scene_radius_ * scene_radius_);
+      return e->pdf_dir > 0 && !is_black(e->radiance);
+    }
+  }
+  return false;
+}
+
+void LightSet::pdf_emission(const Scene& scene, int i, const Vec3& origin, const Vec3& n, const Vec3& dir,
+                            float* pdf_pos, float* pdf_dir) const {
+  const Light& l = lights_[i];
+  *pdf_pos = *pdf_dir = 0;
+  switch (l.type) {
+    case LightType::Point:
+    case LightType::Spot:
+      *pdf_pos = l.radius > 0 ? 1 / (kPi * l.radius * l.radius) : 1;
+      if (l.type == LightType::Spot)
+        *pdf_dir = dot(dir, l.direction) > l.cos_half_angle ? uniform_cone_pdf(l.cos_half_angle) : 0;
+      else
+        *pdf_dir = uniform_sphere_pdf();
+      return;
+    case LightType::Area:
+      *pdf_pos = 1 / l.area;
+      *pdf_dir = cosine_hemisphere_pdf(dot(dir, l.direction));
+      return;
+    case LightType::Triangle:
+      *pdf_pos = 1 / l.area;
+      *pdf_dir = 0.5f * std::abs(dot(dir, n)) * kInvPi;
+      return;
+    case LightType::Sun:
+    case LightType::World:
+      *pdf_pos = 1 / (kPi * scene_radius_ * scene_radius_);
+      *pdf_dir = pdf(scene, i, origin, -dir, INFINITY);
+      return;
+  }
+}
+
+Spectrum LightSet::emitted(const Scene& scene, int i, const Vec3& origin, const Vec3& n, const Vec3& dir) const {
+  const Light& l = lights_[i];
+  switch (l.type) {
+    case LightType::Point:
+    case LightType::Spot: {
+      float atten = spot_attenuation(l, dir);
+      if (l.radius > 0) return l.power * (atten / (4 * kPi * kPi * l.radius * l.radius));
+      return l.power * (atten * kInv4Pi);
+    }
+    case LightType::Area:
+      return dot(dir, l.direction) > 0 ? l.power * (0.25f / l.area) : Spectrum(0.0f);
+    case LightType::Triangle: {
+      Hit h;  // the emission is looked up at the origin's barycentrics
+      Vec3 p0, p1, p2;
+      scene.geometry.triangle(l.instance, l.primitive, &p0, &p1, &p2);
+      Vec3 e1 = p1 - p0, e2 = p2 - p0, q = origin - p0;
+      float d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2), d20 = dot(q, e1), d21 = dot(q, e2);
+      float den = d00 * d11 - d01 * d01;
+      h.instance = l.instance;
+      h.primitive = l.primitive;
+      h.u = den != 0 ? (d11 * d20 - d01 * d21) / den : 0;
+      h.v = den != 0 ? (d00 * d21 - d01 * d20) / den : 0;
+      SurfacePoint sp = scene.geometry.surface(h);
+      return scene.material(sp.material).emission(scene.images, sp.uv);
+    }
+    case LightType::Sun:
+      return sun_radiance(l);
+    case LightType::World:
+      return scene.world.radiance(-dir);
+  }
+  return Spectrum(0.0f);
 }
 
 bool LightSet::intersect_lamp(int i, const Ray& ray, LampHit* hit) const {

@@ -60,6 +60,16 @@ struct LightSample {
   bool delta = false;
 };
 
+// A light sampled as the start of a light subpath (BDPT): a point and a direction of emission.
+struct EmissionSample {
+  Ray ray;
+  Vec3 n;                // normal at the origin (zero for points); for infinite lights: -ray.d
+  Spectrum radiance;     // Le(origin, ray.d); intensity for point lights, irradiance for delta suns
+  float pdf_pos = 0;     // area density of the origin (1 for delta positions)
+  float pdf_dir = 0;     // solid-angle density of the direction (1 for delta directions)
+  bool delta_pos = false, delta_dir = false;
+};
+
 class Scene;
 
 class LightSet {
@@ -80,6 +90,17 @@ class LightSet {
   // Solid-angle pdf that sample() picks direction wi from p for this light (selection excluded);
   // for area-like lights the point at distance t along wi.
   float pdf(const Scene& scene, int light, const Vec3& p, const Vec3& wi, float t) const;
+
+  // Emission sampling for light subpaths, and its densities for a given origin and direction.
+  // Infinite lights (sun, world) emit from a disk perpendicular to the direction over the scene's
+  // bounding sphere (pbrt 3, section 12.6), so pdf_pos is 1 / (pi r^2).
+  bool sample_emission(const Scene& scene, int light, Vec2 u_pos, Vec2 u_dir, EmissionSample* out) const;
+  void pdf_emission(const Scene& scene, int light, const Vec3& origin, const Vec3& n, const Vec3& dir,
+                    float* pdf_pos, float* pdf_dir) const;
+  // Radiance a light emits from `origin` towards `dir` (spot falloff, one-sidedness).
+  Spectrum emitted(const Scene& scene, int light, const Vec3& origin, const Vec3& n, const Vec3& dir) const;
+  float scene_radius() const { return scene_radius_; }
+  Vec3 scene_center() const { return scene_center_; }
 
   // Lights that rays can hit (area lights, point and spot lights with a radius): the closest hit
   // at distance < tmax is reported with its radiance towards the ray origin. Lamps do not occlude.
@@ -116,6 +137,7 @@ class LightSet {
   Distribution1D distribution_;
   int world_light_ = -1;
   float scene_radius_ = 1;
+  Vec3 scene_center_;
 };
 
 }  // namespace lt

@@ -1,5 +1,6 @@
 #include "scene/material.h"
 
+#include <functional>
 #include <string>
 
 #include "core/error.h"
@@ -70,6 +71,30 @@ Material::Material(std::vector<ShaderNode> nodes, int root, size_t image_count) 
       }
     }
   }
+  // The evaluator walks the graph as a tree: a node shared by several inputs is visited once per
+  // path to it. The depth-first check above sees a shared node only at the first depth it reaches
+  // it, so measure the longest path (the evaluator's stack holds kMaxDepth levels) and the expanded
+  // size (sharing can make the walk exponentially long; a tree of n nodes expands to n) here.
+  constexpr double kMaxExpanded = 4096;
+  std::vector<std::pair<double, int>> memo(n, {-1.0, 0});  // expanded size, longest path below
+  std::function<std::pair<double, int>(int, int)> expand = [&](int i, int depth) {  // acyclic here
+    if (memo[i].first < 0) {
+      if (depth > kMaxDepth) throw InvalidArgument("material node tree is deeper than " + std::to_string(kMaxDepth));
+      const ShaderNode& s = nodes_[i];
+      std::pair<double, int> r{1, 0};
+      if (s.type == NodeType::Mix || s.type == NodeType::Add) {
+        auto a = expand(s.child[0], depth + 1), b = expand(s.child[1], depth + 1);
+        r = {std::min(1 + a.first + b.first, 2 * kMaxExpanded), 1 + std::max(a.second, b.second)};
+      }
+      memo[i] = r;
+    }
+    if (depth + memo[i].second > kMaxDepth)
+      throw InvalidArgument("material node tree is deeper than " + std::to_string(kMaxDepth));
+    return memo[i];
+  };
+  if (expand(root, 0).first > kMaxExpanded)
+    throw InvalidArgument("material node graph expands to more than " + std::to_string(int(kMaxExpanded)) +
+                          " nodes when shared nodes are repeated for each input they feed");
   emissive_ = emissive;
   emission_estimate_ = estimate;
 }

@@ -1,0 +1,610 @@
+"""ctypes binding of Lantern's C ABI (native/include/lantern/lantern.h).
+
+This is the only module that knows the ABI: structures, signatures and status codes live here.
+Bulk arrays are numpy contiguous float32/int32 passed by pointer; the core copies what it keeps.
+"""
+
+import ctypes
+import os
+import threading
+
+import numpy as np
+
+ABI_VERSION = 1
+
+# lt_status
+OK = 0
+_STATUS_NAMES = {
+    1: "invalid argument",
+    2: "out of memory",
+    3: "I/O error",
+    4: "invalid state",
+    5: "internal error",
+}
+
+# lt_interpolation, lt_extension
+INTERP_LINEAR, INTERP_CLOSEST = 0, 1
+EXTENSION_REPEAT, EXTENSION_EXTEND, EXTENSION_CLIP = 0, 1, 2
+
+# lt_node_type
+NODE_DIFFUSE = 0
+NODE_GLOSSY = 1
+NODE_GLASS = 2
+NODE_EMISSION = 3
+NODE_MIX = 4
+NODE_ADD = 5
+NODE_PRINCIPLED = 6
+NODE_TRANSPARENT = 7
+
+# lt_visibility
+VISIBLE_CAMERA = 1
+VISIBLE_DIFFUSE = 2
+VISIBLE_GLOSSY = 4
+VISIBLE_TRANSMISSION = 8
+VISIBLE_SHADOW = 16
+VISIBLE_ALL = 31
+
+# lt_light_type, lt_area_shape
+LIGHT_POINT, LIGHT_SPOT, LIGHT_AREA, LIGHT_SUN = 0, 1, 2, 3
+AREA_SQUARE, AREA_RECTANGLE, AREA_DISK, AREA_ELLIPSE = 0, 1, 2, 3
+
+# lt_camera_type, lt_sensor_fit
+CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC = 0, 1
+SENSOR_AUTO, SENSOR_HORIZONTAL, SENSOR_VERTICAL = 0, 1, 2
+
+# lt_integrator, lt_filter
+INTEGRATOR_PATH, INTEGRATOR_BIDIRECTIONAL = 0, 1
+MIS_POWER, MIS_BALANCE, MIS_UNIFORM = 0, 1, 2
+FILTER_BOX, FILTER_GAUSSIAN, FILTER_BLACKMAN_HARRIS = 0, 1, 2
+
+# lt_render_state
+STATE_RUNNING, STATE_DONE, STATE_CANCELLED, STATE_FAILED = 0, 1, 2, 3
+
+# lt_pass
+PASS_COMBINED = 0
+PASS_DEPTH = 1
+PASS_NORMAL = 2
+PASS_ALBEDO = 3
+PASS_VARIANCE = 4
+PASS_SAMPLE_COUNT = 5
+PASS_COUNT = 6
+
+
+class LanternError(RuntimeError):
+    """A failing Lantern call; `status` is the lt_status code, the message lt_last_error()."""
+
+    def __init__(self, message, status=None):
+        super().__init__(message)
+        self.status = status
+
+
+# ---- structures (field order and types exactly as in lantern.h) ---------------------------------
+
+_f_p = ctypes.POINTER(ctypes.c_float)
+_i_p = ctypes.POINTER(ctypes.c_int)
+
+
+class ImageDesc(ctypes.Structure):
+    _fields_ = [
+        ("width", ctypes.c_int),
+        ("height", ctypes.c_int),
+        ("channels", ctypes.c_int),
+        ("pixels", _f_p),
+        ("srgb", ctypes.c_int),
+        ("interpolation", ctypes.c_int),
+        ("extension", ctypes.c_int),
+    ]
+
+
+class Input(ctypes.Structure):
+    _fields_ = [("value", ctypes.c_float * 3), ("image", ctypes.c_int)]
+
+    def __init__(self, value=(0.0, 0.0, 0.0), image=-1):
+        super().__init__((ctypes.c_float * 3)(*value), image)
+
+
+_INPUT_FIELDS = ("color", "roughness", "fac", "metallic", "specular", "transmission", "emission",
+                 "strength")
+
+
+class ShaderNode(ctypes.Structure):
+    _fields_ = [
+        ("type", ctypes.c_int),
+        ("color", Input),
+        ("roughness", Input),
+        ("fac", Input),
+        ("metallic", Input),
+        ("specular", Input),
+        ("transmission", Input),
+        ("emission", Input),
+        ("strength", Input),
+        ("ior", ctypes.c_float),
+        ("child", ctypes.c_int * 2),
+    ]
+
+    def __init__(self, type=NODE_DIFFUSE, ior=1.5, child=(-1, -1), **inputs):
+        """Inputs not given are constant 0 (image -1, not the zero-filled image 0)."""
+        super().__init__()
+        self.type = type
+        self.ior = ior
+        self.child[0], self.child[1] = child
+        for name in _INPUT_FIELDS:
+            setattr(self, name, inputs.pop(name, None) or Input())
+        if inputs:
+            raise TypeError("unknown shader node inputs: %s (valid: %s)"
+                            % (", ".join(inputs), ", ".join(_INPUT_FIELDS)))
+
+
+class MeshDesc(ctypes.Structure):
+    _fields_ = [
+        ("positions", _f_p),
+        ("vertex_count", ctypes.c_int),
+        ("triangles", _i_p),
+        ("triangle_count", ctypes.c_int),
+        ("corner_normals", _f_p),
+        ("corner_uvs", _f_p),
+        ("material_slots", _i_p),
+    ]
+
+
+class InstanceDesc(ctypes.Structure):
+    _fields_ = [
+        ("mesh", ctypes.c_int),
+        ("transform", ctypes.c_float * 12),
+        ("materials", _i_p),
+        ("material_count", ctypes.c_int),
+        ("visibility", ctypes.c_uint),
+    ]
+
+
+class LightDesc(ctypes.Structure):
+    _fields_ = [
+        ("type", ctypes.c_int),
+        ("color", ctypes.c_float * 3),
+        ("transform", ctypes.c_float * 12),
+        ("radius", ctypes.c_float),
+        ("spot_size", ctypes.c_float),
+        ("spot_blend", ctypes.c_float),
+        ("shape", ctypes.c_int),
+        ("size_x", ctypes.c_float),
+        ("size_y", ctypes.c_float),
+        ("angle", ctypes.c_float),
+        ("visibility", ctypes.c_uint),
+    ]
+
+
+class CameraDesc(ctypes.Structure):
+    _fields_ = [
+        ("type", ctypes.c_int),
+        ("transform", ctypes.c_float * 12),
+        ("focal_length", ctypes.c_float),
+        ("sensor_width", ctypes.c_float),
+        ("sensor_height", ctypes.c_float),
+        ("sensor_fit", ctypes.c_int),
+        ("ortho_scale", ctypes.c_float),
+        ("shift_x", ctypes.c_float),
+        ("shift_y", ctypes.c_float),
+        ("clip_start", ctypes.c_float),
+        ("clip_end", ctypes.c_float),
+        ("pixel_aspect", ctypes.c_float),
+    ]
+
+
+class WorldDesc(ctypes.Structure):
+    _fields_ = [
+        ("color", ctypes.c_float * 3),
+        ("strength", ctypes.c_float),
+        ("image", ctypes.c_int),
+        ("rotation_z", ctypes.c_float),
+        ("visibility", ctypes.c_uint),
+    ]
+
+
+class RenderSettings(ctypes.Structure):
+    _fields_ = [
+        ("width", ctypes.c_int),
+        ("height", ctypes.c_int),
+        ("border", ctypes.c_int * 4),
+        ("samples", ctypes.c_int),
+        ("seed", ctypes.c_uint),
+        ("integrator", ctypes.c_int),
+        ("max_bounces", ctypes.c_int),
+        ("diffuse_bounces", ctypes.c_int),
+        ("glossy_bounces", ctypes.c_int),
+        ("transmission_bounces", ctypes.c_int),
+        ("transparent_bounces", ctypes.c_int),
+        ("clamp_direct", ctypes.c_float),
+        ("clamp_indirect", ctypes.c_float),
+        ("threads", ctypes.c_int),
+        ("filter", ctypes.c_int),
+        ("filter_width", ctypes.c_float),
+        ("transparent_background", ctypes.c_int),
+        ("max_camera_length", ctypes.c_int),
+        ("max_light_length", ctypes.c_int),
+        ("mis_heuristic", ctypes.c_int),
+    ]
+
+
+class RenderStatus(ctypes.Structure):
+    _fields_ = [
+        ("state", ctypes.c_int),
+        ("samples_done", ctypes.c_int),
+        ("samples_total", ctypes.c_int),
+        ("elapsed_seconds", ctypes.c_double),
+        ("remaining_seconds", ctypes.c_double),
+        ("nan_samples", ctypes.c_uint64),
+        ("rays", ctypes.c_uint64),
+    ]
+
+
+# ---- library loading -----------------------------------------------------------------------------
+
+_lib = None
+_lib_lock = threading.Lock()
+
+
+def library_path():
+    path = os.environ.get("LANTERN_LIBRARY")
+    if path:
+        return path
+    return os.path.join(os.path.dirname(os.path.abspath(__file__)), "liblantern.so")
+
+
+def _declare(lib):
+    c_int, c_char_p, c_void_p = ctypes.c_int, ctypes.c_char_p, ctypes.c_void_p
+    P = ctypes.POINTER
+    scene_p = c_void_p  # opaque lt_scene*
+    render_p = c_void_p  # opaque lt_render*
+    sig = {
+        "lt_abi_version": ([], c_int),
+        "lt_version": ([], c_char_p),
+        "lt_last_error": ([], c_char_p),
+        "lt_scene_create": ([P(scene_p)], c_int),
+        "lt_scene_destroy": ([scene_p], None),
+        "lt_scene_warning_count": ([scene_p], c_int),
+        "lt_scene_warning": ([scene_p, c_int], c_char_p),
+        "lt_scene_add_image": ([scene_p, P(ImageDesc), P(c_int)], c_int),
+        "lt_scene_add_material": ([scene_p, P(ShaderNode), c_int, c_int, P(c_int)], c_int),
+        "lt_scene_add_mesh": ([scene_p, P(MeshDesc), P(c_int)], c_int),
+        "lt_scene_add_instance": ([scene_p, P(InstanceDesc), P(c_int)], c_int),
+        "lt_scene_add_light": ([scene_p, P(LightDesc)], c_int),
+        "lt_scene_set_camera": ([scene_p, P(CameraDesc)], c_int),
+        "lt_scene_set_world": ([scene_p, P(WorldDesc)], c_int),
+        "lt_scene_commit": ([scene_p], c_int),
+        "lt_render_settings_default": ([P(RenderSettings)], None),
+        "lt_render_start": ([scene_p, P(RenderSettings), P(render_p)], c_int),
+        "lt_render_poll": ([render_p, P(RenderStatus)], c_int),
+        "lt_render_cancel": ([render_p], c_int),
+        "lt_render_wait": ([render_p], c_int),
+        "lt_pass_channels": ([c_int], c_int),
+        "lt_render_read_pass": ([render_p, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_destroy": ([render_p], None),
+        "lt_render_write_exr": ([render_p, c_char_p], c_int),
+    }
+    for name, (argtypes, restype) in sig.items():
+        try:
+            fn = getattr(lib, name)
+        except AttributeError:
+            raise LanternError("Lantern library %s lacks %s: it does not match this add-on"
+                               % (lib._name, name)) from None
+        fn.argtypes = argtypes
+        fn.restype = restype
+
+
+def lib():
+    """The loaded library (loaded on first use so that the add-on registers without it)."""
+    global _lib
+    with _lib_lock:
+        if _lib is None:
+            path = library_path()
+            if not os.path.isfile(path):
+                raise LanternError(
+                    "Lantern's native library was not found at %s. Build it (cmake target "
+                    "lantern_shared) and copy liblantern.so next to the add-on, or point the "
+                    "LANTERN_LIBRARY environment variable at it." % path)
+            try:
+                loaded = ctypes.CDLL(path)
+            except OSError as e:
+                raise LanternError("Could not load Lantern's native library %s: %s" % (path, e)) from e
+            _declare(loaded)
+            version = loaded.lt_abi_version()
+            if version != ABI_VERSION:
+                raise LanternError("Lantern library %s has ABI version %d, this add-on needs %d"
+                                   % (path, version, ABI_VERSION))
+            _lib = loaded
+        return _lib
+
+
+def version():
+    return lib().lt_version().decode("utf-8", "replace")
+
+
+def _check(status, what):
+    if status != OK:
+        msg = lib().lt_last_error()
+        msg = msg.decode("utf-8", "replace") if msg else ""
+        kind = _STATUS_NAMES.get(status, "status %d" % status)
+        raise LanternError("%s failed (%s): %s" % (what, kind, msg or "no message"), status)
+
+
+def pass_channels(pass_id):
+    n = lib().lt_pass_channels(int(pass_id))
+    if n <= 0:
+        raise LanternError("unknown pass %r" % (pass_id,))
+    return n
+
+
+# ---- numpy helpers ------------------------------------------------------------------------------
+
+def _f32(a, what, size_multiple=1):
+    a = np.ascontiguousarray(a, dtype=np.float32).reshape(-1)
+    if a.size % size_multiple:
+        raise ValueError("%s: %d floats is not a multiple of %d" % (what, a.size, size_multiple))
+    return a
+
+
+def _i32(a, what):
+    return np.ascontiguousarray(a, dtype=np.int32).reshape(-1)
+
+
+def _fptr(a):
+    return None if a is None else a.ctypes.data_as(_f_p)
+
+
+def _iptr(a):
+    return None if a is None else a.ctypes.data_as(_i_p)
+
+
+def _transform(m):
+    """A 3x4 row-major transform from a 4x4 or 3x4 matrix-like (mathutils.Matrix or array)."""
+    a = np.asarray(m, dtype=np.float32)
+    if a.shape == (4, 4):
+        a = a[:3]
+    if a.shape != (3, 4):
+        raise ValueError("transform must be 3x4 or 4x4, got %s" % (a.shape,))
+    return (ctypes.c_float * 12)(*a.reshape(-1).tolist())
+
+
+def make_input(value=(0.0, 0.0, 0.0), image=-1):
+    """An lt_input: a colour (3 floats) or scalar (value[0]) constant, or an image id."""
+    if np.ndim(value) == 0:
+        value = (float(value), 0.0, 0.0)
+    v = [float(x) for x in list(value)[:3]]
+    return Input(v + [0.0] * (3 - len(v)), int(image))
+
+
+# ---- scene --------------------------------------------------------------------------------------
+
+class Scene:
+    """An lt_scene: fill it, commit it, then render it (it must outlive its renders)."""
+
+    def __init__(self):
+        self._lib = lib()
+        h = ctypes.c_void_p()
+        _check(self._lib.lt_scene_create(ctypes.byref(h)), "lt_scene_create")
+        self._h = h
+        self._renders = []
+
+    @property
+    def handle(self):
+        if self._h is None:
+            raise LanternError("scene is closed")
+        return self._h
+
+    def add_image(self, pixels, width, height, channels, srgb=False,
+                  interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT):
+        px = _f32(pixels, "image pixels")
+        if px.size != width * height * channels:
+            raise ValueError("image: %d floats for %dx%dx%d" % (px.size, width, height, channels))
+        d = ImageDesc(int(width), int(height), int(channels), _fptr(px), int(bool(srgb)),
+                      int(interpolation), int(extension))
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_add_image(self.handle, ctypes.byref(d), ctypes.byref(out)),
+               "lt_scene_add_image")
+        return out.value
+
+    def add_material(self, nodes, root=0):
+        """nodes: a sequence of ShaderNode; root: the index feeding the Surface output."""
+        n = len(nodes)
+        arr = (ShaderNode * max(n, 1))(*nodes)
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_add_material(self.handle, arr, n, int(root), ctypes.byref(out)),
+               "lt_scene_add_material")
+        return out.value
+
+    def add_mesh(self, positions, triangles, corner_normals=None, corner_uvs=None,
+                 material_slots=None):
+        pos = _f32(positions, "positions", 3)
+        tri = _i32(triangles, "triangles")
+        if tri.size % 3:
+            raise ValueError("triangles: %d indices is not a multiple of 3" % tri.size)
+        ntri = tri.size // 3
+        nrm = None if corner_normals is None else _f32(corner_normals, "corner normals")
+        uvs = None if corner_uvs is None else _f32(corner_uvs, "corner uvs")
+        mat = None if material_slots is None else _i32(material_slots, "material slots")
+        for a, per, what in ((nrm, 9, "corner normals"), (uvs, 6, "corner uvs"),
+                             (mat, 1, "material slots")):
+            if a is not None and a.size != per * ntri:
+                raise ValueError("%s: %d values for %d triangles" % (what, a.size, ntri))
+        d = MeshDesc(_fptr(pos), pos.size // 3, _iptr(tri), ntri, _fptr(nrm), _fptr(uvs), _iptr(mat))
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_add_mesh(self.handle, ctypes.byref(d), ctypes.byref(out)),
+               "lt_scene_add_mesh")
+        return out.value
+
+    def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL):
+        mats = _i32(list(materials), "materials") if len(materials) else None
+        d = InstanceDesc(int(mesh), _transform(transform), _iptr(mats),
+                         0 if mats is None else mats.size, int(visibility))
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_add_instance(self.handle, ctypes.byref(d), ctypes.byref(out)),
+               "lt_scene_add_instance")
+        return out.value
+
+    def add_light(self, type, color, transform, radius=0.0, spot_size=0.0, spot_blend=0.0,
+                  shape=AREA_SQUARE, size_x=0.0, size_y=0.0, angle=0.0, visibility=VISIBLE_ALL):
+        d = LightDesc()
+        d.type = int(type)
+        d.color[:] = [float(c) for c in color[:3]]
+        d.transform = _transform(transform)
+        d.radius, d.spot_size, d.spot_blend = radius, spot_size, spot_blend
+        d.shape, d.size_x, d.size_y, d.angle = int(shape), size_x, size_y, angle
+        d.visibility = int(visibility)
+        _check(self._lib.lt_scene_add_light(self.handle, ctypes.byref(d)), "lt_scene_add_light")
+
+    def set_camera(self, transform, type=CAMERA_PERSPECTIVE, focal_length=50.0,
+                   sensor_width=36.0, sensor_height=24.0, sensor_fit=SENSOR_AUTO,
+                   ortho_scale=6.0, shift_x=0.0, shift_y=0.0, clip_start=0.1, clip_end=100.0,
+                   pixel_aspect=1.0):
+        d = CameraDesc()
+        d.type = int(type)
+        d.transform = _transform(transform)
+        d.focal_length, d.sensor_width, d.sensor_height = focal_length, sensor_width, sensor_height
+        d.sensor_fit, d.ortho_scale = int(sensor_fit), ortho_scale
+        d.shift_x, d.shift_y, d.clip_start, d.clip_end = shift_x, shift_y, clip_start, clip_end
+        d.pixel_aspect = pixel_aspect
+        _check(self._lib.lt_scene_set_camera(self.handle, ctypes.byref(d)), "lt_scene_set_camera")
+
+    def set_world(self, color=(0.0, 0.0, 0.0), strength=1.0, image=-1, rotation_z=0.0,
+                  visibility=1):
+        d = WorldDesc()
+        d.color[:] = [float(c) for c in color[:3]]
+        d.strength, d.image, d.rotation_z, d.visibility = strength, int(image), rotation_z, int(visibility)
+        _check(self._lib.lt_scene_set_world(self.handle, ctypes.byref(d)), "lt_scene_set_world")
+
+    def commit(self):
+        _check(self._lib.lt_scene_commit(self.handle), "lt_scene_commit")
+
+    def warnings(self):
+        h = self.handle
+        out = []
+        for i in range(self._lib.lt_scene_warning_count(h)):
+            w = self._lib.lt_scene_warning(h, i)
+            if w:
+                out.append(w.decode("utf-8", "replace"))
+        return out
+
+    def render(self, settings):
+        return Render(self, settings)
+
+    def close(self):
+        """Destroys the scene; renders still using it are cancelled and destroyed first."""
+        for r in self._renders:
+            r.close()
+        self._renders = []
+        if self._h is not None:
+            self._lib.lt_scene_destroy(self._h)
+            self._h = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+
+# ---- rendering ----------------------------------------------------------------------------------
+
+def default_settings():
+    s = RenderSettings()
+    lib().lt_render_settings_default(ctypes.byref(s))
+    return s
+
+
+class Render:
+    """An lt_render. `settings` is a RenderSettings or a dict of its fields (over the defaults)."""
+
+    def __init__(self, scene, settings):
+        self._lib = lib()
+        self.scene = scene  # keeps the scene alive while the render runs
+        if isinstance(settings, dict):
+            s = default_settings()
+            for k, v in settings.items():
+                if k == "border":
+                    s.border[:] = [int(x) for x in v]
+                else:
+                    setattr(s, k, v)
+            settings = s
+        self.settings = settings
+        self._h = None
+
+    @property
+    def handle(self):
+        if self._h is None:
+            raise LanternError("render is not running (call start) or is closed")
+        return self._h
+
+    @property
+    def region_size(self):
+        """(width, height) of the rendered region: the border if one is set, else the frame."""
+        b = list(self.settings.border)
+        if any(b):
+            return b[1] - b[0], b[3] - b[2]
+        return self.settings.width, self.settings.height
+
+    def start(self):
+        h = ctypes.c_void_p()
+        _check(self._lib.lt_render_start(self.scene.handle, ctypes.byref(self.settings),
+                                         ctypes.byref(h)), "lt_render_start")
+        self._h = h
+        self.scene._renders.append(self)
+        return self
+
+    def poll(self):
+        st = RenderStatus()
+        _check(self._lib.lt_render_poll(self.handle, ctypes.byref(st)), "lt_render_poll")
+        return st
+
+    def cancel(self):
+        _check(self._lib.lt_render_cancel(self.handle), "lt_render_cancel")
+
+    def wait(self):
+        _check(self._lib.lt_render_wait(self.handle), "lt_render_wait")
+
+    def pass_size(self, pass_id):
+        w, h = self.region_size
+        return w * h * pass_channels(pass_id)
+
+    def read_pass(self, pass_id, out=None):
+        """Fills `out` (float32 contiguous, width*height*channels of the region) and returns it."""
+        n = self.pass_size(pass_id)
+        if out is None:
+            out = np.empty(n, dtype=np.float32)
+        if out.dtype != np.float32 or not out.flags["C_CONTIGUOUS"] or out.size != n:
+            raise ValueError("read_pass needs a contiguous float32 array of %d floats" % n)
+        _check(self._lib.lt_render_read_pass(self.handle, int(pass_id), _fptr(out), out.size),
+               "lt_render_read_pass")
+        return out
+
+    def write_exr(self, path):
+        _check(self._lib.lt_render_write_exr(self.handle, os.fsencode(path)), "lt_render_write_exr")
+
+    def close(self):
+        if self._h is not None:
+            h, self._h = self._h, None
+            # Destroying a running render would free what its threads use: stop it first.
+            self._lib.lt_render_cancel(h)
+            self._lib.lt_render_wait(h)
+            self._lib.lt_render_destroy(h)
+            try:
+                self.scene._renders.remove(self)
+            except ValueError:
+                pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass

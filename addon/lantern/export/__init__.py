@@ -1,0 +1,77 @@
+"""Depsgraph -> core scene. Everything is read from the depsgraph handed in, never bpy.context."""
+
+import numpy as np
+
+from .camera import export_camera
+from .light import export_light
+from .material import ImageExporter, MaterialExporter
+from .mesh import CONVERTIBLE_TYPES, MeshExporter
+from .world import export_world
+
+# Object types that are not rendered (or not yet): skipped silently.
+_IGNORED_TYPES = {'CAMERA', 'EMPTY', 'ARMATURE', 'LATTICE', 'SPEAKER', 'LIGHT_PROBE', 'GPENCIL'}
+
+
+def _deduplicating(report):
+    seen = set()
+
+    def wrapped(level, message):
+        if message not in seen:
+            seen.add(message)
+            report(level, message)
+    return wrapped
+
+
+def export_scene(depsgraph, core_scene, report, camera_object=None):
+    """Fills core_scene (not committed) from the depsgraph; returns a summary dict.
+
+    report(level_set, message) receives warnings, like RenderEngine.report. camera_object
+    overrides the scene camera (RenderEngine.camera_override).
+    """
+    report = _deduplicating(report)
+    summary = {"camera": export_camera(depsgraph, core_scene, report, camera_object)}
+
+    images = ImageExporter(core_scene, report)
+    materials = MaterialExporter(core_scene, report, images)
+    meshes = MeshExporter(depsgraph, core_scene, report, materials)
+    summary["world"] = export_world(depsgraph, core_scene, report, images)
+
+    lights = 0
+    skipped_types = set()
+    # Curves, surfaces, text and metaballs come as their object and, since Blender 3.0, as a
+    # MESH instance of their evaluated geometry: export the latter, convert only if it is absent.
+    deferred = []
+    has_mesh_instance = set()
+    for inst in depsgraph.object_instances:
+        if not inst.show_self:  # e.g. a particle emitter set not to render itself
+            continue
+        obj = inst.object
+        t = obj.type
+        if t in _IGNORED_TYPES:
+            continue
+        # The iterator reuses its matrix: copy it now.
+        matrix = np.array(inst.matrix_world, dtype=np.float32)
+        if t == 'MESH':
+            if inst.is_instance and inst.parent is not None and inst.parent.type in CONVERTIBLE_TYPES:
+                has_mesh_instance.add(inst.parent.original.as_pointer())
+            meshes.export_instance(obj, matrix)
+        elif t in CONVERTIBLE_TYPES:
+            if inst.is_instance:
+                meshes.export_instance(obj, matrix, warn_empty=False)
+            else:
+                deferred.append((obj, matrix))
+        elif t == 'LIGHT':
+            lights += export_light(obj, matrix, core_scene, report)
+        elif t not in skipped_types:
+            skipped_types.add(t)
+            report({'WARNING'}, "Objects of type %s are not supported yet, skipped (e.g. '%s')"
+                   % (t, obj.name))
+    for obj, matrix in deferred:
+        if obj.original.as_pointer() not in has_mesh_instance:
+            meshes.export_instance(obj, matrix, warn_empty=False)  # e.g. a curve without bevel
+
+    summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
+                   materials=len(materials.ids), images=sum(1 for v in images.ids.values()
+                                                            if v is not None),
+                   lights=lights)
+    return summary

@@ -1,0 +1,332 @@
+"""Material export: a material's surface node tree, flattened into lt_shader_node records.
+
+Supported: Diffuse, Glossy, Glass, Emission, Principled (3.4 sockets), Mix, Add and Transparent
+shaders; inputs from constants, RGB and Value nodes, or UV-mapped Image Textures; reroutes and
+muted nodes are followed. Anything else is reported, and replaced as documented: an unsupported
+shader node by mid-grey diffuse (0.5), an unsupported node feeding an input by that input's
+default value.
+"""
+
+import numpy as np
+
+from .. import core
+
+FALLBACK_GREY = 0.5
+
+# Rec. 709 luma, as Blender converts a colour into a float socket.
+_LUMA = (0.2126, 0.7152, 0.0722)
+
+# Principled sockets renamed in Blender 4.0: the 3.4 name first.
+_SOCKET_ALIASES = {
+    "Specular": ("Specular", "Specular IOR Level"),
+    "Transmission": ("Transmission", "Transmission Weight"),
+    "Emission": ("Emission", "Emission Color"),
+    "Subsurface": ("Subsurface", "Subsurface Weight"),
+    "Clearcoat": ("Clearcoat", "Coat Weight"),
+    "Sheen": ("Sheen", "Sheen Weight"),
+}
+
+_INTERPOLATION = {'Linear': core.INTERP_LINEAR, 'Closest': core.INTERP_CLOSEST}
+_EXTENSION = {'REPEAT': core.EXTENSION_REPEAT, 'EXTEND': core.EXTENSION_EXTEND,
+              'CLIP': core.EXTENSION_CLIP}
+
+
+class ImageExporter:
+    """Exports each (image, colour space, interpolation, extension) once; returns core ids."""
+
+    def __init__(self, core_scene, report):
+        self.core_scene = core_scene
+        self.report = report
+        self.ids = {}
+
+    def export(self, image, interpolation='Linear', extension='REPEAT', where=""):
+        """Core image id, or None (reported) when the image cannot be used."""
+        if image is None:
+            self.report({'WARNING'}, "%s: image texture without an image" % where)
+            return None
+        key = (image.original.as_pointer(), interpolation, extension)
+        if key in self.ids:
+            return self.ids[key]
+        if image.source == 'TILED':
+            self.report({'WARNING'}, "%s: image '%s' is a UDIM (tiled) image, only its first tile "
+                                     "is used" % (where, image.name))
+        width, height = image.size[:]  # loads the image if needed
+        channels = image.channels
+        if width <= 0 or height <= 0 or channels not in (1, 3, 4):
+            self.report({'WARNING'}, "%s: image '%s' has no pixels (missing file?), its input "
+                                     "uses the socket value" % (where, image.name))
+            self.ids[key] = None
+            return None
+        pixels = np.empty(width * height * channels, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        # Byte images give their stored values: sRGB-encoded when the colour space is sRGB.
+        # Float images are already linear; Non-Color data is raw.
+        space = image.colorspace_settings.name
+        srgb = (not image.is_float) and space == 'sRGB'
+        if space not in {'sRGB', 'Non-Color', 'Linear', 'Raw', 'Linear ACES'} and not image.is_float:
+            self.report({'WARNING'}, "%s: image '%s' colour space '%s' is not supported, its "
+                                     "values are used as linear" % (where, image.name, space))
+        interp = _INTERPOLATION.get(interpolation)
+        if interp is None:
+            self.report({'WARNING'}, "%s: %s interpolation is not supported, treated as Linear"
+                                     % (where, interpolation))
+            interp = core.INTERP_LINEAR
+        ext = _EXTENSION.get(extension)
+        if ext is None:
+            self.report({'WARNING'}, "%s: %s extension is not supported, treated as Repeat"
+                                     % (where, extension))
+            ext = core.EXTENSION_REPEAT
+        image_id = self.core_scene.add_image(pixels, width, height, channels, srgb=srgb,
+                                             interpolation=interp, extension=ext)
+        self.ids[key] = image_id
+        return image_id
+
+
+def _follow(socket):
+    """The output socket feeding an input socket through reroutes and muted nodes, or None."""
+    seen = 0
+    while socket is not None and seen < 256:
+        seen += 1
+        links = [l for l in socket.links if l.is_valid and not l.is_muted]
+        if not links:
+            return None
+        out = links[0].from_socket
+        node = out.node
+        if node.type == 'REROUTE':
+            socket = node.inputs[0]
+            continue
+        if node.mute:
+            # A muted node passes its internal link's input through, or gives nothing.
+            socket = next((l.from_socket for l in node.internal_links if l.to_socket == out), None)
+            continue
+        return out
+    return None
+
+
+class MaterialExporter:
+    """Translates each material once; `export(material)` returns its core id."""
+
+    def __init__(self, core_scene, report, images):
+        self.core_scene = core_scene
+        self.report = report
+        self.images = images
+        self.ids = {}
+
+    # -- public --------------------------------------------------------------------------------
+
+    def export(self, material):
+        if material is None:
+            return -1
+        key = material.original.as_pointer()
+        if key in self.ids:
+            return self.ids[key]
+        self._material = material
+        self._nodes = []
+        self._memo = {}
+        if material.use_nodes and material.node_tree is not None:
+            root = self._surface_root(material)
+        else:
+            root = self._add(core.NODE_DIFFUSE, color=core.make_input(material.diffuse_color[:3]))
+        mat_id = self.core_scene.add_material(self._nodes, root)
+        self.ids[key] = mat_id
+        return mat_id
+
+    # -- tree walk -----------------------------------------------------------------------------
+
+    def _warn(self, message):
+        self.report({'WARNING'}, "Material '%s': %s" % (self._material.name, message))
+
+    def _add(self, node_type, **fields):
+        self._nodes.append(core.ShaderNode(node_type, **fields))
+        return len(self._nodes) - 1
+
+    def _black(self):
+        # What an unlinked shader socket contributes in Cycles: no closure, i.e. absorbs.
+        return self._add(core.NODE_DIFFUSE, color=core.make_input((0.0, 0.0, 0.0)))
+
+    def _grey(self):
+        return self._add(core.NODE_DIFFUSE, color=core.make_input((FALLBACK_GREY,) * 3))
+
+    def _surface_root(self, material):
+        tree = material.node_tree
+        output = tree.get_output_node('CYCLES')
+        if output is None:
+            self._warn("no active Material Output node, rendered black")
+            return self._black()
+        return self._shader(output.inputs["Surface"])
+
+    def _shader(self, socket):
+        """Index of the node tree feeding a shader input socket."""
+        out = _follow(socket)
+        if out is None:
+            return self._black()
+        key = out.as_pointer()
+        if key not in self._memo:
+            self._memo[key] = self._shader_node(out.node)
+        return self._memo[key]
+
+    def _shader_node(self, node):
+        t = node.type
+        inp = node.inputs
+        if t == 'BSDF_DIFFUSE':
+            return self._add(core.NODE_DIFFUSE, color=self._color(node, "Color"),
+                             roughness=self._scalar(node, "Roughness"))
+        if t == 'BSDF_GLOSSY':
+            if node.distribution not in {'GGX', 'SHARP'} and _is_rough(node):
+                self._warn("Glossy BSDF '%s' distribution %s treated as GGX"
+                           % (node.name, node.distribution))
+            rough = core.make_input(0.0) if node.distribution == 'SHARP' else \
+                self._scalar(node, "Roughness")
+            return self._add(core.NODE_GLOSSY, color=self._color(node, "Color"), roughness=rough)
+        if t == 'BSDF_GLASS':
+            if node.distribution not in {'GGX', 'SHARP'} and _is_rough(node):
+                self._warn("Glass BSDF '%s' distribution %s treated as GGX"
+                           % (node.name, node.distribution))
+            rough = core.make_input(0.0) if node.distribution == 'SHARP' else \
+                self._scalar(node, "Roughness")
+            return self._add(core.NODE_GLASS, color=self._color(node, "Color"), roughness=rough,
+                             ior=self._constant(node, "IOR"))
+        if t == 'EMISSION':
+            return self._add(core.NODE_EMISSION, color=self._color(node, "Color"),
+                             strength=self._scalar(node, "Strength"))
+        if t == 'BSDF_TRANSPARENT':
+            return self._add(core.NODE_TRANSPARENT, color=self._color(node, "Color"))
+        if t == 'MIX_SHADER':
+            fac = self._scalar(node, 0)
+            a, b = self._shader(inp[1]), self._shader(inp[2])
+            return self._add(core.NODE_MIX, fac=fac, child=(a, b))
+        if t == 'ADD_SHADER':
+            a, b = self._shader(inp[0]), self._shader(inp[1])
+            return self._add(core.NODE_ADD, child=(a, b))
+        if t == 'BSDF_PRINCIPLED':
+            return self._principled(node)
+        self._warn("node '%s' (%s) is not supported, replaced by grey diffuse"
+                   % (node.name, node.bl_idname))
+        return self._grey()
+
+    def _principled(self, node):
+        inp = node.inputs
+        if node.distribution != 'GGX' and _is_rough(node):
+            self._warn("Principled BSDF '%s' distribution %s treated as GGX"
+                       % (node.name, node.distribution))
+        ignored = []
+        for name, default in (("Subsurface", 0.0), ("Specular Tint", 0.0), ("Anisotropic", 0.0),
+                              ("Sheen", 0.0), ("Clearcoat", 0.0), ("Transmission Roughness", 0.0),
+                              ("Alpha", 1.0)):
+            s = next((inp.get(a) for a in _SOCKET_ALIASES.get(name, (name,)) if inp.get(a)), None)
+            if s is not None and (s.is_linked or _differs(s.default_value, default)):
+                ignored.append(name)
+        for name in ("Normal", "Clearcoat Normal", "Tangent"):
+            s = inp.get(name)
+            if s is not None and _follow(s) is not None:
+                ignored.append(name)
+        if ignored:
+            self._warn("Principled BSDF '%s': %s not supported, ignored"
+                       % (node.name, ", ".join(ignored)))
+        return self._add(
+            core.NODE_PRINCIPLED,
+            color=self._color(node, "Base Color"),
+            metallic=self._scalar(node, "Metallic"),
+            roughness=self._scalar(node, "Roughness"),
+            specular=self._scalar(node, "Specular"),
+            transmission=self._scalar(node, "Transmission"),
+            ior=self._constant(node, "IOR"),
+            emission=self._color(node, "Emission"),
+            strength=self._scalar(node, "Emission Strength"),
+        )
+
+    # -- inputs --------------------------------------------------------------------------------
+
+    def _socket(self, node, name):
+        for alias in _SOCKET_ALIASES.get(name, (name,)):
+            s = node.inputs.get(alias) if isinstance(alias, str) else node.inputs[alias]
+            if s is not None:
+                return s
+        raise KeyError("node '%s' has no input '%s'" % (node.name, name))
+
+    def _constant(self, node, name):
+        """A float that the ABI takes as a constant (IOR): linked inputs use the socket value."""
+        s = self._socket(node, name)
+        if _follow(s) is not None:
+            src = _follow(s).node
+            if src.type == 'VALUE':
+                return float(src.outputs[0].default_value)
+            self._warn("'%s' of '%s' must be a constant, its link from '%s' is ignored"
+                       % (s.name, node.name, src.name))
+        return float(s.default_value)
+
+    def _color(self, node, name):
+        return self._input(node, name, colour=True)
+
+    def _scalar(self, node, name):
+        return self._input(node, name, colour=False)
+
+    def _input(self, node, name, colour):
+        s = self._socket(node, name)
+        default = _socket_value(s, colour)
+        out = _follow(s)
+        if out is None:
+            return core.make_input(default)
+        src = out.node
+        if src.type in {'RGB', 'VALUE'}:
+            return core.make_input(_convert(out.default_value, colour))
+        if src.type == 'TEX_IMAGE':
+            image_id = self._image_texture(src, out, s, node)
+            if image_id is not None:
+                return core.make_input((1.0, 1.0, 1.0), image=image_id)
+            return core.make_input(default)
+        self._warn("node '%s' (%s) feeding '%s' of '%s' is not supported, using the socket's "
+                   "value" % (src.name, src.bl_idname, s.name, node.name))
+        return core.make_input(default)
+
+    def _image_texture(self, tex, out, socket, node):
+        where = "Material '%s', image texture '%s'" % (self._material.name, tex.name)
+        if out.name != "Color":
+            self._warn("the %s output of image texture '%s' is not supported, using the socket's "
+                       "value for '%s' of '%s'" % (out.name, tex.name, socket.name, node.name))
+            return None
+        if tex.projection != 'FLAT':
+            self._warn("image texture '%s': %s projection treated as Flat (UV)"
+                       % (tex.name, tex.projection))
+        vec = _follow(tex.inputs["Vector"])
+        if vec is not None and not _is_uv_source(vec):
+            self._warn("image texture '%s': vector input from '%s' is not supported, the active "
+                       "render UV map is used" % (tex.name, vec.node.name))
+        return self.images.export(tex.image, tex.interpolation, tex.extension, where)
+
+
+def _differs(value, default):
+    values = tuple(value)[:3] if hasattr(value, "__len__") else (value,)
+    return any(abs(v - default) > 1e-6 for v in values)
+
+
+def _is_rough(node):
+    """Whether the microfacet distribution matters: roughness linked or above zero."""
+    s = node.inputs["Roughness"]
+    return _follow(s) is not None or s.default_value > 0.0
+
+
+def _is_uv_source(out):
+    node = out.node
+    if node.type == 'TEX_COORD':
+        return out.name == "UV"
+    if node.type == 'UVMAP':
+        return True
+    return False
+
+
+def _socket_value(socket, colour):
+    v = socket.default_value
+    if isinstance(v, float) or isinstance(v, int):
+        return _convert(float(v), colour)
+    return _convert(tuple(v), colour)
+
+
+def _convert(v, colour):
+    """A socket value as the receiving socket sees it: colour (3 floats) or scalar."""
+    if isinstance(v, (float, int)):
+        return (float(v),) * 3 if colour else float(v)
+    v = tuple(v)[:3]
+    if colour:
+        return v
+    return float(sum(c * w for c, w in zip(v, _LUMA)))

@@ -1,0 +1,132 @@
+"""Mesh export: each distinct evaluated geometry once, then one instance per object instance."""
+
+import numpy as np
+
+from .. import core
+from .light import visibility_bits
+
+# Object types Blender can turn into a mesh with to_mesh().
+CONVERTIBLE_TYPES = {'CURVE', 'SURFACE', 'FONT', 'META'}
+
+
+def mesh_arrays(mesh):
+    """Triangle arrays of a Blender mesh, or None when it has no faces.
+
+    Corner normals come from Blender's split normals (smooth, flat, auto smooth and custom
+    normals alike); they are omitted when every face is flat, the core then uses the
+    geometric normal as Cycles does.
+    """
+    mesh.calc_loop_triangles()
+    tris = mesh.loop_triangles
+    nt = len(tris)
+    if nt == 0:
+        return None
+    nv = len(mesh.vertices)
+    positions = np.empty(nv * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", positions)
+    triangles = np.empty(nt * 3, dtype=np.int32)
+    tris.foreach_get("vertices", triangles)
+    corner_loops = np.empty(nt * 3, dtype=np.int32)
+    tris.foreach_get("loops", corner_loops)
+    material_slots = np.empty(nt, dtype=np.int32)
+    tris.foreach_get("material_index", material_slots)
+
+    smooth = np.empty(nt, dtype=bool)
+    try:
+        tris.foreach_get("use_smooth", smooth)
+    except (AttributeError, TypeError, RuntimeError):
+        smooth[:] = True  # newer Blender: its corner normals are flat on flat faces anyway
+    has_custom = getattr(mesh, "has_custom_normals", False)
+    corner_normals = None
+    if smooth.any() or has_custom:
+        if hasattr(mesh, "calc_normals_split"):  # Blender < 4.1; later versions keep them current
+            mesh.calc_normals_split()
+        nl = len(mesh.loops)
+        loop_normals = np.empty(nl * 3, dtype=np.float32)
+        if hasattr(mesh, "corner_normals"):
+            mesh.corner_normals.foreach_get("vector", loop_normals)
+        else:
+            mesh.loops.foreach_get("normal", loop_normals)
+        corner_normals = loop_normals.reshape(-1, 3)[corner_loops]
+        if not has_custom and not smooth.all():
+            # Flat triangles of a non-planar polygon: the triangle's own normal, as Cycles.
+            flat = ~smooth
+            p = positions.reshape(-1, 3)[triangles.reshape(-1, 3)[flat]]
+            n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+            corner_normals.reshape(nt, 3, 3)[flat] = n[:, None, :]
+        corner_normals = corner_normals.reshape(-1)
+
+    corner_uvs = None
+    layer = next((l for l in mesh.uv_layers if l.active_render), None) or mesh.uv_layers.active
+    if layer is not None:
+        uvs = np.empty(len(mesh.loops) * 2, dtype=np.float32)
+        layer.data.foreach_get("uv", uvs)
+        corner_uvs = uvs.reshape(-1, 2)[corner_loops].reshape(-1)
+
+    return dict(positions=positions, triangles=triangles, corner_normals=corner_normals,
+                corner_uvs=corner_uvs, material_slots=material_slots)
+
+
+class MeshExporter:
+    """Adds geometry once per distinct evaluated datablock and an instance per object instance."""
+
+    def __init__(self, depsgraph, core_scene, report, materials):
+        self.depsgraph = depsgraph
+        self.core_scene = core_scene
+        self.report = report
+        self.materials = materials
+        self.mesh_ids = {}  # geometry key -> core mesh id, or None for empty geometry
+        self.instance_count = 0
+
+    def _geometry_key(self, obj):
+        if obj.type == 'MESH' and obj.data is not None:
+            return ('MESH', obj.data.as_pointer())
+        # Converted geometry depends on the object's own modifiers: one per object.
+        return (obj.type, obj.original.as_pointer())
+
+    def _mesh_id(self, obj, warn_empty=True):
+        key = self._geometry_key(obj)
+        if key in self.mesh_ids:
+            return self.mesh_ids[key]
+        mesh_id = None
+        mesh, temporary = None, False
+        try:
+            if obj.type == 'MESH':
+                mesh = obj.data
+            else:
+                mesh, temporary = obj.to_mesh(), True
+            arrays = mesh_arrays(mesh) if mesh is not None else None
+            if arrays is None:
+                if warn_empty:
+                    self.report({'WARNING'}, "Object '%s' has no faces, skipped" % obj.name)
+            else:
+                mesh_id = self.core_scene.add_mesh(**arrays)
+        finally:
+            if temporary:
+                obj.to_mesh_clear()
+        self.mesh_ids[key] = mesh_id
+        return mesh_id
+
+    def _material_ids(self, obj):
+        slots = obj.material_slots
+        if len(slots):
+            mats = [s.material for s in slots]
+        else:
+            data = obj.data
+            mats = list(getattr(data, "materials", [])) if data is not None else []
+        return [self.materials.export(m) for m in mats]
+
+    def export_instance(self, obj, matrix_world, warn_empty=True):
+        """obj: an evaluated object of a mesh or convertible type."""
+        mesh_id = self._mesh_id(obj, warn_empty)
+        if mesh_id is None:
+            return False
+        self.core_scene.add_instance(mesh_id, matrix_world, self._material_ids(obj),
+                                     visibility_bits(obj))
+        self.instance_count += 1
+        return True
+
+    @property
+    def mesh_count(self):
+        return sum(1 for v in self.mesh_ids.values() if v is not None)

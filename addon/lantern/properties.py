@@ -1,0 +1,121 @@
+"""Lantern's render settings, stored on the scene as scene.lantern."""
+
+import bpy
+from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+
+
+class LanternRenderSettings(bpy.types.PropertyGroup):
+    samples: IntProperty(
+        name="Samples",
+        description="Samples per pixel: more samples give less noise and take proportionally "
+                    "longer",
+        default=64, min=1, max=1 << 24, soft_max=4096,
+    )
+    seed: IntProperty(
+        name="Seed",
+        description="Seed of the random numbers: renders with different seeds have independent "
+                    "noise and can be averaged",
+        default=0, min=0,
+    )
+    integrator: EnumProperty(
+        name="Integrator",
+        description="Light transport algorithm",
+        items=[
+            ("PATH", "Path Tracing",
+             "Unidirectional path tracing with next event estimation and multiple importance "
+             "sampling: robust for most scenes"),
+            ("BIDIRECTIONAL", "Bidirectional",
+             "Bidirectional path tracing: also traces paths from the lights and connects them to "
+             "camera paths; slower per sample, but converges much faster where light is hard to "
+             "reach (light through gaps, caustics, small bright lights)"),
+        ],
+        default="PATH",
+    )
+    max_camera_length: IntProperty(
+        name="Max Camera Path Length",
+        description="Bidirectional: vertices of the camera subpath after the camera (the total "
+                    "bounce limit also applies)",
+        default=64, min=1, max=1024,
+    )
+    max_light_length: IntProperty(
+        name="Max Light Path Length",
+        description="Bidirectional: vertices of the light subpath, the one on the light included. "
+                    "1 makes it equal to path tracing with next event estimation; longer light "
+                    "paths find caustics and hard-to-reach light at a higher cost per sample",
+        default=64, min=0, max=1024,
+    )
+    mis_heuristic: EnumProperty(
+        name="MIS Heuristic",
+        description="Bidirectional: how the connection strategies are weighted",
+        items=[
+            ("POWER", "Power", "Veach's power heuristic (exponent 2): the lowest noise in practice"),
+            ("BALANCE", "Balance", "Veach's balance heuristic"),
+            ("UNIFORM", "Uniform", "Every strategy weighted equally (for teaching: unbiased, but "
+                                   "noisy)"),
+        ],
+        default="POWER",
+    )
+    max_bounces: IntProperty(
+        name="Total",
+        description="Total maximum number of bounces: fewer is faster but loses (darkens) the "
+                    "light of long paths",
+        default=12, min=0, max=1024,
+    )
+    diffuse_bounces: IntProperty(
+        name="Diffuse",
+        description="Maximum number of diffuse reflection bounces, bounded by the total: fewer "
+                    "is faster but darkens indirect diffuse lighting",
+        default=4, min=0, max=1024,
+    )
+    glossy_bounces: IntProperty(
+        name="Glossy",
+        description="Maximum number of glossy reflection bounces, bounded by the total: fewer "
+                    "is faster but darkens reflections of reflections",
+        default=4, min=0, max=1024,
+    )
+    transmission_bounces: IntProperty(
+        name="Transmission",
+        description="Maximum number of transmission bounces, bounded by the total: fewer is "
+                    "faster but darkens what is seen through several glass surfaces",
+        default=12, min=0, max=1024,
+    )
+    transparent_bounces: IntProperty(
+        name="Transparent",
+        description="Maximum number of transparent bounces (independent of the total): fewer "
+                    "is faster but makes stacks of transparent surfaces opaque",
+        default=8, min=0, max=1024,
+    )
+    clamp_direct: FloatProperty(
+        name="Direct Light",
+        description="Clamp the contribution of direct lighting samples to this value to reduce "
+                    "fireflies, at the cost of bias (darker highlights); 0 disables clamping",
+        default=0.0, min=0.0,
+    )
+    clamp_indirect: FloatProperty(
+        name="Indirect Light",
+        description="Clamp the contribution of indirect lighting samples to this value to "
+                    "reduce fireflies, at the cost of bias (darker indirect light); 0 disables "
+                    "clamping (Cycles defaults to 10)",
+        default=0.0, min=0.0,
+    )
+    threads: IntProperty(
+        name="Threads",
+        description="Number of render threads: 0 uses all cores; fewer leaves the machine "
+                    "responsive but renders slower",
+        default=0, min=0, max=1024,
+    )
+
+
+classes = (LanternRenderSettings,)
+
+
+def register():
+    for c in classes:
+        bpy.utils.register_class(c)
+    bpy.types.Scene.lantern = PointerProperty(type=LanternRenderSettings)
+
+
+def unregister():
+    del bpy.types.Scene.lantern
+    for c in reversed(classes):
+        bpy.utils.unregister_class(c)

@@ -1,0 +1,334 @@
+"""Lantern's panels, laid out like Cycles', and Lantern's entry in Blender's standard panels."""
+
+import bpy
+from bpy.types import Panel
+
+ENGINE = 'LANTERN'
+
+
+class LanternButtonsPanel:
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    bl_context = "render"
+    COMPAT_ENGINES = {ENGINE}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+
+# ---- render properties ---------------------------------------------------------------------------
+
+class LANTERN_RENDER_PT_sampling(LanternButtonsPanel, Panel):
+    bl_label = "Sampling"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.scene.lantern
+
+        col = layout.column(align=True)
+        col.prop(settings, "integrator")
+        if settings.integrator == 'BIDIRECTIONAL':
+            col = layout.column(align=True)
+            col.prop(settings, "max_camera_length", text="Max Camera Length")
+            col.prop(settings, "max_light_length", text="Max Light Length")
+            col.prop(settings, "mis_heuristic")
+        col = layout.column(align=True)
+        col.prop(settings, "samples")
+        col.prop(settings, "seed")
+
+
+class LANTERN_RENDER_PT_light_paths(LanternButtonsPanel, Panel):
+    bl_label = "Light Paths"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        pass
+
+
+class LANTERN_RENDER_PT_light_paths_max_bounces(LanternButtonsPanel, Panel):
+    bl_label = "Max Bounces"
+    bl_parent_id = "LANTERN_RENDER_PT_light_paths"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.scene.lantern
+
+        col = layout.column(align=True)
+        col.prop(settings, "max_bounces", text="Total")
+
+        col = layout.column(align=True)
+        col.prop(settings, "diffuse_bounces", text="Diffuse")
+        col.prop(settings, "glossy_bounces", text="Glossy")
+        col.prop(settings, "transmission_bounces", text="Transmission")
+
+        col = layout.column(align=True)
+        col.prop(settings, "transparent_bounces", text="Transparent")
+
+
+class LANTERN_RENDER_PT_light_paths_clamping(LanternButtonsPanel, Panel):
+    bl_label = "Clamping"
+    bl_parent_id = "LANTERN_RENDER_PT_light_paths"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.scene.lantern
+
+        col = layout.column(align=True)
+        col.prop(settings, "clamp_direct", text="Direct Light")
+        col.prop(settings, "clamp_indirect", text="Indirect Light")
+
+
+class LANTERN_RENDER_PT_film(LanternButtonsPanel, Panel):
+    bl_label = "Film"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        scene = context.scene
+
+        col = layout.column()
+        col.prop(scene.render, "film_transparent", text="Transparent")
+
+        # Lantern uses Cycles' pixel filter settings so both engines render a scene alike.
+        cscene = getattr(scene, "cycles", None)
+        if cscene is not None:
+            col = layout.column()
+            col.prop(cscene, "pixel_filter_type", text="Pixel Filter")
+            if cscene.pixel_filter_type != 'BOX':
+                col.prop(cscene, "filter_width", text="Width")
+        else:
+            layout.label(text="Pixel filter: Blackman-Harris, 1.5 px")
+
+
+class LANTERN_RENDER_PT_performance(LanternButtonsPanel, Panel):
+    bl_label = "Performance"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(context.scene.lantern, "threads")
+
+
+# ---- view layer --------------------------------------------------------------------------------
+
+class LANTERN_VIEWLAYER_PT_passes(LanternButtonsPanel, Panel):
+    bl_label = "Passes"
+    bl_context = "view_layer"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        view_layer = context.view_layer
+
+        col = layout.column(heading="Include", align=True)
+        col.prop(view_layer, "use_pass_combined")
+        col.prop(view_layer, "use_pass_z")
+        col.prop(view_layer, "use_pass_normal")
+        layout.label(text="Albedo, Variance and Sample Count are always written")
+
+
+# ---- object, light, material, world ----------------------------------------------------------
+
+class LANTERN_OBJECT_PT_visibility(LanternButtonsPanel, Panel):
+    bl_label = "Visibility"
+    bl_context = "object"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return super().poll(context) and context.object is not None
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        ob = context.object
+
+        col = layout.column(heading="Show In")
+        col.prop(ob, "hide_viewport", text="Viewports", invert_checkbox=True, toggle=False)
+        col.prop(ob, "hide_render", text="Renders", invert_checkbox=True, toggle=False)
+
+        if ob.type in {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'LIGHT', 'CURVES',
+                       'POINTCLOUD', 'VOLUME'}:
+            col = layout.column(heading="Ray Visibility")
+            col.prop(ob, "visible_camera", text="Camera")
+            col.prop(ob, "visible_diffuse", text="Diffuse")
+            col.prop(ob, "visible_glossy", text="Glossy")
+            col.prop(ob, "visible_transmission", text="Transmission")
+            if ob.type != 'LIGHT':
+                col.prop(ob, "visible_shadow", text="Shadow")
+
+
+class LANTERN_LIGHT_PT_light(LanternButtonsPanel, Panel):
+    bl_label = "Light"
+    bl_context = "data"
+
+    @classmethod
+    def poll(cls, context):
+        return context.light is not None and super().poll(context)
+
+    def draw(self, context):
+        layout = self.layout
+        light = context.light
+
+        layout.row().prop(light, "type", expand=True)
+        layout.use_property_split = True
+
+        col = layout.column()
+        col.prop(light, "color")
+        col.prop(light, "energy")
+        col.separator()
+
+        if light.type in {'POINT', 'SPOT'}:
+            col.prop(light, "shadow_soft_size", text="Radius")
+        elif light.type == 'SUN':
+            col.prop(light, "angle")
+        elif light.type == 'AREA':
+            col.prop(light, "shape", text="Shape")
+            sub = col.column(align=True)
+            if light.shape in {'SQUARE', 'DISK'}:
+                sub.prop(light, "size")
+            else:
+                sub.prop(light, "size", text="Size X")
+                sub.prop(light, "size_y", text="Y")
+
+
+def _node_view(layout, id_data, input_name, fallback_prop):
+    if not id_data.use_nodes:
+        layout.prop(id_data, "use_nodes", icon='NODETREE')
+        layout.prop(id_data, fallback_prop)
+        return
+    ntree = id_data.node_tree
+    node = ntree.get_output_node('CYCLES')  # Lantern reads the output Cycles would use
+    if node is None:
+        layout.label(text="No output node")
+        return
+    socket = node.inputs.get(input_name)
+    if socket is None:
+        layout.label(text="Incompatible output node")
+    else:
+        layout.template_node_view(ntree, node, socket)
+
+
+class LANTERN_MATERIAL_PT_surface(LanternButtonsPanel, Panel):
+    bl_label = "Surface"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context):
+        mat = context.material
+        return mat is not None and not mat.grease_pencil and super().poll(context)
+
+    def draw(self, context):
+        self.layout.use_property_split = True
+        _node_view(self.layout, context.material, "Surface", "diffuse_color")
+
+
+class LANTERN_WORLD_PT_surface(LanternButtonsPanel, Panel):
+    bl_label = "Surface"
+    bl_context = "world"
+
+    @classmethod
+    def poll(cls, context):
+        return context.world is not None and super().poll(context)
+
+    def draw(self, context):
+        self.layout.use_property_split = True
+        _node_view(self.layout, context.world, "Surface", "color")
+
+
+class LANTERN_WORLD_PT_ray_visibility(LanternButtonsPanel, Panel):
+    bl_label = "Ray Visibility"
+    bl_context = "world"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return (context.world is not None and hasattr(context.world, "cycles_visibility")
+                and super().poll(context))
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(context.world.cycles_visibility, "camera")
+
+
+classes = (
+    LANTERN_RENDER_PT_sampling,
+    LANTERN_RENDER_PT_light_paths,
+    LANTERN_RENDER_PT_light_paths_max_bounces,
+    LANTERN_RENDER_PT_light_paths_clamping,
+    LANTERN_RENDER_PT_film,
+    LANTERN_RENDER_PT_performance,
+    LANTERN_VIEWLAYER_PT_passes,
+    LANTERN_OBJECT_PT_visibility,
+    LANTERN_LIGHT_PT_light,
+    LANTERN_MATERIAL_PT_surface,
+    LANTERN_WORLD_PT_surface,
+    LANTERN_WORLD_PT_ray_visibility,
+)
+
+
+# ---- standard panels ---------------------------------------------------------------------------
+
+# Standard panels for 'BLENDER_RENDER' that would mislead under Lantern (Lantern has its own).
+_EXCLUDED_PANELS = {
+    "DATA_PT_light",          # only the type: LANTERN_LIGHT_PT_light replaces it
+    "DATA_PT_area",           # in LANTERN_LIGHT_PT_light
+    "DATA_PT_falloff_curve",  # light falloff curves are not used by Lantern
+    "OBJECT_PT_visibility",   # LANTERN_OBJECT_PT_visibility adds ray visibility
+    "DATA_PT_preview",
+    "MATERIAL_PT_preview",
+}
+# Engine-agnostic panels that do not list 'BLENDER_RENDER'.
+_EXTRA_PANELS = {
+    "EEVEE_MATERIAL_PT_context_material",  # material slots
+    "DATA_PT_spot",                         # spot size and blend
+    "RENDER_PT_color_management",
+}
+
+_patched = []
+
+
+def _standard_panels():
+    for name in dir(bpy.types):
+        cls = getattr(bpy.types, name, None)
+        if not isinstance(cls, type) or not issubclass(cls, Panel) or name.startswith("LANTERN_"):
+            continue
+        if getattr(cls, "bl_space_type", None) != 'PROPERTIES':
+            continue
+        # Only a class's own set: an inherited one would enable every sibling panel too.
+        engines = cls.__dict__.get("COMPAT_ENGINES")
+        if not isinstance(engines, set):
+            continue
+        if name in _EXTRA_PANELS or ('BLENDER_RENDER' in engines and name not in _EXCLUDED_PANELS):
+            yield cls
+
+
+def register():
+    for c in classes:
+        bpy.utils.register_class(c)
+    for panel in _standard_panels():
+        if ENGINE not in panel.COMPAT_ENGINES:
+            panel.COMPAT_ENGINES.add(ENGINE)
+            _patched.append(panel)
+
+
+def unregister():
+    for panel in _patched:
+        panel.COMPAT_ENGINES.discard(ENGINE)
+    _patched.clear()
+    for c in reversed(classes):
+        bpy.utils.unregister_class(c)

@@ -1,0 +1,537 @@
+// Bidirectional path tracing (Veach 1997, ch. 10; pbrt 3, section 16.3): a camera subpath and a
+// light subpath per sample, every camera vertex connected with every light vertex, and all (s, t)
+// strategies combined by multiple importance sampling. MIS weights are sums of products of ratios
+// of neighbouring vertices' densities (pbrt's MISWeight), never products of whole-path pdfs, so
+// they stay finite on paths of hundreds of vertices.
+//
+// Strategies: s = 0 (the camera subpath reaches an emitter: a mesh light, a lamp, the sun or the
+// world), s = 1 (a fresh light sample at the camera vertex, as next-event estimation), s >= 2,
+// and t = 1 (a light vertex connected to the pinhole and splatted through the pixel filter).
+#include <algorithm>
+#include <vector>
+
+#include "integrators/integrator.h"
+#include "integrators/path_vertex.h"
+
+namespace lt {
+
+namespace {
+
+constexpr unsigned kVisCamera = 1, kVisDiffuse = 2, kVisGlossy = 4, kVisTransmission = 8;
+constexpr unsigned kVisLightRay = kVisDiffuse | kVisGlossy | kVisTransmission;
+
+enum class Mode { Radiance, Importance };
+
+unsigned visibility_of(uint32_t lobe) {
+  if (lobe & kLobeTransmission) return kVisTransmission;
+  if (lobe & kLobeDiffuse) return kVisDiffuse;
+  return kVisGlossy;
+}
+
+// Scratch subpaths, allocated once per thread and reused: no heap allocation per sample.
+struct Scratch {
+  std::vector<PathVertex> camera, light;
+};
+Scratch& scratch(size_t n) {
+  thread_local Scratch s;
+  if (s.camera.size() < n) s.camera.resize(n);
+  if (s.light.size() < n) s.light.resize(n);
+  return s;
+}
+
+class Bdpt {
+ public:
+  Bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats)
+      : ctx_(ctx), scene_(ctx.scene), lights_(ctx.scene.lights), s_(ctx.settings), cs_(cs), sampler_(sampler),
+        stats_(stats),
+        pixel_center_{std::floor(cs.film.x) + 0.5f, std::floor(cs.film.y) + 0.5f},
+        film_area_(ctx.camera.pixel_plane_area() * float(ctx.width) * float(ctx.height)) {}
+
+  SampleValue run(std::vector<Splat>& splats);
+
+ private:
+  // ---- densities ---------------------------------------------------------------------------
+  float convert_density(float pdf, const PathVertex& from, const PathVertex& to) const {
+    if (to.infinite) return pdf;
+    Vec3 w = to.p - from.p;
+    float d2 = length_squared(w);
+    if (!(d2 > 0)) return 0;
+    if (to.on_surface()) pdf *= std::abs(dot(to.n, w)) / std::sqrt(d2);
+    return pdf / d2;
+  }
+  // Solid-angle density with which the camera, for the pixel being estimated, shoots towards p,
+  // as MIS must see it: each pixel has spp camera samples but N * spp light paths (N pixels in the
+  // region), so the camera's per-pixel density is divided by N (Veach's sample-count-weighted
+  // heuristics; it equals pbrt's density normalised over the whole film).
+  float camera_pdf_dir(const Vec3& p) const {
+    Vec2 film;
+    Vec3 dir;
+    float dist;
+    if (!ctx_.camera.project(p, ctx_.filter.radius() + 1, &film, &dir, &dist)) return 0;
+    float h = ctx_.filter.pdf(film.x - pixel_center_.x) * ctx_.filter.pdf(film.y - pixel_center_.y);
+    float c = dot(dir, ctx_.camera.forward());
+    return h / (film_area_ * c * c * c);
+  }
+  float bsdf_pdf(const PathVertex& v, const Vec3& to_prev, const Vec3& to_next) const {
+    float pdf;
+    v.bsdf.eval(v.frame.to_local(to_prev), v.frame.to_local(to_next), &pdf);
+    return pdf;
+  }
+  // Density (area measure at `next`) that vertex v samples `next`, having been reached from prev.
+  float pdf(const PathVertex& v, const PathVertex* prev, const PathVertex& next) const {
+    if (v.type == VertexType::Light) return pdf_light(v, next);
+    Vec3 wn = next.p - v.p;
+    if (!(length_squared(wn) > 0)) return 0;
+    wn = normalize(wn);
+    float p;
+    if (v.type == VertexType::Camera) {
+      p = camera_pdf_dir(next.p);
+    } else {
+      Vec3 wp = normalize(prev->p - v.p);
+      p = bsdf_pdf(v, wp, wn);
+    }
+    return convert_density(p, v, next);
+  }
+  // Density that a light subpath starting at light vertex v continues to `to` (area at `to`).
+  float pdf_light(const PathVertex& v, const PathVertex& to) const {
+    Vec3 w = to.p - v.p;
+    float d2 = length_squared(w);
+    if (!(d2 > 0)) return 0;
+    w = w / std::sqrt(d2);
+    float p;
+    if (v.infinite) {
+      p = 1 / (kPi * lights_.scene_radius() * lights_.scene_radius());
+    } else {
+      float pdf_pos, pdf_dir;
+      lights_.pdf_emission(scene_, v.light, v.p, v.n, w, &pdf_pos, &pdf_dir);
+      p = pdf_dir / d2;
+    }
+    if (to.on_surface()) p *= std::abs(dot(to.n, w));
+    return p;
+  }
+  // Density that a light subpath starts at v (light choice included).
+  float pdf_light_origin(const PathVertex& v, const PathVertex& to) const {
+    float pmf = lights_.pmf(v.light);
+    if (v.infinite) {
+      Vec3 w = normalize(v.p - to.p);
+      return pmf * lights_.pdf(scene_, v.light, to.p, w, INFINITY);
+    }
+    float pdf_pos, pdf_dir;
+    lights_.pdf_emission(scene_, v.light, v.p, v.n, normalize(to.p - v.p), &pdf_pos, &pdf_dir);
+    return pmf * pdf_pos;
+  }
+  bool is_delta_light(const PathVertex& v) const {
+    return v.type == VertexType::Light && lights_.light(v.light).delta();
+  }
+
+  // ---- scattering ----------------------------------------------------------------------------
+  // BSDF towards `to` at a vertex, with pbrt's shading-normal correction for importance transport.
+  Spectrum f(const PathVertex& v, const Vec3& to_world, Mode mode) const {
+    if (v.type != VertexType::Surface) return Spectrum(0.0f);
+    Vec3 wi = v.frame.to_local(to_world);
+    if ((dot(to_world, v.n) > 0) != (wi.z > 0)) return Spectrum(0.0f);  // shading normal would leak
+    float pdf;
+    Spectrum r = v.bsdf.eval(v.wo, wi, &pdf);
+    if (mode == Mode::Importance) r *= shading_correction(v, v.frame.to_world(v.wo), to_world);
+    return r;
+  }
+  static float shading_correction(const PathVertex& v, const Vec3& wo, const Vec3& wi) {
+    float num = std::abs(dot(wo, v.frame.n)) * std::abs(dot(wi, v.n));
+    float den = std::abs(dot(wo, v.n)) * std::abs(dot(wi, v.frame.n));
+    return den > 0 ? num / den : 0.0f;
+  }
+  float cos_at(const PathVertex& v, const Vec3& w) const {
+    if (v.type == VertexType::Surface) return std::abs(dot(v.frame.n, w));
+    if (v.type == VertexType::Light && v.on_surface()) return std::abs(dot(v.n, w));
+    return 1.0f;
+  }
+  bool visible(const PathVertex& a, const PathVertex& b) const {
+    Ray r;
+    Vec3 d = b.p - a.p;
+    float dist = length(d);
+    if (!(dist > 0)) return false;
+    r.d = d / dist;
+    r.o = a.type == VertexType::Surface ? spawn_origin(a.sp, r.d) : a.p;
+    r.tmin = 0;
+    if (b.infinite) {
+      r.d = normalize(b.p - a.p);
+      r.tmax = INFINITY;
+    } else {
+      Vec3 end = b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p;
+      r.tmax = length(end - r.o) * (1 - 1e-4f);
+    }
+    ++stats_.rays;
+    return !scene_.geometry.occluded(r);
+  }
+
+  int random_walk(Ray ray, Spectrum beta, float pdf_fwd, int max_depth, Mode mode, std::vector<PathVertex>& path);
+  void emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le);
+  int generate_light_subpath(std::vector<PathVertex>& path);
+  float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, const PathVertex* sampled, int s,
+                   int t);
+  Spectrum connect(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, int t);
+  void splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats);
+
+  float heuristic(float r) const {
+    switch (s_.mis) {
+      case MisHeuristic::Power: return r * r;
+      case MisHeuristic::Balance: return r;
+      case MisHeuristic::Uniform: return r != 0 ? 1.0f : 0.0f;
+    }
+    return r;
+  }
+  int max_depth() const { return s_.max_bounces + 1; }  // s + t - 2: the path tracer's limit
+
+  const RenderContext& ctx_;
+  const Scene& scene_;
+  const LightSet& lights_;
+  const IntegratorSettings& s_;
+  const CameraSample& cs_;
+  Sampler& sampler_;
+  SampleStats& stats_;
+  Vec2 pixel_center_;
+  float film_area_;  // view-plane area of the render region at unit distance
+  SampleValue out_;
+  Spectrum L_{0.0f};
+  int camera_count_ = 0;
+};
+
+// Adds the s = 0 strategy for a camera subpath whose vertex t - 1 is on an emitter.
+void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le) {
+  if (t - 2 > max_depth() || is_black(le)) return;
+  const PathVertex& v = camera[t - 1];
+  Spectrum c = v.beta * le;
+  if (is_black(c)) return;
+  L_ += c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t);
+}
+
+int Bdpt::random_walk(Ray ray, Spectrum beta, float pdf_fwd, int max_depth, Mode mode, std::vector<PathVertex>& path) {
+  if (max_depth <= 0) return 1;
+  unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
+  int count = 1, bounces = 0;
+  Bsdf scratch_bsdf;
+  for (;;) {
+    PathVertex& prev = path[count - 1];
+    PathVertex& v = path[count];
+    Hit hit;
+    ++stats_.rays;
+    bool found = scene_.geometry.intersect(ray, visibility, &hit);
+    if (mode == Mode::Radiance) {
+      // Lamps with a size are crossed, not hit: each one crossed ends a path of strategy s = 0.
+      if (lights_.has_hittable()) {
+        Ray r = ray;
+        r.tmax = found ? hit.t : ray.tmax;
+        lights_.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
+          const Light& l = lights_.light(h.light);
+          v = PathVertex();
+          v.type = VertexType::Light;
+          v.light = h.light;
+          v.p = ray.o + ray.d * h.t;
+          v.n = l.type == LightType::Area ? l.direction : -ray.d;
+          v.beta = beta;
+          v.pdf_fwd = convert_density(pdf_fwd, prev, v);
+          emitter_reached(path, count + 1, h.radiance);
+        });
+      }
+      if (!found) {
+        bool background = count == 1;
+        if (background) out_.alpha = s_.transparent_background ? 0.0f : 1.0f;
+        if (!(background && s_.transparent_background)) {
+          auto reach = [&](int light, const Spectrum& le) {
+            v = PathVertex();
+            v.type = VertexType::Light;
+            v.infinite = true;
+            v.light = light;
+            v.p = ray.o + ray.d;
+            v.beta = beta;
+            v.pdf_fwd = pdf_fwd;
+            emitter_reached(path, count + 1, le);
+          };
+          if (lights_.world_light() >= 0 && (!background || scene_.world.camera_visible))
+            reach(lights_.world_light(), scene_.world.radiance(ray.d));
+          lights_.escaped_suns(ray.d, visibility, reach);
+        }
+      }
+    }
+    if (!found) break;
+
+    SurfacePoint sp = scene_.geometry.surface(hit);
+    const bool backface = dot(ray.d, sp.ng) > 0;
+    v.type = VertexType::Surface;
+    v.delta = false;
+    v.infinite = false;
+    v.sp = sp;
+    v.p = sp.p;
+    v.n = backface ? -sp.ng : sp.ng;
+    v.frame = Frame(backface ? -sp.ns : sp.ns);
+    v.wo = v.frame.to_local(-ray.d);
+    v.beta = beta;
+    v.pdf_fwd = convert_density(pdf_fwd, prev, v);
+    v.pdf_rev = 0;
+    const Material& material = scene_.material(sp.material);
+    Spectrum le = material.evaluate(scene_.images, sp.uv, backface, &v.bsdf);
+    v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
+    ++count;
+    if (mode == Mode::Radiance) {
+      if (count == 2) {
+        out_.alpha = 1;
+        out_.depth = hit.t;
+        out_.normal = v.frame.n;
+        out_.albedo = v.bsdf.albedo();
+      }
+      if (v.light >= 0) emitter_reached(path, count, le);
+      else if (!is_black(le)) L_ += beta * le;  // emission no light sampler knows: no MIS partner
+    }
+    if (++bounces >= max_depth || v.bsdf.count() == 0) break;
+
+    BsdfSample bs;
+    float u_lobe = sampler_.next_1d();
+    Vec2 u = sampler_.next_2d();
+    if (!v.bsdf.sample(v.wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
+    Vec3 wi = v.frame.to_world(bs.wi);
+    if ((dot(wi, v.n) > 0) != ((bs.flags & kLobeReflection) != 0)) break;
+    float pdf_rev;
+    v.bsdf.eval(bs.wi, v.wo, &pdf_rev);
+    pdf_fwd = bs.pdf;
+    if (bs.flags & kLobeSpecular) {
+      v.delta = true;
+      pdf_fwd = pdf_rev = 0;
+    }
+    beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
+    if (mode == Mode::Importance) beta *= shading_correction(v, -ray.d, wi);
+    if (!is_finite(beta) || is_black(beta)) break;
+    prev.pdf_rev = convert_density(pdf_rev, v, prev);
+    if (!(bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1)) visibility = visibility_of(bs.flags);
+    ray.o = spawn_origin(sp, wi);
+    ray.d = wi;
+    ray.tmin = 0;
+    ray.tmax = INFINITY;
+    // Russian roulette (unbiased; MIS weights need not account for it).
+    if (bounces >= 3) {
+      float q = std::min(0.95f, max_component(beta));
+      if (sampler_.next_1d() >= q) break;
+      beta /= q;
+    }
+  }
+  return count;
+}
+
+int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
+  if (lights_.empty() || s_.max_light_length <= 0) return 0;
+  float pmf, u_remapped;
+  int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
+  Vec2 up = sampler_.next_2d(), ud = sampler_.next_2d();
+  EmissionSample e;
+  if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
+    return 0;
+  const Light& l = lights_.light(li);
+  PathVertex& y0 = path[0];
+  y0 = PathVertex();
+  y0.type = VertexType::Light;
+  y0.light = li;
+  y0.infinite = l.infinite();
+  y0.delta_direction = e.delta_dir;
+  y0.p = e.ray.o;
+  y0.n = (l.type == LightType::Area || l.type == LightType::Triangle || (l.radius > 0 && !l.infinite())) ? e.n : Vec3(0.0f);
+  y0.beta = e.radiance;
+  y0.pdf_fwd = pmf * e.pdf_pos;
+  float cos_l = is_black(e.n) ? 1.0f : std::abs(dot(e.n, e.ray.d));
+  Spectrum beta = e.radiance * (cos_l / (pmf * e.pdf_pos * e.pdf_dir));
+  Ray ray = e.ray;
+  ray.tmin = 0;
+  if (l.type == LightType::Area || l.type == LightType::Triangle) ray.o = offset_ray_origin(e.ray.o, e.n);
+  int count = random_walk(ray, beta, e.pdf_dir, s_.max_light_length - 1, Mode::Importance, path);
+  if (y0.infinite) {
+    // The first surface vertex's density is the disk's, not a solid angle's (pbrt 3, 16.3.2).
+    if (count > 1) {
+      path[1].pdf_fwd = e.pdf_pos;
+      if (path[1].on_surface()) path[1].pdf_fwd *= std::abs(dot(e.ray.d, path[1].n));
+    }
+    y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY);
+  }
+  return count;
+}
+
+float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, const PathVertex* sampled,
+                       int s, int t) {
+  if (s + t == 2) return 1;
+  // Temporarily place the sampled vertex and the densities this strategy implies (pbrt's
+  // ScopedAssignment), then restore them.
+  PathVertex* qs = s > 0 ? &light[s - 1] : nullptr;
+  PathVertex* pt = t > 0 ? &camera[t - 1] : nullptr;
+  PathVertex* qs_minus = s > 1 ? &light[s - 2] : nullptr;
+  PathVertex* pt_minus = t > 1 ? &camera[t - 2] : nullptr;
+  PathVertex saved_endpoint;
+  PathVertex* replaced = nullptr;
+  if (s == 1) replaced = qs;
+  else if (t == 1) replaced = pt;
+  if (replaced) {
+    saved_endpoint = *replaced;
+    *replaced = *sampled;
+  }
+  struct Saved { float* where; float value; };
+  Saved saved[4];
+  int n_saved = 0;
+  auto assign = [&](float* where, float value) {
+    saved[n_saved++] = {where, *where};
+    *where = value;
+  };
+  bool pt_delta = pt ? pt->delta : false, qs_delta = qs ? qs->delta : false;
+  if (pt) pt->delta = false;
+  if (qs) qs->delta = false;
+  if (pt) assign(&pt->pdf_rev, s > 0 ? pdf(*qs, qs_minus, *pt) : pdf_light_origin(*pt, *pt_minus));
+  if (pt_minus) assign(&pt_minus->pdf_rev, s > 0 ? pdf(*pt, qs, *pt_minus) : pdf_light(*pt, *pt_minus));
+  if (qs) assign(&qs->pdf_rev, pdf(*pt, pt_minus, *qs));
+  if (qs_minus) assign(&qs_minus->pdf_rev, pdf(*qs, pt, *qs_minus));
+
+  auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
+  double sum = 0, r = 1;
+  for (int i = t - 1; i > 0; --i) {
+    r *= remap0(camera[i].pdf_rev) / remap0(camera[i].pdf_fwd);
+    if (!camera[i].delta && !camera[i - 1].delta) sum += heuristic(float(r));
+  }
+  r = 1;
+  for (int i = s - 1; i >= 0; --i) {
+    r *= remap0(light[i].pdf_rev) / remap0(light[i].pdf_fwd);
+    bool delta_light_vertex = i > 0 ? light[i - 1].delta : is_delta_light(light[0]);
+    if (!light[i].delta && !delta_light_vertex) sum += heuristic(float(r));
+  }
+
+  for (int k = n_saved - 1; k >= 0; --k) *saved[k].where = saved[k].value;
+  if (pt) pt->delta = pt_delta;
+  if (qs) qs->delta = qs_delta;
+  if (replaced) *replaced = saved_endpoint;
+  double w = 1 / (1 + sum);
+  return std::isfinite(w) ? float(w) : 0.0f;
+}
+
+Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, int t) {
+  PathVertex& pt = camera[t - 1];
+  if (pt.type != VertexType::Surface || !pt.bsdf.has_non_delta()) return Spectrum(0.0f);
+  if (s == 1) {
+    // A fresh light sample at the camera vertex: exactly the path tracer's next-event estimation.
+    float pmf, u_remapped;
+    int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
+    Vec2 u = sampler_.next_2d();
+    LightSample ls;
+    if (!(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance))
+      return Spectrum(0.0f);
+    const Light& l = lights_.light(li);
+    PathVertex sampled;
+    sampled.type = VertexType::Light;
+    sampled.light = li;
+    sampled.infinite = l.infinite();
+    sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
+    sampled.n = l.type == LightType::Area ? l.direction
+                : (l.type == LightType::Triangle || ((l.type == LightType::Point || l.type == LightType::Spot) && l.radius > 0))
+                    ? -ls.wi
+                    : Vec3(0.0f);
+    if (l.type == LightType::Triangle) {
+      Vec3 p0, p1, p2;
+      scene_.geometry.triangle(l.instance, l.primitive, &p0, &p1, &p2);
+      sampled.n = normalize(cross(p1 - p0, p2 - p0));
+    }
+    sampled.beta = ls.radiance / (pmf * ls.pdf);
+    Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance) * sampled.beta * cos_at(pt, ls.wi);
+    if (is_black(c)) return c;
+    Ray shadow;
+    shadow.o = spawn_origin(pt.sp, ls.wi);
+    shadow.d = ls.wi;
+    shadow.tmin = 0;
+    shadow.tmax = std::isinf(ls.distance) ? INFINITY : ls.distance * (1 - 1e-4f);
+    ++stats_.rays;
+    if (scene_.geometry.occluded(shadow)) return Spectrum(0.0f);
+    sampled.pdf_fwd = pdf_light_origin(sampled, pt);
+    return c * mis_weight(light, camera, &sampled, 1, t);
+  }
+  // s >= 2: join two surface vertices with a shadow ray.
+  PathVertex& qs = light[s - 1];
+  if (qs.type != VertexType::Surface || !qs.bsdf.has_non_delta()) return Spectrum(0.0f);
+  Vec3 d = pt.p - qs.p;
+  float d2 = length_squared(d);
+  if (!(d2 > 0)) return Spectrum(0.0f);
+  Vec3 w = d / std::sqrt(d2);  // from the light vertex towards the camera vertex
+  Spectrum c = qs.beta * f(qs, w, Mode::Importance) * f(pt, -w, Mode::Radiance) * pt.beta;
+  if (is_black(c)) return c;
+  c *= cos_at(qs, w) * cos_at(pt, w) / d2;
+  if (is_black(c) || !visible(qs, pt)) return Spectrum(0.0f);
+  return c * mis_weight(light, camera, nullptr, s, t);
+}
+
+void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats) {
+  const PathVertex& qs = light[s - 1];
+  if (qs.type != VertexType::Surface || !qs.bsdf.has_non_delta()) return;
+  const Camera& cam = ctx_.camera;
+  Vec2 film;
+  Vec3 dir;
+  float dist;
+  if (!cam.project(qs.p, ctx_.filter.radius(), &film, &dir, &dist)) return;
+  Spectrum base = qs.beta * f(qs, -dir, Mode::Importance);
+  if (is_black(base)) return;
+  PathVertex z0;
+  z0.type = VertexType::Camera;
+  z0.p = cam.position();
+  if (!visible(qs, z0)) return;
+  float c = dot(dir, cam.forward());
+  // Pixel j's importance is W_j = h_j(x) / (a cos^4) (a: view-plane area of a pixel); with the
+  // geometry term cos * cos_qs / d^2 the contribution is h_j cos_qs / (a cos^3 d^2). The film
+  // divides the sum of splats by the number of light paths.
+  base *= cos_at(qs, dir) / (cam.pixel_plane_area() * c * c * c * dist * dist);
+  const float r = ctx_.filter.radius();
+  const int px0 = std::max(ctx_.x0, int(std::ceil(film.x - r - 0.5f))),
+            px1 = std::min(ctx_.x0 + ctx_.width - 1, int(std::floor(film.x + r - 0.5f)));
+  const int py0 = std::max(ctx_.y0, int(std::ceil(film.y - r - 0.5f))),
+            py1 = std::min(ctx_.y0 + ctx_.height - 1, int(std::floor(film.y + r - 0.5f)));
+  const Vec2 own_center = pixel_center_;
+  for (int py = py0; py <= py1; ++py)
+    for (int px = px0; px <= px1; ++px) {
+      float h = ctx_.filter.pdf(film.x - (px + 0.5f)) * ctx_.filter.pdf(film.y - (py + 0.5f));
+      if (!(h > 0)) continue;
+      pixel_center_ = {px + 0.5f, py + 0.5f};  // the MIS weight depends on the pixel's filter
+      float w = mis_weight(light, camera, &z0, s, 1);
+      Spectrum v = base * (h * w);
+      if (is_finite(v) && !is_black(v))
+        splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v});
+    }
+  pixel_center_ = own_center;
+}
+
+SampleValue Bdpt::run(std::vector<Splat>& splats) {
+  const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
+  Scratch& sc = scratch(capacity);
+  std::vector<PathVertex>& camera = sc.camera;
+  std::vector<PathVertex>& light = sc.light;
+
+  // Camera subpath: z0 on the pinhole; z1's density is the filter's choice of film position.
+  PathVertex& z0 = camera[0];
+  z0 = PathVertex();
+  z0.type = VertexType::Camera;
+  z0.p = cs_.ray.o;
+  z0.delta = ctx_.camera.orthographic();  // a delta direction: t = 1 cannot reach it
+  float c = dot(cs_.ray.d, ctx_.camera.forward());
+  float pdf_dir = ctx_.camera.orthographic() ? 0.0f : cs_.film_pdf / (film_area_ * c * c * c);
+  int camera_depth = std::min(s_.max_camera_length, s_.max_bounces + 2);
+  int nt = random_walk(cs_.ray, Spectrum(1.0f), pdf_dir, camera_depth, Mode::Radiance, camera);
+  int ns = generate_light_subpath(light);
+
+  for (int t = 2; t <= nt; ++t)
+    for (int s = 1; s <= ns; ++s) {
+      if (s + t - 2 > max_depth()) break;
+      Spectrum c = connect(light, camera, s, t);
+      if (!is_black(c)) L_ += c;
+    }
+  for (int s = 2; s <= ns; ++s)
+    if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
+  out_.radiance = L_;
+  return out_;
+}
+
+}  // namespace
+
+SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
+                       std::vector<Splat>& splats) {
+  Bdpt b(ctx, cs, sampler, stats);
+  return b.run(splats);
+}
+
+}  // namespace lt

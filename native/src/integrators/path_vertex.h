@@ -1,0 +1,45 @@
+// A vertex of a camera or light subpath for bidirectional path tracing (Veach 1997, ch. 10;
+// pbrt 3, section 16.3). Densities are stored in area measure (solid angle for infinite lights)
+// so that MIS weights are sums of ratios of neighbouring densities.
+#pragma once
+
+#include "core/math.h"
+#include "geometry/hit.h"
+#include "scene/bsdf.h"
+
+namespace lt {
+
+enum class VertexType : uint8_t {
+  Camera,
+  Light,
+  Surface,
+  Medium,  // scattering inside a participating medium (phase function instead of BSDF)
+};
+
+struct PathVertex {
+  VertexType type = VertexType::Surface;
+  bool delta = false;     // reached by sampling a delta lobe, or a delta light/camera position
+  bool infinite = false;  // sun or world light vertex: a direction rather than a point
+  int light = -1;         // light index: Light vertices, and Surface vertices on emissive meshes
+  Spectrum beta{1.0f};    // throughput of the subpath up to and including this vertex
+  float pdf_fwd = 0;      // density of sampling this vertex from its predecessor
+  float pdf_rev = 0;      // density of sampling it from its successor (the other direction)
+  Vec3 p;
+  Vec3 n;                 // geometric normal (zero for points in space: point lights, camera, media)
+  Frame frame;            // shading frame, z facing the side the vertex was reached from
+  Vec3 wo;                // local direction towards the predecessor
+  SurfacePoint sp;
+  Bsdf bsdf;
+
+  bool on_surface() const { return n.x != 0 || n.y != 0 || n.z != 0; }
+  bool connectible() const {
+    switch (type) {
+      case VertexType::Surface: return bsdf.has_non_delta();
+      case VertexType::Light: return !delta_direction;
+      default: return true;
+    }
+  }
+  bool delta_direction = false;  // Light vertices: the light emits in one direction (sun with angle 0)
+};
+
+}  // namespace lt
