@@ -6,17 +6,12 @@
 #include <new>
 #include <string>
 
+#include "api/handles.h"
 #include "core/error.h"
 #include "core/render.h"
 #include "io/exr.h"
 #include "scene/scene.h"
 
-struct lt_scene {
-  lt::Scene scene;
-};
-struct lt_render {
-  std::unique_ptr<lt::RenderJob> job;
-};
 
 namespace {
 

@@ -25,6 +25,15 @@ class Distribution1D {
     } else {
       for (size_t i = 1; i <= n; ++i) cdf_[i] /= integral_;
     }
+    // Guide table: for each of n equal slices of u, the bin where the search can start, so that
+    // inverting the CDF is exact and O(1) on average instead of a binary search.
+    guide_.resize(n);
+    size_t i = 0;
+    for (size_t k = 0; k < n; ++k) {
+      double u = double(k) / double(n);
+      while (i + 1 < n && cdf_[i + 1] <= u) ++i;
+      guide_[k] = uint32_t(i);
+    }
   }
   size_t size() const { return func_.size(); }
   double integral() const { return integral_; }
@@ -52,17 +61,16 @@ class Distribution1D {
  private:
   int find(float u) const {
     // Largest i with cdf_[i] <= u, restricted to [0, n-1].
-    size_t lo = 0, hi = func_.size();
-    while (hi - lo > 1) {
-      size_t mid = (lo + hi) / 2;
-      if (cdf_[mid] <= u) lo = mid; else hi = mid;
-    }
+    const size_t n = func_.size();
+    size_t lo = guide_[std::min(n - 1, size_t(double(u) * double(n)))];
+    while (lo + 1 < n && cdf_[lo + 1] <= u) ++lo;
     // Skip zero-width bins so a sample never lands where the function is zero.
     while (lo + 1 < func_.size() && cdf_[lo + 1] - cdf_[lo] <= 0) ++lo;
     return int(lo);
   }
   std::vector<float> func_;
   std::vector<double> cdf_;
+  std::vector<uint32_t> guide_;
   double integral_ = 0;
 };
 

@@ -74,6 +74,7 @@ void RenderJob::render_pass_with(int sample_index, Trace trace) {
             Sampler sampler(settings_.seed, uint32_t(fy) * uint32_t(settings_.width) + uint32_t(fx), uint32_t(sample_index));
             float ox = filter_.sample(sampler.next_1d()), oy = filter_.sample(sampler.next_1d());
             CameraSample cs;
+            cs.pixel_center = {fx + 0.5f, fy + 0.5f};
             cs.film = {fx + 0.5f + ox, fy + 0.5f + oy};
             cs.film_pdf = filter_.pdf(ox) * filter_.pdf(oy);
             cs.ray = camera_.generate(cs.film.x, cs.film.y);

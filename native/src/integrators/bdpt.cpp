@@ -44,10 +44,11 @@ class Bdpt {
   Bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats)
       : ctx_(ctx), scene_(ctx.scene), lights_(ctx.scene.lights), s_(ctx.settings), cs_(cs), sampler_(sampler),
         stats_(stats),
-        pixel_center_{std::floor(cs.film.x) + 0.5f, std::floor(cs.film.y) + 0.5f},
+        pixel_center_(cs.pixel_center),
         film_area_(ctx.camera.pixel_plane_area() * float(ctx.width) * float(ctx.height)) {}
 
   SampleValue run(std::vector<Splat>& splats);
+  std::vector<float> weight_sums();
 
  private:
   // ---- densities ---------------------------------------------------------------------------
@@ -164,7 +165,7 @@ class Bdpt {
     return !scene_.geometry.occluded(r);
   }
 
-  int random_walk(Ray ray, Spectrum beta, float pdf_fwd, int max_depth, Mode mode, std::vector<PathVertex>& path);
+  int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vector<PathVertex>& path);
   void emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le);
   int generate_light_subpath(std::vector<PathVertex>& path);
   float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, const PathVertex* sampled, int s,
@@ -181,6 +182,7 @@ class Bdpt {
     return r;
   }
   int max_depth() const { return s_.max_bounces + 1; }  // s + t - 2: the path tracer's limit
+  int camera_depth() const { return std::min(s_.max_camera_length, s_.max_bounces + 2); }
 
   const RenderContext& ctx_;
   const Scene& scene_;
@@ -205,8 +207,16 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   L_ += c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t);
 }
 
-int Bdpt::random_walk(Ray ray, Spectrum beta, float pdf_fwd, int max_depth, Mode mode, std::vector<PathVertex>& path) {
+int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vector<PathVertex>& path) {
   if (max_depth <= 0) return 1;
+  // Densities are computed from the vertices' positions with the same pdf() the MIS weights use,
+  // not from the sampled directions (rays leave from offset origins): every strategy then sees
+  // exactly the same numbers and the weights sum to one.
+  auto density_of = [&](int count, const PathVertex& v) {
+    const PathVertex& prev = path[count - 1];
+    if (prev.delta) return 0.0f;
+    return pdf(prev, count >= 2 ? &path[count - 2] : nullptr, v);
+  };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
   int count = 1, bounces = 0;
   Bsdf scratch_bsdf;
@@ -229,7 +239,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, float pdf_fwd, int max_depth, Mode
           v.p = ray.o + ray.d * h.t;
           v.n = l.type == LightType::Area ? l.direction : -ray.d;
           v.beta = beta;
-          v.pdf_fwd = convert_density(pdf_fwd, prev, v);
+          v.pdf_fwd = density_of(count, v);
           emitter_reached(path, count + 1, h.radiance);
         });
       }
@@ -242,9 +252,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, float pdf_fwd, int max_depth, Mode
             v.type = VertexType::Light;
             v.infinite = true;
             v.light = light;
-            v.p = ray.o + ray.d;
+            v.p = prev.p + ray.d;
             v.beta = beta;
-            v.pdf_fwd = pdf_fwd;
+            v.pdf_fwd = density_of(count, v);
             emitter_reached(path, count + 1, le);
           };
           if (lights_.world_light() >= 0 && (!background || scene_.world.camera_visible))
@@ -266,8 +276,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, float pdf_fwd, int max_depth, Mode
     v.frame = Frame(backface ? -sp.ns : sp.ns);
     v.wo = v.frame.to_local(-ray.d);
     v.beta = beta;
-    v.pdf_fwd = convert_density(pdf_fwd, prev, v);
     v.pdf_rev = 0;
+    v.pdf_fwd = density_of(count, v);
+    if (count >= 2) path[count - 2].pdf_rev = prev.delta ? 0.0f : pdf(prev, &v, path[count - 2]);
     const Material& material = scene_.material(sp.material);
     Spectrum le = material.evaluate(scene_.images, sp.uv, backface, &v.bsdf);
     v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
@@ -290,17 +301,10 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, float pdf_fwd, int max_depth, Mode
     if (!v.bsdf.sample(v.wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
     Vec3 wi = v.frame.to_world(bs.wi);
     if ((dot(wi, v.n) > 0) != ((bs.flags & kLobeReflection) != 0)) break;
-    float pdf_rev;
-    v.bsdf.eval(bs.wi, v.wo, &pdf_rev);
-    pdf_fwd = bs.pdf;
-    if (bs.flags & kLobeSpecular) {
-      v.delta = true;
-      pdf_fwd = pdf_rev = 0;
-    }
+    v.delta = (bs.flags & kLobeSpecular) != 0;
     beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
     if (mode == Mode::Importance) beta *= shading_correction(v, -ray.d, wi);
     if (!is_finite(beta) || is_black(beta)) break;
-    prev.pdf_rev = convert_density(pdf_rev, v, prev);
     if (!(bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1)) visibility = visibility_of(bs.flags);
     ray.o = spawn_origin(sp, wi);
     ray.d = wi;
@@ -340,15 +344,10 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   Ray ray = e.ray;
   ray.tmin = 0;
   if (l.type == LightType::Area || l.type == LightType::Triangle) ray.o = offset_ray_origin(e.ray.o, e.n);
-  int count = random_walk(ray, beta, e.pdf_dir, s_.max_light_length - 1, Mode::Importance, path);
-  if (y0.infinite) {
-    // The first surface vertex's density is the disk's, not a solid angle's (pbrt 3, 16.3.2).
-    if (count > 1) {
-      path[1].pdf_fwd = e.pdf_pos;
-      if (path[1].on_surface()) path[1].pdf_fwd *= std::abs(dot(e.ray.d, path[1].n));
-    }
-    y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY);
-  }
+  int count = random_walk(ray, beta, s_.max_light_length - 1, Mode::Importance, path);
+  // An infinite light's vertex is a direction: its density is the direction's (pbrt 3, 16.3.2);
+  // y1's is the disk's (pdf_light handles it).
+  if (y0.infinite) y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY);
   return count;
 }
 
@@ -384,17 +383,19 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   if (qs) assign(&qs->pdf_rev, pdf(*pt, pt_minus, *qs));
   if (qs_minus) assign(&qs_minus->pdf_rev, pdf(*qs, pt, *qs_minus));
 
+  // Strategy (s', t') exists only if the subpath limits let both walks produce it.
+  auto exists = [&](int s2, int t2) { return s2 <= s_.max_light_length && t2 - 1 <= camera_depth(); };
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
   double sum = 0, r = 1;
   for (int i = t - 1; i > 0; --i) {
     r *= remap0(camera[i].pdf_rev) / remap0(camera[i].pdf_fwd);
-    if (!camera[i].delta && !camera[i - 1].delta) sum += heuristic(float(r));
+    if (!camera[i].delta && !camera[i - 1].delta && exists(s + t - i, i)) sum += heuristic(float(r));
   }
   r = 1;
   for (int i = s - 1; i >= 0; --i) {
     r *= remap0(light[i].pdf_rev) / remap0(light[i].pdf_fwd);
     bool delta_light_vertex = i > 0 ? light[i - 1].delta : is_delta_light(light[0]);
-    if (!light[i].delta && !delta_light_vertex) sum += heuristic(float(r));
+    if (!light[i].delta && !delta_light_vertex && exists(i, s + t - i)) sum += heuristic(float(r));
   }
 
   for (int k = n_saved - 1; k >= 0; --k) *saved[k].where = saved[k].value;
@@ -508,10 +509,7 @@ SampleValue Bdpt::run(std::vector<Splat>& splats) {
   z0.type = VertexType::Camera;
   z0.p = cs_.ray.o;
   z0.delta = ctx_.camera.orthographic();  // a delta direction: t = 1 cannot reach it
-  float c = dot(cs_.ray.d, ctx_.camera.forward());
-  float pdf_dir = ctx_.camera.orthographic() ? 0.0f : cs_.film_pdf / (film_area_ * c * c * c);
-  int camera_depth = std::min(s_.max_camera_length, s_.max_bounces + 2);
-  int nt = random_walk(cs_.ray, Spectrum(1.0f), pdf_dir, camera_depth, Mode::Radiance, camera);
+  int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, camera);
   int ns = generate_light_subpath(light);
 
   for (int t = 2; t <= nt; ++t)
@@ -526,7 +524,80 @@ SampleValue Bdpt::run(std::vector<Splat>& splats) {
   return out_;
 }
 
+std::vector<float> Bdpt::weight_sums() {
+  std::vector<float> sums;
+  const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
+  std::vector<PathVertex> camera(capacity), light(capacity);
+  PathVertex& z0 = camera[0];
+  z0.type = VertexType::Camera;
+  z0.p = cs_.ray.o;
+  z0.delta = ctx_.camera.orthographic();
+  int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, camera);
+  int ns = generate_light_subpath(light);
+  for (int t = 2; t <= nt; ++t)
+    for (int s = 2; s <= ns; ++s) {
+      if (s + t - 2 > max_depth()) break;
+      PathVertex &qs = light[s - 1], &pt = camera[t - 1];
+      if (pt.type != VertexType::Surface || qs.type != VertexType::Surface || !pt.bsdf.has_non_delta() ||
+          !qs.bsdf.has_non_delta() || !visible(qs, pt))
+        continue;
+      if (is_black(f(qs, normalize(pt.p - qs.p), Mode::Importance)) || is_black(f(pt, normalize(qs.p - pt.p), Mode::Radiance)))
+        continue;
+      // The full path x[0] = camera ... x[k] = light, with both densities of every vertex:
+      // cam[i] (sampled from x[i-1]) and lig[i] (sampled from x[i+1]).
+      const int k = s + t - 1;
+      std::vector<PathVertex> x(k + 1);
+      for (int i = 0; i < t; ++i) x[i] = camera[i];
+      for (int i = 0; i < s; ++i) x[t + i] = light[s - 1 - i];
+      std::vector<float> cam(k + 1), lig(k + 1);
+      for (int i = 0; i < t; ++i) { cam[i] = camera[i].pdf_fwd; lig[i] = camera[i].pdf_rev; }
+      for (int i = 0; i < s; ++i) { lig[t + i] = light[s - 1 - i].pdf_fwd; cam[t + i] = light[s - 1 - i].pdf_rev; }
+      // Densities across the connection, which neither walk produced.
+      lig[t - 1] = pdf(qs, s > 1 ? &light[s - 2] : nullptr, pt);
+      lig[t - 2] = pdf(pt, &qs, camera[t - 2]);
+      cam[t] = pdf(pt, &camera[t - 2], qs);
+      cam[t + 1] = pdf(qs, &pt, light[s - 2]);
+      lig[k] = light[0].pdf_fwd;
+      float sum = 0;
+      for (int t2 = 1; t2 <= k + 1; ++t2) {
+        const int s2 = k + 1 - t2;
+        if (s2 + t2 - 2 > max_depth() || (s2 == 1 && t2 == 1)) continue;
+        std::vector<PathVertex> c2(x.begin(), x.begin() + t2), l2(s2);
+        for (int i = 0; i < t2; ++i) { c2[i].pdf_fwd = cam[i]; c2[i].pdf_rev = lig[i]; }
+        for (int i = 0; i < s2; ++i) {
+          l2[i] = x[k - i];
+          l2[i].pdf_fwd = lig[k - i];
+          l2[i].pdf_rev = cam[k - i];
+        }
+        // Only strategies whose connection can be made sample this path.
+        if (t2 >= 1 && s2 >= 1) {
+          const PathVertex& a = c2[t2 - 1];
+          const PathVertex& b = l2[s2 - 1];
+          bool a_ok = a.type == VertexType::Camera ? !ctx_.camera.orthographic() : (a.type == VertexType::Surface && !a.delta);
+          bool b_ok = b.type == VertexType::Light ? !b.delta_direction : (b.type == VertexType::Surface && !b.delta);
+          if (!a_ok || !b_ok) continue;
+        }
+        if (s2 == 0 && is_delta_light(x[k])) continue;
+        if (t2 == 1 && x[1].delta) continue;
+        const PathVertex* sampled = s2 == 1 ? &l2[0] : (t2 == 1 ? &c2[0] : nullptr);
+        PathVertex sampled_copy;
+        if (sampled) sampled_copy = *sampled;
+        float w = mis_weight(l2, c2, sampled ? &sampled_copy : nullptr, s2, t2);
+        if (!(w >= 0 && w <= 1 + 1e-5f)) sum = NAN;  // a weight outside [0, 1] fails the check
+        sum += w;
+      }
+      sums.push_back(sum);
+    }
+  return sums;
+}
+
 }  // namespace
+
+std::vector<float> bdpt_mis_weight_sums(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler) {
+  SampleStats stats;
+  Bdpt b(ctx, cs, sampler, stats);
+  return b.weight_sums();
+}
 
 SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
                        std::vector<Splat>& splats) {

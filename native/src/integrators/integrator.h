@@ -27,12 +27,13 @@ struct SampleStats {
   uint64_t rays = 0;
 };
 
-// A camera ray with where it crosses the film (full-frame pixels, y up) and the density, per unit
-// film area, with which the pixel's filter chose that position.
+// A camera ray with where it crosses the film (full-frame pixels, y up), the pixel it estimates
+// and the density, per unit film area, with which that pixel's filter chose the position.
 struct CameraSample {
   Ray ray;
   Vec2 film;
   float film_pdf = 1;
+  Vec2 pixel_center;  // the pixel being estimated (the filter can place `film` in a neighbour)
 };
 
 // A light-tracing contribution to a pixel of the render region (BDPT's t = 1).
@@ -53,6 +54,12 @@ struct RenderContext {
 // connection strategy weighted by MIS; t = 1 contributions go to `splats`.
 SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
                        std::vector<Splat>& splats);
+
+// For tests: runs one BDPT sample and, for every full path it connects (strategies s >= 1,
+// t >= 2), re-splits that path into every other strategy (s', t') that could have sampled it and
+// returns the sums of their MIS weights, computed by the integrator's own weight code (each sum
+// must be 1; a sum is NaN if any single weight falls outside [0, 1]).
+std::vector<float> bdpt_mis_weight_sums(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler);
 
 // Radiance along a camera ray, plus the first-hit data passes. One call is one sample.
 SampleValue trace_path(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,

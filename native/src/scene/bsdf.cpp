@@ -10,10 +10,12 @@
 // Microfacet normals are sampled from the distribution of visible normals (Heitz 2018, "Sampling
 // the GGX Distribution of Visible Normals"), so the sampling weight is G1(wi) (times Fresnel).
 //
-// Every lobe is defined relative to the hemisphere wo lies in: when a bent shading normal puts wo
-// slightly below the surface (wo.z < 0) the frame is mirrored (z -> -z) before evaluating, so that
-// reflection stays on wo's side and refraction goes to the other one. Cycles instead returns black
-// for microfacet closures there; mirroring avoids black fringes and keeps every routine finite.
+// Every lobe is defined relative to the hemisphere wo lies in: when wo is below the surface
+// (wo.z < 0: a reverse evaluation from the far side, or a bent shading normal) the frame is
+// mirrored (z -> -z), so that reflection stays on wo's side and refraction goes to the other one,
+// and glass sees the inverse relative IOR 1/eta from there. Cycles instead returns black for
+// microfacet closures below the shading normal; mirroring keeps every routine finite and BDPT's
+// reverse pdfs consistent with sampling from the other side.
 #include "scene/bsdf.h"
 
 namespace lt {
@@ -30,13 +32,26 @@ inline float lobe_alpha(const Lobe& l) { return l.alpha >= 0 ? std::min(l.alpha,
 inline float lobe_eta(const Lobe& l) { return (l.eta > 0 && std::isfinite(l.eta)) ? l.eta : 1.0f; }
 inline float lobe_sigma(const Lobe& l) { return l.roughness > 0 ? std::min(l.roughness, 1.0f) : 0.0f; }
 
+// The lobe as seen from below (-Z): the frame is mirrored, and glass's relative IOR inverts, since
+// eta is the IOR of the -Z side over the +Z side. This is what a reverse evaluation needs (BDPT's
+// pdf of the opposite direction through glass), and it keeps bent shading normals finite.
+const Lobe& lobe_from_below(const Lobe& l, Lobe* tmp) {
+  if (l.type != LobeType::Dielectric) return l;
+  *tmp = l;
+  tmp->eta = 1 / lobe_eta(l);
+  return *tmp;
+}
+
 bool lobe_is_delta(const Lobe& l) {
   switch (l.type) {
     case LobeType::Diffuse: return false;
     case LobeType::GlossyGGX:
     case LobeType::SpecularGGX: return !(lobe_alpha(l) >= kSmoothAlpha);
-    case LobeType::Dielectric:
-      return !(lobe_alpha(l) >= kSmoothAlpha) || std::abs(lobe_eta(l) - 1) < kEtaDeltaEpsilon;
+    case LobeType::Dielectric: {
+      float eta = lobe_eta(l);  // symmetric in eta and 1/eta, so both sides agree
+      return !(lobe_alpha(l) >= kSmoothAlpha) || std::abs(eta - 1) < kEtaDeltaEpsilon ||
+             std::abs(1 / eta - 1) < kEtaDeltaEpsilon;
+    }
     case LobeType::Transparent: return true;
   }
   return true;
@@ -67,7 +82,7 @@ Spectrum diffuse_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
   float a = 1 / (kPi + (kPi / 2 - 2.0f / 3.0f) * sigma);
   float b = sigma * a;
   float s = dot(i, o) - i.z * o.z;
-  if (s > 0) s /= std::max(i.z, o.z);
+  if (s > 0) s /= std::max(std::max(i.z, o.z), 1e-7f);  // Cycles adds FLT_MIN; this bounds f at grazing
   return l.weight * std::max(0.0f, a + b * s);
 }
 
@@ -261,7 +276,8 @@ uint32_t lobe_flags(const Lobe& l) {
 Spectrum lobe_eval(const Lobe& l, const Vec3& wo, const Vec3& wi) {
   if (wo.z == 0 || lobe_is_delta(l)) return Spectrum(0.0f);
   float pdf;
-  Spectrum f = wo.z > 0 ? eval_upper(l, wo, wi, &pdf) : eval_upper(l, flip_z(wo), flip_z(wi), &pdf);
+  Lobe tmp;
+  Spectrum f = wo.z > 0 ? eval_upper(l, wo, wi, &pdf) : eval_upper(lobe_from_below(l, &tmp), flip_z(wo), flip_z(wi), &pdf);
   return is_finite(f) ? vmax(f, Spectrum(0.0f)) : Spectrum(0.0f);
 }
 
@@ -269,14 +285,19 @@ float lobe_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi) {
   if (wo.z == 0 || lobe_is_delta(l)) return 0;
   float pdf;
   if (wo.z > 0) eval_upper(l, wo, wi, &pdf);
-  else eval_upper(l, flip_z(wo), flip_z(wi), &pdf);
+  else {
+    Lobe tmp;
+    eval_upper(lobe_from_below(l, &tmp), flip_z(wo), flip_z(wi), &pdf);
+  }
   return std::isfinite(pdf) && pdf > 0 ? pdf : 0.0f;
 }
 
-bool lobe_sample(const Lobe& l, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out) {
+bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out) {
   if (wo.z == 0 || !is_finite(wo)) return false;
   const bool flip = wo.z < 0;
   const Vec3 o = flip ? flip_z(wo) : wo;
+  Lobe tmp;
+  const Lobe& l = flip ? lobe_from_below(lobe, &tmp) : lobe;
   BsdfSample s;
   s.eta = 1;
   if (lobe_is_delta(l)) {

@@ -4,7 +4,10 @@
 // All directions are in the local shading frame: +Z is the shading normal, flipped by the caller
 // to face the side wo arrives from, so wo.z >= 0 except where shading normals bend it. eta is the
 // relative index of refraction inside/outside as seen from wo's side (the caller passes 1/ior on
-// back faces). f() values exclude the cosine; the integrator multiplies |wi.z|.
+// back faces). f() values exclude the cosine; the integrator multiplies |wi.z|. Each lobe is
+// defined relative to the hemisphere wo lies in: with wo.z < 0 (a reverse evaluation from the far
+// side, or a bent shading normal) the frame is mirrored, so reflection stays on wo's side and
+// refraction crosses to the other, and glass sees 1/eta from below.
 #pragma once
 
 #include <cstdint>
@@ -65,8 +68,10 @@ class Bsdf {
 
   // Sum of the non-delta lobes' f, and the mixture pdf of sampling wi with sample().
   Spectrum eval(const Vec3& wo, const Vec3& wi, float* pdf) const;
-  // Picks a lobe with probability proportional to its weight's luminance-ish estimate, samples it,
-  // then (for non-delta lobes) evaluates all non-delta lobes for f and the mixture pdf.
+  // Picks a lobe with probability proportional to its weight's estimate (the weight's average,
+  // times Schlick's Fresnel at wo for SpecularGGX; see bsdf.cpp), samples it, then (for non-delta
+  // lobes) evaluates all non-delta lobes for f and the mixture pdf. For a delta lobe, f and pdf
+  // are that lobe's, the pdf times its selection probability.
   bool sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const;
   // Directional albedo estimate of the lobes' weights (for the Albedo pass and Russian roulette).
   Spectrum albedo() const;

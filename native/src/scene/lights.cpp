@@ -246,7 +246,7 @@ float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, fl
       if (!w.image) return uniform_sphere_pdf();
       Vec3 tex_dir = rotate_z(wi, w.rotation_z);
       Vec2 uv = direction_to_equirect(tex_dir);
-      float sin_theta = safe_sqrt(1 - tex_dir.z * tex_dir.z);
+      float sin_theta = std::sqrt(tex_dir.x * tex_dir.x + tex_dir.y * tex_dir.y);  // exact near the poles
       if (!(sin_theta > 0)) return 0;
       return w.distribution.pdf(uv) / (2 * kPi * kPi * sin_theta);
     }

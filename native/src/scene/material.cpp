@@ -110,32 +110,40 @@ Material Material::default_surface() {
 
 template <bool kLobes>
 Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface, Bsdf* bsdf) const {
-  struct Item { int node; Vec3 weight; };
+  // Plain floats: a Vec3 member would zero-fill the whole stack on every evaluation.
+  struct Item {
+    int node;
+    float w[3];
+    Vec3 weight() const { return {w[0], w[1], w[2]}; }
+  };
   Item stack[kMaxDepth + 2];
   int top = 0;
-  stack[top++] = {root_, Vec3(1.0f)};
+  auto push = [&](int node, const Vec3& weight) { stack[top++] = {node, {weight.x, weight.y, weight.z}}; };
+  push(root_, Vec3(1.0f));
   Spectrum emitted(0.0f);
   while (top > 0) {
-    Item it = stack[--top];
-    if (is_black(it.weight)) continue;
-    const ShaderNode& s = nodes_[it.node];
+    const Item& top_item = stack[--top];
+    const int node = top_item.node;
+    const Vec3 weight = top_item.weight();
+    if (is_black(weight)) continue;
+    const ShaderNode& s = nodes_[node];
     switch (s.type) {
       case NodeType::Mix: {
         float f = unit(value_of(s.fac, images, uv));
-        stack[top++] = {s.child[0], it.weight * (1 - f)};
-        stack[top++] = {s.child[1], it.weight * f};
+        push(s.child[0], weight * (1 - f));
+        push(s.child[1], weight * f);
         break;
       }
       case NodeType::Add:
-        stack[top++] = {s.child[0], it.weight};
-        stack[top++] = {s.child[1], it.weight};
+        push(s.child[0], weight);
+        push(s.child[1], weight);
         break;
       case NodeType::Emission:
-        emitted += it.weight * non_negative(color_of(s.color, images, uv)) * std::max(0.0f, value_of(s.strength, images, uv));
+        emitted += weight * non_negative(color_of(s.color, images, uv)) * std::max(0.0f, value_of(s.strength, images, uv));
         break;
       case NodeType::Principled:
         if (s.emission.image >= 0 || !is_black(s.emission.value))
-          emitted += it.weight * non_negative(color_of(s.emission, images, uv)) * std::max(0.0f, value_of(s.strength, images, uv));
+          emitted += weight * non_negative(color_of(s.emission, images, uv)) * std::max(0.0f, value_of(s.strength, images, uv));
         if constexpr (kLobes) {
           // Cycles 3.x Principled v1, reduced to its main lobes (README: departures): Lambert
           // diffuse (no retro-reflection, sheen, subsurface or clearcoat), a GGX specular layer with
@@ -147,18 +155,18 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
           float spec = std::max(0.0f, value_of(s.specular, images, uv));
           Lobe d;
           d.type = LobeType::Diffuse;
-          d.weight = it.weight * base * ((1 - metallic) * (1 - transmission));
+          d.weight = weight * base * ((1 - metallic) * (1 - transmission));
           bsdf->add(d);
           Lobe g;
           g.type = LobeType::SpecularGGX;
-          g.weight = it.weight * (1 - transmission);
+          g.weight = weight * (1 - transmission);
           g.alpha = r * r;
           g.f0 = lerp(metallic, Vec3(std::min(1.0f, 0.08f * spec)), base);
           bsdf->add(g);
           if (transmission > 0) {
             Lobe t;
             t.type = LobeType::Dielectric;
-            t.weight = it.weight * base * transmission;
+            t.weight = weight * base * transmission;
             t.alpha = r * r;
             float ior = std::max(1.0f + 1e-4f, s.ior);
             t.eta = backface ? 1 / ior : ior;
@@ -169,7 +177,7 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
       default:
         if constexpr (kLobes) {
           Lobe l;
-          l.weight = it.weight * non_negative(color_of(s.color, images, uv));
+          l.weight = weight * non_negative(color_of(s.color, images, uv));
           float r = unit(value_of(s.roughness, images, uv));
           switch (s.type) {
             case NodeType::Diffuse: l.type = LobeType::Diffuse; l.roughness = r; break;

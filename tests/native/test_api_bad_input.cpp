@@ -1,0 +1,771 @@
+// Bad input through the C ABI: NULL pointers, non-finite and degenerate geometry, out-of-range
+// indices, unknown enum values, cyclic materials, absurd settings, calls in the wrong state,
+// cancellation and destruction while rendering. Failing calls must return the documented status
+// and set their own lt_last_error() message; every image rendered here must be finite in every
+// pass.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <thread>
+
+#include "scene_builders.h"
+
+using namespace lt_test;
+
+namespace {
+
+const float kNaN = std::numeric_limits<float>::quiet_NaN();
+const float kInf = std::numeric_limits<float>::infinity();
+
+// lt_last_error() keeps the last failure's message: before each call under test, a different
+// known failure sets a sentinel message that the call must replace with its own.
+std::string sentinel(int which) {
+  if (which == 0) lt_scene_create(nullptr);
+  else lt_render_wait(nullptr);
+  return lt_last_error();
+}
+
+// Runs `call`, expects status `code`, a non-empty message of its own, and returns the message.
+template <class F>
+std::string expect_failure(F call, int code, const char* text, int which_sentinel = 0) {
+  const std::string before = sentinel(which_sentinel);
+  const int status = call();
+  EXPECT_EQ(status, code) << text;
+  const char* e = lt_last_error();
+  EXPECT_NE(e, nullptr) << text;
+  std::string msg = e ? e : "";
+  EXPECT_FALSE(msg.empty()) << text << ": lt_last_error() is empty";
+  EXPECT_NE(msg, before) << text << ": the failing call did not set its own message";
+  return msg;
+}
+#define EXPECT_FAILS(code, expr) expect_failure([&] { return (expr); }, (code), #expr)
+#define EXPECT_INVALID(expr) EXPECT_FAILS(LT_ERROR_INVALID_ARGUMENT, expr)
+// Evaluates `haystack` once (it is often the failing call itself).
+#define EXPECT_CONTAINS(haystack, needle)                                                       \
+  do {                                                                                          \
+    const std::string h_ = (haystack);                                                          \
+    EXPECT_NE(h_.find(needle), std::string::npos) << "\"" << needle << "\" not in \"" << h_ << "\""; \
+  } while (0)
+
+int warnings(const lt_scene* s) { return lt_scene_warning_count(s); }
+
+bool has_warning(const lt_scene* s, const std::string& needle) {
+  for (int i = 0; i < lt_scene_warning_count(s); ++i)
+    if (std::string(lt_scene_warning(s, i)).find(needle) != std::string::npos) return true;
+  return false;
+}
+
+// A lit, committed-ready scene: a floor plane, a camera, a sun and a dim world.
+ScenePtr basic_scene() {
+  ScenePtr s = new_scene();
+  add_object(s.get(), plane(10, 10), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}));
+  add_light(s.get(), sun_light({0.2f, 0.1f, -1}, 3));
+  set_world(s.get(), {0.1f, 0.1f, 0.1f}, 1);
+  set_camera(s.get(), perspective_camera(look_at({0, -4, 3}, {0, 0, 0}), 35));
+  return s;
+}
+
+// Commits and renders a small image; every pass must be finite.
+Passes commit_and_render(lt_scene* s, int samples = 4) {
+  EXPECT_EQ(lt_scene_commit(s), LT_OK) << lt_last_error();
+  Passes p = render(s, render_settings(32, 24, samples, 1));
+  EXPECT_EQ(p.first_non_finite(), "") << "a pass holds a NaN or Inf";
+  EXPECT_EQ(p.status.state, LT_STATE_DONE);
+  return p;
+}
+
+lt_render* start_long_render(lt_scene* s) {
+  lt_render_settings rs = render_settings(400, 300, 1 << 20, 3);
+  rs.max_bounces = rs.diffuse_bounces = 64;
+  lt_render* r = nullptr;
+  EXPECT_EQ(lt_render_start(s, &rs, &r), LT_OK) << lt_last_error();
+  return r;
+}
+
+}  // namespace
+
+TEST(ApiBadInput, VersionAndNoCrashOnNullHandles) {
+  EXPECT_EQ(lt_abi_version(), LT_ABI_VERSION);
+  ASSERT_NE(lt_version(), nullptr);
+  EXPECT_GT(std::string(lt_version()).size(), 0u);
+  // Functions without a status: NULL is a no-op.
+  lt_scene_destroy(nullptr);
+  lt_render_destroy(nullptr);
+  lt_render_settings_default(nullptr);
+  EXPECT_EQ(lt_scene_warning_count(nullptr), 0);
+  ASSERT_NE(lt_scene_warning(nullptr, 0), nullptr);
+  EXPECT_STREQ(lt_scene_warning(nullptr, 0), "");
+  EXPECT_EQ(lt_pass_channels(-1), 0);
+  EXPECT_EQ(lt_pass_channels(LT_PASS_COUNT), 0);
+  EXPECT_EQ(lt_pass_channels(LT_PASS_COMBINED), 4);
+}
+
+TEST(ApiBadInput, NullPointersEverywhere) {
+  expect_failure([] { return lt_scene_create(nullptr); }, LT_ERROR_INVALID_ARGUMENT, "lt_scene_create(NULL)", 1);
+
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  int id = -1;
+
+  float pixels[4] = {1, 1, 1, 1};
+  lt_image_desc img{1, 1, 4, pixels, 0, LT_INTERP_LINEAR, LT_EXTENSION_REPEAT};
+  EXPECT_INVALID(lt_scene_add_image(nullptr, &img, &id));
+  EXPECT_INVALID(lt_scene_add_image(s, nullptr, &id));
+  EXPECT_INVALID(lt_scene_add_image(s, &img, nullptr));
+  img.pixels = nullptr;
+  EXPECT_INVALID(lt_scene_add_image(s, &img, &id));
+
+  lt_shader_node n = node(LT_NODE_DIFFUSE);
+  EXPECT_INVALID(lt_scene_add_material(nullptr, &n, 1, 0, &id));
+  EXPECT_INVALID(lt_scene_add_material(s, nullptr, 1, 0, &id));
+  EXPECT_INVALID(lt_scene_add_material(s, &n, 1, 0, nullptr));
+
+  MeshData tri;
+  tri.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  tri.triangles = {0, 1, 2};
+  lt_mesh_desc md = tri.desc();
+  EXPECT_INVALID(lt_scene_add_mesh(nullptr, &md, &id));
+  EXPECT_INVALID(lt_scene_add_mesh(s, nullptr, &id));
+  EXPECT_INVALID(lt_scene_add_mesh(s, &md, nullptr));
+  md.positions = nullptr;
+  EXPECT_INVALID(lt_scene_add_mesh(s, &md, &id));
+  md = tri.desc();
+  md.triangles = nullptr;
+  EXPECT_INVALID(lt_scene_add_mesh(s, &md, &id));
+
+  const int mesh = add_mesh(s, tri);
+  lt_instance_desc inst{};
+  inst.mesh = mesh;
+  Xform xf = identity();
+  std::copy(xf.begin(), xf.end(), inst.transform);
+  inst.visibility = LT_VISIBLE_ALL;
+  EXPECT_INVALID(lt_scene_add_instance(nullptr, &inst, &id));
+  EXPECT_INVALID(lt_scene_add_instance(s, nullptr, &id));
+  EXPECT_INVALID(lt_scene_add_instance(s, &inst, nullptr));
+  inst.materials = nullptr;
+  inst.material_count = 2;
+  EXPECT_INVALID(lt_scene_add_instance(s, &inst, &id));
+
+  lt_light_desc l = point_light({0, 0, 1}, 10);
+  EXPECT_INVALID(lt_scene_add_light(nullptr, &l));
+  EXPECT_INVALID(lt_scene_add_light(s, nullptr));
+  lt_camera_desc c = perspective_camera(identity());
+  EXPECT_INVALID(lt_scene_set_camera(nullptr, &c));
+  EXPECT_INVALID(lt_scene_set_camera(s, nullptr));
+  lt_world_desc w = world({1, 1, 1}, 1);
+  EXPECT_INVALID(lt_scene_set_world(nullptr, &w));
+  EXPECT_INVALID(lt_scene_set_world(s, nullptr));
+  EXPECT_INVALID(lt_scene_commit(nullptr));
+
+  ASSERT_EQ(lt_scene_commit(s), LT_OK) << lt_last_error();
+  lt_render_settings rs = render_settings(16, 16, 2);
+  lt_render* r = nullptr;
+  EXPECT_INVALID(lt_render_start(nullptr, &rs, &r));
+  EXPECT_INVALID(lt_render_start(s, nullptr, &r));
+  EXPECT_INVALID(lt_render_start(s, &rs, nullptr));
+  EXPECT_EQ(r, nullptr);
+
+  ASSERT_EQ(lt_render_start(s, &rs, &r), LT_OK) << lt_last_error();
+  RenderPtr rp(r);
+  ASSERT_EQ(lt_render_wait(r), LT_OK);
+  lt_render_status st;
+  EXPECT_INVALID(lt_render_poll(nullptr, &st));
+  EXPECT_INVALID(lt_render_poll(r, nullptr));
+  EXPECT_INVALID(lt_render_cancel(nullptr));
+  expect_failure([] { return lt_render_wait(nullptr); }, LT_ERROR_INVALID_ARGUMENT, "lt_render_wait(NULL)", 0);
+  std::vector<float> buf(16 * 16 * 4);
+  EXPECT_INVALID(lt_render_read_pass(nullptr, LT_PASS_COMBINED, buf.data(), buf.size()));
+  EXPECT_INVALID(lt_render_read_pass(r, LT_PASS_COMBINED, nullptr, buf.size()));
+  EXPECT_INVALID(lt_render_write_exr(nullptr, "/tmp/never_written.exr"));
+  EXPECT_INVALID(lt_render_write_exr(r, nullptr));
+  Passes p = read_passes(r, 16, 16);
+  EXPECT_EQ(p.first_non_finite(), "");
+}
+
+TEST(ApiBadInput, NonFiniteVertexPositionsAreDroppedWithAWarning) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  // Four triangles: one clean, one with a NaN corner, one with an Inf corner, one with -Inf.
+  MeshData m;
+  m.positions = {-1, -1, 0.5f, 1, -1, 0.5f, 0, 1, 0.5f,  // clean
+                 kNaN, 0, 1,   1, 0, 1,    0, 1, 1,      // NaN
+                 0, kInf, 1,   1, 0, 1,    0, 1, 1,      // +Inf
+                 0, 0, -kInf,  1, 0, 1,    0, 1, 1};     // -Inf
+  m.triangles = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+  // NaN corner normals too: the mesh falls back to flat shading with a warning.
+  for (int t = 0; t < 4; ++t) m.corner_normals.insert(m.corner_normals.end(), {0, 0, 1, kNaN, 0, 1, 0, 0, 1});
+  const int before = warnings(s);
+  add_object(s, m, add_diffuse(s, {0.5f, 0.5f, 0.5f}));
+  EXPECT_GE(warnings(s), before + 2);
+  EXPECT_TRUE(has_warning(s, "dropped 3")) << "the three non-finite triangles must be reported";
+  EXPECT_TRUE(has_warning(s, "normals"));
+  // A mesh whose every vertex is NaN: everything dropped, still no crash.
+  MeshData all_nan;
+  all_nan.positions = {kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
+  all_nan.triangles = {0, 1, 2};
+  add_object(s, all_nan, add_diffuse(s, {0.5f, 0.5f, 0.5f}));
+  EXPECT_TRUE(has_warning(s, "dropped 1"));
+  Passes p = commit_and_render(s);
+  EXPECT_EQ(p.status.nan_samples, 0u);
+}
+
+TEST(ApiBadInput, DegenerateAndZeroAreaTrianglesAreDroppedWithAWarning) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  MeshData m;
+  m.positions = {0, 0, 1, 1, 0, 1, 0, 1, 1,  // a good triangle
+                 2, 0, 1, 3, 0, 1, 4, 0, 1,  // collinear: zero area
+                 5, 5, 5};                   // a single point for repeated indices
+  m.triangles = {0, 1, 2, 3, 4, 5, 6, 6, 6, 0, 0, 1, 2, 2, 2};
+  add_object(s, m, add_diffuse(s, {0.5f, 0.5f, 0.5f}));
+  EXPECT_TRUE(has_warning(s, "dropped 4")) << "collinear, a point and two repeated-index triangles";
+  // An emissive mesh of degenerate triangles only: no light may come out of it.
+  MeshData flat;
+  flat.positions = {0, 0, 2, 1, 1, 2, 2, 2, 2};
+  flat.triangles = {0, 1, 2};
+  add_object(s, flat, add_emission(s, {1, 1, 1}, 100));
+  commit_and_render(s);
+}
+
+TEST(ApiBadInput, ZeroAreaAndBlackLightsAreLeftOutWithAWarning) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  int before = warnings(s);
+  for (int shape : {LT_AREA_SQUARE, LT_AREA_RECTANGLE, LT_AREA_DISK, LT_AREA_ELLIPSE}) {
+    lt_light_desc l = area_light(shape, 0, 1, look_at({0, 0, 2}, {0, 0, 0}), 100);
+    EXPECT_EQ(lt_scene_add_light(s, &l), LT_OK) << lt_last_error();
+    EXPECT_EQ(warnings(s), ++before) << "shape " << shape;
+  }
+  lt_light_desc thin = area_light(LT_AREA_RECTANGLE, 1, 0, look_at({0, 0, 2}, {0, 0, 0}), 100);
+  EXPECT_EQ(lt_scene_add_light(s, &thin), LT_OK);
+  EXPECT_EQ(warnings(s), ++before);
+  // A zero-scale transform gives zero area too.
+  lt_light_desc squashed = area_light(LT_AREA_SQUARE, 1, 1, compose(translate({0, 0, 2}), scale({0, 0, 0})), 100);
+  EXPECT_EQ(lt_scene_add_light(s, &squashed), LT_OK);
+  EXPECT_EQ(warnings(s), ++before);
+  EXPECT_TRUE(has_warning(s, "area"));
+  lt_light_desc black = point_light({0, 0, 1}, 0);
+  EXPECT_EQ(lt_scene_add_light(s, &black), LT_OK);
+  EXPECT_EQ(warnings(s), ++before);
+  commit_and_render(s);
+}
+
+TEST(ApiBadInput, EmptyMeshesWarnAndRender) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  const int mat = add_diffuse(s, {0.5f, 0.5f, 0.5f});
+  const int before = warnings(s);
+  MeshData empty;
+  const int e = add_mesh(s, empty);
+  EXPECT_EQ(warnings(s), before + 1);
+  EXPECT_TRUE(has_warning(s, "no triangles"));
+  add_instance(s, e, mat);
+  MeshData points_only;
+  points_only.positions = {0, 0, 0, 1, 1, 1};
+  add_instance(s, add_mesh(s, points_only), mat, translate({0, 0, 1}));
+  EXPECT_EQ(warnings(s), before + 2);
+  commit_and_render(s);
+}
+
+TEST(ApiBadInput, ZeroScaleAndNonFiniteInstanceTransformsWarnAndRender) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  const int mesh = add_mesh(s, icosphere(0.5f, 2));
+  const int glow = add_emission(s, {1, 1, 1}, 10);  // would become triangle lights if kept
+  int before = warnings(s);
+  add_instance(s, mesh, glow, scale({0, 0, 0}));
+  EXPECT_EQ(warnings(s), ++before);
+  EXPECT_TRUE(has_warning(s, "zero-scale"));
+  Xform nan_xf = translate({kNaN, 0, 0});
+  add_instance(s, mesh, glow, nan_xf);
+  EXPECT_EQ(warnings(s), ++before);
+  Xform inf_xf = scale({kInf, 1, 1});
+  add_instance(s, mesh, glow, inf_xf);
+  EXPECT_EQ(warnings(s), ++before);
+  Passes p = commit_and_render(s);
+  EXPECT_EQ(p.status.nan_samples, 0u);
+}
+
+TEST(ApiBadInput, OutOfRangeIndicesNameTheIndex) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  int id = -1;
+
+  MeshData tri;
+  tri.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  tri.triangles = {0, 1, 3};
+  lt_mesh_desc md = tri.desc();
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_mesh(s, &md, &id)), "index 3");
+  tri.triangles = {0, -7, 2};
+  md = tri.desc();
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_mesh(s, &md, &id)), "-7");
+  md.vertex_count = -1;
+  EXPECT_INVALID(lt_scene_add_mesh(s, &md, &id));
+  md = tri.desc();
+  md.triangle_count = -2;
+  EXPECT_INVALID(lt_scene_add_mesh(s, &md, &id));
+
+  tri.triangles = {0, 1, 2};
+  const int mesh = add_mesh(s, tri);
+  lt_instance_desc inst{};
+  inst.mesh = 99;
+  Xform xf = identity();
+  std::copy(xf.begin(), xf.end(), inst.transform);
+  inst.visibility = LT_VISIBLE_ALL;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_instance(s, &inst, &id)), "99");
+  inst.mesh = -1;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_instance(s, &inst, &id)), "-1");
+  inst.mesh = mesh;
+  int mats[2] = {0, 42};
+  inst.materials = mats;
+  inst.material_count = 2;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_instance(s, &inst, &id)), "42");
+  mats[1] = -2;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_instance(s, &inst, &id)), "-2");
+  inst.material_count = -1;
+  EXPECT_INVALID(lt_scene_add_instance(s, &inst, &id));
+
+  lt_shader_node nodes[2] = {node(LT_NODE_MIX), node(LT_NODE_DIFFUSE)};
+  nodes[0].child[0] = 1;
+  nodes[0].child[1] = 7;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 0, &id)), "7");
+  nodes[0].child[1] = -1;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 0, &id)), "-1");
+  nodes[0].child[1] = 1;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 5, &id)), "5");
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, -3, &id)), "-3");
+  EXPECT_INVALID(lt_scene_add_material(s, nodes, 0, 0, &id));
+  EXPECT_INVALID(lt_scene_add_material(s, nodes, -4, 0, &id));
+  nodes[1].color.image = 3;  // no images in the scene
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 0, &id)), "3");
+  nodes[1].color.image = -5;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 0, &id)), "-5");
+
+  lt_world_desc w = world({1, 1, 1}, 1);
+  w.image = 4;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_set_world(s, &w)), "4");
+
+  EXPECT_STREQ(lt_scene_warning(s, -1), "");
+  EXPECT_STREQ(lt_scene_warning(s, 1000), "");
+
+  ASSERT_EQ(lt_scene_commit(s), LT_OK);
+  lt_render_settings rs = render_settings(8, 8, 1);
+  Passes ok = render(s, rs);
+  EXPECT_EQ(ok.first_non_finite(), "");
+  lt_render* r = nullptr;
+  ASSERT_EQ(lt_render_start(s, &rs, &r), LT_OK);
+  RenderPtr rp(r);
+  lt_render_wait(r);
+  std::vector<float> buf(8 * 8 * 4);
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_render_read_pass(r, 99, buf.data(), buf.size())), "99");
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_render_read_pass(r, -1, buf.data(), buf.size())), "-1");
+}
+
+TEST(ApiBadInput, UnknownEnumValuesListTheValidNames) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  int id = -1;
+
+  for (int type : {-1, 4, 1000}) {
+    lt_light_desc l = point_light({0, 0, 1}, 10);
+    l.type = type;
+    std::string msg = EXPECT_INVALID(lt_scene_add_light(s, &l));
+    for (const char* name : {"POINT", "SPOT", "AREA", "SUN"}) EXPECT_CONTAINS(msg, name);
+  }
+  for (int type : {-1, int(LT_NODE_COUNT), 1000}) {
+    lt_shader_node n = node(type);
+    std::string msg = EXPECT_INVALID(lt_scene_add_material(s, &n, 1, 0, &id));
+    for (const char* name : {"DIFFUSE", "GLOSSY", "GLASS", "EMISSION", "MIX", "ADD", "PRINCIPLED", "TRANSPARENT"})
+      EXPECT_CONTAINS(msg, name);
+  }
+  for (int type : {-1, 2, 1000}) {
+    lt_camera_desc c = perspective_camera(identity());
+    c.type = type;
+    std::string msg = EXPECT_INVALID(lt_scene_set_camera(s, &c));
+    for (const char* name : {"PERSPECTIVE", "ORTHOGRAPHIC"}) EXPECT_CONTAINS(msg, name);
+  }
+  // Other enums: refused with a message.
+  lt_camera_desc c = perspective_camera(identity());
+  c.sensor_fit = 3;
+  EXPECT_INVALID(lt_scene_set_camera(s, &c));
+  lt_light_desc area = area_light(9, 1, 1, identity(), 10);
+  EXPECT_INVALID(lt_scene_add_light(s, &area));
+  float px[3] = {1, 1, 1};
+  lt_image_desc img{1, 1, 3, px, 0, 2, LT_EXTENSION_REPEAT};
+  EXPECT_INVALID(lt_scene_add_image(s, &img, &id));
+  img.interpolation = LT_INTERP_LINEAR;
+  img.extension = 3;
+  EXPECT_INVALID(lt_scene_add_image(s, &img, &id));
+  img.extension = LT_EXTENSION_REPEAT;
+  img.channels = 2;
+  EXPECT_INVALID(lt_scene_add_image(s, &img, &id));
+
+  ASSERT_EQ(lt_scene_commit(s), LT_OK);
+  lt_render* r = nullptr;
+  lt_render_settings rs = render_settings(8, 8, 1);
+  rs.integrator = LT_INTEGRATOR_COUNT;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_render_start(s, &rs, &r)), "PATH");
+  rs = render_settings(8, 8, 1);
+  rs.filter = 3;
+  EXPECT_INVALID(lt_render_start(s, &rs, &r));
+  rs.filter = -1;
+  EXPECT_INVALID(lt_render_start(s, &rs, &r));
+  EXPECT_EQ(r, nullptr);
+}
+
+TEST(ApiBadInput, NonFiniteParametersAreRefused) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  int id = -1;
+  lt_light_desc l = point_light({0, 0, 1}, 10);
+  l.color[1] = kNaN;
+  EXPECT_INVALID(lt_scene_add_light(s, &l));
+  l = point_light({0, 0, 1}, -10);
+  EXPECT_INVALID(lt_scene_add_light(s, &l));
+  l = point_light({0, 0, 1}, 10);
+  l.transform[3] = kInf;
+  EXPECT_INVALID(lt_scene_add_light(s, &l));
+  l = point_light({0, 0, 1}, 10);
+  l.radius = kNaN;
+  EXPECT_INVALID(lt_scene_add_light(s, &l));
+  l = sun_light({0, 0, -1}, 1);
+  l.angle = -1;
+  EXPECT_INVALID(lt_scene_add_light(s, &l));
+  l = spot_light({0, 0, 1}, {0, 0, 0}, 10, kNaN, 0);
+  EXPECT_INVALID(lt_scene_add_light(s, &l));
+
+  lt_camera_desc c = perspective_camera(identity());
+  c.focal_length = kNaN;
+  EXPECT_INVALID(lt_scene_set_camera(s, &c));
+  c = perspective_camera(identity());
+  c.focal_length = 0;
+  EXPECT_INVALID(lt_scene_set_camera(s, &c));
+  c = perspective_camera(identity());
+  c.clip_end = c.clip_start;
+  EXPECT_INVALID(lt_scene_set_camera(s, &c));
+  c = perspective_camera(scale({0, 0, 0}));
+  EXPECT_INVALID(lt_scene_set_camera(s, &c));
+
+  lt_world_desc w = world({1, 1, 1}, kInf);
+  EXPECT_INVALID(lt_scene_set_world(s, &w));
+  w = world({kNaN, 1, 1}, 1);
+  EXPECT_INVALID(lt_scene_set_world(s, &w));
+
+  lt_shader_node n = node(LT_NODE_DIFFUSE);
+  n.color.value[2] = kNaN;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, &n, 1, 0, &id)), "color");
+  n = node(LT_NODE_GLASS);
+  n.ior = kInf;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, &n, 1, 0, &id)), "ior");
+
+  float px[3] = {kNaN, 1, kInf};
+  lt_image_desc img{1, 1, 3, px, 0, LT_INTERP_LINEAR, LT_EXTENSION_REPEAT};
+  // Non-finite texels are either refused or sanitised; a textured world must then render finite.
+  if (lt_scene_add_image(s, &img, &id) == LT_OK) {
+    lt_world_desc tw = world({1, 1, 1}, 1);
+    tw.image = id;
+    EXPECT_EQ(lt_scene_set_world(s, &tw), LT_OK) << lt_last_error();
+  } else {
+    EXPECT_GT(std::string(lt_last_error()).size(), 0u);
+  }
+  Passes p = commit_and_render(s);
+  EXPECT_EQ(p.status.nan_samples, 0u);
+}
+
+TEST(ApiBadInput, CyclicMaterialsAreRefused) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  int id = -1;
+  // A node that is its own child.
+  lt_shader_node self[2] = {node(LT_NODE_MIX), node(LT_NODE_DIFFUSE)};
+  self[0].child[0] = 1;
+  self[0].child[1] = 0;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, self, 2, 0, &id)), "cycle");
+  // A three-node loop below the root.
+  lt_shader_node loop[4] = {node(LT_NODE_ADD), node(LT_NODE_MIX), node(LT_NODE_ADD), node(LT_NODE_DIFFUSE)};
+  loop[0].child[0] = 3;
+  loop[0].child[1] = 1;
+  loop[1].child[0] = 3;
+  loop[1].child[1] = 2;
+  loop[2].child[0] = 1;
+  loop[2].child[1] = 3;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, loop, 4, 0, &id)), "cycle");
+  // A shared child (a DAG, not a cycle) is fine.
+  lt_shader_node dag[3] = {node(LT_NODE_ADD), node(LT_NODE_MIX), node(LT_NODE_DIFFUSE)};
+  dag[0].child[0] = 1;
+  dag[0].child[1] = 2;
+  dag[1].child[0] = 2;
+  dag[1].child[1] = 2;
+  dag[2].color.value[0] = dag[2].color.value[1] = dag[2].color.value[2] = 0.3f;
+  EXPECT_EQ(lt_scene_add_material(s, dag, 3, 0, &id), LT_OK) << lt_last_error();
+  // Too deep a tree is refused rather than overflowing the evaluator's stack.
+  std::vector<lt_shader_node> chain(200, node(LT_NODE_MIX));
+  for (int i = 0; i + 1 < 200; ++i) chain[i].child[0] = chain[i].child[1] = i + 1;
+  chain[199] = node(LT_NODE_DIFFUSE);
+  EXPECT_INVALID(lt_scene_add_material(s, chain.data(), 200, 0, &id));
+  add_object(s, icosphere(0.5f, 2), id, translate({0, 0, 0.5f}));
+  commit_and_render(s);
+}
+
+TEST(ApiBadInput, AbsurdRenderSettingsAreRefused) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  ASSERT_EQ(lt_scene_commit(s), LT_OK);
+  lt_render* r = nullptr;
+  auto refused = [&](lt_render_settings rs, const char* what) {
+    SCOPED_TRACE(what);
+    expect_failure([&] { return lt_render_start(s, &rs, &r); }, LT_ERROR_INVALID_ARGUMENT, what);
+    EXPECT_EQ(r, nullptr);
+  };
+  lt_render_settings rs = render_settings(0, 10, 1);
+  refused(rs, "width 0");
+  rs = render_settings(10, 0, 1);
+  refused(rs, "height 0");
+  rs = render_settings(-1, -1, 1);
+  refused(rs, "-1 x -1");
+  rs = render_settings(100000, 100000, 1);
+  refused(rs, "100000 x 100000");
+  rs = render_settings(65536, 65536, 1);
+  refused(rs, "65536 x 65536: too many pixels");
+  rs = render_settings(1, 70000, 1);
+  refused(rs, "1 x 70000");
+  rs = render_settings(8, 8, 0);
+  refused(rs, "0 samples");
+  rs = render_settings(8, 8, -3);
+  refused(rs, "negative samples");
+  rs = render_settings(8, 8, 1);
+  rs.max_bounces = -1;
+  refused(rs, "negative bounces");
+  rs = render_settings(8, 8, 1);
+  rs.max_bounces = 100000;
+  refused(rs, "huge bounces");
+  rs = render_settings(8, 8, 1);
+  rs.diffuse_bounces = -2;
+  refused(rs, "negative diffuse bounces");
+  rs = render_settings(8, 8, 1);
+  rs.filter_width = 0;
+  refused(rs, "filter width 0");
+  rs = render_settings(8, 8, 1);
+  rs.filter_width = kNaN;
+  refused(rs, "filter width NaN");
+  rs = render_settings(8, 8, 1);
+  rs.clamp_direct = kNaN;
+  refused(rs, "clamp NaN");
+  rs = render_settings(8, 8, 1);
+  rs.clamp_indirect = -1;
+  refused(rs, "negative clamp");
+  rs = render_settings(8, 8, 1);
+  rs.threads = -1;
+  refused(rs, "negative threads");
+  int borders[][4] = {{4, 4, 0, 8}, {5, 3, 0, 8}, {0, 9, 0, 8}, {-1, 4, 0, 8}, {0, 8, 6, 2}, {0, 8, 0, 9}};
+  for (auto& b : borders) {
+    rs = render_settings(8, 8, 1);
+    std::copy(b, b + 4, rs.border);
+    refused(rs, "bad border");
+  }
+  // Still usable: a 1 x 1 render works.
+  Passes p = render(s, render_settings(1, 1, 2));
+  EXPECT_EQ(p.first_non_finite(), "");
+}
+
+TEST(ApiBadInput, RenderBeforeCommitAndEditsAfterCommitAreStateErrors) {
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  lt_render* r = nullptr;
+  lt_render_settings rs = render_settings(8, 8, 1);
+  EXPECT_FAILS(LT_ERROR_STATE, lt_render_start(s, &rs, &r));
+  EXPECT_EQ(r, nullptr);
+
+  // A committed scene without a camera cannot render either.
+  ScenePtr no_camera = new_scene();
+  ASSERT_EQ(lt_scene_commit(no_camera.get()), LT_OK);
+  EXPECT_INVALID(lt_render_start(no_camera.get(), &rs, &r));
+
+  ASSERT_EQ(lt_scene_commit(s), LT_OK);
+  EXPECT_EQ(lt_scene_commit(s), LT_OK) << "a second commit is harmless";
+  int id = -1;
+  float px[3] = {1, 1, 1};
+  lt_image_desc img{1, 1, 3, px, 0, LT_INTERP_LINEAR, LT_EXTENSION_REPEAT};
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_image(s, &img, &id));
+  lt_shader_node n = node(LT_NODE_DIFFUSE);
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_material(s, &n, 1, 0, &id));
+  MeshData tri;
+  tri.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  tri.triangles = {0, 1, 2};
+  lt_mesh_desc md = tri.desc();
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_mesh(s, &md, &id));
+  lt_instance_desc inst{};
+  inst.mesh = 0;
+  Xform xf = identity();
+  std::copy(xf.begin(), xf.end(), inst.transform);
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_instance(s, &inst, &id));
+  lt_light_desc l = point_light({0, 0, 1}, 10);
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_light(s, &l));
+  lt_camera_desc c = perspective_camera(identity());
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_set_camera(s, &c));
+  lt_world_desc w = world({1, 1, 1}, 1);
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_set_world(s, &w));
+  // The refused edits changed nothing: the scene renders.
+  Passes p = render(s, rs);
+  EXPECT_EQ(p.first_non_finite(), "");
+}
+
+TEST(ApiBadInput, ReadPassWithAWrongBufferSize) {
+  ScenePtr sp = basic_scene();
+  ASSERT_EQ(lt_scene_commit(sp.get()), LT_OK);
+  lt_render_settings rs = render_settings(10, 6, 2);
+  lt_render* r = nullptr;
+  ASSERT_EQ(lt_render_start(sp.get(), &rs, &r), LT_OK);
+  RenderPtr rp(r);
+  ASSERT_EQ(lt_render_wait(r), LT_OK);
+  for (int pass = 0; pass < LT_PASS_COUNT; ++pass) {
+    const size_t need = size_t(10 * 6 * lt_pass_channels(pass));
+    std::vector<float> buf(need + 8, -1.0f);
+    for (size_t wrong : {size_t(0), need - 1, need + 1, size_t(10 * 6), need * 2}) {
+      if (wrong == need) continue;
+      std::string msg = EXPECT_INVALID(lt_render_read_pass(r, pass, buf.data(), wrong));
+      EXPECT_CONTAINS(msg, std::to_string(need));
+    }
+    EXPECT_EQ(buf[0], -1.0f) << "a refused read must not write";
+    EXPECT_EQ(lt_render_read_pass(r, pass, buf.data(), need), LT_OK);
+  }
+  Passes p = read_passes(r, 10, 6);
+  EXPECT_EQ(p.first_non_finite(), "");
+}
+
+TEST(ApiBadInput, CancelRightAfterStart) {
+  ScenePtr sp = basic_scene();
+  add_object(sp.get(), icosphere(1, 3), add_diffuse(sp.get(), {0.9f, 0.9f, 0.9f}), translate({0, 0, 1}));
+  ASSERT_EQ(lt_scene_commit(sp.get()), LT_OK);
+  const auto t0 = std::chrono::steady_clock::now();
+  lt_render* r = start_long_render(sp.get());
+  ASSERT_NE(r, nullptr);
+  RenderPtr rp(r);
+  EXPECT_EQ(lt_render_cancel(r), LT_OK);
+  EXPECT_EQ(lt_render_wait(r), LT_OK);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(seconds, 2.0) << "cancel must stop a render within a pass";
+  Passes p = read_passes(r, 400, 300);
+  EXPECT_EQ(p.status.state, LT_STATE_CANCELLED);
+  EXPECT_LT(p.status.samples_done, p.status.samples_total);
+  EXPECT_EQ(p.first_non_finite(), "");
+  EXPECT_EQ(lt_render_cancel(r), LT_OK) << "cancelling twice is harmless";
+  EXPECT_EQ(lt_render_wait(r), LT_OK) << "waiting twice is harmless";
+}
+
+TEST(ApiBadInput, CancelAfterSomeSamplesKeepsAConsistentImage) {
+  ScenePtr sp = basic_scene();
+  ASSERT_EQ(lt_scene_commit(sp.get()), LT_OK);
+  lt_render* r = start_long_render(sp.get());
+  ASSERT_NE(r, nullptr);
+  RenderPtr rp(r);
+  lt_render_status st{};
+  const auto t0 = std::chrono::steady_clock::now();
+  do {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    ASSERT_EQ(lt_render_poll(r, &st), LT_OK);
+    // Reading while rendering gives a finite image.
+    Passes live = read_passes(r, 400, 300);
+    ASSERT_EQ(live.first_non_finite(), "");
+  } while (st.samples_done < 2 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(20));
+  ASSERT_GE(st.samples_done, 2);
+  EXPECT_EQ(st.state, LT_STATE_RUNNING);
+  EXPECT_GT(st.rays, 0u);
+  ASSERT_EQ(lt_render_cancel(r), LT_OK);
+  ASSERT_EQ(lt_render_wait(r), LT_OK);
+  Passes p = read_passes(r, 400, 300);
+  EXPECT_EQ(p.status.state, LT_STATE_CANCELLED);
+  EXPECT_EQ(p.first_non_finite(), "");
+  // Each pixel holds the completed passes, plus at most the one interrupted.
+  int bad = 0;
+  for (float c : p.sample_count)
+    if (c < p.status.samples_done || c > p.status.samples_done + 1) ++bad;
+  EXPECT_EQ(bad, 0) << "pixels whose sample count is not " << p.status.samples_done << " or one more";
+}
+
+TEST(ApiBadInput, DestroyWhileRunning) {
+  ScenePtr sp = basic_scene();
+  ASSERT_EQ(lt_scene_commit(sp.get()), LT_OK);
+  // Right after the start.
+  auto t0 = std::chrono::steady_clock::now();
+  lt_render* r = start_long_render(sp.get());
+  ASSERT_NE(r, nullptr);
+  lt_render_destroy(r);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0);
+  // After some progress, and two renders of one scene at once.
+  lt_render* a = start_long_render(sp.get());
+  lt_render* b = start_long_render(sp.get());
+  ASSERT_NE(a, nullptr);
+  ASSERT_NE(b, nullptr);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  t0 = std::chrono::steady_clock::now();
+  lt_render_destroy(a);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0);
+  Passes p = read_passes(b, 400, 300);
+  EXPECT_EQ(p.first_non_finite(), "");
+  lt_render_destroy(b);
+  // The scene is still usable.
+  Passes q = render(sp.get(), render_settings(8, 8, 2));
+  EXPECT_EQ(q.first_non_finite(), "");
+}
+
+TEST(ApiBadInput, SharedNodesDoNotExplodeEvaluation) {
+  // A node graph may share a node between inputs (a DAG). Shared nodes must not make shading cost
+  // grow as 2^depth: 40 levels of Add nodes whose two inputs are the same node.
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  const int depth = 40;
+  std::vector<lt_shader_node> nodes(depth + 1, node(LT_NODE_ADD));
+  for (int i = 0; i < depth; ++i) nodes[i].child[0] = nodes[i].child[1] = i + 1;
+  nodes[depth] = node(LT_NODE_DIFFUSE);
+  nodes[depth].color.value[0] = nodes[depth].color.value[1] = nodes[depth].color.value[2] = 1e-12f;
+  int id = -1;
+  const int status = lt_scene_add_material(s, nodes.data(), depth + 1, 0, &id);
+  if (status != LT_OK) {
+    // Refusing the graph is acceptable, with a message.
+    EXPECT_EQ(status, LT_ERROR_INVALID_ARGUMENT);
+    EXPECT_GT(std::string(lt_last_error()).size(), 0u);
+    return;
+  }
+  add_object(s, icosphere(0.5f, 1), id, translate({0, 0, 0.5f}));
+  const auto t0 = std::chrono::steady_clock::now();
+  commit_and_render(s, 1);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+}
+
+TEST(ApiBadInput, SharedNodesCannotHideTreeDepth) {
+  // The root's second input X (a chain of 60 nodes) is validated first at depth 1; its first input
+  // is another chain of 60 nodes that ends at X again, so X's subtree really sits 60 levels deeper
+  // than where it was first seen: 121 levels in all, beyond what the evaluator's stack holds (64).
+  ScenePtr sp = basic_scene();
+  lt_scene* s = sp.get();
+  const int chain = 60;
+  // 0: root; 1..chain: first chain; chain+1 .. 2 chain: X's chain; 2 chain + 1: the shared leaf.
+  const int x = chain + 1, leaf = 2 * chain + 1;
+  std::vector<lt_shader_node> nodes(leaf + 1, node(LT_NODE_ADD));
+  nodes[0].child[0] = 1;
+  nodes[0].child[1] = x;
+  for (int i = 1; i <= chain; ++i) {
+    nodes[i].child[0] = leaf;
+    nodes[i].child[1] = i < chain ? i + 1 : x;  // the first chain ends at X
+  }
+  for (int i = x; i < leaf; ++i) {
+    nodes[i].child[0] = leaf;
+    nodes[i].child[1] = i + 1;
+  }
+  nodes[leaf] = node(LT_NODE_DIFFUSE);
+  nodes[leaf].color.value[0] = nodes[leaf].color.value[1] = nodes[leaf].color.value[2] = 1e-3f;
+  int id = -1;
+  const int status = lt_scene_add_material(s, nodes.data(), leaf + 1, 0, &id);
+  if (status != LT_OK) {
+    EXPECT_EQ(status, LT_ERROR_INVALID_ARGUMENT);
+    EXPECT_GT(std::string(lt_last_error()).size(), 0u);
+    return;
+  }
+  add_object(s, icosphere(0.5f, 1), id, translate({0, 0, 0.5f}));
+  commit_and_render(s, 1);
+  ADD_FAILURE() << "a material 121 levels deep was accepted (the evaluator holds 64)";
+}

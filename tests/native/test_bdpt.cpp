@@ -1,0 +1,297 @@
+// Bidirectional path tracing: MIS weights of every strategy that can sample a path sum to one,
+// light subpaths of length 1 reduce BDPT to path tracing with NEE, full BDPT agrees with path
+// tracing in expectation, long paths stay finite, and sampling allocates nothing per sample.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+
+#include "api/handles.h"
+#include "core/film.h"
+#include "integrators/integrator.h"
+#include "scene_builders.h"
+
+using namespace lt_test;
+
+// ---- a counting allocator for the whole test binary (only counts while enabled) -----------------
+namespace {
+std::atomic<bool> g_count_allocations{false};
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+void* operator new(std::size_t n) {
+  if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+
+enum class Lights { Area, PointSpot, AreaAndSun };
+
+// A closed room (diffuse, red and green side walls) seen from inside, with a glossy sphere, a
+// glass sphere and a diffuse block; an opening in the ceiling lets the sun in for AreaAndSun.
+ScenePtr room(Lights lights, float glass_roughness = 0.2f) {
+  ScenePtr s = new_scene();
+  lt_scene* sc = s.get();
+  int white = add_diffuse(sc, {0.7f, 0.7f, 0.7f});
+  int red = add_diffuse(sc, {0.7f, 0.15f, 0.1f});
+  int green = add_diffuse(sc, {0.15f, 0.6f, 0.1f});
+  MeshData floor = plane(2, 2);
+  add_object(sc, floor, white);
+  MeshData ceiling = plane(2, 2);
+  flip_winding(ceiling);
+  if (lights != Lights::AreaAndSun) add_object(sc, ceiling, white, translate({0, 0, 2}));
+  MeshData back = plane(2, 2);
+  add_object(sc, back, white, compose(translate({0, 1, 1}), rotate({1, 0, 0}, float(M_PI / 2))));
+  MeshData left = plane(2, 2);
+  add_object(sc, left, red, compose(translate({-1, 0, 1}), rotate({0, 1, 0}, float(M_PI / 2))));
+  add_object(sc, left, green, compose(translate({1, 0, 1}), rotate({0, 1, 0}, float(-M_PI / 2))));
+  MeshData front = plane(2, 2);
+  add_object(sc, front, white, compose(translate({0, -1.6f, 1}), rotate({1, 0, 0}, float(-M_PI / 2))));
+  add_object(sc, box({-0.7f, 0.1f, 0}, {-0.2f, 0.6f, 0.8f}), white);
+
+  lt_shader_node glossy = node(LT_NODE_GLOSSY);
+  glossy.color.value[0] = glossy.color.value[1] = glossy.color.value[2] = 0.8f;
+  glossy.roughness.value[0] = 0.3f;
+  int glossy_id;
+  check(lt_scene_add_material(sc, &glossy, 1, 0, &glossy_id), "glossy");
+  add_object(sc, icosphere(0.3f, 3), glossy_id, translate({0.45f, 0.3f, 0.3f}));
+  {
+    lt_shader_node glass = node(LT_NODE_GLASS);
+    glass.color.value[0] = glass.color.value[1] = glass.color.value[2] = 1.0f;
+    glass.roughness.value[0] = glass_roughness;
+    glass.ior = 1.5f;
+    int glass_id;
+    check(lt_scene_add_material(sc, &glass, 1, 0, &glass_id), "glass");
+    add_object(sc, icosphere(0.25f, 3), glass_id, translate({0.1f, -0.4f, 0.25f}));
+  }
+  switch (lights) {
+    case Lights::Area:
+      add_light(sc, area_light(LT_AREA_SQUARE, 0.5f, 0.5f, translate({0, 0, 1.99f}), 60));
+      break;
+    case Lights::PointSpot: {
+      lt_light_desc p = point_light({0.3f, -0.2f, 1.7f}, 40);
+      p.radius = 0.05f;
+      add_light(sc, p);
+      add_light(sc, spot_light({-0.5f, -0.5f, 1.8f}, {-0.3f, 0.3f, 0}, 60, 1.0f, 0.3f));
+      break;
+    }
+    case Lights::AreaAndSun:
+      add_light(sc, area_light(LT_AREA_DISK, 0.4f, 0.4f, translate({0.4f, -0.3f, 1.9f}), 30));
+      add_light(sc, sun_light({0.3f, 0.2f, -1}, 4, 0.05f));
+      set_world(sc, {0.1f, 0.12f, 0.2f}, 1);
+      break;
+  }
+  set_camera(sc, perspective_camera(look_at({0, -1.5f, 1.0f}, {0, 0.5f, 0.8f}), 22));
+  check(lt_scene_commit(sc), "commit");
+  return s;
+}
+
+lt_render_settings settings(int integrator, int size, int samples, unsigned seed, int light_length) {
+  lt_render_settings r = render_settings(size, size, samples, seed);
+  r.integrator = integrator;
+  r.max_bounces = 8;
+  r.diffuse_bounces = r.glossy_bounces = r.transmission_bounces = 8;  // BDPT has no per-kind limits
+  r.max_light_length = light_length;
+  r.max_camera_length = 64;
+  return r;
+}
+
+struct TileMeans {
+  int tiles = 0;
+  std::vector<double> mean;  // tile * 3 + channel
+};
+TileMeans tile_means(const std::vector<float>& rgba, int size, int tile) {
+  TileMeans t;
+  int n = size / tile;
+  t.tiles = n * n;
+  t.mean.assign(size_t(t.tiles) * 3, 0.0);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x)
+      for (int c = 0; c < 3; ++c)
+        t.mean[((y / tile) * n + x / tile) * 3 + c] += rgba[(size_t(y) * size + x) * 4 + c] / double(tile * tile);
+  return t;
+}
+
+}  // namespace
+
+// For random paths the integrator builds in three scenes, the weights of all strategies that can
+// sample the same path sum to 1 (power, balance and uniform heuristics).
+TEST(Bdpt, MisWeightsSumToOne) {
+  for (Lights lights : {Lights::Area, Lights::PointSpot, Lights::AreaAndSun}) {
+    ScenePtr s = room(lights);
+    const lt::Scene& scene = s->scene;
+    const int size = 32;
+    lt::Camera camera(scene.camera, size, size);
+    lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
+    for (lt::MisHeuristic h : {lt::MisHeuristic::Power, lt::MisHeuristic::Balance, lt::MisHeuristic::Uniform}) {
+      lt::IntegratorSettings is;
+      is.max_bounces = 8;
+      is.mis = h;
+      lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
+      int checked = 0;
+      double worst = 0;
+      for (int i = 0; i < 4000; ++i) {
+        int px = i % size, py = (i / size) % size;
+        lt::Sampler sampler(7, uint32_t(py * size + px), uint32_t(i));
+        float ox = filter.sample(sampler.next_1d()), oy = filter.sample(sampler.next_1d());
+        lt::CameraSample cs;
+        cs.pixel_center = {px + 0.5f, py + 0.5f};
+        cs.film = {px + 0.5f + ox, py + 0.5f + oy};
+        cs.film_pdf = filter.pdf(ox) * filter.pdf(oy);
+        cs.ray = camera.generate(cs.film.x, cs.film.y);
+        for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
+          ++checked;
+          worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
+        }
+      }
+      EXPECT_GT(checked, 1000) << "too few connected paths to test";
+      EXPECT_LT(worst, 1e-3) << "scene " << int(lights) << " heuristic " << int(h) << ": " << checked << " paths";
+    }
+  }
+}
+
+// With the light subpath cut to its light vertex, BDPT's strategies are s = 0 and s = 1: path
+// tracing with next-event estimation and MIS. Per 16x16 tile, the means agree within 5 standard
+// errors (from both renders' Variance passes; pixels are independent when nothing is splatted).
+TEST(Bdpt, LightLengthOneEqualsPathTracing) {
+  const int size = 64, tile = 16;
+  for (Lights lights : {Lights::Area, Lights::PointSpot, Lights::AreaAndSun}) {
+    ScenePtr s = room(lights);
+    Passes pt = render(s.get(), settings(LT_INTEGRATOR_PATH, size, 128, 1, 1));
+    Passes bd = render(s.get(), settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 128, 2, 1));
+    ASSERT_EQ(pt.first_non_finite(), "");
+    ASSERT_EQ(bd.first_non_finite(), "");
+    int worse = 0;
+    for (int ty = 0; ty < size / tile; ++ty)
+      for (int tx = 0; tx < size / tile; ++tx)
+        for (int c = 0; c < 3; ++c) {
+          RegionStats a = region_stats(pt, c, tx * tile, (tx + 1) * tile, ty * tile, (ty + 1) * tile);
+          RegionStats b = region_stats(bd, c, tx * tile, (tx + 1) * tile, ty * tile, (ty + 1) * tile);
+          double se = std::sqrt(a.standard_error * a.standard_error + b.standard_error * b.standard_error);
+          if (std::abs(a.mean - b.mean) > 5 * se) {
+            ++worse;
+            ADD_FAILURE() << "scene " << int(lights) << " tile " << tx << "," << ty << " channel " << c << ": PT "
+                          << a.mean << " BDPT " << b.mean << " (5 se = " << 5 * se << ")";
+          }
+        }
+    EXPECT_EQ(worse, 0);
+  }
+}
+
+// Full BDPT (every strategy, light tracing splats included) against path tracing. Splats make
+// neighbouring pixels' noise correlated, so each tile mean's standard error comes from the spread
+// of K independent renders (different seeds) of each integrator. The glass is rough (0.5) here: a
+// sharper caustic gives path tracing a heavy-tailed error that K renders cannot estimate.
+TEST(Bdpt, FullBdptAgreesWithPathTracing) {
+  const int size = 48, tile = 16, K = 6;
+  for (Lights lights : {Lights::Area, Lights::PointSpot, Lights::AreaAndSun}) {
+    ScenePtr s = room(lights, 0.5f);
+    std::vector<TileMeans> pt, bd;
+    for (int k = 0; k < K; ++k) {
+      Passes a = render(s.get(), settings(LT_INTEGRATOR_PATH, size, 48, 100 + k, 64));
+      Passes b = render(s.get(), settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 200 + k, 64));
+      ASSERT_EQ(a.first_non_finite(), "");
+      ASSERT_EQ(b.first_non_finite(), "");
+      pt.push_back(tile_means(a.combined, size, tile));
+      bd.push_back(tile_means(b.combined, size, tile));
+    }
+    const int tiles = pt[0].tiles;
+    for (int i = 0; i < tiles * 3; ++i) {
+      double ma = 0, mb = 0, va = 0, vb = 0;
+      for (int k = 0; k < K; ++k) { ma += pt[k].mean[i] / K; mb += bd[k].mean[i] / K; }
+      for (int k = 0; k < K; ++k) {
+        va += (pt[k].mean[i] - ma) * (pt[k].mean[i] - ma) / (K - 1);
+        vb += (bd[k].mean[i] - mb) * (bd[k].mean[i] - mb) / (K - 1);
+      }
+      double se = std::sqrt(va / K + vb / K);
+      EXPECT_LE(std::abs(ma - mb), 5 * se) << "scene " << int(lights) << " tile " << i / 3 << " channel " << i % 3
+                                          << ": PT " << ma << " BDPT " << mb;
+    }
+  }
+}
+
+// A closed white box of albedo 0.99 and 200 bounces: no NaN or Inf reaches the film, no sample is
+// discarded, and every MIS weight of these long paths lies in [0, 1] and sums to 1.
+TEST(Bdpt, LongPathsStayFinite) {
+  ScenePtr s = new_scene();
+  lt_scene* sc = s.get();
+  int white = add_diffuse(sc, {0.99f, 0.99f, 0.99f});
+  MeshData b = box({-1, -1, 0}, {1, 1, 2});
+  flip_winding(b);  // seen from inside
+  add_object(sc, b, white);
+  add_light(sc, point_light({0.2f, 0.1f, 1.5f}, 10));
+  add_light(sc, area_light(LT_AREA_SQUARE, 0.3f, 0.3f, translate({0, 0, 1.98f}), 5));
+  set_camera(sc, perspective_camera(look_at({0, -0.9f, 1}, {0, 1, 1}), 20));
+  check(lt_scene_commit(sc), "commit");
+  lt_render_settings r = render_settings(24, 24, 4, 3);
+  r.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
+  r.max_bounces = r.diffuse_bounces = 200;
+  r.max_camera_length = r.max_light_length = 201;
+  Passes p = render(sc, r);
+  EXPECT_EQ(p.first_non_finite(), "");
+  EXPECT_EQ(p.status.nan_samples, 0u);
+
+  const lt::Scene& scene = s->scene;
+  lt::Camera camera(scene.camera, 24, 24);
+  lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
+  lt::IntegratorSettings is;
+  is.max_bounces = 200;
+  is.max_camera_length = is.max_light_length = 201;
+  lt::RenderContext ctx{scene, camera, filter, is, 0, 0, 24, 24};
+  int checked = 0, long_paths = 0;
+  double worst = 0;
+  for (int i = 0; i < 300; ++i) {
+    lt::Sampler sampler(11, uint32_t(i % 576), uint32_t(i));
+    lt::CameraSample cs;
+    cs.pixel_center = {12.5f, 11.5f};
+    cs.film = {12.3f, 11.7f};
+    cs.film_pdf = filter.pdf(-0.2f) * filter.pdf(0.2f);
+    cs.ray = camera.generate(cs.film.x, cs.film.y);
+    std::vector<float> sums = lt::bdpt_mis_weight_sums(ctx, cs, sampler);
+    for (float sum : sums) worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
+    checked += int(sums.size());
+    if (sums.size() > 400) ++long_paths;
+  }
+  EXPECT_GT(checked, 1000);
+  EXPECT_GT(long_paths, 0) << "no sample built subpaths long enough to test";
+  EXPECT_LT(worst, 1e-3);
+}
+
+// After warm-up, tracing samples with either integrator performs no heap allocation.
+TEST(Bdpt, NoHeapAllocationPerSample) {
+  ScenePtr s = room(Lights::AreaAndSun);
+  const lt::Scene& scene = s->scene;
+  const int size = 32;
+  lt::Camera camera(scene.camera, size, size);
+  lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
+  lt::IntegratorSettings is;
+  lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
+  std::vector<lt::Splat> splats;
+  splats.reserve(1 << 16);
+  lt::SampleStats stats;
+  auto run = [&](int first, int count) {
+    for (int i = first; i < first + count; ++i) {
+      lt::Sampler sampler(5, uint32_t(i % (size * size)), uint32_t(i));
+      lt::CameraSample cs;
+      cs.film = {float(i % size) + 0.5f, float((i / size) % size) + 0.5f};
+      cs.pixel_center = cs.film;
+      cs.film_pdf = filter.pdf(0) * filter.pdf(0);
+      cs.ray = camera.generate(cs.film.x, cs.film.y);
+      lt::trace_bdpt(ctx, cs, sampler, stats, splats);
+      lt::trace_path(scene, is, cs.ray, sampler, stats);
+      if (splats.size() > (1 << 15)) splats.clear();
+    }
+  };
+  run(0, 200);  // warm-up: per-thread scratch subpaths are allocated once
+  g_allocations = 0;
+  g_count_allocations = true;
+  run(200, 2000);
+  g_count_allocations = false;
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations while tracing 2000 samples";
+}

@@ -1,0 +1,671 @@
+// BSDF lobes and their mixture: chi-square tests of every sampling routine against its pdf (one
+// adapter per lobe type, the generic tester in chi2.h), discrete tests of the delta lobes, and
+// sanity checks (reciprocity, energy, finiteness over random inputs, mixture bookkeeping).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "chi2.h"
+#include "scene/bsdf.h"
+
+namespace lt {
+namespace {
+
+using test::Chi2Options;
+using test::Chi2Result;
+using test::DirectionPdf;
+using test::DirectionSample;
+using test::DirectionSampler;
+
+constexpr float kDeg = kPi / 180;
+
+Vec3 from_angles(float theta_deg, float phi_deg = 0) {
+  float t = theta_deg * kDeg, p = phi_deg * kDeg;
+  return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
+}
+Vec3 mirror(const Vec3& w) { return {-w.x, -w.y, w.z}; }
+
+Lobe diffuse(float sigma = 0, Spectrum w = Spectrum(1.0f)) {
+  Lobe l;
+  l.type = LobeType::Diffuse;
+  l.roughness = sigma;
+  l.weight = w;
+  return l;
+}
+Lobe glossy(float alpha, Spectrum w = Spectrum(1.0f)) {
+  Lobe l;
+  l.type = LobeType::GlossyGGX;
+  l.alpha = alpha;
+  l.weight = w;
+  return l;
+}
+Lobe dielectric(float alpha, float eta, Spectrum w = Spectrum(1.0f)) {
+  Lobe l;
+  l.type = LobeType::Dielectric;
+  l.alpha = alpha;
+  l.eta = eta;
+  l.weight = w;
+  return l;
+}
+Lobe specular(float alpha, Spectrum f0, Spectrum w = Spectrum(1.0f)) {
+  Lobe l;
+  l.type = LobeType::SpecularGGX;
+  l.alpha = alpha;
+  l.f0 = f0;
+  l.weight = w;
+  return l;
+}
+Lobe transparent(Spectrum w = Spectrum(1.0f)) {
+  Lobe l;
+  l.type = LobeType::Transparent;
+  l.weight = w;
+  return l;
+}
+
+// ---- adapters -----------------------------------------------------------------------------------
+
+DirectionSampler lobe_sampler(const Lobe& lobe, const Vec3& wo) {
+  return [=](Sampler& rng, DirectionSample* out) {
+    Vec2 u = rng.next_2d();
+    float u_extra = rng.next_1d();
+    BsdfSample s;
+    if (!lobe_sample(lobe, wo, u, u_extra, &s)) return false;
+    out->dir = s.wi;
+    out->pdf = s.pdf;
+    return true;
+  };
+}
+DirectionPdf lobe_density(const Lobe& lobe, const Vec3& wo) {
+  return [=](const Vec3& wi) { return double(lobe_pdf(lobe, wo, wi)); };
+}
+
+// The mixture through Bsdf::sample / Bsdf::eval; delta samples count as failures (their mass is
+// missing from the continuous pdf, which the tester's failure bin accounts for).
+DirectionSampler bsdf_sampler(const Bsdf& bsdf, const Vec3& wo) {
+  return [=](Sampler& rng, DirectionSample* out) {
+    float u_lobe = rng.next_1d();
+    Vec2 u = rng.next_2d();
+    BsdfSample s;
+    if (!bsdf.sample(wo, u_lobe, u, &s) || (s.flags & kLobeSpecular)) return false;
+    out->dir = s.wi;
+    out->pdf = s.pdf;
+    return true;
+  };
+}
+DirectionPdf bsdf_density(const Bsdf& bsdf, const Vec3& wo) {
+  return [=](const Vec3& wi) {
+    float pdf = 0;
+    bsdf.eval(wo, wi, &pdf);
+    return double(pdf);
+  };
+}
+
+// Microfacet normals from the visible-normal sampler against D_wo(m) = G1(wo) max(0, wo.m) D(m) / wo.z.
+DirectionSampler vndf_sampler(float alpha, const Vec3& wo) {
+  return [=](Sampler& rng, DirectionSample* out) {
+    Vec3 m = ggx_sample_visible_normal(wo, alpha, rng.next_2d());
+    out->dir = m;
+    out->pdf = ggx_G1(wo, alpha) * std::max(0.0f, dot(wo, m)) * ggx_D(m, alpha) / wo.z;
+    return true;
+  };
+}
+DirectionPdf vndf_density(float alpha, const Vec3& wo) {
+  return [=](const Vec3& m) { return double(ggx_G1(wo, alpha) * std::max(0.0f, dot(wo, m)) * ggx_D(m, alpha) / wo.z); };
+}
+
+// ---- the chi-square cases -------------------------------------------------------------------------
+
+struct Chi2Case {
+  std::string name;
+  DirectionSampler sampler;
+  DirectionPdf pdf;
+  Vec3 pole{0, 0, 1};
+  double power = 1;
+  int theta_bins = 40, phi_bins = 80;
+  double expected_integral = -1;
+};
+
+Chi2Case lobe_case(std::string name, const Lobe& l, const Vec3& wo) {
+  Chi2Case c;
+  c.name = std::move(name);
+  c.sampler = lobe_sampler(l, wo);
+  c.pdf = lobe_density(l, wo);
+  return c;
+}
+Chi2Case with_pole(Chi2Case c, const Vec3& pole, double power) {
+  c.pole = pole;
+  c.power = power;
+  return c;
+}
+Chi2Case with_integral(Chi2Case c, double expected) {
+  c.expected_integral = expected;
+  return c;
+}
+Chi2Case with_bins(Chi2Case c, int nt, int np) {
+  c.theta_bins = nt;
+  c.phi_bins = np;
+  return c;
+}
+
+Bsdf mixture(std::initializer_list<Lobe> lobes) {
+  Bsdf b;
+  for (const Lobe& l : lobes) b.add(l);
+  return b;
+}
+
+std::vector<Chi2Case> make_cases() {
+  std::vector<Chi2Case> cs;
+  // Diffuse: Lambert and Oren-Nayar; integral 1 exactly (cosine-weighted hemisphere).
+  cs.push_back(with_integral(lobe_case("lambert_30", diffuse(0), from_angles(30, 10)), 1));
+  cs.push_back(with_integral(lobe_case("lambert_wo_below", diffuse(0), normalize(Vec3(0.6f, 0.1f, -0.05f))), 1));
+  cs.push_back(with_integral(lobe_case("oren_nayar_0.5_60", diffuse(0.5f), from_angles(60, 40)), 1));
+  cs.push_back(with_integral(lobe_case("oren_nayar_1_85", diffuse(1), from_angles(85, -70)), 1));
+
+  // The visible-normal sampler on its own: D_wo integrates to exactly 1.
+  for (float a : {0.3f, 1.0f})
+    for (float t : {0.0f, 60.0f, 85.0f}) {
+      Chi2Case c;
+      c.name = "vndf_a" + std::to_string(a).substr(0, 4) + "_" + std::to_string(int(t));
+      c.sampler = vndf_sampler(a, from_angles(t, 20));
+      c.pdf = vndf_density(a, from_angles(t, 20));
+      c.expected_integral = 1;
+      if (a < 1) c = with_pole(c, Vec3(0, 0, 1), 1.5);
+      cs.push_back(c);
+    }
+
+  // GGX glossy: bins concentrated around the mirror direction for the sharp lobes.
+  for (float a : {0.05f, 0.3f, 1.0f})
+    for (float t : {0.0f, 45.0f, 80.0f, 89.0f}) {
+      if (a == 0.3f && t == 89.0f) continue;
+      Vec3 wo = from_angles(t, 30);
+      Chi2Case c = lobe_case("ggx_a" + std::to_string(a).substr(0, 4) + "_" + std::to_string(int(t)), glossy(a), wo);
+      if (a <= 0.05f) c = with_pole(c, mirror(wo), 2);
+      else if (a < 1) c = with_pole(c, mirror(wo), 1.5);
+      cs.push_back(c);
+    }
+
+  // Rough dielectric: reflection and refraction, entering and leaving, below and above the
+  // critical angle of eta = 1/1.5 (41.8 degrees).
+  for (float a : {0.1f, 0.5f})
+    for (float eta : {1.5f, 1 / 1.5f})
+      for (float t : {30.0f, 70.0f}) {
+        Chi2Case c = lobe_case("glass_a" + std::to_string(a).substr(0, 3) + "_eta" + std::to_string(eta).substr(0, 4) +
+                                   "_" + std::to_string(int(t)),
+                               dielectric(a, eta), from_angles(t, 100));
+        if (a < 0.2f) c = with_bins(c, 60, 120);
+        cs.push_back(c);
+      }
+  cs.push_back(lobe_case("glass_a0.3_wo_below", dielectric(0.3f, 1.5f), normalize(Vec3(-0.5f, 0.4f, -0.08f))));
+
+  // Principled specular layer (the pdf does not depend on f0).
+  cs.push_back(with_pole(lobe_case("specular_a0.2_40", specular(0.2f, Spectrum(0.04f, 0.5f, 0.9f)), from_angles(40, 0)),
+                         mirror(from_angles(40, 0)), 1.5));
+  cs.push_back(lobe_case("specular_a0.6_75", specular(0.6f, Spectrum(0.04f)), from_angles(75, 200)));
+
+  // Mixtures through Bsdf::sample / Bsdf::eval.
+  {
+    Vec3 wo = from_angles(40, 15);
+    Bsdf b = mixture({diffuse(0, Spectrum(0.5f)), glossy(0.2f, Spectrum(0.5f, 0.3f, 0.9f))});
+    Chi2Case c;
+    c.name = "mixture_diffuse_glossy";
+    c.sampler = bsdf_sampler(b, wo);
+    c.pdf = bsdf_density(b, wo);
+    cs.push_back(c);
+  }
+  {
+    Vec3 wo = from_angles(60, -45);
+    Bsdf b = mixture({diffuse(0.3f, Spectrum(0.6f, 0.5f, 0.4f)), specular(0.3f, Spectrum(0.04f)),
+                      dielectric(0.2f, 1.45f, Spectrum(0.3f))});
+    Chi2Case c;
+    c.name = "mixture_principled_like";
+    c.sampler = bsdf_sampler(b, wo);
+    c.pdf = bsdf_density(b, wo);
+    cs.push_back(c);
+  }
+  {
+    // A delta lobe in the mixture: the continuous part carries exactly the diffuse lobe's
+    // selection probability 0.5 / (0.5 + 1).
+    Vec3 wo = from_angles(50, 80);
+    Bsdf b = mixture({diffuse(0, Spectrum(0.5f)), dielectric(0, 1.5f)});
+    Chi2Case c;
+    c.name = "mixture_diffuse_smooth_glass";
+    c.sampler = bsdf_sampler(b, wo);
+    c.pdf = bsdf_density(b, wo);
+    c.expected_integral = 0.5 / 1.5;
+    cs.push_back(c);
+  }
+  return cs;
+}
+
+const std::vector<Chi2Case>& cases() {
+  static const std::vector<Chi2Case> cs = make_cases();
+  return cs;
+}
+
+Chi2Result run(const Chi2Case& c, uint32_t seed) {
+  Chi2Options o;
+  o.name = c.name;
+  o.pole = c.pole;
+  o.theta_power = c.power;
+  o.theta_bins = c.theta_bins;
+  o.phi_bins = c.phi_bins;
+  o.expected_integral = c.expected_integral;
+  o.seed = seed;
+  return test::chi2_test(c.sampler, c.pdf, o);
+}
+
+class BsdfChi2 : public ::testing::TestWithParam<int> {};
+
+TEST_P(BsdfChi2, SamplesFollowPdf) {
+  const Chi2Case& c = cases()[GetParam()];
+  Chi2Result r = run(c, 1000u + uint32_t(GetParam()));
+  EXPECT_TRUE(r.chi2_ok) << r.summary;
+  EXPECT_TRUE(r.integral_ok) << r.summary;
+  EXPECT_TRUE(r.pdf_ok) << r.summary;
+  // The lobes compute a sample's pdf through the same code as pdf(): no boundary slack needed.
+  EXPECT_EQ(r.pdf_mismatches, 0u) << r.summary;
+  EXPECT_EQ(r.zero_pdf_samples, 0u) << r.summary;
+  RecordProperty("summary", r.summary);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllLobes, BsdfChi2, ::testing::Range(0, int(cases().size())),
+                         [](const ::testing::TestParamInfo<int>& param_info) {
+                           std::string n = cases()[param_info.param].name;
+                           for (char& ch : n)
+                             if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                           return n;
+                         });
+
+// The tester must be able to fail: a GGX sampler checked against a slightly wrong roughness, and a
+// Lambert sampler against a pdf 10% too large.
+TEST(Chi2Tester, CanFail) {
+  Vec3 wo = from_angles(35, 0);
+  Chi2Options o;
+  o.name = "wrong_alpha";
+  o.pdf_rel_tolerance = INFINITY;  // only the distribution is under test here
+  Chi2Result wrong_alpha = test::chi2_test(lobe_sampler(glossy(0.3f), wo), lobe_density(glossy(0.33f), wo), o);
+  EXPECT_FALSE(wrong_alpha.chi2_ok) << wrong_alpha.summary;
+
+  Lobe l = diffuse(0);
+  o.name = "pdf_times_1.1";
+  o.samples = 200000;
+  o.pdf_rel_tolerance = 1e-3;
+  Chi2Result scaled = test::chi2_test(lobe_sampler(l, wo), [&](const Vec3& wi) { return 1.1 * lobe_pdf(l, wo, wi); }, o);
+  EXPECT_FALSE(scaled.integral_ok) << scaled.summary;
+  EXPECT_FALSE(scaled.chi2_ok) << scaled.summary;
+  EXPECT_FALSE(scaled.pdf_ok) << scaled.summary;
+
+  // A sampler that silently drops 2% of its samples while its pdf still integrates to 1.
+  o.name = "lossy_sampler";
+  auto base = lobe_sampler(l, wo);
+  Chi2Result lossy = test::chi2_test(
+      [&](Sampler& rng, DirectionSample* s) { return base(rng, s) && rng.next_1d() >= 0.02f; }, lobe_density(l, wo), o);
+  EXPECT_FALSE(lossy.chi2_ok) << lossy.summary;
+}
+
+TEST(Chi2Tester, SurvivalFunction) {
+  // Reference values of the chi-square upper tail.
+  EXPECT_NEAR(test::chi2_survival(3.841459, 1), 0.05, 1e-6);
+  EXPECT_NEAR(test::chi2_survival(18.307038, 10), 0.05, 1e-6);
+  EXPECT_NEAR(test::chi2_survival(100, 100), 0.4811916845, 1e-8);
+  EXPECT_NEAR(test::chi2_survival(1135.8, 1000), 0.0017287856, 1e-8);  // mpmath
+  EXPECT_NEAR(test::sidak_alpha(0.01, 1), 0.01, 1e-12);
+  EXPECT_NEAR(test::sidak_alpha(0.01, 10), 1 - std::pow(0.99, 0.1), 1e-12);
+}
+
+// ---- delta lobes ------------------------------------------------------------------------------------
+
+// Reflection versus refraction frequency equals Fresnel within 5 standard errors, the directions
+// are the exact mirror / Snell directions, and f |cos| / pdf is the lobe's weight.
+TEST(DeltaLobes, SmoothDielectricFollowsFresnel) {
+  const int n = 100000;
+  const Spectrum w(0.9f, 0.7f, 0.5f);
+  for (float eta : {1.5f, 1 / 1.5f, 1.0f, 2.4f})
+    for (float t : {0.0f, 30.0f, 41.0f, 60.0f, 85.0f}) {
+      SCOPED_TRACE("eta " + std::to_string(eta) + " theta " + std::to_string(t));
+      Vec3 wo = from_angles(t, 25);
+      Lobe l = dielectric(0, eta, w);
+      EXPECT_EQ(lobe_flags(l) & kLobeSpecular, uint32_t(kLobeSpecular));
+      float fr = fresnel_dielectric(wo.z, eta);
+      Sampler rng(7, 0, uint32_t(t * 100 + eta * 10));
+      int reflected = 0;
+      for (int k = 0; k < n; ++k) {
+        BsdfSample s;
+        ASSERT_TRUE(lobe_sample(l, wo, rng.next_2d(), rng.next_1d(), &s));
+        Spectrum weight = s.f * std::abs(s.wi.z) / s.pdf;
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(weight[c], w[c], 1e-4f * w[c]);
+        if (s.flags & kLobeReflection) {
+          ++reflected;
+          ASSERT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeReflection));
+          ASSERT_NEAR(s.pdf, fr, 1e-6f);
+          ASSERT_EQ(s.eta, 1.0f);
+          Vec3 m = mirror(wo);
+          ASSERT_NEAR(s.wi.x, m.x, 1e-6f);
+          ASSERT_NEAR(s.wi.y, m.y, 1e-6f);
+          ASSERT_NEAR(s.wi.z, m.z, 1e-6f);
+        } else {
+          ASSERT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeTransmission));
+          ASSERT_NEAR(s.pdf, 1 - fr, 1e-6f);
+          ASSERT_EQ(s.eta, eta);
+          // Snell: sin_t eta = sin_i, opposite azimuth, below the surface, unit length.
+          float sin_i = std::sqrt(wo.x * wo.x + wo.y * wo.y);
+          float sin_t = std::sqrt(s.wi.x * s.wi.x + s.wi.y * s.wi.y);
+          ASSERT_NEAR(sin_t * eta, sin_i, 1e-5f);
+          ASSERT_LT(s.wi.z, 0);
+          ASSERT_NEAR(length(s.wi), 1, 1e-5f);
+          if (sin_i > 0) {
+            ASSERT_NEAR(s.wi.x * wo.y - s.wi.y * wo.x, 0, 1e-5f);
+          }
+          ASSERT_LE(s.wi.x * wo.x + s.wi.y * wo.y, 0);
+        }
+      }
+      double p = double(reflected) / n;
+      double se = std::sqrt(std::max(1e-12, double(fr) * (1 - fr) / n));
+      EXPECT_LE(std::abs(p - fr), 5 * se + 1e-9) << "reflected " << reflected << " of " << n << ", Fresnel " << fr;
+      // Delta lobes are invisible to eval/pdf.
+      EXPECT_EQ(lobe_pdf(l, wo, mirror(wo)), 0.0f);
+      EXPECT_TRUE(is_black(lobe_eval(l, wo, mirror(wo))));
+    }
+}
+
+// eta is the IOR of the -Z side over the +Z side: seen from below, glass refracts with 1/eta, so a
+// refracted direction traced back refracts onto the original one (what BDPT's reverse pdfs need).
+TEST(DeltaLobes, GlassFromBelowSeesInverseEta) {
+  for (float eta : {1.5f, 1 / 1.5f})
+    for (float t : {10.0f, 35.0f, 60.0f}) {
+      Vec3 wo = from_angles(t, 40);
+      Lobe l = dielectric(0, eta);
+      BsdfSample down, up;
+      // u_extra just below 1 picks refraction whenever it is possible.
+      if (!lobe_sample(l, wo, Vec2{0.5f, 0.5f}, kOneMinusEpsilon, &down) || !(down.flags & kLobeTransmission)) continue;
+      EXPECT_EQ(down.eta, eta);
+      ASSERT_TRUE(lobe_sample(l, down.wi, Vec2{0.5f, 0.5f}, kOneMinusEpsilon, &up));
+      ASSERT_TRUE(up.flags & kLobeTransmission);
+      EXPECT_FLOAT_EQ(up.eta, 1 / eta);
+      EXPECT_NEAR(length(up.wi - wo), 0, 1e-5f);
+      // Fresnel is symmetric across the interface.
+      EXPECT_NEAR(down.pdf, up.pdf, 1e-5f);
+    }
+  // Rough glass: the reverse pdf through the interface is nonzero and finite.
+  Lobe rough = dielectric(0.3f, 1.5f);
+  Vec3 wo = from_angles(30, 0), wi = normalize(Vec3(-0.2f, 0.05f, -1));
+  EXPECT_GT(lobe_pdf(rough, wo, wi), 0);
+  EXPECT_GT(lobe_pdf(rough, wi, wo), 0);
+  EXPECT_TRUE(std::isfinite(lobe_pdf(rough, wi, wo)));
+}
+
+TEST(DeltaLobes, FresnelReferenceValues) {
+  EXPECT_NEAR(fresnel_dielectric(1, 1.5f), 0.04f, 1e-6f);
+  EXPECT_NEAR(fresnel_dielectric(1, 1 / 1.5f), 0.04f, 1e-6f);
+  EXPECT_EQ(fresnel_dielectric(0.5f, 1 / 1.5f), 1.0f);  // beyond the critical angle
+  EXPECT_NEAR(fresnel_dielectric(0, 1.5f), 1.0f, 1e-6f);
+  EXPECT_NEAR(fresnel_dielectric(std::cos(56.31f * kDeg), 1.5f), 0.0740f, 1e-3f);  // Brewster: rp = 0
+  EXPECT_EQ(fresnel_dielectric(0.7f, 1.0f), 0.0f);
+  // Arriving from inside equals 1/eta from outside.
+  EXPECT_FLOAT_EQ(fresnel_dielectric(-0.8f, 1.5f), fresnel_dielectric(0.8f, 1 / 1.5f));
+}
+
+TEST(DeltaLobes, MirrorsAndPassThrough) {
+  Sampler rng(3, 0, 0);
+  for (int k = 0; k < 1000; ++k) {
+    Vec3 wo = sample_uniform_sphere(rng.next_2d());
+    if (std::abs(wo.z) < 1e-3f) continue;
+    Spectrum w(0.2f, 0.5f, 1.0f);
+    BsdfSample s;
+    ASSERT_TRUE(lobe_sample(glossy(0, w), wo, rng.next_2d(), rng.next_1d(), &s));
+    EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeReflection));
+    EXPECT_NEAR(length(s.wi - mirror(wo)), 0, 1e-6f);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, w[c], 1e-5f);
+
+    Spectrum f0(0.04f, 0.5f, 0.9f);
+    ASSERT_TRUE(lobe_sample(specular(5e-5f, f0, w), wo, rng.next_2d(), rng.next_1d(), &s));
+    EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeReflection));
+    float c5 = std::pow(1 - std::abs(wo.z), 5.0f);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, w[c] * (f0[c] + (1 - f0[c]) * c5), 1e-5f);
+
+    ASSERT_TRUE(lobe_sample(transparent(w), wo, rng.next_2d(), rng.next_1d(), &s));
+    EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeTransmission));
+    EXPECT_NEAR(length(s.wi + wo), 0, 1e-7f);
+    EXPECT_EQ(s.eta, 1.0f);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, w[c], 1e-5f);
+  }
+}
+
+// Through the mixture a delta lobe is picked with its selection probability and reports
+// pdf = selection probability x branch probability.
+TEST(DeltaLobes, MixtureSelection) {
+  Vec3 wo = from_angles(50, 80);
+  Bsdf b = mixture({diffuse(0, Spectrum(0.5f)), dielectric(0, 1.5f, Spectrum(1.0f))});
+  const float p_glass = 1 / 1.5f;
+  const float fr = fresnel_dielectric(wo.z, 1.5f);
+  const int n = 200000;
+  int delta = 0;
+  Sampler rng(11, 0, 0);
+  for (int k = 0; k < n; ++k) {
+    BsdfSample s;
+    ASSERT_TRUE(b.sample(wo, rng.next_1d(), rng.next_2d(), &s));
+    if (!(s.flags & kLobeSpecular)) continue;
+    ++delta;
+    float branch = (s.flags & kLobeReflection) ? fr : 1 - fr;
+    ASSERT_NEAR(s.pdf, p_glass * branch, 1e-5f);
+    ASSERT_NEAR(s.f.x * std::abs(s.wi.z) / s.pdf, 1 / p_glass, 1e-4f);
+  }
+  double se = std::sqrt(p_glass * (1 - p_glass) / n);
+  EXPECT_LE(std::abs(double(delta) / n - p_glass), 5 * se);
+}
+
+// ---- sanity --------------------------------------------------------------------------------------------
+
+// f(wo, wi) == f(wi, wo) for the reflection lobes. (Glass is not reciprocal, as in Cycles: its
+// reflection/refraction split uses Fresnel at wo's angle.)
+TEST(BsdfSanity, Reciprocity) {
+  const Lobe lobes[] = {diffuse(0), diffuse(0.3f), diffuse(1), glossy(0.01f), glossy(0.1f), glossy(0.5f), glossy(1),
+                        specular(0.2f, Spectrum(0.04f, 0.3f, 0.9f))};
+  Sampler rng(5, 0, 0);
+  for (const Lobe& l : lobes)
+    for (int k = 0; k < 20000; ++k) {
+      Vec3 a = sample_uniform_sphere(rng.next_2d()), b = sample_uniform_sphere(rng.next_2d());
+      a.z = std::abs(a.z);
+      b.z = std::abs(b.z);
+      Spectrum fab = lobe_eval(l, a, b), fba = lobe_eval(l, b, a);
+      for (int c = 0; c < 3; ++c)
+        ASSERT_NEAR(fab[c], fba[c], 1e-4f * std::max(1.0f, std::max(fab[c], fba[c])))
+            << "lobe type " << int(l.type) << " a " << a.x << ' ' << a.y << ' ' << a.z << " b " << b.x << ' ' << b.y
+            << ' ' << b.z;
+    }
+}
+
+// Directional albedo by Monte Carlo with each lobe's own sampling: mean of f |cos| / pdf with
+// failed samples counting zero.
+struct Estimate {
+  double mean, se;
+};
+Estimate albedo(const Lobe& l, const Vec3& wo, int n, uint32_t seed) {
+  Sampler rng(seed, 1, 0);
+  double sum = 0, sum2 = 0;
+  for (int k = 0; k < n; ++k) {
+    BsdfSample s;
+    double v = 0;
+    if (lobe_sample(l, wo, rng.next_2d(), rng.next_1d(), &s)) v = max_component(s.f) * std::abs(s.wi.z) / s.pdf;
+    sum += v;
+    sum2 += v * v;
+  }
+  double mean = sum / n;
+  return {mean, std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n)};
+}
+
+TEST(BsdfSanity, EnergyConservation) {
+  const int n = 100000;
+  const Lobe lobes[] = {diffuse(0),         diffuse(0.5f),        diffuse(1),
+                        glossy(0.05f),      glossy(0.3f),         glossy(1),
+                        dielectric(0.1f, 1.5f), dielectric(0.5f, 1.5f), dielectric(0.1f, 1 / 1.5f),
+                        dielectric(0.5f, 1 / 1.5f), dielectric(1, 3), specular(0.3f, Spectrum(1.0f)),
+                        specular(0.8f, Spectrum(0.5f))};
+  uint32_t seed = 0;
+  for (const Lobe& l : lobes)
+    for (float t : {0.0f, 45.0f, 75.0f, 89.0f}) {
+      Estimate e = albedo(l, from_angles(t, 60), n, ++seed);
+      EXPECT_LE(e.mean, 1 + 5 * e.se + 1e-5) << "lobe type " << int(l.type) << " alpha " << l.alpha << " sigma "
+                                            << l.roughness << " eta " << l.eta << " theta " << t;
+    }
+  // Lambert reflects everything; smooth-ish GGX at normal incidence nearly everything.
+  EXPECT_NEAR(albedo(diffuse(0), from_angles(30), n, 99).mean, 1.0, 1e-5);
+  Estimate g = albedo(glossy(0.05f), from_angles(0), n, 98);
+  EXPECT_GT(g.mean, 0.99);
+  // Glass without absorption: everything is reflected or refracted except the small Smith
+  // shadowing loss (no 1/eta^2 radiance scaling, as in Cycles).
+  Estimate d = albedo(dielectric(0.05f, 1.5f), from_angles(20), n, 97);
+  EXPECT_GT(d.mean, 0.98);
+}
+
+bool finite_nonneg(const Spectrum& f) { return is_finite(f) && f.x >= 0 && f.y >= 0 && f.z >= 0; }
+
+Lobe random_lobe(Sampler& rng) {
+  Lobe l;
+  l.type = LobeType(std::min(4, int(rng.next_1d() * 5)));
+  l.weight = Spectrum(rng.next_1d(), rng.next_1d(), rng.next_1d());
+  l.roughness = rng.next_1d() < 0.2f ? 0.0f : rng.next_1d();
+  float u = rng.next_1d();
+  l.alpha = u < 0.1f ? 0.0f : (u < 0.2f ? 1e-4f : (u < 0.25f ? 1.0f : std::pow(10.0f, -4 * rng.next_1d())));
+  float e = rng.next_1d();
+  l.eta = e < 0.1f ? 1.0f : (e < 0.15f ? 1.0001f : std::pow(3.0f, 2 * rng.next_1d() - 1));
+  l.f0 = Spectrum(rng.next_1d(), rng.next_1d(), rng.next_1d());
+  return l;
+}
+
+Vec3 random_direction(Sampler& rng) {
+  float u = rng.next_1d();
+  Vec3 d = sample_uniform_sphere(rng.next_2d());
+  if (u < 0.15f) d.z = (rng.next_1d() - 0.5f) * 1e-4f;  // grazing
+  else if (u < 0.25f) d.z = -1e-2f * rng.next_1d();       // bent shading normal
+  else if (u < 0.3f) d = Vec3(0, 0, 1);
+  else if (u < 0.32f) d = Vec3(1, 0, 0);
+  return normalize(d);
+}
+
+// NaN hunting: random lobes, random and degenerate directions; everything stays finite.
+TEST(BsdfSanity, FiniteEverywhere) {
+  Sampler rng(17, 0, 0);
+  for (int k = 0; k < 300000; ++k) {
+    Lobe l = random_lobe(rng);
+    Vec3 wo = random_direction(rng), wi = random_direction(rng);
+    Spectrum f = lobe_eval(l, wo, wi);
+    float pdf = lobe_pdf(l, wo, wi);
+    ASSERT_TRUE(finite_nonneg(f)) << k;
+    ASSERT_TRUE(std::isfinite(pdf) && pdf >= 0) << k;
+    BsdfSample s;
+    Vec2 u = rng.next_2d();
+    if (rng.next_1d() < 0.05f) u = Vec2{rng.next_1d() < 0.5f ? 0.0f : kOneMinusEpsilon, rng.next_1d()};
+    if (lobe_sample(l, wo, u, rng.next_1d(), &s)) {
+      ASSERT_TRUE(finite_nonneg(s.f)) << k;
+      ASSERT_TRUE(std::isfinite(s.pdf) && s.pdf > 0) << k;
+      ASSERT_TRUE(is_finite(s.wi) && std::abs(length(s.wi) - 1) < 1e-4f) << k;
+      ASSERT_TRUE(std::isfinite(s.eta) && s.eta > 0) << k;
+      Spectrum weight = s.f * std::abs(s.wi.z) / s.pdf;
+      ASSERT_TRUE(is_finite(weight)) << k;
+    }
+    Bsdf b;
+    int nl = 1 + int(rng.next_1d() * 3);
+    for (int j = 0; j < nl; ++j) b.add(random_lobe(rng));
+    float bpdf;
+    ASSERT_TRUE(finite_nonneg(b.eval(wo, wi, &bpdf))) << k;
+    ASSERT_TRUE(std::isfinite(bpdf) && bpdf >= 0) << k;
+    if (b.sample(wo, rng.next_1d(), rng.next_2d(), &s)) {
+      ASSERT_TRUE(finite_nonneg(s.f) && std::isfinite(s.pdf) && s.pdf > 0 && is_finite(s.wi)) << k;
+      ASSERT_TRUE(is_finite(s.f * std::abs(s.wi.z) / s.pdf)) << k;
+    }
+    ASSERT_TRUE(finite_nonneg(b.albedo()));
+  }
+}
+
+// A sample from the mixture carries the same f and pdf that eval() reports for its direction.
+TEST(BsdfMixture, SampleMatchesEval) {
+  Bsdf b = mixture({diffuse(0.5f, Spectrum(0.4f, 0.5f, 0.6f)), glossy(0.1f, Spectrum(0.3f)),
+                    specular(0.4f, Spectrum(0.04f)), dielectric(0.3f, 1.33f, Spectrum(0.2f, 0.4f, 0.2f))});
+  Sampler rng(23, 0, 0);
+  int checked = 0;
+  for (int k = 0; k < 20000; ++k) {
+    Vec3 wo = sample_uniform_sphere(rng.next_2d());
+    if (std::abs(wo.z) < 1e-3f) continue;
+    BsdfSample s;
+    if (!b.sample(wo, rng.next_1d(), rng.next_2d(), &s)) continue;
+    float pdf;
+    Spectrum f = b.eval(wo, s.wi, &pdf);
+    ASSERT_NEAR(pdf, s.pdf, 1e-4f * s.pdf);
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(f[c], s.f[c], 1e-4f * std::max(1e-3f, s.f[c]));
+    ++checked;
+  }
+  EXPECT_GT(checked, 15000);
+}
+
+TEST(BsdfMixture, Bookkeeping) {
+  Bsdf b;
+  b.add(diffuse(0, Spectrum(0.0f)));
+  b.add(glossy(0.2f, Spectrum(-1.0f)));
+  b.add(glossy(0.2f, Spectrum(NAN, 1, 1)));
+  EXPECT_EQ(b.count(), 0);
+  EXPECT_FALSE(b.has_non_delta());
+  BsdfSample s;
+  EXPECT_FALSE(b.sample(Vec3(0, 0, 1), 0.5f, Vec2{0.5f, 0.5f}, &s));
+  float pdf = 1;
+  EXPECT_TRUE(is_black(b.eval(Vec3(0, 0, 1), Vec3(0, 0, 1), &pdf)));
+  EXPECT_EQ(pdf, 0.0f);
+
+  b.add(transparent(Spectrum(0.5f)));
+  EXPECT_EQ(b.count(), 1);
+  EXPECT_FALSE(b.has_non_delta());
+  EXPECT_EQ(b.flags(), uint32_t(kLobeSpecular | kLobeTransmission));
+  b.add(diffuse(0, Spectrum(0.8f, 0.2f, 0.1f)));
+  EXPECT_TRUE(b.has_non_delta());
+  EXPECT_EQ(b.flags(), uint32_t(kLobeSpecular | kLobeTransmission | kLobeDiffuse | kLobeReflection));
+  Spectrum a = b.albedo();
+  EXPECT_FLOAT_EQ(a.x, 1.0f);  // 0.5 + 0.8 clamped
+  EXPECT_FLOAT_EQ(a.y, 0.7f);
+  EXPECT_FLOAT_EQ(a.z, 0.6f);
+
+  for (int k = 0; k < kMaxLobes; ++k) b.add(diffuse());
+  EXPECT_EQ(b.count(), kMaxLobes);
+  EXPECT_TRUE(b.overflowed());
+  b.clear();
+  EXPECT_EQ(b.count(), 0);
+  EXPECT_FALSE(b.overflowed());
+
+  EXPECT_EQ(lobe_flags(glossy(0.5f)), uint32_t(kLobeGlossy | kLobeReflection));
+  EXPECT_EQ(lobe_flags(dielectric(0.5f, 1.5f)), uint32_t(kLobeGlossy | kLobeReflection | kLobeTransmission));
+  EXPECT_EQ(lobe_flags(dielectric(0.5f, 1.0f)), uint32_t(kLobeSpecular | kLobeReflection | kLobeTransmission));
+  EXPECT_EQ(lobe_flags(glossy(0.5f * kSmoothAlpha)), uint32_t(kLobeSpecular | kLobeReflection));
+}
+
+// Reference values of the lobes against closed forms.
+TEST(BsdfValues, ClosedForms) {
+  Vec3 wo = from_angles(30, 0), wi = from_angles(50, 180);
+  // Lambert.
+  EXPECT_NEAR(lobe_eval(diffuse(0, Spectrum(0.5f)), wo, wi).x, 0.5f * kInvPi, 1e-7f);
+  EXPECT_TRUE(is_black(lobe_eval(diffuse(0), wo, -wi)));
+  // Oren-Nayar as Cycles: s = wi.wo - cos cos (negative here, opposite azimuths), t = 1.
+  float sigma = 0.7f;
+  float a = 1 / (kPi + (kPi / 2 - 2.0f / 3.0f) * sigma), b = sigma * a;
+  float s = dot(wi, wo) - wi.z * wo.z;
+  EXPECT_NEAR(lobe_eval(diffuse(sigma), wo, wi).x, a + b * s, 1e-6f);
+  Vec3 wi2 = from_angles(50, 20);
+  float s2 = (dot(wi2, wo) - wi2.z * wo.z) / std::max(wi2.z, wo.z);
+  EXPECT_NEAR(lobe_eval(diffuse(sigma), wo, wi2).x, a + b * s2, 1e-6f);
+  // GGX at the mirror configuration: m = n, D = 1 / (pi alpha^2).
+  float alpha = 0.2f;
+  Vec3 m(0, 0, 1);
+  EXPECT_NEAR(ggx_D(m, alpha), 1 / (kPi * alpha * alpha), 1e-3f);
+  auto g1 = [&](const Vec3& w) {
+    float t2 = (1 - w.z * w.z) / (w.z * w.z);
+    return 2 / (1 + std::sqrt(1 + alpha * alpha * t2));
+  };
+  EXPECT_NEAR(ggx_G1(wo, alpha), g1(wo), 1e-6f);
+  float f_expect = ggx_D(m, alpha) * g1(wo) * g1(mirror(wo)) / (4 * wo.z * wo.z);
+  EXPECT_NEAR(lobe_eval(glossy(alpha), wo, mirror(wo)).x, f_expect, 1e-4f * f_expect);
+  EXPECT_NEAR(lobe_pdf(glossy(alpha), wo, mirror(wo)), ggx_D(m, alpha) * g1(wo) / (4 * wo.z), 1e-3f);
+}
+
+}  // namespace
+}  // namespace lt
