@@ -222,6 +222,7 @@ class RenderSettings(ctypes.Structure):
         ("max_camera_length", ctypes.c_int),
         ("max_light_length", ctypes.c_int),
         ("mis_heuristic", ctypes.c_int),
+        ("strategy_view_depth", ctypes.c_int),
     ]
 
 
@@ -278,6 +279,8 @@ def _declare(lib):
         "lt_render_wait": ([render_p], c_int),
         "lt_pass_channels": ([c_int], c_int),
         "lt_render_read_pass": ([render_p, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_strategy_grid": ([render_p, _f_p, ctypes.c_size_t, ctypes.POINTER(c_int),
+                                          ctypes.POINTER(c_int)], c_int),
         "lt_render_destroy": ([render_p], None),
         "lt_render_write_exr": ([render_p, c_char_p], c_int),
     }
@@ -581,6 +584,17 @@ class Render:
         _check(self._lib.lt_render_read_pass(self.handle, int(pass_id), _fptr(out), out.size),
                "lt_render_read_pass")
         return out
+
+    def read_strategy_grid(self):
+        """The BDPT strategy view of a stopped render: float32 array (height, width, 3), rows
+        bottom to top; rows are path depths (0 at the top), columns s = 0, 1, ..."""
+        w, h = ctypes.c_int(), ctypes.c_int()
+        _check(self._lib.lt_render_read_strategy_grid(self.handle, None, 0, ctypes.byref(w), ctypes.byref(h)),
+               "lt_render_read_strategy_grid")
+        out = np.empty(w.value * h.value * 3, dtype=np.float32)
+        _check(self._lib.lt_render_read_strategy_grid(self.handle, _fptr(out), out.size, ctypes.byref(w),
+                                                      ctypes.byref(h)), "lt_render_read_strategy_grid")
+        return out.reshape(h.value, w.value, 3)
 
     def write_exr(self, path):
         _check(self._lib.lt_render_write_exr(self.handle, os.fsencode(path)), "lt_render_write_exr")

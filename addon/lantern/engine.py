@@ -72,7 +72,32 @@ def render_settings(scene, width, height, border):
         transparent_background=int(scene.render.film_transparent),
         max_camera_length=lt.max_camera_length, max_light_length=lt.max_light_length,
         mis_heuristic=heuristics[lt.mis_heuristic],
+        strategy_view_depth=lt.strategy_view_depth if lt.integrator == 'BIDIRECTIONAL' else 0,
     )
+
+
+# What the last render did (status and settings, and the BDPT strategy view when asked for):
+# for scripts and benchmarks.
+LAST_RENDER = {}
+
+STRATEGY_IMAGE = "Lantern Strategies"
+
+
+def _show_strategies():
+    grid = LAST_RENDER.get("strategies")
+    if grid is None:
+        return None
+    h, w, _ = grid.shape
+    image = bpy.data.images.get(STRATEGY_IMAGE)
+    if image is None or tuple(image.size) != (w, h):
+        if image is not None:
+            bpy.data.images.remove(image)
+        image = bpy.data.images.new(STRATEGY_IMAGE, w, h, alpha=True, float_buffer=True)
+    rgba = np.ones((h, w, 4), dtype=np.float32)
+    rgba[..., :3] = grid
+    image.pixels.foreach_set(rgba.ravel())
+    image.update()
+    return None
 
 
 def _clock(seconds):
@@ -192,6 +217,13 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if st.state == core.STATE_FAILED and not failed:
                 self.report({'ERROR'}, "Lantern render failed")
             writer.write()  # all passes, whatever was rendered (cancelled: partial image)
+            LAST_RENDER.clear()
+            LAST_RENDER.update(stats=st, settings=render.settings)
+            if render.settings.strategy_view_depth > 0:
+                # bpy.data must not be touched from the render thread: the image is made on the
+                # main thread by a timer.
+                LAST_RENDER["strategies"] = render.read_strategy_grid()
+                bpy.app.timers.register(_show_strategies, first_interval=0.0)
             self.update_stats("", format_stats(st) + (" | Cancelled" if cancelled else ""))
             self.update_progress(1.0 if st.samples_total <= 0 else
                                  st.samples_done / st.samples_total)

@@ -44,6 +44,13 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
                     "paths find caustics and hard-to-reach light at a higher cost per sample",
         default=64, min=0, max=1024,
     )
+    strategy_view_depth: IntProperty(
+        name="Strategy View Depth",
+        description="Bidirectional: also keep the weighted contribution of every (s, t) strategy "
+                    "for path depths below this, shown as a grid in the image 'Lantern Strategies' "
+                    "(for debugging and teaching; costs memory per strategy image). 0 turns it off",
+        default=0, min=0, max=8,
+    )
     mis_heuristic: EnumProperty(
         name="MIS Heuristic",
         description="Bidirectional: how the connection strategies are weighted",

@@ -35,6 +35,7 @@ class LANTERN_RENDER_PT_sampling(LanternButtonsPanel, Panel):
             col.prop(settings, "max_camera_length", text="Max Camera Length")
             col.prop(settings, "max_light_length", text="Max Light Length")
             col.prop(settings, "mis_heuristic")
+            col.prop(settings, "strategy_view_depth")
         col = layout.column(align=True)
         col.prop(settings, "samples")
         col.prop(settings, "seed")

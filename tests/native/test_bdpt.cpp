@@ -295,3 +295,44 @@ TEST(Bdpt, NoHeapAllocationPerSample) {
   g_count_allocations = false;
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations while tracing 2000 samples";
 }
+
+// The strategy view's cells, summed, are the Combined image when the view covers every depth.
+TEST(Bdpt, StrategyViewSumsToImage) {
+  ScenePtr s = room(Lights::AreaAndSun);
+  const int size = 24, depth = 3;
+  lt_render_settings r = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 8, 9, 64);
+  r.max_bounces = 1;  // path depths s + t - 2 <= 2: all inside the view
+  r.strategy_view_depth = depth;
+  lt_render* render = nullptr;
+  check(lt_render_start(s.get(), &r, &render), "start");
+  RenderPtr guard(render);
+  check(lt_render_wait(render), "wait");
+  int gw = 0, gh = 0;
+  check(lt_render_read_strategy_grid(render, nullptr, 0, &gw, &gh), "grid size");
+  ASSERT_EQ(gw, (depth + 2) * size);
+  ASSERT_EQ(gh, depth * size);
+  std::vector<float> grid(size_t(gw) * gh * 3);
+  check(lt_render_read_strategy_grid(render, grid.data(), grid.size(), &gw, &gh), "grid");
+  Passes p = read_passes(render, size, size);
+  double worst = 0, total = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x)
+      for (int c = 0; c < 3; ++c) {
+        double sum = 0;
+        for (int row = 0; row < depth; ++row)
+          for (int col = 0; col < depth + 2; ++col)
+            sum += grid[(size_t(row * size + y) * gw + col * size + x) * 3 + c];
+        double v = p.rgba(x, y)[c];
+        worst = std::max(worst, std::abs(sum - v));
+        total += v;
+      }
+  EXPECT_GT(total, 0);
+  EXPECT_LT(worst, 1e-4 * std::max(1.0, total / (size * size * 3)));
+  // A render without the view has none to read.
+  lt_render_settings plain = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 1, 9, 64);
+  lt_render* r2 = nullptr;
+  check(lt_render_start(s.get(), &plain, &r2), "start");
+  RenderPtr guard2(r2);
+  check(lt_render_wait(r2), "wait");
+  EXPECT_EQ(lt_render_read_strategy_grid(r2, nullptr, 0, &gw, &gh), LT_ERROR_STATE);
+}

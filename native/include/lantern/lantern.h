@@ -211,6 +211,9 @@ typedef struct lt_render_settings {
    * path tracing with next-event estimation), and the MIS heuristic (lt_mis). */
   int max_camera_length, max_light_length;
   int mis_heuristic;
+  /* Bidirectional strategy view: keep each (s, t) strategy's weighted contribution for path
+   * depths s + t - 2 below this (0: off; at most 8). Read with lt_render_read_strategy_grid. */
+  int strategy_view_depth;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -255,6 +258,12 @@ LT_API int lt_pass_channels(int pass);
  * Blender's RenderResult stores them). Can be called while rendering: gives the samples
  * accumulated so far. */
 LT_API int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count);
+
+/* The strategy view of a finished (or cancelled) bidirectional render: a grid of RGB images of
+ * the region's size, (depth + 2) columns (s = 0, 1, ...) by `depth` rows (path depth s + t - 2,
+ * 0 at the top), rows bottom to top. With out == NULL only the grid's size is returned. */
+LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_count, int* width,
+                                        int* height);
 
 LT_API void lt_render_destroy(lt_render* render);
 

@@ -367,12 +367,22 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
             "resolution " + std::to_string(s->width) + "x" + std::to_string(s->height) + " is out of range (at most " +
                 std::to_string(kMaxDimension) + " per side and " + std::to_string(kMaxPixels) + " pixels)");
     require(s->samples > 0 && s->samples <= (1 << 24), "samples must be in [1, 16777216]");
+    bool full = s->border[0] == 0 && s->border[1] == 0 && s->border[2] == 0 && s->border[3] == 0;
     require(s->integrator >= 0 && s->integrator < LT_INTEGRATOR_COUNT,
             "unknown integrator " + std::to_string(s->integrator) + "; valid: PATH, BIDIRECTIONAL");
     require(s->integrator != LT_INTEGRATOR_BIDIRECTIONAL ||
                 (s->max_camera_length >= 1 && s->max_camera_length <= 1024 && s->max_light_length >= 0 &&
                  s->max_light_length <= 1024),
             "bidirectional path lengths must be in [1, 1024] (camera) and [0, 1024] (light)");
+    require(s->strategy_view_depth >= 0 && s->strategy_view_depth <= 8, "strategy view depth must be in [0, 8]");
+    if (s->integrator == LT_INTEGRATOR_BIDIRECTIONAL && s->strategy_view_depth > 0) {
+      long long region = (long long)(full ? s->width : s->border[1] - s->border[0]) *
+                         (full ? s->height : s->border[3] - s->border[2]);
+      long long cells = (long long)s->strategy_view_depth * (s->strategy_view_depth + 2);
+      require(region * cells * 6 <= (1LL << 28),
+              "the strategy view of " + std::to_string(cells) + " images at this resolution needs more than 1 GiB; "
+              "lower the depth or the resolution");
+    }
     require(s->mis_heuristic >= LT_MIS_POWER && s->mis_heuristic <= LT_MIS_UNIFORM,
             "unknown MIS heuristic " + std::to_string(s->mis_heuristic) + "; valid: POWER, BALANCE, UNIFORM");
     require(s->max_bounces >= 0 && s->diffuse_bounces >= 0 && s->glossy_bounces >= 0 && s->transmission_bounces >= 0 &&
@@ -387,7 +397,6 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     lt::RenderSettings rs;
     rs.width = s->width;
     rs.height = s->height;
-    bool full = s->border[0] == 0 && s->border[1] == 0 && s->border[2] == 0 && s->border[3] == 0;
     if (full) {
       rs.x0 = 0; rs.y0 = 0; rs.x1 = s->width; rs.y1 = s->height;
     } else {
@@ -411,6 +420,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.max_camera_length = s->max_camera_length;
     is.max_light_length = s->max_light_length;
     is.mis = lt::MisHeuristic(s->mis_heuristic);
+    is.strategy_depth = s->integrator == LT_INTEGRATOR_BIDIRECTIONAL ? s->strategy_view_depth : 0;
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;
@@ -463,6 +473,25 @@ int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_co
     require(float_count == need, "pass buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) +
                                      " are needed");
     film.read(lt::Pass(pass), out);
+  });
+}
+
+int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_count, int* width, int* height) {
+  return guarded([&] {
+    require(render && width && height, "lt_render_read_strategy_grid: NULL argument");
+    const lt::RenderJob& job = *render->job;
+    const int depth = job.settings().integrator_settings.strategy_depth;
+    if (depth <= 0) throw lt::StateError("this render has no strategy view (bidirectional with strategy_view_depth > 0)");
+    const int columns = lt::strategy_columns(depth);
+    *width = columns * job.region_width();
+    *height = depth * job.region_height();
+    if (!out) return;
+    if (job.status().state == lt::RenderState::Running)
+      throw lt::StateError("the strategy view can be read once the render has stopped");
+    size_t need = size_t(*width) * *height * 3;
+    require(float_count == need, "strategy grid buffer holds " + std::to_string(float_count) + " floats; " +
+                                     std::to_string(need) + " are needed");
+    job.film().read_strategy_grid(columns, depth, out);
   });
 }
 

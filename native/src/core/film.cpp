@@ -132,3 +132,28 @@ void Film::read(Pass pass, float* out) const {
 }
 
 }  // namespace lt
+
+namespace lt {
+
+void Film::read_strategy_grid(int columns, int rows, float* out) const {
+  const int gw = columns * width_;
+  const double splat_scale = light_paths_ ? 1.0 / double(light_paths_) : 0.0;
+  for (int d = 0; d < rows; ++d)
+    for (int s = 0; s < columns; ++s) {
+      const int cell = d * columns + s;
+      const int oy = (rows - 1 - d) * height_, ox = s * width_;
+      for (int y = 0; y < height_; ++y)
+        for (int x = 0; x < width_; ++x) {
+          const size_t i = size_t(y) * width_ + x;
+          const uint32_t n = accum_[i].count;
+          float* o = out + (size_t(oy + y) * gw + ox + x) * 3;
+          for (int k = 0; k < 3; ++k) {
+            double v = strategy_splats_[(i * strategy_cells_ + cell) * 3 + k] * splat_scale;
+            if (n) v += strategies_[(i * strategy_cells_ + cell) * 3 + k] / double(n);
+            o[k] = float(v);
+          }
+        }
+    }
+}
+
+}  // namespace lt

@@ -64,6 +64,26 @@ class Film {
     for (int k = 0; k < 3; ++k) splat_[3 * size_t(pixel) + k] += v[k];
   }
   void add_light_paths(uint64_t n) { light_paths_ += n; }
+  // BDPT's strategy view: per pixel, one RGB accumulator per strategy cell. Camera-side
+  // contributions are averaged over the pixel's samples, splats over the light paths.
+  void enable_strategies(int cells) {
+    strategy_cells_ = cells;
+    strategies_.assign(size_t(width_) * height_ * cells * 3, 0.0f);
+    strategy_splats_.assign(strategies_.size(), 0.0f);
+  }
+  int strategy_cells() const { return strategy_cells_; }
+  void add_strategies(int x, int y, const Spectrum* values) {
+    float* o = &strategies_[(size_t(y) * width_ + x) * strategy_cells_ * 3];
+    for (int c = 0; c < strategy_cells_; ++c)
+      for (int k = 0; k < 3; ++k) o[3 * c + k] += values[c][k];
+  }
+  void add_strategy_splat(uint32_t pixel, int cell, const Spectrum& v) {
+    float* o = &strategy_splats_[(size_t(pixel) * strategy_cells_ + cell) * 3];
+    for (int k = 0; k < 3; ++k) o[k] += v[k];
+  }
+  // The grid of strategy images: `columns` x `rows` cells of the region's size, RGB, rows bottom
+  // to top with depth 0 at the top. Only valid once rendering has stopped.
+  void read_strategy_grid(int columns, int rows, float* out) const;
   // Copies the accumulators to the published buffer readers use.
   void publish();
   // Resolves a pass of the published buffer: width*height*channels floats, rows bottom to top.
@@ -76,6 +96,8 @@ class Film {
   std::vector<PixelAccum> published_;
   std::vector<double> splat_, published_splat_;
   uint64_t light_paths_ = 0, published_light_paths_ = 0;
+  int strategy_cells_ = 0;
+  std::vector<float> strategies_, strategy_splats_;
   mutable std::mutex mutex_;
 };
 

@@ -19,7 +19,10 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
       settings_(s),
       camera_(scene.camera, s.width, s.height),
       filter_(s.filter, s.filter_width),
-      film_(s.x1 - s.x0, s.y1 - s.y0) {}
+      film_(s.x1 - s.x0, s.y1 - s.y0) {
+  const int depth = s.integrator_settings.strategy_depth;
+  if (s.integrator == IntegratorType::Bidirectional && depth > 0) film_.enable_strategies(depth * strategy_columns(depth));
+}
 
 RenderJob::~RenderJob() {
   cancel();
@@ -39,12 +42,22 @@ void RenderJob::render_pass(int sample_index) {
   if (settings_.integrator == IntegratorType::Bidirectional) {
     RenderContext ctx{scene_, camera_, filter_, settings_.integrator_settings,
                       settings_.x0, settings_.y0, film_.width(), film_.height()};
+    const int cells = film_.strategy_cells();
     render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>& splats) {
-      return trace_bdpt(ctx, cs, sampler, stats, splats);
+      if (!cells) return trace_bdpt(ctx, cs, sampler, stats, splats);
+      thread_local std::vector<Spectrum> strategies;
+      strategies.assign(size_t(cells), Spectrum(0.0f));
+      SampleValue v = trace_bdpt(ctx, cs, sampler, stats, splats, strategies.data());
+      if (is_finite(v.radiance))
+        film_.add_strategies(int(cs.pixel_center.x) - settings_.x0, int(cs.pixel_center.y) - settings_.y0, strategies.data());
+      return v;
     });
     // Merge the splats tile by tile in a fixed order (deterministic for any thread count).
     for (auto& list : tile_splats_) {
-      for (const Splat& sp : list) film_.add_splat(sp.pixel, sp.value);
+      for (const Splat& sp : list) {
+        film_.add_splat(sp.pixel, sp.value);
+        if (sp.strategy >= 0) film_.add_strategy_splat(sp.pixel, sp.strategy, sp.value);
+      }
       list.clear();
     }
     film_.add_light_paths(uint64_t(film_.width()) * film_.height());

@@ -47,7 +47,7 @@ class Bdpt {
         pixel_center_(cs.pixel_center),
         film_area_(ctx.camera.pixel_plane_area() * float(ctx.width) * float(ctx.height)) {}
 
-  SampleValue run(std::vector<Splat>& splats);
+  SampleValue run(std::vector<Splat>& splats, Spectrum* strategies);
   std::vector<float> weight_sums();
 
  private:
@@ -173,6 +173,15 @@ class Bdpt {
   Spectrum connect(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, int t);
   void splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats);
 
+  // Adds a strategy's weighted contribution to the sample and to the strategy view.
+  void add(const Spectrum& c, int s, int t) {
+    L_ += c;
+    if (strategies_) {
+      int cell = strategy_cell(s, t, s_.strategy_depth);
+      if (cell >= 0) strategies_[cell] += c;
+    }
+  }
+
   float heuristic(float r) const {
     switch (s_.mis) {
       case MisHeuristic::Power: return r * r;
@@ -195,6 +204,7 @@ class Bdpt {
   float film_area_;  // view-plane area of the render region at unit distance
   SampleValue out_;
   Spectrum L_{0.0f};
+  Spectrum* strategies_ = nullptr;
   int camera_count_ = 0;
 };
 
@@ -204,7 +214,7 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   const PathVertex& v = camera[t - 1];
   Spectrum c = v.beta * le;
   if (is_black(c)) return;
-  L_ += c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t);
+  add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t), 0, t);
 }
 
 int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vector<PathVertex>& path) {
@@ -291,7 +301,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
         out_.albedo = v.bsdf.albedo();
       }
       if (v.light >= 0) emitter_reached(path, count, le);
-      else if (!is_black(le)) L_ += beta * le;  // emission no light sampler knows: no MIS partner
+      else if (!is_black(le)) add(beta * le, 0, count);  // emission no light sampler knows: no MIS partner
     }
     if (++bounces >= max_depth || v.bsdf.count() == 0) break;
 
@@ -492,12 +502,14 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
       float w = mis_weight(light, camera, &z0, s, 1);
       Spectrum v = base * (h * w);
       if (is_finite(v) && !is_black(v))
-        splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v});
+        splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v,
+                          strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1});
     }
   pixel_center_ = own_center;
 }
 
-SampleValue Bdpt::run(std::vector<Splat>& splats) {
+SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
+  strategies_ = strategies;
   const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
   Scratch& sc = scratch(capacity);
   std::vector<PathVertex>& camera = sc.camera;
@@ -516,7 +528,7 @@ SampleValue Bdpt::run(std::vector<Splat>& splats) {
     for (int s = 1; s <= ns; ++s) {
       if (s + t - 2 > max_depth()) break;
       Spectrum c = connect(light, camera, s, t);
-      if (!is_black(c)) L_ += c;
+      if (!is_black(c)) add(c, s, t);
     }
   for (int s = 2; s <= ns; ++s)
     if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
@@ -600,9 +612,9 @@ std::vector<float> bdpt_mis_weight_sums(const RenderContext& ctx, const CameraSa
 }
 
 SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
-                       std::vector<Splat>& splats) {
+                       std::vector<Splat>& splats, Spectrum* strategies) {
   Bdpt b(ctx, cs, sampler, stats);
-  return b.run(splats);
+  return b.run(splats, strategies);
 }
 
 }  // namespace lt

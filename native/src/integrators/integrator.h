@@ -18,6 +18,9 @@ struct IntegratorSettings {
   // vertex count) and the MIS heuristic.
   int max_camera_length = 64, max_light_length = 64;
   MisHeuristic mis = MisHeuristic::Power;
+  // Bidirectional strategy view: weighted contributions of every (s, t) with path depth
+  // s + t - 2 < strategy_depth, laid out as a grid (0: off).
+  int strategy_depth = 0;
   int diffuse_bounces = 4, glossy_bounces = 4, transmission_bounces = 12, transparent_bounces = 8;
   float clamp_direct = 0, clamp_indirect = 0;  // 0: off
   bool transparent_background = false;
@@ -36,11 +39,20 @@ struct CameraSample {
   Vec2 pixel_center;  // the pixel being estimated (the filter can place `film` in a neighbour)
 };
 
-// A light-tracing contribution to a pixel of the render region (BDPT's t = 1).
+// A light-tracing contribution to a pixel of the render region (BDPT's t = 1), and its cell in
+// the strategy view (-1 when the view is off).
 struct Splat {
   uint32_t pixel;
   Spectrum value;
+  int32_t strategy = -1;
 };
+
+// The strategy view's grid: row = path depth d = s + t - 2, column = s (0 .. depth + 2 - 1).
+inline int strategy_columns(int depth) { return depth + 2; }
+inline int strategy_cell(int s, int t, int depth) {
+  int d = s + t - 2;
+  return d >= 0 && d < depth && s < strategy_columns(depth) ? d * strategy_columns(depth) + s : -1;
+}
 
 struct RenderContext {
   const Scene& scene;
@@ -52,8 +64,10 @@ struct RenderContext {
 
 // Bidirectional path tracing: one camera subpath and one light subpath per sample, every
 // connection strategy weighted by MIS; t = 1 contributions go to `splats`.
+// `strategies`, when not null, receives this sample's weighted contribution per strategy cell
+// (strategy_depth * strategy_columns entries, zeroed by the caller).
 SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
-                       std::vector<Splat>& splats);
+                       std::vector<Splat>& splats, Spectrum* strategies = nullptr);
 
 // For tests: runs one BDPT sample and, for every full path it connects (strategies s >= 1,
 // t >= 2), re-splits that path into every other strategy (s', t') that could have sampled it and
