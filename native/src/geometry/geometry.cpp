@@ -117,6 +117,14 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
   const int id = int(instances_.size());
   float det = inst.xf.determinant();
   inst.flipped = det < 0;
+  // Rows of the cofactor matrix, sign-corrected so that normals keep facing outwards.
+  for (int r = 0; r < 3; ++r) {
+    Vec3 e(r == 0, r == 1, r == 2);
+    Vec3 row = inst.xf.normal(e);  // column r of the normal matrix
+    inst.normal_rows[0][r] = row.x;
+    inst.normal_rows[1][r] = row.y;
+    inst.normal_rows[2][r] = row.z;
+  }
   instances_.push_back(inst);
   instance_visibility_.push_back(inst.visibility & 31u);
   if ((inst.visibility & 31u) != 31u) partial_visibility_ = true;
@@ -231,17 +239,16 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
   const Instance& inst = instances_[hit.instance];
   const Mesh& m = meshes_[inst.mesh];
   const int t = hit.primitive;
-  Vec3 p0, p1, p2;
-  triangle(hit.instance, t, &p0, &p1, &p2);
+  const Vec3& p0 = m.positions[m.indices[3 * t]];
+  const Vec3& p1 = m.positions[m.indices[3 * t + 1]];
+  const Vec3& p2 = m.positions[m.indices[3 * t + 2]];
   const float b1 = hit.u, b2 = hit.v, b0 = 1 - b1 - b2;
-  sp.p = p0 * b0 + p1 * b1 + p2 * b2;
-  Vec3 n = cross(p1 - p0, p2 - p0);
-  if (inst.flipped) n = -n;  // a mirroring transform reverses the winding, not the surface
-  sp.area = 0.5f * length(n);
-  sp.ng = normalize(n);
+  // Interpolate in object space, transform once.
+  sp.p = inst.xf.point(p0 * b0 + p1 * b1 + p2 * b2);
+  sp.ng = normalize(inst.normal_to_world(cross(p1 - p0, p2 - p0)));
   if (!m.corner_normals.empty()) {
     Vec3 ns = m.corner_normals[3 * t] * b0 + m.corner_normals[3 * t + 1] * b1 + m.corner_normals[3 * t + 2] * b2;
-    ns = normalize(inst.xf.normal(ns));
+    ns = normalize(inst.normal_to_world(ns));
     sp.ns = is_finite(ns) ? ns : sp.ng;
     if (dot(sp.ns, sp.ng) < 0) sp.ns = -sp.ns;  // keep the shading normal on the geometric side
   } else {

@@ -25,7 +25,6 @@ struct SurfacePoint {
   Vec2 uv;
   int material = -1;
   int instance = -1, primitive = -1;
-  float area = 0;  // world-space area of the triangle (for emissive triangles)
 };
 
 // Offsets a ray origin off a surface along the geometric normal by an amount that scales with the
