@@ -96,7 +96,7 @@ lt_render_settings settings(int integrator, int size, int samples, unsigned seed
   lt_render_settings r = render_settings(size, size, samples, seed);
   r.integrator = integrator;
   r.max_bounces = 8;
-  r.diffuse_bounces = r.glossy_bounces = r.transmission_bounces = 8;  // BDPT has no per-kind limits
+  r.diffuse_bounces = r.glossy_bounces = r.transmission_bounces = 8;
   r.max_light_length = light_length;
   r.max_camera_length = 64;
   return r;
@@ -194,8 +194,12 @@ TEST(Bdpt, FullBdptAgreesWithPathTracing) {
     ScenePtr s = room(lights, 0.5f);
     std::vector<TileMeans> pt, bd;
     for (int k = 0; k < K; ++k) {
-      Passes a = render(s.get(), settings(LT_INTEGRATOR_PATH, size, 48, 100 + k, 64));
-      Passes b = render(s.get(), settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 200 + k, 64));
+      // A diffuse limit below the total: BDPT must apply Cycles' per-kind limits as PT does.
+      lt_render_settings pa = settings(LT_INTEGRATOR_PATH, size, 48, 100 + k, 64);
+      lt_render_settings pb = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 200 + k, 64);
+      pa.diffuse_bounces = pb.diffuse_bounces = 2;
+      Passes a = render(s.get(), pa);
+      Passes b = render(s.get(), pb);
       ASSERT_EQ(a.first_non_finite(), "");
       ASSERT_EQ(b.first_non_finite(), "");
       pt.push_back(tile_means(a.combined, size, tile));

@@ -22,6 +22,19 @@ constexpr unsigned kVisLightRay = kVisDiffuse | kVisGlossy | kVisTransmission;
 
 enum class Mode { Radiance, Importance };
 
+// Bounce kinds, as Cycles limits them: a vertex counts as the kind of its BSDF's dominant lobe
+// (a property of the path, so every strategy of a path agrees on it and MIS stays consistent).
+enum Kind : uint8_t { kNone = 0, kDiffuse = 1, kGlossy = 2, kTransmission = 3 };
+uint8_t kind_of(const Bsdf& bsdf) {
+  uint32_t f = bsdf.dominant_flags();
+  if (!f || (f == (kLobeSpecular | kLobeTransmission) && bsdf.count() > 0 &&
+             bsdf.lobe(0).type == LobeType::Transparent))
+    return kNone;
+  if (f & kLobeTransmission) return kTransmission;
+  if (f & kLobeDiffuse) return kDiffuse;
+  return kGlossy;
+}
+
 unsigned visibility_of(uint32_t lobe) {
   if (lobe & kLobeTransmission) return kVisTransmission;
   if (lobe & kLobeDiffuse) return kVisDiffuse;
@@ -191,6 +204,21 @@ class Bdpt {
     return r;
   }
   int max_depth() const { return s_.max_bounces + 1; }  // s + t - 2: the path tracer's limit
+  // The path tracer's per-kind limits: it scatters at every vertex but the last before the light,
+  // so those vertices' kinds are counted (the last one's is free).
+  bool within_kind_limits(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s,
+                          int t) const {
+    int n[4] = {0, 0, 0, 0};
+    for (int i = 1; i < t; ++i)
+      if (camera[i].type == VertexType::Surface) ++n[camera[i].kind];
+    for (int i = 1; i < s; ++i)
+      if (light[i].type == VertexType::Surface) ++n[light[i].kind];
+    // The scattering vertex next to the light end.
+    const PathVertex* last = s >= 2 ? &light[1] : (s == 1 ? &camera[t - 1] : (t >= 3 ? &camera[t - 2] : nullptr));
+    if (last && last->type == VertexType::Surface) --n[last->kind];
+    return n[kDiffuse] <= s_.diffuse_bounces && n[kGlossy] <= s_.glossy_bounces &&
+           n[kTransmission] <= s_.transmission_bounces;
+  }
   int camera_depth() const { return std::min(s_.max_camera_length, s_.max_bounces + 2); }
 
   const RenderContext& ctx_;
@@ -210,7 +238,7 @@ class Bdpt {
 
 // Adds the s = 0 strategy for a camera subpath whose vertex t - 1 is on an emitter.
 void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le) {
-  if (t - 2 > max_depth() || is_black(le)) return;
+  if (t - 2 > max_depth() || is_black(le) || !within_kind_limits(camera, camera, 0, t)) return;
   const PathVertex& v = camera[t - 1];
   Spectrum c = v.beta * le;
   if (is_black(c)) return;
@@ -292,6 +320,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
     const Material& material = scene_.material(sp.material);
     Spectrum le = material.evaluate(scene_.images, sp.uv, backface, &v.bsdf);
     v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
+    v.kind = kind_of(v.bsdf);
     ++count;
     if (mode == Mode::Radiance) {
       if (count == 2) {
@@ -419,6 +448,7 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
 Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, int t) {
   PathVertex& pt = camera[t - 1];
   if (pt.type != VertexType::Surface || !pt.bsdf.has_non_delta()) return Spectrum(0.0f);
+  if (!within_kind_limits(light, camera, s, t)) return Spectrum(0.0f);
   if (s == 1) {
     // A fresh light sample at the camera vertex: exactly the path tracer's next-event estimation.
     float pmf, u_remapped;
@@ -472,6 +502,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
 void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats) {
   const PathVertex& qs = light[s - 1];
   if (qs.type != VertexType::Surface || !qs.bsdf.has_non_delta()) return;
+  if (!within_kind_limits(light, camera, s, 1)) return;
   const Camera& cam = ctx_.camera;
   Vec2 film;
   Vec3 dir;

@@ -21,6 +21,7 @@ struct PathVertex {
   bool delta = false;     // reached by sampling a delta lobe, or a delta light/camera position
   bool infinite = false;  // sun or world light vertex: a direction rather than a point
   int light = -1;         // light index: Light vertices, and Surface vertices on emissive meshes
+  uint8_t kind = 0;       // bounce kind for Cycles' per-kind limits (see bdpt.cpp), 0: uncounted
   Spectrum beta{1.0f};    // throughput of the subpath up to and including this vertex
   float pdf_fwd = 0;      // density of sampling this vertex from its predecessor
   float pdf_rev = 0;      // density of sampling it from its successor (the other direction)

@@ -393,6 +393,16 @@ void Bsdf::add(const Lobe& lobe) {
   lobes_[count_++] = lobe;
 }
 
+uint32_t Bsdf::dominant_flags() const {
+  int best = -1;
+  float w = -1;
+  for (int i = 0; i < count_; ++i) {
+    float wi = selection_weight(i);
+    if (wi > w) { w = wi; best = i; }
+  }
+  return best >= 0 ? lobe_flags(lobes_[best]) : 0u;
+}
+
 float Bsdf::selection_weight(int i) const { return selection_estimate(lobes_[i], Vec3(0, 0, 1)); }
 
 Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf) const {

@@ -77,6 +77,9 @@ class Bsdf {
   Spectrum albedo() const;
   uint32_t flags() const;  // union of lobe flags
   bool has_non_delta() const;
+  // Flags of the lobe with the largest selection weight (0 without lobes): how a bidirectional
+  // path classifies this vertex for Cycles' per-kind bounce limits.
+  uint32_t dominant_flags() const;
 
  private:
   float selection_weight(int i) const;

@@ -1,0 +1,119 @@
+#include "scene/majorant_grid.h"
+
+namespace lt {
+
+MajorantGrid::MajorantGrid(const int lo[3], const int hi[3], int cell) : cell_(std::max(1, cell)) {
+  for (int a = 0; a < 3; ++a) {
+    lo_[a] = lo[a];
+    hi_[a] = std::max(hi[a], lo[a] + 1);
+    res_[a] = std::max(1, (hi_[a] - lo_[a] + cell_ - 1) / cell_);
+  }
+  values_.assign(size_t(res_[0]) * res_[1] * res_[2], 0.0f);
+}
+
+void MajorantGrid::add_voxels(const int a[3], const int b[3], float v) {
+  if (!(v > 0)) return;  // the density is clamped to >= 0, so 0 is every cell's floor
+  int c0[3], c1[3];
+  for (int k = 0; k < 3; ++k) {
+    // Voxel x lies in the footprint of cells c with c*C <= x - lo <= (c+1)*C.
+    long lo = std::max<long>(a[k], lo_[k]) - lo_[k], hi = std::min<long>(b[k], hi_[k]) - lo_[k];
+    if (hi < lo) return;
+    c0[k] = int(std::max<long>(0, (lo + cell_ - 1) / cell_ - 1));
+    c1[k] = int(std::min<long>(res_[k] - 1, hi / cell_));
+  }
+  for (int z = c0[2]; z <= c1[2]; ++z)
+    for (int y = c0[1]; y <= c1[1]; ++y)
+      for (int x = c0[0]; x <= c1[0]; ++x) {
+        float& m = values_[(size_t(z) * res_[1] + y) * res_[0] + x];
+        m = std::max(m, v);
+      }
+}
+
+void MajorantGrid::raise_cell(int x, int y, int z, float v) {
+  float& m = values_[(size_t(z) * res_[1] + y) * res_[0] + x];
+  m = std::max(m, v);
+}
+
+void MajorantGrid::raise_all(float v) {
+  for (float& m : values_) m = std::max(m, v);
+}
+
+float MajorantGrid::value_at(const Vec3& p) const {
+  int c[3];
+  for (int a = 0; a < 3; ++a) c[a] = clamp(int(std::floor((p[a] - lo_[a]) / cell_)), 0, res_[a] - 1);
+  return cell_value(c[0], c[1], c[2]);
+}
+
+float MajorantGrid::max_value() const {
+  float m = 0;
+  for (float v : values_) m = std::max(m, v);
+  return m;
+}
+
+bool MajorantGrid::clip(const Vec3& o, const Vec3& d, float* t0, float* t1) const {
+  float a = *t0, b = *t1;
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0) {
+      if (o[k] < lo_[k] || o[k] > hi_[k]) return false;
+      continue;
+    }
+    float inv = 1.0f / d[k];
+    float tn = (lo_[k] - o[k]) * inv, tf = (hi_[k] - o[k]) * inv;
+    if (tn > tf) std::swap(tn, tf);
+    a = std::max(a, tn);
+    b = std::min(b, tf);
+  }
+  if (!(a < b)) return false;
+  *t0 = a;
+  *t1 = b;
+  return true;
+}
+
+MajorantGrid::Iterator MajorantGrid::traverse(const Vec3& o, const Vec3& d, float t0, float t1) const {
+  Iterator it;
+  if (!valid() || !clip(o, d, &t0, &t1)) return it;
+  it.grid_ = this;
+  it.t_ = t0;
+  it.t_end_ = t1;
+  it.done_ = false;
+  const Vec3 p = o + d * t0;
+  for (int a = 0; a < 3; ++a) {
+    // Position and direction in cell units relative to the domain's corner.
+    float q = (p[a] - lo_[a]) / cell_, v = d[a] / cell_;
+    it.cell_[a] = clamp(int(std::floor(q)), 0, res_[a] - 1);
+    if (v > 0) {
+      it.step_[a] = 1;
+      it.t_delta_[a] = 1 / v;
+      it.t_next_[a] = t0 + std::max(0.0f, (it.cell_[a] + 1 - q) / v);
+    } else if (v < 0) {
+      it.step_[a] = -1;
+      it.t_delta_[a] = -1 / v;
+      it.t_next_[a] = t0 + std::max(0.0f, (it.cell_[a] - q) / v);
+    } else {
+      it.step_[a] = 0;
+      it.t_delta_[a] = INFINITY;
+      it.t_next_[a] = INFINITY;
+    }
+  }
+  return it;
+}
+
+bool MajorantGrid::Iterator::next(MajorantSegment* seg) {
+  if (done_) return false;
+  int axis = t_next_[0] < t_next_[1] ? (t_next_[0] < t_next_[2] ? 0 : 2) : (t_next_[1] < t_next_[2] ? 1 : 2);
+  float tb = std::min(t_next_[axis], t_end_);
+  seg->t0 = t_;
+  seg->t1 = std::max(t_, tb);
+  seg->value = grid_->cell_value(cell_[0], cell_[1], cell_[2]);
+  t_ = seg->t1;
+  if (tb >= t_end_) {
+    done_ = true;
+  } else {
+    cell_[axis] += step_[axis];
+    if (cell_[axis] < 0 || cell_[axis] >= grid_->res_[axis]) done_ = true;
+    t_next_[axis] += t_delta_[axis];
+  }
+  return true;
+}
+
+}  // namespace lt

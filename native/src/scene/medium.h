@@ -1,0 +1,161 @@
+// Participating media: homogeneous (closed form) and heterogeneous (a voxel density grid times
+// coefficients per unit density), with transmittance estimation and free-flight distance sampling.
+//
+// Heterogeneous estimators (select per call with VolumeEstimator):
+//  * RayMarching (biased, deterministic): midpoint quadrature of sigma_t with a fixed step,
+//    starting where the ray enters the grid's domain; distance sampling accumulates optical depth
+//    in the same steps up to tau = -ln(1 - u) and reverts linearly inside the last step (sigma_t is
+//    taken as constant within a step, so the revert is exact for the marched field).
+//  * Tracking (unbiased): ratio tracking for transmittance (Novak et al. 2014) and delta tracking
+//    for distances (Woodcock et al. 1965), generalised to chromatic media as spectral tracking
+//    (Kutz et al. 2017). The majorant is piecewise constant: a coarse grid of per-cell maxima of
+//    the interpolated density (scene/majorant_grid.h), traversed by 3D DDA, not one global maximum.
+// Homogeneous media always use the closed forms, whatever the estimator.
+//
+// Conventions the caller must follow (pbrt-v3's):
+//  * Ray parameters t are those of `ray` (world position ray.o + t ray.d); ray.d need not be unit
+//    length: coefficients are per world unit and are scaled by |ray.d| internally.
+//  * transmittance() returns an estimate of T(t0, t1) per RGB channel (exact for homogeneous media
+//    and deterministic for ray marching; unbiased, possibly 0 or > 1, for ratio tracking).
+//  * sample_distance(): multiply the path throughput by out->weight in BOTH cases.
+//      - true  = a real collision at out->t (scattering or absorption is not split: the weight
+//        already carries sigma_s): weight = sigma_s(t) T(t0, t) / pdf(t). The caller then
+//        scatters with the phase function (NEE and phase sampling) WITHOUT multiplying sigma_s
+//        again. Grey media give weight = albedo sigma_s / sigma_t.
+//      - false = no collision before t1: weight = T(t0, t1) / P(no collision), 1 for grey media; the
+//        caller continues to the surface (or boundary) at t1.
+//    pdf and P use the channel-averaged (one-sample MIS, balance heuristic) densities for
+//    homogeneous media and ray marching, and spectral tracking's weights for tracking, so that
+//    every RGB channel's expectation is exact even when sigma_t differs per channel.
+//  * Work is bounded: a tracking call stops after kMaxTrackingSteps tentative collisions (then
+//    transmittance returns 0 and distance sampling forces a collision at the current point with
+//    weight (current weight) x albedo; both are biased but happen only when the majorant's optical
+//    depth over the segment exceeds ~kMaxTrackingSteps; counted in capped_calls()). Ray marching
+//    takes at most kMaxMarchingSteps steps per call, enlarging the step if the segment needs more.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+#include "core/sampling.h"
+#include "scene/majorant_grid.h"
+#include "scene/phase.h"
+
+namespace lt {
+
+enum class VolumeEstimator { RayMarching, Tracking };
+
+// A scalar voxel grid in index space: voxel centres at integer index coordinates, values
+// interpolated trilinearly between them (Cycles' convention), clamped to >= 0. Either a NanoVDB
+// float grid (from io/vdb.h) or a dense array.
+struct GridData {
+  std::string name;
+  Transform index_to_object;  // index space -> object space (the VDB's linear transform)
+  int index_min[3] = {0, 0, 0}, index_max[3] = {-1, -1, -1};  // inclusive bounds of non-background voxels
+  uint64_t active_voxels = 0;                                  // VDB: active voxels; dense: non-zero voxels
+  float background = 0;
+
+  // NanoVDB storage: nano_owner keeps the buffer alive (a nanovdb::GridHandle<HostBuffer>, type
+  // erased so that this header needs no NanoVDB), nano_grid points at the nanovdb::FloatGrid in it.
+  std::shared_ptr<void> nano_owner;
+  const void* nano_grid = nullptr;
+  size_t nano_bytes = 0;
+
+  // Dense storage: value (i, j, k) at dense[(k * dims[1] + j) * dims[0] + i], index coordinates
+  // (i, j, k); zero outside.
+  std::vector<float> dense;
+  int dims[3] = {0, 0, 0};
+
+  // Throws InvalidArgument for non-positive dimensions, a size mismatch or non-finite values.
+  static GridData from_dense(std::vector<float> values, int nx, int ny, int nz,
+                             const Transform& index_to_object = Transform(), std::string name = "density");
+
+  bool empty() const { return index_max[0] < index_min[0]; }
+  bool is_nanovdb() const { return nano_grid != nullptr; }
+  float voxel(int i, int j, int k) const;     // the stored value (background / 0 outside)
+  float interpolate(const Vec3& p) const;      // trilinear at an index-space point, clamped >= 0
+  size_t memory_bytes() const;                 // NanoVDB buffer or dense array
+};
+
+// Inverse of an affine transform; throws InvalidArgument if its linear part is singular.
+Transform affine_inverse(const Transform& t);
+
+struct MediumInteraction {
+  float t = 0;             // ray parameter of the collision
+  Vec3 p;                  // world position ray.o + t ray.d
+  Spectrum sigma_s{0.0f};  // scattering coefficient at p, per world unit (informational: already in weight)
+  Spectrum weight{1.0f};   // throughput factor; see the conventions above
+  int steps = 0;           // marching steps or tentative collisions taken (statistics)
+};
+
+class Medium {
+ public:
+  static constexpr int kMaxTrackingSteps = 1 << 16;
+  static constexpr int kMaxMarchingSteps = 1 << 16;
+  static constexpr int kDefaultMajorantCell = 8;  // voxels per majorant cell edge
+
+  Medium() = default;  // vacuum: empty()
+  Medium(const Medium& o);
+  Medium& operator=(const Medium& o);
+
+  // sigma_a, sigma_s per world unit; g is the Henyey-Greenstein anisotropy.
+  static Medium homogeneous(const Spectrum& sigma_a, const Spectrum& sigma_s, float g);
+  // sigma_a, sigma_s per world unit and per unit density; the grid's index space maps to world by
+  // object_to_world * grid.index_to_object. Builds the majorant grid (cells of `majorant_cell`
+  // voxels per edge). Throws InvalidArgument for a null grid, negative or non-finite coefficients,
+  // or a singular transform.
+  static Medium heterogeneous(std::shared_ptr<const GridData> grid, const Spectrum& sigma_a, const Spectrum& sigma_s,
+                              float g, const Transform& object_to_world = Transform(),
+                              int majorant_cell = kDefaultMajorantCell);
+
+  bool is_homogeneous() const { return !grid_; }
+  // True if the medium has no effect on light (sigma_t == 0 everywhere): callers can skip it.
+  bool empty() const { return empty_; }
+  // World-space bounds of the region where sigma_t can be non-zero; false if unbounded
+  // (homogeneous media are bounded by their mesh, not by the medium).
+  bool bounds(Vec3* lo, Vec3* hi) const;
+  // Clips [*t0, *t1] to the region where sigma_t can be non-zero; false if nothing is left.
+  bool clip(const Ray& ray, float* t0, float* t1) const;
+
+  Spectrum transmittance(const Ray& ray, float t0, float t1, Sampler& s, VolumeEstimator e, float step) const;
+  bool sample_distance(const Ray& ray, float t0, float t1, Sampler& s, VolumeEstimator e, float step,
+                       MediumInteraction* out) const;
+
+  const PhaseHG& phase() const { return phase_; }
+  // Coefficients at a world point (exact lookups; for tests and quadrature).
+  Spectrum sigma_t(const Vec3& p) const { return (sigma_a_ + sigma_s_) * density(p); }
+  Spectrum sigma_s(const Vec3& p) const { return sigma_s_ * density(p); }
+  float density(const Vec3& p) const;  // 1 for homogeneous media
+  const Spectrum& sigma_a_unit() const { return sigma_a_; }
+  const Spectrum& sigma_s_unit() const { return sigma_s_; }
+  // Smallest world-space edge of a voxel (0 for homogeneous media): the default ray-marching
+  // step (a step <= 0 or NaN passed to the estimators means this), as Cycles' step rate 1.
+  float voxel_size() const { return voxel_size_; }
+  const MajorantGrid& majorant_grid() const { return majorant_; }
+  const Transform& world_to_index() const { return world_to_index_; }
+  std::shared_ptr<const GridData> grid() const { return grid_; }
+  // Bytes held for this medium's grid: NanoVDB buffer (or dense array) + majorant grid.
+  size_t memory_bytes() const;
+  // Calls that hit kMaxTrackingSteps (see the conventions above).
+  uint64_t capped_calls() const { return capped_.load(std::memory_order_relaxed); }
+
+ private:
+  void count_capped() const { capped_.fetch_add(1, std::memory_order_relaxed); }
+
+  Spectrum sigma_a_{0.0f}, sigma_s_{0.0f};
+  PhaseHG phase_;
+  bool empty_ = true;
+  std::shared_ptr<const GridData> grid_;
+  Transform world_to_index_;
+  MajorantGrid majorant_;
+  float voxel_size_ = 0;
+  mutable std::atomic<uint64_t> capped_{0};
+
+  friend struct MediumAccess;
+};
+
+}  // namespace lt

@@ -1,0 +1,316 @@
+"""Rendering and image helpers for the Blender tests (run inside Blender's Python).
+
+Images are numpy float32 arrays shaped (height, width, channels), rows from the TOP of the image
+(as OpenEXR stores them; Blender's Image.pixels and the core's pass buffers go bottom to top).
+
+A render is written to a 32-bit float multilayer OpenEXR and read back with the small reader below
+(NONE, ZIPS, ZIP codecs; HALF/FLOAT/UINT channels), so every pass of one render comes back at once.
+Blender writes scene-linear values to EXR whatever the view transform; test_harness.py checks the
+reader against bpy.data.images.load and the linearity against an emission plane of strength 1.
+"""
+import math
+import os
+import struct
+import tempfile
+import time
+import zlib
+
+import numpy as np
+
+import bpy
+
+CYCLES = "CYCLES"
+LANTERN = "LANTERN"
+
+# ----------------------------------------------------------------------------------------------
+# OpenEXR (scanline, single part) reader
+# ----------------------------------------------------------------------------------------------
+_EXR_MAGIC = 20000630
+_LINES_PER_BLOCK = {0: 1, 2: 1, 3: 16}  # NONE, ZIPS, ZIP
+_DTYPES = {0: np.dtype("<u4"), 1: np.dtype("<f2"), 2: np.dtype("<f4")}
+
+
+def _read_header(data):
+    magic, version = struct.unpack_from("<ii", data, 0)
+    if magic != _EXR_MAGIC:
+        raise ValueError("not an OpenEXR file")
+    if version & 0x1A00:  # tiled, deep or multi-part
+        raise ValueError("only single-part scanline OpenEXR is supported (version flags %#x)" % version)
+    pos = 8
+    header = {}
+    while data[pos] != 0:
+        end = data.index(b"\0", pos)
+        name = data[pos:end].decode()
+        pos = end + 1
+        end = data.index(b"\0", pos)
+        typ = data[pos:end].decode()
+        pos = end + 1
+        (size,) = struct.unpack_from("<i", data, pos)
+        pos += 4
+        header[name] = (typ, data[pos:pos + size])
+        pos += size
+    return header, pos + 1
+
+
+def _parse_channels(raw):
+    channels, pos = [], 0
+    while raw[pos] != 0:
+        end = raw.index(b"\0", pos)
+        name = raw[pos:end].decode()
+        pixel_type, _plinear, xs, ys = struct.unpack_from("<iB3xii", raw, end + 1)
+        if xs != 1 or ys != 1:
+            raise ValueError("subsampled channels are not supported")
+        channels.append((name, pixel_type))
+        pos = end + 1 + 16
+    return channels
+
+
+def _unzip(block, expected):
+    if len(block) == expected:  # the writer stores a block raw when compression does not help
+        return np.frombuffer(block, np.uint8)
+    t = np.frombuffer(zlib.decompress(block), np.uint8).astype(np.int64)
+    if t.size != expected:
+        raise ValueError("bad ZIP block size")
+    t[1:] -= 128
+    t = (np.cumsum(t) & 0xFF).astype(np.uint8)  # undo the predictor
+    out = np.empty_like(t)
+    half = (t.size + 1) // 2
+    out[0::2] = t[:half]  # undo the byte interleave
+    out[1::2] = t[half:]
+    return out
+
+
+def read_exr(path):
+    """All channels of an OpenEXR file: {channel name: float32 array (h, w)}, rows top first."""
+    with open(path, "rb") as f:
+        data = f.read()
+    header, pos = _read_header(data)
+    channels = sorted(_parse_channels(header["channels"][1]), key=lambda c: c[0])
+    compression = header["compression"][1][0]
+    if compression not in _LINES_PER_BLOCK:
+        raise ValueError("unsupported EXR compression %d (use NONE, ZIPS or ZIP)" % compression)
+    xmin, ymin, xmax, ymax = struct.unpack("<4i", header["dataWindow"][1])
+    width, height = xmax - xmin + 1, ymax - ymin + 1
+    lines = _LINES_PER_BLOCK[compression]
+    nblocks = (height + lines - 1) // lines
+    offsets = struct.unpack_from("<%dQ" % nblocks, data, pos)
+    out = {name: np.zeros((height, width), np.float32) for name, _ in channels}
+    for off in offsets:
+        y, size = struct.unpack_from("<ii", data, off)
+        block = data[off + 8:off + 8 + size]
+        y0 = y - ymin
+        n = min(lines, height - y0)
+        expected = n * width * sum(_DTYPES[t].itemsize for _, t in channels)
+        buf = np.frombuffer(block, np.uint8) if compression == 0 else _unzip(block, expected)
+        p = 0
+        for row in range(n):
+            for name, t in channels:
+                nbytes = width * _DTYPES[t].itemsize
+                out[name][y0 + row] = np.frombuffer(buf[p:p + nbytes].tobytes(), _DTYPES[t])
+                p += nbytes
+    return out
+
+
+_CHANNEL_ORDERS = ("RGBA", "XYZW", "UVA")
+
+
+def _order_key(chans):
+    for order in _CHANNEL_ORDERS:
+        if set(chans) <= set(order):
+            return order.index
+    return None
+
+
+def read_multilayer_exr(path):
+    """Passes of a Blender multilayer EXR: {pass name: float32 array (h, w, c)}.
+
+    Channels are named "ViewLayer.Pass.C"; the view layer part is dropped (one layer per render),
+    a plain EXR's "R", "G", "B", "A" channels come back as the pass "Combined". Channels are
+    ordered RGBA / XYZW / UVA when their letters fit, else alphabetically."""
+    chans = read_exr(path)
+    groups = {}
+    for name, arr in chans.items():
+        parts = name.split(".")
+        pass_name = parts[-2] if len(parts) >= 2 else "Combined"
+        groups.setdefault(pass_name, {})[parts[-1]] = arr
+    passes = {}
+    for pass_name, cs in groups.items():
+        names = list(cs)
+        key = _order_key(names)
+        names.sort(key=key) if key else names.sort()
+        passes[pass_name] = np.stack([cs[c] for c in names], axis=-1)
+    return passes
+
+
+def load_image_pixels(path):
+    """An image file through Blender's own loader: float32 (h, w, 4), rows top first."""
+    img = bpy.data.images.load(path, check_existing=False)
+    try:
+        w, h = img.size
+        px = np.empty(w * h * 4, np.float32)
+        img.pixels.foreach_get(px)
+        return px.reshape(h, w, 4)[::-1].copy()
+    finally:
+        bpy.data.images.remove(img)
+
+
+# ----------------------------------------------------------------------------------------------
+# PNG preview writer (no dependencies): for looking at renders
+# ----------------------------------------------------------------------------------------------
+def to_srgb8(img, exposure=0.0):
+    x = np.clip(np.asarray(img, np.float64)[..., :3] * (2.0 ** exposure), 0.0, 1.0)
+    x = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    return (x * 255 + 0.5).astype(np.uint8)
+
+
+def write_png(path, img, exposure=0.0):
+    """Writes a linear (h, w, >=3) image (rows top first) as an 8-bit sRGB PNG."""
+    rgb = to_srgb8(img, exposure)
+    h, w, _ = rgb.shape
+    raw = b"".join(b"\0" + rgb[y].tobytes() for y in range(h))
+
+    def chunk(tag, payload):
+        c = struct.pack(">I", len(payload)) + tag + payload
+        return c + struct.pack(">I", zlib.crc32(tag + payload) & 0xFFFFFFFF)
+
+    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+    png += chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b"")
+    with open(path, "wb") as f:
+        f.write(png)
+
+
+# ----------------------------------------------------------------------------------------------
+# Rendering
+# ----------------------------------------------------------------------------------------------
+def engine_registered(idname=LANTERN):
+    return any(getattr(c, "bl_idname", None) == idname for c in bpy.types.RenderEngine.__subclasses__())
+
+
+# Cycles settings that the Lantern settings mirror (same names where the add-on has them).
+_BOUNCES = {
+    "max_bounces": "max_bounces",
+    "diffuse_bounces": "diffuse_bounces",
+    "glossy_bounces": "glossy_bounces",
+    "transmission_bounces": "transmission_bounces",
+    "transparent_bounces": "transparent_max_bounces",
+    "clamp_direct": "sample_clamp_direct",
+    "clamp_indirect": "sample_clamp_indirect",
+}
+
+
+def configure(scene, engine, samples, seed, threads=2, integrator="PATH"):
+    """Sets the engine, its samples and seed, and the thread count. For Lantern the light-path
+    settings are copied from the scene's Cycles settings so both engines render the same thing."""
+    scene.render.engine = engine
+    scene.render.threads_mode = "FIXED"
+    scene.render.threads = threads
+    if engine == CYCLES:
+        scene.cycles.samples = samples
+        scene.cycles.seed = seed
+    elif engine == LANTERN:
+        lt = scene.lantern
+        lt.samples = samples
+        lt.seed = seed
+        lt.integrator = integrator
+        for name, cycles_name in _BOUNCES.items():
+            if hasattr(lt, name):
+                setattr(lt, name, getattr(scene.cycles, cycles_name))
+        if hasattr(lt, "threads"):
+            lt.threads = threads
+    else:
+        raise ValueError("unknown engine %r" % engine)
+
+
+def _exr_settings(scene, multilayer=True):
+    s = scene.render.image_settings
+    s.file_format = "OPEN_EXR_MULTILAYER" if multilayer else "OPEN_EXR"
+    s.color_mode = "RGBA"
+    s.color_depth = "32"
+    s.exr_codec = "ZIP"
+    scene.render.use_file_extension = True
+    scene.render.use_compositing = False
+    scene.render.use_sequencer = False
+
+
+class RenderOutput(dict):
+    """Passes of one render ({name: (h, w, c) float32}) plus .seconds, .path, .status."""
+
+    seconds = 0.0
+    path = ""
+    status = None
+
+    @property
+    def combined(self):
+        return self["Combined"]
+
+
+def render(scene, engine=CYCLES, samples=64, seed=0, threads=2, outdir=None, tag=None,
+           keep=False, integrator="PATH"):
+    """Renders `scene` with `engine` and returns its passes (RenderOutput).
+
+    The render goes to a float multilayer EXR; the Render Result is also saved when the
+    operator does not write it (a cancelled render), so a partial image can still be read."""
+    configure(scene, engine, samples, seed, threads, integrator)
+    _exr_settings(scene)
+    outdir = outdir or tempfile.mkdtemp(prefix="lantern_test_")
+    tag = tag or "%s_%s_s%d_seed%d" % (scene.name, engine.lower(), samples, seed)
+    base = os.path.join(outdir, tag)
+    scene.render.filepath = base
+    path = base + ".exr"
+    if os.path.exists(path):
+        os.remove(path)
+    t0 = time.perf_counter()
+    status = bpy.ops.render.render(write_still=True, scene=scene.name)
+    seconds = time.perf_counter() - t0
+    if not os.path.exists(path):
+        result = bpy.data.images.get("Render Result")
+        if result is None:
+            raise RuntimeError("render of %s with %s wrote nothing (%s)" % (scene.name, engine, status))
+        result.save_render(path, scene=scene)
+    out = RenderOutput(read_multilayer_exr(path))
+    out.seconds, out.path, out.status = seconds, path, status
+    if not keep:
+        os.remove(path)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# Statistics
+# ----------------------------------------------------------------------------------------------
+def normal_quantile_upper(p):
+    """z with P(Z > z) = p for a standard normal Z: bisection on erfc (no scipy)."""
+    lo, hi = 0.0, 40.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if 0.5 * math.erfc(mid / math.sqrt(2.0)) > p:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def bonferroni_z(n_tests, family_alpha=1e-3):
+    """Two-sided critical z for n_tests simultaneous tests at family-wise false-alarm rate alpha."""
+    return normal_quantile_upper(family_alpha / (2.0 * n_tests))
+
+
+def tile_view(img, tile):
+    """(h, w, c) → (th, tw, tile*tile, c), dropping partial edge tiles."""
+    h, w, c = img.shape
+    th, tw = h // tile, w // tile
+    x = img[:th * tile, :tw * tile].reshape(th, tile, tw, tile, c)
+    return x.transpose(0, 2, 1, 3, 4).reshape(th, tw, tile * tile, c)
+
+
+def tile_mean_and_se2(run_a, run_b, tile=16):
+    """Tile means of the average of two independent renders, and the squared standard error of
+    those means: per pixel the noise variance of one render is (a-b)^2/2, of their average
+    (a-b)^2/4; pixels are independent, so the tile mean's variance is that summed over the tile
+    divided by N^2."""
+    a = np.asarray(run_a, np.float64)[..., :3]
+    b = np.asarray(run_b, np.float64)[..., :3]
+    mean = tile_view(0.5 * (a + b), tile).mean(axis=2)
+    d = tile_view(a - b, tile)
+    n = d.shape[2]
+    se2 = (d * d / 4.0).sum(axis=2) / (n * n)
+    return mean, se2

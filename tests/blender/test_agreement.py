@@ -1,0 +1,139 @@
+"""Lantern agrees with Cycles on the same .blend.
+
+Rule (both engines alike): each engine renders the scene twice with seeds 0 and 1. Per pixel, the
+noise variance of the average of the two renders is (a - b)^2 / 4; pixels are independent, so the
+variance of a 16x16 tile's mean is that summed over the tile divided by N^2. For every tile and RGB
+channel, |mean_Lantern - mean_Cycles| <= z * sqrt(se_Lantern^2 + se_Cycles^2), with z the two-sided
+normal quantile for a family-wise false-alarm rate of 1e-3 Bonferroni-corrected over all tiles and
+channels of the scene. Neither engine clamps, filters glossy or adapts its sampling (see
+tests/scenes/build_scenes.py).
+
+The bidirectional integrator splats light-tracing samples into several pixels, so its pixels are
+not independent: there the tile means' variance comes from K independent renders and the
+critical value is Student's t with K - 1 degrees of freedom (same Bonferroni correction).
+"""
+import math
+import os
+
+import numpy as np
+import pytest
+
+import render_utils as ru
+
+PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "sun_world",
+               "textured", "instanced"]
+SAMPLES = 128
+TILE = 16
+
+
+def _report(name, mean_l, mean_c, bound, outdir, images):
+    diff = np.abs(mean_l - mean_c)
+    order = np.argsort((diff / np.maximum(bound, 1e-30)).ravel())[::-1][:8]
+    lines = ["%s: tile (row %d, col %d) channel %d: Lantern %.5f Cycles %.5f |d| %.5f bound %.5f"
+             % (name, i // 3 // mean_l.shape[1], i // 3 % mean_l.shape[1], i % 3,
+                mean_l.ravel()[i], mean_c.ravel()[i], diff.ravel()[i], bound.ravel()[i])
+             for i in order]
+    for tag, img in images.items():
+        ru.write_png(os.path.join(outdir, "%s_%s.png" % (name, tag)), img)
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize("name", PATH_SCENES)
+def test_path_tracer_agrees_with_cycles(name, scene_factory, outdir):
+    scene = scene_factory(name)
+    c0 = ru.render(scene, ru.CYCLES, SAMPLES, seed=0).combined
+    c1 = ru.render(scene, ru.CYCLES, SAMPLES, seed=1).combined
+    l0 = ru.render(scene, ru.LANTERN, SAMPLES, seed=0).combined
+    l1 = ru.render(scene, ru.LANTERN, SAMPLES, seed=1).combined
+    for img in (l0, l1):
+        assert np.isfinite(img).all()
+    mean_c, se2_c = ru.tile_mean_and_se2(c0, c1, TILE)
+    mean_l, se2_l = ru.tile_mean_and_se2(l0, l1, TILE)
+    z = ru.bonferroni_z(mean_c.size)
+    bound = z * np.sqrt(se2_c + se2_l)
+    ok = np.abs(mean_l - mean_c) <= bound
+    assert ok.all(), _report(name, mean_l, mean_c, bound, outdir,
+                             {"lantern": 0.5 * (l0 + l1), "cycles": 0.5 * (c0 + c1)})
+
+
+# ---- bidirectional ---------------------------------------------------------------------------
+def student_t_upper(p, dof):
+    """t with P(T > t) = p for Student's t with `dof` degrees of freedom (bisection on the
+    regularised incomplete beta function; no scipy)."""
+    def betacf(a, b, x):  # continued fraction (Numerical Recipes, betacf)
+        qab, qap, qam = a + b, a + 1, a - 1
+        c, d = 1.0, 1.0 - qab * x / qap
+        d = 1.0 / (d if abs(d) > 1e-300 else 1e-300)
+        h = d
+        for m in range(1, 300):
+            m2 = 2 * m
+            aa = m * (b - m) * x / ((qam + m2) * (a + m2))
+            d = 1.0 + aa * d
+            d = 1.0 / (d if abs(d) > 1e-300 else 1e-300)
+            c = 1.0 + aa / c if abs(c) > 1e-300 else 1e-300
+            h *= d * c
+            aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2))
+            d = 1.0 + aa * d
+            d = 1.0 / (d if abs(d) > 1e-300 else 1e-300)
+            c = 1.0 + aa / c if abs(c) > 1e-300 else 1e-300
+            de = d * c
+            h *= de
+            if abs(de - 1.0) < 1e-14:
+                break
+        return h
+
+    def ibeta(a, b, x):
+        if x <= 0:
+            return 0.0
+        if x >= 1:
+            return 1.0
+        lbt = math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) + a * math.log(x) + b * math.log(1 - x)
+        if x < (a + 1) / (a + b + 2):
+            return math.exp(lbt) * betacf(a, b, x) / a
+        return 1.0 - math.exp(lbt) * betacf(b, a, 1 - x) / b
+
+    def upper_tail(t):
+        return 0.5 * ibeta(dof / 2.0, 0.5, dof / (dof + t * t))
+
+    lo, hi = 0.0, 1e4
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if upper_tail(mid) > p:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+BDPT_SCENES = ["cornell_area", "cornell_point", "glossy_glass", "door"]
+K = 12
+
+
+@pytest.mark.parametrize("name", BDPT_SCENES)
+def test_bidirectional_agrees_with_cycles(name, scene_factory, outdir):
+    import build_scenes
+    scene = scene_factory(name)
+    samples = build_scenes.SCENES[name][2]
+    c0 = ru.render(scene, ru.CYCLES, samples, seed=0).combined
+    c1 = ru.render(scene, ru.CYCLES, samples, seed=1).combined
+    mean_c, se2_c = ru.tile_mean_and_se2(c0, c1, TILE)
+    per_run = max(1, samples // K)
+    means = []
+    images = []
+    for k in range(K):
+        out = ru.render(scene, ru.LANTERN, per_run, seed=100 + k, integrator="BIDIRECTIONAL")
+        img = out.combined
+        assert np.isfinite(img).all()
+        images.append(img)
+        means.append(ru.tile_view(np.asarray(img, np.float64)[..., :3], TILE).mean(axis=2))
+    means = np.array(means)
+    mean_l = means.mean(axis=0)
+    se2_l = means.var(axis=0, ddof=1) / K
+    n = mean_c.size
+    # Lantern's side has K - 1 degrees of freedom, Cycles' side hundreds: using K - 1 for the
+    # sum is conservative.
+    t = student_t_upper(1e-3 / (2.0 * n), K - 1)
+    bound = t * np.sqrt(se2_c + se2_l)
+    ok = np.abs(mean_l - mean_c) <= bound
+    assert ok.all(), _report(name + "_bdpt", mean_l, mean_c, bound, outdir,
+                             {"lantern": np.mean(images, axis=0), "cycles": 0.5 * (c0 + c1)})

@@ -1,0 +1,601 @@
+"""Builds Lantern's test scenes and examples.blend with bpy only (no external assets).
+
+    blender -b --factory-startup --python tests/scenes/build_scenes.py -- OUTDIR [--only a,b]
+    blender -b --factory-startup --python tests/scenes/build_scenes.py -- --examples [PATH]
+
+The first form writes OUTDIR/<name>.blend for every test scene, each holding one Scene named after
+itself. The second writes examples.blend (default: the repository root) with one scene per example.
+Both can be given together.
+
+Every scene is made by one builder function, `build_<name>(scene)`, which fills a Scene made by
+`new_scene()`; tests (tests/blender/conftest.py) call `build(name)` in-process, the examples reuse
+the same builders at a nicer resolution. Scenes are set up for Cycles on the CPU with a fixed seed,
+no adaptive sampling, no denoising, no clamping and no glossy filter, so that Cycles renders the
+unbiased image the agreement tests compare Lantern with. Every object's and light's ray visibility
+is set explicitly: objects visible to every ray, lights not visible to the camera.
+"""
+import math
+import os
+import sys
+
+import bmesh
+import bpy
+import numpy as np
+from mathutils import Matrix, Vector
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+EXAMPLES_PATH = os.path.join(REPO, "examples.blend")
+
+# Cornell box colours (reflectances of the classic measured box, rounded).
+RED = (0.63, 0.065, 0.05)
+GREEN = (0.14, 0.45, 0.091)
+WHITE = (0.725, 0.71, 0.68)
+
+
+# ----------------------------------------------------------------------------------------------
+# Scene, world, camera
+# ----------------------------------------------------------------------------------------------
+def new_scene(name, resolution=(96, 96), samples=128):
+    """An empty Scene called `name` (replacing one of that name) set up for a Cycles CPU render."""
+    old = bpy.data.scenes.get(name)
+    if old is not None:
+        bpy.data.scenes.remove(old)
+    scene = bpy.data.scenes.new(name)
+    r = scene.render
+    r.engine = "CYCLES"
+    r.resolution_x, r.resolution_y = resolution
+    r.resolution_percentage = 100
+    r.pixel_aspect_x = r.pixel_aspect_y = 1.0
+    r.use_border = False
+    r.use_motion_blur = False
+    r.film_transparent = False
+    r.threads_mode = "AUTO"
+    c = scene.cycles
+    c.device = "CPU"
+    c.feature_set = "SUPPORTED"
+    c.samples = samples
+    c.seed = 0
+    c.use_animated_seed = False
+    c.sample_offset = 0
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.use_guiding = False
+    c.blur_glossy = 0.0
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    c.light_sampling_threshold = 0.0
+    c.caustics_reflective = True
+    c.caustics_refractive = True
+    c.max_bounces = 12
+    c.diffuse_bounces = 4
+    c.glossy_bounces = 4
+    c.transmission_bounces = 12
+    c.transparent_max_bounces = 8
+    c.volume_bounces = 0
+    c.pixel_filter_type = "BLACKMAN_HARRIS"
+    c.filter_width = 1.5
+    c.film_exposure = 1.0
+    v = scene.view_settings
+    scene.display_settings.display_device = "sRGB"
+    v.view_transform = "Standard"
+    v.look = "None"
+    v.exposure = 0.0
+    v.gamma = 1.0
+    set_world(scene, (0.0, 0.0, 0.0), 0.0)
+    return scene
+
+
+def set_world(scene, color, strength):
+    """A World called after the scene with a constant Background colour x strength."""
+    world = bpy.data.worlds.new(scene.name)
+    world.use_nodes = True
+    nt = world.node_tree
+    nt.nodes.clear()
+    bg = nt.nodes.new("ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (*color, 1.0)
+    bg.inputs["Strength"].default_value = strength
+    out = nt.nodes.new("ShaderNodeOutputWorld")
+    nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+    world.cycles_visibility.camera = True
+    scene.world = world
+    return world
+
+
+def look_at(obj, target, up_axis="Y"):
+    d = Vector(target) - obj.location
+    obj.rotation_mode = "QUATERNION"
+    obj.rotation_quaternion = d.to_track_quat("-Z", up_axis)
+
+
+def add_camera(scene, location, target, lens=50.0, name="Camera"):
+    cam = bpy.data.cameras.new(name)
+    cam.type = "PERSP"
+    cam.lens_unit = "MILLIMETERS"
+    cam.lens = lens
+    cam.sensor_fit = "AUTO"
+    cam.sensor_width = 36.0
+    cam.sensor_height = 24.0
+    cam.shift_x = cam.shift_y = 0.0
+    cam.clip_start = 0.05
+    cam.clip_end = 1000.0
+    cam.dof.use_dof = False
+    obj = bpy.data.objects.new(name, cam)
+    obj.location = location
+    scene.collection.objects.link(obj)
+    look_at(obj, target)
+    scene.camera = obj
+    return obj
+
+
+# ----------------------------------------------------------------------------------------------
+# Objects and lights
+# ----------------------------------------------------------------------------------------------
+def set_visibility(obj, camera=True, diffuse=True, glossy=True, transmission=True, shadow=True,
+                   volume_scatter=True):
+    obj.hide_render = False
+    obj.hide_viewport = False
+    obj.visible_camera = camera
+    obj.visible_diffuse = diffuse
+    obj.visible_glossy = glossy
+    obj.visible_transmission = transmission
+    obj.visible_shadow = shadow
+    obj.visible_volume_scatter = volume_scatter
+
+
+def add_object(scene, name, data, location=(0, 0, 0), rotation=(0, 0, 0), scale=(1, 1, 1),
+               collection=None, **visibility):
+    """Links a new object to `collection` (default: the scene's master collection)."""
+    obj = bpy.data.objects.new(name, data)
+    obj.location = location
+    obj.rotation_mode = "XYZ"
+    obj.rotation_euler = [math.radians(a) for a in rotation]
+    obj.scale = scale
+    (collection or scene.collection).objects.link(obj)
+    set_visibility(obj, **visibility)
+    return obj
+
+
+def add_light(scene, name, kind, energy, location, rotation=(0, 0, 0), color=(1, 1, 1),
+              camera=False, **props):
+    """A light (rotation in degrees; lights point down their local -Z). Visible to every ray but
+    the camera unless camera=True. props: radius (shadow_soft_size), spot_size (rad), spot_blend,
+    shape, size, size_y, angle (rad)."""
+    light = bpy.data.lights.new(name, kind)
+    light.energy = energy
+    light.color = color
+    light.use_shadow = True
+    light.shadow_soft_size = props.pop("radius", 0.0)
+    light.cycles.cast_shadow = True
+    light.cycles.use_multiple_importance_sampling = True
+    light.cycles.max_bounces = 1024
+    if kind == "AREA":
+        light.cycles.is_portal = False
+    for key, value in props.items():
+        setattr(light, key, value)
+    return add_object(scene, name, light, location, rotation, camera=camera)
+
+
+def _mesh(name, bm):
+    me = bpy.data.meshes.new(name)
+    bm.to_mesh(me)
+    bm.free()
+    return me
+
+
+def _smooth(me, smooth):
+    me.polygons.foreach_set("use_smooth", [smooth] * len(me.polygons))
+    return me
+
+
+def mesh_plane(name, size_x, size_y=None, matrix=None):
+    """A quad in the XY plane centred at the origin, normal +Z, UVs 0..1."""
+    bm = bmesh.new()
+    bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=0.5, calc_uvs=True,
+                          matrix=Matrix.Diagonal((size_x, size_y or size_x, 1.0, 1.0)))
+    if matrix is not None:
+        bm.transform(matrix)
+    return _smooth(_mesh(name, bm), False)
+
+
+def mesh_box(name, size, origin_at_bottom=True):
+    """An axis-aligned box of size (x, y, z) with UVs; origin at the bottom centre by default."""
+    sx, sy, sz = size
+    m = Matrix.Diagonal((sx, sy, sz, 1.0))
+    if origin_at_bottom:
+        m = Matrix.Translation((0, 0, sz / 2)) @ m
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=1.0, matrix=m, calc_uvs=True)
+    return _smooth(_mesh(name, bm), False)
+
+
+def mesh_sphere(name, radius, segments=48, rings=24, smooth=True):
+    bm = bmesh.new()
+    bmesh.ops.create_uvsphere(bm, u_segments=segments, v_segments=rings, radius=radius,
+                              calc_uvs=True)
+    return _smooth(_mesh(name, bm), smooth)
+
+
+def mesh_cone(name, radius, depth, segments=32):
+    bm = bmesh.new()
+    bmesh.ops.create_cone(bm, cap_ends=True, cap_tris=False, segments=segments,
+                          radius1=radius, radius2=0.0, depth=depth, calc_uvs=True,
+                          matrix=Matrix.Translation((0, 0, depth / 2)))
+    return _smooth(_mesh(name, bm), False)
+
+
+def assign(obj, *materials):
+    """Puts the materials in the mesh's slots (shared by every object using the mesh)."""
+    obj.data.materials.clear()
+    for mat in materials:
+        obj.data.materials.append(mat)
+    return obj
+
+
+# ----------------------------------------------------------------------------------------------
+# Materials and images
+# ----------------------------------------------------------------------------------------------
+def _material(name):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    out.target = "ALL"
+    out.location = (300, 0)
+    return mat, nt, out
+
+
+def _bsdf_material(name, node_type, color, **inputs):
+    mat, nt, out = _material(name)
+    bsdf = nt.nodes.new(node_type)
+    if color is not None:
+        if isinstance(color, bpy.types.NodeSocket):
+            nt.links.new(color, bsdf.inputs["Color"])
+        else:
+            bsdf.inputs["Color"].default_value = (*color, 1.0)
+    for key, value in inputs.items():
+        if key == "distribution":
+            bsdf.distribution = value
+        elif isinstance(value, bpy.types.Node):
+            nt.links.new(value.outputs[0], bsdf.inputs[key])
+        else:
+            bsdf.inputs[key].default_value = value
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    mat.diffuse_color = (*color, 1.0) if isinstance(color, tuple) else (0.8, 0.8, 0.8, 1.0)
+    return mat
+
+
+def diffuse(name, color, roughness=0.0):
+    return _bsdf_material(name, "ShaderNodeBsdfDiffuse", color, Roughness=roughness)
+
+
+def glossy(name, color, roughness):
+    return _bsdf_material(name, "ShaderNodeBsdfGlossy", color, distribution="GGX",
+                          Roughness=roughness)
+
+
+def glass(name, color, roughness, ior=1.5):
+    return _bsdf_material(name, "ShaderNodeBsdfGlass", color, distribution="GGX",
+                          Roughness=roughness, IOR=ior)
+
+
+def image_material(name, image, shader="ShaderNodeBsdfDiffuse", target="Color", **inputs):
+    """`shader` with the image (UV-mapped, linear interpolation, repeat) feeding `target`."""
+    mat, nt, out = _material(name)
+    tex = nt.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    tex.interpolation = "Linear"
+    tex.extension = "REPEAT"
+    tex.projection = "FLAT"
+    tex.location = (-300, 0)
+    bsdf = nt.nodes.new(shader)
+    if shader == "ShaderNodeBsdfGlossy":
+        bsdf.distribution = "GGX"
+    for key, value in inputs.items():
+        bsdf.inputs[key].default_value = (*value, 1.0) if key == "Color" else value
+    nt.links.new(tex.outputs["Color"], bsdf.inputs[target])
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def packed_image(name, pixels, colorspace):
+    """An 8-bit image from float pixels (h, w, 4), rows bottom first, packed into the .blend."""
+    h, w, _ = pixels.shape
+    img = bpy.data.images.new(name, width=w, height=h, alpha=True, float_buffer=False)
+    img.colorspace_settings.name = colorspace
+    img.alpha_mode = "STRAIGHT"
+    img.pixels.foreach_set(np.ascontiguousarray(pixels, np.float32).ravel())
+    img.update()
+    img.pack()
+    return img
+
+
+def checker_pixels(size=64, squares=8):
+    """sRGB-encoded colour checker: warm/cool squares, brightness ramping along U."""
+    y, x = np.mgrid[0:size, 0:size]
+    check = ((x * squares // size) + (y * squares // size)) % 2
+    ramp = 0.35 + 0.65 * (x + 0.5) / size
+    a = np.array([0.95, 0.55, 0.15])
+    b = np.array([0.15, 0.45, 0.85])
+    rgb = np.where(check[..., None] == 1, a, b) * ramp[..., None]
+    return np.concatenate([rgb, np.ones((size, size, 1))], axis=-1)
+
+
+def roughness_pixels(size=64, bands=4):
+    """Non-colour roughness: `bands` horizontal bands from 0.05 to 0.6."""
+    y = np.mgrid[0:size, 0:size][0]
+    v = 0.05 + 0.55 * (y * bands // size) / (bands - 1)
+    return np.stack([v, v, v, np.ones_like(v)], axis=-1)
+
+
+# ----------------------------------------------------------------------------------------------
+# Scenes
+# ----------------------------------------------------------------------------------------------
+def cornell_box(scene):
+    """The box (interior x, y in [-1, 1], z in [0, 2], open towards -Y), two boxes, camera."""
+    white = diffuse("White", WHITE)
+    red = diffuse("Red", RED)
+    green = diffuse("Green", GREEN)
+    walls = [  # name, matrix taking the +Z unit plane into place (normals face inward), material
+        ("Floor", Matrix.Identity(4), white),
+        ("Ceiling", Matrix.Translation((0, 0, 2)) @ Matrix.Rotation(math.pi, 4, "X"), white),
+        ("BackWall", Matrix.Translation((0, 1, 1)) @ Matrix.Rotation(math.pi / 2, 4, "X"), white),
+        ("LeftWall", Matrix.Translation((-1, 0, 1)) @ Matrix.Rotation(math.pi / 2, 4, "Y"), red),
+        ("RightWall", Matrix.Translation((1, 0, 1)) @ Matrix.Rotation(-math.pi / 2, 4, "Y"), green),
+    ]
+    for name, m, mat in walls:
+        assign(add_object(scene, name, mesh_plane(name, 2.0, 2.0, matrix=m)), mat)
+    assign(add_object(scene, "TallBox", mesh_box("TallBox", (0.6, 0.6, 1.2)), (-0.35, 0.3, 0.0),
+                      (0, 0, 17)), white)
+    assign(add_object(scene, "ShortBox", mesh_box("ShortBox", (0.6, 0.6, 0.6)), (0.36, -0.3, 0.0),
+                      (0, 0, -18)), white)
+    add_camera(scene, (0, -3.8, 1.0), (0, 0, 1.0), lens=50.0)
+
+
+def build_cornell_area(scene):
+    cornell_box(scene)
+    add_light(scene, "AreaLight", "AREA", 40.0, (0, 0, 1.98), shape="SQUARE", size=0.5)
+
+
+def build_cornell_point(scene):
+    cornell_box(scene)
+    add_light(scene, "PointLight", "POINT", 60.0, (0, 0, 1.7), radius=0.1)
+
+
+def build_cornell_spot(scene):
+    cornell_box(scene)
+    add_light(scene, "SpotLight", "SPOT", 120.0, (0, 0, 1.9), radius=0.05,
+              spot_size=math.radians(60.0), spot_blend=0.2, show_cone=False)
+
+
+def build_glossy_glass(scene):
+    set_world(scene, (0.05, 0.07, 0.1), 1.0)
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 12.0))
+    assign(floor, diffuse("FloorGrey", (0.5, 0.5, 0.5)))
+    spheres = [
+        ("GlossyRough", glossy("GlossyR02", (0.8, 0.8, 0.8), 0.2)),
+        ("GlossyMirror", glossy("GlossyR00", (0.9, 0.6, 0.3), 0.0)),
+        ("GlassClear", glass("GlassR00", (1.0, 1.0, 1.0), 0.0)),
+        ("GlassRough", glass("GlassR03", (0.8, 1.0, 0.9), 0.3)),
+    ]
+    for i, (name, mat) in enumerate(spheres):
+        obj = add_object(scene, name, mesh_sphere(name, 0.4), (-1.5 + i, 0, 0.4))
+        assign(obj, mat)
+    add_object(scene, "BackBlock", mesh_box("BackBlock", (4.0, 0.3, 1.2)), (0, 1.6, 0))
+    assign(scene.objects["BackBlock"], diffuse("BlockRed", (0.7, 0.2, 0.15)))
+    add_light(scene, "AreaLight", "AREA", 200.0, (0.5, -1.0, 3.0), rotation=(-15, 10, 0),
+              shape="RECTANGLE", size=1.5, size_y=1.0)
+    add_camera(scene, (0, -5.0, 1.6), (0, 0, 0.45), lens=40.0)
+
+
+def build_sun_world(scene):
+    set_world(scene, (0.3, 0.45, 0.7), 1.0)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 40.0))
+    assign(ground, diffuse("Ground", (0.6, 0.6, 0.55)))
+    cube = add_object(scene, "Cube", mesh_box("Cube", (1.0, 1.0, 1.0)), (-0.9, 0.4, 0), (0, 0, 30))
+    assign(cube, diffuse("Orange", (0.8, 0.35, 0.1)))
+    sphere = add_object(scene, "Sphere", mesh_sphere("Sphere", 0.5), (0.8, -0.3, 0.5))
+    assign(sphere, diffuse("Blue", (0.15, 0.3, 0.8)))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(40, 0, 30), angle=math.radians(1.0))
+    add_camera(scene, (0, -6.0, 2.0), (0, 0, 0.5), lens=35.0)
+
+
+def build_textured(scene):
+    set_world(scene, (0.1, 0.1, 0.1), 1.0)
+    checker = packed_image("Checker", checker_pixels(), "sRGB")
+    rough = packed_image("RoughnessBands", roughness_pixels(), "Non-Color")
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 4.0))
+    assign(floor, image_material("CheckerDiffuse", checker))
+    cube = add_object(scene, "Cube", mesh_box("Cube", (0.8, 0.8, 0.8)), (-0.7, 0.2, 0), (0, 0, 25))
+    assign(cube, floor.data.materials[0])
+    panel = add_object(scene, "GlossyPanel",
+                       mesh_plane("GlossyPanel", 1.6, 1.6,
+                                  matrix=Matrix.Rotation(math.pi / 2, 4, "X")),
+                       (0.8, 0.6, 0.8), (0, 0, -20))
+    assign(panel, image_material("BandedGlossy", rough, shader="ShaderNodeBsdfGlossy",
+                                 target="Roughness", Color=(0.9, 0.9, 0.9)))
+    add_light(scene, "AreaLight", "AREA", 150.0, (-0.5, -1.5, 3.0), rotation=(-25, 0, 0),
+              shape="SQUARE", size=1.0)
+    add_camera(scene, (0.3, -4.2, 2.2), (0, 0.2, 0.4), lens=40.0)
+
+
+def build_instanced(scene):
+    set_world(scene, (0.05, 0.05, 0.05), 1.0)
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
+    assign(floor, diffuse("FloorGrey", (0.6, 0.6, 0.6)))
+    shared = mesh_box("SharedBox", (0.5, 0.5, 0.5))
+    shared.materials.append(diffuse("SharedGreen", (0.2, 0.6, 0.25)))
+    # Alt+D duplicates: three objects, one mesh datablock (one non-uniformly scaled).
+    add_object(scene, "Box.A", shared, (-1.2, 0.0, 0), (0, 0, 10))
+    add_object(scene, "Box.B", shared, (-0.4, 0.8, 0), (0, 0, 40), (1.0, 1.0, 2.0))
+    add_object(scene, "Box.C", shared, (-1.4, 1.2, 0.5), (30, 20, 0), (0.8, 0.8, 0.8))
+    # A collection instanced twice by empties; the collection itself is not in the scene.
+    group = bpy.data.collections.new("InstancedGroup")
+    group.instance_offset = (0, 0, 0)
+    sph = add_object(scene, "GroupSphere", mesh_sphere("GroupSphere", 0.3), (0, 0, 0.3),
+                     collection=group)
+    assign(sph, diffuse("GroupOrange", (0.85, 0.4, 0.1)))
+    cone = add_object(scene, "GroupCone", mesh_cone("GroupCone", 0.25, 0.7), (0.5, 0, 0),
+                      collection=group)
+    assign(cone, diffuse("GroupBlue", (0.15, 0.25, 0.8)))
+    for name, loc, rot, scale in (("GroupInstance.A", (0.6, -0.3, 0), (0, 0, 0), 1.0),
+                                  ("GroupInstance.B", (0.9, 0.9, 0), (0, 0, 70), 1.3)):
+        empty = add_object(scene, name, None, loc, rot, (scale,) * 3)
+        empty.instance_type = "COLLECTION"
+        empty.instance_collection = group
+    add_light(scene, "AreaLight", "AREA", 150.0, (0.5, -1.0, 3.0), rotation=(-15, 0, 0),
+              shape="DISK", size=1.2)
+    add_camera(scene, (0, -4.5, 2.5), (0, 0.3, 0.3), lens=40.0)
+
+
+def build_door(scene):
+    """Two rooms side by side; the lit one (x > 0) reaches the camera's room (x < 0) only through
+    a narrow gap in the partition: light that path tracing finds only by chance."""
+    white = diffuse("DoorWhite", (0.75, 0.75, 0.75))
+    w, d, h = 4.0, 3.0, 2.5  # both rooms together: x in [-2, 2], y in [-1.5, 1.5], z in [0, 2.5]
+    walls = [  # the +Z unit plane moved into place, normals inward
+        ("Floor", (w, d), Matrix.Identity(4)),
+        ("Ceiling", (w, d), Matrix.Translation((0, 0, h)) @ Matrix.Rotation(math.pi, 4, "X")),
+        ("South", (w, h), Matrix.Translation((0, -d / 2, h / 2)) @ Matrix.Rotation(-math.pi / 2, 4, "X")),
+        ("North", (w, h), Matrix.Translation((0, d / 2, h / 2)) @ Matrix.Rotation(math.pi / 2, 4, "X")),
+        ("West", (h, d), Matrix.Translation((-w / 2, 0, h / 2)) @ Matrix.Rotation(math.pi / 2, 4, "Y")),
+        ("East", (h, d), Matrix.Translation((w / 2, 0, h / 2)) @ Matrix.Rotation(-math.pi / 2, 4, "Y")),
+    ]
+    for name, (sx, sy), m in walls:
+        assign(add_object(scene, "Door" + name, mesh_plane("Door" + name, sx, sy, matrix=m)), white)
+    # The partition at x = 0, 0.1 thick, with a 0.1 wide gap at y in [0.6, 0.7], full height.
+    gap0, gap1 = 0.6, 0.7
+    south = gap0 + d / 2
+    north = d / 2 - gap1
+    assign(add_object(scene, "PartitionSouth", mesh_box("PartitionSouth", (0.1, south, h)),
+                      (0, -d / 2 + south / 2, 0)), white)
+    assign(add_object(scene, "PartitionNorth", mesh_box("PartitionNorth", (0.1, north, h)),
+                      (0, d / 2 - north / 2, 0)), white)
+    assign(add_object(scene, "Crate", mesh_box("Crate", (0.6, 0.6, 0.6)), (-1.0, 0.2, 0), (0, 0, 20)),
+           diffuse("DoorCrate", (0.7, 0.5, 0.3)))
+    add_light(scene, "LitRoomLight", "AREA", 400.0, (1.0, 0.0, 2.45), shape="SQUARE", size=0.8)
+    add_camera(scene, (-1.9, -1.4, 1.4), (0.0, 0.6, 0.7), lens=22.0)
+
+
+def build_unsupported_node(scene):
+    """Noise Texture → Diffuse colour (material "NoiseMaterial") and a Toon BSDF ("ToonMaterial")."""
+    set_world(scene, (0.1, 0.1, 0.1), 1.0)
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
+    assign(floor, diffuse("FloorGrey", (0.6, 0.6, 0.6)))
+    mat, nt, out = _material("NoiseMaterial")
+    noise = nt.nodes.new("ShaderNodeTexNoise")
+    noise.name = noise.label = "Noise Texture"
+    noise.inputs["Scale"].default_value = 8.0
+    bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    nt.links.new(noise.outputs["Color"], bsdf.inputs["Color"])
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    assign(add_object(scene, "NoiseSphere", mesh_sphere("NoiseSphere", 0.5), (-0.6, 0, 0.5)), mat)
+    toon = _bsdf_material("ToonMaterial", "ShaderNodeBsdfToon", (0.8, 0.3, 0.3))
+    assign(add_object(scene, "ToonSphere", mesh_sphere("ToonSphere", 0.5), (0.6, 0, 0.5)), toon)
+    add_light(scene, "AreaLight", "AREA", 100.0, (0, -1.0, 3.0), shape="SQUARE", size=1.0)
+    add_camera(scene, (0, -4.0, 1.8), (0, 0, 0.4), lens=40.0)
+
+
+# name: (builder, resolution, Cycles samples)
+SCENES = {
+    "cornell_area": (build_cornell_area, (96, 96), 128),
+    "cornell_point": (build_cornell_point, (96, 96), 128),
+    "cornell_spot": (build_cornell_spot, (96, 96), 128),
+    "glossy_glass": (build_glossy_glass, (96, 96), 128),
+    "sun_world": (build_sun_world, (96, 96), 128),
+    "textured": (build_textured, (96, 96), 128),
+    "instanced": (build_instanced, (96, 96), 128),
+    "unsupported_node": (build_unsupported_node, (96, 96), 64),
+    "door": (build_door, (96, 96), 512),
+}
+
+# example scene name: (builder scene, resolution, samples)
+EXAMPLES = {
+    "a05_box": ("cornell_area", (256, 256), 256),
+    "glossy_glass": ("glossy_glass", (320, 240), 256),
+    "door": ("door", (320, 240), 256),
+}
+
+
+def build(name, scene_name=None, resolution=None, samples=None):
+    """Builds test scene `name` into a new Scene (called scene_name, default name) and returns it."""
+    builder, res, spp = SCENES[name]
+    scene = new_scene(scene_name or name, resolution or res, samples or spp)
+    builder(scene)
+    return scene
+
+
+def _lantern_registered():
+    return any(getattr(c, "bl_idname", None) == "LANTERN"
+               for c in bpy.types.RenderEngine.__subclasses__())
+
+
+def reset_file():
+    """Empties the current file (keeps one placeholder scene, returned)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    placeholder = bpy.data.scenes[0]
+    placeholder.name = "__placeholder__"
+    return placeholder
+
+
+def _save(path, placeholder):
+    if placeholder.name in bpy.data.scenes and len(bpy.data.scenes) > 1:
+        bpy.data.scenes.remove(placeholder)
+    bpy.data.orphans_purge(do_recursive=True) if hasattr(bpy.data, "orphans_purge") else None
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(path), compress=True, copy=False)
+
+
+def write_test_blends(outdir, names=None):
+    """OUTDIR/<name>.blend for each test scene; returns the paths."""
+    paths = []
+    for name in names or SCENES:
+        placeholder = reset_file()
+        build(name)
+        path = os.path.join(outdir, name + ".blend")
+        _save(path, placeholder)
+        paths.append(path)
+        print("wrote", path)
+    return paths
+
+
+def write_examples(path=EXAMPLES_PATH):
+    """examples.blend: one scene per example, render engine Lantern when it is registered."""
+    placeholder = reset_file()
+    lantern = _lantern_registered()
+    for example, (name, res, spp) in EXAMPLES.items():
+        scene = build(name, scene_name=example, resolution=res, samples=spp)
+        if lantern:
+            scene.render.engine = "LANTERN"
+            if hasattr(scene, "lantern"):
+                scene.lantern.samples = spp
+    for window in bpy.context.window_manager.windows:
+        window.scene = bpy.data.scenes["a05_box"]
+    _save(path, placeholder)
+    print("wrote", path, "(engine %s)" % ("LANTERN" if lantern else "CYCLES"))
+    return path
+
+
+def main(argv):
+    import argparse
+
+    p = argparse.ArgumentParser(prog="build_scenes.py", description=__doc__.split("\n")[0])
+    p.add_argument("outdir", nargs="?", help="write one .blend per test scene here")
+    p.add_argument("--only", default="", help="comma-separated scene names (default: all)")
+    p.add_argument("--examples", nargs="?", const=EXAMPLES_PATH, default=None,
+                   help="also write examples.blend (default path: %(const)s)")
+    args = p.parse_args(argv)
+    if not args.outdir and not args.examples:
+        p.error("give OUTDIR and/or --examples")
+    names = [n for n in args.only.split(",") if n] or None
+    for n in names or ():
+        if n not in SCENES:
+            p.error("unknown scene %r; known: %s" % (n, ", ".join(SCENES)))
+    if args.outdir:
+        write_test_blends(args.outdir, names)
+    if args.examples:
+        write_examples(args.examples)
+
+
+if __name__ == "__main__":
+    main(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
