@@ -187,9 +187,17 @@ def _smooth(me, smooth):
     return me
 
 
+def _bmesh_with_uvs():
+    """A bmesh with a UV layer: bmesh's calc_uvs fills an existing layer and silently skips
+    otherwise."""
+    bm = bmesh.new()
+    bm.loops.layers.uv.new("UVMap")
+    return bm
+
+
 def mesh_plane(name, size_x, size_y=None, matrix=None):
     """A quad in the XY plane centred at the origin, normal +Z, UVs 0..1."""
-    bm = bmesh.new()
+    bm = _bmesh_with_uvs()
     bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=0.5, calc_uvs=True,
                           matrix=Matrix.Diagonal((size_x, size_y or size_x, 1.0, 1.0)))
     if matrix is not None:
@@ -203,7 +211,7 @@ def mesh_box(name, size, origin_at_bottom=True):
     m = Matrix.Diagonal((sx, sy, sz, 1.0))
     if origin_at_bottom:
         m = Matrix.Translation((0, 0, sz / 2)) @ m
-    bm = bmesh.new()
+    bm = _bmesh_with_uvs()
     bmesh.ops.create_cube(bm, size=1.0, matrix=m, calc_uvs=True)
     return _smooth(_mesh(name, bm), False)
 
@@ -477,6 +485,18 @@ def build_door(scene):
     add_camera(scene, (-1.9, -1.4, 1.4), (0.0, 0.6, 0.7), lens=22.0)
 
 
+def build_caustic(scene):
+    """A smooth glass sphere on a diffuse floor under a small point light: its caustic is reached
+    by path tracing only through the glass, by chance."""
+    set_world(scene, (0.02, 0.02, 0.03), 1.0)
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 6.0))
+    assign(floor, diffuse("CausticFloor", (0.7, 0.7, 0.7)))
+    ball = add_object(scene, "GlassBall", mesh_sphere("GlassBall", 0.5, segments=64, rings=32), (0, 0, 0.5))
+    assign(ball, glass("CausticGlass", (1.0, 1.0, 1.0), 0.0, ior=1.5))
+    add_light(scene, "SmallLight", "POINT", 200.0, (0.6, 0.3, 2.6), radius=0.02)
+    add_camera(scene, (0, -3.5, 2.2), (0, 0.1, 0.25), lens=40.0)
+
+
 def build_unsupported_node(scene):
     """Noise Texture → Diffuse colour (material "NoiseMaterial") and a Toon BSDF ("ToonMaterial")."""
     set_world(scene, (0.1, 0.1, 0.1), 1.0)
@@ -507,6 +527,7 @@ SCENES = {
     "instanced": (build_instanced, (96, 96), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
+    "caustic": (build_caustic, (96, 96), 256),
 }
 
 # example scene name: (builder scene, resolution, samples)

@@ -364,10 +364,11 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   float pmf, u_remapped;
   int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
   Vec2 up = sampler_.next_2d(), ud = sampler_.next_2d();
+  const Light& l = lights_.light(li);
+  if (l.faces_receiver()) return 0;
   EmissionSample e;
   if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
     return 0;
-  const Light& l = lights_.light(li);
   PathVertex& y0 = path[0];
   y0 = PathVertex();
   y0.type = VertexType::Light;
@@ -422,8 +423,13 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   if (qs) assign(&qs->pdf_rev, pdf(*pt, pt_minus, *qs));
   if (qs_minus) assign(&qs_minus->pdf_rev, pdf(*qs, pt, *qs_minus));
 
-  // Strategy (s', t') exists only if the subpath limits let both walks produce it.
-  auto exists = [&](int s2, int t2) { return s2 <= s_.max_light_length && t2 - 1 <= camera_depth(); };
+  // Strategy (s', t') exists only if the subpath limits let both walks produce it, and light
+  // subpaths (s' >= 2) never start on a lamp that faces its receiver.
+  const PathVertex& light_end = s > 1 ? light[0] : (s == 1 ? *qs : camera[t - 1]);
+  const bool subpaths_from_light = light_end.light < 0 || !lights_.light(light_end.light).faces_receiver();
+  auto exists = [&](int s2, int t2) {
+    return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light);
+  };
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
   double sum = 0, r = 1;
   for (int i = t - 1; i > 0; --i) {
@@ -555,8 +561,11 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, camera);
   int ns = generate_light_subpath(light);
 
+  // s = 1 takes a fresh light sample and needs no light subpath (there is none when the picked
+  // lamp faces its receiver, or emission sampling failed).
+  const int s_max = s_.max_light_length >= 1 ? std::max(ns, 1) : 0;
   for (int t = 2; t <= nt; ++t)
-    for (int s = 1; s <= ns; ++s) {
+    for (int s = 1; s <= s_max; ++s) {
       if (s + t - 2 > max_depth()) break;
       Spectrum c = connect(light, camera, s, t);
       if (!is_black(c)) add(c, s, t);

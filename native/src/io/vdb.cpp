@@ -29,7 +29,11 @@ openvdb::GridPtrVecPtr open_metadata(openvdb::io::File& file, const std::string&
   if (std::filesystem::is_directory(path, ec)) throw IoError("VDB path is a directory, not a file: " + quoted(path));
   try {
     file.open(/*delayLoad=*/false);
-    return file.readAllGridMetadata();
+    openvdb::GridPtrVecPtr grids = file.readAllGridMetadata();
+    // OpenVDB does not check its stream while reading the header: a file cut inside the header
+    // "opens" with zero grids. A real VDB file without grids is as useless, so both are errors.
+    if (!grids || grids->empty()) throw std::runtime_error("the file contains no grids");
+    return grids;
   } catch (const std::exception& e) {
     throw IoError("cannot read VDB file " + quoted(path) + " (corrupt, truncated or not a VDB file): " + e.what());
   }

@@ -269,21 +269,13 @@ bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, Emis
         dir = sample_uniform_sphere(ud);
         e->pdf_dir = uniform_sphere_pdf();
       }
+      if (l.faces_receiver()) return false;  // see Light::faces_receiver
       e->ray.o = l.position;
       e->ray.d = dir;
-      if (l.radius > 0) {
-        // Cycles 3.4's disk of radius r facing the receiver: emit from the disk facing `dir`.
-        Vec2 d = sample_disk_concentric(up);
-        e->ray.o = l.position + Frame(dir).to_world(Vec3(d.x * l.radius, d.y * l.radius, 0));
-        e->n = dir;
-        e->pdf_pos = 1 / (kPi * l.radius * l.radius);
-        e->radiance = l.power * (spot_attenuation(l, dir) / (4 * kPi * kPi * l.radius * l.radius));
-      } else {
-        e->n = Vec3(0.0f);
-        e->pdf_pos = 1;
-        e->delta_pos = true;
-        e->radiance = l.power * (spot_attenuation(l, dir) * kInv4Pi);
-      }
+      e->n = Vec3(0.0f);
+      e->pdf_pos = 1;
+      e->delta_pos = true;
+      e->radiance = l.power * (spot_attenuation(l, dir) * kInv4Pi);
       return !is_black(e->radiance);
     }
     case LightType::Area: {

@@ -38,6 +38,10 @@ struct Light {
            (type == LightType::Sun && tan_half_angle == 0);
   }
   bool infinite() const { return type == LightType::Sun || type == LightType::World; }
+  // Cycles 3.4 draws a point or spot light with a radius as a disk facing whatever it lights: its
+  // emission depends on the receiver, so no light subpath can start on it (BDPT reaches it only by
+  // the strategies s = 0 and s = 1, which see it from the receiver).
+  bool faces_receiver() const { return (type == LightType::Point || type == LightType::Spot) && radius > 0; }
 };
 
 // World background: colour x strength, optionally times an equirectangular image.
