@@ -114,8 +114,8 @@ TEST_P(PhaseChi2, SamplingFollowsPdf) {
 INSTANTIATE_TEST_SUITE_P(PhaseHG, PhaseChi2, ::testing::Values(-0.99f, -0.5f, 0.0f, 0.5f, 0.99f));
 
 TEST(PhaseHG, Normalisation) {
-  // 2 pi * integral over cos in [-1, 1]: substitution cos = 1 - 2 x^3-ish is unnecessary with
-  // 2e6 Simpson intervals even for the g = +-0.99 peaks (width ~ 1e-2 in cos).
+  // 2 pi * integral of p over cos in [-1, 1] by Simpson's rule; 2e6 intervals resolve even the
+  // g = +-0.99 peaks (width ~ 1e-2 in cos).
   for (float g : {-0.99f, -0.5f, 0.0f, 0.3f, 0.5f, 0.99f}) {
     const int m = 2000000;
     double h = 2.0 / m, sum = 0;

@@ -362,17 +362,17 @@ def cornell_box(scene):
 
 def build_cornell_area(scene):
     cornell_box(scene)
-    add_light(scene, "AreaLight", "AREA", 40.0, (0, 0, 1.98), shape="SQUARE", size=0.5)
+    add_light(scene, "AreaLight", "AREA", 50.0, (0, 0, 1.98), shape="SQUARE", size=0.5)
 
 
 def build_cornell_point(scene):
     cornell_box(scene)
-    add_light(scene, "PointLight", "POINT", 60.0, (0, 0, 1.7), radius=0.1)
+    add_light(scene, "PointLight", "POINT", 30.0, (0, 0, 1.7), radius=0.1)
 
 
 def build_cornell_spot(scene):
     cornell_box(scene)
-    add_light(scene, "SpotLight", "SPOT", 120.0, (0, 0, 1.9), radius=0.05,
+    add_light(scene, "SpotLight", "SPOT", 300.0, (0, 0, 1.9), radius=0.05,
               spot_size=math.radians(60.0), spot_blend=0.2, show_cone=False)
 
 
@@ -391,7 +391,7 @@ def build_glossy_glass(scene):
         assign(obj, mat)
     add_object(scene, "BackBlock", mesh_box("BackBlock", (4.0, 0.3, 1.2)), (0, 1.6, 0))
     assign(scene.objects["BackBlock"], diffuse("BlockRed", (0.7, 0.2, 0.15)))
-    add_light(scene, "AreaLight", "AREA", 200.0, (0.5, -1.0, 3.0), rotation=(-15, 10, 0),
+    add_light(scene, "AreaLight", "AREA", 200.0, (0.5, -1.0, 3.0), rotation=(15, 10, 0),
               shape="RECTANGLE", size=1.5, size_y=1.0)
     add_camera(scene, (0, -5.0, 1.6), (0, 0, 0.45), lens=40.0)
 
@@ -422,7 +422,7 @@ def build_textured(scene):
                        (0.8, 0.6, 0.8), (0, 0, -20))
     assign(panel, image_material("BandedGlossy", rough, shader="ShaderNodeBsdfGlossy",
                                  target="Roughness", Color=(0.9, 0.9, 0.9)))
-    add_light(scene, "AreaLight", "AREA", 150.0, (-0.5, -1.5, 3.0), rotation=(-25, 0, 0),
+    add_light(scene, "AreaLight", "AREA", 100.0, (-0.5, -1.5, 3.0), rotation=(25, 0, 0),
               shape="SQUARE", size=1.0)
     add_camera(scene, (0.3, -4.2, 2.2), (0, 0.2, 0.4), lens=40.0)
 
@@ -451,7 +451,7 @@ def build_instanced(scene):
         empty = add_object(scene, name, None, loc, rot, (scale,) * 3)
         empty.instance_type = "COLLECTION"
         empty.instance_collection = group
-    add_light(scene, "AreaLight", "AREA", 150.0, (0.5, -1.0, 3.0), rotation=(-15, 0, 0),
+    add_light(scene, "AreaLight", "AREA", 150.0, (0.5, -1.0, 3.0), rotation=(15, 0, 0),
               shape="DISK", size=1.2)
     add_camera(scene, (0, -4.5, 2.5), (0, 0.3, 0.3), lens=40.0)
 
@@ -530,11 +530,12 @@ SCENES = {
     "caustic": (build_caustic, (96, 96), 256),
 }
 
-# example scene name: (builder scene, resolution, samples)
+# example scene name: (builder scene, resolution, samples, Lantern integrator)
 EXAMPLES = {
-    "a05_box": ("cornell_area", (256, 256), 256),
-    "glossy_glass": ("glossy_glass", (320, 240), 256),
-    "door": ("door", (320, 240), 256),
+    "a05_box": ("cornell_area", (256, 256), 128, "BIDIRECTIONAL"),  # the sheet's BDPT Cornell box
+    "glossy_glass": ("glossy_glass", (320, 240), 256, "PATH"),
+    "door": ("door", (320, 240), 128, "BIDIRECTIONAL"),
+    "caustic": ("caustic", (320, 240), 128, "BIDIRECTIONAL"),
 }
 
 
@@ -584,12 +585,12 @@ def write_examples(path=EXAMPLES_PATH):
     """examples.blend: one scene per example, render engine Lantern when it is registered."""
     placeholder = reset_file()
     lantern = _lantern_registered()
-    for example, (name, res, spp) in EXAMPLES.items():
+    for example, (name, res, spp, integrator) in EXAMPLES.items():
         scene = build(name, scene_name=example, resolution=res, samples=spp)
         if lantern:
             scene.render.engine = "LANTERN"
-            if hasattr(scene, "lantern"):
-                scene.lantern.samples = spp
+            scene.lantern.samples = spp
+            scene.lantern.integrator = integrator
     for window in bpy.context.window_manager.windows:
         window.scene = bpy.data.scenes["a05_box"]
     _save(path, placeholder)

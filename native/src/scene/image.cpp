@@ -9,17 +9,14 @@ float srgb_to_linear(float c) {
 
 Image::Image(int width, int height, int channels, const float* pixels, bool srgb, Interpolation interp,
              Extension ext)
-    : width_(width), height_(height), interp_(interp), ext_(ext) {
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb) {
   size_t n = size_t(width) * height;
   texels_.resize(n);
   first_.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const float* px = pixels + i * channels;
     Vec3 c = channels >= 3 ? Vec3(px[0], px[1], px[2]) : Vec3(px[0]);
-    for (int k = 0; k < 3; ++k) {
-      float v = std::isfinite(c[k]) ? c[k] : 0.0f;  // never let a bad texel poison the image
-      c[k] = srgb ? srgb_to_linear(v) : v;
-    }
+    for (int k = 0; k < 3; ++k) c[k] = std::isfinite(c[k]) ? c[k] : 0.0f;  // never let a bad texel poison the image
     texels_[i] = c;
     first_[i] = c.x;
   }
@@ -56,12 +53,19 @@ T Image::filtered(Vec2 uv, F get) const {
   return sum;
 }
 
+Vec3 Image::texel(int x, int y) const {
+  Vec3 c = texels_[size_t(y) * width_ + x];
+  return srgb_ ? Vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) : c;
+}
+
 Vec3 Image::lookup(Vec2 uv) const {
-  return filtered<Vec3>(uv, [&](int x, int y) { return texels_[size_t(y) * width_ + x]; });
+  Vec3 c = filtered<Vec3>(uv, [&](int x, int y) { return texels_[size_t(y) * width_ + x]; });
+  return srgb_ ? Vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) : c;
 }
 
 float Image::lookup_value(Vec2 uv) const {
-  return filtered<float>(uv, [&](int x, int y) { return first_[size_t(y) * width_ + x]; });
+  float v = filtered<float>(uv, [&](int x, int y) { return first_[size_t(y) * width_ + x]; });
+  return srgb_ ? srgb_to_linear(v) : v;
 }
 
 }  // namespace lt

@@ -1,5 +1,5 @@
-// Images for textures and environment maps: linear float RGBA, rows bottom to top as Blender
-// stores them, looked up like Cycles (pixel centres at (i + 0.5) / width).
+// Images for textures and environment maps: float RGB, rows bottom to top as Blender stores them,
+// looked up like Cycles (pixel centres at (i + 0.5) / width).
 #pragma once
 
 #include <vector>
@@ -21,14 +21,17 @@ class Image {
   int height() const { return height_; }
   Vec3 lookup(Vec2 uv) const;            // RGB
   float lookup_value(Vec2 uv) const;     // first channel, for scalar inputs
-  Vec3 texel(int x, int y) const { return texels_[size_t(y) * width_ + x]; }
+  Vec3 texel(int x, int y) const;  // linear
 
  private:
   int width_, height_;
   Interpolation interp_;
   Extension ext_;
+  // sRGB images stay encoded and are decoded after interpolation, as Cycles does for 8-bit sRGB
+  // textures (they differ from interpolating decoded values at sharp edges).
+  bool srgb_ = false;
   std::vector<Vec3> texels_;
-  std::vector<float> first_;  // first channel as given (linear after decoding)
+  std::vector<float> first_;  // first channel
   template <class T, class F> T filtered(Vec2 uv, F fetch) const;
 };
 

@@ -154,8 +154,6 @@ class Medium {
   MajorantGrid majorant_;
   float voxel_size_ = 0;
   mutable std::atomic<uint64_t> capped_{0};
-
-  friend struct MediumAccess;
 };
 
 }  // namespace lt
