@@ -193,6 +193,7 @@ _BOUNCES = {
     "glossy_bounces": "glossy_bounces",
     "transmission_bounces": "transmission_bounces",
     "transparent_bounces": "transparent_max_bounces",
+    "volume_bounces": "volume_bounces",
     "clamp_direct": "sample_clamp_direct",
     "clamp_indirect": "sample_clamp_indirect",
 }

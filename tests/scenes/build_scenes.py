@@ -517,6 +517,42 @@ def build_unsupported_node(scene):
 
 
 # name: (builder, resolution, Cycles samples)
+def volume_material(name, density, color=(1.0, 1.0, 1.0), anisotropy=0.0,
+                    absorption_color=(0.0, 0.0, 0.0)):
+    """A material with only a Principled Volume on the Volume output: an invisible boundary."""
+    mat, nt, out = _material(name)
+    vol = nt.nodes.new("ShaderNodeVolumePrincipled")
+    vol.inputs["Density"].default_value = density
+    vol.inputs["Color"].default_value = (*color, 1.0)
+    vol.inputs["Anisotropy"].default_value = anisotropy
+    vol.inputs["Absorption Color"].default_value = (*absorption_color, 1.0)
+    nt.links.new(vol.outputs[0], out.inputs["Volume"])
+    return mat
+
+
+def build_smoke_box(scene):
+    """The area-lit Cornell box with a homogeneous smoke cube (density 2, no surface shader)."""
+    build_cornell_area(scene)
+    smoke = volume_material("Smoke", 2.0, color=(0.8, 0.8, 0.8), anisotropy=0.3)
+    assign(add_object(scene, "SmokeCube", mesh_box("SmokeCube", (0.6, 0.6, 0.6)), (0.2, -0.45, 0.7)),
+           smoke)
+
+
+def _fog_room(scene, density):
+    """The area-lit Cornell box filled by a fog cube slightly smaller than the room."""
+    build_cornell_area(scene)
+    fog = volume_material("Fog%g" % density, density, color=(0.9, 0.9, 0.9))
+    assign(add_object(scene, "Fog", mesh_box("Fog", (1.9, 1.9, 1.9)), (0.0, 0.0, 0.02)), fog)
+
+
+def build_thin_fog(scene):
+    _fog_room(scene, 0.1)
+
+
+def build_dense_fog(scene):
+    _fog_room(scene, 1.5)
+
+
 SCENES = {
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),
@@ -528,6 +564,9 @@ SCENES = {
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
     "caustic": (build_caustic, (96, 96), 256),
+    "smoke_box": (build_smoke_box, (64, 64), 128),
+    "thin_fog": (build_thin_fog, (64, 64), 128),
+    "dense_fog": (build_dense_fog, (64, 64), 128),
 }
 
 # example scene name: (builder scene, resolution, samples, Lantern integrator)
