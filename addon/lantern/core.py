@@ -53,7 +53,10 @@ CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC = 0, 1
 SENSOR_AUTO, SENSOR_HORIZONTAL, SENSOR_VERTICAL = 0, 1, 2
 
 # lt_integrator, lt_filter
-INTEGRATOR_PATH, INTEGRATOR_BIDIRECTIONAL = 0, 1
+INTEGRATOR_PATH, INTEGRATOR_BIDIRECTIONAL, INTEGRATOR_VOLPATH, INTEGRATOR_VOLUME_DEBUG = 0, 1, 2, 3
+# lt_volume_estimator, lt_volume_node
+VOLUME_RAY_MARCHING, VOLUME_TRACKING = 0, 1
+VOLUME_PRINCIPLED, VOLUME_SCATTER, VOLUME_ABSORPTION = 0, 1, 2
 MIS_POWER, MIS_BALANCE, MIS_UNIFORM = 0, 1, 2
 FILTER_BOX, FILTER_GAUSSIAN, FILTER_BLACKMAN_HARRIS = 0, 1, 2
 
@@ -223,6 +226,19 @@ class RenderSettings(ctypes.Structure):
         ("max_light_length", ctypes.c_int),
         ("mis_heuristic", ctypes.c_int),
         ("strategy_view_depth", ctypes.c_int),
+        ("volume_bounces", ctypes.c_int),
+        ("volume_estimator", ctypes.c_int),
+        ("volume_step", ctypes.c_float),
+    ]
+
+
+class VolumeDesc(ctypes.Structure):
+    _fields_ = [
+        ("node", ctypes.c_int),
+        ("color", ctypes.c_float * 3),
+        ("density", ctypes.c_float),
+        ("absorption_color", ctypes.c_float * 3),
+        ("anisotropy", ctypes.c_float),
     ]
 
 
@@ -271,6 +287,9 @@ def _declare(lib):
         "lt_scene_add_light": ([scene_p, P(LightDesc)], c_int),
         "lt_scene_set_camera": ([scene_p, P(CameraDesc)], c_int),
         "lt_scene_set_world": ([scene_p, P(WorldDesc)], c_int),
+        "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int], c_int),
+        "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, P(VolumeDesc),
+                                      P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
         "lt_render_settings_default": ([P(RenderSettings)], None),
         "lt_render_start": ([scene_p, P(RenderSettings), P(render_p)], c_int),
@@ -474,6 +493,35 @@ class Scene:
         d.color[:] = [float(c) for c in color[:3]]
         d.strength, d.image, d.rotation_z, d.visibility = strength, int(image), rotation_z, int(visibility)
         _check(self._lib.lt_scene_set_world(self.handle, ctypes.byref(d)), "lt_scene_set_world")
+
+    @staticmethod
+    def _volume_desc(node, color, density, absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0):
+        d = VolumeDesc()
+        d.node = int(node)
+        d.color[:] = [float(c) for c in color[:3]]
+        d.density = float(density)
+        d.absorption_color[:] = [float(c) for c in absorption_color[:3]]
+        d.anisotropy = float(anisotropy)
+        return d
+
+    def set_material_volume(self, material, node, color, density, absorption_color=(0.0, 0.0, 0.0),
+                            anisotropy=0.0, null_surface=True):
+        """A homogeneous medium inside the closed meshes using `material` (Cycles' formulas)."""
+        d = self._volume_desc(node, color, density, absorption_color, anisotropy)
+        _check(self._lib.lt_scene_set_material_volume(self.handle, int(material), ctypes.byref(d),
+                                                       int(bool(null_surface))),
+               "lt_scene_set_material_volume")
+
+    def add_volume_grid(self, path, grid, transform, node, color, density,
+                        absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0):
+        """A Volume object's .vdb grid; raises LanternError (LT_ERROR_IO) with the core's message."""
+        d = self._volume_desc(node, color, density, absorption_color, anisotropy)
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_add_volume_grid(self.handle, os.fsencode(path), grid.encode("utf-8"),
+                                                   _transform(transform), ctypes.byref(d),
+                                                   ctypes.byref(out)),
+               "lt_scene_add_volume_grid")
+        return out.value
 
     def commit(self):
         _check(self._lib.lt_scene_commit(self.handle), "lt_scene_commit")

@@ -57,7 +57,9 @@ def render_settings(scene, width, height, border):
         filter_width = 1.0 if filter_type == core.FILTER_BOX else cycles.filter_width
     else:
         filter_type, filter_width = core.FILTER_BLACKMAN_HARRIS, 1.5
-    integrators = {'PATH': core.INTEGRATOR_PATH, 'BIDIRECTIONAL': core.INTEGRATOR_BIDIRECTIONAL}
+    integrators = {'PATH': core.INTEGRATOR_PATH, 'BIDIRECTIONAL': core.INTEGRATOR_BIDIRECTIONAL,
+                   'VOLPATH': core.INTEGRATOR_VOLPATH, 'VOLUME_DEBUG': core.INTEGRATOR_VOLUME_DEBUG}
+    estimators = {'RAY_MARCHING': core.VOLUME_RAY_MARCHING, 'TRACKING': core.VOLUME_TRACKING}
     heuristics = {'POWER': core.MIS_POWER, 'BALANCE': core.MIS_BALANCE, 'UNIFORM': core.MIS_UNIFORM}
     return dict(
         width=width, height=height, border=border,
@@ -73,6 +75,8 @@ def render_settings(scene, width, height, border):
         max_camera_length=lt.max_camera_length, max_light_length=lt.max_light_length,
         mis_heuristic=heuristics[lt.mis_heuristic],
         strategy_view_depth=lt.strategy_view_depth if lt.integrator == 'BIDIRECTIONAL' else 0,
+        volume_bounces=lt.volume_bounces, volume_estimator=estimators[lt.volume_estimator],
+        volume_step=lt.volume_step,
     )
 
 

@@ -28,6 +28,13 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
              "Bidirectional path tracing: also traces paths from the lights and connects them to "
              "camera paths; slower per sample, but converges much faster where light is hard to "
              "reach (light through gaps, caustics, small bright lights)"),
+            ("VOLPATH", "Volumetric Path",
+             "Path tracing through participating media (volume materials, Volume objects); the "
+             "same as Path Tracing in scenes without volumes"),
+            ("VOLUME_DEBUG", "Volume Debug",
+             "Estimator view for the same camera rays, four half-size panels: transmittance by "
+             "ray marching (top left) and ratio tracking (top right), sampled collision distance "
+             "in metres by ray marching (bottom left) and delta tracking (bottom right)"),
         ],
         default="PATH",
     )
@@ -104,6 +111,29 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
                     "reduce fireflies, at the cost of bias (darker indirect light); 0 disables "
                     "clamping (Cycles defaults to 10)",
         default=0.0, min=0.0,
+    )
+    volume_estimator: EnumProperty(
+        name="Volume Estimator",
+        description="How heterogeneous volumes (VDB grids) are sampled; homogeneous volumes are "
+                    "always exact",
+        items=[
+            ("RAY_MARCHING", "Ray Marching",
+             "Fixed steps of the Step Size: deterministic transmittance, biased by the step"),
+            ("TRACKING", "Delta/Ratio Tracking",
+             "Unbiased delta tracking and ratio tracking against per-cell majorants"),
+        ],
+        default="TRACKING",
+    )
+    volume_step: FloatProperty(
+        name="Step Size",
+        description="Ray-marching step in world units; 0 uses each grid's voxel size",
+        default=0.0, min=0.0, subtype='DISTANCE',
+    )
+    volume_bounces: IntProperty(
+        name="Volume",
+        description="Maximum number of volume scattering bounces (Cycles' default 0 is single "
+                    "scattering: direct light only inside volumes)",
+        default=0, min=0, max=1024,
     )
     threads: IntProperty(
         name="Threads",

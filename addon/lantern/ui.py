@@ -69,6 +69,7 @@ class LANTERN_RENDER_PT_light_paths_max_bounces(LanternButtonsPanel, Panel):
 
         col = layout.column(align=True)
         col.prop(settings, "transparent_bounces", text="Transparent")
+        col.prop(settings, "volume_bounces", text="Volume")
 
 
 class LANTERN_RENDER_PT_light_paths_clamping(LanternButtonsPanel, Panel):
@@ -84,6 +85,23 @@ class LANTERN_RENDER_PT_light_paths_clamping(LanternButtonsPanel, Panel):
         col = layout.column(align=True)
         col.prop(settings, "clamp_direct", text="Direct Light")
         col.prop(settings, "clamp_indirect", text="Indirect Light")
+
+
+class LANTERN_RENDER_PT_volumes(LanternButtonsPanel, Panel):
+    bl_label = "Volumes"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.scene.lantern
+        col = layout.column(align=True)
+        col.prop(settings, "volume_estimator", text="Estimator")
+        sub = col.column(align=True)
+        sub.active = settings.volume_estimator == 'RAY_MARCHING' or settings.integrator == 'VOLUME_DEBUG'
+        sub.prop(settings, "volume_step", text="Step Size")
+        col.prop(settings, "volume_bounces", text="Max Bounces")
 
 
 class LANTERN_RENDER_PT_film(LanternButtonsPanel, Panel):
@@ -271,6 +289,7 @@ classes = (
     LANTERN_RENDER_PT_light_paths,
     LANTERN_RENDER_PT_light_paths_max_bounces,
     LANTERN_RENDER_PT_light_paths_clamping,
+    LANTERN_RENDER_PT_volumes,
     LANTERN_RENDER_PT_film,
     LANTERN_RENDER_PT_performance,
     LANTERN_VIEWLAYER_PT_passes,

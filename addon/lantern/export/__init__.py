@@ -6,6 +6,7 @@ from .camera import export_camera
 from .light import export_light
 from .material import ImageExporter, MaterialExporter
 from .mesh import CONVERTIBLE_TYPES, MeshExporter
+from .volume import export_volume
 from .world import export_world
 
 # Object types that are not rendered (or not yet): skipped silently.
@@ -36,7 +37,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
     meshes = MeshExporter(depsgraph, core_scene, report, materials)
     summary["world"] = export_world(depsgraph, core_scene, report, images)
 
-    lights = 0
+    lights = volumes = 0
     skipped_types = set()
     # Curves, surfaces, text and metaballs come as their object and, since Blender 3.0, as a
     # MESH instance of their evaluated geometry: export the latter, convert only if it is absent.
@@ -62,6 +63,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
                 deferred.append((obj, matrix))
         elif t == 'LIGHT':
             lights += export_light(obj, matrix, core_scene, report)
+        elif t == 'VOLUME':
+            volumes += export_volume(obj, matrix, core_scene, report, materials)
         elif t not in skipped_types:
             skipped_types.add(t)
             report({'WARNING'}, "Objects of type %s are not supported yet, skipped (e.g. '%s')"
@@ -73,5 +76,5 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
     summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()
                                                             if v is not None),
-                   lights=lights)
+                   lights=lights, volumes=volumes)
     return summary

@@ -123,13 +123,53 @@ class MaterialExporter:
         self._material = material
         self._nodes = []
         self._memo = {}
+        volume = None
         if material.use_nodes and material.node_tree is not None:
-            root = self._surface_root(material)
+            volume = self.volume(material)
+            output = material.node_tree.get_output_node('CYCLES')
+            if volume is not None and _follow(output.inputs["Surface"]) is None:
+                # Volume only: Cycles' invisible boundary (Transparent for the surface integrators).
+                root = self._add(core.NODE_TRANSPARENT, color=core.make_input((1.0, 1.0, 1.0)))
+            else:
+                root = self._surface_root(material)
         else:
             root = self._add(core.NODE_DIFFUSE, color=core.make_input(material.diffuse_color[:3]))
         mat_id = self.core_scene.add_material(self._nodes, root)
+        if volume is not None:
+            null_surface = _follow(material.node_tree.get_output_node('CYCLES').inputs["Surface"]) is None
+            self.core_scene.set_material_volume(mat_id, null_surface=null_surface, **volume)
         self.ids[key] = mat_id
         return mat_id
+
+    def volume(self, material):
+        """The material's Volume output as set_material_volume's keywords, or None."""
+        self._material = material
+        if not material.use_nodes or material.node_tree is None:
+            return None
+        output = material.node_tree.get_output_node('CYCLES')
+        if output is None or "Volume" not in output.inputs:
+            return None
+        out = _follow(output.inputs["Volume"])
+        if out is None:
+            return None
+        node = out.node
+        kinds = {'PRINCIPLED_VOLUME': core.VOLUME_PRINCIPLED, 'VOLUME_SCATTER': core.VOLUME_SCATTER,
+                 'VOLUME_ABSORPTION': core.VOLUME_ABSORPTION}
+        if node.type not in kinds:
+            self._warn("volume node '%s' (%s) is not supported (Principled Volume, Volume Scatter "
+                       "and Volume Absorption are); the volume is left out" % (node.name, node.bl_idname))
+            return None
+        for s in node.inputs:
+            if s.is_linked and s.name in ("Color", "Density", "Anisotropy", "Absorption Color"):
+                self._warn("'%s' of volume '%s' is linked; only constant volume inputs are "
+                           "supported, the socket's value is used" % (s.name, node.name))
+        def value(name, default):
+            s = node.inputs.get(name)
+            return default if s is None else s.default_value
+        return dict(node=kinds[node.type], color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3],
+                    density=float(value("Density", 1.0)),
+                    absorption_color=tuple(value("Absorption Color", (0.0, 0.0, 0.0)))[:3],
+                    anisotropy=float(value("Anisotropy", 0.0)))
 
     # -- tree walk -----------------------------------------------------------------------------
 

@@ -181,13 +181,51 @@ typedef struct lt_world_desc {
 } lt_world_desc;
 LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
 
+/* ---- volumes (docs/volumes.md) ---------------------------------------------------------------
+ * A volume shader node with Cycles' formulas: Principled Volume (sigma_s = d colour, sigma_t =
+ * d (colour + (1 - colour)(1 - sqrt(absorption_color)))), Volume Scatter (sigma_s = d colour),
+ * Volume Absorption (sigma_a = d (1 - colour)); Henyey-Greenstein anisotropy, g > 0 forward. */
+enum lt_volume_node { LT_VOLUME_PRINCIPLED = 0, LT_VOLUME_SCATTER = 1, LT_VOLUME_ABSORPTION = 2 };
+typedef struct lt_volume_desc {
+  int node; /* lt_volume_node */
+  float color[3];
+  float density;
+  float absorption_color[3]; /* Principled only */
+  float anisotropy;
+} lt_volume_desc;
+
+/* Gives a material a homogeneous medium inside the closed meshes that use it (entered through
+ * front faces, left through back faces). null_surface != 0: the material has no Surface output and
+ * its boundary is invisible to the volumetric integrators (the add-on exports a Transparent
+ * surface for the other integrators). */
+LT_API int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* desc, int null_surface);
+
+/* A Volume object: the float grid `grid` of the .vdb file at `path` (its density multiplies the
+ * desc's Density), placed by `transform` (object to world, row-major 3x4) after the grid's own
+ * index-to-object transform. The medium is bounded by the grid; no geometry. Errors: LT_ERROR_IO
+ * with the message (missing, unreadable or corrupt file; no such grid, listing those present; a
+ * grid that is empty or not a float grid). */
+LT_API int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
+                                    const lt_volume_desc* desc, int* out_id);
+
 /* Builds acceleration structures and light samplers. Must be called before rendering; scene
  * edits after commit are refused with LT_ERROR_STATE. */
 LT_API int lt_scene_commit(lt_scene* scene);
 
 /* ---- rendering ---------------------------------------------------------------------------- */
 
-enum lt_integrator { LT_INTEGRATOR_PATH = 0, LT_INTEGRATOR_BIDIRECTIONAL = 1, LT_INTEGRATOR_COUNT = 2 };
+/* VOLPATH: volumetric path tracing (equals PATH on a scene without media). VOLUME_DEBUG: a 2x2 view
+ * of the estimators for the same camera rays, each panel a half-size view of the frame: top left
+ * transmittance by ray marching, top right by ratio tracking, bottom left distance to the sampled
+ * collision (world units, 0 for none) by ray marching, bottom right by delta tracking. */
+enum lt_integrator {
+  LT_INTEGRATOR_PATH = 0,
+  LT_INTEGRATOR_BIDIRECTIONAL = 1,
+  LT_INTEGRATOR_VOLPATH = 2,
+  LT_INTEGRATOR_VOLUME_DEBUG = 3,
+  LT_INTEGRATOR_COUNT = 4
+};
+enum lt_volume_estimator { LT_VOLUME_RAY_MARCHING = 0, LT_VOLUME_TRACKING = 1 };
 enum lt_mis { LT_MIS_POWER = 0, LT_MIS_BALANCE = 1, LT_MIS_UNIFORM = 2 };
 enum lt_filter { LT_FILTER_BOX = 0, LT_FILTER_GAUSSIAN = 1, LT_FILTER_BLACKMAN_HARRIS = 2 };
 
@@ -214,6 +252,12 @@ typedef struct lt_render_settings {
   /* Bidirectional strategy view: keep each (s, t) strategy's weighted contribution for path
    * depths s + t - 2 below this (0: off; at most 8). Read with lt_render_read_strategy_grid. */
   int strategy_view_depth;
+  /* Volumes: Cycles' volume bounce limit (default 0: single scattering), the estimator for
+   * heterogeneous media (lt_volume_estimator; homogeneous media are always exact) and the
+   * ray-marching step in world units (0: each grid's voxel size). */
+  int volume_bounces;
+  int volume_estimator;
+  float volume_step;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);

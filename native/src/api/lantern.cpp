@@ -10,6 +10,8 @@
 #include "core/error.h"
 #include "core/render.h"
 #include "io/exr.h"
+#include "io/vdb.h"
+#include "scene/volume_material.h"
 #include "scene/scene.h"
 
 
@@ -70,6 +72,18 @@ lt::Input to_input(const lt_input& in, size_t image_count, const char* what, int
   r.value = lt::Vec3(in.value[0], in.value[1], in.value[2]);
   r.image = in.image;
   return r;
+}
+
+lt::VolumeCoefficients to_volume(const lt_volume_desc* d) {
+  require(d != nullptr, "volume description is NULL");
+  require(d->node >= LT_VOLUME_PRINCIPLED && d->node <= LT_VOLUME_ABSORPTION,
+          "unknown volume node " + std::to_string(d->node) + "; valid: PRINCIPLED, SCATTER, ABSORPTION");
+  require(finite_array(d->color, 3) && finite_array(d->absorption_color, 3) && std::isfinite(d->density) &&
+              std::isfinite(d->anisotropy),
+          "volume colour, density, absorption colour and anisotropy must be finite");
+  return lt::volume_coefficients(lt::VolumeNode(d->node), lt::Vec3(d->color[0], d->color[1], d->color[2]), d->density,
+                                 lt::Vec3(d->absorption_color[0], d->absorption_color[1], d->absorption_color[2]),
+                                 d->anisotropy);
 }
 
 constexpr int kMaxDimension = 65536;
@@ -331,6 +345,45 @@ int lt_scene_set_world(lt_scene* scene, const lt_world_desc* d) {
   });
 }
 
+int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* d, int null_surface) {
+  return guarded([&] {
+    require(scene && d, "lt_scene_set_material_volume: NULL argument");
+    scene->scene.require_editable();
+    lt::Scene& sc = scene->scene;
+    require(material >= 0 && material < int(sc.materials.size()),
+            "material " + std::to_string(material) + " does not exist");
+    lt::VolumeCoefficients c = to_volume(d);
+    sc.material_medium.resize(sc.materials.size(), -1);
+    sc.material_null.resize(sc.materials.size(), 0);
+    sc.media.push_back(lt::Medium::homogeneous(c.sigma_a, c.sigma_s, c.g));
+    sc.material_medium[material] = int(sc.media.size()) - 1;
+    sc.material_null[material] = null_surface != 0;
+  });
+}
+
+int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
+                             const lt_volume_desc* d, int* out_id) {
+  return guarded([&] {
+    require(scene && path && transform && d && out_id, "lt_scene_add_volume_grid: NULL argument");
+    scene->scene.require_editable();
+    lt::VolumeCoefficients c = to_volume(d);
+    lt::Transform xf = to_transform(transform, "volume");
+    require(std::abs(xf.determinant()) > 1e-30f, "volume transform is singular");
+    const std::string grid_name = grid && *grid ? grid : "density";
+    std::shared_ptr<lt::GridData> data;
+    try {
+      data = std::make_shared<lt::GridData>(lt::load_density_grid(path, grid_name));
+    } catch (const lt::InvalidArgument& e) {
+      throw lt::IoError(std::string(path) + ": " + e.what());  // a file that cannot be used is an I/O error
+    }
+    lt::Scene& sc = scene->scene;
+    sc.media.push_back(lt::Medium::heterogeneous(data, c.sigma_a, c.sigma_s, c.g, xf));
+    *out_id = int(sc.media.size()) - 1;
+    if (sc.media.back().empty()) sc.warnings.push_back(std::string(path) + ": volume has no density; left out");
+    else sc.global_media.push_back(*out_id);
+  });
+}
+
 int lt_scene_commit(lt_scene* scene) {
   return guarded([&] {
     require(scene != nullptr, "lt_scene_commit: NULL scene");
@@ -355,6 +408,9 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->max_camera_length = 64;
   s->max_light_length = 64;
   s->mis_heuristic = LT_MIS_POWER;
+  s->volume_bounces = 0;
+  s->volume_estimator = LT_VOLUME_TRACKING;
+  s->volume_step = 0;
 }
 
 int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** out) {
@@ -369,7 +425,11 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     require(s->samples > 0 && s->samples <= (1 << 24), "samples must be in [1, 16777216]");
     bool full = s->border[0] == 0 && s->border[1] == 0 && s->border[2] == 0 && s->border[3] == 0;
     require(s->integrator >= 0 && s->integrator < LT_INTEGRATOR_COUNT,
-            "unknown integrator " + std::to_string(s->integrator) + "; valid: PATH, BIDIRECTIONAL");
+            "unknown integrator " + std::to_string(s->integrator) + "; valid: PATH, BIDIRECTIONAL, VOLPATH, VOLUME_DEBUG");
+    require(s->volume_bounces >= 0 && s->volume_bounces <= 1024, "volume bounces must be in [0, 1024]");
+    require(s->volume_estimator == LT_VOLUME_RAY_MARCHING || s->volume_estimator == LT_VOLUME_TRACKING,
+            "unknown volume estimator " + std::to_string(s->volume_estimator) + "; valid: RAY_MARCHING, TRACKING");
+    require(std::isfinite(s->volume_step) && s->volume_step >= 0, "volume step must be finite and >= 0");
     require(s->integrator != LT_INTEGRATOR_BIDIRECTIONAL ||
                 (s->max_camera_length >= 1 && s->max_camera_length <= 1024 && s->max_light_length >= 0 &&
                  s->max_light_length <= 1024),
@@ -420,6 +480,10 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.max_camera_length = s->max_camera_length;
     is.max_light_length = s->max_light_length;
     is.mis = lt::MisHeuristic(s->mis_heuristic);
+    is.volume_bounces = s->volume_bounces;
+    is.volume_estimator = s->volume_estimator == LT_VOLUME_RAY_MARCHING ? lt::VolumeEstimator::RayMarching
+                                                                       : lt::VolumeEstimator::Tracking;
+    is.volume_step = s->volume_step;
     is.strategy_depth = s->integrator == LT_INTEGRATOR_BIDIRECTIONAL ? s->strategy_view_depth : 0;
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);

@@ -61,7 +61,23 @@ void RenderJob::render_pass(int sample_index) {
       list.clear();
     }
     film_.add_light_paths(uint64_t(film_.width()) * film_.height());
+  } else if (settings_.integrator == IntegratorType::VolumeDebug) {
+    // Panels: top row transmittance (marching | ratio tracking), bottom row sampled distance
+    // (marching | delta tracking); each panel is the whole view at half the resolution.
+    const int hw = std::max(1, settings_.width / 2), hh = std::max(1, settings_.height / 2);
+    render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) {
+      const int col = cs.film.x >= hw ? 1 : 0, top = cs.film.y >= hh ? 1 : 0;
+      float fx = std::min(cs.film.x - col * hw, float(hw)) * settings_.width / float(hw);
+      float fy = std::min(cs.film.y - top * hh, float(hh)) * settings_.height / float(hh);
+      return trace_volume_debug(scene_, settings_.integrator_settings, camera_.generate(fx, fy), (1 - top) * 2 + col,
+                                sampler, stats);
+    });
+  } else if (settings_.integrator == IntegratorType::VolPath && scene_.has_media()) {
+    render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) {
+      return trace_volpath(scene_, settings_.integrator_settings, cs.ray, sampler, stats);
+    });
   } else {
+    // Path tracing; also "Volumetric Path" on a scene without media (the same estimator, no cost).
     render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) {
       return trace_path(scene_, settings_.integrator_settings, cs.ray, sampler, stats);
     });

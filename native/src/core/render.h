@@ -14,7 +14,8 @@
 
 namespace lt {
 
-enum class IntegratorType { Path = 0, Bidirectional = 1, Count = 2 };
+// VolumeDebug: the 2x2 estimator view of integrators/volume_debug.cpp (each panel a half-size view).
+enum class IntegratorType { Path = 0, Bidirectional = 1, VolPath = 2, VolumeDebug = 3, Count = 4 };
 
 struct RenderSettings {
   int width = 640, height = 480;

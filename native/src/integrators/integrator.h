@@ -6,6 +6,7 @@
 
 #include "core/film.h"
 #include "core/sampling.h"
+#include "scene/medium.h"
 #include "scene/scene.h"
 
 namespace lt {
@@ -24,6 +25,11 @@ struct IntegratorSettings {
   int diffuse_bounces = 4, glossy_bounces = 4, transmission_bounces = 12, transparent_bounces = 8;
   float clamp_direct = 0, clamp_indirect = 0;  // 0: off
   bool transparent_background = false;
+  // Volumes: Cycles' volume bounce limit (0: single scattering), the estimator for heterogeneous
+  // media and the ray-marching step in world units (<= 0: each medium's voxel size).
+  int volume_bounces = 0;
+  VolumeEstimator volume_estimator = VolumeEstimator::Tracking;
+  float volume_step = 0;
 };
 
 struct SampleStats {
@@ -78,5 +84,16 @@ std::vector<float> bdpt_mis_weight_sums(const RenderContext& ctx, const CameraSa
 // Radiance along a camera ray, plus the first-hit data passes. One call is one sample.
 SampleValue trace_path(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
                        Sampler& sampler, SampleStats& stats);
+
+// Volumetric path tracing (integrators/volpath.cpp): trace_path with a volume stack, free-flight
+// sampling, NEE through media and invisible boundaries. Only for scenes with media.
+SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
+                          Sampler& sampler, SampleStats& stats);
+
+// Volume debug view (integrators/volume_debug.cpp): for the camera ray of a panel pixel, panel
+// 0 = transmittance by ray marching, 1 = by ratio tracking, 2 = sampled distance by ray marching,
+// 3 = by delta tracking (distance from the ray origin in world units, 0 without a collision).
+SampleValue trace_volume_debug(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
+                               int panel, Sampler& sampler, SampleStats& stats);
 
 }  // namespace lt

@@ -60,6 +60,10 @@ void Scene::commit() {
     all.push_back(w);
   }
   lights.build(std::move(all), world_set ? &world : nullptr, geometry);
+  material_medium.resize(materials.size(), -1);
+  material_null.resize(materials.size(), 0);
+  for (int m : material_medium) has_boundaries_ = has_boundaries_ || m >= 0;
+  has_media_ = has_boundaries_ || !global_media.empty();
   committed_ = true;
 }
 

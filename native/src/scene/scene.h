@@ -11,6 +11,7 @@
 #include "scene/image.h"
 #include "scene/lights.h"
 #include "scene/material.h"
+#include "scene/medium.h"
 
 namespace lt {
 
@@ -29,6 +30,22 @@ class Scene {
   LightSet lights;
   std::vector<std::string> warnings;
 
+  // Participating media (docs/volumes.md). material_medium[m]: the medium inside closed meshes of
+  // material m (-1: none); material_null[m]: m has no surface, its boundary is invisible.
+  // global_media: media bounded by their own grid (Volume objects), active along every ray.
+  std::vector<Medium> media;
+  std::vector<int> material_medium, global_media;
+  std::vector<uint8_t> material_null;
+  int medium_of(int material) const {
+    return material >= 0 && material < int(material_medium.size()) ? material_medium[material] : -1;
+  }
+  bool null_surface(int material) const {
+    return material >= 0 && material < int(material_null.size()) && material_null[material];
+  }
+  // Set by commit(): the scene has media at all, and mesh boundaries of media.
+  bool has_media() const { return has_media_; }
+  bool has_boundaries() const { return has_boundaries_; }
+
   void commit();
   bool committed() const { return committed_; }
   const Material& material(int id) const {
@@ -38,6 +55,7 @@ class Scene {
 
  private:
   bool committed_ = false;
+  bool has_media_ = false, has_boundaries_ = false;
 };
 
 }  // namespace lt

@@ -1,0 +1,101 @@
+#include "integrators/media_transport.h"
+
+namespace lt {
+
+namespace {
+
+constexpr unsigned kVisAll = 31, kVisShadow = 16;
+constexpr int kMaxCrossings = 256;  // invisible boundaries a shadow ray or the stack probe passes
+
+// Calls f(medium) for every non-empty medium the ray is in: the stack's, then the global ones.
+template <class F>
+void for_each_medium(const Scene& scene, const VolumeStack& stack, F f) {
+  for (int i = 0; i < stack.size; ++i)
+    if (!scene.media[stack.media[i]].empty()) f(stack.media[i]);
+  for (int m : scene.global_media) f(m);
+}
+
+}  // namespace
+
+void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* stack, SampleStats& stats) {
+  stack->size = 0;
+  Ray r = camera_ray;
+  r.tmin = 0;
+  r.tmax = INFINITY;
+  int decided[VolumeStack::kCapacity * 4], n_decided = 0;
+  for (int i = 0; i < kMaxCrossings; ++i) {
+    Hit hit;
+    ++stats.rays;
+    if (!scene.geometry.intersect(r, kVisAll, &hit)) break;
+    SurfacePoint sp = scene.geometry.surface(hit);
+    int m = scene.medium_of(sp.material);
+    if (m >= 0) {
+      bool seen = false;
+      for (int k = 0; k < n_decided; ++k) seen = seen || decided[k] == m;
+      if (!seen && n_decided < int(sizeof(decided) / sizeof(int))) {
+        decided[n_decided++] = m;
+        if (dot(r.d, sp.ng) > 0) stack->cross(m, true);  // first met from inside
+      }
+    }
+    r.o = spawn_origin(sp, r.d);
+  }
+}
+
+void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir, VolumeStack* stack) {
+  int m = scene.medium_of(sp.material);
+  if (m >= 0) stack->cross(m, dot(dir, sp.ng) < 0);
+}
+
+Spectrum media_transmittance(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
+                             Sampler& sampler, VolumeEstimator est, float step) {
+  Spectrum T(1.0f);
+  for_each_medium(scene, stack, [&](int m) {
+    if (!is_black(T)) T *= scene.media[m].transmittance(ray, t0, t1, sampler, est, step);
+  });
+  return T;
+}
+
+int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1, Sampler& sampler,
+                 VolumeEstimator est, float step, Spectrum* beta, MediumInteraction* mi) {
+  int winner = -1;
+  float end = t1;
+  Spectrum w(1.0f);
+  for_each_medium(scene, stack, [&](int m) {
+    MediumInteraction cur;
+    if (!(end > t0)) return;
+    if (scene.media[m].sample_distance(ray, t0, end, sampler, est, step, &cur)) {
+      if (winner >= 0) {  // the previous collision lies beyond: it survived to cur.t
+        Spectrum st = scene.media[winner].sigma_t(mi->p);
+        for (int k = 0; k < 3; ++k) w[k] *= mi->sigma_s[k] > 0 ? mi->weight[k] * st[k] / mi->sigma_s[k] : 0.0f;
+      }
+      winner = m;
+      *mi = cur;
+      end = cur.t;
+    } else {
+      w *= cur.weight;
+    }
+  });
+  *beta *= winner >= 0 ? w * mi->weight : w;
+  return winner;
+}
+
+Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sampler& sampler, VolumeEstimator est,
+                              float step, SampleStats& stats) {
+  Spectrum T(1.0f);
+  for (int i = 0; i < kMaxCrossings; ++i) {
+    Hit hit;
+    ++stats.rays;
+    bool found = scene.geometry.intersect(ray, kVisShadow, &hit);
+    T *= media_transmittance(scene, stack, ray, ray.tmin, found ? hit.t : ray.tmax, sampler, est, step);
+    if (!found || is_black(T)) return T;
+    SurfacePoint sp = scene.geometry.surface(hit);
+    if (!scene.null_surface(sp.material)) return Spectrum(0.0f);
+    cross_boundary(scene, sp, ray.d, &stack);
+    ray.o = spawn_origin(sp, ray.d);
+    ray.tmax -= hit.t;
+    ray.tmin = 0;
+  }
+  return Spectrum(0.0f);
+}
+
+}  // namespace lt

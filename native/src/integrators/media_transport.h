@@ -1,0 +1,35 @@
+// Light transport through the scene's media, shared by the volumetric path tracer and the volume
+// debug view: the volume stack at the camera, transmittance along segments and shadow rays through
+// invisible boundaries, and free-flight sampling over overlapping media.
+#pragma once
+
+#include "integrators/integrator.h"
+#include "scene/volume_stack.h"
+
+namespace lt {
+
+// The media containing the ray's origin: the first boundary of each medium met along the ray is a
+// back face (closed meshes; parity as in pbrt's medium interfaces). Follows the ray to infinity.
+void init_volume_stack(const Scene& scene, const Ray& ray, VolumeStack* stack, SampleStats& stats);
+
+// Applies a boundary crossing at a surface point by a ray leaving towards `dir` (enter when dir
+// goes against the geometric normal's outside, i.e. into the closed mesh).
+void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir, VolumeStack* stack);
+
+// Product of the transmittances of every medium of the stack and every global medium on [t0, t1].
+Spectrum media_transmittance(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
+                             Sampler& sampler, VolumeEstimator est, float step);
+
+// Free-flight sampling on [t0, t1] over the stack's and the global media: each medium is sampled
+// on [t0, nearest collision so far]; the nearest collision wins (exact for independent media;
+// a superseded collision's weight becomes its survival weight sigma_t/sigma_s x weight).
+// Multiplies *beta by the weights; returns the colliding medium or -1 (continue to t1).
+int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1, Sampler& sampler,
+                 VolumeEstimator est, float step, Spectrum* beta, MediumInteraction* mi);
+
+// Transmittance of a shadow ray (ray.tmax: distance to the light) through invisible boundaries
+// (updating a copy of the stack) and media; 0 if an opaque surface is in the way.
+Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sampler& sampler, VolumeEstimator est,
+                              float step, SampleStats& stats);
+
+}  // namespace lt

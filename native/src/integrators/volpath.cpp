@@ -1,0 +1,224 @@
+// Volumetric path tracing (pbrt 3, 15.3; Assignment 4 of the sheet): the path tracer of path.cpp
+// with a volume stack, free-flight sampling in the media along every segment, NEE from medium
+// vertices with the phase function and from surface vertices with transmittance along the shadow
+// ray through invisible boundaries, MIS (power heuristic) of light sampling against phase/BSDF
+// sampling, Russian roulette, and Cycles' volume bounce limit (0: single scattering).
+#include "integrators/media_transport.h"
+
+namespace lt {
+
+namespace {
+
+constexpr unsigned kVisCamera = 1, kVisDiffuse = 2, kVisGlossy = 4, kVisTransmission = 8;
+constexpr int kMaxNullCrossings = 1024;
+
+Spectrum clamp_contribution(const Spectrum& c, float limit) {
+  if (limit <= 0) return c;
+  float m = max_component(c);
+  return m > limit ? c * (limit / m) : c;
+}
+
+unsigned visibility_of(uint32_t lobe) {
+  if (lobe & kLobeTransmission) return kVisTransmission;
+  if (lobe & kLobeDiffuse) return kVisDiffuse;
+  return kVisGlossy;
+}
+
+}  // namespace
+
+SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
+                          SampleStats& stats) {
+  SampleValue out;
+  const LightSet& lights = scene.lights;
+  const VolumeEstimator est = s.volume_estimator;
+  const float step = s.volume_step;
+  Spectrum L(0.0f), beta(1.0f);
+  Ray ray = camera_ray;
+  unsigned visibility = kVisCamera;
+  int bounce = 0, diffuse = 0, glossy = 0, transmission = 0, transparent = 0, volume = 0, nulls = 0;
+  float prev_pdf = 0;
+  bool prev_delta = true;
+  Vec3 prev_p = ray.o;
+  float t_prev = 0;  // distance from prev_p to ray.o (the ray crossed invisible boundaries)
+  VolumeStack stack;
+  if (scene.has_boundaries()) init_volume_stack(scene, camera_ray, &stack, stats);
+  Bsdf bsdf;
+
+  auto add = [&](const Spectrum& c) {
+    L += clamp_contribution(c, bounce == 0 ? s.clamp_direct : s.clamp_indirect);
+  };
+  auto mis_emitter = [&](int light, const Vec3& dir, float t) {
+    if (prev_delta) return 1.0f;
+    float light_pdf = lights.pmf(light) * lights.pdf(scene, light, prev_p, dir, t);
+    return power_heuristic(prev_pdf, light_pdf);
+  };
+  // NEE from p (a medium point when sp is null); f(wi) returns the BSDF x cos or phase value and
+  // its pdf; `stack` is the stack on the side the shadow ray leaves into.
+  auto next_event = [&](const Vec3& p, const SurfacePoint* sp, const VolumeStack& st, auto f) {
+    float pmf, u_light;
+    int li = lights.pick(sampler.next_1d(), &pmf, &u_light);
+    Vec2 u = sampler.next_2d();
+    LightSample ls;
+    if (!(pmf > 0) || !lights.sample(scene, li, p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance)) return;
+    float scatter_pdf;
+    Spectrum fv = f(ls.wi, &scatter_pdf);
+    if (is_black(fv)) return;
+    Ray shadow;
+    shadow.o = sp ? spawn_origin(*sp, ls.wi) : p;
+    shadow.d = ls.wi;
+    shadow.tmin = 0;
+    shadow.tmax = std::isinf(ls.distance) ? INFINITY : ls.distance * (1 - 1e-4f);
+    VolumeStack shadow_stack = st;
+    if (sp) cross_boundary(scene, *sp, ls.wi, &shadow_stack);
+    Spectrum T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats);
+    if (is_black(T)) return;
+    float light_pdf = pmf * ls.pdf;
+    float w = ls.delta ? 1.0f : power_heuristic(light_pdf, scatter_pdf);
+    add(beta * fv * T * ls.radiance * (w / light_pdf));
+  };
+
+  for (;;) {
+    Hit hit;
+    ++stats.rays;
+    bool found = scene.geometry.intersect(ray, visibility, &hit);
+    const float t_end = found ? hit.t : ray.tmax;
+
+    // Free flight through the media along [tmin, t_end].
+    const Spectrum beta_before = beta;
+    MediumInteraction mi;
+    int medium = sample_media(scene, stack, ray, ray.tmin, t_end, sampler, est, step, &beta, &mi);
+    const float t_seg = medium >= 0 ? mi.t : t_end;
+    // Lamps with a size are hit by rays but never occlude (as in Cycles); weighted as the segment
+    // before the collision (exact for grey media).
+    if (lights.has_hittable()) {
+      Ray r = ray;
+      r.tmax = t_seg;
+      lights.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
+        add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t));
+      });
+    }
+    if (!is_finite(beta)) break;
+
+    if (medium >= 0) {
+      // A real collision: beta already holds sigma_s T / pdf (medium.h).
+      if (bounce == 0 && transparent == 0) out.alpha = 1;
+      if (is_black(beta) || volume > s.volume_bounces || bounce > s.max_bounces) break;
+      const PhaseHG& phase = scene.media[medium].phase();
+      const Vec3 wo = normalize(-ray.d);
+      if (!lights.empty())
+        next_event(mi.p, nullptr, stack, [&](const Vec3& wi, float* pdf) {
+          float p = phase.eval(wo, wi);
+          *pdf = p;
+          return Spectrum(p);
+        });
+      Vec3 wi;
+      float pdf;
+      if (!phase.sample(wo, sampler.next_2d(), &wi, &pdf) || !(pdf > 0)) break;
+      ++volume;
+      ++bounce;
+      visibility = kVisDiffuse;
+      prev_pdf = pdf;
+      prev_delta = false;
+      prev_p = mi.p;
+      t_prev = 0;
+      ray.o = mi.p;
+      ray.d = wi;
+      ray.tmin = 0;
+      ray.tmax = INFINITY;
+    } else if (!found) {
+      bool background = bounce == 0 && transparent == 0;
+      if (!(background && s.transparent_background)) {
+        if (lights.world_light() >= 0 && (!background || scene.world.camera_visible))
+          add(beta * scene.world.radiance(ray.d) * mis_emitter(lights.world_light(), ray.d, INFINITY));
+        lights.escaped_suns(ray.d, visibility, [&](int i, const Spectrum& radiance) {
+          add(beta * radiance * mis_emitter(i, ray.d, INFINITY));
+        });
+      }
+      if (background && out.alpha == 0) out.alpha = s.transparent_background ? 0.0f : 1.0f;
+      break;
+    } else {
+      SurfacePoint sp = scene.geometry.surface(hit);
+      if (scene.null_surface(sp.material)) {
+        // An invisible medium boundary: update the stack and continue along the same line.
+        if (++nulls > kMaxNullCrossings) break;
+        cross_boundary(scene, sp, ray.d, &stack);
+        t_prev += hit.t * length(ray.d);
+        ray.o = spawn_origin(sp, ray.d);
+        ray.tmax -= hit.t;
+        ray.tmin = 0;
+        continue;
+      }
+      const bool backface = dot(ray.d, sp.ng) > 0;
+      const Vec3 ng = backface ? -sp.ng : sp.ng, ns = backface ? -sp.ns : sp.ns;
+      const Material& material = scene.material(sp.material);
+      Spectrum emitted = material.evaluate(scene.images, sp.uv, backface, &bsdf);
+      if (bounce == 0 && transparent == 0) {
+        out.alpha = 1;
+        out.depth = hit.t;
+      }
+      if (!is_black(emitted)) {
+        int li = lights.triangle_light(sp.instance, sp.primitive);
+        add(beta * emitted * (li >= 0 ? mis_emitter(li, ray.d, t_prev + hit.t * length(ray.d)) : 1.0f));
+      }
+      if (bounce == 0 && transparent == 0) {
+        out.normal = ns;
+        out.albedo = bsdf.albedo();
+      }
+      if (bsdf.count() == 0) break;
+      if (bounce > s.max_bounces || diffuse > s.diffuse_bounces || glossy > s.glossy_bounces ||
+          transmission > s.transmission_bounces || transparent > s.transparent_bounces || volume > s.volume_bounces)
+        break;
+
+      const Frame frame(ns);
+      const Vec3 wo = frame.to_local(-ray.d);
+      if (bsdf.has_non_delta() && !lights.empty())
+        next_event(sp.p, &sp, stack, [&](const Vec3& wi_world, float* pdf) {
+          Vec3 wi = frame.to_local(wi_world);
+          Spectrum f = bsdf.eval(wo, wi, pdf);
+          // The geometric normal decides which side the light is on; shading normals only shade.
+          if ((dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
+          return f * std::abs(wi.z);
+        });
+
+      BsdfSample bs;
+      float u_lobe = sampler.next_1d();
+      Vec2 u = sampler.next_2d();
+      if (!bsdf.sample(wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
+      Vec3 wi = frame.to_world(bs.wi);
+      bool reflect_geo = dot(wi, ng) > 0;
+      if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;
+      beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
+      if (!is_finite(beta)) break;
+      if (!reflect_geo) cross_boundary(scene, sp, wi, &stack);  // refraction into / out of a medium
+
+      if (bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1) {
+        ++transparent;
+      } else {
+        ++bounce;
+        if (bs.flags & kLobeDiffuse) ++diffuse;
+        else if (bs.flags & kLobeTransmission) ++transmission;
+        else ++glossy;
+        visibility = visibility_of(bs.flags);
+      }
+      prev_pdf = bs.pdf;
+      prev_delta = (bs.flags & kLobeSpecular) != 0;
+      prev_p = sp.p;
+      t_prev = 0;
+      ray.o = spawn_origin(sp, wi);
+      ray.d = wi;
+      ray.tmin = 0;
+      ray.tmax = INFINITY;
+    }
+
+    // Russian roulette once the path has had a chance to gather light (unbiased: divide by q).
+    if (bounce >= 3) {
+      float q = std::min(0.95f, max_component(beta));
+      if (sampler.next_1d() >= q) break;
+      beta /= q;
+    }
+  }
+  out.radiance = L;
+  return out;
+}
+
+}  // namespace lt

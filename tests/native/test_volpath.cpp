@@ -1,0 +1,203 @@
+// The volumetric path tracer through the C ABI: energy conservation in a white furnace, identity
+// with the path tracer on scenes without media, extremes, VDB volumes and their errors.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "scene_builders.h"
+
+using namespace lt_test;
+
+namespace {
+
+constexpr double kSigmas = 5.0;
+
+lt_volume_desc volume(int node, float density, float color = 1, float g = 0) {
+  lt_volume_desc d{};
+  d.node = node;
+  d.color[0] = d.color[1] = d.color[2] = color;
+  d.density = density;
+  d.anisotropy = g;
+  return d;
+}
+
+// A material whose only output is a volume: a Transparent surface for PATH, invisible for VOLPATH.
+int add_volume_material(lt_scene* s, const lt_volume_desc& d) {
+  lt_shader_node n = node(LT_NODE_TRANSPARENT);
+  n.color.value[0] = n.color.value[1] = n.color.value[2] = 1;
+  int id;
+  check(lt_scene_add_material(s, &n, 1, 0, &id), "add_material");
+  check(lt_scene_set_material_volume(s, id, &d, 1), "set_material_volume");
+  return id;
+}
+
+lt_render_settings volpath_settings(int w, int h, int spp, unsigned seed = 1) {
+  lt_render_settings rs = render_settings(w, h, spp, seed);
+  rs.integrator = LT_INTEGRATOR_VOLPATH;
+  return rs;
+}
+
+std::string vdb(const std::string& name) { return std::string(LANTERN_TEST_VDB_DIR) + "/" + name; }
+
+// A medium sphere of radius `r` at the origin seen from -Y, in a uniform white world.
+ScenePtr furnace_scene(float density, float albedo, float g, float r) {
+  ScenePtr s = new_scene();
+  int m = add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, density, albedo, g));
+  add_object(s.get(), icosphere(r, 3), m);
+  set_world(s.get(), {1, 1, 1}, 1);
+  set_camera(s.get(), perspective_camera(look_at({0, -4 * r, 0}, {0, 0, 0}), 50));
+  check(lt_scene_commit(s.get()), "commit");
+  return s;
+}
+
+}  // namespace
+
+TEST(VolPath, FurnaceAlbedoOneMediumReturnsTheWorld) {
+  ScenePtr s = furnace_scene(1.5f, 1.0f, 0.5f, 1.0f);
+  lt_render_settings rs = volpath_settings(24, 24, 128, 3);
+  rs.max_bounces = 1024;
+  rs.volume_bounces = 1024;
+  Passes p = render(s.get(), rs);
+  ASSERT_EQ(p.first_non_finite(), "");
+  double sum = 0, var = 0;
+  int failures = 0;
+  for (int y = 0; y < p.height; ++y)
+    for (int x = 0; x < p.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        double m = p.rgba(x, y)[c], v = p.var(x, y)[c];
+        sum += m;
+        var += v;
+        if (std::abs(m - 1.0) > kSigmas * std::sqrt(v) + 1e-5 && failures++ < 10)
+          ADD_FAILURE() << "pixel (" << x << ", " << y << ") channel " << c << ": " << m;
+      }
+  int n = 3 * p.width * p.height;
+  EXPECT_NEAR(sum / n, 1.0, kSigmas * std::sqrt(var) / n + 1e-5);
+  EXPECT_GT(var, 0.0) << "the medium should make the estimate noisy";
+}
+
+TEST(VolPath, SingleScatteringLosesEnergyInTheFurnace) {
+  // Cycles' default volume_bounces = 0: one scattering event, so the sphere is darker than the world.
+  ScenePtr s = furnace_scene(3.0f, 1.0f, 0.0f, 1.0f);
+  Passes p = render(s.get(), volpath_settings(16, 16, 32, 3));
+  ASSERT_EQ(p.first_non_finite(), "");
+  EXPECT_LT(p.rgba(8, 8)[0], 0.9f);
+}
+
+TEST(VolPath, EqualsPathWithoutMedia) {
+  ScenePtr s = new_scene();
+  int white = add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), red = add_diffuse(s.get(), {0.8f, 0.1f, 0.1f});
+  add_object(s.get(), box({-1, -1, 0}, {1, 1, 2}), white);
+  add_object(s.get(), icosphere(0.4f, 2), red, translate({0.2f, 0.1f, 0.4f}));
+  add_light(s.get(), point_light({0, 0, 1.8f}, 100));
+  set_world(s.get(), {0.2f, 0.2f, 0.2f}, 1);
+  set_camera(s.get(), perspective_camera(look_at({0, -0.9f, 1}, {0, 0, 1}), 20));
+  check(lt_scene_commit(s.get()), "commit");
+  lt_render_settings rs = render_settings(32, 32, 16, 5);
+  Passes a = render(s.get(), rs);
+  rs.integrator = LT_INTEGRATOR_VOLPATH;
+  Passes b = render(s.get(), rs);
+  // Per 8x8 tile and channel: means within 5 standard errors of each other.
+  for (int ty = 0; ty < 4; ++ty)
+    for (int tx = 0; tx < 4; ++tx)
+      for (int c = 0; c < 3; ++c) {
+        RegionStats ra = region_stats(a, c, 8 * tx, 8 * tx + 8, 8 * ty, 8 * ty + 8);
+        RegionStats rb = region_stats(b, c, 8 * tx, 8 * tx + 8, 8 * ty, 8 * ty + 8);
+        double se = std::hypot(ra.standard_error, rb.standard_error);
+        EXPECT_LE(std::abs(ra.mean - rb.mean), kSigmas * se + 1e-6) << "tile " << tx << "," << ty;
+      }
+}
+
+TEST(VolPath, ExtremesAreFiniteAndBounded) {
+  struct Case {
+    float density, albedo, g, scale;
+  };
+  const Case cases[] = {{1e-6f, 1, 0, 1},   {1e6f, 1, 0, 1},     {1e6f, 0, 0, 1},    {1, 0, 0, 1},
+                        {1, 1, -0.99f, 1},  {1, 1, 0.99f, 1},    {1e3f, 1, 0, 1e-3f}, {1e-4f, 1, 0, 1e4f},
+                        {1e6f, 1, 0.99f, 1e4f}, {1e-6f, 0, -0.99f, 1e-3f}};
+  for (const Case& k : cases) {
+    ScenePtr s = new_scene();
+    int m = add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, k.density, k.albedo, k.g));
+    add_object(s.get(), icosphere(k.scale, 2), m);
+    int white = add_diffuse(s.get(), {0.8f, 0.8f, 0.8f});
+    add_object(s.get(), box({-3 * k.scale, -3 * k.scale, -2 * k.scale}, {3 * k.scale, 3 * k.scale, -1.5f * k.scale}), white);
+    add_light(s.get(), point_light({0, -2 * k.scale, 2 * k.scale}, 100 * k.scale * k.scale));
+    set_world(s.get(), {0.5f, 0.5f, 0.5f}, 1);
+    lt_camera_desc cam = perspective_camera(look_at({0, -5 * k.scale, 0}, {0, 0, 0}), 35);
+    cam.clip_start = 1e-4f * k.scale;
+    cam.clip_end = 1e3f * k.scale;
+    set_camera(s.get(), cam);
+    check(lt_scene_commit(s.get()), "commit");
+    lt_render_settings rs = volpath_settings(16, 16, 4);
+    rs.volume_bounces = 64;
+    auto t0 = std::chrono::steady_clock::now();
+    Passes p = render(s.get(), rs);
+    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(p.first_non_finite(), "") << "density " << k.density << " albedo " << k.albedo << " g " << k.g;
+    EXPECT_EQ(p.status.nan_samples, 0u) << "density " << k.density << " scale " << k.scale;
+    EXPECT_LT(secs, 20.0) << "density " << k.density << " albedo " << k.albedo << " scale " << k.scale;
+  }
+}
+
+TEST(VolPath, VdbVolumeThroughTheAbi) {
+  for (int estimator : {LT_VOLUME_RAY_MARCHING, LT_VOLUME_TRACKING}) {
+    ScenePtr s = new_scene();
+    lt_volume_desc d = volume(LT_VOLUME_PRINCIPLED, 5, 1);
+    Xform xf = identity();
+    int id = -1;
+    ASSERT_EQ(lt_scene_add_volume_grid(s.get(), vdb("density.vdb").c_str(), "density", xf.data(), &d, &id), LT_OK)
+        << lt_last_error();
+    EXPECT_GE(id, 0);
+    set_world(s.get(), {1, 1, 1}, 1);
+    // The grid spans about [0.7, 2.2] x [-2, -0.5] x [0.7, 2.2].
+    set_camera(s.get(), perspective_camera(look_at({1.45f, -6, 1.45f}, {1.45f, -1.25f, 1.45f}), 50));
+    check(lt_scene_commit(s.get()), "commit");
+    lt_render_settings rs = volpath_settings(16, 16, 16);
+    rs.volume_estimator = estimator;
+    rs.volume_bounces = 16;
+    Passes p = render(s.get(), rs);
+    ASSERT_EQ(p.first_non_finite(), "");
+    EXPECT_LT(p.rgba(8, 8)[0], 0.99f) << "the cloud should dim the centre (single scattering loses light)";
+    EXPECT_GT(p.rgba(8, 8)[0], 0.0f);
+    EXPECT_NEAR(p.rgba(0, 0)[0], 1.0f, 1e-4f) << "the corner sees the world only";
+    // The debug view renders its four panels.
+    rs.integrator = LT_INTEGRATOR_VOLUME_DEBUG;
+    Passes dbg = render(s.get(), rs);
+    ASSERT_EQ(dbg.first_non_finite(), "");
+    EXPECT_LT(dbg.rgba(12, 12)[0], 0.99f) << "transmittance, ratio tracking panel (top right)";
+    EXPECT_GT(dbg.rgba(4, 4)[0], 1.0f) << "sampled distance panel (bottom left): metres from the camera";
+  }
+}
+
+TEST(VolPath, VdbErrorsThroughTheAbi) {
+  lt_volume_desc d = volume(LT_VOLUME_PRINCIPLED, 1);
+  Xform xf = identity();
+  struct Case {
+    std::string file, grid, expect;
+  };
+  const Case cases[] = {{"missing.vdb", "density", "missing.vdb"},
+                        {"no_density.vdb", "density", "temperature"},
+                        {"empty.vdb", "density", "empty.vdb"},
+                        {"vector.vdb", "density", "vector.vdb"}};
+  for (const Case& c : cases) {
+    ScenePtr s = new_scene();
+    int id = -1;
+    EXPECT_EQ(lt_scene_add_volume_grid(s.get(), vdb(c.file).c_str(), c.grid.c_str(), xf.data(), &d, &id), LT_ERROR_IO)
+        << c.file;
+    std::string msg = lt_last_error();
+    EXPECT_NE(msg.find(c.expect), std::string::npos) << c.file << ": " << msg;
+    EXPECT_EQ(lt_scene_commit(s.get()), LT_OK);
+  }
+  ScenePtr s = new_scene();
+  int id;
+  lt_volume_desc bad = d;
+  bad.node = 7;
+  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), vdb("density.vdb").c_str(), "density", xf.data(), &bad, &id),
+            LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_material_volume(s.get(), 3, &d, 1), LT_ERROR_INVALID_ARGUMENT);
+  bad = d;
+  bad.density = NAN;
+  int m = add_diffuse(s.get(), {1, 1, 1});
+  EXPECT_EQ(lt_scene_set_material_volume(s.get(), m, &bad, 0), LT_ERROR_INVALID_ARGUMENT);
+}
