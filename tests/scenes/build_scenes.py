@@ -486,14 +486,16 @@ def build_door(scene):
 
 
 def build_caustic(scene):
-    """A smooth glass sphere on a diffuse floor under a small point light: its caustic is reached
-    by path tracing only through the glass, by chance."""
+    """A smooth glass sphere on a diffuse floor under a small light: its caustic is reached by
+    path tracing only through the glass, by chance."""
     set_world(scene, (0.02, 0.02, 0.03), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 6.0))
     assign(floor, diffuse("CausticFloor", (0.7, 0.7, 0.7)))
     ball = add_object(scene, "GlassBall", mesh_sphere("GlassBall", 0.5, segments=64, rings=32), (0, 0, 0.5))
     assign(ball, glass("CausticGlass", (1.0, 1.0, 1.0), 0.0, ior=1.5))
-    add_light(scene, "SmallLight", "POINT", 200.0, (0.6, 0.3, 2.6), radius=0.02)
+    # A small disk area light rather than a point light with a radius: Cycles 3.4 draws the latter
+    # as a disk facing each receiver, which no light subpath can start from (see README).
+    add_light(scene, "SmallLight", "AREA", 60.0, (0.6, 0.3, 2.6), shape="DISK", size=0.12)
     add_camera(scene, (0, -3.5, 2.2), (0, 0.1, 0.25), lens=40.0)
 
 
@@ -553,6 +555,81 @@ def build_dense_fog(scene):
     _fog_room(scene, 1.5)
 
 
+# ---- OpenVDB scenes ---------------------------------------------------------------------------
+# The .vdb files are written at build time by tests/scenes/make_test_vdb.cpp into <build>/test_vdb;
+# LANTERN_TEST_VDB_DIR names that directory (scripts/run_tests.sh exports it). examples.blend points
+# its Volume objects at "//assets/<file>" instead (write_examples; scripts/render_examples.sh copies
+# the files there before rendering).
+def test_vdb_path(filename):
+    """Absolute path of a generated test .vdb (LANTERN_TEST_VDB_DIR, default <repo>/build/test_vdb)."""
+    directory = os.environ.get("LANTERN_TEST_VDB_DIR") or os.path.join(REPO, "build", "test_vdb")
+    return os.path.join(directory, filename)
+
+
+def add_vdb_volume(scene, name, filename, material, location=(0, 0, 0), rotation=(0, 0, 0),
+                   scale=(1, 1, 1)):
+    """A Volume object reading the generated `filename` (grid "density"), with `material`. Render
+    step size 0 (auto: one voxel), object space, as Cycles' defaults."""
+    vol = bpy.data.volumes.new(name)
+    vol.filepath = test_vdb_path(filename)
+    vol.render.space = "OBJECT"
+    vol.render.step_size = 0.0
+    vol.materials.append(material)
+    obj = add_object(scene, name, vol, location, rotation, scale)
+    return obj
+
+
+def build_vdb_cloud(scene):
+    """cloud.vdb (a few noisy blobs, 48^3 voxels of 4 cm, density 0..1 x 5) with a white Principled
+    Volume under a sun and a blue-grey world; Cycles ray-marches it at a quarter voxel
+    (volume_step_rate 0.25), two volume bounces."""
+    set_world(scene, (0.35, 0.45, 0.6), 0.8)
+    cloud = volume_material("CloudVolume", 5.0, color=(1.0, 1.0, 1.0), anisotropy=0.0)
+    add_vdb_volume(scene, "Cloud", "cloud.vdb", cloud, (0, 0, 1.0))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(50, 0, 40), angle=math.radians(1.0))
+    add_camera(scene, (0, -4.2, 1.4), (0, 0, 1.0), lens=80.0)
+    scene.cycles.volume_step_rate = 0.25
+    scene.cycles.volume_max_steps = 4096
+    scene.cycles.volume_bounces = 2
+
+
+def build_vdb_smoke(scene):
+    """smoke.vdb (a rising noisy plume, 40x40x64 voxels of 3 cm) on a grey floor under a sun."""
+    set_world(scene, (0.4, 0.45, 0.55), 0.6)
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
+    assign(floor, diffuse("Floor", (0.5, 0.5, 0.5)))
+    smoke = volume_material("SmokeVolume", 12.0, color=(0.7, 0.7, 0.7), anisotropy=0.2)
+    add_vdb_volume(scene, "Smoke", "smoke.vdb", smoke, (0, 0, 0.0))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(45, 0, -35), angle=math.radians(1.0))
+    add_camera(scene, (0, -3.0, 1.0), (0, 0, 0.9), lens=55.0)
+    scene.cycles.volume_step_rate = 0.5
+    scene.cycles.volume_bounces = 1
+
+
+def build_smoke_interior(scene):
+    """A closed room (6 x 6 x 4 m) filled with thin homogeneous smoke; the sun enters through a
+    window in the left wall and draws a shaft of light across the smoke (like the sheet's
+    a05_sibenik_smoke)."""
+    set_world(scene, (0.5, 0.6, 0.8), 1.0)
+    wall = diffuse("Wall", (0.7, 0.68, 0.62))
+    t = 0.2
+    parts = [("Floor", (6.4, 6.4, t), (0, 0, -t)), ("Ceiling", (6.4, 6.4, t), (0, 0, 4.0)),
+             ("Back", (6.4, t, 4.0), (0, 3.0 + t / 2, 0)), ("Front", (6.4, t, 4.0), (0, -3.0 - t / 2, 0)),
+             ("Right", (t, 6.0, 4.0), (3.0 + t / 2, 0, 0)),
+             # the left wall around a window: y in [-0.8, 1.2], z in [1.2, 3.0]
+             ("LeftLow", (t, 6.0, 1.2), (-3.0 - t / 2, 0, 0)), ("LeftHigh", (t, 6.0, 1.0), (-3.0 - t / 2, 0, 3.0)),
+             ("LeftA", (t, 2.2, 1.8), (-3.0 - t / 2, -1.9, 1.2)), ("LeftB", (t, 1.8, 1.8), (-3.0 - t / 2, 2.1, 1.2))]
+    for name, size, loc in parts:
+        assign(add_object(scene, name, mesh_box(name, size), loc), wall)
+    column = add_object(scene, "Column", mesh_box("Column", (0.5, 0.5, 4.0)), (0.6, 0.8, 0))
+    assign(column, diffuse("Column", (0.6, 0.55, 0.5)))
+    smoke = volume_material("RoomSmoke", 0.2, color=(0.9, 0.9, 0.9), anisotropy=0.4)
+    assign(add_object(scene, "RoomSmoke", mesh_box("RoomSmoke", (5.98, 5.98, 3.98)), (0, 0, 0.01)), smoke)
+    add_light(scene, "Sun", "SUN", 8.0, (0, 0, 8), rotation=(55, 0, -70), angle=math.radians(0.5))
+    add_camera(scene, (1.8, -2.7, 1.5), (-1.2, 1.0, 1.4), lens=22.0)
+    scene.cycles.volume_bounces = 1
+
+
 SCENES = {
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),
@@ -567,15 +644,28 @@ SCENES = {
     "smoke_box": (build_smoke_box, (64, 64), 128),
     "thin_fog": (build_thin_fog, (64, 64), 128),
     "dense_fog": (build_dense_fog, (64, 64), 128),
+    "vdb_cloud": (build_vdb_cloud, (64, 64), 128),
+    "vdb_smoke": (build_vdb_smoke, (64, 64), 64),
+    "smoke_interior": (build_smoke_interior, (64, 64), 64),
 }
 
-# example scene name: (builder scene, resolution, samples, Lantern integrator)
+# example scene name: (builder scene, resolution, samples, Lantern integrator[, other Lantern
+# settings])
 EXAMPLES = {
     "a05_box": ("cornell_area", (256, 256), 128, "BIDIRECTIONAL"),  # the sheet's BDPT Cornell box
     "glossy_glass": ("glossy_glass", (320, 240), 256, "PATH"),
     "door": ("door", (320, 240), 128, "BIDIRECTIONAL"),
     "caustic": ("caustic", (320, 240), 128, "BIDIRECTIONAL"),
+    # the sheet's volume scenes (the .vdb files: "//assets/", see write_examples)
+    "a05_smoke_debug": ("vdb_smoke", (320, 240), 16, "VOLUME_DEBUG"),
+    "a05_cloud_march": ("vdb_cloud", (256, 256), 128, "VOLPATH",
+                        dict(volume_estimator="RAY_MARCHING", volume_step=0.0)),
+    "a05_cloud_track": ("vdb_cloud", (256, 256), 128, "VOLPATH", dict(volume_estimator="TRACKING")),
+    "a05_smoke_interior": ("smoke_interior", (320, 240), 256, "VOLPATH"),
 }
+
+# Where examples.blend's Volume objects find their .vdb files: next to the .blend.
+EXAMPLE_ASSETS = "//assets/"
 
 
 def build(name, scene_name=None, resolution=None, samples=None):
@@ -624,12 +714,18 @@ def write_examples(path=EXAMPLES_PATH):
     """examples.blend: one scene per example, render engine Lantern when it is registered."""
     placeholder = reset_file()
     lantern = _lantern_registered()
-    for example, (name, res, spp, integrator) in EXAMPLES.items():
+    for example, (name, res, spp, integrator, *extra) in EXAMPLES.items():
         scene = build(name, scene_name=example, resolution=res, samples=spp)
         if lantern:
             scene.render.engine = "LANTERN"
             scene.lantern.samples = spp
             scene.lantern.integrator = integrator
+            for key, value in (extra[0] if extra else {}).items():
+                setattr(scene.lantern, key, value)
+    # Blender-relative .vdb paths: scripts/render_examples.sh copies <build>/test_vdb/*.vdb into
+    # assets/ next to examples.blend (a build directory is not part of a user's checkout).
+    for volume in bpy.data.volumes:
+        volume.filepath = EXAMPLE_ASSETS + os.path.basename(volume.filepath)
     for window in bpy.context.window_manager.windows:
         window.scene = bpy.data.scenes["a05_box"]
     _save(path, placeholder)
