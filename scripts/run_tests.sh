@@ -12,4 +12,5 @@ echo "== native tests (ctest) =="
 echo "== Blender tests (pytest inside blender -b) =="
 # The tests use this checkout's add-on and library, not an installed copy.
 export LANTERN_LIBRARY="$PWD/$BUILD_DIR/liblantern.so"
+export LANTERN_TEST_VDB_DIR="$PWD/$BUILD_DIR/test_vdb"  # .vdb files the build generates
 blender -b --factory-startup --python-exit-code 1 --python tests/blender/run_pytest.py -- -q

@@ -149,6 +149,22 @@ TEST(VdbLoad, TileGridMajorantAndTransmittance) {
               (unsigned long long)g->active_voxels, g->nano_bytes, maj.memory_bytes());
 }
 
+// The example and benchmark clouds (bench/volumes.py parses the "[ media    ] vdb memory" lines).
+TEST(VdbLoad, CloudAndSmokeMemory) {
+  for (const char* name : {"cloud.vdb", "smoke.vdb"}) {
+    auto g = std::make_shared<const GridData>(load_density_grid(vdb(name)));
+    EXPECT_GT(g->active_voxels, 1000u) << name;
+    EXPECT_LE(g->active_voxels, 64ull * 64 * 64) << name;
+    Medium m = Medium::heterogeneous(g, Spectrum(0.0f), Spectrum(1.0f), 0);
+    const size_t maj = m.majorant_grid().memory_bytes();
+    EXPECT_EQ(m.memory_bytes(), g->nano_bytes + maj);
+    EXPECT_LT(m.memory_bytes(), 16u * g->active_voxels + 2000000u) << name;
+    std::printf("[ media    ] vdb memory %s: %llu active voxels, NanoVDB %zu bytes, majorant %zu bytes, "
+                "file %llu bytes\n", name, (unsigned long long)g->active_voxels, g->nano_bytes, maj,
+                (unsigned long long)std::filesystem::file_size(vdb(name)));
+  }
+}
+
 TEST(VdbErrors, MissingFile) {
   std::string kind, msg = error_of([] { load_density_grid(vdb("does_not_exist.vdb")); }, &kind);
   EXPECT_EQ(kind, "IoError") << msg;

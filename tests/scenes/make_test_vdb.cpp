@@ -4,9 +4,13 @@
 //   empty.vdb       "density" (float) without active voxels
 //   vector.vdb      "density" as a vec3s grid (wrong type)
 //   tiles.vdb       "density" (float) made of constant tiles
+//   cloud.vdb       "density" (float): a procedural cloud, a few noisy blobs in 48^3 voxels
+//   smoke.vdb       "density" (float): a rising, widening noisy smoke plume in 40x40x64 voxels
 // Usage: make_test_vdb <output directory>
 #include <openvdb/openvdb.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -52,6 +56,84 @@ openvdb::Vec3SGrid::Ptr velocity(const std::string& name) {
   return grid;
 }
 
+// Deterministic value noise in [0, 1] (hashed lattice, smoothstep-interpolated), a few octaves.
+double lattice(int x, int y, int z) {
+  unsigned h = unsigned(x) * 73856093u ^ unsigned(y) * 19349663u ^ unsigned(z) * 83492791u;
+  h ^= h >> 13; h *= 0x5bd1e995u; h ^= h >> 15;
+  return (h & 0xffffu) / 65535.0;
+}
+
+double value_noise(double x, double y, double z) {
+  const int xi = int(std::floor(x)), yi = int(std::floor(y)), zi = int(std::floor(z));
+  auto s = [](double t) { return t * t * (3.0 - 2.0 * t); };
+  const double fx = s(x - xi), fy = s(y - yi), fz = s(z - zi);
+  double r = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+    r += (dx ? fx : 1 - fx) * (dy ? fy : 1 - fy) * (dz ? fz : 1 - fz) * lattice(xi + dx, yi + dy, zi + dz);
+  }
+  return r;
+}
+
+double fbm(double x, double y, double z) {
+  double sum = 0.0, amp = 0.5, norm = 0.0;
+  for (int o = 0; o < 3; ++o, amp *= 0.5, x *= 2.0, y *= 2.0, z *= 2.0) {
+    sum += amp * value_noise(x, y, z);
+    norm += amp;
+  }
+  return sum / norm;
+}
+
+// A fog grid from density(i, j, k) in [0, 1] over [0, n), voxel size `voxel`, centred on the
+// origin in x and y and starting at z = z0; only voxels above 0.01 are active.
+template <class F>
+openvdb::FloatGrid::Ptr procedural(const int n[3], double voxel, double z0, F density) {
+  auto grid = openvdb::FloatGrid::create(0.0f);
+  grid->setName("density");
+  grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  auto xf = openvdb::math::Transform::createLinearTransform(voxel);
+  xf->postTranslate(openvdb::Vec3d(-0.5 * (n[0] - 1) * voxel, -0.5 * (n[1] - 1) * voxel, z0));
+  grid->setTransform(xf);
+  auto acc = grid->getAccessor();
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        const double d = density(i, j, k);
+        if (d > 0.01) acc.setValue(openvdb::Coord(i, j, k), float(std::min(d, 1.0)));
+      }
+  grid->pruneGrid();
+  return grid;
+}
+
+openvdb::FloatGrid::Ptr cloud_grid() {
+  const int n[3] = {48, 48, 48};
+  // Blobs (centre in voxels, radius in voxels).
+  const double blobs[5][4] = {{24, 24, 22, 12}, {14, 22, 20, 8}, {33, 27, 21, 9}, {22, 32, 28, 7},
+                              {28, 16, 27, 6}};
+  return procedural(n, 0.04, -0.94, [&](int i, int j, int k) {
+    double shape = 0.0;
+    for (const auto& b : blobs) {
+      const double dx = i - b[0], dy = j - b[1], dz = k - b[2];
+      shape += std::exp(-(dx * dx + dy * dy + dz * dz) / (2.0 * b[3] * b[3] * 0.45));
+    }
+    const double noise = fbm(i * 0.15, j * 0.15, k * 0.15);
+    return std::max(0.0, 1.6 * shape * (0.35 + noise) - 0.35);
+  });
+}
+
+openvdb::FloatGrid::Ptr smoke_grid() {
+  const int n[3] = {40, 40, 64};
+  return procedural(n, 0.03, 0.0, [&](int i, int j, int k) {
+    const double h = k / 63.0;                     // 0 at the source, 1 at the top
+    const double radius = 3.0 + 14.0 * h;          // the plume widens as it rises
+    const double cx = 19.5 + 4.0 * std::sin(6.0 * h), cy = 19.5 + 3.0 * std::cos(5.0 * h);
+    const double r = std::hypot(i - cx, j - cy) / radius;
+    const double noise = fbm(i * 0.2, j * 0.2, k * 0.12);
+    const double d = std::exp(-2.0 * r * r) * (0.3 + 1.2 * noise) * (1.0 - 0.5 * h);
+    return d * (k < 62 ? 1.0 : 0.0) - 0.05;
+  });
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -81,5 +163,8 @@ int main(int argc, char** argv) {
                                               openvdb::Coord(tv::kBoxB[1][0], tv::kBoxB[1][1], tv::kBoxB[1][2])),
                            tv::kBoxBValue, true);
   write(dir + "/tiles.vdb", {tiles});
+
+  write(dir + "/cloud.vdb", {cloud_grid()});
+  write(dir + "/smoke.vdb", {smoke_grid()});
   return 0;
 }

@@ -11,13 +11,13 @@
 #include <vector>
 
 #include "integrators/integrator.h"
+#include "integrators/ray_kinds.h"
 #include "integrators/path_vertex.h"
 
 namespace lt {
 
 namespace {
 
-constexpr unsigned kVisCamera = 1, kVisDiffuse = 2, kVisGlossy = 4, kVisTransmission = 8;
 constexpr unsigned kVisLightRay = kVisDiffuse | kVisGlossy | kVisTransmission;
 
 enum class Mode { Radiance, Importance };
@@ -35,11 +35,6 @@ uint8_t kind_of(const Bsdf& bsdf) {
   return kGlossy;
 }
 
-unsigned visibility_of(uint32_t lobe) {
-  if (lobe & kLobeTransmission) return kVisTransmission;
-  if (lobe & kLobeDiffuse) return kVisDiffuse;
-  return kVisGlossy;
-}
 
 // Scratch subpaths, allocated once per thread and reused: no heap allocation per sample.
 struct Scratch {

@@ -1,10 +1,10 @@
 #include "integrators/media_transport.h"
+#include "integrators/ray_kinds.h"
 
 namespace lt {
 
 namespace {
 
-constexpr unsigned kVisAll = 31, kVisShadow = 16;
 constexpr int kMaxCrossings = 256;  // invisible boundaries a shadow ray or the stack probe passes
 
 // Calls f(medium) for every non-empty medium the ray is in: the stack's, then the global ones.

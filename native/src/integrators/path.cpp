@@ -1,25 +1,12 @@
 // Unidirectional path tracing with next-event estimation and multiple importance sampling (power
 // heuristic; Veach 1997, ch. 9), Russian roulette on the throughput, and Cycles' bounce limits.
 #include "integrators/integrator.h"
+#include "integrators/ray_kinds.h"
 
 namespace lt {
 
 namespace {
 
-constexpr unsigned kVisCamera = 1, kVisDiffuse = 2, kVisGlossy = 4, kVisTransmission = 8;
-
-// Cycles' sample clamp: scale a contribution so that its largest channel is at most `limit`.
-Spectrum clamp_contribution(const Spectrum& c, float limit) {
-  if (limit <= 0) return c;
-  float m = max_component(c);
-  return m > limit ? c * (limit / m) : c;
-}
-
-unsigned visibility_of(uint32_t lobe) {
-  if (lobe & kLobeTransmission) return kVisTransmission;
-  if (lobe & kLobeDiffuse) return kVisDiffuse;
-  return kVisGlossy;
-}
 
 }  // namespace
 

@@ -4,25 +4,13 @@
 // ray through invisible boundaries, MIS (power heuristic) of light sampling against phase/BSDF
 // sampling, Russian roulette, and Cycles' volume bounce limit (0: single scattering).
 #include "integrators/media_transport.h"
+#include "integrators/ray_kinds.h"
 
 namespace lt {
 
 namespace {
 
-constexpr unsigned kVisCamera = 1, kVisDiffuse = 2, kVisGlossy = 4, kVisTransmission = 8;
 constexpr int kMaxNullCrossings = 1024;
-
-Spectrum clamp_contribution(const Spectrum& c, float limit) {
-  if (limit <= 0) return c;
-  float m = max_component(c);
-  return m > limit ? c * (limit / m) : c;
-}
-
-unsigned visibility_of(uint32_t lobe) {
-  if (lobe & kLobeTransmission) return kVisTransmission;
-  if (lobe & kLobeDiffuse) return kVisDiffuse;
-  return kVisGlossy;
-}
 
 }  // namespace
 

@@ -1,0 +1,16 @@
+#!/bin/sh
+# Builds the library (Release, build-bench/) and runs the convergence benchmark in Blender; writes
+# bench/results/convergence.json, convergence_<scene>*.png and convergence.log.
+# Extra arguments go to convergence.py, e.g.: bench/run_convergence.sh --quick
+# Needs matplotlib in Blender's Python for the plots (Debian: apt-get install python3-matplotlib).
+set -eu
+REPO=$(cd "$(dirname "$0")/.." && pwd)
+BUILD=${LANTERN_BENCH_BUILD:-$REPO/build-bench}
+BLENDER=${BLENDER:-blender}
+RESULTS=$REPO/bench/results
+cmake -S "$REPO" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$BUILD" -j2 --target lantern_shared
+mkdir -p "$RESULTS"
+LANTERN_LIBRARY="$BUILD/liblantern.so" "$BLENDER" -b --factory-startup --python-exit-code 1 \
+  --python "$REPO/bench/convergence.py" -- --out "$RESULTS" "$@" \
+  2>&1 | tee "$RESULTS/convergence.log" | grep -E '^(bench:|====|Goals|Load|Wrote|Error|Traceback|  |[a-z_]+ +at )'
