@@ -184,6 +184,10 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             for w in core_scene.warnings():
                 self.report({'WARNING'}, w)
             print("Lantern: exported %s in %.2f s" % (summary, time.monotonic() - t0))
+            if summary.get("media") and scene.lantern.integrator not in ('VOLPATH', 'VOLUME_DEBUG'):
+                self.report({'WARNING'}, "The scene has %d participating medium/media, which only the "
+                            "Volumetric Path integrator renders: the %s integrator ignores them"
+                            % (summary["media"], scene.lantern.integrator.title()))
 
             render = core.Render(core_scene, render_settings(scene, width, height, border))
             render.start()

@@ -192,3 +192,17 @@ def test_volume_debug_view_renders(scene_factory):
     assert np.isfinite(img).all()
     assert img[..., :3].min() >= 0.0
     assert img[..., :3].max() > 1.0, "the distance panels hold metres from the camera"
+
+
+def test_media_with_another_integrator_are_reported(scene_factory):
+    """Media are rendered by 'VOLPATH' only: the export counts them, so that the engine can warn
+    that another integrator ignores them."""
+    scene = scene_factory("smoke_box")
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    core_scene = core.Scene()
+    try:
+        summary = export_scene(depsgraph, core_scene, lambda level, message: None)
+    finally:
+        core_scene.close()
+    assert summary["media"] >= 1

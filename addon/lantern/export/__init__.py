@@ -76,5 +76,5 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
     summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()
                                                             if v is not None),
-                   lights=lights, volumes=volumes)
+                   lights=lights, volumes=volumes, media=volumes + materials.media)
     return summary

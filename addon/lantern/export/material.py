@@ -111,6 +111,7 @@ class MaterialExporter:
         self.report = report
         self.images = images
         self.ids = {}
+        self.media = 0  # materials with a Volume output
 
     # -- public --------------------------------------------------------------------------------
 
@@ -138,6 +139,7 @@ class MaterialExporter:
         if volume is not None:
             null_surface = _follow(material.node_tree.get_output_node('CYCLES').inputs["Surface"]) is None
             self.core_scene.set_material_volume(mat_id, null_surface=null_surface, **volume)
+            self.media += 1
         self.ids[key] = mat_id
         return mat_id
 
