@@ -288,6 +288,7 @@ def _declare(lib):
         "lt_scene_set_camera": ([scene_p, P(CameraDesc)], c_int),
         "lt_scene_set_world": ([scene_p, P(WorldDesc)], c_int),
         "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int], c_int),
+        "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc)], c_int),
         "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, P(VolumeDesc),
                                       P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
@@ -511,6 +512,12 @@ class Scene:
         _check(self._lib.lt_scene_set_material_volume(self.handle, int(material), ctypes.byref(d),
                                                        int(bool(null_surface))),
                "lt_scene_set_material_volume")
+
+    def set_world_volume(self, node, color, density, absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0):
+        """A homogeneous World volume filling the scene (Cycles' formulas); escaped rays cross it to
+        infinity."""
+        d = self._volume_desc(node, color, density, absorption_color, anisotropy)
+        _check(self._lib.lt_scene_set_world_volume(self.handle, ctypes.byref(d)), "lt_scene_set_world_volume")
 
     def add_volume_grid(self, path, grid, transform, node, color, density,
                         absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0):

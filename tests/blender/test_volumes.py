@@ -15,7 +15,7 @@ import render_utils as ru
 from lantern import core
 from lantern.export import export_scene
 
-VOLUME_SCENES = ["smoke_box", "thin_fog", "dense_fog"]
+VOLUME_SCENES = ["smoke_box", "thin_fog", "dense_fog", "world_fog"]
 SAMPLES = 128
 TILE = 16
 ROUNDING = 1e-5
@@ -206,3 +206,31 @@ def test_media_with_another_integrator_are_reported(scene_factory):
     finally:
         core_scene.close()
     assert summary["media"] >= 1
+
+
+# ---- World volume ------------------------------------------------------------------------------
+def test_world_volume_is_exported_and_counted(scene_factory):
+    scene = scene_factory("world_fog")
+    summary, text = _export(scene)
+    assert summary["media"] == 1, summary
+    assert text == "", text
+
+
+def test_world_volume_hides_background_and_sun(scene_factory):
+    """Cycles 3.4 hides the background and suns behind a World volume (infinite escape distance);
+    Lantern's VOLPATH too: with the point light removed the image is black."""
+    scene = scene_factory("world_fog")
+    bpy.data.objects["Lamp"].hide_render = True
+    img = ru.render(scene, ru.LANTERN, 4, seed=0, integrator="VOLPATH").combined
+    assert np.isfinite(img).all()
+    assert img[..., :3].max() == 0.0
+
+
+def test_unsupported_world_volume_node_is_reported(scene_factory):
+    scene = scene_factory("world_fog")
+    nt = scene.world.node_tree
+    emission = nt.nodes.new("ShaderNodeEmission")
+    nt.links.new(emission.outputs[0], nt.get_output_node('CYCLES').inputs["Volume"])
+    summary, text = _export(scene)
+    assert scene.world.name in text and emission.name in text, text
+    assert summary["media"] == 0, summary

@@ -4,8 +4,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <string>
+#include <vector>
 
+#include "api/handles.h"
+#include "core/label_font.h"
 #include "scene_builders.h"
 
 using namespace lt_test;
@@ -50,6 +54,28 @@ ScenePtr furnace_scene(float density, float albedo, float g, float r) {
   set_camera(s.get(), perspective_camera(look_at({0, -4 * r, 0}, {0, 0, 0}), 50));
   check(lt_scene_commit(s.get()), "commit");
   return s;
+}
+
+// Combined of one render as the ABI reads it (labelled) and as the film holds it without labels.
+struct LabelledRender {
+  int width = 0, height = 0;
+  std::vector<float> labelled, plain;
+  const float* at(const std::vector<float>& img, int x, int y) const { return &img[(size_t(y) * width + x) * 4]; }
+};
+
+LabelledRender render_labelled(lt_scene* s, const lt_render_settings& rs, int w, int h) {
+  lt_render* raw = nullptr;
+  check(lt_render_start(s, &rs, &raw), "lt_render_start");
+  RenderPtr r(raw);
+  check(lt_render_wait(r.get()), "lt_render_wait");
+  LabelledRender out;
+  out.width = w;
+  out.height = h;
+  out.labelled.assign(size_t(w) * h * 4, -1.0f);
+  out.plain.assign(out.labelled.size(), -1.0f);
+  check(lt_render_read_pass(r.get(), LT_PASS_COMBINED, out.labelled.data(), out.labelled.size()), "read_pass");
+  r->job->film().read(lt::Pass::Combined, out.plain.data(), /*labels=*/false);
+  return out;
 }
 
 }  // namespace
@@ -200,4 +226,72 @@ TEST(VolPath, VdbErrorsThroughTheAbi) {
   bad.density = NAN;
   int m = add_diffuse(s.get(), {1, 1, 1});
   EXPECT_EQ(lt_scene_set_material_volume(s.get(), m, &bad, 0), LT_ERROR_INVALID_ARGUMENT);
+}
+
+TEST(VolPath, DebugViewLabelsEachPanel) {
+  ScenePtr s = furnace_scene(2.0f, 0.8f, 0.0f, 1.0f);
+  // 96x40: four 48x20 panels, labels at 1x (43x9 with the outline, one pixel in from the corner).
+  lt_render_settings rs = render_settings(96, 40, 4, 7);
+  rs.integrator = LT_INTEGRATOR_VOLUME_DEBUG;
+  LabelledRender img = render_labelled(s.get(), rs, 96, 40);
+  const char* names[4] = {"T MARCH", "T RATIO", "D MARCH", "D DELTA"};
+  std::vector<int> expect(96 * 40, lt::kLabelNone);  // from the font's glyphs, outline around them
+  for (int panel = 0; panel < 4; ++panel) {
+    const int gx0 = (panel % 2) * 48 + 2, gy0 = (panel < 2 ? 39 : 19) - 2;  // glyph top-left
+    for (int i = 0; names[panel][i]; ++i)
+      for (int gy = 0; gy < 7; ++gy)
+        for (int gx = 0; gx < 5; ++gx)
+          if ((lt::label_glyph(names[panel][i])[gy] >> (4 - gx)) & 1) {
+            const int x = gx0 + 6 * i + gx, y = gy0 - gy;
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx)
+                if (expect[(y + dy) * 96 + x + dx] == lt::kLabelNone) expect[(y + dy) * 96 + x + dx] = lt::kLabelBlack;
+          }
+    for (int i = 0; names[panel][i]; ++i)
+      for (int gy = 0; gy < 7; ++gy)
+        for (int gx = 0; gx < 5; ++gx)
+          if ((lt::label_glyph(names[panel][i])[gy] >> (4 - gx)) & 1) expect[(gy0 - gy) * 96 + gx0 + 6 * i + gx] = lt::kLabelWhite;
+    // The T's or D's top row: white, outlined above and to the left.
+    EXPECT_EQ(expect[gy0 * 96 + gx0 + 1], lt::kLabelWhite);
+    EXPECT_EQ(expect[(gy0 + 1) * 96 + gx0], lt::kLabelBlack);
+    EXPECT_EQ(expect[gy0 * 96 + gx0 - 1], lt::kLabelBlack);
+  }
+  int white = 0, black = 0, changed = 0;
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 96; ++x) {
+      const float *a = img.at(img.labelled, x, y), *b = img.at(img.plain, x, y);
+      const int e = expect[y * 96 + x];
+      if (e == lt::kLabelNone) {
+        EXPECT_EQ(std::memcmp(a, b, 4 * sizeof(float)), 0) << "unlabelled pixel changed at " << x << "," << y;
+        continue;
+      }
+      const float v = e == lt::kLabelWhite ? 1.0f : 0.0f;
+      EXPECT_TRUE(a[0] == v && a[1] == v && a[2] == v && a[3] == 1.0f) << "label pixel " << x << "," << y;
+      (e == lt::kLabelWhite ? white : black) += 1;
+      changed += std::memcmp(a, b, 4 * sizeof(float)) != 0;
+    }
+  EXPECT_GT(white, 4 * 60);
+  EXPECT_GT(black, 4 * 60);
+  EXPECT_GT(changed, 4 * 60) << "the label must differ from the render beneath it";
+
+  // 2x for panels 200 px wide or more, clipped to a border region (the top-left panel's corner).
+  rs = render_settings(420, 40, 2, 7);
+  rs.integrator = LT_INTEGRATOR_VOLUME_DEBUG;
+  rs.border[0] = 0, rs.border[1] = 60, rs.border[2] = 20, rs.border[3] = 40;
+  LabelledRender big = render_labelled(s.get(), rs, 60, 20);
+  for (int x = 2; x < 12; ++x)
+    for (int y : {16, 17}) EXPECT_EQ(big.at(big.labelled, x, y)[0], 1.0f) << "2x T bar at " << x << "," << y;
+  EXPECT_EQ(big.at(big.labelled, 1, 17)[0], 0.0f);
+  EXPECT_EQ(big.at(big.labelled, 12, 17)[0], 0.0f);
+  EXPECT_EQ(big.at(big.labelled, 5, 18)[0], 0.0f);
+  EXPECT_EQ(big.at(big.labelled, 6, 15)[0], 1.0f) << "2x T stem";
+
+  // No labels in panels too small to hold them (20x8), nor for the other integrators.
+  for (int integrator : {LT_INTEGRATOR_VOLUME_DEBUG, LT_INTEGRATOR_VOLPATH}) {
+    rs = render_settings(integrator == LT_INTEGRATOR_VOLPATH ? 96 : 40, integrator == LT_INTEGRATOR_VOLPATH ? 40 : 16, 2, 7);
+    rs.integrator = integrator;
+    LabelledRender plain = render_labelled(s.get(), rs, rs.width, rs.height);
+    EXPECT_EQ(std::memcmp(plain.labelled.data(), plain.plain.data(), plain.labelled.size() * sizeof(float)), 0)
+        << "integrator " << integrator;
+  }
 }

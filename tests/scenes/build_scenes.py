@@ -555,6 +555,27 @@ def build_dense_fog(scene):
     _fog_room(scene, 1.5)
 
 
+
+def build_world_fog(scene):
+    """A ground plane, a sphere, a point light and a sun in a World volume (Principled Volume,
+    density 0.15, anisotropy 0.3). As in Cycles 3.4 the background and the sun are fully hidden
+    (escaped rays and sun shadow rays cross the world volume to infinity): only the point light
+    lights the ground and the fog."""
+    world = set_world(scene, (0.3, 0.45, 0.7), 1.0)
+    nt = world.node_tree
+    vol = nt.nodes.new("ShaderNodeVolumePrincipled")
+    vol.inputs["Density"].default_value = 0.15
+    vol.inputs["Color"].default_value = (0.9, 0.8, 0.7, 1.0)
+    vol.inputs["Anisotropy"].default_value = 0.3
+    nt.links.new(vol.outputs[0], nt.get_output_node('CYCLES').inputs["Volume"])
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 8.0))
+    assign(ground, diffuse("Ground", (0.6, 0.6, 0.55)))
+    sphere = add_object(scene, "Sphere", mesh_sphere("Sphere", 0.5), (0.5, 0.3, 0.5))
+    assign(sphere, diffuse("Blue", (0.15, 0.3, 0.8)))
+    add_light(scene, "Lamp", "POINT", 300.0, (-0.6, -0.4, 1.8))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(40, 0, 30))
+    add_camera(scene, (0, -5.0, 1.5), (0, 0, 0.8), lens=30.0)
+
 # ---- OpenVDB scenes ---------------------------------------------------------------------------
 # The .vdb files are written at build time by tests/scenes/make_test_vdb.cpp into <build>/test_vdb;
 # LANTERN_TEST_VDB_DIR names that directory (scripts/run_tests.sh exports it). examples.blend points
@@ -644,6 +665,7 @@ SCENES = {
     "smoke_box": (build_smoke_box, (64, 64), 128),
     "thin_fog": (build_thin_fog, (64, 64), 128),
     "dense_fog": (build_dense_fog, (64, 64), 128),
+    "world_fog": (build_world_fog, (64, 64), 128),
     "vdb_cloud": (build_vdb_cloud, (64, 64), 128),
     "vdb_smoke": (build_vdb_smoke, (64, 64), 64),
     "smoke_interior": (build_smoke_interior, (64, 64), 64),

@@ -7,7 +7,7 @@ from .light import export_light
 from .material import ImageExporter, MaterialExporter
 from .mesh import CONVERTIBLE_TYPES, MeshExporter
 from .volume import export_volume
-from .world import export_world
+from .world import export_world, export_world_volume
 
 # Object types that are not rendered (or not yet): skipped silently.
 _IGNORED_TYPES = {'CAMERA', 'EMPTY', 'ARMATURE', 'LATTICE', 'SPEAKER', 'LIGHT_PROBE', 'GPENCIL'}
@@ -36,6 +36,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
     materials = MaterialExporter(core_scene, report, images)
     meshes = MeshExporter(depsgraph, core_scene, report, materials)
     summary["world"] = export_world(depsgraph, core_scene, report, images)
+    world_media = export_world_volume(depsgraph, core_scene, report)
 
     lights = volumes = 0
     skipped_types = set()
@@ -76,5 +77,5 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
     summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()
                                                             if v is not None),
-                   lights=lights, volumes=volumes, media=volumes + materials.media)
+                   lights=lights, volumes=volumes, media=volumes + materials.media + world_media)
     return summary

@@ -103,6 +103,37 @@ def _follow(socket):
     return None
 
 
+_VOLUME_KINDS = {'PRINCIPLED_VOLUME': core.VOLUME_PRINCIPLED, 'VOLUME_SCATTER': core.VOLUME_SCATTER,
+                 'VOLUME_ABSORPTION': core.VOLUME_ABSORPTION}
+
+
+def volume_keywords(output, warn):
+    """The Volume input of an output node (Material Output or World Output) as the keywords of
+    set_material_volume / set_world_volume, or None; warn(message) reports what is left out."""
+    if output is None or "Volume" not in output.inputs:
+        return None
+    out = _follow(output.inputs["Volume"])
+    if out is None:
+        return None
+    node = out.node
+    if node.type not in _VOLUME_KINDS:
+        warn("volume node '%s' (%s) is not supported (Principled Volume, Volume Scatter "
+             "and Volume Absorption are); the volume is left out" % (node.name, node.bl_idname))
+        return None
+    for s in node.inputs:
+        if s.is_linked and s.name in ("Color", "Density", "Anisotropy", "Absorption Color"):
+            warn("'%s' of volume '%s' is linked; only constant volume inputs are "
+                 "supported, the socket's value is used" % (s.name, node.name))
+
+    def value(name, default):
+        s = node.inputs.get(name)
+        return default if s is None else s.default_value
+    return dict(node=_VOLUME_KINDS[node.type], color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3],
+                density=float(value("Density", 1.0)),
+                absorption_color=tuple(value("Absorption Color", (0.0, 0.0, 0.0)))[:3],
+                anisotropy=float(value("Anisotropy", 0.0)))
+
+
 class MaterialExporter:
     """Translates each material once; `export(material)` returns its core id."""
 
@@ -148,30 +179,7 @@ class MaterialExporter:
         self._material = material
         if not material.use_nodes or material.node_tree is None:
             return None
-        output = material.node_tree.get_output_node('CYCLES')
-        if output is None or "Volume" not in output.inputs:
-            return None
-        out = _follow(output.inputs["Volume"])
-        if out is None:
-            return None
-        node = out.node
-        kinds = {'PRINCIPLED_VOLUME': core.VOLUME_PRINCIPLED, 'VOLUME_SCATTER': core.VOLUME_SCATTER,
-                 'VOLUME_ABSORPTION': core.VOLUME_ABSORPTION}
-        if node.type not in kinds:
-            self._warn("volume node '%s' (%s) is not supported (Principled Volume, Volume Scatter "
-                       "and Volume Absorption are); the volume is left out" % (node.name, node.bl_idname))
-            return None
-        for s in node.inputs:
-            if s.is_linked and s.name in ("Color", "Density", "Anisotropy", "Absorption Color"):
-                self._warn("'%s' of volume '%s' is linked; only constant volume inputs are "
-                           "supported, the socket's value is used" % (s.name, node.name))
-        def value(name, default):
-            s = node.inputs.get(name)
-            return default if s is None else s.default_value
-        return dict(node=kinds[node.type], color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3],
-                    density=float(value("Density", 1.0)),
-                    absorption_color=tuple(value("Absorption Color", (0.0, 0.0, 0.0)))[:3],
-                    anisotropy=float(value("Anisotropy", 0.0)))
+        return volume_keywords(material.node_tree.get_output_node('CYCLES'), self._warn)
 
     # -- tree walk -----------------------------------------------------------------------------
 

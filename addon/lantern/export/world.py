@@ -1,8 +1,9 @@
-"""World export: Background colour or equirectangular Environment Texture, times strength."""
+"""World export: Background colour or equirectangular Environment Texture, times strength; the
+World Output's Volume as a medium filling the scene."""
 
 import math
 
-from .material import _follow
+from .material import _follow, volume_keywords
 
 _CAMERA_DEFAULT = 1
 
@@ -119,3 +120,22 @@ def export_world(depsgraph, core_scene, report, images):
     core_scene.set_world(color=(1.0, 1.0, 1.0), strength=strength, image=image_id,
                          rotation_z=math.fmod(rotation, 2.0 * math.pi), visibility=visibility)
     return "environment"
+
+
+def export_world_volume(depsgraph, core_scene, report):
+    """The World Output's Volume input as a World volume; returns the number of media (0 or 1).
+
+    As in Cycles, escaped rays and shadow rays to sun and world lights cross it to infinity: the
+    background and suns are fully attenuated; only the Volumetric Path integrator renders it."""
+    world = depsgraph.scene_eval.world
+    if world is None or not world.use_nodes or world.node_tree is None:
+        return 0
+
+    def warn(msg):
+        report({'WARNING'}, "World '%s': %s" % (world.name, msg))
+
+    volume = volume_keywords(world.node_tree.get_output_node('CYCLES'), warn)
+    if volume is None:
+        return 0
+    core_scene.set_world_volume(**volume)
+    return 1

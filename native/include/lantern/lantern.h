@@ -200,6 +200,13 @@ typedef struct lt_volume_desc {
  * surface for the other integrators). */
 LT_API int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* desc, int null_surface);
 
+/* A World volume: a homogeneous medium filling the whole scene, active along every ray (it adds to
+ * the media of closed meshes the ray is in). As in Cycles 3.4, rays that escape travel an infinite
+ * distance through it: the background seen through a world volume with sigma_t > 0 is fully
+ * attenuated, and so are shadow rays to the world and to sun lights (they reach infinity). Only the
+ * volumetric integrators see it. Calling it again adds another world medium. */
+LT_API int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* desc);
+
 /* A Volume object: the float grid `grid` of the .vdb file at `path` (its density multiplies the
  * desc's Density), placed by `transform` (object to world, row-major 3x4) after the grid's own
  * index-to-object transform. The medium is bounded by the grid; no geometry. Errors: LT_ERROR_IO

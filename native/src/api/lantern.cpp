@@ -361,6 +361,17 @@ int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_
   });
 }
 
+int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* d) {
+  return guarded([&] {
+    require(scene && d, "lt_scene_set_world_volume: NULL argument");
+    scene->scene.require_editable();
+    lt::VolumeCoefficients c = to_volume(d);
+    lt::Scene& sc = scene->scene;
+    sc.media.push_back(lt::Medium::homogeneous(c.sigma_a, c.sigma_s, c.g));
+    if (!sc.media.back().empty()) sc.global_media.push_back(int(sc.media.size()) - 1);
+  });
+}
+
 int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
                              const lt_volume_desc* d, int* out_id) {
   return guarded([&] {

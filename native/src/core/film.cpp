@@ -1,5 +1,7 @@
 #include "core/film.h"
 
+#include "core/label_font.h"
+
 namespace lt {
 
 namespace {
@@ -85,7 +87,7 @@ uint64_t Film::total_samples() const {
   return n;
 }
 
-void Film::read(Pass pass, float* out) const {
+void Film::read(Pass pass, float* out, bool labels) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const int c = pass_channels(pass);
   const size_t n = size_t(width_) * height_;
@@ -129,6 +131,13 @@ void Film::read(Pass pass, float* out) const {
       case Pass::Count: break;
     }
   }
+  if (pass != Pass::Combined || !labels || labels_.empty()) return;
+  for (size_t i = 0; i < n; ++i)
+    if (labels_[i] != kLabelNone) {
+      const float v = labels_[i] == kLabelWhite ? 1.0f : 0.0f;
+      out[4 * i] = out[4 * i + 1] = out[4 * i + 2] = v;
+      out[4 * i + 3] = 1.0f;
+    }
 }
 
 }  // namespace lt

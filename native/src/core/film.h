@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 #include "core/distribution.h"
@@ -86,8 +87,12 @@ class Film {
   void read_strategy_grid(int columns, int rows, float* out) const;
   // Copies the accumulators to the published buffer readers use.
   void publish();
+  // Labels drawn over Combined when it is read (never accumulated): per pixel a LabelPixel of
+  // core/label_font.h, rows bottom to top; empty for none. Set before rendering starts.
+  void set_labels(std::vector<uint8_t> mask) { labels_ = std::move(mask); }
   // Resolves a pass of the published buffer: width*height*channels floats, rows bottom to top.
-  void read(Pass pass, float* out) const;
+  // `labels` false: Combined without the labels (tests).
+  void read(Pass pass, float* out, bool labels = true) const;
   uint64_t total_samples() const;
 
  private:
@@ -98,6 +103,7 @@ class Film {
   uint64_t light_paths_ = 0, published_light_paths_ = 0;
   int strategy_cells_ = 0;
   std::vector<float> strategies_, strategy_splats_;
+  std::vector<uint8_t> labels_;
   mutable std::mutex mutex_;
 };
 

@@ -6,12 +6,33 @@
 
 #include <cstdio>
 
+#include "core/label_font.h"
+
 namespace lt {
 
 namespace {
 constexpr int kTile = 16;
 // Readers see a new image at most this often while rendering (publishing copies the film).
 constexpr double kPublishInterval = 0.25;
+
+// The volume debug view's panel names, stamped at each panel's top-left corner (in the region's
+// pixels): 2x for panels 200 px wide or more, skipped for panels too small to hold them.
+std::vector<uint8_t> volume_debug_labels(const RenderSettings& s, int region_w, int region_h) {
+  static const char* const kNames[4] = {"T MARCH", "T RATIO", "D MARCH", "D DELTA"};
+  const int hw = std::max(1, s.width / 2), hh = std::max(1, s.height / 2);
+  const int pw = std::min(hw, s.width - hw), ph = std::min(hh, s.height - hh);
+  constexpr int kMargin = 1;
+  int scale = pw >= 200 ? 2 : 1;
+  while (scale > 0 && (label_width("T MARCH", scale) + 2 * kMargin > pw || label_height(scale) + 2 * kMargin > ph))
+    --scale;
+  if (!scale) return {};
+  std::vector<uint8_t> mask(size_t(region_w) * region_h, kLabelNone);
+  for (int panel = 0; panel < 4; ++panel) {
+    const int x = (panel % 2) * hw + kMargin, y_top = (panel < 2 ? s.height : hh) - 1 - kMargin;
+    stamp_label(mask, region_w, region_h, x - s.x0, y_top - s.y0, kNames[panel], scale);
+  }
+  return mask;
+}
 }  // namespace
 
 RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
@@ -22,6 +43,7 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
       film_(s.x1 - s.x0, s.y1 - s.y0) {
   const int depth = s.integrator_settings.strategy_depth;
   if (s.integrator == IntegratorType::Bidirectional && depth > 0) film_.enable_strategies(depth * strategy_columns(depth));
+  if (s.integrator == IntegratorType::VolumeDebug) film_.set_labels(volume_debug_labels(s, film_.width(), film_.height()));
 }
 
 RenderJob::~RenderJob() {

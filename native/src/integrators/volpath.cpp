@@ -71,11 +71,13 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
     bool found = scene.geometry.intersect(ray, visibility, &hit);
     const float t_end = found ? hit.t : ray.tmax;
 
-    // Free flight through the media along [tmin, t_end].
+    // Free flight through the media along [tmin, t_end]. A ray that escapes (even a camera ray cut
+    // by the clip distance) crosses the media to infinity, as in Cycles 3.4: a World volume with
+    // sigma_t > 0 hides the background completely (docs/volumes.md).
     const Spectrum beta_before = beta;
     MediumInteraction mi;
-    int medium = sample_media(scene, stack, ray, ray.tmin, t_end, sampler, est, step, &beta, &mi);
-    const float t_seg = medium >= 0 ? mi.t : t_end;
+    int medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
+    const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;
     // Lamps with a size are hit by rays but never occlude (as in Cycles); weighted as the segment
     // before the collision (exact for grey media).
     if (lights.has_hittable()) {

@@ -32,7 +32,8 @@ class Scene {
 
   // Participating media (docs/volumes.md). material_medium[m]: the medium inside closed meshes of
   // material m (-1: none); material_null[m]: m has no surface, its boundary is invisible.
-  // global_media: media bounded by their own grid (Volume objects), active along every ray.
+  // global_media: media active along every ray: Volume objects (bounded by their own grid) and
+  // World volumes (homogeneous, unbounded: escaping rays cross an infinite distance).
   std::vector<Medium> media;
   std::vector<int> material_medium, global_media;
   std::vector<uint8_t> material_null;
