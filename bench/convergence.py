@@ -23,12 +23,13 @@ What it does, per scene ("door", "caustic", "cornell_area" of tests/scenes/build
     and writing the image, as a user waits for it. CPU time of the process is recorded too.
   * Ratios at equal time: each method's log relMSE is interpolated linearly in log time at the
     largest time all three methods reached; the ratios are taken there (from relmse_corrected).
-    The JSON also has them from raw relMSE, from CPU time, from a 1/t fit of the last rungs
-    (fit_inverse_time) and from the trimmed relMSE: the same without the 0.1 % of pixels of
-    largest error. A smooth glass sphere shows a small light's sub-pixel image to the camera, a
-    pure specular path that no method samples other than by chance; those few pixels alone can
-    move one render's relMSE by orders of magnitude, so on "caustic" the trimmed figure is the
-    steady one.
+    The JSON also has them against CPU time of the process (on a machine shared with other jobs
+    the steadier time base; both engines keep 2 threads busy when the machine is idle), from a 1/t
+    fit of the last rungs (fit_inverse_time), and from the trimmed relMSE: the same without the
+    0.1 % of pixels of largest error. On "caustic" a few fireflies (light seen through the glass,
+    the caustic seen through the glass) move one render's relMSE by orders of magnitude; the
+    trimmed figure is steadier there but favours the methods whose error is fireflies (it drops
+    them) while they are fewer than 0.1 % of the pixels.
 Output: OUT/convergence.json, OUT/convergence_<scene>.png (log-log plot, needs matplotlib),
 OUT/convergence_<scene>_reference.png and OUT/convergence_<scene>_images.png (reference, then each
 method's rung nearest the equal time; all with the exposure given in the JSON).

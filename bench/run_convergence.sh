@@ -1,6 +1,6 @@
 #!/bin/sh
 # Builds the library (Release, build-bench/) and runs the convergence benchmark in Blender; writes
-# bench/results/convergence.json, convergence_<scene>*.png and convergence.log.
+# bench/results/convergence.json, convergence_<scene>*.png and convergence.log (or into --out DIR).
 # Extra arguments go to convergence.py, e.g.: bench/run_convergence.sh --quick
 # Needs matplotlib in Blender's Python for the plots (Debian: apt-get install python3-matplotlib).
 set -eu
@@ -10,7 +10,13 @@ BLENDER=${BLENDER:-blender}
 RESULTS=$REPO/bench/results
 cmake -S "$REPO" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$BUILD" -j2 --target lantern_shared
-mkdir -p "$RESULTS"
+OUT=$RESULTS  # convergence.py's --out, if given, also takes the log
+prev=
+for a in "$@"; do
+  [ "$prev" = "--out" ] && OUT=$a
+  prev=$a
+done
+mkdir -p "$OUT"
 LANTERN_LIBRARY="$BUILD/liblantern.so" "$BLENDER" -b --factory-startup --python-exit-code 1 \
   --python "$REPO/bench/convergence.py" -- --out "$RESULTS" "$@" \
-  2>&1 | tee "$RESULTS/convergence.log" | grep -E '^(bench:|====|Goals|Load|Wrote|Error|Traceback|  |[a-z_]+ +at )'
+  2>&1 | tee "$OUT/convergence.log" | grep --line-buffered -E '^(bench:|====|scene |[a-z_]+ +(wall|cpu)_|Goal|Load|Wrote|Error|Traceback|  )'
