@@ -143,7 +143,6 @@ TEST(Bdpt, MisWeightsSumToOne) {
         lt::CameraSample cs;
         cs.pixel_center = {px + 0.5f, py + 0.5f};
         cs.film = {px + 0.5f + ox, py + 0.5f + oy};
-        cs.film_pdf = filter.pdf(ox) * filter.pdf(oy);
         cs.ray = camera.generate(cs.film.x, cs.film.y);
         for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
           ++checked;
@@ -255,7 +254,6 @@ TEST(Bdpt, LongPathsStayFinite) {
     lt::CameraSample cs;
     cs.pixel_center = {12.5f, 11.5f};
     cs.film = {12.3f, 11.7f};
-    cs.film_pdf = filter.pdf(-0.2f) * filter.pdf(0.2f);
     cs.ray = camera.generate(cs.film.x, cs.film.y);
     std::vector<float> sums = lt::bdpt_mis_weight_sums(ctx, cs, sampler);
     for (float sum : sums) worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
@@ -285,7 +283,6 @@ TEST(Bdpt, NoHeapAllocationPerSample) {
       lt::CameraSample cs;
       cs.film = {float(i % size) + 0.5f, float((i / size) % size) + 0.5f};
       cs.pixel_center = cs.film;
-      cs.film_pdf = filter.pdf(0) * filter.pdf(0);
       cs.ray = camera.generate(cs.film.x, cs.film.y);
       lt::trace_bdpt(ctx, cs, sampler, stats, splats);
       lt::trace_path(scene, is, cs.ray, sampler, stats);

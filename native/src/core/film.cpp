@@ -28,25 +28,47 @@ FilterSampler::FilterSampler(FilterType type, float width) {
       };
       break;
   }
-  std::vector<float> v(kFilterTableSize);
-  for (int i = 0; i < kFilterTableSize; ++i) v[i] = std::max(0.0f, f(half_range_ * (i + 0.5f) / kFilterTableSize));
-  table_ = Distribution1D(v);
+  const int n = kFilterTableSize;
+  std::vector<double> v(n), cdf(n + 1, 0.0);
+  for (int i = 0; i < n; ++i) {
+    v[i] = std::max(0.0f, f(half_range_ * (i + 0.5f) / n));
+    cdf[i + 1] = cdf[i] + v[i];
+  }
+  const double total = cdf[n] > 0 ? cdf[n] : 1.0;
+  cdf_.resize(n + 1);
+  inv_width_.resize(n);
+  density_.resize(n);
+  guide_.resize(n);
+  for (int i = 0; i <= n; ++i) cdf_[i] = float(cdf[i] / total);
+  cdf_[n] = 1.0f;
+  for (int i = 0; i < n; ++i) {
+    const float w = cdf_[i + 1] - cdf_[i];
+    inv_width_[i] = w > 0 ? 1.0f / w : 0.0f;
+    // Density per pixel of offset: the bin's probability spread over its width, split by sign.
+    density_[i] = float(v[i] / total * n * 0.5 / half_range_);
+  }
+  for (int k = 0, i = 0; k < n; ++k) {
+    while (i + 1 < n && cdf_[i + 1] <= float(k) / n) ++i;
+    guide_[k] = uint32_t(i);
+  }
 }
 
 float FilterSampler::sample(float u) const {
   // The profile is symmetric: the first half of u picks the sign.
-  float sign = u < 0.5f ? -1.0f : 1.0f;
-  float r = u < 0.5f ? 2 * u : 2 * u - 1;
-  float pdf;
-  return sign * half_range_ * table_.sample_continuous(std::min(r, kOneMinusEpsilon), &pdf);
+  const float sign = u < 0.5f ? -1.0f : 1.0f;
+  const float r = std::min(u < 0.5f ? 2 * u : 2 * u - 1, kOneMinusEpsilon);
+  const int n = int(guide_.size());
+  int i = int(guide_[std::min(n - 1, int(r * n))]);
+  while (i + 1 < n && cdf_[i + 1] <= r) ++i;  // also skips empty bins
+  const float t = std::min((r - cdf_[i]) * inv_width_[i], kOneMinusEpsilon);
+  return sign * half_range_ * (i + t) / n;
 }
 
 float FilterSampler::pdf(float offset) const {
-  float a = std::abs(offset) / half_range_;
+  const float a = std::abs(offset) / half_range_;
   if (!(a < 1)) return 0;
-  int bin = std::min(int(a * table_.size()), int(table_.size()) - 1);
-  double integral = table_.integral();
-  return integral > 0 ? float(table_.func(bin) / integral) * 0.5f / half_range_ : 0.0f;
+  const int n = int(density_.size());
+  return density_[std::min(int(a * n), n - 1)];
 }
 
 int pass_channels(Pass pass) {

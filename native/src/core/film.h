@@ -26,7 +26,10 @@ class FilterSampler {
   float radius() const { return half_range_; }
 
  private:
-  Distribution1D table_;
+  // The profile over [0, radius] as a piecewise-constant distribution in float, inverted through
+  // a guide table: two lookups per camera sample, on the hot path.
+  std::vector<float> cdf_, inv_width_, density_;
+  std::vector<uint32_t> guide_;
   float half_range_ = 0.5f;
 };
 

@@ -127,7 +127,6 @@ void RenderJob::render_pass_with(int sample_index, Trace trace) {
             CameraSample cs;
             cs.pixel_center = {fx + 0.5f, fy + 0.5f};
             cs.film = {fx + 0.5f + ox, fy + 0.5f + oy};
-            cs.film_pdf = filter_.pdf(ox) * filter_.pdf(oy);
             cs.ray = camera_.generate(cs.film.x, cs.film.y);
             size_t splat_mark = splats.size();
             SampleValue v = trace(cs, sampler, stats, splats);

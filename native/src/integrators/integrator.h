@@ -36,13 +36,12 @@ struct SampleStats {
   uint64_t rays = 0;
 };
 
-// A camera ray with where it crosses the film (full-frame pixels, y up), the pixel it estimates
-// and the density, per unit film area, with which that pixel's filter chose the position.
+// A camera ray with where it crosses the film (full-frame pixels, y up) and the pixel it
+// estimates (the filter can place `film` in a neighbour).
 struct CameraSample {
   Ray ray;
   Vec2 film;
-  float film_pdf = 1;
-  Vec2 pixel_center;  // the pixel being estimated (the filter can place `film` in a neighbour)
+  Vec2 pixel_center;
 };
 
 // A light-tracing contribution to a pixel of the render region (BDPT's t = 1), and its cell in
