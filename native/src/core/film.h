@@ -8,7 +8,6 @@
 #include <utility>
 #include <vector>
 
-#include "core/distribution.h"
 #include "core/math.h"
 
 namespace lt {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "integrators/integrator.h"
-#include "integrators/ray_kinds.h"
+#include "integrators/path_state.h"
 #include "integrators/path_vertex.h"
 
 namespace lt {

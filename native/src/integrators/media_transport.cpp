@@ -1,5 +1,5 @@
 #include "integrators/media_transport.h"
-#include "integrators/ray_kinds.h"
+#include "integrators/path_state.h"
 
 namespace lt {
 

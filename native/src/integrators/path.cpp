@@ -1,7 +1,7 @@
 // Unidirectional path tracing with next-event estimation and multiple importance sampling (power
 // heuristic; Veach 1997, ch. 9), Russian roulette on the throughput, and Cycles' bounce limits.
 #include "integrators/integrator.h"
-#include "integrators/ray_kinds.h"
+#include "integrators/path_state.h"
 
 namespace lt {
 
@@ -17,7 +17,7 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
   Spectrum L(0.0f), beta(1.0f);
   Ray ray = camera_ray;
   unsigned visibility = kVisCamera;
-  int bounce = 0, diffuse = 0, glossy = 0, transmission = 0, transparent = 0;
+  Bounces b;
   // The previous scattering vertex, for MIS on emitters the BSDF-sampled ray reaches.
   float prev_pdf = 0;
   bool prev_delta = true;
@@ -25,7 +25,7 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
   Bsdf bsdf;
 
   auto add = [&](const Spectrum& c) {
-    L += clamp_contribution(c, bounce == 0 ? s.clamp_direct : s.clamp_indirect);
+    L += clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
   };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
     if (prev_delta) return 1.0f;
@@ -46,7 +46,7 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
       });
     }
     if (!found) {
-      bool background = bounce == 0 && transparent == 0;
+      bool background = b.from_camera();
       if (!(background && s.transparent_background)) {
         if (lights.world_light() >= 0 && (!background || scene.world.camera_visible))
           add(beta * scene.world.radiance(ray.d) * mis_emitter(lights.world_light(), ray.d, INFINITY));
@@ -63,7 +63,7 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
     const Vec3 ng = backface ? -sp.ng : sp.ng, ns = backface ? -sp.ns : sp.ns;
     const Material& material = scene.material(sp.material);
     Spectrum emitted = material.evaluate(scene.images, sp.uv, backface, &bsdf);
-    if (bounce == 0 && transparent == 0) {
+    if (b.from_camera()) {
       out.alpha = 1;
       out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
     }
@@ -71,14 +71,12 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
       int li = lights.triangle_light(sp.instance, sp.primitive);
       add(beta * emitted * (li >= 0 ? mis_emitter(li, ray.d, hit.t) : 1.0f));
     }
-    if (bounce == 0 && transparent == 0) {
+    if (b.from_camera()) {
       out.normal = ns;
       out.albedo = bsdf.albedo();
     }
     if (bsdf.count() == 0) break;
-    if (bounce > s.max_bounces || diffuse > s.diffuse_bounces || glossy > s.glossy_bounces ||
-        transmission > s.transmission_bounces || transparent > s.transparent_bounces)
-      break;
+    if (b.exceeded(s)) break;
 
     const Frame frame(ns);
     const Vec3 wo = frame.to_local(-ray.d);
@@ -122,15 +120,7 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
     beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
     if (!is_finite(beta)) break;
 
-    if (bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1) {
-      ++transparent;  // Transparent BSDF: Cycles counts these apart from the bounces
-    } else {
-      ++bounce;
-      if (bs.flags & kLobeDiffuse) ++diffuse;
-      else if (bs.flags & kLobeTransmission) ++transmission;
-      else ++glossy;
-      visibility = visibility_of(bs.flags);
-    }
+    b.count(bs, &visibility);
     prev_pdf = bs.pdf;
     prev_delta = (bs.flags & kLobeSpecular) != 0;
     prev_p = sp.p;
@@ -139,12 +129,7 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
     ray.tmin = 0;
     ray.tmax = INFINITY;
 
-    // Russian roulette once the path has had a chance to gather light (unbiased: divide by q).
-    if (bounce >= 3) {
-      float q = std::min(0.95f, max_component(beta));
-      if (sampler.next_1d() >= q) break;
-      beta /= q;
-    }
+    if (!russian_roulette(b.total, &beta, sampler)) break;
   }
   out.radiance = L;
   return out;

@@ -4,7 +4,7 @@
 // ray through invisible boundaries, MIS (power heuristic) of light sampling against phase/BSDF
 // sampling, Russian roulette, and Cycles' volume bounce limit (0: single scattering).
 #include "integrators/media_transport.h"
-#include "integrators/ray_kinds.h"
+#include "integrators/path_state.h"
 
 namespace lt {
 
@@ -23,7 +23,8 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
   Spectrum L(0.0f), beta(1.0f);
   Ray ray = camera_ray;
   unsigned visibility = kVisCamera;
-  int bounce = 0, diffuse = 0, glossy = 0, transmission = 0, transparent = 0, volume = 0, nulls = 0;
+  Bounces b;
+  int volume = 0, nulls = 0;
   float prev_pdf = 0;
   bool prev_delta = true;
   Vec3 prev_p = ray.o;
@@ -33,7 +34,7 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
   Bsdf bsdf;
 
   auto add = [&](const Spectrum& c) {
-    L += clamp_contribution(c, bounce == 0 ? s.clamp_direct : s.clamp_indirect);
+    L += clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
   };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
     if (prev_delta) return 1.0f;
@@ -91,8 +92,8 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
 
     if (medium >= 0) {
       // A real collision: beta already holds sigma_s T / pdf (medium.h).
-      if (bounce == 0 && transparent == 0) out.alpha = 1;
-      if (is_black(beta) || volume > s.volume_bounces || bounce > s.max_bounces) break;
+      if (b.from_camera()) out.alpha = 1;
+      if (is_black(beta) || volume > s.volume_bounces || b.total > s.max_bounces) break;
       const PhaseHG& phase = scene.media[medium].phase();
       const Vec3 wo = normalize(-ray.d);
       if (!lights.empty())
@@ -105,7 +106,7 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
       float pdf;
       if (!phase.sample(wo, sampler.next_2d(), &wi, &pdf) || !(pdf > 0)) break;
       ++volume;
-      ++bounce;
+      ++b.total;
       visibility = kVisDiffuse;
       prev_pdf = pdf;
       prev_delta = false;
@@ -116,7 +117,7 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
       ray.tmin = 0;
       ray.tmax = INFINITY;
     } else if (!found) {
-      bool background = bounce == 0 && transparent == 0;
+      bool background = b.from_camera();
       if (!(background && s.transparent_background)) {
         if (lights.world_light() >= 0 && (!background || scene.world.camera_visible))
           add(beta * scene.world.radiance(ray.d) * mis_emitter(lights.world_light(), ray.d, INFINITY));
@@ -142,7 +143,7 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
       const Vec3 ng = backface ? -sp.ng : sp.ng, ns = backface ? -sp.ns : sp.ns;
       const Material& material = scene.material(sp.material);
       Spectrum emitted = material.evaluate(scene.images, sp.uv, backface, &bsdf);
-      if (bounce == 0 && transparent == 0) {
+      if (b.from_camera()) {
         out.alpha = 1;
         out.depth = hit.t;
       }
@@ -150,13 +151,12 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
         int li = lights.triangle_light(sp.instance, sp.primitive);
         add(beta * emitted * (li >= 0 ? mis_emitter(li, ray.d, t_prev + hit.t * length(ray.d)) : 1.0f));
       }
-      if (bounce == 0 && transparent == 0) {
+      if (b.from_camera()) {
         out.normal = ns;
         out.albedo = bsdf.albedo();
       }
       if (bsdf.count() == 0) break;
-      if (bounce > s.max_bounces || diffuse > s.diffuse_bounces || glossy > s.glossy_bounces ||
-          transmission > s.transmission_bounces || transparent > s.transparent_bounces || volume > s.volume_bounces)
+      if (b.exceeded(s) || volume > s.volume_bounces)
         break;
 
       const Frame frame(ns);
@@ -181,15 +181,7 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
       if (!is_finite(beta)) break;
       if (!reflect_geo) cross_boundary(scene, sp, wi, &stack);  // refraction into / out of a medium
 
-      if (bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1) {
-        ++transparent;
-      } else {
-        ++bounce;
-        if (bs.flags & kLobeDiffuse) ++diffuse;
-        else if (bs.flags & kLobeTransmission) ++transmission;
-        else ++glossy;
-        visibility = visibility_of(bs.flags);
-      }
+      b.count(bs, &visibility);
       prev_pdf = bs.pdf;
       prev_delta = (bs.flags & kLobeSpecular) != 0;
       prev_p = sp.p;
@@ -200,12 +192,7 @@ SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const
       ray.tmax = INFINITY;
     }
 
-    // Russian roulette once the path has had a chance to gather light (unbiased: divide by q).
-    if (bounce >= 3) {
-      float q = std::min(0.95f, max_component(beta));
-      if (sampler.next_1d() >= q) break;
-      beta /= q;
-    }
+    if (!russian_roulette(b.total, &beta, sampler)) break;
   }
   out.radiance = L;
   return out;

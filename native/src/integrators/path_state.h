@@ -1,0 +1,63 @@
+// What the unidirectional integrators track along a path the way Cycles does: ray kinds (Cycles'
+// ray visibility flags, lt_visibility), bounce counts and their limits, the sample clamp and
+// Russian roulette.
+#pragma once
+
+#include <cstdint>
+
+#include "core/sampling.h"
+#include "integrators/integrator.h"
+#include "scene/bsdf.h"
+
+namespace lt {
+
+constexpr unsigned kVisCamera = 1, kVisDiffuse = 2, kVisGlossy = 4, kVisTransmission = 8, kVisShadow = 16;
+constexpr unsigned kVisAll = 31;
+
+// The visibility flag of a ray leaving a lobe of these flags.
+inline unsigned visibility_of(uint32_t lobe) {
+  if (lobe & kLobeTransmission) return kVisTransmission;
+  if (lobe & kLobeDiffuse) return kVisDiffuse;
+  return kVisGlossy;
+}
+
+// Cycles' sample clamp: scale a contribution so that its largest channel is at most `limit`.
+inline Spectrum clamp_contribution(const Spectrum& c, float limit) {
+  if (limit <= 0) return c;
+  float m = max_component(c);
+  return m > limit ? c * (limit / m) : c;
+}
+
+// Cycles' bounce bookkeeping: transparent pass-throughs are counted apart from the bounces.
+struct Bounces {
+  int total = 0, diffuse = 0, glossy = 0, transmission = 0, transparent = 0;
+  bool from_camera() const { return total == 0 && transparent == 0; }  // still on the camera ray
+  // Counts the scattering a BSDF sample made; a bounce changes the next ray's kind.
+  void count(const BsdfSample& bs, unsigned* visibility) {
+    if (bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1) {
+      ++transparent;
+      return;
+    }
+    ++total;
+    if (bs.flags & kLobeDiffuse) ++diffuse;
+    else if (bs.flags & kLobeTransmission) ++transmission;
+    else ++glossy;
+    *visibility = visibility_of(bs.flags);
+  }
+  bool exceeded(const IntegratorSettings& s) const {
+    return total > s.max_bounces || diffuse > s.diffuse_bounces || glossy > s.glossy_bounces ||
+           transmission > s.transmission_bounces || transparent > s.transparent_bounces;
+  }
+};
+
+// Russian roulette once the path has had a chance to gather light (unbiased: divide by q).
+// Returns false when the path ends.
+inline bool russian_roulette(int bounce, Spectrum* beta, Sampler& sampler) {
+  if (bounce < 3) return true;
+  float q = std::min(0.95f, max_component(*beta));
+  if (sampler.next_1d() >= q) return false;
+  *beta /= q;
+  return true;
+}
+
+}  // namespace lt
