@@ -12,10 +12,10 @@ bl_info = {
 
 if "bpy" in locals():
     import importlib
-    for _m in (properties, ui, engine):  # noqa: F821 (reload support)
+    for _m in (properties, ui, engine, operators):  # noqa: F821 (reload support)
         importlib.reload(_m)
 else:
-    from . import properties, ui, engine
+    from . import properties, ui, engine, operators
 
 import bpy  # noqa: E402
 
@@ -24,9 +24,11 @@ def register():
     properties.register()
     engine.register()
     ui.register()
+    operators.register()
 
 
 def unregister():
+    operators.unregister()
     ui.unregister()
     engine.unregister()
     properties.unregister()

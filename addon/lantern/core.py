@@ -210,6 +210,7 @@ class RenderSettings(ctypes.Structure):
         ("border", ctypes.c_int * 4),
         ("samples", ctypes.c_int),
         ("seed", ctypes.c_uint),
+        ("sample_offset", ctypes.c_int),
         ("integrator", ctypes.c_int),
         ("max_bounces", ctypes.c_int),
         ("diffuse_bounces", ctypes.c_int),
@@ -303,6 +304,8 @@ def _declare(lib):
                                           ctypes.POINTER(c_int)], c_int),
         "lt_render_destroy": ([render_p], None),
         "lt_render_write_exr": ([render_p, c_char_p], c_int),
+        "lt_render_write_exr_attributes": ([render_p, c_char_p, P(c_char_p)], c_int),
+        "lt_merge_exr": ([c_char_p, P(c_char_p), c_int], c_int),
     }
     for name, (argtypes, restype) in sig.items():
         try:
@@ -569,6 +572,19 @@ class Scene:
 
 # ---- rendering ----------------------------------------------------------------------------------
 
+def _string_pairs(mapping):
+    """A NULL-terminated char*[] of key, value, key, value, ..."""
+    items = [os.fsencode(str(x)) for kv in mapping.items() for x in kv]
+    return (ctypes.c_char_p * (len(items) + 1))(*items, None)
+
+
+def merge_exr(out_path, part_paths):
+    """lt_merge_exr: the sample-weighted merge of sample-split parts into out_path."""
+    paths = [os.fsencode(p) for p in part_paths]
+    arr = (ctypes.c_char_p * max(1, len(paths)))(*paths)
+    _check(lib().lt_merge_exr(os.fsencode(out_path), arr, len(paths)), "lt_merge_exr")
+
+
 def default_settings():
     s = RenderSettings()
     lib().lt_render_settings_default(ctypes.byref(s))
@@ -651,8 +667,14 @@ class Render:
                                                       ctypes.byref(h)), "lt_render_read_strategy_grid")
         return out.reshape(h.value, w.value, 3)
 
-    def write_exr(self, path):
-        _check(self._lib.lt_render_write_exr(self.handle, os.fsencode(path)), "lt_render_write_exr")
+    def write_exr(self, path, attributes=None):
+        """Writes every pass to a 32-bit float EXR; `attributes`: extra header strings (dict)."""
+        if not attributes:
+            _check(self._lib.lt_render_write_exr(self.handle, os.fsencode(path)), "lt_render_write_exr")
+            return
+        _check(self._lib.lt_render_write_exr_attributes(self.handle, os.fsencode(path),
+                                                        _string_pairs(attributes)),
+               "lt_render_write_exr_attributes")
 
     def close(self):
         if self._h is not None:

@@ -63,7 +63,7 @@ def render_settings(scene, width, height, border):
     heuristics = {'POWER': core.MIS_POWER, 'BALANCE': core.MIS_BALANCE, 'UNIFORM': core.MIS_UNIFORM}
     return dict(
         width=width, height=height, border=border,
-        samples=lt.samples, seed=lt.seed & 0xFFFFFFFF,
+        samples=lt.samples, seed=lt.seed & 0xFFFFFFFF, sample_offset=lt.sample_offset,
         integrator=integrators[lt.integrator],
         max_bounces=lt.max_bounces, diffuse_bounces=lt.diffuse_bounces,
         glossy_bounces=lt.glossy_bounces, transmission_bounces=lt.transmission_bounces,

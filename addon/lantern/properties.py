@@ -17,6 +17,14 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
                     "noise and can be averaged",
         default=0, min=0,
     )
+    sample_offset: IntProperty(
+        name="Sample Offset",
+        description="Number of samples to skip when starting the render: a render of samples "
+                    "[offset, offset + samples) uses exactly the random numbers those samples use in "
+                    "a full render, so parts rendered on several machines merge (Merge Images, "
+                    "`lantern merge`) into the full render",
+        default=0, min=0, max=(1 << 30) - (1 << 24),
+    )
     integrator: EnumProperty(
         name="Integrator",
         description="Light transport algorithm",

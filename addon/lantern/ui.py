@@ -39,6 +39,7 @@ class LANTERN_RENDER_PT_sampling(LanternButtonsPanel, Panel):
         col = layout.column(align=True)
         col.prop(settings, "samples")
         col.prop(settings, "seed")
+        col.prop(settings, "sample_offset")
 
 
 class LANTERN_RENDER_PT_light_paths(LanternButtonsPanel, Panel):

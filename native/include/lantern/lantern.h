@@ -243,6 +243,9 @@ typedef struct lt_render_settings {
   int border[4];
   int samples;
   unsigned seed;
+  /* Cycles' Sample Offset: the render takes samples [sample_offset, sample_offset + samples) of the
+   * sequence a full render would take, so sample-split parts merge into that render (lt_merge_exr). */
+  int sample_offset;
   int integrator;
   int max_bounces;
   int diffuse_bounces, glossy_bounces, transmission_bounces, transparent_bounces;
@@ -297,7 +300,7 @@ LT_API int lt_render_wait(lt_render* render);
 enum lt_pass {
   LT_PASS_COMBINED = 0, /* RGBA */
   LT_PASS_DEPTH = 1,    /* 1 channel: distance along the camera axis (Blender's Z) */
-  LT_PASS_NORMAL = 2,   /* 3 channels: world-space shading normal of the first hit */
+  LT_PASS_NORMAL = 2,   /* 3 channels: mean world-space shading normal of the first hits (Cycles) */
   LT_PASS_ALBEDO = 3,   /* 3 channels: colour of the first non-specular hit */
   LT_PASS_VARIANCE = 4, /* 3 channels: variance of the Combined pixel mean, per channel */
   LT_PASS_SAMPLE_COUNT = 5, /* 1 channel: samples accumulated in the pixel */
@@ -318,8 +321,21 @@ LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t fl
 
 LT_API void lt_render_destroy(lt_render* render);
 
-/* Writes the given render's passes to a 32-bit float OpenEXR file. */
+/* Writes the given render's passes to a 32-bit float OpenEXR file (written to a temporary file
+ * beside it and renamed: an existing file is replaced only by a complete one). The header records
+ * lantern/sample_ranges ("a-b": samples [a, b)), lantern/samples, seed, integrator and resolution.
+ * attributes: NULL, or key, value, key, value, ..., NULL: extra string attributes for the header
+ * (e.g. "lantern/scene", an identity of the scene that lt_merge_exr compares). */
 LT_API int lt_render_write_exr(lt_render* render, const char* path);
+LT_API int lt_render_write_exr_attributes(lt_render* render, const char* path, const char* const* attributes);
+
+/* Merges sample-split parts written by lt_render_write_exr (or earlier merges) into out_path: per
+ * pixel, the sample-count-weighted average of every pass (Depth: the minimum; Sample Count: the
+ * sum; Variance: pooled over the parts), equal to one render of all the parts' samples up to float
+ * rounding. Refused with LT_ERROR_INVALID_ARGUMENT and a message naming the part when the parts
+ * disagree (resolution, channels, scene, seed, integrator), their sample ranges overlap, or a part
+ * has no recorded sample counts; LT_ERROR_IO for unreadable files. Nothing is written on failure. */
+LT_API int lt_merge_exr(const char* out_path, const char* const* part_paths, int part_count);
 
 #ifdef __cplusplus
 }

@@ -3,6 +3,7 @@
 #include "lantern/lantern.h"
 
 #include <cstring>
+#include <map>
 #include <new>
 #include <string>
 
@@ -434,6 +435,8 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
             "resolution " + std::to_string(s->width) + "x" + std::to_string(s->height) + " is out of range (at most " +
                 std::to_string(kMaxDimension) + " per side and " + std::to_string(kMaxPixels) + " pixels)");
     require(s->samples > 0 && s->samples <= (1 << 24), "samples must be in [1, 16777216]");
+    require(s->sample_offset >= 0 && s->sample_offset <= (1 << 30) - s->samples,
+            "sample offset must be in [0, 2^30 - samples]");
     bool full = s->border[0] == 0 && s->border[1] == 0 && s->border[2] == 0 && s->border[3] == 0;
     require(s->integrator >= 0 && s->integrator < LT_INTEGRATOR_COUNT,
             "unknown integrator " + std::to_string(s->integrator) + "; valid: PATH, BIDIRECTIONAL, VOLPATH, VOLUME_DEBUG");
@@ -478,6 +481,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     }
     rs.samples = s->samples;
     rs.seed = s->seed;
+    rs.sample_offset = s->sample_offset;
     rs.integrator = lt::IntegratorType(s->integrator);
     auto& is = rs.integrator_settings;
     is.max_bounces = s->max_bounces;
@@ -576,6 +580,32 @@ int lt_render_write_exr(lt_render* render, const char* path) {
   return guarded([&] {
     require(render && path, "lt_render_write_exr: NULL argument");
     lt::write_render_exr(path, *render->job);
+  });
+}
+
+int lt_render_write_exr_attributes(lt_render* render, const char* path, const char* const* attributes) {
+  return guarded([&] {
+    require(render && path, "lt_render_write_exr_attributes: NULL argument");
+    std::map<std::string, std::string> extra;
+    for (const char* const* a = attributes; a && a[0]; a += 2) {
+      require(a[1] != nullptr, std::string("EXR attribute ") + a[0] + " has no value");
+      require(*a[0] != '\0', "EXR attribute names must not be empty");
+      extra[a[0]] = a[1];
+    }
+    lt::write_render_exr(path, *render->job, extra);
+  });
+}
+
+int lt_merge_exr(const char* out_path, const char* const* part_paths, int part_count) {
+  return guarded([&] {
+    require(out_path && (part_paths || part_count == 0), "lt_merge_exr: NULL argument");
+    require(part_count > 0, "lt_merge_exr: no parts to merge");
+    std::vector<std::string> parts;
+    for (int i = 0; i < part_count; ++i) {
+      require(part_paths[i] != nullptr, "lt_merge_exr: part path " + std::to_string(i) + " is NULL");
+      parts.push_back(part_paths[i]);
+    }
+    lt::merge_exr(out_path, parts);
   });
 }
 

@@ -102,6 +102,14 @@ void Film::publish() {
   published_light_paths_ = light_paths_;
 }
 
+bool Film::read_light_tracing(float* out) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!published_light_paths_) return false;
+  const double scale = 1.0 / double(published_light_paths_);
+  for (size_t i = 0; i < published_splat_.size(); ++i) out[i] = float(published_splat_[i] * scale);
+  return true;
+}
+
 uint64_t Film::total_samples() const {
   std::lock_guard<std::mutex> lock(mutex_);
   uint64_t n = 0;
@@ -128,13 +136,11 @@ void Film::read(Pass pass, float* out, bool labels) const {
         o[3] = float(a.alpha * inv);
         break;
       case Pass::Depth: o[0] = a.depth; break;
-      case Pass::Normal: {
-        Vec3 nrm(float(a.normal[0]), float(a.normal[1]), float(a.normal[2]));
-        float len = length(nrm);
-        nrm = len > 0 ? nrm / len : Vec3(0.0f);
-        for (int k = 0; k < 3; ++k) o[k] = nrm[k];
+      case Pass::Normal:
+        // The mean of the samples' normals, as in Cycles (not renormalised: shorter at edges), so
+        // that sample-split parts average into the full render's pass.
+        for (int k = 0; k < 3; ++k) o[k] = float(a.normal[k] * inv);
         break;
-      }
       case Pass::Albedo:
         for (int k = 0; k < 3; ++k) o[k] = float(a.albedo[k] * inv);
         break;

@@ -95,6 +95,9 @@ class Film {
   // Resolves a pass of the published buffer: width*height*channels floats, rows bottom to top.
   // `labels` false: Combined without the labels (tests).
   void read(Pass pass, float* out, bool labels = true) const;
+  // The light-tracing (t = 1 splat) part of Combined, RGB per pixel; false when the render traced
+  // no light paths (not bidirectional).
+  bool read_light_tracing(float* out) const;
   uint64_t total_samples() const;
 
  private:

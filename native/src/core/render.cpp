@@ -152,7 +152,7 @@ void RenderJob::run() {
     arena.execute([&] {
       for (int s = 0; s < settings_.samples; ++s) {
         if (cancel_.load()) break;
-        render_pass(s);
+        render_pass(settings_.sample_offset + s);
         if (cancel_.load()) break;
         samples_done_.store(s + 1);
         auto now = std::chrono::steady_clock::now();

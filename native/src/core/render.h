@@ -22,6 +22,7 @@ struct RenderSettings {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // region of the full frame; x1 == 0: all
   int samples = 16;
   uint32_t seed = 0;
+  int sample_offset = 0;  // first sample index: the pass s uses sample_offset + s
   IntegratorType integrator = IntegratorType::Path;
   IntegratorSettings integrator_settings;
   int threads = 0;

@@ -3,16 +3,29 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <random>
 
 #include "core/error.h"
 #include "core/render.h"
 
 namespace lt {
 
+const ExrChannel* ExrImage::find(const std::string& name) const {
+  for (const ExrChannel& c : channels)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
 void write_exr(const std::string& path, int width, int height, const std::vector<ExrChannel>& channels,
                const std::map<std::string, std::string>& attributes) {
+  // A unique temporary name in the same directory (rename is atomic only within a file system).
+  const std::string tmp = path + ".tmp" + std::to_string(std::random_device{}());
   try {
     Imf::Header header(width, height);
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -28,15 +41,77 @@ void write_exr(const std::string& path, int width, int height, const std::vector
       fb.insert(channels[c].name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(flipped[c].data()), sizeof(float),
                                              sizeof(float) * width));
     }
-    Imf::OutputFile file(path.c_str(), header);
-    file.setFrameBuffer(fb);
-    file.writePixels(height);
+    {
+      Imf::OutputFile file(tmp.c_str(), header);
+      file.setFrameBuffer(fb);
+      file.writePixels(height);
+    }
+    std::filesystem::rename(tmp, path);
   } catch (const std::exception& e) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
     throw IoError("could not write " + path + ": " + e.what());
   }
 }
 
-void write_render_exr(const std::string& path, const RenderJob& job) {
+ExrImage read_exr(const std::string& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& h = file.header();
+    const Imath::Box2i dw = h.dataWindow();
+    ExrImage img;
+    img.width = dw.max.x - dw.min.x + 1;
+    img.height = dw.max.y - dw.min.y + 1;
+    for (auto it = h.begin(); it != h.end(); ++it)
+      if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) img.attributes[it.name()] = s->value();
+    std::vector<std::vector<float>> top_down;
+    Imf::FrameBuffer fb;
+    for (auto it = h.channels().begin(); it != h.channels().end(); ++it) {
+      img.channels.push_back({it.name(), {}});
+      top_down.emplace_back(size_t(img.width) * img.height);
+    }
+    for (size_t c = 0; c < img.channels.size(); ++c) {
+      char* base = reinterpret_cast<char*>(top_down[c].data()) -
+                   (ptrdiff_t(dw.min.x) + ptrdiff_t(dw.min.y) * img.width) * ptrdiff_t(sizeof(float));
+      fb.insert(img.channels[c].name, Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * img.width));
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    for (size_t c = 0; c < img.channels.size(); ++c) {
+      auto& out = img.channels[c].pixels;
+      out.resize(top_down[c].size());
+      for (int y = 0; y < img.height; ++y)
+        std::copy_n(top_down[c].data() + size_t(y) * img.width, img.width, out.data() + size_t(img.height - 1 - y) * img.width);
+    }
+    return img;
+  } catch (const std::exception& e) {
+    throw IoError("could not read " + path + ": " + e.what());
+  }
+}
+
+namespace {
+const char* integrator_name(IntegratorType t) {
+  switch (t) {
+    case IntegratorType::Path: return "PATH";
+    case IntegratorType::Bidirectional: return "BIDIRECTIONAL";
+    case IntegratorType::VolPath: return "VOLPATH";
+    case IntegratorType::VolumeDebug: return "VOLUME_DEBUG";
+    default: return "?";
+  }
+}
+
+void add_channels(std::vector<ExrChannel>& channels, const std::vector<float>& buf, size_t n,
+                  const std::vector<std::string>& names) {
+  const size_t c = names.size();
+  for (size_t k = 0; k < c; ++k) {
+    ExrChannel ch{names[k], std::vector<float>(n)};
+    for (size_t i = 0; i < n; ++i) ch.pixels[i] = buf[i * c + k];
+    channels.push_back(std::move(ch));
+  }
+}
+}  // namespace
+
+void write_render_exr(const std::string& path, const RenderJob& job, const std::map<std::string, std::string>& extra) {
   const int w = job.region_width(), h = job.region_height();
   const size_t n = size_t(w) * h;
   struct Out { Pass pass; std::vector<std::string> names; };
@@ -50,24 +125,24 @@ void write_render_exr(const std::string& path, const RenderJob& job) {
   };
   std::vector<ExrChannel> channels;
   for (const Out& o : outs) {
-    int c = pass_channels(o.pass);
-    std::vector<float> buf(n * c);
+    std::vector<float> buf(n * pass_channels(o.pass));
     job.film().read(o.pass, buf.data());
-    for (int k = 0; k < c; ++k) {
-      ExrChannel ch;
-      ch.name = o.names[k];
-      ch.pixels.resize(n);
-      for (size_t i = 0; i < n; ++i) ch.pixels[i] = buf[i * c + k];
-      channels.push_back(std::move(ch));
-    }
+    add_channels(channels, buf, n, o.names);
   }
+  std::vector<float> light(n * 3);
+  if (job.film().read_light_tracing(light.data())) add_channels(channels, light, n, {"LightTracing.R", "LightTracing.G", "LightTracing.B"});
   RenderStatus st = job.status();
-  std::map<std::string, std::string> attrs = {
-      {"lantern/samples", std::to_string(st.samples_done)},
-      {"lantern/seed", std::to_string(job.settings().seed)},
-      {"lantern/integrator", "path"},
-      {"lantern/render_seconds", std::to_string(st.elapsed)},
-  };
+  const RenderSettings& s = job.settings();
+  std::map<std::string, std::string> attrs = extra;
+  attrs["lantern/samples"] = std::to_string(st.samples_done);
+  attrs["lantern/sample_ranges"] = std::to_string(s.sample_offset) + "-" + std::to_string(s.sample_offset + st.samples_done);
+  attrs["lantern/seed"] = std::to_string(s.seed);
+  attrs["lantern/integrator"] = integrator_name(s.integrator);
+  attrs["lantern/resolution"] = std::to_string(s.width) + "x" + std::to_string(s.height);
+  attrs["lantern/region"] = std::to_string(s.x0) + " " + std::to_string(s.y0) + " " + std::to_string(s.x1) + " " + std::to_string(s.y1);
+  char secs[32];
+  std::snprintf(secs, sizeof(secs), "%.3f", st.elapsed);
+  attrs["lantern/render_seconds"] = secs;
   write_exr(path, w, h, channels, attrs);
 }
 
