@@ -5,7 +5,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PACKAGES=(blender cmake g++ make libembree-dev libtbb-dev libopenexr-dev libopenvdb-dev libnanovdb-dev
-          libboost-iostreams-dev libgtest-dev libbenchmark-dev python3-numpy python3-pytest)
+          libboost-iostreams-dev libgtest-dev libbenchmark-dev python3-numpy python3-pytest
+          slurmctld slurmd slurm-client munge)  # the last four: the farm end-to-end test (tests/blender/test_farm.py)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,0 +1,104 @@
+"""One farm task: renders samples [offset, offset + samples) of one frame of a .blend with Lantern and
+writes the part as a 32-bit float EXR with Lantern's own writer (every pass, the sample range, seed,
+resolution and the scene's identity in the header), for `lantern merge`.
+
+    blender -b SCENE.blend --python-exit-code 1 --python lantern_task.py -- \\
+        --offset O --samples S --frame F --out PART.exr [--timing]
+
+Any farm that runs `blender -b` (Slurm, Flamenco, Deadline) can run it. The add-on is Blender's
+installed `lantern`, or the package under $LANTERN_ADDON_DIR (its library: $LANTERN_LIBRARY or the
+one beside it). Fails (exit code 1, message on stderr) on any error: a part is written completely
+or not at all.
+"""
+import argparse
+import hashlib
+import os
+import sys
+import time
+
+import bpy
+
+T_START = time.monotonic()
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    p = argparse.ArgumentParser(prog="lantern_task.py")
+    p.add_argument("--offset", type=int, required=True, help="first sample index")
+    p.add_argument("--samples", type=int, required=True, help="number of samples")
+    p.add_argument("--frame", type=int, default=None, help="frame (default: the scene's current)")
+    p.add_argument("--out", required=True, help="the part's EXR path")
+    p.add_argument("--timing", action="store_true", help="print the time of each stage (bench/)")
+    return p.parse_args(argv)
+
+
+def load_addon():
+    addon_dir = os.environ.get("LANTERN_ADDON_DIR")
+    if addon_dir:
+        sys.path.insert(0, addon_dir)
+        import lantern
+        if not hasattr(bpy.types.Scene, "lantern"):
+            lantern.register()
+    else:
+        import addon_utils
+        addon_utils.enable("lantern", default_set=False)
+        import lantern  # noqa: F401
+    from lantern import core, engine
+    from lantern.export import export_scene
+    return core, engine, export_scene
+
+
+def scene_identity(frame):
+    """Which render a part belongs to: the .blend's content and the frame (lt_merge_exr compares it)."""
+    digest = hashlib.sha256()
+    with open(bpy.data.filepath, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return "%s frame %d" % (digest.hexdigest()[:20], frame)
+
+
+def main():
+    args = parse_args()
+    if args.samples < 1 or args.offset < 0:
+        raise SystemExit("lantern task: need --samples >= 1 and --offset >= 0")
+    core, engine, export_scene = load_addon()
+    scene = bpy.context.scene
+    frame = scene.frame_current if args.frame is None else args.frame
+    scene.frame_set(frame)
+    t_loaded = time.monotonic()
+
+    width, height, border = engine.frame_size(scene.render)
+    settings = engine.render_settings(scene, width, height, border)
+    settings.update(samples=args.samples, sample_offset=args.offset)
+    warnings = []
+    core_scene = core.Scene()
+    export_scene(bpy.context.evaluated_depsgraph_get(), core_scene,
+                 lambda level, msg: warnings.append(msg))
+    t_exported = time.monotonic()
+    core_scene.commit()
+    t_built = time.monotonic()
+    for w in warnings + list(core_scene.warnings()):
+        print("lantern task: warning: %s" % w, file=sys.stderr)
+
+    render = core.Render(core_scene, settings)
+    render.start()
+    render.wait()
+    st = render.poll()
+    if st.state != core.STATE_DONE or st.samples_done != args.samples:
+        raise SystemExit("lantern task: render stopped after %d of %d samples (state %d)"
+                         % (st.samples_done, args.samples, st.state))
+    t_rendered = time.monotonic()
+    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
+    render.write_exr(args.out, {"lantern/scene": scene_identity(frame), "lantern/frame": str(frame),
+                                "lantern/blend": bpy.data.filepath})
+    render.close()
+    core_scene.close()
+    print("lantern task: frame %d samples [%d, %d) -> %s" % (frame, args.offset,
+                                                             args.offset + args.samples, args.out))
+    if args.timing:
+        print("lantern task timing: startup %.3f export %.3f build %.3f render %.3f write %.3f" % (
+            t_loaded - T_START, t_exported - t_loaded, t_built - t_exported, t_rendered - t_built,
+            time.monotonic() - t_rendered))
+
+
+main()

@@ -49,6 +49,9 @@ static int farm(int argc, char** argv) {
     return 1;
   }
   setenv("LANTERN_CLI", (dir + "/lantern").c_str(), 1);
+  // The user's PATH, for the jobs: a python3 launcher (pyenv's shim) may put its own bin first,
+  // and Blender's embedded Python then takes that interpreter's prefix and misses its modules.
+  if (const char* path = std::getenv("PATH")) setenv("LANTERN_FARM_PATH", path, 1);
   std::vector<char*> args = {const_cast<char*>("python3"), const_cast<char*>(script.c_str())};
   for (int i = 2; i < argc; ++i) args.push_back(argv[i]);
   args.push_back(nullptr);
