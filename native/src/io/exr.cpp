@@ -54,7 +54,7 @@ void write_exr(const std::string& path, int width, int height, const std::vector
   }
 }
 
-ExrImage read_exr(const std::string& path) {
+ExrImage read_exr(const std::string& path, bool pixels) {
   try {
     Imf::InputFile file(path.c_str());
     const Imf::Header& h = file.header();
@@ -64,12 +64,10 @@ ExrImage read_exr(const std::string& path) {
     img.height = dw.max.y - dw.min.y + 1;
     for (auto it = h.begin(); it != h.end(); ++it)
       if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) img.attributes[it.name()] = s->value();
-    std::vector<std::vector<float>> top_down;
+    for (auto it = h.channels().begin(); it != h.channels().end(); ++it) img.channels.push_back({it.name(), {}});
+    if (!pixels) return img;
+    std::vector<std::vector<float>> top_down(img.channels.size(), std::vector<float>(size_t(img.width) * img.height));
     Imf::FrameBuffer fb;
-    for (auto it = h.channels().begin(); it != h.channels().end(); ++it) {
-      img.channels.push_back({it.name(), {}});
-      top_down.emplace_back(size_t(img.width) * img.height);
-    }
     for (size_t c = 0; c < img.channels.size(); ++c) {
       char* base = reinterpret_cast<char*>(top_down[c].data()) -
                    (ptrdiff_t(dw.min.x) + ptrdiff_t(dw.min.y) * img.width) * ptrdiff_t(sizeof(float));

@@ -29,8 +29,9 @@ struct ExrImage {
 void write_exr(const std::string& path, int width, int height, const std::vector<ExrChannel>& channels,
                const std::map<std::string, std::string>& attributes);
 
-// Reads a single-part scanline or tiled EXR. Throws IoError.
-ExrImage read_exr(const std::string& path);
+// Reads a single-part scanline or tiled EXR (pixels false: the header only, channels left empty).
+// Throws IoError.
+ExrImage read_exr(const std::string& path, bool pixels = true);
 
 // All passes of a render, named as Blender names them in a multilayer EXR (Combined as R, G, B, A),
 // plus LightTracing.R/G/B for bidirectional renders (the t = 1 splats inside Combined, which the

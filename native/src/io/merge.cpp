@@ -55,8 +55,9 @@ std::string channel_list(const ExrImage& img) {
 
 std::string merge_exr(const std::string& out_path, const std::vector<std::string>& paths) {
   if (paths.empty()) throw InvalidArgument("merge: no parts given");
+  // Headers first: everything is checked before any pixel is read or anything written.
   std::vector<ExrImage> parts;
-  for (const std::string& p : paths) parts.push_back(read_exr(p));
+  for (const std::string& p : paths) parts.push_back(read_exr(p, false));
 
   // Every part must carry its sample counts, and agree with the first on what was rendered.
   std::vector<Range> ranges;
@@ -103,79 +104,99 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
                             paths[ranges[k].part] + " has [" + std::to_string(ranges[k].begin) + ", " +
                             std::to_string(ranges[k].end) + "); the same samples would count twice");
 
+  // Then one part at a time into double accumulators (memory: the accumulators and one part).
+  // Per pixel and part p with c_p samples: means weighted by c_p; Depth the minimum; LightTracing
+  // (splats over b - a light paths per pixel) weighted by the part's sample count; Combined's
+  // camera part (Combined - LightTracing) with its sum of squared deviations pooled by Chan et
+  // al.'s update (1979), from ss_p = (c_p - 1) c_p Var_p since the Variance pass is s^2 / c.
   const ExrImage& ref = parts[0];
-  const size_t n = size_t(ref.width) * ref.height, np = parts.size();
-  auto channel = [&](size_t part, const std::string& name) { return parts[part].find(name)->pixels.data(); };
+  const size_t n = size_t(ref.width) * ref.height, nc = ref.channels.size(), np = parts.size();
+  const bool light = ref.find("LightTracing.R") != nullptr;
   long long total_samples = 0;
   for (long long s : samples) total_samples += s;
-  const bool light = ref.find("LightTracing.R") != nullptr;
+  enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB };
+  std::vector<Kind> kind(nc);
+  std::vector<int> rgb_index(nc, -1);
+  for (size_t k = 0; k < nc; ++k) {
+    const std::string& name = ref.channels[k].name;
+    kind[k] = name == "SampleCount.X" ? Count : name == "Depth.Z" ? Depth
+              : name.rfind("LightTracing.", 0) == 0 ? Light : name.rfind("Variance.", 0) == 0 ? Variance : Mean;
+    for (int c = 0; c < 3; ++c)
+      if (name == std::string(1, "RGB"[c])) kind[k] = CombinedRGB, rgb_index[k] = c;
+      else if (kind[k] == Variance && name == std::string("Variance.") + "RGB"[c]) rgb_index[k] = c;
+  }
+  int light_k[3] = {-1, -1, -1};
+  for (size_t k = 0; k < nc; ++k)
+    for (int c = 0; c < 3; ++c)
+      if (ref.channels[k].name == std::string("LightTracing.") + "RGB"[c]) light_k[c] = int(k);
+  std::vector<std::vector<double>> acc(nc, std::vector<double>(n, 0.0));
+  std::vector<double> count(n, 0.0);
+  // Per pixel and colour channel: running count-weighted camera mean and squared deviations.
+  std::vector<double> cam_mean(n * 3, 0.0), cam_ss(n * 3, 0.0);
+  for (size_t p = 0; p < np; ++p) {
+    const ExrImage img = read_exr(paths[p]);
+    if (img.channels.size() != nc) throw IoError(paths[p] + " changed while merging");
+    const float* c_p = img.find("SampleCount.X")->pixels.data();
+    const float* rgb[3] = {img.find("R") ? img.find("R")->pixels.data() : nullptr,
+                           img.find("G") ? img.find("G")->pixels.data() : nullptr,
+                           img.find("B") ? img.find("B")->pixels.data() : nullptr};
+    const float* lt[3] = {};
+    const float* var[3] = {};
+    for (int c = 0; c < 3; ++c) {
+      if (light) lt[c] = img.find(std::string("LightTracing.") + "RGB"[c])->pixels.data();
+      if (const ExrChannel* v = img.find(std::string("Variance.") + "RGB"[c])) var[c] = v->pixels.data();
+    }
+    for (size_t k = 0; k < nc; ++k) {
+      const float* in = img.channels[k].pixels.data();
+      double* a = acc[k].data();
+      switch (kind[k]) {
+        case Mean: for (size_t i = 0; i < n; ++i) a[i] += double(c_p[i]) * in[i]; break;
+        case Count: for (size_t i = 0; i < n; ++i) a[i] += in[i]; break;
+        case Depth: for (size_t i = 0; i < n; ++i) a[i] = p == 0 ? in[i] : std::min(a[i], double(in[i])); break;
+        case Light: for (size_t i = 0; i < n; ++i) a[i] += double(samples[p]) * in[i]; break;
+        case Variance: case CombinedRGB: break;  // below
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      if (!rgb[c]) continue;
+      for (size_t i = 0; i < n; ++i) {
+        const double cp = c_p[i];
+        if (cp <= 0) continue;
+        const double m = double(rgb[c][i]) - (light ? double(lt[c][i]) : 0.0);
+        const double ss = var[c] && cp > 1 ? (cp - 1) * cp * double(var[c][i]) : 0.0;
+        const double before = count[i], after = before + cp, delta = m - cam_mean[3 * i + c];
+        cam_mean[3 * i + c] += delta * cp / after;
+        cam_ss[3 * i + c] += ss + delta * delta * before * cp / after;
+      }
+    }
+    for (size_t i = 0; i < n; ++i) count[i] += c_p[i];
+  }
 
   std::vector<ExrChannel> out;
-  for (const ExrChannel& c : ref.channels) out.push_back({c.name, std::vector<float>(n)});
-  auto out_channel = [&](const std::string& name) {
-    for (ExrChannel& c : out)
-      if (c.name == name) return c.pixels.data();
-    return static_cast<float*>(nullptr);
-  };
-  std::vector<const float*> counts(np);
-  for (size_t p = 0; p < np; ++p) counts[p] = channel(p, "SampleCount.X");
-  const char* const rgb[3] = {"R", "G", "B"};
-
-  for (ExrChannel& oc : out) {
-    const std::string& name = oc.name;
-    const bool is_rgb = name == "R" || name == "G" || name == "B";
-    if (name.rfind("Variance.", 0) == 0 || (is_rgb && light)) continue;  // below, with their means
-    std::vector<const float*> in(np);
-    for (size_t p = 0; p < np; ++p) in[p] = channel(p, name);
+  for (size_t k = 0; k < nc; ++k) {
+    ExrChannel oc{ref.channels[k].name, std::vector<float>(n)};
+    const double* a = acc[k].data();
     for (size_t i = 0; i < n; ++i) {
-      double v;
-      if (name == "SampleCount.X") {
-        v = 0;
-        for (size_t p = 0; p < np; ++p) v += in[p][i];
-      } else if (name == "Depth.Z") {  // the nearest hit over all samples
-        v = in[0][i];
-        for (size_t p = 1; p < np; ++p) v = std::min(v, double(in[p][i]));
-      } else if (name.rfind("LightTracing.", 0) == 0) {  // splats over light paths: b - a per pixel
-        v = 0;
-        for (size_t p = 0; p < np; ++p) v += double(samples[p]) * in[p][i];
-        v /= double(total_samples);
-      } else {  // a per-sample mean: weighted by the pixel's sample counts
-        double sum = 0, c = 0;
-        for (size_t p = 0; p < np; ++p) {
-          sum += double(counts[p][i]) * in[p][i];
-          c += counts[p][i];
+      double v = 0;
+      switch (kind[k]) {
+        case Mean: v = count[i] > 0 ? a[i] / count[i] : 0.0; break;
+        case Count: case Depth: v = a[i]; break;
+        case Light: v = a[i] / double(total_samples); break;
+        case CombinedRGB: {
+          const int c = rgb_index[k];
+          v = cam_mean[3 * i + c];
+          if (light) v += acc[light_k[c]][i] / double(total_samples);
+          break;
         }
-        v = c > 0 ? sum / c : 0.0;
+        case Variance: {
+          const int c = rgb_index[k];
+          v = c >= 0 && count[i] > 1 ? cam_ss[3 * i + c] / ((count[i] - 1) * count[i]) : 0.0;
+          break;
+        }
       }
       oc.pixels[i] = float(v);
     }
-  }
-  // Combined's camera part (Combined minus LightTracing) and its variance, pooled over the parts
-  // (Chan et al. 1979): SS = sum_p [(c_p - 1) s_p^2 + c_p (m_p - M)^2], with s_p^2 = c_p Var_p since
-  // the Variance pass is the variance of the pixel mean, s^2 / c.
-  for (int k = 0; k < 3; ++k) {
-    const std::string cn = rgb[k], vn = std::string("Variance.") + rgb[k], ln = std::string("LightTracing.") + rgb[k];
-    float* merged_mean = out_channel(cn);
-    float* merged_var = out_channel(vn);
-    const float* merged_light = light ? out_channel(ln) : nullptr;
-    std::vector<double> m(np);
-    for (size_t i = 0; i < n; ++i) {
-      double c = 0, sum = 0;
-      for (size_t p = 0; p < np; ++p) {
-        m[p] = double(channel(p, cn)[i]) - (light ? double(channel(p, ln)[i]) : 0.0);
-        c += counts[p][i];
-        sum += counts[p][i] * m[p];
-      }
-      const double mean = c > 0 ? sum / c : 0.0;
-      if (light && merged_mean) merged_mean[i] = float(mean + merged_light[i]);
-      if (!merged_var) continue;
-      double ss = 0;
-      for (size_t p = 0; p < np; ++p) {
-        const double cp = counts[p][i];
-        ss += (cp - 1 > 0 ? (cp - 1) * cp * double(channel(p, vn)[i]) : 0.0) + cp * (m[p] - mean) * (m[p] - mean);
-      }
-      merged_var[i] = float(c > 1 ? ss / ((c - 1) * c) : 0.0);
-    }
+    out.push_back(std::move(oc));
   }
 
   // Header: what all parts agree on, then the merged counts.
