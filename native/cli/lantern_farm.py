@@ -139,8 +139,12 @@ def submit(args, extra):
     opts = slurm_options(job)
     array = sbatch(["--array=0-%d" % (len(tasks) - 1), "--job-name=lantern-task",
                     "--output=" + os.path.join(d, "logs", "task_%a.log")] + opts + [os.path.join(d, "task.sh")])
-    merge = sbatch(["--dependency=afterok:" + array, "--kill-on-invalid-dep=yes", "--job-name=lantern-merge",
-                    "--output=" + os.path.join(d, "logs", "merge.log")] + opts + [os.path.join(d, "merge.sh")])
+    try:
+        merge = sbatch(["--dependency=afterok:" + array, "--kill-on-invalid-dep=yes", "--job-name=lantern-merge",
+                        "--output=" + os.path.join(d, "logs", "merge.log")] + opts + [os.path.join(d, "merge.sh")])
+    except SystemExit:
+        run(["scancel", array])  # no tasks without their merge
+        raise
     job["submissions"] = [{"array": array, "tasks": [t["index"] for t in tasks], "merge": merge}]
     save(job)
     print("lantern farm: submitted %d tasks (job %s, %d frame(s) x %d sample ranges) and the merge (job %s)"
@@ -221,7 +225,7 @@ def describe(t):
 
 
 def report(job):
-    """Prints progress; returns (finished, succeeded)."""
+    """Prints progress; returns (finished, succeeded, something failed)."""
     states, merge = collect(job)
     counts = {}
     for s, _ in states.values():
@@ -249,12 +253,14 @@ def report(job):
     elif not failed and not active:
         print("lantern farm: the merge ended %s (%s); log: %s" % (merge[0], merge[1],
                                                                os.path.join(job["dir"], "logs", "merge.log")))
-    return not active, merge[0] == "COMPLETED" and not failed
+    merge_failed = not active and merge[0] != "COMPLETED"
+    return not active, merge[0] == "COMPLETED" and not failed, bool(failed) or merge_failed
 
 
 def status(args):
-    finished, ok = report(load(args.dir))
-    sys.exit(0 if ok or not finished else 1)
+    """Exit code 0 while all is well (running or merged), 1 once a task or the merge failed."""
+    _, _, failed = report(load(args.dir))
+    sys.exit(1 if failed else 0)
 
 
 def wait(args):
@@ -270,7 +276,7 @@ def wait(args):
             print("lantern farm: still running after %g s" % args.timeout)
             sys.exit(2)
         time.sleep(args.poll)
-    _, ok = report(job)
+    _, ok, _ = report(job)
     sys.exit(0 if ok else 1)
 
 
