@@ -3,7 +3,7 @@ writes the part as a 32-bit float EXR with Lantern's own writer (every pass, the
 resolution and the scene's identity in the header), for `lantern merge`.
 
     blender -b SCENE.blend --python-exit-code 1 --python lantern_task.py -- \\
-        --offset O --samples S --frame F --out PART.exr [--timing]
+        (--offset O --samples S | --samples TOTAL --part K/N) [--frame F] --out PART.exr [--timing]
 
 Any farm that runs `blender -b` (Slurm, Flamenco, Deadline) can run it. The add-on is Blender's
 installed `lantern`, or the package under $LANTERN_ADDON_DIR (its library: $LANTERN_LIBRARY or the
@@ -24,12 +24,28 @@ T_START = time.monotonic()
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     p = argparse.ArgumentParser(prog="lantern_task.py")
-    p.add_argument("--offset", type=int, required=True, help="first sample index")
-    p.add_argument("--samples", type=int, required=True, help="number of samples")
+    p.add_argument("--offset", type=int, help="first sample index")
+    p.add_argument("--samples", type=int, required=True,
+                   help="number of samples; with --part, of the whole render")
+    p.add_argument("--part", help="K/N: render part K (0 to N-1) of N of the --samples, samples "
+                                  "[K S / N, (K + 1) S / N): for farms that number tasks but cannot "
+                                  "compute offsets (Deadline's <STARTFRAME>, Flamenco)")
     p.add_argument("--frame", type=int, default=None, help="frame (default: the scene's current)")
     p.add_argument("--out", required=True, help="the part's EXR path")
     p.add_argument("--timing", action="store_true", help="print the time of each stage (bench/)")
-    return p.parse_args(argv)
+    args = p.parse_args(argv)
+    if (args.part is None) == (args.offset is None):
+        p.error("give either --offset or --part")
+    if args.part is not None:
+        try:
+            k, n = (int(x) for x in args.part.split("/"))
+        except ValueError:
+            p.error("--part wants K/N, got %r" % args.part)
+        if not (0 <= k < n <= args.samples):
+            p.error("--part %s: need 0 <= K < N <= --samples (%d)" % (args.part, args.samples))
+        args.offset = k * args.samples // n
+        args.samples = (k + 1) * args.samples // n - args.offset
+    return args
 
 
 def load_addon():

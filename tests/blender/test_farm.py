@@ -95,6 +95,21 @@ def test_four_task_split_merges_into_the_one_machine_render(farm_env):
     parts = sorted(os.listdir(os.path.join(d, "parts")))
     assert len(parts) == 4, parts
     _assert_same_render(os.path.join(d, "frame.exr"), e["reference"])
+    # The CLI refuses a part given twice, writing nothing.
+    part = os.path.join(d, "parts", parts[1])
+    bad = os.path.join(d, "bad.exr")
+    code, out = _run([e["lantern"], "merge", bad, part, part], e["env"])
+    assert code == 1 and "sample ranges overlap" in out and not os.path.exists(bad), out
+    # The task script's --part K/N (for farms that only number their tasks) renders the same samples
+    # as Slurm task 1 did: [8, 16), bit for bit.
+    assert parts[1] == "frame_s000008-000016.exr", parts
+    again = str(e["work"] / "part_1_of_4.exr")
+    code, out = _run(["blender", "-b", "--factory-startup", e["blend"], "--python-exit-code", "1", "--python",
+                      os.path.join(os.path.dirname(e["lantern"]), "lantern_task.py"), "--",
+                      "--samples", str(SAMPLES), "--part", "1/4", "--out", again], e["env"])
+    assert code == 0, out
+    a, b = render_utils.read_exr(again), render_utils.read_exr(part)
+    assert all(np.array_equal(a[k], b[k]) for k in b), "--part 1/4 differs from task 1's part"
 
 
 def test_failed_task_stops_the_merge_and_its_resubmission_completes_it(farm_env):

@@ -74,7 +74,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
     std::vector<Range> own = parse_ranges(r->second, i, path);
     long long total = 0;
     for (const Range& x : own) total += x.end - x.begin;
-    if (total != samples[i] || samples[i] <= 0)
+    if (samples[i] <= 0) throw InvalidArgument(path + ": the part has no samples (a render cancelled before its first)");
+    if (total != samples[i])
       throw InvalidArgument(path + ": lantern/samples (" + s->second + ") does not match lantern/sample_ranges (" +
                             r->second + ")");
     ranges.insert(ranges.end(), own.begin(), own.end());
