@@ -10,9 +10,12 @@ then with K = --samples. From the last run: render time per sample r (the core's
 and the fixed cost F = wall time - render time (everything a task pays whatever its sample count).
 The merge cost per part m: (`lantern merge` of all five parts - that of one) / 4, best of 3 each. Model for S = 4096 samples at 1920x1080 (render and
 EXR write scaled by the pixel count; start-up, export and build do not depend on it):
-    T(1) = F + S r,   T(N) = F + (S / N) r + N m        (m: merge time per part, run after all tasks)
-    speedup T(1) / T(N), efficiency speedup / N; splitting stops paying (efficiency 50%) near
-    N = S r / F when the merge is small.
+    T(1) = F + S r,   T(N) = F + (S / N) r + M(N)
+where M(N) is the merge after all tasks as `lantern farm` runs it: N m + w (one merge; w: writing
+the merged EXR) up to 16 tasks, else groups of g = ceil(sqrt(N)) parts merged in parallel and then
+their results, (g + ceil(N / g)) m + 2 w. Speedup T(1) / T(N), efficiency speedup / N; the table
+gives the first N where it falls below 50% and, for comparison, where the fixed cost alone would
+put it, (S r + 2 F) / F.
 Slurm's own scheduling and launch (about 2 s per batch of tasks, see the farm note) come on top.
 Writes bench/results/farm_overhead.json and prints the table. Nothing asserts on time.
 """
@@ -129,6 +132,15 @@ def main():
     print_tables(rows)
 
 
+def merge_seconds(n, m, write):
+    """`lantern farm`'s merge of n parts: one merge up to 16 tasks, else groups of g = ceil(sqrt(n))
+    merged in parallel on separate nodes, then one merge of the group results."""
+    if n <= 16:
+        return n * m + write
+    g = math.ceil(math.sqrt(n))
+    return g * m + write + math.ceil(n / g) * m + write
+
+
 def model(row):
     """The 4096-sample 1080p split model (module docstring) from one scene's measurements."""
     t = row["task"]
@@ -138,12 +150,13 @@ def model(row):
     r, m = row["render_seconds_per_sample"] * scale, row["merge_seconds_per_part"] * scale
     sr = TARGET_SAMPLES * r
     t1 = f + sr
-    split = {}
-    for n in TASKS:
-        tn = f + sr / n + n * m
-        split[n] = {"seconds": tn, "speedup": t1 / tn, "efficiency": t1 / tn / n}
-    # Efficiency T1 / (N F + S r + N^2 m) = 1/2: with the merge, and with the fixed cost alone.
-    n50 = (-f + math.sqrt(f * f + 4 * m * (sr + 2 * f))) / (2 * m) if m > 0 else (sr + 2 * f) / f
+    write = t["write"] * scale  # each merge job writes one 1080p EXR, like a task
+
+    def t_n(n):
+        return f + sr / n + merge_seconds(n, m, write)
+
+    split = {n: {"seconds": t_n(n), "speedup": t1 / t_n(n), "efficiency": t1 / t_n(n) / n} for n in TASKS}
+    n50 = next((n for n in range(1, 1 << 20) if t1 / t_n(n) / n < 0.5), None)
     return {"fixed_seconds_1080p": f, "render_seconds_per_sample_1080p": r, "merge_seconds_per_part_1080p": m,
             "one_machine_seconds_1080p_4096": t1, "split": split, "tasks_at_50_percent": n50,
             "tasks_at_50_percent_fixed_cost_only": (sr + 2 * f) / f}

@@ -32,6 +32,8 @@ def parse_args():
                                   "compute offsets (Deadline's <STARTFRAME>, Flamenco)")
     p.add_argument("--frame", type=int, default=None, help="frame (default: the scene's current)")
     p.add_argument("--out", required=True, help="the part's EXR path")
+    p.add_argument("--scene-id", help="the scene's identity for the merge (default: a hash of the .blend "
+                                      "file; `lantern farm submit` computes it once for all tasks)")
     p.add_argument("--timing", action="store_true", help="print the time of each stage (bench/)")
     args = p.parse_args(argv)
     if (args.part is None) == (args.offset is None):
@@ -64,13 +66,17 @@ def load_addon():
     return core, engine, export_scene
 
 
-def scene_identity(frame):
-    """Which render a part belongs to: the .blend's content and the frame (lt_merge_exr compares it)."""
+def blend_hash(path):
     digest = hashlib.sha256()
-    with open(bpy.data.filepath, "rb") as f:
+    with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
             digest.update(block)
-    return "%s frame %d" % (digest.hexdigest()[:20], frame)
+    return digest.hexdigest()[:20]
+
+
+def scene_identity(scene_id, frame):
+    """Which render a part belongs to: the .blend's content and the frame (lt_merge_exr compares it)."""
+    return "%s frame %d" % (scene_id or blend_hash(bpy.data.filepath), frame)
 
 
 def main():
@@ -105,7 +111,7 @@ def main():
                          % (st.samples_done, args.samples, st.state))
     t_rendered = time.monotonic()
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    render.write_exr(args.out, {"lantern/scene": scene_identity(frame), "lantern/frame": str(frame),
+    render.write_exr(args.out, {"lantern/scene": scene_identity(args.scene_id, frame), "lantern/frame": str(frame),
                                 "lantern/blend": bpy.data.filepath})
     render.close()
     core_scene.close()

@@ -112,31 +112,36 @@ def test_four_task_split_merges_into_the_one_machine_render(farm_env):
     assert all(np.array_equal(a[k], b[k]) for k in b), "--part 1/4 differs from task 1's part"
 
 
-def test_failed_task_stops_the_merge_and_its_resubmission_completes_it(farm_env):
+def test_failed_task_stops_its_merges_and_its_resubmission_completes_them(farm_env):
+    """Two frames of 4 tasks, merged in groups of 2 (a merge tree): task 4 (frame 2) fails."""
     e = farm_env
     d = str(e["work"] / "job_fail")
     os.makedirs(os.path.join(d, "parts"))
-    # Task 2 is frame 2, samples [0, 16): its part path taken by a directory, so the task's write
+    # Task 4 is frame 2, samples [0, 8): its part path taken by a directory, so the task's write
     # (a rename onto that path) really fails.
-    blocker = os.path.join(d, "parts", "frame_0002_s000000-000016.exr")
+    blocker = os.path.join(d, "parts", "frame_0002_s000000-000008.exr")
     os.makedirs(blocker)
-    code, out = _run([e["lantern"], "farm", "submit", e["blend"], "--tasks", "2", "--samples", str(SAMPLES),
-                      "--frames", "1-2", "--dir", d], e["env"])
-    assert code == 0, out
+    code, out = _run([e["lantern"], "farm", "submit", e["blend"], "--tasks", "4", "--samples", str(SAMPLES),
+                      "--frames", "1-2", "--merge-group", "2", "--dir", d], e["env"])
+    assert code == 0 and "6 merge job(s)" in out, out
     code, out = _run([e["lantern"], "farm", "wait", d, "--timeout", "300", "--poll", "0.5"], e["env"])
     assert code == 1, out
-    assert re.search(r"FAILED task 2 \(frame 2, samples \[0, 16\)\)", out), out
-    assert "the merge did not run" in out, out
-    assert not any(f.startswith("frame_") and f.endswith(".exr") for f in os.listdir(d)), os.listdir(d)
+    assert re.search(r"FAILED task 4 \(frame 2, samples \[0, 8\)\)", out), out
+    assert "FAILED task" not in out.replace("FAILED task 4 ", ""), out  # only that one
+    assert "the merge of frame_0002 did not run" in out, out
+    # Frame 1 does not wait for frame 2: merged; frame 2's group 1 too, its group 0 and final not.
+    assert os.path.exists(os.path.join(d, "frame_0001.exr"))
+    assert os.path.exists(os.path.join(d, "parts", "frame_0002_group1.exr"))
+    assert not os.path.exists(os.path.join(d, "frame_0002.exr"))
     code, status = _run([e["lantern"], "farm", "status", d], e["env"])
-    assert code == 1 and "FAILED task 2" in status and "merge" in status, status
-    assert re.search(r"merge \(job \d+\): (cancelled|pending)", status), status
-    # The printed command reruns just task 2, then the merge.
+    assert code == 1 and "FAILED task 4" in status, status
+    assert re.search(r"6 merges: .*2 cancelled", status), status
+    # The printed command reruns just task 4, then frame 2's group 0 and final merges.
     resubmit = [line.strip() for line in out.splitlines() if " farm resubmit " in line]
-    assert resubmit and resubmit[0].endswith("--tasks 2"), out
+    assert resubmit and resubmit[0].endswith("--tasks 4"), out
     os.rmdir(blocker)
     code, out = _run(shlex.split(resubmit[0]), e["env"])
-    assert code == 0 and "resubmitted task(s) 2" in out, out
+    assert code == 0 and "resubmitted task(s) 4" in out and "2 merge job(s)" in out, out
     code, out = _run([e["lantern"], "farm", "wait", d, "--timeout", "300", "--poll", "0.5"], e["env"])
     assert code == 0, out
     # The scene does not move: both frames are the reference image.
