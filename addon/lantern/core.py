@@ -10,7 +10,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 1
+ABI_VERSION = 2
 
 # lt_status
 OK = 0

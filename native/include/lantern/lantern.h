@@ -23,7 +23,7 @@ extern "C" {
 #define LT_API __attribute__((visibility("default")))
 #endif
 
-#define LT_ABI_VERSION 1
+#define LT_ABI_VERSION 2  /* 2: lt_render_settings.sample_offset */
 
 enum lt_status {
   LT_OK = 0,
