@@ -10,7 +10,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 2
+ABI_VERSION = 3
 
 # lt_status
 OK = 0
@@ -62,6 +62,9 @@ FILTER_BOX, FILTER_GAUSSIAN, FILTER_BLACKMAN_HARRIS = 0, 1, 2
 
 # lt_render_state
 STATE_RUNNING, STATE_DONE, STATE_CANCELLED, STATE_FAILED = 0, 1, 2, 3
+# lt_halt_reason
+HALT_NONE, HALT_SAMPLES, HALT_TIME_LIMIT, HALT_NOISE_TARGET, HALT_CANCELLED, HALT_FAILED = range(6)
+HALT_NAMES = ("running", "samples", "time limit", "noise target", "cancelled", "failed")
 
 # lt_pass
 PASS_COMBINED = 0
@@ -230,6 +233,10 @@ class RenderSettings(ctypes.Structure):
         ("volume_bounces", ctypes.c_int),
         ("volume_estimator", ctypes.c_int),
         ("volume_step", ctypes.c_float),
+        ("time_limit", ctypes.c_float),
+        ("noise_target", ctypes.c_float),
+        ("adaptive", ctypes.c_int),
+        ("min_samples", ctypes.c_int),
     ]
 
 
@@ -252,6 +259,9 @@ class RenderStatus(ctypes.Structure):
         ("remaining_seconds", ctypes.c_double),
         ("nan_samples", ctypes.c_uint64),
         ("rays", ctypes.c_uint64),
+        ("rel_error", ctypes.c_double),
+        ("halt_reason", ctypes.c_int),
+        ("active_pixels", ctypes.c_uint64),
     ]
 
 

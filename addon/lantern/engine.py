@@ -64,6 +64,8 @@ def render_settings(scene, width, height, border):
     return dict(
         width=width, height=height, border=border,
         samples=lt.samples, seed=lt.seed & 0xFFFFFFFF, sample_offset=lt.sample_offset,
+        time_limit=lt.time_limit, noise_target=lt.noise_target,
+        adaptive=int(lt.adaptive and lt.noise_target > 0), min_samples=lt.min_samples,
         integrator=integrators[lt.integrator],
         max_bounces=lt.max_bounces, diffuse_bounces=lt.diffuse_bounces,
         glossy_bounces=lt.glossy_bounces, transmission_bounces=lt.transmission_bounces,
@@ -112,12 +114,145 @@ def _clock(seconds):
     return ("%d:%02d:%05.2f" % (h, m, s)) if h else ("%02d:%05.2f" % (m, s))
 
 
-def format_stats(st):
-    text = "Sample %d/%d | Elapsed %s" % (st.samples_done, st.samples_total,
-                                         _clock(st.elapsed_seconds))
+def format_error(rel_error):
+    """The estimated relative error (lt_render_status.rel_error) as a percentage."""
+    if rel_error < 0:
+        return "rel. error --"
+    if rel_error == float("inf"):
+        return "rel. error >100%"
+    return "rel. error %.2g%%" % (100.0 * rel_error) if rel_error < 0.01 else \
+        "rel. error %.1f%%" % (100.0 * rel_error)
+
+
+def _seconds(t):
+    return "%.1f s" % t if t < 10 else "%.0f s" % t
+
+
+def format_stats(st, pixels=0):
+    """Blender's status line: "Sample 12/64 | rel. error 2.3%, 41 s | Remaining 00:12.00"."""
+    text = "Sample %d/%d | %s, %s" % (st.samples_done, st.samples_total,
+                                       format_error(st.rel_error), _seconds(st.elapsed_seconds))
+    if pixels and st.active_pixels < pixels:
+        text += " | %.0f%% of pixels sampling" % (100.0 * st.active_pixels / pixels)
     if st.state == core.STATE_RUNNING:
         text += " | Remaining %s" % _clock(st.remaining_seconds)
+    elif st.halt_reason in (core.HALT_CANCELLED, core.HALT_FAILED):
+        text += " | %s" % core.HALT_NAMES[st.halt_reason].capitalize()
+    else:
+        text += " | Stopped by %s" % core.HALT_NAMES[st.halt_reason]
     return text
+
+
+# As lt_render_write_exr names them (native/src/io/exr.cpp).
+_INTEGRATOR_NAMES = {core.INTEGRATOR_PATH: "PATH", core.INTEGRATOR_BIDIRECTIONAL: "BIDIRECTIONAL",
+                     core.INTEGRATOR_VOLPATH: "VOLPATH", core.INTEGRATOR_VOLUME_DEBUG: "VOLUME_DEBUG"}
+
+
+def render_metadata(st, settings):
+    """What the image is worth and how it was made: stored with the image as "lantern.*" fields
+    (RenderResult stamp data, which Blender writes into EXR and PNG headers; a JSON file beside
+    other formats, see write_sidecar)."""
+    return {
+        "lantern.samples": "%d" % st.samples_done,
+        "lantern.rel_error": "%.6g" % st.rel_error,
+        "lantern.render_seconds": "%.3f" % st.elapsed_seconds,
+        "lantern.halt_reason": core.HALT_NAMES[st.halt_reason],
+        "lantern.max_samples": "%d" % settings.samples,
+        "lantern.time_limit": "%.6g" % settings.time_limit,
+        "lantern.noise_target": "%.6g" % settings.noise_target,
+        "lantern.adaptive": "%d" % settings.adaptive,
+        "lantern.min_samples": "%d" % settings.min_samples,
+        "lantern.seed": "%d" % settings.seed,
+        "lantern.integrator": _INTEGRATOR_NAMES.get(settings.integrator, "?"),
+    }
+
+
+_LIGHT_NAMES = {'POINT': "point", 'SPOT': "spot", 'AREA': "area", 'SUN': "sun"}
+
+
+def scene_report(summary, settings, warnings, st=None, pixels=0):
+    """One report of what the scene used and what Lantern did with it (Info editor and log)."""
+    s = settings
+    lines = ["Lantern render report"]
+    if s.integrator == core.INTEGRATOR_BIDIRECTIONAL:
+        heuristic = {core.MIS_POWER: "power", core.MIS_BALANCE: "balance",
+                     core.MIS_UNIFORM: "uniform"}[s.mis_heuristic]
+        lines.append("integrator: bidirectional path tracing, every (s, t) strategy, %s-heuristic MIS "
+                     "(camera path <= %d, light path <= %d vertices)"
+                     % (heuristic, s.max_camera_length, s.max_light_length))
+    elif s.integrator == core.INTEGRATOR_VOLPATH:
+        lines.append("integrator: volumetric path tracing, next-event estimation from surfaces and "
+                     "media with MIS against BSDF/phase sampling")
+    elif s.integrator == core.INTEGRATOR_VOLUME_DEBUG:
+        lines.append("integrator: volume debug view (estimator panels)")
+    else:
+        lines.append("integrator: path tracing, next-event estimation with power-heuristic MIS "
+                     "against BSDF sampling")
+    kinds = summary.get("light_kinds", {})
+    lights = ", ".join("%d %s" % (n, _LIGHT_NAMES.get(k, k.lower())) for k, n in sorted(kinds.items()))
+    lines.append("lights: %s; world: %s" % (lights or "none", summary.get("world") or "none"))
+    homogeneous = summary.get("material_media", 0) + summary.get("world_media", 0)
+    grids = summary.get("volumes", 0)
+    if homogeneous or grids:
+        media = []
+        if homogeneous:
+            media.append("%d homogeneous (closed-form distance sampling and transmittance)" % homogeneous)
+        if grids:
+            est = ("ray marching, step %s (biased)" % ("%g m" % s.volume_step if s.volume_step > 0
+                                                        else "= voxel size")
+                   if s.volume_estimator == core.VOLUME_RAY_MARCHING else
+                   "delta tracking and ratio tracking against per-cell majorants (unbiased)")
+            media.append("%d heterogeneous VDB grid(s): %s" % (grids, est))
+        text = "media: " + "; ".join(media)
+        if s.integrator not in (core.INTEGRATOR_VOLPATH, core.INTEGRATOR_VOLUME_DEBUG):
+            text += " -- IGNORED by this integrator (use Volumetric Path)"
+        lines.append(text)
+    else:
+        lines.append("media: none")
+    if s.noise_target > 0 or s.time_limit > 0:
+        halting = ["%d samples" % s.samples]
+        if s.time_limit > 0:
+            halting.append("%g s" % s.time_limit)
+        if s.noise_target > 0:
+            halting.append("rel. error %g%% from %d samples%s" % (100 * s.noise_target, s.min_samples,
+                                                                  ", adaptive" if s.adaptive else ""))
+        lines.append("halting at the first of: " + ", ".join(halting))
+    if warnings:
+        lines.append("unsupported input and fallbacks:")
+        lines.extend("  " + w for w in warnings)
+    else:
+        lines.append("unsupported input: none")
+    if st is not None:
+        lines.append("result: " + format_stats(st, pixels))
+    return "\n".join(lines)
+
+
+# File formats whose headers Blender fills with the render's stamp data (checked by
+# tests/blender/test_halting.py): the others get a JSON file beside the image.
+METADATA_FORMATS = {'OPEN_EXR', 'OPEN_EXR_MULTILAYER', 'PNG', 'JPEG'}
+
+
+def write_sidecar(scene, metadata):
+    """render_write handler work: a JSON file beside an image whose format keeps no metadata."""
+    import json
+    import os
+    if scene.render.image_settings.file_format in METADATA_FORMATS:
+        return None
+    # A still goes to the output path as it is, an animation frame gets the frame number: the
+    # image just written is whichever of the two is newer.
+    framed = scene.render.frame_path(frame=scene.frame_current)
+    ext = os.path.splitext(framed)[1]
+    still = bpy.path.abspath(scene.render.filepath)
+    if scene.render.use_file_extension and not still.lower().endswith(ext.lower()):
+        still += ext
+    written = [p for p in (framed, still) if os.path.isfile(p)]
+    if not written:
+        return None
+    image = max(written, key=os.path.getmtime)
+    path = os.path.splitext(image)[0] + ".lantern.json"
+    with open(path, "w") as f:
+        json.dump(metadata, f, indent=1, sort_keys=True)
+    return path
 
 
 class _PassWriter:
@@ -172,26 +307,35 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         self.update_stats("", "Exporting scene")
         core_scene = None
         render = None
+        warnings = []
+
+        def report(level, message):
+            warnings.append(message)
+            self.report(level, message)
         try:
             core_scene = core.Scene()
             t0 = time.monotonic()
-            summary = export_scene(depsgraph, core_scene, self.report,
-                                   camera_object=self.camera_override)
+            summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override)
             if self.test_break():
                 return
             self.update_stats("", "Building acceleration structures")
             core_scene.commit()
             for w in core_scene.warnings():
-                self.report({'WARNING'}, w)
+                report({'WARNING'}, w)
             print("Lantern: exported %s in %.2f s" % (summary, time.monotonic() - t0))
             if summary.get("media") and scene.lantern.integrator not in ('VOLPATH', 'VOLUME_DEBUG'):
-                self.report({'WARNING'}, "The scene has %d participating medium/media, which only the "
-                            "Volumetric Path integrator renders: the %s integrator ignores them"
-                            % (summary["media"], scene.lantern.integrator.title()))
+                report({'WARNING'}, "The scene has %d participating medium/media, which only the "
+                       "Volumetric Path integrator renders: the %s integrator ignores them"
+                       % (summary["media"], scene.lantern.integrator.title()))
 
             render = core.Render(core_scene, render_settings(scene, width, height, border))
             render.start()
-            self._progress(render, view_layer, border)
+            st = self._progress(render, view_layer, border)
+            rw, rh = render.region_size
+            text = scene_report(summary, render.settings, warnings, st, rw * rh)
+            LAST_RENDER["report"] = text
+            print(text)
+            self.report({'INFO'}, text)
         except core.LanternError as e:
             self.report({'ERROR'}, str(e))
             print("Lantern: error: %s" % e)
@@ -214,7 +358,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                     "Render result is %dx%d but Lantern renders %dx%d (border %s)"
                     % (result.resolution_x, result.resolution_y, rw, rh, border))
             writer = _PassWriter(render, result.layers[0], self.active_view_get(), passes)
-            cancelled = self._poll_loop(render, result, writer)
+            self._poll_loop(render, result, writer)
             try:
                 render.wait()
                 failed = False
@@ -225,14 +369,19 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if st.state == core.STATE_FAILED and not failed:
                 self.report({'ERROR'}, "Lantern render failed")
             writer.write()  # all passes, whatever was rendered (cancelled: partial image)
+            metadata = render_metadata(st, render.settings)
+            # Stamp data goes on the final result (get_result), not on the tile being written.
+            final = self.get_result()
+            for key, value in metadata.items():
+                final.stamp_data_add_field(key, value)
             LAST_RENDER.clear()
-            LAST_RENDER.update(stats=st, settings=render.settings)
+            LAST_RENDER.update(stats=st, settings=render.settings, metadata=metadata)
             if render.settings.strategy_view_depth > 0:
                 # bpy.data must not be touched from the render thread: the image is made on the
                 # main thread by a timer.
                 LAST_RENDER["strategies"] = render.read_strategy_grid()
                 bpy.app.timers.register(_show_strategies, first_interval=0.0)
-            self.update_stats("", format_stats(st) + (" | Cancelled" if cancelled else ""))
+            self.update_stats("", format_stats(st, rw * rh))
             self.update_progress(1.0 if st.samples_total <= 0 else
                                  st.samples_done / st.samples_total)
             if st.nan_samples:
@@ -241,9 +390,12 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         finally:
             # Never cancel=True: that would drop the (partial) image.
             self.end_result(result)
+        return st
 
     def _poll_loop(self, render, result, writer):
         """Polls until the render ends; returns True if the user cancelled it."""
+        rw, rh = render.region_size
+        pixels = rw * rh
         next_update = time.monotonic() + MIN_UPDATE_SECONDS
         while True:
             time.sleep(POLL_SECONDS)
@@ -257,11 +409,18 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if now >= next_update:
                 writer.write(only=("Combined",))
                 self.update_result(result)
-                self.update_stats("", format_stats(st))
+                self.update_stats("", format_stats(st, pixels))
                 if st.samples_total > 0:
                     self.update_progress(st.samples_done / st.samples_total)
                 cost = time.monotonic() - now
                 next_update = time.monotonic() + max(MIN_UPDATE_SECONDS, UPDATE_COST_FACTOR * cost)
+
+
+@bpy.app.handlers.persistent
+def _on_render_write(scene, *args):
+    metadata = LAST_RENDER.get("metadata")
+    if scene.render.engine == LanternRenderEngine.bl_idname and metadata:
+        write_sidecar(scene, metadata)
 
 
 classes = (LanternRenderEngine,)
@@ -270,8 +429,11 @@ classes = (LanternRenderEngine,)
 def register():
     for c in classes:
         bpy.utils.register_class(c)
+    bpy.app.handlers.render_write.append(_on_render_write)
 
 
 def unregister():
+    if _on_render_write in bpy.app.handlers.render_write:
+        bpy.app.handlers.render_write.remove(_on_render_write)
     for c in reversed(classes):
         bpy.utils.unregister_class(c)

@@ -1,7 +1,7 @@
 """Lantern's render settings, stored on the scene as scene.lantern."""
 
 import bpy
-from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 
 class LanternRenderSettings(bpy.types.PropertyGroup):
@@ -10,6 +10,35 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
         description="Samples per pixel: more samples give less noise and take proportionally "
                     "longer",
         default=64, min=1, max=1 << 24, soft_max=4096,
+    )
+    time_limit: FloatProperty(
+        name="Time Limit",
+        description="Stop rendering after this many seconds (the first sample pass always "
+                    "completes), whatever the noise: a predictable render time for an "
+                    "unpredictable noise level; 0 renders without a time limit",
+        default=0.0, min=0.0, soft_max=3600.0, subtype='TIME_ABSOLUTE', unit='TIME_ABSOLUTE',
+    )
+    noise_target: FloatProperty(
+        name="Noise Target",
+        description="Stop rendering once the estimated relative error of the image (RMS noise "
+                    "over the image's RMS, from two independent half images) falls to this: "
+                    "halving it takes about four times as long; 0 renders the full Samples",
+        default=0.0, min=0.0, max=1.0, soft_max=0.2, precision=4, subtype='FACTOR',
+    )
+    adaptive: BoolProperty(
+        name="Adaptive Sampling",
+        description="With a noise target: pixels whose own noise is already below their share of "
+                    "the target stop sampling, so the time goes to the noisy ones; reaches the "
+                    "target sooner, at the risk of stopping a pixel that has not yet met a rare "
+                    "bright path (raise Min Samples against that)",
+        default=False,
+    )
+    min_samples: IntProperty(
+        name="Min Samples",
+        description="Samples every pixel takes before the noise target and adaptive sampling are "
+                    "checked: more is slower for easy scenes but safer against noise estimated "
+                    "from too few samples (fireflies not yet seen)",
+        default=16, min=1, max=1 << 24, soft_max=1024,
     )
     seed: IntProperty(
         name="Seed",

@@ -38,6 +38,12 @@ class LANTERN_RENDER_PT_sampling(LanternButtonsPanel, Panel):
             col.prop(settings, "strategy_view_depth")
         col = layout.column(align=True)
         col.prop(settings, "samples")
+        col.prop(settings, "time_limit")
+        col.prop(settings, "noise_target")
+        sub = col.column(align=True)
+        sub.active = settings.noise_target > 0
+        sub.prop(settings, "adaptive")
+        sub.prop(settings, "min_samples")
         col.prop(settings, "seed")
         col.prop(settings, "sample_offset")
 

@@ -107,6 +107,16 @@ TEST(ApiExr, WritesEveryPassAndReadsBackTheSameCombined) {
   const auto* seed = file.header().findTypedAttribute<Imf::StringAttribute>("lantern/seed");
   ASSERT_NE(seed, nullptr);
   EXPECT_EQ(seed->value(), "77");
+  // What the image is worth and what stopped it.
+  const auto* err = file.header().findTypedAttribute<Imf::StringAttribute>("lantern/rel_error");
+  ASSERT_NE(err, nullptr);
+  EXPECT_NEAR(std::stod(err->value()), p.status.rel_error, 1e-6 * p.status.rel_error);
+  const auto* halt = file.header().findTypedAttribute<Imf::StringAttribute>("lantern/halt_reason");
+  ASSERT_NE(halt, nullptr);
+  EXPECT_EQ(halt->value(), "samples");
+  const auto* integrator = file.header().findTypedAttribute<Imf::StringAttribute>("lantern/integrator");
+  ASSERT_NE(integrator, nullptr);
+  EXPECT_EQ(integrator->value(), "PATH");
 }
 
 TEST(ApiExr, BorderRenderWritesTheRegion) {

@@ -39,6 +39,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
     world_media = export_world_volume(depsgraph, core_scene, report)
 
     lights = volumes = 0
+    light_kinds = {}
     skipped_types = set()
     # Curves, surfaces, text and metaballs come as their object and, since Blender 3.0, as a
     # MESH instance of their evaluated geometry: export the latter, convert only if it is absent.
@@ -63,7 +64,9 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
             else:
                 deferred.append((obj, matrix))
         elif t == 'LIGHT':
-            lights += export_light(obj, matrix, core_scene, report)
+            if export_light(obj, matrix, core_scene, report):
+                lights += 1
+                light_kinds[obj.data.type] = light_kinds.get(obj.data.type, 0) + 1
         elif t == 'VOLUME':
             volumes += export_volume(obj, matrix, core_scene, report, materials)
         elif t not in skipped_types:
@@ -77,5 +80,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
     summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()
                                                             if v is not None),
-                   lights=lights, volumes=volumes, media=volumes + materials.media + world_media)
+                   lights=lights, light_kinds=light_kinds, volumes=volumes,
+                   material_media=materials.media, world_media=world_media,
+                   media=volumes + materials.media + world_media)
     return summary

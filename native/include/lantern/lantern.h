@@ -23,7 +23,7 @@ extern "C" {
 #define LT_API __attribute__((visibility("default")))
 #endif
 
-#define LT_ABI_VERSION 2  /* 2: lt_render_settings.sample_offset */
+#define LT_ABI_VERSION 3  /* 2: lt_render_settings.sample_offset; 3: halting settings and status */
 
 enum lt_status {
   LT_OK = 0,
@@ -268,6 +268,16 @@ typedef struct lt_render_settings {
   int volume_bounces;
   int volume_estimator;
   float volume_step;
+  /* Halting: the render stops at the first of `samples`, `time_limit` seconds of rendering (0:
+   * none; the first pass always completes, later passes may be cut mid-way, leaving some pixels
+   * one sample short) and the estimated relative error (lt_render_status.rel_error) falling to
+   * `noise_target` (e.g. 0.02; 0: none), checked once every pixel has `min_samples`.
+   * adaptive != 0 (needs a noise target): a pixel stops sampling once the variance of its mean is
+   * below its share of the target, target^2 * (mean over pixels of sum_c R_pc^2). */
+  float time_limit;
+  float noise_target;
+  int adaptive;
+  int min_samples;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -290,7 +300,23 @@ typedef struct lt_render_status {
   double remaining_seconds; /* estimate; negative when unknown */
   uint64_t nan_samples;     /* samples discarded because they were not finite */
   uint64_t rays;            /* rays traced so far */
+  /* Estimated relative error of the Combined image after the last pass: the RMS error relative to
+   * the RMS of the converged image, sqrt(E[sum_pc (I_pc - R_pc)^2] / sum_pc R_pc^2) over pixels p
+   * and RGB channels c, from two independent half images (each pixel's even- and odd-numbered
+   * samples; core/film.h). Negative while a pixel has fewer than 2 samples; +inf when the noise
+   * is as large as the image. */
+  double rel_error;
+  int halt_reason;          /* lt_halt_reason */
+  uint64_t active_pixels;   /* pixels still sampling (fewer than the region's with adaptive sampling) */
 } lt_render_status;
+enum lt_halt_reason {
+  LT_HALT_NONE = 0, /* still running */
+  LT_HALT_SAMPLES = 1,
+  LT_HALT_TIME_LIMIT = 2,
+  LT_HALT_NOISE_TARGET = 3,
+  LT_HALT_CANCELLED = 4,
+  LT_HALT_FAILED = 5
+};
 LT_API int lt_render_poll(lt_render* render, lt_render_status* status);
 
 /* Requests cancellation; lt_render_wait returns within the time one pixel's sample takes. */

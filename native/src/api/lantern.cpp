@@ -423,6 +423,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->volume_bounces = 0;
   s->volume_estimator = LT_VOLUME_TRACKING;
   s->volume_step = 0;
+  s->min_samples = 16;
 }
 
 int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** out) {
@@ -468,6 +469,10 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     require(s->threads >= 0 && s->threads <= 4096, "threads must be in [0, 4096]");
     require(s->filter >= LT_FILTER_BOX && s->filter <= LT_FILTER_BLACKMAN_HARRIS, "unknown pixel filter");
     require(std::isfinite(s->filter_width) && s->filter_width > 0 && s->filter_width <= 100, "filter width must be in (0, 100]");
+    require(std::isfinite(s->time_limit) && s->time_limit >= 0, "time limit must be finite and >= 0 (0: none)");
+    require(std::isfinite(s->noise_target) && s->noise_target >= 0, "noise target must be finite and >= 0 (0: none)");
+    require(!s->adaptive || s->noise_target > 0, "adaptive sampling needs a noise target > 0");
+    require(s->min_samples >= 1 && s->min_samples <= (1 << 24), "min samples must be in [1, 16777216]");
     lt::RenderSettings rs;
     rs.width = s->width;
     rs.height = s->height;
@@ -503,6 +508,10 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;
+    rs.time_limit = s->time_limit;
+    rs.noise_target = s->noise_target;
+    rs.adaptive = s->adaptive != 0;
+    rs.min_samples = s->min_samples;
     auto r = std::make_unique<lt_render>();
     r->job = std::make_unique<lt::RenderJob>(scene->scene, rs);
     r->job->start();
@@ -521,6 +530,9 @@ int lt_render_poll(lt_render* render, lt_render_status* st) {
     st->remaining_seconds = s.remaining;
     st->nan_samples = s.nan_samples;
     st->rays = s.rays;
+    st->rel_error = s.rel_error;
+    st->halt_reason = int(s.halt_reason);
+    st->active_pixels = s.active_pixels;
   });
 }
 

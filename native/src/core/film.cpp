@@ -2,6 +2,11 @@
 
 #include "core/label_font.h"
 
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <limits>
+
 namespace lt {
 
 namespace {
@@ -83,16 +88,79 @@ int pass_channels(Pass pass) {
 
 void Film::add(int x, int y, const SampleValue& s) {
   PixelAccum& a = accum_[size_t(y) * width_ + x];
+  const bool half = a.count & 1u;
   for (int k = 0; k < 3; ++k) {
     double v = s.radiance[k];
     a.rgb[k] += v;
     a.rgb2[k] += v * v;
+    if (half) a.half[k] += v;
     a.normal[k] += s.normal[k];
     a.albedo[k] += s.albedo[k];
   }
   a.alpha += s.alpha;
   a.depth = std::min(a.depth, s.depth);
   a.count += 1;
+}
+
+ErrorEstimate Film::error_estimate() const {
+  ErrorEstimate e;
+  const size_t n_pixels = accum_.size();
+  const bool splats = !splat_.empty() && light_paths_half_ > 0 && light_paths_ > light_paths_half_;
+  const double inv_la = splats ? 1.0 / double(light_paths_ - light_paths_half_) : 0.0;
+  const double inv_lb = splats ? 1.0 / double(light_paths_half_) : 0.0;
+  const double inv_l = splats ? 1.0 / double(light_paths_) : 0.0;
+  // Per-row sums in parallel, added in row order: the same bits for any thread count.
+  std::vector<double> row_var(height_, 0.0), row_sq(height_, 0.0);
+  std::atomic<bool> incomplete{false};
+  tbb::parallel_for(0, height_, [&](int y) {
+    double var_sum = 0, square_sum = 0;
+    for (size_t i = size_t(y) * width_; i < size_t(y + 1) * width_; ++i) {
+      const PixelAccum& a = accum_[i];
+      if (a.count < 2) {
+        incomplete.store(true, std::memory_order_relaxed);
+        return;
+      }
+      const double n = a.count, nb = double(a.count / 2), na = n - nb;
+      for (int k = 0; k < 3; ++k) {
+        double mean_a = (a.rgb[k] - a.half[k]) / na, mean_b = a.half[k] / nb, mean = a.rgb[k] / n;
+        if (splats) {
+          const double s = splat_[3 * i + k], sb = splat_half_[3 * i + k];
+          mean_a += (s - sb) * inv_la;
+          mean_b += sb * inv_lb;
+          mean += s * inv_l;
+        }
+        const double d = mean_a - mean_b;
+        var_sum += d * d * na * nb / (n * n);
+        square_sum += mean * mean;
+      }
+    }
+    row_var[y] = var_sum;
+    row_sq[y] = square_sum;
+  });
+  if (incomplete.load()) return e;
+  double var_sum = 0, square_sum = 0;
+  for (int y = 0; y < height_; ++y) {
+    var_sum += row_var[y];
+    square_sum += row_sq[y];
+  }
+  const double signal = square_sum - var_sum;
+  e.mean_square = std::max(0.0, signal) / double(n_pixels);
+  e.variance = var_sum;
+  if (var_sum <= 0) e.rel_error = 0;
+  else e.rel_error = signal > 0 ? std::sqrt(var_sum / signal) : std::numeric_limits<double>::infinity();
+  return e;
+}
+
+double Film::pixel_variance(int x, int y) const {
+  const PixelAccum& a = accum_[size_t(y) * width_ + x];
+  if (a.count < 2) return 0;
+  const double n = a.count;
+  double v = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double mean = a.rgb[k] / n;
+    v += std::max(0.0, a.rgb2[k] / n - mean * mean) / (n - 1.0);
+  }
+  return v;
 }
 
 void Film::publish() {
@@ -121,7 +189,8 @@ void Film::read(Pass pass, float* out, bool labels) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const int c = pass_channels(pass);
   const size_t n = size_t(width_) * height_;
-  const double splat_scale = published_light_paths_ ? 1.0 / double(published_light_paths_) : 0.0;
+  const double splat_scale =
+      published_light_paths_ && !published_splat_.empty() ? 1.0 / double(published_light_paths_) : 0.0;
   for (size_t i = 0; i < n; ++i) {
     float* o = out + i * c;
     if (published_.empty()) {
@@ -132,7 +201,8 @@ void Film::read(Pass pass, float* out, bool labels) const {
     const double inv = a.count ? 1.0 / a.count : 0.0;
     switch (pass) {
       case Pass::Combined:
-        for (int k = 0; k < 3; ++k) o[k] = float(a.rgb[k] * inv + published_splat_[3 * i + k] * splat_scale);
+        for (int k = 0; k < 3; ++k)
+          o[k] = float(a.rgb[k] * inv + (splat_scale > 0 ? published_splat_[3 * i + k] * splat_scale : 0.0));
         o[3] = float(a.alpha * inv);
         break;
       case Pass::Depth: o[0] = a.depth; break;

@@ -43,6 +43,9 @@ struct SampleValue {
 struct PixelAccum {
   double rgb[3] = {0, 0, 0};
   double rgb2[3] = {0, 0, 0};
+  // The pixel's odd-numbered samples (its 2nd, 4th, ...): with the rest, two independent half
+  // images for the error estimate (core/film.cpp, Film::error_estimate).
+  double half[3] = {0, 0, 0};
   double alpha = 0;
   double normal[3] = {0, 0, 0};
   double albedo[3] = {0, 0, 0};
@@ -53,20 +56,51 @@ struct PixelAccum {
 enum class Pass { Combined = 0, Depth = 1, Normal = 2, Albedo = 3, Variance = 4, SampleCount = 5, Count = 6 };
 int pass_channels(Pass pass);
 
+// The image's relative error, estimated from two independent half images A (a pixel's even-
+// numbered samples, its 1st, 3rd, ...) and B (its odd-numbered ones) of the Combined RGB:
+//   v_p = sum_c (A_pc - B_pc)^2 n_A n_B / n^2      unbiased for Var[I_pc] summed over channels
+//   E^2 = sum_p v_p / (sum_pc I_pc^2 - sum_p v_p)   (the denominator unbiased for sum_pc R_pc^2)
+// i.e. E estimates sqrt(E[sum (I - R)^2] / sum R^2), the RMS error relative to the RMS of the
+// converged image R. Since E[(A - B)^2] = Var A + Var B for independent halves, v_p needs no model
+// of the noise; BDPT splats are split into halves the same way (by the sample that traced the
+// light path) and normalised by each half's light paths.
+struct ErrorEstimate {
+  double rel_error = -1;   // E; negative until every pixel has 2 samples; +inf if noise >= signal
+  double mean_square = 0;  // sum_pc R_pc^2 / pixels (estimated): the adaptive sampler's scale
+  double variance = 0;     // sum_p v_p
+};
+
 class Film {
  public:
-  Film(int width, int height)
-      : width_(width), height_(height), accum_(size_t(width) * height), splat_(size_t(width) * height * 3, 0.0) {}
+  Film(int width, int height) : width_(width), height_(height), accum_(size_t(width) * height) {}
   int width() const { return width_; }
   int height() const { return height_; }
   // Only the thread that owns the pixel in the current pass writes it.
   void add(int x, int y, const SampleValue& s);
+  // The half (0: A, 1: B) the pixel's next sample goes to.
+  int next_half(int x, int y) const { return int(accum_[size_t(y) * width_ + x].count & 1u); }
   // Light-tracing contributions (BDPT's t = 1): summed per pixel and divided, when read, by the
-  // number of light paths traced for the whole region (each one may reach any pixel).
-  void add_splat(uint32_t pixel, const Spectrum& v) {
-    for (int k = 0; k < 3; ++k) splat_[3 * size_t(pixel) + k] += v[k];
+  // number of light paths traced for the whole region (each one may reach any pixel). `half`:
+  // that of the camera sample whose light path made the splat.
+  void enable_splats() {
+    splat_.assign(size_t(width_) * height_ * 3, 0.0);
+    splat_half_ = splat_;
   }
-  void add_light_paths(uint64_t n) { light_paths_ += n; }
+  void add_splat(uint32_t pixel, const Spectrum& v, int half) {
+    for (int k = 0; k < 3; ++k) splat_[3 * size_t(pixel) + k] += v[k];
+    if (half)
+      for (int k = 0; k < 3; ++k) splat_half_[3 * size_t(pixel) + k] += v[k];
+  }
+  void add_light_paths(uint64_t n, uint64_t n_half) {
+    light_paths_ += n;
+    light_paths_half_ += n_half;
+  }
+  // Of the accumulators (the rendering thread, between passes); see ErrorEstimate.
+  ErrorEstimate error_estimate() const;
+  // Variance of the pixel's Combined RGB mean (summed over channels) from its camera samples'
+  // sample variance; 0 below 2 samples.
+  double pixel_variance(int x, int y) const;
+  uint32_t count(int x, int y) const { return accum_[size_t(y) * width_ + x].count; }
   // BDPT's strategy view: per pixel, one RGB accumulator per strategy cell. Camera-side
   // contributions are averaged over the pixel's samples, splats over the light paths.
   void enable_strategies(int cells) {
@@ -104,8 +138,8 @@ class Film {
   int width_, height_;
   std::vector<PixelAccum> accum_;
   std::vector<PixelAccum> published_;
-  std::vector<double> splat_, published_splat_;
-  uint64_t light_paths_ = 0, published_light_paths_ = 0;
+  std::vector<double> splat_, splat_half_, published_splat_;  // empty without splats
+  uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   int strategy_cells_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;

@@ -4,6 +4,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "core/label_font.h"
@@ -12,6 +14,9 @@ namespace lt {
 
 namespace {
 constexpr int kTile = 16;
+// With adaptive sampling the active pixels cluster in a few places: smaller tiles spread them over
+// the threads.
+constexpr int kAdaptiveTile = 4;
 // Readers see a new image at most this often while rendering (publishing copies the film).
 constexpr double kPublishInterval = 0.25;
 
@@ -40,7 +45,10 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
       settings_(s),
       camera_(scene.camera, s.width, s.height),
       filter_(s.filter, s.filter_width),
-      film_(s.x1 - s.x0, s.y1 - s.y0) {
+      film_(s.x1 - s.x0, s.y1 - s.y0),
+      active_(size_t(film_.width()) * film_.height(), 1) {
+  active_pixels_.store(active_.size());
+  if (s.integrator == IntegratorType::Bidirectional) film_.enable_splats();
   const int depth = s.integrator_settings.strategy_depth;
   if (s.integrator == IntegratorType::Bidirectional && depth > 0) film_.enable_strategies(depth * strategy_columns(depth));
   if (s.integrator == IntegratorType::VolumeDebug) film_.set_labels(volume_debug_labels(s, film_.width(), film_.height()));
@@ -75,14 +83,18 @@ void RenderJob::render_pass(int sample_index) {
       return v;
     });
     // Merge the splats tile by tile in a fixed order (deterministic for any thread count).
-    for (auto& list : tile_splats_) {
-      for (const Splat& sp : list) {
-        film_.add_splat(sp.pixel, sp.value);
+    for (size_t i = 0; i < tile_splats_.size(); ++i) {
+      for (const Splat& sp : tile_splats_[i]) {
+        film_.add_splat(sp.pixel, sp.value, int(i & 1));
         if (sp.strategy >= 0) film_.add_strategy_splat(sp.pixel, sp.strategy, sp.value);
       }
-      list.clear();
+      tile_splats_[i].clear();
     }
-    film_.add_light_paths(uint64_t(film_.width()) * film_.height());
+    // One light path per camera sample traced (fewer than the region's pixels when adaptive
+    // sampling has stopped some, or when the pass was cut short): dividing by the paths actually
+    // traced keeps the splat estimate unbiased, as every light path is independent of the pixel
+    // whose sample traced it.
+    film_.add_light_paths(pass_samples_.load(), pass_samples_half_.load());
   } else if (settings_.integrator == IntegratorType::VolumeDebug) {
     // Panels: top row transmittance (marching | ratio tracking), bottom row sampled distance
     // (marching | delta tracking); each panel is the whole view at half the resolution.
@@ -109,17 +121,27 @@ void RenderJob::render_pass(int sample_index) {
 template <class Trace>
 void RenderJob::render_pass_with(int sample_index, Trace trace) {
   const int w = film_.width(), h = film_.height();
-  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
-  tile_splats_.resize(size_t(tiles_x) * tiles_y);
+  const int tile_size = settings_.adaptive ? kAdaptiveTile : kTile;
+  const int tiles_x = (w + tile_size - 1) / tile_size, tiles_y = (h + tile_size - 1) / tile_size;
+  tile_splats_.resize(2 * size_t(tiles_x) * tiles_y);
+  pass_samples_.store(0);
+  pass_samples_half_.store(0);
+  // The time limit may cut any pass but the first, so that every pixel has a sample.
+  const bool may_cut = sample_index > 0 && settings_.time_limit > 0;
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
     SampleStats stats;
-    uint64_t nans = 0;
+    uint64_t nans = 0, traced = 0, traced_half = 0;
     for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
       for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) {
-        if (cancel_.load(std::memory_order_relaxed)) break;
-        std::vector<Splat>& splats = tile_splats_[size_t(ty) * tiles_x + tx];
-        for (int y = ty * kTile; y < std::min(h, (ty + 1) * kTile); ++y)
-          for (int x = tx * kTile; x < std::min(w, (tx + 1) * kTile); ++x) {
+        if (cancel_.load(std::memory_order_relaxed) || (may_cut && past_deadline())) break;
+        const size_t tile = size_t(ty) * tiles_x + tx;
+        for (int y = ty * tile_size; y < std::min(h, (ty + 1) * tile_size); ++y)
+          for (int x = tx * tile_size; x < std::min(w, (tx + 1) * tile_size); ++x) {
+            if (!active_[size_t(y) * w + x]) continue;
+            const int half = film_.next_half(x, y);
+            ++traced;
+            traced_half += uint64_t(half);
+            std::vector<Splat>& splats = tile_splats_[2 * tile + size_t(half)];
             const int fx = x + settings_.x0, fy = y + settings_.y0;
             // Random numbers depend only on (seed, pixel of the full frame, sample index).
             Sampler sampler(settings_.seed, uint32_t(fy) * uint32_t(settings_.width) + uint32_t(fx), uint32_t(sample_index));
@@ -140,8 +162,69 @@ void RenderJob::render_pass_with(int sample_index, Trace trace) {
           }
       }
     rays_.fetch_add(stats.rays, std::memory_order_relaxed);
+    pass_samples_.fetch_add(traced, std::memory_order_relaxed);
+    pass_samples_half_.fetch_add(traced_half, std::memory_order_relaxed);
     if (nans) nan_samples_.fetch_add(nans, std::memory_order_relaxed);
   });
+}
+
+bool RenderJob::past_deadline() const {
+  return settings_.time_limit > 0 &&
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count() >= settings_.time_limit;
+}
+
+// Per-pixel adaptive sampling (in the spirit of Cycles' adaptive sampling): the image error is
+// E^2 = sum_p v_p / sum_pc R_pc^2 (ErrorEstimate), so if every pixel's variance v_p is at most
+// target^2 * sum_pc R_pc^2 / pixels, E meets the target. A pixel stops sampling once the largest
+// variance among its 8 neighbours (each from its own samples' sample variance) meets that share;
+// its mean stays the average of its own samples. Reading the neighbours and never the pixel
+// itself keeps its stopping time independent of its own samples (up to the neighbours' counts),
+// so the mean stays unbiased: deciding on its own variance would stop a pixel that has not yet
+// met a rare bright path and bias it low (measured: tile means off by 2 standard errors on the
+// Cornell box). Taking the maximum keeps pixels next to noisy ones sampling, as Cycles' dilation.
+// BDPT: the per-pixel variance sees camera samples only; splats keep arriving in stopped pixels
+// from the light paths of active ones, normalised by the light paths actually traced (unbiased),
+// and the image estimate includes their noise. The share is therefore scaled by (sum of the
+// per-pixel variances) / (the halves' sum_p v_p) when that is below 1, and should every pixel
+// meet its share while the image misses the target, all pixels sample again.
+void RenderJob::update_active(const ErrorEstimate& e) {
+  const int w = film_.width(), h = film_.height();
+  // Rows in parallel; per-row sums added in row order (the same bits for any thread count).
+  std::vector<double> v(active_.size()), row_sum(h, 0.0);
+  tbb::parallel_for(0, h, [&](int y) {
+    double sum = 0;
+    for (int x = 0; x < w; ++x) sum += v[size_t(y) * w + x] = film_.pixel_variance(x, y);
+    row_sum[y] = sum;
+  });
+  double pixel_sum = 0;
+  for (double r : row_sum) pixel_sum += r;
+  const double seen = e.variance > 0 ? std::min(1.0, pixel_sum / e.variance) : 1.0;
+  const double share = settings_.noise_target * settings_.noise_target * e.mean_square * seen;
+  std::vector<uint32_t> row_active(h, 0);
+  tbb::parallel_for(0, h, [&](int y) {
+    uint32_t active = 0;
+    for (int x = 0; x < w; ++x) {
+      uint8_t& a = active_[size_t(y) * w + x];
+      if (a) {
+        double nb = -1;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int qx = x + dx, qy = y + dy;
+            if ((dx || dy) && qx >= 0 && qx < w && qy >= 0 && qy < h) nb = std::max(nb, v[size_t(qy) * w + qx]);
+          }
+        if ((nb >= 0 ? nb : v[size_t(y) * w + x]) <= share) a = 0;  // a 1x1 region reads itself
+      }
+      active += a;
+    }
+    row_active[y] = active;
+  });
+  uint64_t active = 0;
+  for (uint32_t r : row_active) active += r;
+  if (!active) {
+    std::fill(active_.begin(), active_.end(), uint8_t(1));
+    active = active_.size();
+  }
+  active_pixels_.store(active);
 }
 
 void RenderJob::run() {
@@ -149,12 +232,33 @@ void RenderJob::run() {
   try {
     tbb::task_arena arena(settings_.threads > 0 ? settings_.threads : tbb::task_arena::automatic);
     auto last_publish = std::chrono::steady_clock::now();
+    HaltReason halt = HaltReason::Samples;
     arena.execute([&] {
       for (int s = 0; s < settings_.samples; ++s) {
         if (cancel_.load()) break;
+        if (s > 0 && past_deadline()) {
+          halt = HaltReason::TimeLimit;
+          break;
+        }
         render_pass(settings_.sample_offset + s);
         if (cancel_.load()) break;
+        // A pass cut by the time limit leaves some pixels one sample short: samples_done counts
+        // complete passes.
+        if (s > 0 && past_deadline()) {
+          halt = HaltReason::TimeLimit;
+          if (pass_samples_.load() == active_pixels_.load()) samples_done_.store(s + 1);
+          break;
+        }
         samples_done_.store(s + 1);
+        const ErrorEstimate e = film_.error_estimate();
+        rel_error_.store(e.rel_error);
+        if (settings_.noise_target > 0 && s + 1 >= settings_.min_samples && e.rel_error >= 0) {
+          if (e.rel_error <= settings_.noise_target) {
+            halt = HaltReason::NoiseTarget;
+            break;
+          }
+          if (settings_.adaptive) update_active(e);
+        }
         auto now = std::chrono::steady_clock::now();
         if (std::chrono::duration<double>(now - last_publish).count() >= kPublishInterval) {
           film_.publish();
@@ -163,13 +267,16 @@ void RenderJob::run() {
       }
     });
     film_.publish();
+    arena.execute([&] { rel_error_.store(film_.error_estimate().rel_error); });  // also after a cut pass
     finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+    halt_reason_.store(int(cancel_.load() ? HaltReason::Cancelled : halt));
     state_.store(cancel_.load() ? int(RenderState::Cancelled) : int(RenderState::Done));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lantern: render failed: %s\n", e.what());
     error_ = e.what();
     film_.publish();
     finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+    halt_reason_.store(int(HaltReason::Failed));
     state_.store(int(RenderState::Failed));
   }
 }
@@ -181,8 +288,24 @@ RenderStatus RenderJob::status() const {
   st.samples_total = settings_.samples;
   double fin = finished_elapsed_.load();
   st.elapsed = fin >= 0 ? fin : std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  if (st.state != RenderState::Running) st.remaining = 0;
-  else if (st.samples_done > 0) st.remaining = st.elapsed / st.samples_done * (st.samples_total - st.samples_done);
+  st.rel_error = rel_error_.load();
+  st.halt_reason = HaltReason(halt_reason_.load());
+  st.active_pixels = active_pixels_.load();
+  if (st.state != RenderState::Running) {
+    st.remaining = 0;
+  } else if (st.samples_done > 0) {
+    // The first halting criterion to be met: samples, the time limit, or the noise target with
+    // the error falling as 1/sqrt(samples) (an overestimate with adaptive sampling).
+    const double per_sample = st.elapsed / st.samples_done;
+    double left = per_sample * (st.samples_total - st.samples_done);
+    if (settings_.time_limit > 0) left = std::min(left, std::max(0.0, settings_.time_limit - st.elapsed));
+    if (settings_.noise_target > 0 && st.rel_error > 0 && std::isfinite(st.rel_error)) {
+      const double r = st.rel_error / settings_.noise_target;
+      const double needed = std::max(double(settings_.min_samples), st.samples_done * r * r);
+      left = std::min(left, per_sample * std::max(0.0, needed - st.samples_done));
+    }
+    st.remaining = left;
+  }
   st.nan_samples = nan_samples_.load();
   st.rays = rays_.load();
   return st;

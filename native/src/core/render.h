@@ -28,15 +28,28 @@ struct RenderSettings {
   int threads = 0;
   FilterType filter = FilterType::BlackmanHarris;
   float filter_width = 1.5f;
+  // Halting: the render stops at the first of `samples`, `time_limit` seconds (0: none; the first
+  // pass always completes) and the image's estimated relative error (ErrorEstimate) reaching
+  // `noise_target` (0: none), checked from `min_samples` on. `adaptive`: pixels whose own
+  // variance is below their share of the target stop sampling (see RenderJob::update_active).
+  double time_limit = 0;
+  double noise_target = 0;
+  bool adaptive = false;
+  int min_samples = 16;
 };
 
 enum class RenderState { Running = 0, Done = 1, Cancelled = 2, Failed = 3 };
+// Why a render stopped (None while it runs).
+enum class HaltReason { None = 0, Samples = 1, TimeLimit = 2, NoiseTarget = 3, Cancelled = 4, Failed = 5 };
 
 struct RenderStatus {
   RenderState state = RenderState::Running;
   int samples_done = 0, samples_total = 0;
   double elapsed = 0, remaining = -1;
   uint64_t nan_samples = 0, rays = 0;
+  double rel_error = -1;  // ErrorEstimate::rel_error after the last complete pass
+  HaltReason halt_reason = HaltReason::None;
+  uint64_t active_pixels = 0;  // pixels still sampling (all of them without adaptive sampling)
 };
 
 class RenderJob {
@@ -58,6 +71,9 @@ class RenderJob {
   void render_pass(int sample_index);
   template <class Trace>
   void render_pass_with(int sample_index, Trace trace);
+  bool past_deadline() const;
+  // Adaptive sampling: clears active_ for pixels whose variance meets their share of the target.
+  void update_active(const ErrorEstimate& e);
   const Scene& scene_;
   RenderSettings settings_;
   Camera camera_;
@@ -68,11 +84,17 @@ class RenderJob {
   std::atomic<int> state_{0};
   std::atomic<int> samples_done_{0};
   std::atomic<uint64_t> nan_samples_{0}, rays_{0};
+  std::atomic<double> rel_error_{-1};
+  std::atomic<int> halt_reason_{0};
+  std::atomic<uint64_t> active_pixels_{0};
+  // Samples traced in the current pass, of them in half B (BDPT: one light path each).
+  std::atomic<uint64_t> pass_samples_{0}, pass_samples_half_{0};
+  std::vector<uint8_t> active_;  // per pixel of the region: still sampling
   std::chrono::steady_clock::time_point start_;
   std::atomic<double> finished_elapsed_{-1};
   std::string error_;
-  // Light-tracing splats of the current pass, one list per tile, merged in tile order so that
-  // the image does not depend on the thread count.
+  // Light-tracing splats of the current pass, two lists per tile (half A, half B), merged in tile
+  // order so that the image does not depend on the thread count.
   std::vector<std::vector<Splat>> tile_splats_;
 };
 

@@ -141,6 +141,21 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
   char secs[32];
   std::snprintf(secs, sizeof(secs), "%.3f", st.elapsed);
   attrs["lantern/render_seconds"] = secs;
+  // The halting settings, what stopped the render and its estimated error (lantern.h,
+  // lt_render_status.rel_error): what the image is worth, kept with it.
+  static const char* const kHalts[] = {"running", "samples", "time_limit", "noise_target", "cancelled", "failed"};
+  auto num = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.9g", v);
+    return std::string(b);
+  };
+  attrs["lantern/rel_error"] = num(st.rel_error);
+  attrs["lantern/halt_reason"] = kHalts[int(st.halt_reason)];
+  attrs["lantern/max_samples"] = std::to_string(s.samples);
+  attrs["lantern/time_limit"] = num(s.time_limit);
+  attrs["lantern/noise_target"] = num(s.noise_target);
+  attrs["lantern/adaptive"] = s.adaptive ? "1" : "0";
+  attrs["lantern/min_samples"] = std::to_string(s.min_samples);
   write_exr(path, w, h, channels, attrs);
 }
 
