@@ -241,3 +241,33 @@ TEST(SampleOffset, OutOfRangeIsRefused) {
 }
 
 }  // namespace
+
+// Parts with fewer light paths than pixels x samples (adaptive sampling stops pixels; so does a
+// pass cut by the time limit): each part's light-tracing image is weighted by the light paths it
+// traced, one per camera sample, which SampleCount counts independently of the header.
+TEST(MergeLightPaths, AdaptivePartsAreWeightedByTheLightPathsTraced) {
+  ScenePtr s = merge_scene(false);
+  TempDir dir;
+  const std::string a = dir.path + "/a.exr", b = dir.path + "/b.exr", out = dir.path + "/m.exr";
+  lt_render_settings ra = settings_for(LT_INTEGRATOR_BIDIRECTIONAL, 0, 48);
+  ra.noise_target = 0.001f;  // never met: adaptive sampling runs to the last sample
+  ra.adaptive = 1;
+  ra.min_samples = 8;
+  render_part(s.get(), ra, a);
+  render_part(s.get(), settings_for(LT_INTEGRATOR_BIDIRECTIONAL, 48, 16), b);
+  ASSERT_EQ(merge(out, {a, b}), LT_OK) << lt_last_error();
+  const lt::ExrImage pa = lt::read_exr(a), pb = lt::read_exr(b), m = lt::read_exr(out);
+  double la = 0, lb = 0;
+  for (float c : pa.find("SampleCount.X")->pixels) la += c;
+  for (float c : pb.find("SampleCount.X")->pixels) lb += c;
+  ASSERT_LT(la, 48.0 * kW * kH) << "adaptive sampling stopped no pixel: the test would not test anything";
+  EXPECT_EQ(pa.attributes.at("lantern/light_paths"), std::to_string((long long)la));
+  EXPECT_EQ(m.attributes.at("lantern/light_paths"), std::to_string((long long)(la + lb)));
+  for (const char* ch : {"LightTracing.R", "LightTracing.G", "LightTracing.B"}) {
+    const auto &xa = pa.find(ch)->pixels, &xb = pb.find(ch)->pixels, &xm = m.find(ch)->pixels;
+    for (size_t i = 0; i < xm.size(); ++i) {
+      const double want = (la * xa[i] + lb * xb[i]) / (la + lb);
+      ASSERT_NEAR(xm[i], want, 1e-5 * std::abs(want) + 1e-30) << ch << " pixel " << i;
+    }
+  }
+}

@@ -91,6 +91,11 @@ class Film {
     if (half)
       for (int k = 0; k < 3; ++k) splat_half_[3 * size_t(pixel) + k] += v[k];
   }
+  // Light paths behind the published splats (0 without splats): what a merge weights them by.
+  uint64_t published_light_paths() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return published_light_paths_;
+  }
   void add_light_paths(uint64_t n, uint64_t n_half) {
     light_paths_ += n;
     light_paths_half_ += n_half;

@@ -240,6 +240,7 @@ void RenderJob::run() {
           halt = HaltReason::TimeLimit;
           break;
         }
+        passes_started_.store(s + 1);
         render_pass(settings_.sample_offset + s);
         if (cancel_.load()) break;
         // A pass cut by the time limit leaves some pixels one sample short: samples_done counts
@@ -285,6 +286,7 @@ RenderStatus RenderJob::status() const {
   RenderStatus st;
   st.state = RenderState(state_.load());
   st.samples_done = samples_done_.load();
+  st.passes_started = passes_started_.load();
   st.samples_total = settings_.samples;
   double fin = finished_elapsed_.load();
   st.elapsed = fin >= 0 ? fin : std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();

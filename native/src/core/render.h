@@ -45,6 +45,9 @@ enum class HaltReason { None = 0, Samples = 1, TimeLimit = 2, NoiseTarget = 3, C
 struct RenderStatus {
   RenderState state = RenderState::Running;
   int samples_done = 0, samples_total = 0;
+  // Passes begun: a pass cut by the time limit or a cancel has used its sample index in some
+  // pixels, so a part's sample range must include it.
+  int passes_started = 0;
   double elapsed = 0, remaining = -1;
   uint64_t nan_samples = 0, rays = 0;
   double rel_error = -1;  // ErrorEstimate::rel_error after the last complete pass
@@ -83,6 +86,7 @@ class RenderJob {
   std::atomic<bool> cancel_{false};
   std::atomic<int> state_{0};
   std::atomic<int> samples_done_{0};
+  std::atomic<int> passes_started_{0};
   std::atomic<uint64_t> nan_samples_{0}, rays_{0};
   std::atomic<double> rel_error_{-1};
   std::atomic<int> halt_reason_{0};

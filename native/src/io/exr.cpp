@@ -132,8 +132,11 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
   RenderStatus st = job.status();
   const RenderSettings& s = job.settings();
   std::map<std::string, std::string> attrs = extra;
-  attrs["lantern/samples"] = std::to_string(st.samples_done);
-  attrs["lantern/sample_ranges"] = std::to_string(s.sample_offset) + "-" + std::to_string(s.sample_offset + st.samples_done);
+  // The sample indices used (a cut last pass included; per-pixel counts are in SampleCount) and
+  // the light paths the splats are divided by, so that merges of such parts stay exact.
+  attrs["lantern/samples"] = std::to_string(st.passes_started);
+  attrs["lantern/sample_ranges"] = std::to_string(s.sample_offset) + "-" + std::to_string(s.sample_offset + st.passes_started);
+  if (uint64_t lp = job.film().published_light_paths()) attrs["lantern/light_paths"] = std::to_string(lp);
   attrs["lantern/seed"] = std::to_string(s.seed);
   attrs["lantern/integrator"] = integrator_name(s.integrator);
   attrs["lantern/resolution"] = std::to_string(s.width) + "x" + std::to_string(s.height);

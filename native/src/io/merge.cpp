@@ -1,7 +1,8 @@
 // lt_merge_exr: sample-split parts of one render into the render itself. A part of samples
 // [a, b) holds per pixel the mean of its c samples (c from SampleCount.X) and, for bidirectional
-// renders, the light-tracing splats divided by its own light-path count (b - a per pixel), so the
-// count-weighted mean of the parts is the mean over all their samples, exactly up to float rounding.
+// renders, the light-tracing splats divided by its own light-path count (lantern/light_paths: one per
+// camera sample traced, fewer with adaptive sampling or a cut pass), so the count-weighted mean of
+// the parts is the mean over all their samples, exactly up to float rounding.
 #include <algorithm>
 #include <cstdlib>
 #include <sstream>
@@ -61,7 +62,7 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
 
   // Every part must carry its sample counts, and agree with the first on what was rendered.
   std::vector<Range> ranges;
-  std::vector<long long> samples(parts.size());
+  std::vector<long long> samples(parts.size()), light_paths(parts.size(), 0);
   for (size_t i = 0; i < parts.size(); ++i) {
     const ExrImage& img = parts[i];
     const std::string& path = paths[i];
@@ -79,6 +80,12 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       throw InvalidArgument(path + ": lantern/samples (" + s->second + ") does not match lantern/sample_ranges (" +
                             r->second + ")");
     ranges.insert(ranges.end(), own.begin(), own.end());
+    if (img.find("LightTracing.R")) {
+      auto l = img.attributes.find("lantern/light_paths");
+      light_paths[i] = l == img.attributes.end() ? 0 : std::atoll(l->second.c_str());
+      if (light_paths[i] <= 0)
+        throw InvalidArgument(path + ": light-tracing channels without a lantern/light_paths count; not merged");
+    }
     if (i == 0) continue;
     const ExrImage& ref = parts[0];
     for (const char* key : kIdentity) {
@@ -107,14 +114,15 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
 
   // Then one part at a time into double accumulators (memory: the accumulators and one part).
   // Per pixel and part p with c_p samples: means weighted by c_p; Depth the minimum; LightTracing
-  // (splats over b - a light paths per pixel) weighted by the part's sample count; Combined's
+  // (splats over the part's light paths) weighted by its light paths; Combined's
   // camera part (Combined - LightTracing) with its sum of squared deviations pooled by Chan et
   // al.'s update (1979), from ss_p = (c_p - 1) c_p Var_p since the Variance pass is s^2 / c.
   const ExrImage& ref = parts[0];
   const size_t n = size_t(ref.width) * ref.height, nc = ref.channels.size(), np = parts.size();
   const bool light = ref.find("LightTracing.R") != nullptr;
-  long long total_samples = 0;
+  long long total_samples = 0, total_light_paths = 0;
   for (long long s : samples) total_samples += s;
+  for (long long l : light_paths) total_light_paths += l;
   enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB };
   std::vector<Kind> kind(nc);
   std::vector<int> rgb_index(nc, -1);
@@ -154,7 +162,7 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         case Mean: for (size_t i = 0; i < n; ++i) a[i] += double(c_p[i]) * in[i]; break;
         case Count: for (size_t i = 0; i < n; ++i) a[i] += in[i]; break;
         case Depth: for (size_t i = 0; i < n; ++i) a[i] = p == 0 ? in[i] : std::min(a[i], double(in[i])); break;
-        case Light: for (size_t i = 0; i < n; ++i) a[i] += double(samples[p]) * in[i]; break;
+        case Light: for (size_t i = 0; i < n; ++i) a[i] += double(light_paths[p]) * in[i]; break;
         case Variance: case CombinedRGB: break;  // below
       }
     }
@@ -182,11 +190,11 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       switch (kind[k]) {
         case Mean: v = count[i] > 0 ? a[i] / count[i] : 0.0; break;
         case Count: case Depth: v = a[i]; break;
-        case Light: v = a[i] / double(total_samples); break;
+        case Light: v = a[i] / double(total_light_paths); break;
         case CombinedRGB: {
           const int c = rgb_index[k];
           v = cam_mean[3 * i + c];
-          if (light) v += acc[light_k[c]][i] / double(total_samples);
+          if (light) v += acc[light_k[c]][i] / double(total_light_paths);
           break;
         }
         case Variance: {
@@ -217,6 +225,7 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   }
   attrs["lantern/samples"] = std::to_string(total_samples);
   attrs["lantern/sample_ranges"] = join_ranges(ranges);
+  if (light) attrs["lantern/light_paths"] = std::to_string(total_light_paths);
   attrs["lantern/render_seconds"] = std::to_string(seconds);
   attrs["lantern/merged_parts"] = std::to_string(np);
   write_exr(out_path, ref.width, ref.height, out, attrs);
