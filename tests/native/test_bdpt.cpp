@@ -244,7 +244,7 @@ TEST(Bdpt, LongPathsStayFinite) {
   lt::Camera camera(scene.camera, 24, 24);
   lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
   lt::IntegratorSettings is;
-  is.max_bounces = 200;
+  is.max_bounces = is.diffuse_bounces = 200;  // as the render above: walks stop at the kind limits
   is.max_camera_length = is.max_light_length = 201;
   lt::RenderContext ctx{scene, camera, filter, is, 0, 0, 24, 24};
   int checked = 0, long_paths = 0;

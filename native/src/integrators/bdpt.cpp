@@ -39,6 +39,7 @@ uint8_t kind_of(const Bsdf& bsdf) {
 // Scratch subpaths, allocated once per thread and reused: no heap allocation per sample.
 struct Scratch {
   std::vector<PathVertex> camera, light;
+  PathVertex endpoint;  // the sampled light vertex of s = 1, the camera vertex of t = 1
 };
 Scratch& scratch(size_t n) {
   thread_local Scratch s;
@@ -82,22 +83,19 @@ class Bdpt {
     return h / (film_area_ * c * c * c);
   }
   float bsdf_pdf(const PathVertex& v, const Vec3& to_prev, const Vec3& to_next) const {
-    float pdf;
-    v.bsdf.eval(v.frame.to_local(to_prev), v.frame.to_local(to_next), &pdf);
-    return pdf;
+    return v.bsdf.pdf(v.frame.to_local(to_prev), v.frame.to_local(to_next));
   }
   // Density (area measure at `next`) that vertex v samples `next`, having been reached from prev.
   float pdf(const PathVertex& v, const PathVertex* prev, const PathVertex& next) const {
     if (v.type == VertexType::Light) return pdf_light(v, next);
     Vec3 wn = next.p - v.p;
     if (!(length_squared(wn) > 0)) return 0;
-    wn = normalize(wn);
     float p;
     if (v.type == VertexType::Camera) {
       p = camera_pdf_dir(next.p);
     } else {
       Vec3 wp = normalize(prev->p - v.p);
-      p = bsdf_pdf(v, wp, wn);
+      p = bsdf_pdf(v, wp, normalize(wn));
     }
     return convert_density(p, v, next);
   }
@@ -139,8 +137,7 @@ class Bdpt {
     if (v.type != VertexType::Surface) return Spectrum(0.0f);
     Vec3 wi = v.frame.to_local(to_world);
     if ((dot(to_world, v.n) > 0) != (wi.z > 0)) return Spectrum(0.0f);  // shading normal would leak
-    float pdf;
-    Spectrum r = v.bsdf.eval(v.wo, wi, &pdf);
+    Spectrum r = v.bsdf.eval(v.wo, wi, nullptr);
     if (mode == Mode::Importance) r *= shading_correction(v, v.frame.to_world(v.wo), to_world);
     return r;
   }
@@ -176,8 +173,21 @@ class Bdpt {
   int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vector<PathVertex>& path);
   void emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le);
   int generate_light_subpath(std::vector<PathVertex>& path);
-  float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, const PathVertex* sampled, int s,
-                   int t);
+  float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, PathVertex* sampled, int s, int t,
+                   double* light_sum = nullptr);
+  // A light or camera vertex for a strategy's sampled endpoint, reset without constructing a
+  // PathVertex (whose BSDF those types never use).
+  PathVertex& endpoint(VertexType type) {
+    PathVertex& v = scratch(0).endpoint;
+    v.type = type;
+    v.delta = v.infinite = v.delta_direction = false;
+    v.light = -1;
+    v.kind = 0;
+    v.beta = Spectrum(1.0f);
+    v.pdf_fwd = v.pdf_rev = 0;
+    v.n = Vec3(0.0f);
+    return v;
+  }
   Spectrum connect(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, int t);
   void splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats);
 
@@ -213,6 +223,12 @@ class Bdpt {
     if (last && last->type == VertexType::Surface) --n[last->kind];
     return n[kDiffuse] <= s_.diffuse_bounces && n[kGlossy] <= s_.glossy_bounces &&
            n[kTransmission] <= s_.transmission_bounces;
+  }
+  // Adds a vertex of kind k to the counts; true if that takes them past its limit.
+  bool exceeds_kind_limit(int* n, uint8_t k) const {
+    ++n[k];
+    return (k == kDiffuse && n[k] > s_.diffuse_bounces) || (k == kGlossy && n[k] > s_.glossy_bounces) ||
+           (k == kTransmission && n[k] > s_.transmission_bounces);
   }
   int camera_depth() const { return std::min(s_.max_camera_length, s_.max_bounces + 2); }
 
@@ -252,7 +268,11 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
   };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
   int count = 1, bounces = 0;
-  Bsdf scratch_bsdf;
+  // Bounce kinds counted so far towards Cycles' per-kind limits (see within_kind_limits): a walk
+  // stops where every strategy using its further vertices would fail them, so no work is spent
+  // on vertices no strategy can use (light subpaths, whose Russian roulette rarely ends them, would
+  // otherwise run to max_light_length).
+  int kinds[4] = {0, 0, 0, 0};
   for (;;) {
     PathVertex& prev = path[count - 1];
     PathVertex& v = path[count];
@@ -316,6 +336,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
     Spectrum le = material.evaluate(scene_.images, sp.uv, backface, &v.bsdf);
     v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
     v.kind = kind_of(v.bsdf);
+    // Light subpaths: strategies with s >= count + 1 count the kinds of light[2..count].
+    if (mode == Mode::Importance && count >= 2 && v.type == VertexType::Surface && exceeds_kind_limit(kinds, v.kind))
+      break;
     ++count;
     if (mode == Mode::Radiance) {
       if (count == 2) {
@@ -328,6 +351,10 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
       else if (!is_black(le)) add(beta * le, 0, count);  // emission no light sampler knows: no MIS partner
     }
     if (++bounces >= max_depth || v.bsdf.count() == 0) break;
+    // Camera subpaths: every strategy using vertex `count` counts the kinds of camera[1..count-2].
+    if (mode == Mode::Radiance && count >= 3 && path[count - 2].type == VertexType::Surface &&
+        exceeds_kind_limit(kinds, path[count - 2].kind))
+      break;
 
     BsdfSample bs;
     float u_lobe = sampler_.next_1d();
@@ -379,30 +406,27 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   Ray ray = e.ray;
   ray.tmin = 0;
   if (l.type == LightType::Area || l.type == LightType::Triangle) ray.o = offset_ray_origin(e.ray.o, e.n);
-  int count = random_walk(ray, beta, s_.max_light_length - 1, Mode::Importance, path);
+  // No strategy uses more than max_depth() + 2 light vertices (t = 1: s - 1 <= max_depth()).
+  int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, path);
   // An infinite light's vertex is a direction: its density is the direction's (pbrt 3, 16.3.2);
   // y1's is the disk's (pdf_light handles it).
   if (y0.infinite) y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY);
   return count;
 }
 
-float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, const PathVertex* sampled,
-                       int s, int t) {
+// light_sum, if given, receives the light side's share of the sum of ratios (see splat_t1).
+float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, PathVertex* sampled, int s,
+                       int t, double* light_sum) {
   if (s + t == 2) return 1;
-  // Temporarily place the sampled vertex and the densities this strategy implies (pbrt's
-  // ScopedAssignment), then restore them.
-  PathVertex* qs = s > 0 ? &light[s - 1] : nullptr;
-  PathVertex* pt = t > 0 ? &camera[t - 1] : nullptr;
+  // The sampled endpoint (s = 1: a light sample, t = 1: the camera) stands in for light[0] or
+  // camera[0]. The densities this strategy implies are assigned temporarily (pbrt's
+  // ScopedAssignment), then restored.
+  PathVertex* qs = s == 1 ? sampled : (s > 1 ? &light[s - 1] : nullptr);
+  PathVertex* pt = t == 1 ? sampled : (t > 1 ? &camera[t - 1] : nullptr);
   PathVertex* qs_minus = s > 1 ? &light[s - 2] : nullptr;
   PathVertex* pt_minus = t > 1 ? &camera[t - 2] : nullptr;
-  PathVertex saved_endpoint;
-  PathVertex* replaced = nullptr;
-  if (s == 1) replaced = qs;
-  else if (t == 1) replaced = pt;
-  if (replaced) {
-    saved_endpoint = *replaced;
-    *replaced = *sampled;
-  }
+  auto L = [&](int i) -> const PathVertex& { return i == s - 1 ? *qs : light[i]; };
+  auto C = [&](int i) -> const PathVertex& { return i == t - 1 ? *pt : camera[i]; };
   struct Saved { float* where; float value; };
   Saved saved[4];
   int n_saved = 0;
@@ -428,20 +452,23 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
   double sum = 0, r = 1;
   for (int i = t - 1; i > 0; --i) {
-    r *= remap0(camera[i].pdf_rev) / remap0(camera[i].pdf_fwd);
-    if (!camera[i].delta && !camera[i - 1].delta && exists(s + t - i, i)) sum += heuristic(float(r));
+    const PathVertex& c = C(i);
+    r *= remap0(c.pdf_rev) / remap0(c.pdf_fwd);
+    if (!c.delta && !C(i - 1).delta && exists(s + t - i, i)) sum += heuristic(float(r));
   }
+  const double camera_sum = sum;
   r = 1;
   for (int i = s - 1; i >= 0; --i) {
-    r *= remap0(light[i].pdf_rev) / remap0(light[i].pdf_fwd);
-    bool delta_light_vertex = i > 0 ? light[i - 1].delta : is_delta_light(light[0]);
-    if (!light[i].delta && !delta_light_vertex && exists(i, s + t - i)) sum += heuristic(float(r));
+    const PathVertex& l = L(i);
+    r *= remap0(l.pdf_rev) / remap0(l.pdf_fwd);
+    bool delta_light_vertex = i > 0 ? L(i - 1).delta : is_delta_light(l);
+    if (!l.delta && !delta_light_vertex && exists(i, s + t - i)) sum += heuristic(float(r));
   }
+  if (light_sum) *light_sum = sum - camera_sum;
 
   for (int k = n_saved - 1; k >= 0; --k) *saved[k].where = saved[k].value;
   if (pt) pt->delta = pt_delta;
   if (qs) qs->delta = qs_delta;
-  if (replaced) *replaced = saved_endpoint;
   double w = 1 / (1 + sum);
   return std::isfinite(w) ? float(w) : 0.0f;
 }
@@ -459,8 +486,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     if (!(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance))
       return Spectrum(0.0f);
     const Light& l = lights_.light(li);
-    PathVertex sampled;
-    sampled.type = VertexType::Light;
+    PathVertex& sampled = endpoint(VertexType::Light);
     sampled.light = li;
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
@@ -511,8 +537,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   if (!cam.project(qs.p, ctx_.filter.radius(), &film, &dir, &dist)) return;
   Spectrum base = qs.beta * f(qs, -dir, Mode::Importance);
   if (is_black(base)) return;
-  PathVertex z0;
-  z0.type = VertexType::Camera;
+  PathVertex& z0 = endpoint(VertexType::Camera);
   z0.p = cam.position();
   if (!visible(qs, z0)) return;
   float c = dot(dir, cam.forward());
@@ -526,12 +551,25 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   const int py0 = std::max(ctx_.y0, int(std::ceil(film.y - r - 0.5f))),
             py1 = std::min(ctx_.y0 + ctx_.height - 1, int(std::floor(film.y + r - 0.5f)));
   const Vec2 own_center = pixel_center_;
+  // The MIS weight depends on the pixel only through the camera's density at qs, which is the
+  // pixel's filter value h times a common factor; that density is a factor of every ratio on the
+  // light side (the camera side is empty for t = 1). So the first pixel's sum of ratios, scaled by
+  // heuristic(h / h_first), gives the others' (the heuristics are multiplicative).
+  float h_first = 0;
+  double sum_first = 0;
   for (int py = py0; py <= py1; ++py)
     for (int px = px0; px <= px1; ++px) {
       float h = ctx_.filter.pdf(film.x - (px + 0.5f)) * ctx_.filter.pdf(film.y - (py + 0.5f));
       if (!(h > 0)) continue;
-      pixel_center_ = {px + 0.5f, py + 0.5f};  // the MIS weight depends on the pixel's filter
-      float w = mis_weight(light, camera, &z0, s, 1);
+      float w;
+      if (h_first > 0) {
+        w = float(1 / (1 + heuristic(h / h_first) * sum_first));
+      } else {
+        pixel_center_ = {px + 0.5f, py + 0.5f};
+        w = mis_weight(light, camera, &z0, s, 1, &sum_first);
+        // The shortcut needs that density to be non-zero (not remapped to 1).
+        if (pdf(z0, nullptr, qs) > 0) h_first = h;
+      }
       Spectrum v = base * (h * w);
       if (is_finite(v) && !is_black(v))
         splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v,

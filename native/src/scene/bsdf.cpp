@@ -273,23 +273,28 @@ uint32_t lobe_flags(const Lobe& l) {
   return 0;
 }
 
-Spectrum lobe_eval(const Lobe& l, const Vec3& wo, const Vec3& wi) {
+namespace {
+// lobe_eval() and lobe_pdf() from one evaluation.
+Spectrum lobe_eval_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf_out) {
+  *pdf_out = 0;
   if (wo.z == 0 || lobe_is_delta(l)) return Spectrum(0.0f);
   float pdf;
   Lobe tmp;
   Spectrum f = wo.z > 0 ? eval_upper(l, wo, wi, &pdf) : eval_upper(lobe_from_below(l, &tmp), flip_z(wo), flip_z(wi), &pdf);
+  *pdf_out = std::isfinite(pdf) && pdf > 0 ? pdf : 0.0f;
   return is_finite(f) ? vmax(f, Spectrum(0.0f)) : Spectrum(0.0f);
+}
+}  // namespace
+
+Spectrum lobe_eval(const Lobe& l, const Vec3& wo, const Vec3& wi) {
+  float pdf;
+  return lobe_eval_pdf(l, wo, wi, &pdf);
 }
 
 float lobe_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi) {
-  if (wo.z == 0 || lobe_is_delta(l)) return 0;
   float pdf;
-  if (wo.z > 0) eval_upper(l, wo, wi, &pdf);
-  else {
-    Lobe tmp;
-    eval_upper(lobe_from_below(l, &tmp), flip_z(wo), flip_z(wi), &pdf);
-  }
-  return std::isfinite(pdf) && pdf > 0 ? pdf : 0.0f;
+  lobe_eval_pdf(l, wo, wi, &pdf);
+  return pdf;
 }
 
 bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out) {
@@ -409,11 +414,14 @@ Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf) const {
   Spectrum f(0.0f);
   float p_total = 0;
   float p[kMaxLobes];
-  if (selection_probabilities(*this, wo, p)) {
+  if (!pdf) {
+    for (int k = 0; k < count_; ++k) f += lobe_eval(lobes_[k], wo, wi);  // zero for delta lobes
+  } else if (selection_probabilities(*this, wo, p)) {
     for (int k = 0; k < count_; ++k) {
       if (lobe_is_delta(lobes_[k])) continue;
-      f += lobe_eval(lobes_[k], wo, wi);
-      p_total += p[k] * lobe_pdf(lobes_[k], wo, wi);
+      float pk;
+      f += lobe_eval_pdf(lobes_[k], wo, wi, &pk);
+      p_total += p[k] * pk;
     }
   } else {
     for (int k = 0; k < count_; ++k) f += lobe_eval(lobes_[k], wo, wi);
@@ -421,6 +429,15 @@ Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf) const {
   if (!is_finite(f)) f = Spectrum(0.0f);
   if (pdf) *pdf = std::isfinite(p_total) ? p_total : 0.0f;
   return f;
+}
+
+float Bsdf::pdf(const Vec3& wo, const Vec3& wi) const {
+  float p[kMaxLobes];
+  if (!selection_probabilities(*this, wo, p)) return 0;
+  float p_total = 0;
+  for (int k = 0; k < count_; ++k)
+    if (!lobe_is_delta(lobes_[k])) p_total += p[k] * lobe_pdf(lobes_[k], wo, wi);
+  return std::isfinite(p_total) ? p_total : 0.0f;
 }
 
 bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
@@ -447,8 +464,9 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
     float pdf = p[chosen] * s.pdf;
     for (int k = 0; k < count_; ++k) {
       if (k == chosen || lobe_is_delta(lobes_[k])) continue;
-      s.f += lobe_eval(lobes_[k], wo, s.wi);
-      pdf += p[k] * lobe_pdf(lobes_[k], wo, s.wi);
+      float pk;
+      s.f += lobe_eval_pdf(lobes_[k], wo, s.wi, &pk);
+      pdf += p[k] * pk;
     }
     s.pdf = pdf;
   }

@@ -66,8 +66,10 @@ class Bsdf {
   const Lobe& lobe(int i) const { return lobes_[i]; }
   bool overflowed() const { return overflowed_; }
 
-  // Sum of the non-delta lobes' f, and the mixture pdf of sampling wi with sample().
+  // Sum of the non-delta lobes' f, and (pdf not null) the mixture pdf of sampling wi with sample().
   Spectrum eval(const Vec3& wo, const Vec3& wi, float* pdf) const;
+  // The mixture pdf alone: eval()'s *pdf to the last bit, without evaluating f.
+  float pdf(const Vec3& wo, const Vec3& wi) const;
   // Picks a lobe with probability proportional to its weight's estimate (the weight's average,
   // times Schlick's Fresnel at wo for SpecularGGX; see bsdf.cpp), samples it, then (for non-delta
   // lobes) evaluates all non-delta lobes for f and the mixture pdf. For a delta lobe, f and pdf
