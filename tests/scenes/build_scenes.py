@@ -457,8 +457,11 @@ def build_instanced(scene):
 
 
 def build_door(scene):
-    """Two rooms side by side; the lit one (x > 0) reaches the camera's room (x < 0) only through
-    a narrow gap in the partition: light that path tracing finds only by chance."""
+    """Veach's door ajar (Veach 1997, fig. 10.4): two rooms side by side, the lamp in the lit one
+    (x > 0), the camera in the other. The partition's doorway is closed by a door opened by 6
+    degrees: light reaches the camera's room only through the 8 cm gap at the door's free edge, so
+    next-event estimation from there is almost always occluded and path tracing finds the light
+    only by chance."""
     white = diffuse("DoorWhite", (0.75, 0.75, 0.75))
     w, d, h = 4.0, 3.0, 2.5  # both rooms together: x in [-2, 2], y in [-1.5, 1.5], z in [0, 2.5]
     walls = [  # the +Z unit plane moved into place, normals inward
@@ -471,18 +474,24 @@ def build_door(scene):
     ]
     for name, (sx, sy), m in walls:
         assign(add_object(scene, "Door" + name, mesh_plane("Door" + name, sx, sy, matrix=m)), white)
-    # The partition at x = 0, 0.1 thick, with a 0.1 wide gap at y in [0.6, 0.7], full height.
-    gap0, gap1 = 0.6, 0.7
-    south = gap0 + d / 2
-    north = d / 2 - gap1
-    assign(add_object(scene, "PartitionSouth", mesh_box("PartitionSouth", (0.1, south, h)),
-                      (0, -d / 2 + south / 2, 0)), white)
-    assign(add_object(scene, "PartitionNorth", mesh_box("PartitionNorth", (0.1, north, h)),
-                      (0, d / 2 - north / 2, 0)), white)
-    assign(add_object(scene, "Crate", mesh_box("Crate", (0.6, 0.6, 0.6)), (-1.0, 0.2, 0), (0, 0, 20)),
+    # The partition: x in [-0.05, 0.05], a doorway at y in [0.2, 1.0], z in [0, 2].
+    t, y0, y1, dh = 0.1, 0.2, 1.0, 2.0
+    south, north = y0 + d / 2, d / 2 - y1
+    for name, size, loc in (("PartitionSouth", (t, south, h), (0, -d / 2 + south / 2, 0)),
+                            ("PartitionNorth", (t, north, h), (0, d / 2 - north / 2, 0)),
+                            ("Lintel", (t, y1 - y0, h - dh), (0, (y0 + y1) / 2, dh))):
+        assign(add_object(scene, name, mesh_box(name, size), loc), white)
+    # The door (4 cm thick) hinged at the doorway's north edge on the lit side, (0.05, 1.0), and
+    # turned into the lit room: its free edge stands 0.8 sin(6 deg) = 8.4 cm off the wall.
+    angle, thick, width = math.radians(6.0), 0.04, y1 - y0
+    cx, cy = thick / 2, -width / 2  # the door's centre relative to the hinge, closed
+    loc = (t / 2 + cx * math.cos(angle) - cy * math.sin(angle), y1 + cx * math.sin(angle) + cy * math.cos(angle), 0)
+    assign(add_object(scene, "Door", mesh_box("Door", (thick, width, dh)), loc, (0, 0, 6.0)),
+           diffuse("DoorWood", (0.6, 0.45, 0.3)))
+    assign(add_object(scene, "Crate", mesh_box("Crate", (0.6, 0.6, 0.6)), (-1.2, 0.8, 0), (0, 0, 20)),
            diffuse("DoorCrate", (0.7, 0.5, 0.3)))
-    add_light(scene, "LitRoomLight", "AREA", 400.0, (1.0, 0.0, 2.45), shape="SQUARE", size=0.8)
-    add_camera(scene, (-1.9, -1.4, 1.4), (0.0, 0.6, 0.7), lens=22.0)
+    add_light(scene, "LitRoomLight", "AREA", 1000.0, (1.0, 0.0, 2.45), shape="SQUARE", size=0.5)
+    add_camera(scene, (-1.9, -1.3, 1.5), (0.0, 0.5, 0.9), lens=22.0)
 
 
 def build_caustic(scene):
