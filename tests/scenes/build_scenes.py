@@ -457,11 +457,10 @@ def build_instanced(scene):
 
 
 def build_door(scene):
-    """Veach's door ajar (Veach 1997, fig. 10.4): two rooms side by side, the lamp in the lit one
-    (x > 0), the camera in the other. The partition's doorway is closed by a door opened by 6
-    degrees: light reaches the camera's room only through the 8 cm gap at the door's free edge, so
-    next-event estimation from there is almost always occluded and path tracing finds the light
-    only by chance."""
+    """A door ajar (the scene of Veach & Guibas 1997, "Metropolis light transport"): two rooms side
+    by side, the lamp in the lit one (x > 0), the camera in the other. The partition's doorway is
+    closed by a door opened by 6 degrees: light reaches the camera's room only through the 8 cm gap
+    at the door's free edge, so next-event estimation from there is almost always occluded."""
     white = diffuse("DoorWhite", (0.75, 0.75, 0.75))
     w, d, h = 4.0, 3.0, 2.5  # both rooms together: x in [-2, 2], y in [-1.5, 1.5], z in [0, 2.5]
     walls = [  # the +Z unit plane moved into place, normals inward
