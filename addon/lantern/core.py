@@ -265,6 +265,14 @@ class RenderStatus(ctypes.Structure):
     ]
 
 
+class SceneStats(ctypes.Structure):
+    _fields_ = [
+        ("mesh_bvh_builds", ctypes.c_uint64),
+        ("top_bvh_builds", ctypes.c_uint64),
+        ("light_sampler_builds", ctypes.c_uint64),
+    ]
+
+
 # ---- library loading -----------------------------------------------------------------------------
 
 _lib = None
@@ -303,6 +311,10 @@ def _declare(lib):
         "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, P(VolumeDesc),
                                       P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
+        "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
+        "lt_scene_set_material": ([scene_p, c_int, P(ShaderNode), c_int, c_int], c_int),
+        "lt_scene_clear_lights": ([scene_p], c_int),
+        "lt_scene_get_stats": ([scene_p, P(SceneStats)], c_int),
         "lt_render_settings_default": ([P(RenderSettings)], None),
         "lt_render_start": ([scene_p, P(RenderSettings), P(render_p)], c_int),
         "lt_render_poll": ([render_p, P(RenderStatus)], c_int),
@@ -545,6 +557,27 @@ class Scene:
 
     def commit(self):
         _check(self._lib.lt_scene_commit(self.handle), "lt_scene_commit")
+
+    # Incremental edits (lantern.h): allowed after commit once the scene's renders are closed;
+    # commit() again afterwards rebuilds only what they touched.
+    def set_instance_transform(self, instance, transform):
+        _check(self._lib.lt_scene_set_instance_transform(self.handle, int(instance), _transform(transform)),
+               "lt_scene_set_instance_transform")
+
+    def set_material(self, material, nodes, root=0):
+        n = len(nodes)
+        arr = (ShaderNode * max(n, 1))(*nodes)
+        _check(self._lib.lt_scene_set_material(self.handle, int(material), arr, n, int(root)),
+               "lt_scene_set_material")
+
+    def clear_lights(self):
+        _check(self._lib.lt_scene_clear_lights(self.handle), "lt_scene_clear_lights")
+
+    def stats(self):
+        """How often commits built mesh BVHs, the top-level BVH and the light sampler."""
+        st = SceneStats()
+        _check(self._lib.lt_scene_get_stats(self.handle, ctypes.byref(st)), "lt_scene_get_stats")
+        return {k: getattr(st, k) for k, _ in SceneStats._fields_}
 
     def warnings(self):
         h = self.handle

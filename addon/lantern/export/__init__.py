@@ -23,14 +23,36 @@ def _deduplicating(report):
     return wrapped
 
 
-def export_scene(depsgraph, core_scene, report, camera_object=None):
+def instance_key(inst):
+    """Identifies an object instance across depsgraph evaluations (for viewport updates)."""
+    if inst.is_instance:
+        return (inst.object.original.as_pointer(), inst.parent.original.as_pointer(),
+                tuple(inst.persistent_id))
+    return (inst.object.original.as_pointer(),)
+
+
+def export_lights(depsgraph, core_scene, report):
+    """Adds every light object instance; returns how many were added."""
+    lights = 0
+    for inst in depsgraph.object_instances:
+        if inst.show_self and inst.object.type == 'LIGHT':
+            lights += export_light(inst.object, np.array(inst.matrix_world, dtype=np.float32),
+                                   core_scene, report)
+    return lights
+
+
+def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
     """Fills core_scene (not committed) from the depsgraph; returns a summary dict.
 
     report(level_set, message) receives warnings, like RenderEngine.report. camera_object
-    overrides the scene camera (RenderEngine.camera_override).
+    overrides the scene camera (RenderEngine.camera_override); None with state given: no camera
+    (the viewport sets its own). state, a dict, receives what viewport updates need: the
+    material exporter and the core instance id of each mesh instance by instance_key.
     """
     report = _deduplicating(report)
-    summary = {"camera": export_camera(depsgraph, core_scene, report, camera_object)}
+    summary = {}
+    if state is None or camera_object is not None:
+        summary["camera"] = export_camera(depsgraph, core_scene, report, camera_object)
 
     images = ImageExporter(core_scene, report)
     materials = MaterialExporter(core_scene, report, images)
@@ -44,6 +66,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
     # Curves, surfaces, text and metaballs come as their object and, since Blender 3.0, as a
     # MESH instance of their evaluated geometry: export the latter, convert only if it is absent.
     deferred = []
+    instances = {}  # instance_key -> core instance id (None: no geometry)
     has_mesh_instance = set()
     for inst in depsgraph.object_instances:
         if not inst.show_self:  # e.g. a particle emitter set not to render itself
@@ -57,12 +80,12 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
         if t == 'MESH':
             if inst.is_instance and inst.parent is not None and inst.parent.type in CONVERTIBLE_TYPES:
                 has_mesh_instance.add(inst.parent.original.as_pointer())
-            meshes.export_instance(obj, matrix)
+            instances[instance_key(inst)] = meshes.export_instance(obj, matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
-                meshes.export_instance(obj, matrix, warn_empty=False)
+                instances[instance_key(inst)] = meshes.export_instance(obj, matrix, warn_empty=False)
             else:
-                deferred.append((obj, matrix))
+                deferred.append((obj, matrix, instance_key(inst)))
         elif t == 'LIGHT':
             if export_light(obj, matrix, core_scene, report):
                 lights += 1
@@ -73,9 +96,11 @@ def export_scene(depsgraph, core_scene, report, camera_object=None):
             skipped_types.add(t)
             report({'WARNING'}, "Objects of type %s are not supported yet, skipped (e.g. '%s')"
                    % (t, obj.name))
-    for obj, matrix in deferred:
+    for obj, matrix, key in deferred:
         if obj.original.as_pointer() not in has_mesh_instance:
-            meshes.export_instance(obj, matrix, warn_empty=False)  # e.g. a curve without bevel
+            instances[key] = meshes.export_instance(obj, matrix, warn_empty=False)  # e.g. a curve without bevel
+    if state is not None:
+        state.update(materials=materials, instances=instances)
 
     summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()

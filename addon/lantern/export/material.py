@@ -142,6 +142,7 @@ class MaterialExporter:
         self.report = report
         self.images = images
         self.ids = {}
+        self.volumes = {}  # material key -> (volume keywords or None, null surface) as exported
         self.media = 0  # materials with a Volume output
 
     # -- public --------------------------------------------------------------------------------
@@ -152,27 +153,48 @@ class MaterialExporter:
         key = material.original.as_pointer()
         if key in self.ids:
             return self.ids[key]
+        nodes, root, volume, null_surface = self._translate(material)
+        mat_id = self.core_scene.add_material(nodes, root)
+        if volume is not None:
+            self.core_scene.set_material_volume(mat_id, null_surface=null_surface, **volume)
+            self.media += 1
+        self.ids[key] = mat_id
+        self.volumes[key] = (volume, null_surface)
+        return mat_id
+
+    def update(self, material):
+        """Replaces an exported material's surface in a committed scene (viewport edits).
+
+        Returns False when the edit needs a new scene: the material was not exported, its
+        volume changed, or it now uses an image the scene does not have (core.LanternError).
+        """
+        key = material.original.as_pointer()
+        if key not in self.ids:
+            return False
+        nodes, root, volume, null_surface = self._translate(material)
+        if self.volumes.get(key) != (volume, null_surface):
+            return False
+        self.core_scene.set_material(self.ids[key], nodes, root)
+        return True
+
+    def _translate(self, material):
+        """(nodes, root, volume keywords or None, null surface) of a material."""
         self._material = material
         self._nodes = []
         self._memo = {}
-        volume = None
+        volume, null_surface = None, False
         if material.use_nodes and material.node_tree is not None:
             volume = self.volume(material)
             output = material.node_tree.get_output_node('CYCLES')
             if volume is not None and _follow(output.inputs["Surface"]) is None:
                 # Volume only: Cycles' invisible boundary (Transparent for the surface integrators).
                 root = self._add(core.NODE_TRANSPARENT, color=core.make_input((1.0, 1.0, 1.0)))
+                null_surface = True
             else:
                 root = self._surface_root(material)
         else:
             root = self._add(core.NODE_DIFFUSE, color=core.make_input(material.diffuse_color[:3]))
-        mat_id = self.core_scene.add_material(self._nodes, root)
-        if volume is not None:
-            null_surface = _follow(material.node_tree.get_output_node('CYCLES').inputs["Surface"]) is None
-            self.core_scene.set_material_volume(mat_id, null_surface=null_surface, **volume)
-            self.media += 1
-        self.ids[key] = mat_id
-        return mat_id
+        return self._nodes, root, volume, null_surface
 
     def volume(self, material):
         """The material's Volume output as set_material_volume's keywords, or None."""

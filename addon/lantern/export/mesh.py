@@ -118,14 +118,15 @@ class MeshExporter:
         return [self.materials.export(m) for m in mats]
 
     def export_instance(self, obj, matrix_world, warn_empty=True):
-        """obj: an evaluated object of a mesh or convertible type."""
+        """obj: an evaluated object of a mesh or convertible type. Returns the core instance id,
+        or None when the object has no geometry."""
         mesh_id = self._mesh_id(obj, warn_empty)
         if mesh_id is None:
-            return False
-        self.core_scene.add_instance(mesh_id, matrix_world, self._material_ids(obj),
-                                     visibility_bits(obj))
+            return None
+        instance = self.core_scene.add_instance(mesh_id, matrix_world, self._material_ids(obj),
+                                                visibility_bits(obj))
         self.instance_count += 1
-        return True
+        return instance
 
     @property
     def mesh_count(self):

@@ -215,9 +215,38 @@ LT_API int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* desc
 LT_API int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
                                     const lt_volume_desc* desc, int* out_id);
 
-/* Builds acceleration structures and light samplers. Must be called before rendering; scene
- * edits after commit are refused with LT_ERROR_STATE. */
+/* Builds acceleration structures and light samplers. Must be called before rendering. After a
+ * commit, adding images, materials, meshes, instances or volumes is refused with LT_ERROR_STATE;
+ * the edits below are allowed (for the viewport) and the next commit rebuilds only what they
+ * touched. */
 LT_API int lt_scene_commit(lt_scene* scene);
+
+/* ---- incremental edits ----------------------------------------------------------------------
+ * Allowed before and after lt_scene_commit, but refused (LT_ERROR_STATE) while the scene has a
+ * render that is not destroyed: its threads read the scene. After such an edit the scene must be
+ * committed again before lt_render_start. What the next commit rebuilds:
+ *   lt_scene_set_instance_transform            the top-level BVH (over the meshes' own BVHs) and
+ *                                              the light sampler (emissive triangles move);
+ *   lt_scene_set_material, lt_scene_clear_lights / lt_scene_add_light, lt_scene_set_world
+ *                                              the light sampler only;
+ *   lt_scene_set_camera                        nothing, and needs no new commit (renders read the
+ *                                              camera when they start).
+ * Meshes' BVHs are never rebuilt: a changed mesh needs a new scene. */
+LT_API int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float transform[12]);
+/* Replaces material `material`'s surface (same node encoding as lt_scene_add_material); its volume
+ * (lt_scene_set_material_volume) is kept. */
+LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_node* nodes, int node_count,
+                                 int root);
+/* Removes every light added with lt_scene_add_light (to add the edited set again). */
+LT_API int lt_scene_clear_lights(lt_scene* scene);
+
+/* How often the scene's commits built each structure (for tests and benchmarks). */
+typedef struct lt_scene_stats {
+  uint64_t mesh_bvh_builds;
+  uint64_t top_bvh_builds;
+  uint64_t light_sampler_builds;
+} lt_scene_stats;
+LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);
 
 /* ---- rendering ---------------------------------------------------------------------------- */
 

@@ -2,6 +2,7 @@
 // tests that build a scene through the ABI and then reach the core behind it.
 #pragma once
 
+#include <atomic>
 #include <memory>
 
 #include "core/render.h"
@@ -9,7 +10,13 @@
 
 struct lt_scene {
   lt::Scene scene;
+  std::atomic<int> live_renders{0};  // renders started and not yet destroyed: they read the scene
 };
 struct lt_render {
   std::unique_ptr<lt::RenderJob> job;
+  lt_scene* scene = nullptr;
+  ~lt_render() {
+    job.reset();  // stops and joins the render's threads before the scene may change
+    if (scene) scene->live_renders.fetch_sub(1);
+  }
 };

@@ -87,8 +87,46 @@ lt::VolumeCoefficients to_volume(const lt_volume_desc* d) {
                                  d->anisotropy);
 }
 
+// Edits that a committed scene also takes (viewport updates): refused while a render reads it.
+// needs_commit: the edit changes what commit builds (the camera does not: renders read it at start).
+void begin_edit(lt_scene* scene, bool needs_commit = true) {
+  if (scene->live_renders.load() > 0)
+    throw lt::StateError("the scene has a render that is not destroyed; destroy it before editing the scene");
+  if (needs_commit) scene->scene.mark_edited();
+}
+
+lt::Material to_material(const lt_scene* scene, const lt_shader_node* nodes, int node_count, int root);
+
 constexpr int kMaxDimension = 65536;
+
 constexpr long long kMaxPixels = 1LL << 28;  // 268 M pixels: beyond this a render is a mistake
+
+lt::Material to_material(const lt_scene* scene, const lt_shader_node* nodes, int node_count, int root) {
+    require(node_count > 0 && node_count <= 4096, "material node count " + std::to_string(node_count) + " is out of range");
+    const size_t images = scene->scene.images.size();
+    std::vector<lt::ShaderNode> v(node_count);
+    for (int i = 0; i < node_count; ++i) {
+      const lt_shader_node& n = nodes[i];
+      if (n.type < 0 || n.type >= LT_NODE_COUNT)
+        throw InvalidArgument("material node " + std::to_string(i) + " has unknown type " + std::to_string(n.type) +
+                              "; valid types are DIFFUSE, GLOSSY, GLASS, EMISSION, MIX, ADD, PRINCIPLED, TRANSPARENT");
+      lt::ShaderNode& s = v[i];
+      s.type = lt::NodeType(n.type);
+      s.color = to_input(n.color, images, "color", i);
+      s.roughness = to_input(n.roughness, images, "roughness", i);
+      s.fac = to_input(n.fac, images, "fac", i);
+      s.metallic = to_input(n.metallic, images, "metallic", i);
+      s.specular = to_input(n.specular, images, "specular", i);
+      s.transmission = to_input(n.transmission, images, "transmission", i);
+      s.emission = to_input(n.emission, images, "emission", i);
+      s.strength = to_input(n.strength, images, "strength", i);
+      require(std::isfinite(n.ior), "material node " + std::to_string(i) + ": ior is not finite");
+      s.ior = n.ior;
+      s.child[0] = n.child[0];
+      s.child[1] = n.child[1];
+    }
+    return lt::Material(std::move(v), root, images);
+}
 
 }  // namespace
 
@@ -138,31 +176,19 @@ int lt_scene_add_material(lt_scene* scene, const lt_shader_node* nodes, int node
   return guarded([&] {
     require(scene && nodes && out_id, "lt_scene_add_material: NULL argument");
     scene->scene.require_editable();
-    require(node_count > 0 && node_count <= 4096, "material node count " + std::to_string(node_count) + " is out of range");
-    const size_t images = scene->scene.images.size();
-    std::vector<lt::ShaderNode> v(node_count);
-    for (int i = 0; i < node_count; ++i) {
-      const lt_shader_node& n = nodes[i];
-      if (n.type < 0 || n.type >= LT_NODE_COUNT)
-        throw InvalidArgument("material node " + std::to_string(i) + " has unknown type " + std::to_string(n.type) +
-                              "; valid types are DIFFUSE, GLOSSY, GLASS, EMISSION, MIX, ADD, PRINCIPLED, TRANSPARENT");
-      lt::ShaderNode& s = v[i];
-      s.type = lt::NodeType(n.type);
-      s.color = to_input(n.color, images, "color", i);
-      s.roughness = to_input(n.roughness, images, "roughness", i);
-      s.fac = to_input(n.fac, images, "fac", i);
-      s.metallic = to_input(n.metallic, images, "metallic", i);
-      s.specular = to_input(n.specular, images, "specular", i);
-      s.transmission = to_input(n.transmission, images, "transmission", i);
-      s.emission = to_input(n.emission, images, "emission", i);
-      s.strength = to_input(n.strength, images, "strength", i);
-      require(std::isfinite(n.ior), "material node " + std::to_string(i) + ": ior is not finite");
-      s.ior = n.ior;
-      s.child[0] = n.child[0];
-      s.child[1] = n.child[1];
-    }
-    scene->scene.materials.emplace_back(std::move(v), root, images);
+    scene->scene.materials.push_back(to_material(scene, nodes, node_count, root));
     *out_id = int(scene->scene.materials.size()) - 1;
+  });
+}
+
+int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_node* nodes, int node_count, int root) {
+  return guarded([&] {
+    require(scene && nodes, "lt_scene_set_material: NULL argument");
+    require(material >= 0 && material < int(scene->scene.materials.size()),
+            "material " + std::to_string(material) + " does not exist");
+    lt::Material m = to_material(scene, nodes, node_count, root);  // validated before anything changes
+    begin_edit(scene);
+    scene->scene.materials[material] = std::move(m);
   });
 }
 
@@ -233,7 +259,7 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
 int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
   return guarded([&] {
     require(scene && d, "lt_scene_add_light: NULL argument");
-    scene->scene.require_editable();
+    begin_edit(scene);
     require(d->type >= LT_LIGHT_POINT && d->type <= LT_LIGHT_SUN,
             "unknown light type " + std::to_string(d->type) + "; valid types are POINT, SPOT, AREA, SUN");
     require(finite_array(d->color, 3) && d->color[0] >= 0 && d->color[1] >= 0 && d->color[2] >= 0,
@@ -296,10 +322,37 @@ int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
   });
 }
 
+int lt_scene_clear_lights(lt_scene* scene) {
+  return guarded([&] {
+    require(scene != nullptr, "lt_scene_clear_lights: NULL scene");
+    begin_edit(scene);
+    scene->scene.lamp_lights.clear();
+  });
+}
+
+int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float transform[12]) {
+  return guarded([&] {
+    require(scene && transform, "lt_scene_set_instance_transform: NULL argument");
+    require(instance >= 0 && instance < int(scene->scene.geometry.instance_count()),
+            "instance " + std::to_string(instance) + " does not exist");
+    lt::Transform xf = to_transform(transform, "instance");
+    begin_edit(scene);
+    scene->scene.geometry.set_instance_transform(instance, xf);
+  });
+}
+
+int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out) {
+  return guarded([&] {
+    require(scene && out, "lt_scene_get_stats: NULL argument");
+    out->mesh_bvh_builds = scene->scene.geometry.mesh_builds();
+    out->top_bvh_builds = scene->scene.geometry.top_builds();
+    out->light_sampler_builds = scene->scene.light_builds();
+  });
+}
+
 int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
   return guarded([&] {
     require(scene && d, "lt_scene_set_camera: NULL argument");
-    scene->scene.require_editable();
     require(d->type == LT_CAMERA_PERSPECTIVE || d->type == LT_CAMERA_ORTHOGRAPHIC,
             "unknown camera type " + std::to_string(d->type) + "; valid types are PERSPECTIVE, ORTHOGRAPHIC");
     require(d->sensor_fit >= LT_SENSOR_AUTO && d->sensor_fit <= LT_SENSOR_VERTICAL, "unknown sensor fit");
@@ -324,6 +377,7 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     c.clip_start = d->clip_start;
     c.clip_end = d->clip_end;
     c.pixel_aspect = d->pixel_aspect;
+    begin_edit(scene, false);
     scene->scene.camera = c;
     scene->scene.camera_set = true;
   });
@@ -332,11 +386,11 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
 int lt_scene_set_world(lt_scene* scene, const lt_world_desc* d) {
   return guarded([&] {
     require(scene && d, "lt_scene_set_world: NULL argument");
-    scene->scene.require_editable();
     require(finite_array(d->color, 3) && std::isfinite(d->strength) && std::isfinite(d->rotation_z),
             "world colour, strength and rotation must be finite");
     require(d->image >= -1 && d->image < int(scene->scene.images.size()),
             "world refers to image " + std::to_string(d->image) + ", which does not exist");
+    begin_edit(scene);
     lt::World& w = scene->scene.world;
     w.color = lt::vmax(lt::Vec3(0.0f), lt::Vec3(d->color[0], d->color[1], d->color[2]) * std::max(0.0f, d->strength));
     w.image = d->image >= 0 ? scene->scene.images[d->image].get() : nullptr;
@@ -430,6 +484,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
   return guarded([&] {
     require(scene && s && out, "lt_render_start: NULL argument");
     if (!scene->scene.committed()) throw lt::StateError("the scene must be committed before rendering");
+    if (scene->scene.edited()) throw lt::StateError("the scene was edited after its commit: commit it again before rendering");
     require(scene->scene.camera_set, "the scene has no camera");
     require(s->width > 0 && s->height > 0 && s->width <= kMaxDimension && s->height <= kMaxDimension &&
                 (long long)s->width * s->height <= kMaxPixels,
@@ -514,6 +569,8 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.min_samples = s->min_samples;
     auto r = std::make_unique<lt_render>();
     r->job = std::make_unique<lt::RenderJob>(scene->scene, rs);
+    r->scene = scene;
+    scene->live_renders.fetch_add(1);
     r->job->start();
     *out = r.release();
   });

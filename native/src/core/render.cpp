@@ -261,7 +261,10 @@ void RenderJob::run() {
           if (settings_.adaptive) update_active(e);
         }
         auto now = std::chrono::steady_clock::now();
-        if (std::chrono::duration<double>(now - last_publish).count() >= kPublishInterval) {
+        // Also after passes 1, 2, 4, 8, ...: early passes change the image most, and the viewport
+        // shows the first one as soon as it exists.
+        const bool power_of_two = ((s + 1) & s) == 0;
+        if (power_of_two || std::chrono::duration<double>(now - last_publish).count() >= kPublishInterval) {
           film_.publish();
           last_publish = now;
         }

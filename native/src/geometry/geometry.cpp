@@ -112,50 +112,71 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
   return id;
 }
 
-int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
-  if (committed_) throw StateError("the scene is committed; instances can no longer be added");
-  const int id = int(instances_.size());
-  float det = inst.xf.determinant();
-  inst.flipped = det < 0;
+namespace {
+bool usable_transform(const Transform& xf) {
+  float det = xf.determinant();
+  bool finite = std::isfinite(det);
+  for (float x : xf.m) finite = finite && std::isfinite(x);
+  return finite && std::abs(det) > 1e-30f;
+}
+
+void set_transform(Instance& inst, const Transform& xf) {
+  inst.xf = xf;
+  inst.flipped = xf.determinant() < 0;
   // Rows of the cofactor matrix, sign-corrected so that normals keep facing outwards.
   for (int r = 0; r < 3; ++r) {
     Vec3 e(r == 0, r == 1, r == 2);
-    Vec3 row = inst.xf.normal(e);  // column r of the normal matrix
+    Vec3 row = xf.normal(e);  // column r of the normal matrix
     inst.normal_rows[0][r] = row.x;
     inst.normal_rows[1][r] = row.y;
     inst.normal_rows[2][r] = row.z;
   }
+}
+}  // namespace
+
+int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
+  if (committed_) throw StateError("the scene is committed; instances can no longer be added");
+  const int id = int(instances_.size());
+  set_transform(inst, inst.xf);
   instances_.push_back(inst);
   instance_visibility_.push_back(inst.visibility & 31u);
   if ((inst.visibility & 31u) != 31u) partial_visibility_ = true;
-  const Mesh& m = meshes_[inst.mesh];
-  if (!m.rtc) return id;  // empty mesh: nothing to trace
-  bool finite = true;
-  for (float x : inst.xf.m) finite = finite && std::isfinite(x);
-  if (!finite || !(std::abs(det) > 1e-30f)) {
+  if (meshes_[inst.mesh].rtc && !usable_transform(inst.xf))
     warnings.push_back("instance " + std::to_string(id) + " has a zero-scale or non-finite transform; left out");
-    return id;
-  }
   return id;
 }
 
+void Geometry::set_instance_transform(int instance, const Transform& xf) {
+  set_transform(instances_.at(size_t(instance)), xf);
+  top_dirty_ = true;
+}
+
 void Geometry::commit() {
-  if (committed_) return;
+  if (committed_ && !top_dirty_) return;
+  if (!committed_) {
+    for (auto& m : meshes_) {
+      if (!m.rtc) continue;
+      if (partial_visibility_) rtcSetSceneFlags(m.rtc, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+      rtcCommitScene(m.rtc);
+      ++mesh_builds_;
+    }
+  }
+  build_top();
+  committed_ = true;
+  top_dirty_ = false;
+}
+
+// Embree two-level instancing: the top level holds one instance geometry per object instance,
+// each pointing at its mesh's committed scene, so rebuilding it never touches a mesh BVH.
+void Geometry::build_top() {
+  if (top_) rtcReleaseScene(top_);
   top_ = rtcNewScene(device_);
   if (partial_visibility_) rtcSetSceneFlags(top_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
-  for (auto& m : meshes_) {
-    if (!m.rtc) continue;
-    if (partial_visibility_) rtcSetSceneFlags(m.rtc, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
-    rtcCommitScene(m.rtc);
-  }
+  bounds_ = Bounds();
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
     const Mesh& m = meshes_[inst.mesh];
-    if (!m.rtc) continue;
-    float det = inst.xf.determinant();
-    bool finite = std::isfinite(det);
-    for (float x : inst.xf.m) finite = finite && std::isfinite(x);
-    if (!finite || !(std::abs(det) > 1e-30f)) continue;
+    if (!m.rtc || !usable_transform(inst.xf)) continue;
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, m.rtc);
     float xf[12];  // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout
@@ -167,7 +188,7 @@ void Geometry::commit() {
     for (const Vec3& p : m.positions) bounds_.extend(inst.xf.point(p));
   }
   rtcCommitScene(top_);
-  committed_ = true;
+  ++top_builds_;
 }
 
 bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {

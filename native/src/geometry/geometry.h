@@ -53,7 +53,16 @@ class Geometry {
   // Takes a validated mesh (see api/): drops degenerate triangles and reports them in warnings.
   int add_mesh(Mesh mesh, std::vector<std::string>& warnings);
   int add_instance(Instance instance, std::vector<std::string>& warnings);
+  // Moves an instance (also after commit): the next commit rebuilds only the top-level BVH over
+  // the meshes' existing BVHs.
+  void set_instance_transform(int instance, const Transform& xf);
+  // First call: builds every mesh's BVH and the top level; later calls rebuild the top level
+  // if an instance moved, and nothing else.
   void commit();
+  // How often mesh BVHs and the top-level BVH were built (tests and benchmarks of incremental
+  // updates).
+  uint64_t mesh_builds() const { return mesh_builds_; }
+  uint64_t top_builds() const { return top_builds_; }
 
   // Closest hit among instances visible to rays of the given visibility bit.
   bool intersect(const Ray& ray, unsigned visibility, Hit* hit) const;
@@ -78,7 +87,9 @@ class Geometry {
   std::vector<unsigned> instance_visibility_;
   Bounds bounds_;
   bool partial_visibility_ = false;
-  bool committed_ = false;
+  bool committed_ = false, top_dirty_ = false;
+  uint64_t mesh_builds_ = 0, top_builds_ = 0;
+  void build_top();
 };
 
 }  // namespace lt

@@ -53,6 +53,10 @@ Spectrum LightSet::sun_radiance(const Light& l) const {
 
 void LightSet::build(std::vector<Light> lights, const World* world, const Geometry& geometry) {
   lights_ = std::move(lights);
+  hittable_.clear();
+  suns_.clear();
+  triangle_index_.clear();
+  world_light_ = -1;
   Bounds b = geometry.bounds();
   scene_radius_ = b.empty() ? 1.0f : std::max(1e-3f, 0.5f * length(b.hi - b.lo));
   scene_center_ = b.empty() ? Vec3(0.0f) : (b.lo + b.hi) * 0.5f;

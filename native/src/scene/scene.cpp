@@ -11,7 +11,7 @@ void Scene::require_editable() const {
 }
 
 void Scene::commit() {
-  if (committed_) return;
+  if (committed_ && !edited_) return;
   geometry.commit();
   std::vector<Light> all = lamp_lights;
   // Every triangle of an emissive material becomes a light (Cycles' mesh lights).
@@ -60,11 +60,14 @@ void Scene::commit() {
     all.push_back(w);
   }
   lights.build(std::move(all), world_set ? &world : nullptr, geometry);
+  ++light_builds_;
   material_medium.resize(materials.size(), -1);
   material_null.resize(materials.size(), 0);
+  has_boundaries_ = false;
   for (int m : material_medium) has_boundaries_ = has_boundaries_ || m >= 0;
   has_media_ = has_boundaries_ || !global_media.empty();
   committed_ = true;
+  edited_ = false;
 }
 
 }  // namespace lt

@@ -47,15 +47,22 @@ class Scene {
   bool has_media() const { return has_media_; }
   bool has_boundaries() const { return has_boundaries_; }
 
+  // First call: builds the BVHs and the light sampler. After edits that are allowed on a committed
+  // scene (mark_edited: instance transforms, materials, lamps, world, camera), a later call
+  // rebuilds the top-level BVH only if an instance moved, then the light sampler; never a mesh BVH.
   void commit();
   bool committed() const { return committed_; }
+  void mark_edited() { edited_ = true; }
+  bool edited() const { return edited_; }
+  uint64_t light_builds() const { return light_builds_; }
   const Material& material(int id) const {
     return id >= 0 && id < int(materials.size()) ? materials[id] : default_material;
   }
   void require_editable() const;
 
  private:
-  bool committed_ = false;
+  bool committed_ = false, edited_ = false;
+  uint64_t light_builds_ = 0;
   bool has_media_ = false, has_boundaries_ = false;
 };
 
