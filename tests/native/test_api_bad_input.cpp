@@ -602,15 +602,21 @@ TEST(ApiBadInput, RenderBeforeCommitAndEditsAfterCommitAreStateErrors) {
   Xform xf = identity();
   std::copy(xf.begin(), xf.end(), inst.transform);
   EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_instance(s, &inst, &id));
+  // The refused edits changed nothing: the scene renders.
+  Passes p = render(s, rs);
+  EXPECT_EQ(p.first_non_finite(), "");
+  // Lights, camera and world are incremental edits (test_api_incremental.cpp): refused only while
+  // a render of the scene exists.
+  ASSERT_EQ(lt_render_start(s, &rs, &r), LT_OK);
   lt_light_desc l = point_light({0, 0, 1}, 10);
   EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_light(s, &l));
   lt_camera_desc c = perspective_camera(identity());
   EXPECT_FAILS(LT_ERROR_STATE, lt_scene_set_camera(s, &c));
   lt_world_desc w = world({1, 1, 1}, 1);
   EXPECT_FAILS(LT_ERROR_STATE, lt_scene_set_world(s, &w));
-  // The refused edits changed nothing: the scene renders.
-  Passes p = render(s, rs);
-  EXPECT_EQ(p.first_non_finite(), "");
+  ASSERT_EQ(lt_render_wait(r), LT_OK);
+  lt_render_destroy(r);
+  EXPECT_EQ(lt_scene_add_light(s, &l), LT_OK);
 }
 
 TEST(ApiBadInput, ReadPassWithAWrongBufferSize) {
