@@ -3,10 +3,15 @@
 import time
 
 import bpy
+import gpu
 import numpy as np
+from gpu_extras.presets import draw_texture_2d
 
 from . import core
 from .export import export_scene
+from .viewport import ViewportSession, view_camera
+
+REDRAW_SECONDS = 0.05      # while a viewport refines, it is redrawn this often
 
 POLL_SECONDS = 0.05        # test_break() and status poll period: cancel acts well within 0.5 s
 MIN_UPDATE_SECONDS = 0.2   # progressive image updates at most 5 times a second...
@@ -290,10 +295,22 @@ class _PassWriter:
 class LanternRenderEngine(bpy.types.RenderEngine):
     bl_idname = 'LANTERN'
     bl_label = 'Lantern'
-    bl_use_preview = False
+    bl_use_preview = True                # material previews render through render()
     bl_use_postprocess = True
     bl_use_shading_nodes_custom = False  # edit materials with Blender's shader nodes
     bl_use_eevee_viewport = True         # Material Preview shading uses EEVEE
+
+    def __init__(self):
+        self.session = None
+        self._texture = None
+        self._texture_version = -1
+
+    def __del__(self):
+        # Blender frees a viewport's engine when the shading mode changes or the view closes.
+        session = getattr(self, "session", None)
+        if session is not None:
+            _REFINING.discard(session)
+            session.close()
 
     def update_render_passes(self, scene=None, renderlayer=None):
         for name, _, channels, chan_id, kind, _ in enabled_passes(renderlayer):
@@ -414,6 +431,75 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                     self.update_progress(st.samples_done / st.samples_total)
                 cost = time.monotonic() - now
                 next_update = time.monotonic() + max(MIN_UPDATE_SECONDS, UPDATE_COST_FACTOR * cost)
+
+    # ---- viewport ------------------------------------------------------------------------------
+
+    def view_update(self, context, depsgraph):
+        if self.session is None:
+            self.session = ViewportSession(self.report)
+        self.session.sync(depsgraph)
+        self.tag_redraw()
+
+    def view_draw(self, context, depsgraph):
+        session = self.session
+        if session is None:
+            return
+        region = context.region
+        scene = depsgraph.scene
+        width, height = region.width, region.height
+        try:
+            session.set_view(view_camera(context.region_data, width, height), width, height)
+            settings = render_settings(scene, width, height, [0, 0, 0, 0])
+            settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
+            refining = session.update(settings)
+        except core.LanternError as e:
+            session.error = str(e)
+            refining = False
+        if refining:
+            _REFINING.add(session)
+            _REFINING_ENGINES[session] = self
+            if not bpy.app.timers.is_registered(_redraw_refining):
+                bpy.app.timers.register(_redraw_refining, first_interval=REDRAW_SECONDS)
+        else:
+            _REFINING.discard(session)
+            _REFINING_ENGINES.pop(session, None)  # no reference that would keep a freed engine
+        if session.error:
+            self.update_stats("", "Lantern: " + session.error)
+        else:
+            done, total = session.samples
+            self.update_stats("", "Sample %d/%d" % (done, total) if done else "Rendering")
+        if session.pixels is None:
+            return
+        if self._texture is None or self._texture_version != session.version:
+            h, w, _ = session.pixels.shape
+            data = gpu.types.Buffer('FLOAT', w * h * 4, session.pixels.ravel())
+            self._texture = gpu.types.GPUTexture((w, h), format='RGBA16F', data=data)
+            self._texture_version = session.version
+        gpu.state.blend_set('ALPHA_PREMULT')
+        self.bind_display_space_shader(scene)
+        draw_texture_2d(self._texture, (0, 0), width, height)  # a low-resolution stage is stretched
+        self.unbind_display_space_shader()
+        gpu.state.blend_set('NONE')
+
+
+# Viewport sessions that are still refining and their engines: a timer asks them to redraw
+# (the native render never calls back into Python).
+_REFINING = set()
+_REFINING_ENGINES = {}
+
+
+def _redraw_refining():
+    for session in list(_REFINING_ENGINES):
+        if session not in _REFINING:
+            del _REFINING_ENGINES[session]
+            continue
+        try:
+            _REFINING_ENGINES[session].tag_redraw()
+        except ReferenceError:  # the engine was freed while its render refined: stop it
+            _REFINING.discard(session)
+            del _REFINING_ENGINES[session]
+            session.close()
+    return REDRAW_SECONDS if _REFINING_ENGINES else None
 
 
 @bpy.app.handlers.persistent

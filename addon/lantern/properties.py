@@ -40,6 +40,12 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
                     "from too few samples (fireflies not yet seen)",
         default=16, min=1, max=1 << 24, soft_max=1024,
     )
+    viewport_samples: IntProperty(
+        name="Viewport Samples",
+        description="Samples per pixel the viewport refines to before it stops: more give a "
+                    "cleaner preview but keep the CPU busy longer after each change",
+        default=32, min=1, max=1 << 24, soft_max=4096,
+    )
     seed: IntProperty(
         name="Seed",
         description="Seed of the random numbers: renders with different seeds have independent "

@@ -47,7 +47,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
     report(level_set, message) receives warnings, like RenderEngine.report. camera_object
     overrides the scene camera (RenderEngine.camera_override); None with state given: no camera
     (the viewport sets its own). state, a dict, receives what viewport updates need: the
-    material exporter and the core instance id of each mesh instance by instance_key.
+    material exporter and each mesh instance's (core instance id, matrix) by instance_key.
     """
     report = _deduplicating(report)
     summary = {}
@@ -66,7 +66,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
     # Curves, surfaces, text and metaballs come as their object and, since Blender 3.0, as a
     # MESH instance of their evaluated geometry: export the latter, convert only if it is absent.
     deferred = []
-    instances = {}  # instance_key -> core instance id (None: no geometry)
+    instances = {}  # instance_key -> (core instance id or None for no geometry, matrix)
     has_mesh_instance = set()
     for inst in depsgraph.object_instances:
         if not inst.show_self:  # e.g. a particle emitter set not to render itself
@@ -80,10 +80,11 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
         if t == 'MESH':
             if inst.is_instance and inst.parent is not None and inst.parent.type in CONVERTIBLE_TYPES:
                 has_mesh_instance.add(inst.parent.original.as_pointer())
-            instances[instance_key(inst)] = meshes.export_instance(obj, matrix)
+            instances[instance_key(inst)] = (meshes.export_instance(obj, matrix), matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
-                instances[instance_key(inst)] = meshes.export_instance(obj, matrix, warn_empty=False)
+                instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False),
+                                                  matrix)
             else:
                 deferred.append((obj, matrix, instance_key(inst)))
         elif t == 'LIGHT':
@@ -98,7 +99,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
                    % (t, obj.name))
     for obj, matrix, key in deferred:
         if obj.original.as_pointer() not in has_mesh_instance:
-            instances[key] = meshes.export_instance(obj, matrix, warn_empty=False)  # e.g. a curve without bevel
+            # e.g. a curve without bevel
+            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False), matrix)
     if state is not None:
         state.update(materials=materials, instances=instances)
 

@@ -250,15 +250,13 @@ void RenderJob::run() {
           if (pass_samples_.load() == active_pixels_.load()) samples_done_.store(s + 1);
           break;
         }
-        samples_done_.store(s + 1);
         const ErrorEstimate e = film_.error_estimate();
         rel_error_.store(e.rel_error);
+        bool reached = false;
         if (settings_.noise_target > 0 && s + 1 >= settings_.min_samples && e.rel_error >= 0) {
-          if (e.rel_error <= settings_.noise_target) {
-            halt = HaltReason::NoiseTarget;
-            break;
-          }
-          if (settings_.adaptive) update_active(e);
+          reached = e.rel_error <= settings_.noise_target;
+          if (reached) halt = HaltReason::NoiseTarget;
+          else if (settings_.adaptive) update_active(e);
         }
         auto now = std::chrono::steady_clock::now();
         // Also after passes 1, 2, 4, 8, ...: early passes change the image most, and the viewport
@@ -268,6 +266,8 @@ void RenderJob::run() {
           film_.publish();
           last_publish = now;
         }
+        samples_done_.store(s + 1);  // after publishing: a reader that sees pass 1 done can read it
+        if (reached) break;
       }
     });
     film_.publish();

@@ -1,0 +1,273 @@
+"""Viewport rendering without Blender's GPU: the viewport's camera, and a session that keeps one
+core scene per viewport, applies depsgraph edits to it incrementally and refines progressively.
+
+Edits and what they cost (lantern.h, incremental edits):
+  object moved (transform)        new instance transforms, top-level BVH only; no mesh export
+  material edited                 that material's nodes, light sampler only; no BVH
+  light edited or moved           the lamps again, light sampler only; no BVH
+  camera / view moved, resized    nothing in the scene: a new render
+  render settings changed         a new render
+  geometry, world, anything else  a new scene (full export)
+"""
+
+import time
+import weakref
+
+import bpy
+import numpy as np
+
+from . import core
+from .export import export_lights, export_scene, instance_key
+
+# Progressive stages after each change: a first pass at 1/START_DIVIDER of the resolution in
+# each direction (16x fewer pixels: a first image within a few tens of ms), then the full
+# resolution up to the viewport's sample count.
+START_DIVIDER = 4
+HALF_FLOAT_MAX = 65504.0  # larger values would become Inf in the RGBA16F texture
+
+_GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
+_TRACED_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
+
+
+def view_camera(region_data, width, height):
+    """set_camera keywords for what a 3D view region shows, from its projection and view
+    matrices (this covers perspective, orthographic and camera views with zoom and offset).
+
+    With sensor fit Horizontal and a 36 mm sensor, Lantern's view plane at unit distance spans
+    x in [(shift_x - 1/2) 36/f, (shift_x + 1/2) 36/f]; an OpenGL projection P maps it to
+    [(P02 - 1)/P00, (P02 + 1)/P00], hence f = 18 P00 and shift_x = P02 / 2 (orthographic:
+    ortho_scale = 2/P00, shift_x = -P03/2); shift_y is in the same units (of the width).
+    """
+    P = np.array(region_data.window_matrix, dtype=np.float64)
+    to_world = np.linalg.inv(np.array(region_data.view_matrix, dtype=np.float64))
+    kw = dict(sensor_width=36.0, sensor_height=36.0 * height / max(width, 1),
+              sensor_fit=core.SENSOR_HORIZONTAL)
+    if region_data.is_perspective:
+        near = P[2, 3] / (P[2, 2] - 1.0)
+        far = P[2, 3] / (P[2, 2] + 1.0)
+        kw.update(type=core.CAMERA_PERSPECTIVE, focal_length=18.0 * P[0, 0],
+                  shift_x=0.5 * P[0, 2], shift_y=0.5 * P[1, 2] * P[0, 0] / P[1, 1],
+                  clip_start=max(near, 1e-6), clip_end=far)
+    else:
+        near = (P[2, 3] + 1.0) / P[2, 2]
+        far = (P[2, 3] - 1.0) / P[2, 2]
+        # Orthographic views clip behind their origin (negative near): move the origin back.
+        z = to_world[:3, 2] / np.linalg.norm(to_world[:3, 2])
+        to_world[:3, 3] += z * (-near)
+        kw.update(type=core.CAMERA_ORTHOGRAPHIC, ortho_scale=2.0 / P[0, 0],
+                  shift_x=-0.5 * P[0, 3], shift_y=-0.5 * P[1, 3] * P[0, 0] / P[1, 1],
+                  clip_start=0.0, clip_end=far - near)
+    kw["transform"] = to_world[:3].astype(np.float32)
+    return kw
+
+
+def _same_camera(a, b):
+    if a is None or b is None or a.keys() != b.keys():
+        return False
+    return all(np.array_equal(a[k], b[k]) if isinstance(a[k], np.ndarray) else a[k] == b[k]
+               for k in a)
+
+
+# Every live session, for tests and benchmarks that drive a real viewport.
+SESSIONS = weakref.WeakSet()
+
+
+class ViewportSession:
+    """One viewport's core scene and its progressive render. Not thread-bound: call from
+    view_update / view_draw (Blender's main thread)."""
+
+    def __init__(self, report):
+        SESSIONS.add(self)
+        self.report = report
+        self.scene = None
+        self.state = {}
+        self.render = None
+        self.stage = 0
+        self.camera = None
+        self.size = (0, 0)
+        self.settings_key = None
+        self.dirty = True          # the render must (re)start
+        self.error = None
+        self.pixels = None         # latest Combined image, (h, w, 4) float32, rows bottom to top
+        self.version = 0           # bumps whenever pixels change
+        self.samples = (0, 0)      # (done, total) of the displayed stage
+        self._shown = None         # (render serial, samples done) the pixels come from
+        self.changed_at = time.monotonic()
+        self.first_image_seconds = None   # from the last change to the first image of it
+        # What each kind of update did (tests and benchmarks read these).
+        self.counters = dict(full_exports=0, transform_updates=0, material_updates=0,
+                             light_updates=0, restarts=0)
+
+    # -- scene ---------------------------------------------------------------------------------
+
+    def sync(self, depsgraph):
+        """Brings the core scene up to date with the depsgraph (view_update)."""
+        try:
+            if self.scene is None or not self._incremental(depsgraph):
+                self._full_export(depsgraph)
+            self.error = None
+        except core.LanternError as e:
+            self.error = str(e)
+            self.report({'ERROR'}, self.error)
+            self._close_scene()
+
+    def _full_export(self, depsgraph):
+        self._close_scene()
+        self.scene = core.Scene()
+        self.state = {}
+        export_scene(depsgraph, self.scene, self.report, state=self.state)
+        self.scene.commit()
+        self.counters["full_exports"] += 1
+        self.camera = None  # the new scene has none yet
+        self._changed()
+
+    def _incremental(self, depsgraph):
+        """Applies the depsgraph's updates in place; False when they need a new scene."""
+        transforms = lights = False
+        materials = []
+        settings = False
+        for u in depsgraph.updates:
+            idb = u.id
+            if isinstance(idb, bpy.types.Object):
+                if u.is_updated_geometry and idb.type in _TRACED_TYPES | {'VOLUME'}:
+                    return False
+                if u.is_updated_transform:
+                    transforms = True
+                    lights = lights or idb.type == 'LIGHT'
+            elif isinstance(idb, bpy.types.Material):
+                materials.append(idb)
+            elif isinstance(idb, bpy.types.Light):
+                lights = True
+            elif isinstance(idb, bpy.types.Scene):
+                settings = True
+            elif isinstance(idb, bpy.types.ShaderNodeTree):
+                # A node group (or an embedded tree) changed: re-translate every material.
+                materials.extend(m for m in bpy.data.materials if m.node_tree is not None)
+            elif isinstance(idb, (bpy.types.World, bpy.types.Image, bpy.types.Collection)
+                            + _GEOMETRY_TYPES):
+                return False
+        if not (transforms or lights or materials or settings):
+            return True
+        self._stop()
+        if transforms and not self._update_transforms(depsgraph):
+            return False
+        exporter = self.state["materials"]
+        for m in materials:
+            if m.original.as_pointer() in exporter.ids and not exporter.update(m):
+                return False
+        if materials:
+            self.counters["material_updates"] += 1
+        if lights:
+            self.scene.clear_lights()
+            export_lights(depsgraph, self.scene, self.report)
+            self.counters["light_updates"] += 1
+        self.scene.commit()
+        self._changed()
+        return True
+
+    def _update_transforms(self, depsgraph):
+        instances = self.state["instances"]
+        seen = 0
+        moved = False
+        for inst in depsgraph.object_instances:
+            if not inst.show_self or inst.object.type not in _TRACED_TYPES:
+                continue
+            key = instance_key(inst)
+            entry = instances.get(key)
+            if entry is None:
+                if inst.object.type == 'MESH':
+                    return False  # an instance that was not exported: a new scene
+                continue
+            seen += 1
+            core_id, old = entry
+            matrix = np.array(inst.matrix_world, dtype=np.float32)
+            if core_id is not None and not np.array_equal(matrix, old):
+                self.scene.set_instance_transform(core_id, matrix)
+                instances[key] = (core_id, matrix)
+                moved = True
+        if seen != len(instances):
+            return False  # an exported instance is gone
+        if moved:
+            self.counters["transform_updates"] += 1
+        return True
+
+    # -- view and render -----------------------------------------------------------------------
+
+    def set_view(self, camera, width, height):
+        """The region's camera and size (view_draw); restarts the render when they change."""
+        if self.scene is None:
+            return
+        if (width, height) != self.size or not _same_camera(camera, self.camera):
+            self._stop()
+            self.scene.set_camera(**camera)
+            self.camera = camera
+            self.size = (width, height)
+            self._changed()
+
+    def _changed(self):
+        self.dirty = True
+        self.changed_at = time.monotonic()
+        self.first_image_seconds = None
+
+    def update(self, settings):
+        """Starts or advances the progressive render and picks up its newest image. settings:
+        render_settings keywords for the full viewport (width, height, samples, ...). Returns
+        True while the render is refining (the caller keeps redrawing)."""
+        if self.scene is None or self.size[0] <= 0 or self.size[1] <= 0:
+            return False
+        key = tuple(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in settings.items()))
+        if key != self.settings_key:
+            self.settings_key = key
+            self._stop()
+            self.dirty = True
+        if self.dirty:
+            self.dirty = False
+            self.stage = 0 if min(self.size) >= 4 * START_DIVIDER else 1
+            self._start(settings)
+        st = self.render.poll()
+        if st.samples_done > 0 and self._shown != (self.counters["restarts"], st.samples_done):
+            self._read(st)
+        if st.state != core.STATE_RUNNING and self.stage == 0:
+            self.stage = 1
+            self._start(settings)
+            return True
+        if st.state == core.STATE_FAILED:
+            self.error = "Lantern viewport render failed"
+        return st.state == core.STATE_RUNNING
+
+    def _start(self, settings):
+        self._stop()
+        s = dict(settings)
+        if self.stage == 0:
+            s.update(width=max(1, s["width"] // START_DIVIDER), height=max(1, s["height"] // START_DIVIDER),
+                     samples=1)
+        self.render = core.Render(self.scene, s).start()
+        self.counters["restarts"] += 1
+
+    def _read(self, st):
+        w, h = self.render.region_size
+        buf = self.render.read_pass(core.PASS_COMBINED).reshape(h, w, 4)
+        np.minimum(buf, HALF_FLOAT_MAX, out=buf)
+        self.pixels = buf
+        self.version += 1
+        self.samples = (st.samples_done, st.samples_total)
+        self._shown = (self.counters["restarts"], st.samples_done)
+        if self.first_image_seconds is None:
+            self.first_image_seconds = time.monotonic() - self.changed_at
+
+    def _stop(self):
+        if self.render is not None:
+            self.render.close()
+            self.render = None
+            self._shown = None
+
+    def _close_scene(self):
+        self._stop()
+        if self.scene is not None:
+            self.scene.close()
+            self.scene = None
+        self.dirty = True
+
+    def close(self):
+        self._close_scene()
+        self.pixels = None
