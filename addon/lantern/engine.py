@@ -307,9 +307,15 @@ class LanternRenderEngine(bpy.types.RenderEngine):
 
     def __del__(self):
         # Blender frees a viewport's engine when the shading mode changes or the view closes.
-        session = getattr(self, "session", None)
+        # If the engine's data is already gone, the session's core objects free themselves
+        # (core.Scene / core.Render __del__) once nothing refers to them.
+        try:
+            session = self.session
+        except (AttributeError, ReferenceError):
+            return
         if session is not None:
             _REFINING.discard(session)
+            _REFINING_ENGINES.pop(session, None)
             session.close()
 
     def update_render_passes(self, scene=None, renderlayer=None):
@@ -345,7 +351,10 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                        "Volumetric Path integrator renders: the %s integrator ignores them"
                        % (summary["media"], scene.lantern.integrator.title()))
 
-            render = core.Render(core_scene, render_settings(scene, width, height, border))
+            settings = render_settings(scene, width, height, border)
+            if self.is_preview:  # material preview: small, few samples, no debug views
+                settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
+            render = core.Render(core_scene, settings)
             render.start()
             st = self._progress(render, view_layer, border)
             rw, rh = render.region_size
@@ -392,7 +401,8 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             for key, value in metadata.items():
                 final.stamp_data_add_field(key, value)
             LAST_RENDER.clear()
-            LAST_RENDER.update(stats=st, settings=render.settings, metadata=metadata)
+            LAST_RENDER.update(stats=st, settings=render.settings, metadata=metadata,
+                               preview=self.is_preview)
             if render.settings.strategy_view_depth > 0:
                 # bpy.data must not be touched from the render thread: the image is made on the
                 # main thread by a timer.

@@ -4,6 +4,32 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 
+# Built-in presets: (label, tooltip, values). Bounce limits and clamping trade accuracy (energy
+# of long paths, bias from clamping) for speed; samples trade noise for time.
+PRESETS = {
+    'PREVIEW': ("Preview", "Fast and noisy, biased: few samples, short paths, indirect light "
+                           "clamped at 10 (for looking around a scene)",
+                dict(samples=16, viewport_samples=8, max_bounces=4, diffuse_bounces=2,
+                     glossy_bounces=2, transmission_bounces=4, transparent_bounces=4,
+                     volume_bounces=0, clamp_direct=0.0, clamp_indirect=10.0)),
+    'FINAL': ("Final", "Cycles' defaults: 256 samples, Cycles' bounce limits and its indirect "
+                       "clamp of 10 (slightly biased, few fireflies)",
+              dict(samples=256, viewport_samples=32, max_bounces=12, diffuse_bounces=4,
+                   glossy_bounces=4, transmission_bounces=12, transparent_bounces=8,
+                   volume_bounces=0, clamp_direct=0.0, clamp_indirect=10.0)),
+    'REFERENCE': ("Reference", "Slow and unbiased: 4096 samples, long paths and no clamping (for "
+                               "ground truth and comparisons)",
+                  dict(samples=4096, viewport_samples=64, max_bounces=64, diffuse_bounces=64,
+                       glossy_bounces=64, transmission_bounces=64, transparent_bounces=64,
+                       volume_bounces=16, clamp_direct=0.0, clamp_indirect=0.0)),
+}
+
+
+def apply_preset(settings, key):
+    for name, value in PRESETS[key][2].items():
+        setattr(settings, name, value)
+
+
 class LanternRenderSettings(bpy.types.PropertyGroup):
     samples: IntProperty(
         name="Samples",
@@ -49,7 +75,8 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
     seed: IntProperty(
         name="Seed",
         description="Seed of the random numbers: renders with different seeds have independent "
-                    "noise and can be averaged",
+                    "noise and can be averaged (costs nothing; the same seed repeats the same "
+                    "noise exactly)",
         default=0, min=0,
     )
     sample_offset: IntProperty(
@@ -62,7 +89,8 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
     )
     integrator: EnumProperty(
         name="Integrator",
-        description="Light transport algorithm",
+        description="Light transport algorithm: what it costs per sample against how fast its "
+                    "noise falls in hard lighting",
         items=[
             ("PATH", "Path Tracing",
              "Unidirectional path tracing with next event estimation and multiple importance "
@@ -84,7 +112,7 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
     max_camera_length: IntProperty(
         name="Max Camera Path Length",
         description="Bidirectional: vertices of the camera subpath after the camera (the total "
-                    "bounce limit also applies)",
+                    "bounce limit also applies); shorter is faster but loses long paths",
         default=64, min=1, max=1024,
     )
     max_light_length: IntProperty(
@@ -103,7 +131,8 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
     )
     mis_heuristic: EnumProperty(
         name="MIS Heuristic",
-        description="Bidirectional: how the connection strategies are weighted",
+        description="Bidirectional: how the connection strategies are weighted; all are "
+                    "unbiased, they differ only in noise",
         items=[
             ("POWER", "Power", "Veach's power heuristic (exponent 2): the lowest noise in practice"),
             ("BALANCE", "Balance", "Veach's balance heuristic"),
@@ -157,8 +186,8 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
     )
     volume_estimator: EnumProperty(
         name="Volume Estimator",
-        description="How heterogeneous volumes (VDB grids) are sampled; homogeneous volumes are "
-                    "always exact",
+        description="How heterogeneous volumes (VDB grids) are sampled, trading bias for noise; "
+                    "homogeneous volumes are always exact",
         items=[
             ("RAY_MARCHING", "Ray Marching",
              "Fixed steps of the Step Size: deterministic transmittance, biased by the step"),
@@ -169,13 +198,15 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
     )
     volume_step: FloatProperty(
         name="Step Size",
-        description="Ray-marching step in world units; 0 uses each grid's voxel size",
+        description="Ray-marching step in world units; 0 uses each grid's voxel size. Smaller "
+                    "steps are less biased but slower",
         default=0.0, min=0.0, subtype='DISTANCE',
     )
     volume_bounces: IntProperty(
         name="Volume",
         description="Maximum number of volume scattering bounces (Cycles' default 0 is single "
-                    "scattering: direct light only inside volumes)",
+                    "scattering: direct light only inside volumes); more is brighter, more "
+                    "accurate in dense media and slower",
         default=0, min=0, max=1024,
     )
     threads: IntProperty(

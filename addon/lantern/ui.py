@@ -1,7 +1,10 @@
 """Lantern's panels, laid out like Cycles', and Lantern's entry in Blender's standard panels."""
 
 import bpy
-from bpy.types import Panel
+from bpy.props import EnumProperty
+from bpy.types import Menu, Operator, Panel
+
+from .properties import PRESETS, apply_preset
 
 ENGINE = 'LANTERN'
 
@@ -17,35 +20,110 @@ class LanternButtonsPanel:
         return context.engine in cls.COMPAT_ENGINES
 
 
+# ---- presets -------------------------------------------------------------------------------------
+
+class LANTERN_MT_presets(Menu):
+    """Lantern's built-in presets (properties.PRESETS), like Cycles' sampling presets menu."""
+    bl_label = "Presets"
+
+    def draw(self, context):
+        layout = self.layout
+        for key, (label, description, _values) in PRESETS.items():
+            op = layout.operator("lantern.apply_preset", text=label)
+            op.preset = key
+
+
+class LANTERN_OT_apply_preset(Operator):
+    """Set samples, bounces and clamping for a speed/accuracy trade"""
+    bl_idname = "lantern.apply_preset"
+    bl_label = "Apply Lantern Preset"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    preset: EnumProperty(items=[(k, v[0], v[1]) for k, v in PRESETS.items()])
+
+    @classmethod
+    def description(cls, context, properties):
+        return PRESETS[properties.preset][1]
+
+    def execute(self, context):
+        apply_preset(context.scene.lantern, self.preset)
+        return {'FINISHED'}
+
+
+def _split(layout):
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    return layout
+
+
 # ---- render properties ---------------------------------------------------------------------------
 
 class LANTERN_RENDER_PT_sampling(LanternButtonsPanel, Panel):
     bl_label = "Sampling"
 
-    def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
-        settings = context.scene.lantern
+    def draw_header_preset(self, context):
+        self.layout.menu("LANTERN_MT_presets", text="", icon='PRESET')
 
+    def draw(self, context):
+        _split(self.layout).prop(context.scene.lantern, "integrator")
+
+
+class LANTERN_RENDER_PT_sampling_viewport(LanternButtonsPanel, Panel):
+    bl_label = "Viewport"
+    bl_parent_id = "LANTERN_RENDER_PT_sampling"
+
+    def draw(self, context):
+        _split(self.layout).prop(context.scene.lantern, "viewport_samples", text="Samples")
+
+
+class LANTERN_RENDER_PT_sampling_render(LanternButtonsPanel, Panel):
+    bl_label = "Render"
+    bl_parent_id = "LANTERN_RENDER_PT_sampling"
+
+    def draw(self, context):
+        layout = _split(self.layout)
+        settings = context.scene.lantern
+        adaptive = settings.noise_target > 0
+        # As Cycles' Render sub-panel: the noise target, then max/min samples, then the time limit.
+        layout.prop(settings, "noise_target")
         col = layout.column(align=True)
-        col.prop(settings, "integrator")
-        if settings.integrator == 'BIDIRECTIONAL':
-            col = layout.column(align=True)
-            col.prop(settings, "max_camera_length", text="Max Camera Length")
-            col.prop(settings, "max_light_length", text="Max Light Length")
-            col.prop(settings, "mis_heuristic")
-            col.prop(settings, "strategy_view_depth")
-        col = layout.column(align=True)
-        col.prop(settings, "samples")
-        col.prop(settings, "time_limit")
-        col.prop(settings, "noise_target")
+        col.prop(settings, "samples", text="Max Samples" if adaptive else "Samples")
         sub = col.column(align=True)
-        sub.active = settings.noise_target > 0
-        sub.prop(settings, "adaptive")
+        sub.active = adaptive
         sub.prop(settings, "min_samples")
-        col.prop(settings, "seed")
-        col.prop(settings, "sample_offset")
+        layout.prop(settings, "time_limit")
+        sub = layout.column()
+        sub.active = adaptive
+        sub.prop(settings, "adaptive")
+
+
+class LANTERN_RENDER_PT_sampling_bidirectional(LanternButtonsPanel, Panel):
+    bl_label = "Bidirectional"
+    bl_parent_id = "LANTERN_RENDER_PT_sampling"
+
+    @classmethod
+    def poll(cls, context):
+        return super().poll(context) and context.scene.lantern.integrator == 'BIDIRECTIONAL'
+
+    def draw(self, context):
+        settings = context.scene.lantern
+        col = _split(self.layout).column(align=True)
+        col.prop(settings, "max_camera_length", text="Max Camera Length")
+        col.prop(settings, "max_light_length", text="Max Light Length")
+        col = self.layout.column()
+        col.prop(settings, "mis_heuristic")
+        col.prop(settings, "strategy_view_depth")
+
+
+class LANTERN_RENDER_PT_sampling_advanced(LanternButtonsPanel, Panel):
+    bl_label = "Advanced"
+    bl_parent_id = "LANTERN_RENDER_PT_sampling"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        col = _split(self.layout).column(align=True)
+        col.prop(context.scene.lantern, "seed")
+        col.prop(context.scene.lantern, "sample_offset")
 
 
 class LANTERN_RENDER_PT_light_paths(LanternButtonsPanel, Panel):
@@ -61,9 +139,7 @@ class LANTERN_RENDER_PT_light_paths_max_bounces(LanternButtonsPanel, Panel):
     bl_parent_id = "LANTERN_RENDER_PT_light_paths"
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _split(self.layout)
         settings = context.scene.lantern
 
         col = layout.column(align=True)
@@ -73,10 +149,10 @@ class LANTERN_RENDER_PT_light_paths_max_bounces(LanternButtonsPanel, Panel):
         col.prop(settings, "diffuse_bounces", text="Diffuse")
         col.prop(settings, "glossy_bounces", text="Glossy")
         col.prop(settings, "transmission_bounces", text="Transmission")
+        col.prop(settings, "volume_bounces", text="Volume")
 
         col = layout.column(align=True)
         col.prop(settings, "transparent_bounces", text="Transparent")
-        col.prop(settings, "volume_bounces", text="Volume")
 
 
 class LANTERN_RENDER_PT_light_paths_clamping(LanternButtonsPanel, Panel):
@@ -84,12 +160,8 @@ class LANTERN_RENDER_PT_light_paths_clamping(LanternButtonsPanel, Panel):
     bl_parent_id = "LANTERN_RENDER_PT_light_paths"
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
         settings = context.scene.lantern
-
-        col = layout.column(align=True)
+        col = _split(self.layout).column(align=True)
         col.prop(settings, "clamp_direct", text="Direct Light")
         col.prop(settings, "clamp_indirect", text="Indirect Light")
 
@@ -99,16 +171,12 @@ class LANTERN_RENDER_PT_volumes(LanternButtonsPanel, Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
         settings = context.scene.lantern
-        col = layout.column(align=True)
+        col = _split(self.layout).column(align=True)
         col.prop(settings, "volume_estimator", text="Estimator")
         sub = col.column(align=True)
         sub.active = settings.volume_estimator == 'RAY_MARCHING' or settings.integrator == 'VOLUME_DEBUG'
         sub.prop(settings, "volume_step", text="Step Size")
-        col.prop(settings, "volume_bounces", text="Max Bounces")
 
 
 class LANTERN_RENDER_PT_film(LanternButtonsPanel, Panel):
@@ -116,23 +184,37 @@ class LANTERN_RENDER_PT_film(LanternButtonsPanel, Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
-        scene = context.scene
+        pass
 
-        col = layout.column()
-        col.prop(scene.render, "film_transparent", text="Transparent")
 
+class LANTERN_RENDER_PT_film_transparency(LanternButtonsPanel, Panel):
+    bl_label = "Transparent"
+    bl_parent_id = "LANTERN_RENDER_PT_film"
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.render, "film_transparent", text="")
+
+    def draw(self, context):
+        layout = _split(self.layout)
+        layout.active = context.scene.render.film_transparent
+        layout.label(text="The world seen directly gets alpha 0; it still lights the scene")
+
+
+class LANTERN_RENDER_PT_film_pixel_filter(LanternButtonsPanel, Panel):
+    bl_label = "Pixel Filter"
+    bl_parent_id = "LANTERN_RENDER_PT_film"
+
+    def draw(self, context):
+        layout = _split(self.layout)
         # Lantern uses Cycles' pixel filter settings so both engines render a scene alike.
-        cscene = getattr(scene, "cycles", None)
-        if cscene is not None:
-            col = layout.column()
-            col.prop(cscene, "pixel_filter_type", text="Pixel Filter")
-            if cscene.pixel_filter_type != 'BOX':
-                col.prop(cscene, "filter_width", text="Width")
-        else:
-            layout.label(text="Pixel filter: Blackman-Harris, 1.5 px")
+        cscene = getattr(context.scene, "cycles", None)
+        if cscene is None:
+            layout.label(text="Blackman-Harris, 1.5 px (enable Cycles to change it)")
+            return
+        col = layout.column()
+        col.prop(cscene, "pixel_filter_type", text="Type")
+        if cscene.pixel_filter_type != 'BOX':
+            col.prop(cscene, "filter_width", text="Width")
 
 
 class LANTERN_RENDER_PT_performance(LanternButtonsPanel, Panel):
@@ -140,10 +222,15 @@ class LANTERN_RENDER_PT_performance(LanternButtonsPanel, Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
-        layout.prop(context.scene.lantern, "threads")
+        pass
+
+
+class LANTERN_RENDER_PT_performance_threads(LanternButtonsPanel, Panel):
+    bl_label = "Threads"
+    bl_parent_id = "LANTERN_RENDER_PT_performance"
+
+    def draw(self, context):
+        _split(self.layout).prop(context.scene.lantern, "threads")
 
 
 # ---- view layer --------------------------------------------------------------------------------
@@ -292,13 +379,22 @@ class LANTERN_WORLD_PT_ray_visibility(LanternButtonsPanel, Panel):
 
 
 classes = (
+    LANTERN_MT_presets,
+    LANTERN_OT_apply_preset,
     LANTERN_RENDER_PT_sampling,
+    LANTERN_RENDER_PT_sampling_viewport,
+    LANTERN_RENDER_PT_sampling_render,
+    LANTERN_RENDER_PT_sampling_bidirectional,
+    LANTERN_RENDER_PT_sampling_advanced,
     LANTERN_RENDER_PT_light_paths,
     LANTERN_RENDER_PT_light_paths_max_bounces,
     LANTERN_RENDER_PT_light_paths_clamping,
     LANTERN_RENDER_PT_volumes,
     LANTERN_RENDER_PT_film,
+    LANTERN_RENDER_PT_film_transparency,
+    LANTERN_RENDER_PT_film_pixel_filter,
     LANTERN_RENDER_PT_performance,
+    LANTERN_RENDER_PT_performance_threads,
     LANTERN_VIEWLAYER_PT_passes,
     LANTERN_OBJECT_PT_visibility,
     LANTERN_LIGHT_PT_light,
@@ -317,13 +413,13 @@ _EXCLUDED_PANELS = {
     "DATA_PT_falloff_curve",  # light falloff curves are not used by Lantern
     "OBJECT_PT_visibility",   # LANTERN_OBJECT_PT_visibility adds ray visibility
     "DATA_PT_preview",
-    "MATERIAL_PT_preview",
 }
 # Engine-agnostic panels that do not list 'BLENDER_RENDER'.
 _EXTRA_PANELS = {
     "EEVEE_MATERIAL_PT_context_material",  # material slots
     "DATA_PT_spot",                         # spot size and blend
     "RENDER_PT_color_management",
+    "MATERIAL_PT_preview",                  # Lantern renders material previews (bl_use_preview)
 }
 
 _patched = []

@@ -172,20 +172,23 @@ def steps():
     scene.lantern.max_bounces = 12
 
     # Material preview: the Material tab renders its preview through render() (is_preview).
+    engine = lantern.engine
+    engine.LAST_RENDER.clear()
     bpy.context.view_layer.objects.active = box
     box.select_set(True)
     yield 0.5
     props.spaces[0].context = 'MATERIAL'
     yield 3.0
-    yield from wait_until("material preview", lambda: mat.preview is not None and
-                          np.asarray(mat.preview.image_pixels_float[:]).max() > 0.0, 60)
-    prev = np.asarray(mat.preview.image_pixels_float[:], dtype=np.float32)
-    size = mat.preview.image_size
-    RESULT["preview"] = image_stats(prev.reshape(size[1], size[0], 4))
-    RESULT["material_panel"] = image_stats(screenshot("material_preview"))
+    yield from wait_until("material preview", lambda: engine.LAST_RENDER.get("preview"), 60)
+    st = engine.LAST_RENDER["stats"]
+    RESULT["preview"] = dict(samples_done=st.samples_done, samples_total=st.samples_total,
+                             state=st.state)
+    yield 1.0
+    screenshot("material_preview")
 
-    # F12: the render opens in a new window; wait for render_complete.
+    # F12: the render shows in an Image Editor in the main window; wait for render_complete.
     props.spaces[0].context = 'RENDER'
+    bpy.context.preferences.view.render_display_type = 'AREA'
     done = []
     bpy.app.handlers.render_complete.append(lambda *a: done.append(True))
     space.shading.type = 'SOLID'  # leave the CPU to the final render
@@ -193,11 +196,13 @@ def steps():
         bpy.ops.render.render('INVOKE_DEFAULT')
     yield from wait_until("F12 render", lambda: bool(done), 120)
     yield 1.0
-    windows = bpy.context.window_manager.windows
-    render_win = windows[len(windows) - 1]
-    editor = next(a for a in render_win.screen.areas if a.type == 'IMAGE_EDITOR')
-    RESULT["f12"] = image_stats(screenshot("f12_render", window=render_win, region_of=editor))
-    RESULT["f12_window"] = len(windows) > 1
+    editor = next(a for a in win.screen.areas if a.type == 'IMAGE_EDITOR')
+    region = next(r for r in editor.regions if r.type == 'WINDOW')
+    with bpy.context.temp_override(window=win, area=editor, region=region):
+        bpy.ops.image.view_all(fit_view=True)
+    yield 1.0
+    RESULT["f12"] = image_stats(screenshot("f12_render", region_of=editor))
+    RESULT["f12_image"] = editor.spaces[0].image.name if editor.spaces[0].image else None
     RESULT["ok"] = True
 
 
