@@ -6,7 +6,10 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(blender cmake g++ make libembree-dev libtbb-dev libopenexr-dev libopenvdb-dev libnanovdb-dev
           libboost-iostreams-dev libgtest-dev libbenchmark-dev python3-numpy python3-pytest
-          slurmctld slurmd slurm-client munge)  # the last four: the farm end-to-end test (tests/blender/test_farm.py)
+          # the farm end-to-end test (tests/blender/test_farm.py)
+          slurmctld slurmd slurm-client munge
+          # the UI test: a windowed Blender under a virtual X server with Mesa's software OpenGL
+          xvfb xauth libgl1-mesa-dri libglx-mesa0 libegl-mesa0)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

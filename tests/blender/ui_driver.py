@@ -108,7 +108,7 @@ def steps():
     win.scene = scene
     scene.render.engine = 'LANTERN'
     scene.lantern.samples = 16
-    scene.lantern.viewport_samples = 16
+    scene.lantern.viewport_samples = 8
     props = area('PROPERTIES')
     props.spaces[0].context = 'RENDER'
     view = area('VIEW_3D')
@@ -120,7 +120,7 @@ def steps():
 
     space.shading.type = 'RENDERED'
     yield from wait_until("first viewport image", lambda: session() is not None and session().pixels is not None, 60)
-    yield from wait_until("viewport refined to 16 samples", lambda: refined(16), 120)
+    yield from wait_until("viewport refined to 8 samples", lambda: refined(8), 120)
     yield 0.5  # the last redraw reaches the screen
     RESULT["rendered"] = image_stats(screenshot("viewport_rendered", region_of=view))
     s = session()
@@ -164,10 +164,11 @@ def steps():
     yield from wait_until("refined after the edits", lambda: refined(4), 60)
     yield 0.5
     RESULT["edited"] = image_stats(screenshot("viewport_edited", region_of=view))
+    RESULT["edited_pixels"] = image_stats(session().pixels)
 
     # Settings change the viewport render: bounces 0 leaves direct light only (darker).
     scene.lantern.max_bounces = 0
-    yield from wait_until("refined with no bounces", lambda: refined(16), 120)
+    yield from wait_until("refined with no bounces", lambda: refined(8), 120)
     RESULT["no_bounces_pixels"] = image_stats(session().pixels)
     scene.lantern.max_bounces = 12
 
