@@ -19,10 +19,13 @@ import numpy as np
 from . import core
 from .export import export_lights, export_scene, instance_key
 
-# Progressive stages after each change: a first pass at 1/START_DIVIDER of the resolution in
-# each direction (16x fewer pixels: a first image within a few tens of ms), then the full
-# resolution up to the viewport's sample count.
+# Progressive stages after each change: one sample at a reduced resolution, then the full
+# resolution up to the viewport's sample count. The reduction is the smallest of DIVIDERS (per
+# side) whose pass is predicted, from the measured cost of full-resolution passes, to take at
+# most START_SECONDS; START_DIVIDER until a cost is known.
+DIVIDERS = (2, 4, 8, 16)
 START_DIVIDER = 4
+START_SECONDS = 0.03
 HALF_FLOAT_MAX = 65504.0  # larger values would become Inf in the RGBA16F texture
 
 _GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
@@ -83,6 +86,7 @@ class ViewportSession:
         self.state = {}
         self.render = None
         self.stage = 0
+        self.divider = START_DIVIDER
         self.camera = None
         self.size = (0, 0)
         self.settings_key = None
@@ -91,6 +95,8 @@ class ViewportSession:
         self.pixels = None         # latest Combined image, (h, w, 4) float32, rows bottom to top
         self.version = 0           # bumps whenever pixels change
         self.samples = (0, 0)      # (done, total) of the displayed stage
+        self.shown_stage = None    # the stage the pixels come from (0: reduced resolution)
+        self.pixel_seconds = None  # measured seconds per pixel and sample at full resolution
         self._shown = None         # (render serial, samples done) the pixels come from
         self.changed_at = time.monotonic()
         self.first_image_seconds = None   # from the last change to the first image of it
@@ -222,9 +228,12 @@ class ViewportSession:
             self.dirty = True
         if self.dirty:
             self.dirty = False
-            self.stage = 0 if min(self.size) >= 4 * START_DIVIDER else 1
+            self.divider = self._divider()
+            self.stage = 0 if min(self.size) >= 4 * self.divider else 1
             self._start(settings)
         st = self.render.poll()
+        if self.stage == 1 and st.samples_done > 0:
+            self.pixel_seconds = st.elapsed_seconds / (st.samples_done * self.size[0] * self.size[1])
         if st.samples_done > 0 and self._shown != (self.counters["restarts"], st.samples_done):
             self._read(st)
         if st.state != core.STATE_RUNNING and self.stage == 0:
@@ -235,11 +244,18 @@ class ViewportSession:
             self.error = "Lantern viewport render failed"
         return st.state == core.STATE_RUNNING
 
+    def _divider(self):
+        if self.pixel_seconds is None:
+            return START_DIVIDER
+        w, h = self.size
+        return next((d for d in DIVIDERS if (w // d) * (h // d) * self.pixel_seconds <= START_SECONDS),
+                    DIVIDERS[-1])
+
     def _start(self, settings):
         self._stop()
         s = dict(settings)
         if self.stage == 0:
-            s.update(width=max(1, s["width"] // START_DIVIDER), height=max(1, s["height"] // START_DIVIDER),
+            s.update(width=max(1, s["width"] // self.divider), height=max(1, s["height"] // self.divider),
                      samples=1)
         self.render = core.Render(self.scene, s).start()
         self.counters["restarts"] += 1
@@ -251,6 +267,7 @@ class ViewportSession:
         self.pixels = buf
         self.version += 1
         self.samples = (st.samples_done, st.samples_total)
+        self.shown_stage = self.stage
         self._shown = (self.counters["restarts"], st.samples_done)
         if self.first_image_seconds is None:
             self.first_image_seconds = time.monotonic() - self.changed_at

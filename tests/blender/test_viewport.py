@@ -72,7 +72,7 @@ def _first_image(session, settings, w, h):
     settings = dict(settings, width=w, height=h)
     while True:
         session.update(settings)
-        if session.pixels is not None and session.stage == 1 and session.samples[0] >= 1:
+        if session.pixels is not None and session.shown_stage == 1 and session.samples[0] >= 1:
             return
         time.sleep(0.002)
 
