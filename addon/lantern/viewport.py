@@ -131,32 +131,41 @@ class ViewportSession:
         """Applies the depsgraph's updates in place; False when they need a new scene."""
         transforms = lights = False
         materials = []
-        settings = False
         for u in depsgraph.updates:
             idb = u.id
             if isinstance(idb, bpy.types.Object):
                 if u.is_updated_geometry and idb.type in _TRACED_TYPES | {'VOLUME'}:
                     return False
-                if u.is_updated_transform:
-                    transforms = True
-                    lights = lights or idb.type == 'LIGHT'
+                # Any object update: compare every instance's matrix, and the set of instances
+                # (an object hidden, shown or added needs a new scene).
+                transforms = True
+                lights = lights or idb.type == 'LIGHT'
             elif isinstance(idb, bpy.types.Material):
                 materials.append(idb)
             elif isinstance(idb, bpy.types.Light):
                 lights = True
-            elif isinstance(idb, bpy.types.Scene):
-                settings = True
             elif isinstance(idb, bpy.types.ShaderNodeTree):
                 # A node group (or an embedded tree) changed: re-translate every material.
                 materials.extend(m for m in bpy.data.materials if m.node_tree is not None)
             elif isinstance(idb, (bpy.types.World, bpy.types.Image, bpy.types.Collection)
                             + _GEOMETRY_TYPES):
                 return False
-        if not (transforms or lights or materials or settings):
+        # Scene updates (render settings) need nothing here: update() restarts the render when
+        # the settings it is given change.
+        if not (transforms or lights or materials):
             return True
-        self._stop()
-        if transforms and not self._update_transforms(depsgraph):
+        moves = self._moved_instances(depsgraph) if transforms else []
+        if moves is None:
             return False
+        if not (moves or lights or materials):
+            return True  # e.g. a selection change: nothing to render again
+        self._stop()
+        instances = self.state["instances"]
+        for key, core_id, matrix in moves:
+            self.scene.set_instance_transform(core_id, matrix)
+            instances[key] = (core_id, matrix)
+        if moves:
+            self.counters["transform_updates"] += 1
         exporter = self.state["materials"]
         for m in materials:
             if m.original.as_pointer() in exporter.ids and not exporter.update(m):
@@ -171,10 +180,12 @@ class ViewportSession:
         self._changed()
         return True
 
-    def _update_transforms(self, depsgraph):
+    def _moved_instances(self, depsgraph):
+        """[(key, core id, new matrix)] of the exported instances that moved, or None when the
+        set of instances changed (a new scene is needed)."""
         instances = self.state["instances"]
         seen = 0
-        moved = False
+        moves = []
         for inst in depsgraph.object_instances:
             if not inst.show_self or inst.object.type not in _TRACED_TYPES:
                 continue
@@ -182,20 +193,14 @@ class ViewportSession:
             entry = instances.get(key)
             if entry is None:
                 if inst.object.type == 'MESH':
-                    return False  # an instance that was not exported: a new scene
+                    return None  # an instance that was not exported
                 continue
             seen += 1
             core_id, old = entry
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             if core_id is not None and not np.array_equal(matrix, old):
-                self.scene.set_instance_transform(core_id, matrix)
-                instances[key] = (core_id, matrix)
-                moved = True
-        if seen != len(instances):
-            return False  # an exported instance is gone
-        if moved:
-            self.counters["transform_updates"] += 1
-        return True
+                moves.append((key, core_id, matrix))
+        return moves if seen == len(instances) else None  # else: an exported instance is gone
 
     # -- view and render -----------------------------------------------------------------------
 
@@ -214,6 +219,9 @@ class ViewportSession:
         self.dirty = True
         self.changed_at = time.monotonic()
         self.first_image_seconds = None
+        # The pixels stay on screen until the new render has some; what they show is stale.
+        self.shown_stage = None
+        self.samples = (0, 0)
 
     def update(self, settings):
         """Starts or advances the progressive render and picks up its newest image. settings:

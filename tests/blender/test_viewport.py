@@ -99,6 +99,7 @@ def test_resizing_does_not_leak(scene_factory):
             _first_image(session, base, w, h)
             if i == 9 or i == len(sizes) - 1:  # the same size: the cycle's last
                 rss.append(_rss_mb())
+        restarts = session.counters["restarts"]
     finally:
         session.close()
     # One leaked film per resize would keep at least its RGBA float readback (16 bytes/pixel).
@@ -106,4 +107,5 @@ def test_resizing_does_not_leak(scene_factory):
     growth = rss[1] - rss[0]
     print("RSS after 10 resizes %.1f MB, after 60: %.1f MB (growth %.1f MB; one image kept per "
           "resize would be %.0f MB)" % (rss[0], rss[1], growth, leaked_images_mb))
+    assert restarts >= 2 * len(sizes), restarts  # every size rendered (two stages each)
     assert growth < 0.25 * leaked_images_mb, (rss, leaked_images_mb)
