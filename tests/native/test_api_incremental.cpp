@@ -15,6 +15,7 @@ namespace {
 
 struct Params {
   V3 box_at{0, 0, 0};
+  V3 panel_at{0, 1.5f, 1.2f};
   V3 box_color{0.8f, 0.8f, 0.8f};
   float lamp_watts = 300;
   V3 eye{0.5f, -5, 2.5f};
@@ -36,8 +37,16 @@ lt_shader_node panel_node(bool emits) {
 }
 
 struct Ids {
-  int box_instance = -1, box_material = -1, panel_material = -1;
+  int box_instance = -1, box_material = -1, panel_instance = -1, panel_material = -1;
 };
+
+Xform panel_xf(V3 at) { return compose(translate(at), rotate({1, 0, 0}, 1.2f)); }
+
+lt_light_desc lamp(float watts) {
+  lt_light_desc l = point_light({-1, -2, 2.5f}, watts);
+  l.radius = 0.3f;  // a lamp rays can hit (kept in the light set's list of hittable lamps)
+  return l;
+}
 
 // Floor, a box, an emissive panel, a point light and a camera; instances in a fixed order.
 ScenePtr build(const Params& p, Ids* ids) {
@@ -49,8 +58,8 @@ ScenePtr build(const Params& p, Ids* ids) {
   ids->box_instance = add_object(s, box({-0.5f, -0.5f, 0}, {0.5f, 0.5f, 1}), ids->box_material, translate(p.box_at));
   lt_shader_node panel = panel_node(p.panel_emits);
   check(lt_scene_add_material(s, &panel, 1, 0, &ids->panel_material), "panel material");
-  add_object(s, plane(0.6f, 0.6f), ids->panel_material, compose(translate({0, 1.5f, 1.2f}), rotate({1, 0, 0}, 1.2f)));
-  add_light(s, point_light({-1, -2, 2.5f}, p.lamp_watts));
+  ids->panel_instance = add_object(s, plane(0.6f, 0.6f), ids->panel_material, panel_xf(p.panel_at));
+  add_light(s, lamp(p.lamp_watts));
   set_camera(s, perspective_camera(look_at(p.eye, {0, 0, 0.5f}), 35));
   check(lt_scene_commit(s), "commit");
   return sp;
@@ -92,6 +101,9 @@ TEST(ApiIncremental, MovingAnInstanceRebuildsOnlyTheTopLevel) {
   p.box_at = {0.8f, 0.3f, 0};
   Xform xf = translate(p.box_at);
   check(lt_scene_set_instance_transform(s, ids.box_instance, xf.data()), "move");
+  p.panel_at = {-0.5f, 1.2f, 1.5f};  // an emitter moves: its triangle lights must follow
+  Xform pxf = panel_xf(p.panel_at);
+  check(lt_scene_set_instance_transform(s, ids.panel_instance, pxf.data()), "move panel");
   check(lt_scene_commit(s), "recommit");
   const lt_scene_stats after = stats(s);
   EXPECT_EQ(after.mesh_bvh_builds, before.mesh_bvh_builds);
@@ -118,7 +130,7 @@ TEST(ApiIncremental, MaterialAndLightEditsDoNotRebuildTheBvh) {
   check(lt_scene_set_material(s, ids.panel_material, &panel, 1, 0), "panel");
   p.lamp_watts = 800;
   check(lt_scene_clear_lights(s), "clear lights");
-  add_light(s, point_light({-1, -2, 2.5f}, p.lamp_watts));
+  add_light(s, lamp(p.lamp_watts));
   check(lt_scene_commit(s), "recommit");
   const lt_scene_stats after = stats(s);
   EXPECT_EQ(after.mesh_bvh_builds, before.mesh_bvh_builds);
