@@ -84,7 +84,8 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
         description="Number of samples to skip when starting the render: a render of samples "
                     "[offset, offset + samples) uses exactly the random numbers those samples use in "
                     "a full render, so parts rendered on several machines merge (Merge Images, "
-                    "`lantern merge`) into the full render",
+                    "`lantern merge`) into the full render (costs nothing; parts with overlapping "
+                    "ranges repeat the same noise and must not be merged)",
         default=0, min=0, max=(1 << 30) - (1 << 24),
     )
     integrator: EnumProperty(
