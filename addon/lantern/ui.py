@@ -197,7 +197,7 @@ class LANTERN_RENDER_PT_film_transparency(LanternButtonsPanel, Panel):
     def draw(self, context):
         layout = _split(self.layout)
         layout.active = context.scene.render.film_transparent
-        layout.label(text="The world seen directly gets alpha 0; it still lights the scene")
+        layout.label(text="Background: alpha 0, still lit")
 
 
 class LANTERN_RENDER_PT_film_pixel_filter(LanternButtonsPanel, Panel):
