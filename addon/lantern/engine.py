@@ -460,7 +460,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         try:
             session.set_view(view_camera(context.region_data, width, height), width, height)
             settings = render_settings(scene, width, height, [0, 0, 0, 0])
-            settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
+            # The viewport stops at its own samples or the noise target, never by the time limit.
+            settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0,
+                            time_limit=0.0)
             refining = session.update(settings)
         except core.LanternError as e:
             session.error = str(e)
@@ -475,9 +477,10 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             _REFINING_ENGINES.pop(session, None)  # no reference that would keep a freed engine
         if session.error:
             self.update_stats("", "Lantern: " + session.error)
+        elif session.status is not None:
+            self.update_stats("", format_stats(session.status))
         else:
-            done, total = session.samples
-            self.update_stats("", "Sample %d/%d" % (done, total) if done else "Rendering")
+            self.update_stats("", "Rendering")
         if session.pixels is None:
             return
         if self._texture is None or self._texture_version != session.version:

@@ -96,6 +96,7 @@ class ViewportSession:
         self.version = 0           # bumps whenever pixels change
         self.samples = (0, 0)      # (done, total) of the displayed stage
         self.shown_stage = None    # the stage the pixels come from (0: reduced resolution)
+        self.status = None         # core status of the render the pixels come from
         self.pixel_seconds = None  # measured seconds per pixel and sample at full resolution
         self._shown = None         # (render serial, samples done) the pixels come from
         self.changed_at = time.monotonic()
@@ -222,6 +223,7 @@ class ViewportSession:
         # The pixels stay on screen until the new render has some; what they show is stale.
         self.shown_stage = None
         self.samples = (0, 0)
+        self.status = None
 
     def update(self, settings):
         """Starts or advances the progressive render and picks up its newest image. settings:
@@ -275,6 +277,7 @@ class ViewportSession:
         self.pixels = buf
         self.version += 1
         self.samples = (st.samples_done, st.samples_total)
+        self.status = st
         self.shown_stage = self.stage
         self._shown = (self.counters["restarts"], st.samples_done)
         if self.first_image_seconds is None:
