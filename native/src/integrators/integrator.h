@@ -84,8 +84,8 @@ std::vector<float> bdpt_mis_weight_sums(const RenderContext& ctx, const CameraSa
 SampleValue trace_path(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
                        Sampler& sampler, SampleStats& stats);
 
-// Volumetric path tracing (integrators/volpath.cpp): trace_path with a volume stack, free-flight
-// sampling, NEE through media and invisible boundaries. Only for scenes with media.
+// Volumetric path tracing (integrators/path.cpp, the same code with media): a volume stack,
+// free-flight sampling, NEE through media and invisible boundaries. Only for scenes with media.
 SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
                           Sampler& sampler, SampleStats& stats);
 

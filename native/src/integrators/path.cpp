@@ -1,27 +1,38 @@
 // Unidirectional path tracing with next-event estimation and multiple importance sampling (power
-// heuristic; Veach 1997, ch. 9), Russian roulette on the throughput, and Cycles' bounce limits.
-#include "integrators/integrator.h"
+// heuristic; Veach 1997, ch. 9), Russian roulette on the throughput and Cycles' bounce limits; with
+// kMedia, volumetric path tracing (pbrt 3, 15.3; Assignment 4 of the sheet): a volume stack,
+// free-flight sampling in the media along every segment, NEE from medium vertices with the phase
+// function and from surfaces with transmittance through invisible boundaries, MIS against
+// phase/BSDF sampling, and Cycles' volume bounce limit (0: single scattering). One template, so a
+// scene without media runs none of the media code (render.cpp picks trace_path for it).
+#include "integrators/media_transport.h"
 #include "integrators/path_state.h"
 
 namespace lt {
 
 namespace {
 
+constexpr int kMaxNullCrossings = 1024;
 
-}  // namespace
-
-SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
-                       SampleStats& stats) {
+template <bool kMedia>
+SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
+                  SampleStats& stats) {
   SampleValue out;
   const LightSet& lights = scene.lights;
+  const VolumeEstimator est = s.volume_estimator;
+  const float step = s.volume_step;
   Spectrum L(0.0f), beta(1.0f);
   Ray ray = camera_ray;
   unsigned visibility = kVisCamera;
   Bounces b;
-  // The previous scattering vertex, for MIS on emitters the BSDF-sampled ray reaches.
+  int volume = 0, nulls = 0;
+  // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
   float prev_pdf = 0;
   bool prev_delta = true;
   Vec3 prev_p = ray.o;
+  float t_prev = 0;  // distance from prev_p to ray.o (the ray crossed invisible boundaries)
+  VolumeStack stack;
+  if (kMedia && scene.has_boundaries()) init_volume_stack(scene, camera_ray, &stack, stats);
   Bsdf bsdf;
 
   auto add = [&](const Spectrum& c) {
@@ -32,20 +43,91 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
     float light_pdf = lights.pmf(light) * lights.pdf(scene, light, prev_p, dir, t);
     return power_heuristic(prev_pdf, light_pdf);
   };
+  // NEE from p (a medium point when sp is null): one light picked by power, MIS-weighted against
+  // the scattering; f(wi, &pdf) returns the BSDF x cos or phase value. `st` is the volume stack on
+  // the side the shadow ray leaves into.
+  auto next_event = [&](const Vec3& p, const SurfacePoint* sp, const VolumeStack& st, auto f) {
+    float pmf, u_light;
+    int li = lights.pick(sampler.next_1d(), &pmf, &u_light);
+    Vec2 u = sampler.next_2d();
+    LightSample ls;
+    if (!(pmf > 0) || !lights.sample(scene, li, p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance)) return;
+    float scatter_pdf;
+    Spectrum fv = f(ls.wi, &scatter_pdf);
+    if (is_black(fv)) return;
+    Ray shadow;
+    shadow.o = sp ? spawn_origin(*sp, ls.wi) : p;
+    shadow.d = ls.wi;
+    shadow.tmin = 0;
+    shadow.tmax = std::isinf(ls.distance) ? INFINITY : ls.distance * (1 - 1e-4f);
+    Spectrum T(1.0f);
+    if constexpr (kMedia) {
+      VolumeStack shadow_stack = st;
+      if (sp) cross_boundary(scene, *sp, ls.wi, &shadow_stack);
+      T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats);
+      if (is_black(T)) return;
+    } else {
+      ++stats.rays;
+      if (scene.geometry.occluded(shadow)) return;
+    }
+    float light_pdf = pmf * ls.pdf;
+    float w = ls.delta ? 1.0f : power_heuristic(light_pdf, scatter_pdf);
+    add(beta * fv * T * ls.radiance * (w / light_pdf));
+  };
 
   for (;;) {
     Hit hit;
     ++stats.rays;
     bool found = scene.geometry.intersect(ray, visibility, &hit);
-    // Lamps with a size are hit by rays but never occlude (as in Cycles).
+    const float t_end = found ? hit.t : ray.tmax;
+
+    // Free flight through the media along [tmin, t_end]. A ray that escapes (even a camera ray cut
+    // by the clip distance) crosses the media to infinity, as in Cycles 3.4: a World volume with
+    // sigma_t > 0 hides the background completely (docs/volumes.md).
+    const Spectrum beta_before = beta;
+    MediumInteraction mi;
+    int medium = -1;
+    if constexpr (kMedia)
+      medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
+    const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;
+    // Lamps with a size are hit by rays but never occlude (as in Cycles); weighted as the segment
+    // before the collision (exact for grey media).
     if (lights.has_hittable()) {
       Ray r = ray;
-      r.tmax = found ? hit.t : ray.tmax;
+      r.tmax = t_seg;
       lights.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
-        add(beta * h.radiance * mis_emitter(h.light, ray.d, h.t));
+        add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t));
       });
     }
-    if (!found) {
+    if (kMedia && !is_finite(beta)) break;  // free-flight weights
+
+    if (medium >= 0) {
+      // A real collision: beta already holds sigma_s T / pdf (medium.h).
+      if (b.from_camera()) out.alpha = 1;
+      if (is_black(beta) || volume > s.volume_bounces || b.total > s.max_bounces) break;
+      const PhaseHG& phase = scene.media[medium].phase();
+      const Vec3 wo = normalize(-ray.d);
+      if (!lights.empty())
+        next_event(mi.p, nullptr, stack, [&](const Vec3& wi, float* pdf) {
+          float p = phase.eval(wo, wi);
+          *pdf = p;
+          return Spectrum(p);
+        });
+      Vec3 wi;
+      float pdf;
+      if (!phase.sample(wo, sampler.next_2d(), &wi, &pdf) || !(pdf > 0)) break;
+      ++volume;
+      ++b.total;
+      visibility = kVisDiffuse;
+      prev_pdf = pdf;
+      prev_delta = false;
+      prev_p = mi.p;
+      t_prev = 0;
+      ray.o = mi.p;
+      ray.d = wi;
+      ray.tmin = 0;
+      ray.tmax = INFINITY;
+    } else if (!found) {
       bool background = b.from_camera();
       if (!(background && s.transparent_background)) {
         if (lights.world_light() >= 0 && (!background || scene.world.camera_visible))
@@ -54,85 +136,89 @@ SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ra
           add(beta * radiance * mis_emitter(i, ray.d, INFINITY));
         });
       }
-      if (background) out.alpha = s.transparent_background ? 0.0f : 1.0f;
+      if (background && out.alpha == 0) out.alpha = s.transparent_background ? 0.0f : 1.0f;
       break;
-    }
-
-    SurfacePoint sp = scene.geometry.surface(hit);
-    const bool backface = dot(ray.d, sp.ng) > 0;
-    const Vec3 ng = backface ? -sp.ng : sp.ng, ns = backface ? -sp.ns : sp.ns;
-    const Material& material = scene.material(sp.material);
-    Spectrum emitted = material.evaluate(scene.images, sp.uv, backface, &bsdf);
-    if (b.from_camera()) {
-      out.alpha = 1;
-      out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
-    }
-    if (!is_black(emitted)) {
-      int li = lights.triangle_light(sp.instance, sp.primitive);
-      add(beta * emitted * (li >= 0 ? mis_emitter(li, ray.d, hit.t) : 1.0f));
-    }
-    if (b.from_camera()) {
-      out.normal = ns;
-      out.albedo = bsdf.albedo();
-    }
-    if (bsdf.count() == 0) break;
-    if (b.exceeded(s)) break;
-
-    const Frame frame(ns);
-    const Vec3 wo = frame.to_local(-ray.d);
-
-    // Next-event estimation: one light picked by power, MIS-weighted against BSDF sampling.
-    if (bsdf.has_non_delta() && !lights.empty()) {
-      float pmf, u_light;
-      int li = lights.pick(sampler.next_1d(), &pmf, &u_light);
-      Vec2 u = sampler.next_2d();
-      LightSample ls;
-      if (pmf > 0 && lights.sample(scene, li, sp.p, u, &ls) && ls.pdf > 0 && !is_black(ls.radiance)) {
-        Vec3 wi = frame.to_local(ls.wi);
-        float bsdf_pdf;
-        Spectrum f = bsdf.eval(wo, wi, &bsdf_pdf);
-        // The geometric normal decides which side the light is on; shading normals only shade.
-        bool same_side_geo = dot(ls.wi, ng) > 0, same_side_shading = wi.z > 0;
-        if (!is_black(f) && same_side_geo == same_side_shading) {
-          Ray shadow;
-          shadow.o = spawn_origin(sp, ls.wi);
-          shadow.d = ls.wi;
-          shadow.tmin = 0;
-          shadow.tmax = std::isinf(ls.distance) ? INFINITY : ls.distance * (1 - 1e-4f);
-          ++stats.rays;
-          if (!scene.geometry.occluded(shadow)) {
-            float light_pdf = pmf * ls.pdf;
-            float w = ls.delta ? 1.0f : power_heuristic(light_pdf, bsdf_pdf);
-            add(beta * f * ls.radiance * (std::abs(wi.z) * w / light_pdf));
-          }
-        }
+    } else {
+      SurfacePoint sp = scene.geometry.surface(hit);
+      if (kMedia && scene.null_surface(sp.material)) {
+        // An invisible medium boundary: update the stack and continue along the same line.
+        if (++nulls > kMaxNullCrossings) break;
+        cross_boundary(scene, sp, ray.d, &stack);
+        t_prev += hit.t * length(ray.d);
+        ray.o = spawn_origin(sp, ray.d);
+        ray.tmax -= hit.t;
+        ray.tmin = 0;
+        continue;
       }
+      const bool backface = dot(ray.d, sp.ng) > 0;
+      const Vec3 ng = backface ? -sp.ng : sp.ng, ns = backface ? -sp.ns : sp.ns;
+      const Material& material = scene.material(sp.material);
+      Spectrum emitted = material.evaluate(scene.images, sp.uv, backface, &bsdf);
+      if (b.from_camera()) {
+        out.alpha = 1;
+        out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
+      }
+      if (!is_black(emitted)) {
+        int li = lights.triangle_light(sp.instance, sp.primitive);
+        add(beta * emitted * (li >= 0 ? mis_emitter(li, ray.d, kMedia ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
+      }
+      if (b.from_camera()) {
+        out.normal = ns;
+        out.albedo = bsdf.albedo();
+      }
+      if (bsdf.count() == 0) break;
+      if (b.exceeded(s) || (kMedia && volume > s.volume_bounces)) break;
+
+      const Frame frame(ns);
+      const Vec3 wo = frame.to_local(-ray.d);
+      if (bsdf.has_non_delta() && !lights.empty())
+        next_event(sp.p, &sp, stack, [&](const Vec3& wi_world, float* pdf) {
+          Vec3 wi = frame.to_local(wi_world);
+          Spectrum f = bsdf.eval(wo, wi, pdf);
+          // The geometric normal decides which side the light is on; shading normals only shade.
+          if ((dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
+          return f * std::abs(wi.z);
+        });
+
+      // Continue the path by sampling the BSDF.
+      BsdfSample bs;
+      float u_lobe = sampler.next_1d();
+      Vec2 u = sampler.next_2d();
+      if (!bsdf.sample(wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
+      Vec3 wi = frame.to_world(bs.wi);
+      bool reflect_geo = dot(wi, ng) > 0;
+      if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;  // shading normal would leak light
+      beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
+      if (!is_finite(beta)) break;
+      if (kMedia && !reflect_geo) cross_boundary(scene, sp, wi, &stack);  // refraction into / out of a medium
+
+      b.count(bs, &visibility);
+      prev_pdf = bs.pdf;
+      prev_delta = (bs.flags & kLobeSpecular) != 0;
+      prev_p = sp.p;
+      t_prev = 0;
+      ray.o = spawn_origin(sp, wi);
+      ray.d = wi;
+      ray.tmin = 0;
+      ray.tmax = INFINITY;
     }
-
-    // Continue the path by sampling the BSDF.
-    BsdfSample bs;
-    float u_lobe = sampler.next_1d();
-    Vec2 u = sampler.next_2d();
-    if (!bsdf.sample(wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
-    Vec3 wi = frame.to_world(bs.wi);
-    bool reflect_geo = dot(wi, ng) > 0;
-    if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;  // shading normal would leak light
-    beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
-    if (!is_finite(beta)) break;
-
-    b.count(bs, &visibility);
-    prev_pdf = bs.pdf;
-    prev_delta = (bs.flags & kLobeSpecular) != 0;
-    prev_p = sp.p;
-    ray.o = spawn_origin(sp, wi);
-    ray.d = wi;
-    ray.tmin = 0;
-    ray.tmax = INFINITY;
 
     if (!russian_roulette(b.total, &beta, sampler)) break;
   }
   out.radiance = L;
   return out;
+}
+
+}  // namespace
+
+SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
+                       SampleStats& stats) {
+  return trace<false>(scene, s, camera_ray, sampler, stats);
+}
+
+SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
+                          SampleStats& stats) {
+  return trace<true>(scene, s, camera_ray, sampler, stats);
 }
 
 }  // namespace lt
