@@ -268,10 +268,10 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
   };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
   int count = 1, bounces = 0;
+  const float beta_start = max_component(beta);
   // Bounce kinds counted so far towards Cycles' per-kind limits (see within_kind_limits): a walk
   // stops where every strategy using its further vertices would fail them, so no work is spent
-  // on vertices no strategy can use (light subpaths, whose Russian roulette rarely ends them, would
-  // otherwise run to max_light_length).
+  // on vertices no strategy can use.
   int kinds[4] = {0, 0, 0, 0};
   for (;;) {
     PathVertex& prev = path[count - 1];
@@ -371,12 +371,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
     ray.d = wi;
     ray.tmin = 0;
     ray.tmax = INFINITY;
-    // Russian roulette (unbiased; MIS weights need not account for it).
-    if (bounces >= 3) {
-      float q = std::min(0.95f, max_component(beta));
-      if (sampler_.next_1d() >= q) break;
-      beta /= q;
-    }
+    // MIS weights need not account for Russian roulette (it keeps every strategy unbiased).
+    if (!russian_roulette(bounces, &beta, sampler_, beta_start)) break;
   }
   return count;
 }

@@ -50,11 +50,13 @@ struct Bounces {
   }
 };
 
-// Russian roulette once the path has had a chance to gather light (unbiased: divide by q).
-// Returns false when the path ends.
-inline bool russian_roulette(int bounce, Spectrum* beta, Sampler& sampler) {
+// Russian roulette once the path has had a chance to gather light (unbiased: divide by q), on the
+// throughput relative to the path's start (`start`: the largest component of its initial beta),
+// so a light subpath, whose beta carries the emitted power, is ended by the albedos it meets as a
+// camera path is, whatever the light's units. Returns false when the path ends.
+inline bool russian_roulette(int bounce, Spectrum* beta, Sampler& sampler, float start = 1.0f) {
   if (bounce < 3) return true;
-  float q = std::min(0.95f, max_component(*beta));
+  float q = std::min(0.95f, max_component(*beta) / start);
   if (sampler.next_1d() >= q) return false;
   *beta /= q;
   return true;
