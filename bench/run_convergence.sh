@@ -2,12 +2,13 @@
 # Builds the library (Release, build-bench/) and runs the convergence benchmark in Blender; writes
 # bench/results/convergence.json, convergence_<scene>*.png and convergence.log (or into --out DIR).
 # Extra arguments go to convergence.py, e.g.: bench/run_convergence.sh --quick
-# Needs matplotlib in Blender's Python for the plots (Debian: apt-get install python3-matplotlib).
+# Installs Debian's python3-matplotlib (Blender's Python sees it) for the plots when it is missing.
 set -eu
 REPO=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${LANTERN_BENCH_BUILD:-$REPO/build-bench}
 BLENDER=${BLENDER:-blender}
 RESULTS=$REPO/bench/results
+bash "$REPO/scripts/install_packages.sh" python3-matplotlib
 cmake -S "$REPO" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$BUILD" -j2 --target lantern_shared
 OUT=$RESULTS  # convergence.py's --out, if given, also takes the log

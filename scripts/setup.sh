@@ -10,16 +10,7 @@ PACKAGES=(blender cmake g++ make libembree-dev libtbb-dev libopenexr-dev libopen
           slurmctld slurmd slurm-client munge
           # the UI test: a windowed Blender under a virtual X server with Mesa's software OpenGL
           xvfb xauth libgl1-mesa-dri libglx-mesa0 libegl-mesa0)
-missing=()
-for p in "${PACKAGES[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "lantern: installing ${missing[*]}"
-  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+bash scripts/install_packages.sh "${PACKAGES[@]}"
 
 BUILD_DIR=${LANTERN_BUILD_DIR:-build}
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
