@@ -1,6 +1,7 @@
 // Bidirectional path tracing: MIS weights of every strategy that can sample a path sum to one,
 // light subpaths of length 1 reduce BDPT to path tracing with NEE, full BDPT agrees with path
-// tracing in expectation, long paths stay finite, and sampling allocates nothing per sample.
+// tracing in expectation, long paths stay finite, the image is linear in the lights' power, and
+// sampling allocates nothing per sample.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -35,7 +36,7 @@ enum class Lights { Area, PointSpot, AreaAndSun };
 
 // A closed room (diffuse, red and green side walls) seen from inside, with a glossy sphere, a
 // glass sphere and a diffuse block; an opening in the ceiling lets the sun in for AreaAndSun.
-ScenePtr room(Lights lights, float glass_roughness = 0.2f) {
+ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1.0f) {
   ScenePtr s = new_scene();
   lt_scene* sc = s.get();
   int white = add_diffuse(sc, {0.7f, 0.7f, 0.7f});
@@ -72,7 +73,7 @@ ScenePtr room(Lights lights, float glass_roughness = 0.2f) {
   }
   switch (lights) {
     case Lights::Area:
-      add_light(sc, area_light(LT_AREA_SQUARE, 0.5f, 0.5f, translate({0, 0, 1.99f}), 60));
+      add_light(sc, area_light(LT_AREA_SQUARE, 0.5f, 0.5f, translate({0, 0, 1.99f}), 60 * light_scale));
       break;
     case Lights::PointSpot: {
       lt_light_desc p = point_light({0.3f, -0.2f, 1.7f}, 40);
@@ -298,6 +299,30 @@ TEST(Bdpt, NoHeapAllocationPerSample) {
 }
 
 // The strategy view's cells, summed, are the Combined image when the view covers every depth.
+// The image is linear in the lights' power, sample by sample: with the power scaled by 2^-10 (an
+// exact float scaling) and the same seed, every pixel is the first render's times 2^-10. Fails
+// if a decision depends on the light's units, as Russian roulette on a light subpath's raw
+// throughput (which carries the emitted power) did.
+TEST(Bdpt, ImageIsLinearInLightPower) {
+  const int size = 24;
+  const float scale = 1.0f / 1024;
+  ScenePtr bright = room(Lights::Area), dim = room(Lights::Area, 0.2f, scale);
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    lt_render_settings r = settings(integrator, size, 8, 5, 64);
+    const std::vector<float> a = render(bright.get(), r).combined, b = render(dim.get(), r).combined;
+    ASSERT_EQ(a.size(), b.size());
+    double total = 0;
+    size_t differing = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+      if (i % 4 == 3) continue;  // alpha
+      total += a[i];
+      if (std::abs(a[i] * scale - b[i]) > 1e-6f * std::abs(a[i] * scale)) ++differing;
+    }
+    EXPECT_GT(total, 0);
+    EXPECT_EQ(differing, 0u) << "integrator " << integrator;
+  }
+}
+
 TEST(Bdpt, StrategyViewSumsToImage) {
   ScenePtr s = room(Lights::AreaAndSun);
   const int size = 24, depth = 3;
