@@ -1,7 +1,7 @@
 // Bidirectional path tracing: MIS weights of every strategy that can sample a path sum to one,
 // light subpaths of length 1 reduce BDPT to path tracing with NEE, full BDPT agrees with path
-// tracing in expectation, long paths stay finite, the image is linear in the lights' power, and
-// sampling allocates nothing per sample.
+// tracing in expectation, long paths stay finite, the image is linear in the lights' power and
+// independent of the scene's scale, and sampling allocates nothing per sample.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -264,6 +264,61 @@ TEST(Bdpt, LongPathsStayFinite) {
   EXPECT_GT(checked, 1000);
   EXPECT_GT(long_paths, 0) << "no sample built subpaths long enough to test";
   EXPECT_LT(worst, 1e-3);
+}
+
+// The same closed room at 1 m, 1 mm and 1 km (geometry, light size and camera scaled, the light's
+// power by the square so its radiance stays): the image does not depend on the scale. Tile means
+// of K renders per scale (SE from their spread: splats correlate pixels) within 5 SE of the 1 m
+// room's, for BDPT and path tracing; nothing non-finite at any scale.
+TEST(Bdpt, ImageDoesNotDependOnSceneScale) {
+  const int size = 32, tile = 16, K = 4;
+  auto scaled_room = [](float k) {
+    ScenePtr s = new_scene();
+    lt_scene* sc = s.get();
+    int white = add_diffuse(sc, {0.7f, 0.7f, 0.7f}), red = add_diffuse(sc, {0.7f, 0.15f, 0.1f});
+    MeshData walls = box({-1, -1, 0}, {1, 1, 2});
+    flip_winding(walls);  // seen from inside
+    MeshData block = box({-0.6f, 0.0f, 0}, {0.1f, 0.6f, 0.9f});
+    transform_mesh(walls, scale({k, k, k}));
+    transform_mesh(block, scale({k, k, k}));
+    add_object(sc, walls, white);
+    add_object(sc, block, red);
+    add_light(sc, area_light(LT_AREA_SQUARE, 0.5f * k, 0.5f * k, translate({0.3f * k, 0, 1.98f * k}), 40 * k * k));
+    lt_camera_desc cam = perspective_camera(look_at({0, -0.95f * k, 1.2f * k}, {0, 1 * k, 0.7f * k}), 18);
+    cam.clip_start = 1e-3f * k;
+    cam.clip_end = 1e3f * k;
+    set_camera(sc, cam);
+    check(lt_scene_commit(sc), "commit");
+    return s;
+  };
+  for (int integrator : {LT_INTEGRATOR_BIDIRECTIONAL, LT_INTEGRATOR_PATH}) {
+    std::vector<std::vector<TileMeans>> runs;
+    for (float k : {1.0f, 1e-3f, 1e3f}) {
+      ScenePtr s = scaled_room(k);
+      runs.emplace_back();
+      for (int i = 0; i < K; ++i) {
+        lt_render_settings r = settings(integrator, size, 16, 300 + 10 * unsigned(runs.size()) + i, 64);
+        Passes p = render(s.get(), r);
+        ASSERT_EQ(p.first_non_finite(), "") << "scale " << k;
+        EXPECT_EQ(p.status.nan_samples, 0u) << "scale " << k;
+        runs.back().push_back(tile_means(p.combined, size, tile));
+      }
+    }
+    const std::vector<TileMeans>& ref = runs[0];
+    for (size_t j = 1; j < runs.size(); ++j)
+      for (int i = 0; i < ref[0].tiles * 3; ++i) {
+        double ma = 0, mb = 0, va = 0, vb = 0;
+        for (int k = 0; k < K; ++k) { ma += ref[k].mean[i] / K; mb += runs[j][k].mean[i] / K; }
+        for (int k = 0; k < K; ++k) {
+          va += (ref[k].mean[i] - ma) * (ref[k].mean[i] - ma) / (K - 1);
+          vb += (runs[j][k].mean[i] - mb) * (runs[j][k].mean[i] - mb) / (K - 1);
+        }
+        EXPECT_GT(ma, 0);
+        EXPECT_LE(std::abs(ma - mb), 5 * std::sqrt(va / K + vb / K))
+            << "integrator " << integrator << " scale " << (j == 1 ? 1e-3 : 1e3) << " tile " << i / 3 << " channel "
+            << i % 3 << ": 1 m " << ma << ", scaled " << mb;
+      }
+  }
 }
 
 // After warm-up, tracing samples with either integrator performs no heap allocation.
