@@ -1,4 +1,5 @@
-"""The engine inside Blender: passes, cancellation, transparent film, warnings for unsupported nodes."""
+"""The engine inside Blender: passes, cancellation, transparent film, warnings for unsupported nodes
+and flattened objects."""
 import time
 
 import numpy as np
@@ -52,6 +53,36 @@ def test_unsupported_nodes_are_reported_and_fall_back(scene_factory):
     # The render still completes with a finite image.
     img = ru.render(scene, ru.LANTERN, 4, seed=0).combined
     assert np.isfinite(img).all()
+
+
+def test_flattened_object_renders_as_its_plane_with_a_warning(scene_factory):
+    """A cube scaled to zero height is the white square it flattens to, lit above a dark floor, and
+    it is reported (Cycles 3.4 renders it black; Lantern used to leave it out)."""
+    import build_scenes as bs
+    scene = scene_factory("unsupported_node")
+    for obj in list(scene.objects):
+        if obj.type == 'MESH' and obj.name != "Floor":
+            bpy.data.objects.remove(obj)
+    for node in scene.objects["Floor"].active_material.node_tree.nodes:  # a dark floor: contrast
+        if node.type == 'BSDF_DIFFUSE':
+            node.inputs["Color"].default_value = (0.05, 0.05, 0.05, 1.0)
+    cube = bs.add_object(scene, "FlatCube", bs.mesh_box("FlatCube", (1.6, 1.6, 1.6)), (0, 0, 0.3), scale=(1, 1, 0))
+    bs.assign(cube, bs.diffuse("FlatWhite", (0.8, 0.8, 0.8)))
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    reports = []
+    core_scene = core.Scene()
+    try:
+        export_scene(depsgraph, core_scene, lambda level, message: reports.append(message))
+    finally:
+        core_scene.close()
+    assert any("FlatCube" in r and "zero scale" in r for r in reports), reports
+    img = ru.render(scene, ru.LANTERN, 16, seed=0).combined
+    assert np.isfinite(img).all()
+    h, w = img.shape[:2]
+    centre = img[h // 2 - 4:h // 2 + 4, w // 2 - 4:w // 2 + 4, :3].mean()  # the square
+    floor = img[h // 2 - 4:h // 2 + 4, 2:10, :3].mean()  # the dark floor beside it
+    assert centre > 5 * floor, (centre, floor)
 
 
 class _CancellingEngine:

@@ -123,6 +123,9 @@ class MeshExporter:
         mesh_id = self._mesh_id(obj, warn_empty)
         if mesh_id is None:
             return None
+        if np.linalg.det(np.asarray(matrix_world, dtype=np.float64)[:3, :3]) == 0:
+            self.report({'WARNING'}, "Object '%s' has zero scale on an axis: rendered as the flat shape it "
+                        "becomes (Cycles 3.4 renders such objects black)" % obj.name)
         instance = self.core_scene.add_instance(mesh_id, matrix_world, self._material_ids(obj),
                                                 visibility_bits(obj))
         self.instance_count += 1

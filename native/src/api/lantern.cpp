@@ -244,7 +244,7 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
     inst.mesh = d->mesh;
     bool finite = finite_array(d->transform, 12);
     if (finite) std::memcpy(inst.xf.m, d->transform, sizeof(inst.xf.m));
-    else std::memset(inst.xf.m, 0, sizeof(inst.xf.m));  // left out by the geometry, with a warning
+    else std::memset(inst.xf.m, 0, sizeof(inst.xf.m));  // scaled to a point: nothing is hit
     for (int i = 0; i < d->material_count; ++i) {
       int m = d->materials[i];
       require(m >= -1 && m < int(scene->scene.materials.size()),
@@ -252,7 +252,9 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
       inst.materials.push_back(m);
     }
     inst.visibility = d->visibility & LT_VISIBLE_ALL;
-    *out_id = scene->scene.geometry.add_instance(std::move(inst), scene->scene.warnings);
+    *out_id = scene->scene.geometry.add_instance(std::move(inst));
+    if (!finite)
+      scene->scene.warnings.push_back("instance " + std::to_string(*out_id) + " has a non-finite transform; left out");
   });
 }
 

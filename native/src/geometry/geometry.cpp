@@ -40,8 +40,30 @@ Geometry::Geometry() {
 Geometry::~Geometry() {
   for (auto& m : meshes_)
     if (m.rtc) rtcReleaseScene(m.rtc);
+  for (auto& b : baked_)
+    if (b.rtc) rtcReleaseScene(b.rtc);
   if (top_) rtcReleaseScene(top_);
   rtcReleaseDevice(device_);
+}
+
+// One Embree scene holding one triangle geometry (not committed: commit() or the caller does).
+RTCScene Geometry::triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices) const {
+  RTCScene scene = rtcNewScene(device_);
+  RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+  float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), positions.size()));
+  for (size_t i = 0; i < positions.size(); ++i) {
+    v[3 * i] = positions[i].x;
+    v[3 * i + 1] = positions[i].y;
+    v[3 * i + 2] = positions[i].z;
+  }
+  unsigned* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                 3 * sizeof(unsigned), indices.size() / 3));
+  std::copy(indices.begin(), indices.end(), idx);
+  rtcCommitGeometry(g);
+  rtcAttachGeometryByID(scene, g, 0);
+  rtcReleaseGeometry(g);
+  return scene;
 }
 
 int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
@@ -93,32 +115,20 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
   for (Vec3& p : mesh.positions)
     if (!is_finite(p)) p = Vec3(0.0f);
 
-  mesh.rtc = rtcNewScene(device_);
-  RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-  float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                         3 * sizeof(float), mesh.positions.size()));
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    v[3 * i] = mesh.positions[i].x;
-    v[3 * i + 1] = mesh.positions[i].y;
-    v[3 * i + 2] = mesh.positions[i].z;
-  }
-  unsigned* idx = static_cast<unsigned*>(
-      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), kept));
-  std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
-  rtcCommitGeometry(g);
-  rtcAttachGeometryByID(mesh.rtc, g, 0);
-  rtcReleaseGeometry(g);
+  mesh.rtc = triangle_scene(mesh.positions, mesh.indices);
   meshes_.push_back(std::move(mesh));
   return id;
 }
 
 namespace {
-bool usable_transform(const Transform& xf) {
-  float det = xf.determinant();
-  bool finite = std::isfinite(det);
+bool finite_transform(const Transform& xf) {
+  bool finite = std::isfinite(xf.determinant());
   for (float x : xf.m) finite = finite && std::isfinite(x);
-  return finite && std::abs(det) > 1e-30f;
+  return finite;
 }
+// Embree instances need an inverse.
+bool invertible(const Transform& xf) { return std::abs(xf.determinant()) > 1e-30f; }
+const Transform kIdentity;
 
 void set_transform(Instance& inst, const Transform& xf) {
   inst.xf = xf;
@@ -134,15 +144,14 @@ void set_transform(Instance& inst, const Transform& xf) {
 }
 }  // namespace
 
-int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
+int Geometry::add_instance(Instance inst) {
   if (committed_) throw StateError("the scene is committed; instances can no longer be added");
   const int id = int(instances_.size());
   set_transform(inst, inst.xf);
   instances_.push_back(inst);
+  baked_.emplace_back();
   instance_visibility_.push_back(inst.visibility & 31u);
   if ((inst.visibility & 31u) != 31u) partial_visibility_ = true;
-  if (meshes_[inst.mesh].rtc && !usable_transform(inst.xf))
-    warnings.push_back("instance " + std::to_string(id) + " has a zero-scale or non-finite transform; left out");
   return id;
 }
 
@@ -176,11 +185,13 @@ void Geometry::build_top() {
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
     const Mesh& m = meshes_[inst.mesh];
-    if (!m.rtc || !usable_transform(inst.xf)) continue;
+    if (!m.rtc || !finite_transform(inst.xf)) continue;
+    const bool flat = !invertible(inst.xf);
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(g, m.rtc);
+    rtcSetGeometryInstancedScene(g, flat ? baked_scene(int(i)) : m.rtc);
     float xf[12];  // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout
     std::copy(inst.xf.m, inst.xf.m + 12, xf);
+    if (flat) std::copy(kIdentity.m, kIdentity.m + 12, xf);  // the baked copy is in world space
     rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xf);
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(top_, g, unsigned(i));
@@ -189,6 +200,29 @@ void Geometry::build_top() {
   }
   rtcCommitScene(top_);
   ++top_builds_;
+}
+
+// The instance's mesh in world space, its triangles in the mesh's order (hits keep their
+// primitive ids; surface() transforms the mesh's own corners). Triangles flattened to no area
+// become single points, which rays never hit.
+RTCScene Geometry::baked_scene(int instance) {
+  const Instance& inst = instances_[size_t(instance)];
+  Baked& b = baked_[size_t(instance)];
+  if (b.rtc && std::equal(b.xf.m, b.xf.m + 12, inst.xf.m)) return b.rtc;
+  if (b.rtc) rtcReleaseScene(b.rtc);
+  const Mesh& m = meshes_[size_t(inst.mesh)];
+  std::vector<Vec3> positions(m.positions.size());
+  for (size_t i = 0; i < positions.size(); ++i) positions[i] = inst.xf.point(m.positions[i]);
+  std::vector<uint32_t> indices = m.indices;
+  for (size_t t = 0; t < m.triangle_count(); ++t) {
+    const Vec3 &p0 = positions[indices[3 * t]], &p1 = positions[indices[3 * t + 1]], &p2 = positions[indices[3 * t + 2]];
+    if (!(length(cross(p1 - p0, p2 - p0)) > 0)) indices[3 * t + 1] = indices[3 * t + 2] = indices[3 * t];
+  }
+  b.rtc = triangle_scene(positions, indices);
+  if (partial_visibility_) rtcSetSceneFlags(b.rtc, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  rtcCommitScene(b.rtc);
+  b.xf = inst.xf;
+  return b.rtc;
 }
 
 bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {

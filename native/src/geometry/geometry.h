@@ -52,7 +52,7 @@ class Geometry {
 
   // Takes a validated mesh (see api/): drops degenerate triangles and reports them in warnings.
   int add_mesh(Mesh mesh, std::vector<std::string>& warnings);
-  int add_instance(Instance instance, std::vector<std::string>& warnings);
+  int add_instance(Instance instance);
   // Moves an instance (also after commit): the next commit rebuilds only the top-level BVH over
   // the meshes' existing BVHs.
   void set_instance_transform(int instance, const Transform& xf);
@@ -85,11 +85,21 @@ class Geometry {
   std::vector<Instance> instances_;
   std::vector<unsigned> rtc_to_instance_;  // Embree instance geometry id -> our instance index
   std::vector<unsigned> instance_visibility_;
+  // Instances whose transform flattens the mesh (zero scale on an axis: no inverse, which Embree's
+  // instancing needs) are traced through a copy of the mesh baked into world space, rebuilt when
+  // the transform changes. Cycles renders such objects.
+  struct Baked {
+    RTCScene rtc = nullptr;
+    Transform xf;
+  };
+  std::vector<Baked> baked_;  // per instance
   Bounds bounds_;
   bool partial_visibility_ = false;
   bool committed_ = false, top_dirty_ = false;
   uint64_t mesh_builds_ = 0, top_builds_ = 0;
   void build_top();
+  RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices) const;
+  RTCScene baked_scene(int instance);
 };
 
 }  // namespace lt

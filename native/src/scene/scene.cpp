@@ -19,8 +19,7 @@ void Scene::commit() {
     const Instance& inst = geometry.instance(int(i));
     const Mesh& m = geometry.mesh(inst.mesh);
     if (!m.rtc) continue;
-    float det = inst.xf.determinant();
-    if (!(std::abs(det) > 1e-30f) || !std::isfinite(det)) continue;
+    if (!std::isfinite(inst.xf.determinant())) continue;  // left out of the geometry
     for (size_t t = 0; t < m.triangle_count(); ++t) {
       const Material& mat = material(inst.material_for(m.slots.empty() ? 0 : m.slots[t]));
       if (!mat.emissive()) continue;
