@@ -221,6 +221,7 @@ RTCScene Geometry::baked_scene(int instance) {
   b.rtc = triangle_scene(positions, indices);
   if (partial_visibility_) rtcSetSceneFlags(b.rtc, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   rtcCommitScene(b.rtc);
+  ++mesh_builds_;  // a BVH over the mesh: moving such an object costs a mesh build
   b.xf = inst.xf;
   return b.rtc;
 }
