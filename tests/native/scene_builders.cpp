@@ -433,6 +433,22 @@ RegionStats region_stats(const Passes& p, int c, int x0, int x1, int y0, int y1)
   return st;
 }
 
+std::string differing_tiles(const Passes& a, const Passes& b, int tile, double z) {
+  std::string report;
+  for (int ty = 0; ty < a.height / tile; ++ty)
+    for (int tx = 0; tx < a.width / tile; ++tx)
+      for (int c = 0; c < 3; ++c) {
+        RegionStats ra = region_stats(a, c, tx * tile, (tx + 1) * tile, ty * tile, (ty + 1) * tile);
+        RegionStats rb = region_stats(b, c, tx * tile, (tx + 1) * tile, ty * tile, (ty + 1) * tile);
+        double se = std::hypot(ra.standard_error, rb.standard_error);
+        if (std::abs(ra.mean - rb.mean) > z * se + 1e-6)
+          report += "tile " + std::to_string(tx) + "," + std::to_string(ty) + " channel " + std::to_string(c) + ": " +
+                    std::to_string(ra.mean) + " vs " + std::to_string(rb.mean) + " (" + std::to_string(z) +
+                    " se = " + std::to_string(z * se) + ")\n";
+      }
+  return report;
+}
+
 TempDir::TempDir() {
   const char* base = std::getenv("TMPDIR");
   std::string tmpl = std::string(base && *base ? base : "/tmp") + "/lantern_test_XXXXXX";

@@ -114,6 +114,10 @@ struct RegionStats {
   int pixels = 0;
 };
 RegionStats region_stats(const Passes& p, int channel, int x0, int x1, int y0, int y1);
+// Compares two renders per tile x tile pixels and RGB channel: one line for each tile whose means
+// differ by more than z standard errors of their difference (each from its render's Variance
+// pass, so for renders whose pixels are independent), "" when none does.
+std::string differing_tiles(const Passes& a, const Passes& b, int tile, double z);
 
 // A unique empty directory under $TMPDIR (or /tmp), removed with its files by the destructor.
 struct TempDir {
