@@ -186,6 +186,23 @@ def engine_registered(idname=LANTERN):
     return any(getattr(c, "bl_idname", None) == idname for c in bpy.types.RenderEngine.__subclasses__())
 
 
+def export(scene):
+    """Exports and commits the scene as a Lantern render would, into a scene that is then freed.
+    Returns (the export summary, the messages it reported)."""
+    from lantern import core
+    from lantern.export import export_scene
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    reports = []
+    core_scene = core.Scene()
+    try:
+        summary = export_scene(depsgraph, core_scene, lambda level, message: reports.append(message))
+        core_scene.commit()
+    finally:
+        core_scene.close()
+    return summary, reports
+
+
 # Cycles settings that the Lantern settings mirror (same names where the add-on has them).
 _BOUNCES = {
     "max_bounces": "max_bounces",

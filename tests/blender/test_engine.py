@@ -10,19 +10,6 @@ from lantern import core, engine
 from lantern.export import export_scene
 
 
-def export_reports(scene):
-    """Exports the scene as a render would and returns the messages it reported."""
-    depsgraph = scene.view_layers[0].depsgraph
-    depsgraph.update()
-    reports = []
-    core_scene = core.Scene()
-    try:
-        export_scene(depsgraph, core_scene, lambda level, message: reports.append(message))
-    finally:
-        core_scene.close()
-    return reports
-
-
 def test_every_pass_is_present_and_finite(scene_factory):
     scene = scene_factory("cornell_area")
     layer = scene.view_layers[0]
@@ -52,7 +39,7 @@ def test_transparent_film_gives_alpha_zero_on_background(scene_factory):
 
 def test_unsupported_nodes_are_reported_and_fall_back(scene_factory):
     scene = scene_factory("unsupported_node")
-    reports = export_reports(scene)
+    reports = ru.export(scene)[1]
     text = "\n".join(reports)
     assert "ToonMaterial" in text and "Toon" in text, text
     assert "NoiseMaterial" in text and "Noise Texture" in text, text
@@ -74,7 +61,7 @@ def test_flattened_object_renders_as_its_plane_with_a_warning(scene_factory):
             node.inputs["Color"].default_value = (0.05, 0.05, 0.05, 1.0)
     cube = bs.add_object(scene, "FlatCube", bs.mesh_box("FlatCube", (1.6, 1.6, 1.6)), (0, 0, 0.3), scale=(1, 1, 0))
     bs.assign(cube, bs.diffuse("FlatWhite", (0.8, 0.8, 0.8)))
-    reports = export_reports(scene)
+    reports = ru.export(scene)[1]
     assert any("FlatCube" in r and "zero scale" in r for r in reports), reports
     img = ru.render(scene, ru.LANTERN, 16, seed=0).combined
     assert np.isfinite(img).all()

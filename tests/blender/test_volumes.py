@@ -22,15 +22,7 @@ ROUNDING = 1e-5
 
 
 def _export(scene):
-    depsgraph = scene.view_layers[0].depsgraph
-    depsgraph.update()
-    reports = []
-    core_scene = core.Scene()
-    try:
-        summary = export_scene(depsgraph, core_scene, lambda level, message: reports.append(message))
-        core_scene.commit()
-    finally:
-        core_scene.close()
+    summary, reports = ru.export(scene)
     return summary, "\n".join(reports)
 
 

@@ -286,12 +286,20 @@ TEST(ApiBadInput, ZeroScaleAndNonFiniteInstanceTransformsWarnAndRender) {
   Xform inf_xf = scale({kInf, 1, 1});
   add_instance(s, mesh, glow, inf_xf);
   EXPECT_EQ(warnings(s), ++before);
+  // Scaled to a line: nothing has an area either.
+  add_instance(s, mesh, glow, scale({1, 0, 0}));
+  EXPECT_EQ(warnings(s), before);
   Passes p = commit_and_render(s);
   EXPECT_EQ(p.status.nan_samples, 0u);
+  // Only the two meshes' own BVHs were built: collapsed instances get no world-space copy.
+  lt_scene_stats st{};
+  ASSERT_EQ(lt_scene_get_stats(s, &st), LT_OK);
+  EXPECT_EQ(st.mesh_bvh_builds, 2u);
 }
 
-// A mesh flattened by a zero scale on one axis renders as the plane it lies in, as in Cycles
-// (Embree's instancing needs an inverse; Lantern traces a world-space copy): per 8x8 tile, the
+// A mesh flattened by a zero scale on one axis renders as the plane it lies in (Cycles 3.4
+// renders it black; README). Embree's instancing needs an inverse, so Lantern traces a
+// world-space copy of the mesh: per 8x8 tile, the
 // flattened box's image agrees with a plane's within 5 standard errors, emission included. Then
 // the flattened instance is moved, as the viewport does, and still agrees.
 TEST(ApiBadInput, FlattenedMeshRendersAsItsPlane) {

@@ -128,6 +128,14 @@ bool finite_transform(const Transform& xf) {
 }
 // Embree instances need an inverse.
 bool invertible(const Transform& xf) { return std::abs(xf.determinant()) > 1e-30f; }
+// Whether any triangle keeps an area: the linear part has rank 2 or more, i.e. its cofactor
+// matrix (the normal rows) is not zero. Objects scaled to a line or a point (often how animators
+// hide them) are left out rather than baked.
+bool keeps_area(const Instance& inst) {
+  for (const Vec3& r : inst.normal_rows)
+    if (r.x != 0 || r.y != 0 || r.z != 0) return true;
+  return false;
+}
 const Transform kIdentity;
 
 void set_transform(Instance& inst, const Transform& xf) {
@@ -185,14 +193,12 @@ void Geometry::build_top() {
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
     const Mesh& m = meshes_[inst.mesh];
-    if (!m.rtc || !finite_transform(inst.xf)) continue;
+    if (!m.rtc || !finite_transform(inst.xf) || !keeps_area(inst)) continue;
     const bool flat = !invertible(inst.xf);
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, flat ? baked_scene(int(i)) : m.rtc);
-    float xf[12];  // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout
-    std::copy(inst.xf.m, inst.xf.m + 12, xf);
-    if (flat) std::copy(kIdentity.m, kIdentity.m + 12, xf);  // the baked copy is in world space
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xf);
+    // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout; the baked copy is in world space.
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, (flat ? kIdentity : inst.xf).m);
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(top_, g, unsigned(i));
     rtcReleaseGeometry(g);
