@@ -97,10 +97,6 @@ TEST(VolPathWorldVolume, LitByAPointLightScattersAndConvergesAcrossSeeds) {
   Passes a = render(s.get(), volpath_settings(16, 16, 64, 1)), b = render(s.get(), volpath_settings(16, 16, 64, 2));
   ASSERT_EQ(a.first_non_finite(), "");
   for (int ty = 0; ty < 4; ++ty)
-    for (int tx = 0; tx < 4; ++tx) {
-      RegionStats ra = region_stats(a, 0, 4 * tx, 4 * tx + 4, 4 * ty, 4 * ty + 4);
-      RegionStats rb = region_stats(b, 0, 4 * tx, 4 * tx + 4, 4 * ty, 4 * ty + 4);
-      EXPECT_GT(ra.mean, 0.0);
-      EXPECT_LE(std::abs(ra.mean - rb.mean), kSigmas * std::hypot(ra.standard_error, rb.standard_error) + 1e-6);
-    }
+    for (int tx = 0; tx < 4; ++tx) EXPECT_GT(region_stats(a, 0, 4 * tx, 4 * tx + 4, 4 * ty, 4 * ty + 4).mean, 0.0);
+  EXPECT_EQ(differing_tiles(a, b, 4, kSigmas), "");
 }
