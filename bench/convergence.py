@@ -6,8 +6,9 @@ Run inside Blender (bench/run_convergence.sh does the build and the call):
     LANTERN_LIBRARY=build-bench/liblantern.so blender -b --factory-startup --python-exit-code 1 \
         --python bench/convergence.py -- [--quick] [--out bench/results] [--scenes door,caustic]
 
-What it does, per scene ("door", "caustic", "cornell_area" of tests/scenes/build_scenes.py, at
-160x120, --quick: 96x72), in one Blender process, all threads for every engine:
+What it does, per scene ("door", "door_bounce", "caustic", "cornell_area" of
+tests/scenes/build_scenes.py, at 160x120, --quick: 96x72), in one Blender process, all threads for
+every engine:
   * Warm-up: one 1-sample render per method (not recorded).
   * Ladder: each method (Lantern PATH, Lantern BIDIRECTIONAL, Cycles) renders at 4, 8, 16, ...
     samples, a different seed for every render. The methods take turns rung by rung, so a change in
@@ -61,7 +62,7 @@ from lantern import core as lt_core  # noqa: E402
 
 EPS = 1e-2  # relMSE denominator: ref^2 + EPS
 TRIM = 1e-3  # the trimmed relMSE leaves out this fraction of pixels, those of largest error
-SCENES = ("door", "caustic", "cornell_area")
+SCENES = ("door", "door_bounce", "caustic", "cornell_area")
 # name: (engine, Lantern integrator)
 METHODS = {
     "PATH": ("LANTERN", "PATH"),
@@ -391,6 +392,7 @@ def plot(name, res, args):
 
 GOALS = {  # scene: (ratio, comparison, bound)
     "door": [("cycles_over_bdpt", ">=", 5.0)],
+    "door_bounce": [("cycles_over_bdpt", ">=", 5.0)],
     "cornell_area": [("bdpt_over_path", "<=", 2.0)],
     "caustic": [],
 }

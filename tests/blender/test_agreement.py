@@ -106,7 +106,7 @@ def student_t_upper(p, dof):
     return 0.5 * (lo + hi)
 
 
-BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "door"]
+BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "door", "door_bounce"]
 K = 12
 
 

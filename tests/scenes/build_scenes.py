@@ -456,11 +456,14 @@ def build_instanced(scene):
     add_camera(scene, (0, -4.5, 2.5), (0, 0.3, 0.3), lens=40.0)
 
 
-def build_door(scene):
+def build_door(scene, lamp_up=False):
     """A door ajar (the scene of Veach & Guibas 1997, "Metropolis light transport"): two rooms side
     by side, the lamp in the lit one (x > 0), the camera in the other. The partition's doorway is
     closed by a door opened by 6 degrees: light reaches the camera's room only through the 8 cm gap
-    at the door's free edge, so next-event estimation from there is almost always occluded."""
+    at the door's free edge, so next-event estimation from there is almost always occluded. The
+    lamp hangs under the ceiling facing down, so some of its light shines straight through the gap
+    onto the camera's room; with lamp_up it faces the ceiling from 0.5 m below, so every path
+    through the gap has bounced in the lit room first."""
     white = diffuse("DoorWhite", (0.75, 0.75, 0.75))
     w, d, h = 4.0, 3.0, 2.5  # both rooms together: x in [-2, 2], y in [-1.5, 1.5], z in [0, 2.5]
     walls = [  # the +Z unit plane moved into place, normals inward
@@ -489,8 +492,17 @@ def build_door(scene):
            diffuse("DoorWood", (0.6, 0.45, 0.3)))
     assign(add_object(scene, "Crate", mesh_box("Crate", (0.6, 0.6, 0.6)), (-1.2, 0.8, 0), (0, 0, 20)),
            diffuse("DoorCrate", (0.7, 0.5, 0.3)))
-    add_light(scene, "LitRoomLight", "AREA", 1000.0, (1.0, 0.0, 2.45), shape="SQUARE", size=0.5)
+    if lamp_up:
+        add_light(scene, "LitRoomLight", "AREA", 1000.0, (1.0, 0.0, 2.0), (180, 0, 0), shape="SQUARE", size=0.5)
+    else:
+        add_light(scene, "LitRoomLight", "AREA", 1000.0, (1.0, 0.0, 2.45), shape="SQUARE", size=0.5)
     add_camera(scene, (-1.9, -1.3, 1.5), (0.0, 0.5, 0.9), lens=22.0)
+
+
+def build_door_bounce(scene):
+    """The door ajar with the lamp facing the ceiling: the camera's room is lit only by light that
+    bounced in the lit room before passing the gap (closer to Veach's scene)."""
+    build_door(scene, lamp_up=True)
 
 
 def build_caustic(scene):
@@ -669,6 +681,7 @@ SCENES = {
     "instanced": (build_instanced, (96, 96), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
+    "door_bounce": (build_door_bounce, (96, 96), 512),
     "caustic": (build_caustic, (96, 96), 256),
     "smoke_box": (build_smoke_box, (64, 64), 128),
     "thin_fog": (build_thin_fog, (64, 64), 128),
