@@ -332,3 +332,34 @@ def tile_mean_and_se2(run_a, run_b, tile=16):
     n = d.shape[2]
     se2 = (d * d / 4.0).sum(axis=2) / (n * n)
     return mean, se2
+
+
+def tile_report(name, mean_l, mean_c, bound, outdir, images):
+    """The 8 tiles furthest past their bound, as text; writes `images` ({tag: image}) as PNGs."""
+    diff = np.abs(mean_l - mean_c)
+    order = np.argsort((diff / np.maximum(bound, 1e-30)).ravel())[::-1][:8]
+    lines = ["%s: tile (row %d, col %d) channel %d: Lantern %.5f Cycles %.5f |d| %.5f bound %.5f"
+             % (name, i // 3 // mean_l.shape[1], i // 3 % mean_l.shape[1], i % 3,
+                mean_l.ravel()[i], mean_c.ravel()[i], diff.ravel()[i], bound.ravel()[i])
+             for i in order]
+    for tag, img in images.items():
+        write_png(os.path.join(outdir, "%s_%s.png" % (name, tag)), img)
+    return "\n".join(lines)
+
+
+def two_seed_agreement(scene, samples, integrator, name, outdir, tile=16, rounding=1e-5):
+    """test_agreement.py's rule for independent pixels: each engine renders seeds 0 and 1; every
+    tile mean and RGB channel must agree within a Bonferroni z bound (family-wise false alarms
+    1e-3) of both engines' noise, plus `rounding` relative (float32 and EXR). Lantern's renders
+    must be finite. Returns (report, Lantern's tile means); the report is "" when all agree."""
+    runs = {engine: [render(scene, engine, samples, seed=s, integrator=integrator).combined for s in (0, 1)]
+            for engine in (CYCLES, LANTERN)}
+    for img in runs[LANTERN]:
+        assert np.isfinite(img).all(), "%s: non-finite pixels" % name
+    mean_c, se2_c = tile_mean_and_se2(*runs[CYCLES], tile)
+    mean_l, se2_l = tile_mean_and_se2(*runs[LANTERN], tile)
+    bound = bonferroni_z(mean_c.size) * np.sqrt(se2_c + se2_l) + rounding * np.abs(mean_c)
+    if (np.abs(mean_l - mean_c) <= bound).all():
+        return "", mean_l
+    return tile_report(name, mean_l, mean_c, bound, outdir,
+                       {"lantern": 0.5 * sum(runs[LANTERN]), "cycles": 0.5 * sum(runs[CYCLES])}), mean_l

@@ -13,7 +13,6 @@ not independent: there the tile means' variance comes from K independent renders
 critical value is Student's t with K - 1 degrees of freedom (same Bonferroni correction).
 """
 import math
-import os
 
 import numpy as np
 import pytest
@@ -27,34 +26,10 @@ TILE = 16
 ROUNDING = 1e-5  # float32 accumulation and EXR round trip
 
 
-def _report(name, mean_l, mean_c, bound, outdir, images):
-    diff = np.abs(mean_l - mean_c)
-    order = np.argsort((diff / np.maximum(bound, 1e-30)).ravel())[::-1][:8]
-    lines = ["%s: tile (row %d, col %d) channel %d: Lantern %.5f Cycles %.5f |d| %.5f bound %.5f"
-             % (name, i // 3 // mean_l.shape[1], i // 3 % mean_l.shape[1], i % 3,
-                mean_l.ravel()[i], mean_c.ravel()[i], diff.ravel()[i], bound.ravel()[i])
-             for i in order]
-    for tag, img in images.items():
-        ru.write_png(os.path.join(outdir, "%s_%s.png" % (name, tag)), img)
-    return "\n".join(lines)
-
-
 @pytest.mark.parametrize("name", PATH_SCENES)
 def test_path_tracer_agrees_with_cycles(name, scene_factory, outdir):
-    scene = scene_factory(name)
-    c0 = ru.render(scene, ru.CYCLES, SAMPLES, seed=0).combined
-    c1 = ru.render(scene, ru.CYCLES, SAMPLES, seed=1).combined
-    l0 = ru.render(scene, ru.LANTERN, SAMPLES, seed=0).combined
-    l1 = ru.render(scene, ru.LANTERN, SAMPLES, seed=1).combined
-    for img in (l0, l1):
-        assert np.isfinite(img).all()
-    mean_c, se2_c = ru.tile_mean_and_se2(c0, c1, TILE)
-    mean_l, se2_l = ru.tile_mean_and_se2(l0, l1, TILE)
-    z = ru.bonferroni_z(mean_c.size)
-    bound = z * np.sqrt(se2_c + se2_l) + ROUNDING * np.abs(mean_c)
-    ok = np.abs(mean_l - mean_c) <= bound
-    assert ok.all(), _report(name, mean_l, mean_c, bound, outdir,
-                             {"lantern": 0.5 * (l0 + l1), "cycles": 0.5 * (c0 + c1)})
+    report, _ = ru.two_seed_agreement(scene_factory(name), SAMPLES, "PATH", name, outdir, TILE, ROUNDING)
+    assert report == "", report
 
 
 # ---- bidirectional ---------------------------------------------------------------------------
@@ -136,5 +111,5 @@ def test_bidirectional_agrees_with_cycles(name, scene_factory, outdir):
     t = student_t_upper(1e-3 / (2.0 * n), K - 1)
     bound = t * np.sqrt(se2_c + se2_l) + ROUNDING * np.abs(mean_c)
     ok = np.abs(mean_l - mean_c) <= bound
-    assert ok.all(), _report(name + "_bdpt", mean_l, mean_c, bound, outdir,
-                             {"lantern": np.mean(images, axis=0), "cycles": 0.5 * (c0 + c1)})
+    assert ok.all(), ru.tile_report(name + "_bdpt", mean_l, mean_c, bound, outdir,
+                                    {"lantern": np.mean(images, axis=0), "cycles": 0.5 * (c0 + c1)})

@@ -341,6 +341,15 @@ lt_light_desc light(int type, V3 color, const Xform& xf) {
   return l;
 }
 
+lt_volume_desc volume(int node, float density, float color, float g) {
+  lt_volume_desc d{};
+  d.node = node;
+  d.color[0] = d.color[1] = d.color[2] = color;
+  d.density = density;
+  d.anisotropy = g;
+  return d;
+}
+
 lt_light_desc point_light(V3 position, float watts) {
   return light(LT_LIGHT_POINT, {watts, watts, watts}, translate(position));
 }

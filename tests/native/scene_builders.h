@@ -90,6 +90,9 @@ lt_light_desc sun_light(V3 direction_of_travel, float strength, float angle_radi
 lt_light_desc area_light(int shape, float size_x, float size_y, const Xform& xf, float watts);
 void add_light(lt_scene* s, const lt_light_desc& l);
 
+// A volume node (LT_VOLUME_*) with a grey colour and anisotropy g.
+lt_volume_desc volume(int node, float density, float color = 1, float g = 0);
+
 // Defaults with the given size, samples and seed.
 lt_render_settings render_settings(int width, int height, int samples, unsigned seed = 0);
 

@@ -18,15 +18,6 @@ namespace {
 
 constexpr double kSigmas = 5.0;
 
-lt_volume_desc volume(int node, float density, float color = 1, float g = 0) {
-  lt_volume_desc d{};
-  d.node = node;
-  d.color[0] = d.color[1] = d.color[2] = color;
-  d.density = density;
-  d.anisotropy = g;
-  return d;
-}
-
 // A material whose only output is a volume: a Transparent surface for PATH, invisible for VOLPATH.
 int add_volume_material(lt_scene* s, const lt_volume_desc& d) {
   lt_shader_node n = node(LT_NODE_TRANSPARENT);

@@ -12,15 +12,6 @@ namespace {
 
 constexpr double kSigmas = 5.0;
 
-lt_volume_desc volume(int node, float density, float color = 1, float g = 0) {
-  lt_volume_desc d{};
-  d.node = node;
-  d.color[0] = d.color[1] = d.color[2] = color;
-  d.density = density;
-  d.anisotropy = g;
-  return d;
-}
-
 lt_render_settings volpath_settings(int w, int h, int spp, unsigned seed = 1) {
   lt_render_settings rs = render_settings(w, h, spp, seed);
   rs.integrator = LT_INTEGRATOR_VOLPATH;
