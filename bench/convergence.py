@@ -40,7 +40,6 @@ import argparse
 import json
 import math
 import os
-import platform
 import subprocess
 import sys
 import tempfile
@@ -51,11 +50,13 @@ import numpy as np
 
 BENCH = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(BENCH)
+sys.path.insert(0, BENCH)
 sys.path.insert(0, os.path.join(REPO, "addon"))
 sys.path.insert(0, os.path.join(REPO, "tests", "scenes"))
 sys.path.insert(0, os.path.join(REPO, "tests", "blender"))
 
 import build_scenes  # noqa: E402  (the test scenes' builders)
+from machine import cpu_model  # noqa: E402
 import lantern  # noqa: E402
 import render_utils  # noqa: E402  (render to EXR and read back; PNG writer)
 from lantern import core as lt_core  # noqa: E402
@@ -100,17 +101,6 @@ def parse_args():
     a.ref_seconds = a.ref_seconds or (16.0 if a.quick else 180.0)
     a.threads = a.threads or os.cpu_count()
     return a
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def git_describe():

@@ -30,7 +30,6 @@ import contextlib
 import ctypes
 import json
 import os
-import platform
 import re
 import statistics
 import struct
@@ -44,10 +43,12 @@ import numpy as np
 
 BENCH = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(BENCH)
+sys.path.insert(0, BENCH)
 sys.path.insert(0, os.path.join(REPO, "addon"))
 sys.path.insert(0, os.path.join(REPO, "tests", "scenes"))
 
 import build_scenes  # noqa: E402  (the test scenes' builders: the same Cornell box as the tests)
+from machine import cpu_model  # noqa: E402
 import lantern  # noqa: E402
 from lantern import core as lt_core  # noqa: E402
 from lantern import engine as lt_engine  # noqa: E402
@@ -276,17 +277,6 @@ def run_embree_raw(exe, path, rays, threads, repeats, *extra):
 
 
 # ---- main ---------------------------------------------------------------------------------------
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
 
 def best(xs):
     xs = [x for x in xs if x is not None]

@@ -22,6 +22,13 @@ float spot_attenuation(const Light& l, const Vec3& from_light) {
   return c;
 }
 
+// A point on an area light, uniform by area (rectangle: u over [-1, 1]^2 of the half axes).
+Vec3 sample_area_point(const Light& l, Vec2 u) {
+  if (l.shape == AreaShape::Rectangle) return l.position + l.axis_u * (2 * u.x - 1) + l.axis_v * (2 * u.y - 1);
+  Vec2 d = sample_disk_concentric(u);
+  return l.position + l.axis_u * d.x + l.axis_v * d.y;
+}
+
 // Equirectangular mapping of Blender's Environment Texture: +X at the image centre, +Z at the top.
 Vec2 direction_to_equirect(const Vec3& d) {
   float u = (std::atan2(d.y, d.x) - kPi) / (-2 * kPi);
@@ -133,13 +140,7 @@ bool LightSet::sample(const Scene& scene, int i, const Vec3& p, Vec2 u, LightSam
     }
     case LightType::Area: {
       // Cycles 3.4: one-sided, radiance P / (4 A); sampled uniformly by area.
-      Vec3 q;
-      if (l.shape == AreaShape::Rectangle) {
-        q = l.position + l.axis_u * (2 * u.x - 1) + l.axis_v * (2 * u.y - 1);
-      } else {
-        Vec2 d = sample_disk_concentric(u);
-        q = l.position + l.axis_u * d.x + l.axis_v * d.y;
-      }
+      Vec3 q = sample_area_point(l, u);
       Vec3 to = q - p;
       float d2 = length_squared(to);
       if (!(d2 > 0)) return false;
@@ -283,13 +284,7 @@ bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, Emis
       return !is_black(e->radiance);
     }
     case LightType::Area: {
-      Vec3 q;
-      if (l.shape == AreaShape::Rectangle) {
-        q = l.position + l.axis_u * (2 * up.x - 1) + l.axis_v * (2 * up.y - 1);
-      } else {
-        Vec2 d = sample_disk_concentric(up);
-        q = l.position + l.axis_u * d.x + l.axis_v * d.y;
-      }
+      Vec3 q = sample_area_point(l, up);
       Vec3 local = sample_cosine_hemisphere(ud);
       e->ray.o = q;
       e->ray.d = Frame(l.direction).to_world(local);
