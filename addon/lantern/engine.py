@@ -183,7 +183,7 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
         heuristic = {core.MIS_POWER: "power", core.MIS_BALANCE: "balance",
                      core.MIS_UNIFORM: "uniform"}[s.mis_heuristic]
         lines.append("integrator: bidirectional path tracing, every (s, t) strategy, %s-heuristic MIS "
-                     "(camera path <= %d, light path <= %d vertices)"
+                     "(camera path <= %d, light path <= %d vertices); media scatter on both subpaths"
                      % (heuristic, s.max_camera_length, s.max_light_length))
     elif s.integrator == core.INTEGRATOR_VOLPATH:
         lines.append("integrator: volumetric path tracing, next-event estimation from surfaces and "
@@ -209,8 +209,8 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
                    "delta tracking and ratio tracking against per-cell majorants (unbiased)")
             media.append("%d heterogeneous VDB grid(s): %s" % (grids, est))
         text = "media: " + "; ".join(media)
-        if s.integrator not in (core.INTEGRATOR_VOLPATH, core.INTEGRATOR_VOLUME_DEBUG):
-            text += " -- IGNORED by this integrator (use Volumetric Path)"
+        if s.integrator == core.INTEGRATOR_PATH:
+            text += " -- IGNORED by this integrator (use Volumetric Path or Bidirectional)"
         lines.append(text)
     else:
         lines.append("media: none")
@@ -346,10 +346,10 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             for w in core_scene.warnings():
                 report({'WARNING'}, w)
             print("Lantern: exported %s in %.2f s" % (summary, time.monotonic() - t0))
-            if summary.get("media") and scene.lantern.integrator not in ('VOLPATH', 'VOLUME_DEBUG'):
-                report({'WARNING'}, "The scene has %d participating medium/media, which only the "
-                       "Volumetric Path integrator renders: the %s integrator ignores them"
-                       % (summary["media"], scene.lantern.integrator.title()))
+            if summary.get("media") and scene.lantern.integrator == 'PATH':
+                report({'WARNING'}, "The scene has %d participating medium/media, which the Path "
+                       "Tracing integrator ignores: use Volumetric Path or Bidirectional"
+                       % summary["media"])
 
             settings = render_settings(scene, width, height, border)
             if self.is_preview:  # material preview: small, few samples, no debug views

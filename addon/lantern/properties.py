@@ -98,8 +98,9 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
              "sampling: robust for most scenes"),
             ("BIDIRECTIONAL", "Bidirectional",
              "Bidirectional path tracing: also traces paths from the lights and connects them to "
-             "camera paths; slower per sample, but converges much faster where light is hard to "
-             "reach (light through gaps, caustics, small bright lights)"),
+             "camera paths, through participating media too; slower per sample, but converges "
+             "much faster where light is hard to reach (light through gaps, caustics, small "
+             "bright lights)"),
             ("VOLPATH", "Volumetric Path",
              "Path tracing through participating media (volume materials, Volume objects); the "
              "same as Path Tracing in scenes without volumes"),

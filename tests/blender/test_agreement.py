@@ -81,7 +81,9 @@ def student_t_upper(p, dof):
     return 0.5 * (lo + hi)
 
 
-BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "door", "door_bounce"]
+# smoke_box and world_fog: media (a smoke box behind an invisible boundary, a World volume)
+BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "door", "door_bounce", "smoke_box",
+               "world_fog"]
 K = 12
 
 

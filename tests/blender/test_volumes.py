@@ -156,8 +156,8 @@ def test_volume_debug_view_renders(scene_factory):
 
 
 def test_media_with_another_integrator_are_reported(scene_factory):
-    """Media are rendered by 'VOLPATH' only: the export counts them, so that the engine can warn
-    that another integrator ignores them."""
+    """Media are rendered by 'VOLPATH' and 'BIDIRECTIONAL': the export counts them, so that the
+    engine can warn that 'PATH' ignores them."""
     scene = scene_factory("smoke_box")
     depsgraph = scene.view_layers[0].depsgraph
     depsgraph.update()

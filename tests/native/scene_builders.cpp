@@ -350,6 +350,15 @@ lt_volume_desc volume(int node, float density, float color, float g) {
   return d;
 }
 
+int add_volume_material(lt_scene* s, const lt_volume_desc& d) {
+  lt_shader_node n = node(LT_NODE_TRANSPARENT);
+  n.color.value[0] = n.color.value[1] = n.color.value[2] = 1;
+  int id;
+  check(lt_scene_add_material(s, &n, 1, 0, &id), "add_material");
+  check(lt_scene_set_material_volume(s, id, &d, 1), "set_material_volume");
+  return id;
+}
+
 lt_light_desc point_light(V3 position, float watts) {
   return light(LT_LIGHT_POINT, {watts, watts, watts}, translate(position));
 }

@@ -92,6 +92,9 @@ void add_light(lt_scene* s, const lt_light_desc& l);
 
 // A volume node (LT_VOLUME_*) with a grey colour and anisotropy g.
 lt_volume_desc volume(int node, float density, float color = 1, float g = 0);
+// A material whose only output is a volume: a Transparent surface for PATH, an invisible boundary
+// for the integrators that render media.
+int add_volume_material(lt_scene* s, const lt_volume_desc& d);
 
 // Defaults with the given size, samples and seed.
 lt_render_settings render_settings(int width, int height, int samples, unsigned seed = 0);

@@ -1,7 +1,8 @@
 // Bidirectional path tracing: MIS weights of every strategy that can sample a path sum to one,
 // light subpaths of length 1 reduce BDPT to path tracing with NEE, full BDPT agrees with path
-// tracing in expectation, long paths stay finite, the image is linear in the lights' power and
-// independent of the scene's scale, and sampling allocates nothing per sample.
+// tracing in expectation (with media: with volumetric path tracing), long paths stay finite, the
+// image is linear in the lights' power and independent of the scene's scale, and sampling
+// allocates nothing per sample.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -36,7 +37,9 @@ enum class Lights { Area, PointSpot, AreaAndSun };
 
 // A closed room (diffuse, red and green side walls) seen from inside, with a glossy sphere, a
 // glass sphere and a diffuse block; an opening in the ceiling lets the sun in for AreaAndSun.
-ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1.0f) {
+// With media: fog (albedo 0.8, g 0.4, optical depth about 1 across) in the lower half of the room
+// behind an invisible boundary, a medium inside the glass sphere and a thin world volume.
+ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1.0f, bool media = false) {
   ScenePtr s = new_scene();
   lt_scene* sc = s.get();
   int white = add_diffuse(sc, {0.7f, 0.7f, 0.7f});
@@ -69,7 +72,17 @@ ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1
     glass.ior = 1.5f;
     int glass_id;
     check(lt_scene_add_material(sc, &glass, 1, 0, &glass_id), "glass");
+    if (media) {
+      lt_volume_desc inside = volume(LT_VOLUME_PRINCIPLED, 3.0f, 0.9f, -0.3f);
+      check(lt_scene_set_material_volume(sc, glass_id, &inside, 0), "glass medium");
+    }
     add_object(sc, icosphere(0.25f, 3), glass_id, translate({0.1f, -0.4f, 0.25f}));
+  }
+  if (media) {
+    int fog = add_volume_material(sc, volume(LT_VOLUME_PRINCIPLED, 0.6f, 0.8f, 0.4f));
+    add_object(sc, box({-0.95f, -1.55f, 0.02f}, {0.95f, 0.95f, 0.9f}), fog);
+    lt_volume_desc air = volume(LT_VOLUME_PRINCIPLED, 0.05f, 0.9f);
+    check(lt_scene_set_world_volume(sc, &air), "world volume");
   }
   switch (lights) {
     case Lights::Area:
@@ -97,7 +110,7 @@ lt_render_settings settings(int integrator, int size, int samples, unsigned seed
   lt_render_settings r = render_settings(size, size, samples, seed);
   r.integrator = integrator;
   r.max_bounces = 8;
-  r.diffuse_bounces = r.glossy_bounces = r.transmission_bounces = 8;
+  r.diffuse_bounces = r.glossy_bounces = r.transmission_bounces = r.volume_bounces = 8;
   r.max_light_length = light_length;
   r.max_camera_length = 64;
   return r;
@@ -124,8 +137,9 @@ TileMeans tile_means(const std::vector<float>& rgba, int size, int tile) {
 // For random paths the integrator builds in three scenes, the weights of all strategies that can
 // sample the same path sum to 1 (power, balance and uniform heuristics).
 TEST(Bdpt, MisWeightsSumToOne) {
-  for (Lights lights : {Lights::Area, Lights::PointSpot, Lights::AreaAndSun}) {
-    ScenePtr s = room(lights);
+  for (int scene_index = 0; scene_index < 4; ++scene_index) {
+    const Lights lights = scene_index == 3 ? Lights::Area : Lights(scene_index);
+    ScenePtr s = room(lights, 0.2f, 1.0f, scene_index == 3);  // the fourth: with media
     const lt::Scene& scene = s->scene;
     const int size = 32;
     lt::Camera camera(scene.camera, size, size);
@@ -133,6 +147,7 @@ TEST(Bdpt, MisWeightsSumToOne) {
     for (lt::MisHeuristic h : {lt::MisHeuristic::Power, lt::MisHeuristic::Balance, lt::MisHeuristic::Uniform}) {
       lt::IntegratorSettings is;
       is.max_bounces = 8;
+      is.volume_bounces = 8;
       is.mis = h;
       lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
       int checked = 0;
@@ -151,7 +166,7 @@ TEST(Bdpt, MisWeightsSumToOne) {
         }
       }
       EXPECT_GT(checked, 1000) << "too few connected paths to test";
-      EXPECT_LT(worst, 1e-3) << "scene " << int(lights) << " heuristic " << int(h) << ": " << checked << " paths";
+      EXPECT_LT(worst, 1e-3) << "scene " << scene_index << " heuristic " << int(h) << ": " << checked << " paths";
     }
   }
 }
@@ -171,39 +186,115 @@ TEST(Bdpt, LightLengthOneEqualsPathTracing) {
   }
 }
 
-// Full BDPT (every strategy, light tracing splats included) against path tracing. Splats make
-// neighbouring pixels' noise correlated, so each tile mean's standard error comes from the spread
-// of K independent renders (different seeds) of each integrator. The glass is rough (0.5) here: a
-// sharper caustic gives path tracing a heavy-tailed error that K renders cannot estimate.
+// Per tile and channel, the means of K renders of `a` and of `b` (seeds a.seed + k, b.seed + k)
+// that differ by more than 5 standard errors, each from the spread of its K tile means (BDPT's
+// splats correlate neighbouring pixels, so the pixels' variances would not do).
+static std::string differing_tiles_k(lt_scene* s, lt_render_settings a, lt_render_settings b, int K, int tile) {
+  std::vector<TileMeans> ma, mb;
+  const unsigned seed_a = a.seed, seed_b = b.seed;
+  for (int k = 0; k < K; ++k) {
+    a.seed = seed_a + k;
+    b.seed = seed_b + k;
+    Passes pa = render(s, a), pb = render(s, b);
+    if (!pa.first_non_finite().empty() || !pb.first_non_finite().empty())
+      return "non-finite pixels: " + pa.first_non_finite() + pb.first_non_finite();
+    ma.push_back(tile_means(pa.combined, a.width, tile));
+    mb.push_back(tile_means(pb.combined, b.width, tile));
+  }
+  std::string report;
+  for (int i = 0; i < ma[0].tiles * 3; ++i) {
+    double mean_a = 0, mean_b = 0, va = 0, vb = 0;
+    for (int k = 0; k < K; ++k) { mean_a += ma[k].mean[i] / K; mean_b += mb[k].mean[i] / K; }
+    for (int k = 0; k < K; ++k) {
+      va += (ma[k].mean[i] - mean_a) * (ma[k].mean[i] - mean_a) / (K - 1);
+      vb += (mb[k].mean[i] - mean_b) * (mb[k].mean[i] - mean_b) / (K - 1);
+    }
+    double se = std::sqrt(va / K + vb / K);
+    if (!(std::abs(mean_a - mean_b) <= 5 * se))
+      report += "tile " + std::to_string(i / 3) + " channel " + std::to_string(i % 3) + ": " + std::to_string(mean_a) +
+                " vs " + std::to_string(mean_b) + " (5 se = " + std::to_string(5 * se) + ")\n";
+  }
+  return report;
+}
+
+// Full BDPT (every strategy, light tracing splats included) against path tracing, K = 6 renders
+// each. The glass is rough (0.5) here: a sharper caustic gives path tracing a heavy-tailed error
+// that K renders cannot estimate.
 TEST(Bdpt, FullBdptAgreesWithPathTracing) {
   const int size = 48, tile = 16, K = 6;
   for (Lights lights : {Lights::Area, Lights::PointSpot, Lights::AreaAndSun}) {
     ScenePtr s = room(lights, 0.5f);
-    std::vector<TileMeans> pt, bd;
-    for (int k = 0; k < K; ++k) {
-      // A diffuse limit below the total: BDPT must apply Cycles' per-kind limits as PT does.
-      lt_render_settings pa = settings(LT_INTEGRATOR_PATH, size, 48, 100 + k, 64);
-      lt_render_settings pb = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 200 + k, 64);
-      pa.diffuse_bounces = pb.diffuse_bounces = 2;
-      Passes a = render(s.get(), pa);
-      Passes b = render(s.get(), pb);
-      ASSERT_EQ(a.first_non_finite(), "");
-      ASSERT_EQ(b.first_non_finite(), "");
-      pt.push_back(tile_means(a.combined, size, tile));
-      bd.push_back(tile_means(b.combined, size, tile));
-    }
-    const int tiles = pt[0].tiles;
-    for (int i = 0; i < tiles * 3; ++i) {
-      double ma = 0, mb = 0, va = 0, vb = 0;
-      for (int k = 0; k < K; ++k) { ma += pt[k].mean[i] / K; mb += bd[k].mean[i] / K; }
-      for (int k = 0; k < K; ++k) {
-        va += (pt[k].mean[i] - ma) * (pt[k].mean[i] - ma) / (K - 1);
-        vb += (bd[k].mean[i] - mb) * (bd[k].mean[i] - mb) / (K - 1);
-      }
-      double se = std::sqrt(va / K + vb / K);
-      EXPECT_LE(std::abs(ma - mb), 5 * se) << "scene " << int(lights) << " tile " << i / 3 << " channel " << i % 3
-                                          << ": PT " << ma << " BDPT " << mb;
-    }
+    // A diffuse limit below the total: BDPT must apply Cycles' per-kind limits as PT does.
+    lt_render_settings pa = settings(LT_INTEGRATOR_PATH, size, 48, 100, 64);
+    lt_render_settings pb = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 200, 64);
+    pa.diffuse_bounces = pb.diffuse_bounces = 2;
+    EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, K, tile), "") << "scene " << int(lights);
+  }
+}
+
+// Media: BDPT's walks scatter in fog, in a medium behind glass and in a world volume, and its
+// connections carry the transmittance. With light subpaths of length 1 it is volumetric path
+// tracing (per tile within 5 SE from the Variance passes); full BDPT agrees with it from K
+// renders each; both with Cycles' volume bounce limit at 0 (single scattering) and at 8.
+TEST(Bdpt, AgreesWithVolumetricPathTracingInMedia) {
+  const int size = 48, tile = 16;
+  ScenePtr s = room(Lights::Area, 0.5f, 1.0f, true);
+  for (int volume_bounces : {0, 8}) {
+    lt_render_settings vp = settings(LT_INTEGRATOR_VOLPATH, size, 128, 1, 64);
+    lt_render_settings b1 = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 128, 2, 1);
+    vp.volume_bounces = b1.volume_bounces = volume_bounces;
+    Passes a = render(s.get(), vp), b = render(s.get(), b1);
+    ASSERT_EQ(a.first_non_finite(), "");
+    ASSERT_EQ(b.first_non_finite(), "");
+    EXPECT_EQ(differing_tiles(a, b, tile, 5), "") << "light length 1, volume bounces " << volume_bounces;
+
+    lt_render_settings va = settings(LT_INTEGRATOR_VOLPATH, size, 48, 100, 64);
+    lt_render_settings vb = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 200, 64);
+    va.volume_bounces = vb.volume_bounces = volume_bounces;
+    EXPECT_EQ(differing_tiles_k(s.get(), va, vb, 6, tile), "") << "full BDPT, volume bounces " << volume_bounces;
+  }
+}
+
+// A heterogeneous medium (an OpenVDB grid, delta and ratio tracking) over a floor, lit by an area
+// light and a world: full BDPT against volumetric path tracing, K renders each. A World volume
+// over the sky scene: no light from the world or the sun gets through, for both integrators.
+TEST(Bdpt, AgreesWithVolumetricPathTracingInAGrid) {
+  ScenePtr s = new_scene();
+  lt_volume_desc d = volume(LT_VOLUME_PRINCIPLED, 4, 0.9f, 0.3f);
+  Xform xf = identity();
+  int id = -1;
+  ASSERT_EQ(lt_scene_add_volume_grid(s.get(), (std::string(LANTERN_TEST_VDB_DIR) + "/density.vdb").c_str(), "density",
+                                     xf.data(), &d, &id),
+            LT_OK)
+      << lt_last_error();
+  add_object(s.get(), plane(6, 6), add_diffuse(s.get(), {0.6f, 0.6f, 0.6f}), translate({1.45f, -1.25f, 0.5f}));
+  add_light(s.get(), area_light(LT_AREA_SQUARE, 0.6f, 0.6f, translate({1.0f, -1.0f, 3.0f}), 80));
+  set_world(s.get(), {0.2f, 0.25f, 0.35f}, 1);
+  // The grid spans about [0.7, 2.2] x [-2, -0.5] x [0.7, 2.2].
+  set_camera(s.get(), perspective_camera(look_at({1.45f, -6, 1.6f}, {1.45f, -1.25f, 1.2f}), 45));
+  check(lt_scene_commit(s.get()), "commit");
+  lt_render_settings va = settings(LT_INTEGRATOR_VOLPATH, 32, 48, 100, 64);
+  lt_render_settings vb = settings(LT_INTEGRATOR_BIDIRECTIONAL, 32, 16, 200, 64);
+  va.volume_estimator = vb.volume_estimator = LT_VOLUME_TRACKING;
+  EXPECT_EQ(differing_tiles_k(s.get(), va, vb, 6, 8), "");
+}
+
+TEST(Bdpt, WorldVolumeHidesLightFromInfinity) {
+  ScenePtr s = new_scene();
+  add_object(s.get(), plane(4, 4), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}));
+  add_light(s.get(), sun_light({0.3f, 0.2f, -1}, 4, 0.05f));
+  set_world(s.get(), {0.3f, 0.4f, 0.6f}, 1);
+  lt_volume_desc air = volume(LT_VOLUME_PRINCIPLED, 0.05f, 0.9f);
+  check(lt_scene_set_world_volume(s.get(), &air), "world volume");
+  set_camera(s.get(), perspective_camera(look_at({0, -3, 1.5f}, {0, 0, 0}), 40));
+  check(lt_scene_commit(s.get()), "commit");
+  for (int integrator : {LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    Passes p = render(s.get(), settings(integrator, 32, 16, 1, 64));
+    ASSERT_EQ(p.first_non_finite(), "");
+    double rgb = 0;
+    for (size_t i = 0; i < p.combined.size(); ++i)
+      if (i % 4 != 3) rgb += p.combined[i];
+    EXPECT_EQ(rgb, 0.0) << "integrator " << integrator;
   }
 }
 
@@ -310,34 +401,38 @@ TEST(Bdpt, ImageDoesNotDependOnSceneScale) {
 
 // After warm-up, tracing samples with either integrator performs no heap allocation.
 TEST(Bdpt, NoHeapAllocationPerSample) {
-  ScenePtr s = room(Lights::AreaAndSun);
-  const lt::Scene& scene = s->scene;
-  const int size = 32;
-  lt::Camera camera(scene.camera, size, size);
-  lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
-  lt::IntegratorSettings is;
-  lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
-  std::vector<lt::Splat> splats;
-  splats.reserve(1 << 16);
-  lt::SampleStats stats;
-  auto run = [&](int first, int count) {
-    for (int i = first; i < first + count; ++i) {
-      lt::Sampler sampler(5, uint32_t(i % (size * size)), uint32_t(i));
-      lt::CameraSample cs;
-      cs.film = {float(i % size) + 0.5f, float((i / size) % size) + 0.5f};
-      cs.pixel_center = cs.film;
-      cs.ray = camera.generate(cs.film.x, cs.film.y);
-      lt::trace_bdpt(ctx, cs, sampler, stats, splats);
-      lt::trace_path(scene, is, cs.ray, sampler, stats);
-      if (splats.size() > (1 << 15)) splats.clear();
-    }
-  };
-  run(0, 200);  // warm-up: per-thread scratch subpaths are allocated once
-  g_allocations = 0;
-  g_count_allocations = true;
-  run(200, 2000);
-  g_count_allocations = false;
-  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations while tracing 2000 samples";
+  for (bool media : {false, true}) {
+    ScenePtr s = media ? room(Lights::Area, 0.2f, 1.0f, true) : room(Lights::AreaAndSun);
+    const lt::Scene& scene = s->scene;
+    const int size = 32;
+    lt::Camera camera(scene.camera, size, size);
+    lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
+    lt::IntegratorSettings is;
+    is.volume_bounces = 8;
+    lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
+    std::vector<lt::Splat> splats;
+    splats.reserve(1 << 16);
+    lt::SampleStats stats;
+    auto run = [&](int first, int count) {
+      for (int i = first; i < first + count; ++i) {
+        lt::Sampler sampler(5, uint32_t(i % (size * size)), uint32_t(i));
+        lt::CameraSample cs;
+        cs.film = {float(i % size) + 0.5f, float((i / size) % size) + 0.5f};
+        cs.pixel_center = cs.film;
+        cs.ray = camera.generate(cs.film.x, cs.film.y);
+        lt::trace_bdpt(ctx, cs, sampler, stats, splats);
+        if (media) lt::trace_volpath(scene, is, cs.ray, sampler, stats);
+        else lt::trace_path(scene, is, cs.ray, sampler, stats);
+        if (splats.size() > (1 << 15)) splats.clear();
+      }
+    };
+    run(0, 200);  // warm-up: per-thread scratch subpaths are allocated once
+    g_allocations = 0;
+    g_count_allocations = true;
+    run(200, 2000);
+    g_count_allocations = false;
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations while tracing 2000 samples" << (media ? " with media" : "");
+  }
 }
 
 // The strategy view's cells, summed, are the Combined image when the view covers every depth.

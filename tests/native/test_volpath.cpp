@@ -18,16 +18,6 @@ namespace {
 
 constexpr double kSigmas = 5.0;
 
-// A material whose only output is a volume: a Transparent surface for PATH, invisible for VOLPATH.
-int add_volume_material(lt_scene* s, const lt_volume_desc& d) {
-  lt_shader_node n = node(LT_NODE_TRANSPARENT);
-  n.color.value[0] = n.color.value[1] = n.color.value[2] = 1;
-  int id;
-  check(lt_scene_add_material(s, &n, 1, 0, &id), "add_material");
-  check(lt_scene_set_material_volume(s, id, &d, 1), "set_material_volume");
-  return id;
-}
-
 lt_render_settings volpath_settings(int w, int h, int spp, unsigned seed = 1) {
   lt_render_settings rs = render_settings(w, h, spp, seed);
   rs.integrator = LT_INTEGRATOR_VOLPATH;

@@ -126,7 +126,8 @@ def export_world_volume(depsgraph, core_scene, report):
     """The World Output's Volume input as a World volume; returns the number of media (0 or 1).
 
     As in Cycles, escaped rays and shadow rays to sun and world lights cross it to infinity: the
-    background and suns are fully attenuated; only the Volumetric Path integrator renders it."""
+    background and suns are fully attenuated; the Volumetric Path and Bidirectional integrators
+    render it."""
     world = depsgraph.scene_eval.world
     if world is None or not world.use_nodes or world.node_tree is None:
         return 0

@@ -196,15 +196,15 @@ typedef struct lt_volume_desc {
 
 /* Gives a material a homogeneous medium inside the closed meshes that use it (entered through
  * front faces, left through back faces). null_surface != 0: the material has no Surface output and
- * its boundary is invisible to the volumetric integrators (the add-on exports a Transparent
- * surface for the other integrators). */
+ * its boundary is invisible to the integrators that render media, VOLPATH and BIDIRECTIONAL (the
+ * add-on exports a Transparent surface for PATH). */
 LT_API int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* desc, int null_surface);
 
 /* A World volume: a homogeneous medium filling the whole scene, active along every ray (it adds to
  * the media of closed meshes the ray is in). As in Cycles 3.4, rays that escape travel an infinite
  * distance through it: the background seen through a world volume with sigma_t > 0 is fully
- * attenuated, and so are shadow rays to the world and to sun lights (they reach infinity). Only the
- * volumetric integrators see it. Calling it again adds another world medium. */
+ * attenuated, and so are shadow rays to the world and to sun lights (they reach infinity). The
+ * volumetric and bidirectional integrators see it. Calling it again adds another world medium. */
 LT_API int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* desc);
 
 /* A Volume object: the float grid `grid` of the .vdb file at `path` (its density multiplies the
@@ -250,7 +250,8 @@ LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);
 
 /* ---- rendering ---------------------------------------------------------------------------- */
 
-/* VOLPATH: volumetric path tracing (equals PATH on a scene without media). VOLUME_DEBUG: a 2x2 view
+/* VOLPATH: volumetric path tracing (equals PATH on a scene without media). BIDIRECTIONAL renders
+ * media too (both subpaths scatter in them). PATH ignores media. VOLUME_DEBUG: a 2x2 view
  * of the estimators for the same camera rays, each panel a half-size view of the frame: top left
  * transmittance by ray marching, top right by ratio tracking, bottom left distance to the sampled
  * collision (world units, 0 for none) by ray marching, bottom right by delta tracking. */
@@ -285,7 +286,8 @@ typedef struct lt_render_settings {
   int transparent_background;         /* Film > Transparent: background alpha 0 */
   /* Bidirectional: vertices of the camera subpath after the camera, vertices of the light
    * subpath including the one on the light (1: only the light vertex, which makes BDPT equal to
-   * path tracing with next-event estimation), and the MIS heuristic (lt_mis). */
+   * path tracing with next-event estimation, or VOLPATH in a scene with media), and the MIS
+ * heuristic (lt_mis). */
   int max_camera_length, max_light_length;
   int mis_heuristic;
   /* Bidirectional strategy view: keep each (s, t) strategy's weighted contribution for path

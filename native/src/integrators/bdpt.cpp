@@ -7,10 +7,18 @@
 // Strategies: s = 0 (the camera subpath reaches an emitter: a mesh light, a lamp, the sun or the
 // world), s = 1 (a fresh light sample at the camera vertex, as next-event estimation), s >= 2,
 // and t = 1 (a light vertex connected to the pinhole and splatted through the pixel filter).
+//
+// Media (scenes with volumes; pbrt 3, section 16.3): both walks sample free flights along every
+// segment as the volumetric path tracer does and scatter at medium vertices with the phase
+// function; invisible boundaries update the walks' volume stacks and make no vertex; connections
+// multiply by the transmittance of their segment. The MIS densities of medium vertices hold the
+// phase function's directional density only, as pbrt's: the distance densities are left out of
+// every strategy alike, so the weights still sum to one (unbiased), at some cost in variance.
 #include <algorithm>
 #include <vector>
 
 #include "integrators/integrator.h"
+#include "integrators/media_transport.h"
 #include "integrators/path_state.h"
 #include "integrators/path_vertex.h"
 
@@ -19,12 +27,13 @@ namespace lt {
 namespace {
 
 constexpr unsigned kVisLightRay = kVisDiffuse | kVisGlossy | kVisTransmission;
+constexpr int kMaxNullCrossings = 1024;
 
 enum class Mode { Radiance, Importance };
 
 // Bounce kinds, as Cycles limits them: a vertex counts as the kind of its BSDF's dominant lobe
 // (a property of the path, so every strategy of a path agrees on it and MIS stays consistent).
-enum Kind : uint8_t { kNone = 0, kDiffuse = 1, kGlossy = 2, kTransmission = 3 };
+enum Kind : uint8_t { kNone = 0, kDiffuse = 1, kGlossy = 2, kTransmission = 3, kVolume = 4 };
 uint8_t kind_of(const Bsdf& bsdf) {
   uint32_t f = bsdf.dominant_flags();
   if (!f || (f == (kLobeSpecular | kLobeTransmission) && bsdf.count() > 0 &&
@@ -54,7 +63,11 @@ class Bdpt {
       : ctx_(ctx), scene_(ctx.scene), lights_(ctx.scene.lights), s_(ctx.settings), cs_(cs), sampler_(sampler),
         stats_(stats),
         pixel_center_(cs.pixel_center),
-        film_area_(ctx.camera.pixel_plane_area() * float(ctx.width) * float(ctx.height)) {}
+        film_area_(ctx.camera.pixel_plane_area() * float(ctx.width) * float(ctx.height)),
+        media_(ctx.scene.has_media()),
+        world_volume_(media_ && std::any_of(ctx.scene.global_media.begin(), ctx.scene.global_media.end(), [&](int m) {
+          return ctx.scene.media[m].is_homogeneous() && !ctx.scene.media[m].empty();
+        })) {}
 
   SampleValue run(std::vector<Splat>& splats, Spectrum* strategies);
   std::vector<float> weight_sums();
@@ -83,8 +96,10 @@ class Bdpt {
     return h / (film_area_ * c * c * c);
   }
   float bsdf_pdf(const PathVertex& v, const Vec3& to_prev, const Vec3& to_next) const {
+    if (v.type == VertexType::Medium) return phase(v).pdf(to_prev, to_next);
     return v.bsdf.pdf(v.frame.to_local(to_prev), v.frame.to_local(to_next));
   }
+  const PhaseHG& phase(const PathVertex& v) const { return scene_.media[v.medium].phase(); }
   // Density (area measure at `next`) that vertex v samples `next`, having been reached from prev.
   float pdf(const PathVertex& v, const PathVertex* prev, const PathVertex& next) const {
     if (v.type == VertexType::Light) return pdf_light(v, next);
@@ -134,6 +149,7 @@ class Bdpt {
   // ---- scattering ----------------------------------------------------------------------------
   // BSDF towards `to` at a vertex, with pbrt's shading-normal correction for importance transport.
   Spectrum f(const PathVertex& v, const Vec3& to_world, Mode mode) const {
+    if (v.type == VertexType::Medium) return Spectrum(phase(v).eval(v.wo, to_world));
     if (v.type != VertexType::Surface) return Spectrum(0.0f);
     Vec3 wi = v.frame.to_local(to_world);
     if ((dot(to_world, v.n) > 0) != (wi.z > 0)) return Spectrum(0.0f);  // shading normal would leak
@@ -151,11 +167,15 @@ class Bdpt {
     if (v.type == VertexType::Light && v.on_surface()) return std::abs(dot(v.n, w));
     return 1.0f;
   }
-  bool visible(const PathVertex& a, const PathVertex& b) const {
+  // Transmittance of the segment from a to b: 0 or 1 without media; with media the product of
+  // the media's transmittances (through invisible boundaries), 0 if a surface is in the way.
+  // a's volume stack is the side a was reached from; a segment leaving through a's surface
+  // crosses it.
+  Spectrum transmittance(const PathVertex& a, const PathVertex& b) const {
     Ray r;
     Vec3 d = b.p - a.p;
     float dist = length(d);
-    if (!(dist > 0)) return false;
+    if (!(dist > 0)) return Spectrum(0.0f);
     r.d = d / dist;
     r.o = a.type == VertexType::Surface ? spawn_origin(a.sp, r.d) : a.p;
     r.tmin = 0;
@@ -166,11 +186,19 @@ class Bdpt {
       Vec3 end = b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p;
       r.tmax = length(end - r.o) * (1 - 1e-4f);
     }
+    if (media_) {
+      VolumeStack stack = a.stack;
+      if (a.type == VertexType::Surface && dot(r.d, a.n) < 0) cross_boundary(scene_, a.sp, r.d, &stack);
+      return shadow_transmittance(scene_, stack, r, sampler_, s_.volume_estimator, s_.volume_step, stats_);
+    }
     ++stats_.rays;
-    return !scene_.geometry.occluded(r);
+    return scene_.geometry.occluded(r) ? Spectrum(0.0f) : Spectrum(1.0f);
+  }
+  static bool scatters(const PathVertex& v) {
+    return v.type == VertexType::Medium || (v.type == VertexType::Surface && v.bsdf.has_non_delta());
   }
 
-  int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vector<PathVertex>& path);
+  int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeStack stack, std::vector<PathVertex>& path);
   void emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le);
   int generate_light_subpath(std::vector<PathVertex>& path);
   float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, PathVertex* sampled, int s, int t,
@@ -213,22 +241,22 @@ class Bdpt {
   // so those vertices' kinds are counted (the last one's is free).
   bool within_kind_limits(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s,
                           int t) const {
-    int n[4] = {0, 0, 0, 0};
+    int n[5] = {0, 0, 0, 0, 0};
     for (int i = 1; i < t; ++i)
-      if (camera[i].type == VertexType::Surface) ++n[camera[i].kind];
+      if (camera[i].type == VertexType::Surface || camera[i].type == VertexType::Medium) ++n[camera[i].kind];
     for (int i = 1; i < s; ++i)
-      if (light[i].type == VertexType::Surface) ++n[light[i].kind];
+      if (light[i].type == VertexType::Surface || light[i].type == VertexType::Medium) ++n[light[i].kind];
     // The scattering vertex next to the light end.
     const PathVertex* last = s >= 2 ? &light[1] : (s == 1 ? &camera[t - 1] : (t >= 3 ? &camera[t - 2] : nullptr));
-    if (last && last->type == VertexType::Surface) --n[last->kind];
+    if (last && (last->type == VertexType::Surface || last->type == VertexType::Medium)) --n[last->kind];
     return n[kDiffuse] <= s_.diffuse_bounces && n[kGlossy] <= s_.glossy_bounces &&
-           n[kTransmission] <= s_.transmission_bounces;
+           n[kTransmission] <= s_.transmission_bounces && n[kVolume] <= s_.volume_bounces;
   }
   // Adds a vertex of kind k to the counts; true if that takes them past its limit.
   bool exceeds_kind_limit(int* n, uint8_t k) const {
     ++n[k];
     return (k == kDiffuse && n[k] > s_.diffuse_bounces) || (k == kGlossy && n[k] > s_.glossy_bounces) ||
-           (k == kTransmission && n[k] > s_.transmission_bounces);
+           (k == kTransmission && n[k] > s_.transmission_bounces) || (k == kVolume && n[k] > s_.volume_bounces);
   }
   int camera_depth() const { return std::min(s_.max_camera_length, s_.max_bounces + 2); }
 
@@ -241,6 +269,8 @@ class Bdpt {
   SampleStats& stats_;
   Vec2 pixel_center_;
   float film_area_;  // view-plane area of the render region at unit distance
+  bool media_;       // the scene has media: walks sample free flights, connections transmittance
+  bool world_volume_;  // a World volume: it attenuates light from infinity completely (as in Cycles)
   SampleValue out_;
   Spectrum L_{0.0f};
   Spectrum* strategies_ = nullptr;
@@ -256,7 +286,8 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t), 0, t);
 }
 
-int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vector<PathVertex>& path) {
+int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeStack stack,
+                      std::vector<PathVertex>& path) {
   if (max_depth <= 0) return 1;
   // Densities are computed from the vertices' positions with the same pdf() the MIS weights use,
   // not from the sampled directions (rays leave from offset origins): every strategy then sees
@@ -267,23 +298,31 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
     return pdf(prev, count >= 2 ? &path[count - 2] : nullptr, v);
   };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
-  int count = 1, bounces = 0;
+  int count = 1, bounces = 0, nulls = 0;
   const float beta_start = max_component(beta);
   // Bounce kinds counted so far towards Cycles' per-kind limits (see within_kind_limits): a walk
   // stops where every strategy using its further vertices would fail them, so no work is spent
   // on vertices no strategy can use.
-  int kinds[4] = {0, 0, 0, 0};
+  int kinds[5] = {0, 0, 0, 0, 0};
+  auto scattering = [](const PathVertex& v) { return v.type == VertexType::Surface || v.type == VertexType::Medium; };
   for (;;) {
     PathVertex& prev = path[count - 1];
     PathVertex& v = path[count];
     Hit hit;
     ++stats_.rays;
     bool found = scene_.geometry.intersect(ray, visibility, &hit);
+    // Free flight through the media, as the volumetric path tracer (path.cpp) samples it.
+    const Spectrum beta_before = beta;
+    MediumInteraction mi;
+    int medium = -1;
+    if (media_)
+      medium = sample_media(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_, s_.volume_estimator,
+                            s_.volume_step, &beta, &mi);
     if (mode == Mode::Radiance) {
       // Lamps with a size are crossed, not hit: each one crossed ends a path of strategy s = 0.
       if (lights_.has_hittable()) {
         Ray r = ray;
-        r.tmax = found ? hit.t : ray.tmax;
+        r.tmax = medium >= 0 ? std::min(mi.t, found ? hit.t : ray.tmax) : (found ? hit.t : ray.tmax);
         lights_.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
           const Light& l = lights_.light(h.light);
           v = PathVertex();
@@ -291,12 +330,12 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
           v.light = h.light;
           v.p = ray.o + ray.d * h.t;
           v.n = l.type == LightType::Area ? l.direction : -ray.d;
-          v.beta = beta;
+          v.beta = medium >= 0 ? beta_before : beta;  // the segment before the collision (exact for grey media)
           v.pdf_fwd = density_of(count, v);
           emitter_reached(path, count + 1, h.radiance);
         });
       }
-      if (!found) {
+      if (!found && medium < 0) {
         bool background = count == 1;
         if (background) out_.alpha = s_.transparent_background ? 0.0f : 1.0f;
         if (!(background && s_.transparent_background)) {
@@ -316,58 +355,100 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, std::vec
         }
       }
     }
-    if (!found) break;
-
-    SurfacePoint sp = scene_.geometry.surface(hit);
-    const bool backface = dot(ray.d, sp.ng) > 0;
-    v.type = VertexType::Surface;
-    v.delta = false;
-    v.infinite = false;
-    v.sp = sp;
-    v.p = sp.p;
-    v.n = backface ? -sp.ng : sp.ng;
-    v.frame = Frame(backface ? -sp.ns : sp.ns);
-    v.wo = v.frame.to_local(-ray.d);
-    v.beta = beta;
-    v.pdf_rev = 0;
-    v.pdf_fwd = density_of(count, v);
-    if (count >= 2) path[count - 2].pdf_rev = prev.delta ? 0.0f : pdf(prev, &v, path[count - 2]);
-    const Material& material = scene_.material(sp.material);
-    Spectrum le = material.evaluate(scene_.images, sp.uv, backface, &v.bsdf);
-    v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
-    v.kind = kind_of(v.bsdf);
-    // Light subpaths: strategies with s >= count + 1 count the kinds of light[2..count].
-    if (mode == Mode::Importance && count >= 2 && v.type == VertexType::Surface && exceeds_kind_limit(kinds, v.kind))
-      break;
-    ++count;
-    if (mode == Mode::Radiance) {
-      if (count == 2) {
-        out_.alpha = 1;
-        out_.depth = hit.t;
-        out_.normal = v.frame.n;
-        out_.albedo = v.bsdf.albedo();
-      }
-      if (v.light >= 0) emitter_reached(path, count, le);
-      else if (!is_black(le)) add(beta * le, 0, count);  // emission no light sampler knows: no MIS partner
-    }
-    if (++bounces >= max_depth || v.bsdf.count() == 0) break;
-    // Camera subpaths: every strategy using vertex `count` counts the kinds of camera[1..count-2].
-    if (mode == Mode::Radiance && count >= 3 && path[count - 2].type == VertexType::Surface &&
-        exceeds_kind_limit(kinds, path[count - 2].kind))
-      break;
-
-    BsdfSample bs;
-    float u_lobe = sampler_.next_1d();
-    Vec2 u = sampler_.next_2d();
-    if (!v.bsdf.sample(v.wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
-    Vec3 wi = v.frame.to_world(bs.wi);
-    if ((dot(wi, v.n) > 0) != ((bs.flags & kLobeReflection) != 0)) break;
-    v.delta = (bs.flags & kLobeSpecular) != 0;
-    beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
-    if (mode == Mode::Importance) beta *= shading_correction(v, -ray.d, wi);
     if (!is_finite(beta) || is_black(beta)) break;
-    if (!(bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1)) visibility = visibility_of(bs.flags);
-    ray.o = spawn_origin(sp, wi);
+
+    Vec3 wi;
+    if (medium >= 0) {
+      // A real collision: beta holds sigma_s T / pdf (medium.h). A medium vertex.
+      v.type = VertexType::Medium;
+      v.delta = false;
+      v.infinite = false;
+      v.p = mi.p;
+      v.n = Vec3(0.0f);
+      v.wo = normalize(-ray.d);
+      v.medium = medium;
+      v.stack = stack;
+      v.light = -1;
+      v.kind = kVolume;
+      v.beta = beta;
+      v.pdf_rev = 0;
+      v.pdf_fwd = density_of(count, v);
+      if (count >= 2) path[count - 2].pdf_rev = prev.delta ? 0.0f : pdf(prev, &v, path[count - 2]);
+      if (mode == Mode::Importance && count >= 2 && exceeds_kind_limit(kinds, kVolume)) break;
+      ++count;
+      if (mode == Mode::Radiance && count == 2) out_.alpha = 1;
+      if (++bounces >= max_depth) break;
+      if (mode == Mode::Radiance && count >= 3 && scattering(path[count - 2]) &&
+          exceeds_kind_limit(kinds, path[count - 2].kind))
+        break;
+      float pdf_dir;
+      if (!phase(v).sample(v.wo, sampler_.next_2d(), &wi, &pdf_dir) || !(pdf_dir > 0)) break;
+      visibility = kVisDiffuse;  // beta *= p / pdf = 1: HG sampling is exact
+      ray.o = mi.p;
+    } else {
+      if (!found) break;
+      SurfacePoint sp = scene_.geometry.surface(hit);
+      if (media_ && scene_.null_surface(sp.material)) {
+        // An invisible medium boundary: update the stack and continue along the same line.
+        if (++nulls > kMaxNullCrossings) break;
+        cross_boundary(scene_, sp, ray.d, &stack);
+        ray.o = spawn_origin(sp, ray.d);
+        ray.tmax -= hit.t;
+        ray.tmin = 0;
+        continue;
+      }
+      const bool backface = dot(ray.d, sp.ng) > 0;
+      v.type = VertexType::Surface;
+      v.delta = false;
+      v.infinite = false;
+      v.sp = sp;
+      v.p = sp.p;
+      v.n = backface ? -sp.ng : sp.ng;
+      v.frame = Frame(backface ? -sp.ns : sp.ns);
+      v.wo = v.frame.to_local(-ray.d);
+      v.stack = stack;
+      v.beta = beta;
+      v.pdf_rev = 0;
+      v.pdf_fwd = density_of(count, v);
+      if (count >= 2) path[count - 2].pdf_rev = prev.delta ? 0.0f : pdf(prev, &v, path[count - 2]);
+      const Material& material = scene_.material(sp.material);
+      Spectrum le = material.evaluate(scene_.images, sp.uv, backface, &v.bsdf);
+      v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
+      v.kind = kind_of(v.bsdf);
+      // Light subpaths: strategies with s >= count + 1 count the kinds of light[2..count].
+      if (mode == Mode::Importance && count >= 2 && exceeds_kind_limit(kinds, v.kind)) break;
+      ++count;
+      if (mode == Mode::Radiance) {
+        if (count == 2) {
+          out_.alpha = 1;
+          out_.depth = hit.t;
+          out_.normal = v.frame.n;
+          out_.albedo = v.bsdf.albedo();
+        }
+        if (v.light >= 0) emitter_reached(path, count, le);
+        else if (!is_black(le)) add(beta * le, 0, count);  // emission no light sampler knows: no MIS partner
+      }
+      if (++bounces >= max_depth || v.bsdf.count() == 0) break;
+      // Camera subpaths: every strategy using vertex `count` counts the kinds of camera[1..count-2].
+      if (mode == Mode::Radiance && count >= 3 && scattering(path[count - 2]) &&
+          exceeds_kind_limit(kinds, path[count - 2].kind))
+        break;
+
+      BsdfSample bs;
+      float u_lobe = sampler_.next_1d();
+      Vec2 u = sampler_.next_2d();
+      if (!v.bsdf.sample(v.wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
+      wi = v.frame.to_world(bs.wi);
+      const bool reflect_geo = dot(wi, v.n) > 0;
+      if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;
+      v.delta = (bs.flags & kLobeSpecular) != 0;
+      beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
+      if (mode == Mode::Importance) beta *= shading_correction(v, -ray.d, wi);
+      if (!is_finite(beta) || is_black(beta)) break;
+      if (!(bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1)) visibility = visibility_of(bs.flags);
+      if (media_ && !reflect_geo) cross_boundary(scene_, sp, wi, &stack);  // into / out of a medium
+      ray.o = spawn_origin(sp, wi);
+    }
     ray.d = wi;
     ray.tmin = 0;
     ray.tmax = INFINITY;
@@ -384,6 +465,9 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   Vec2 up = sampler_.next_2d(), ud = sampler_.next_2d();
   const Light& l = lights_.light(li);
   if (l.faces_receiver()) return 0;
+  // Light arriving from infinity through a World volume is gone (as for s = 0 and s = 1, which
+  // cross it to infinity); a subpath from the scene's bounding disk would cross a finite stretch.
+  if (world_volume_ && l.infinite()) return 0;
   EmissionSample e;
   if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
     return 0;
@@ -402,8 +486,12 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   Ray ray = e.ray;
   ray.tmin = 0;
   if (l.type == LightType::Area || l.type == LightType::Triangle) ray.o = offset_ray_origin(e.ray.o, e.n);
+  VolumeStack stack;
+  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, ray, &stack, stats_);
+  y0.stack = stack;
   // No strategy uses more than max_depth() + 2 light vertices (t = 1: s - 1 <= max_depth()).
-  int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, path);
+  int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, stack,
+                          path);
   // An infinite light's vertex is a direction: its density is the direction's (pbrt 3, 16.3.2);
   // y1's is the disk's (pdf_light handles it).
   if (y0.infinite) y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY);
@@ -471,7 +559,7 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
 
 Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, int t) {
   PathVertex& pt = camera[t - 1];
-  if (pt.type != VertexType::Surface || !pt.bsdf.has_non_delta()) return Spectrum(0.0f);
+  if (!scatters(pt)) return Spectrum(0.0f);
   if (!within_kind_limits(light, camera, s, t)) return Spectrum(0.0f);
   if (s == 1) {
     // A fresh light sample at the camera vertex: exactly the path tracer's next-event estimation.
@@ -499,18 +587,25 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance) * sampled.beta * cos_at(pt, ls.wi);
     if (is_black(c)) return c;
     Ray shadow;
-    shadow.o = spawn_origin(pt.sp, ls.wi);
+    shadow.o = pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p;
     shadow.d = ls.wi;
     shadow.tmin = 0;
     shadow.tmax = std::isinf(ls.distance) ? INFINITY : ls.distance * (1 - 1e-4f);
-    ++stats_.rays;
-    if (scene_.geometry.occluded(shadow)) return Spectrum(0.0f);
+    if (media_) {
+      VolumeStack stack = pt.stack;
+      if (pt.type == VertexType::Surface && dot(ls.wi, pt.n) < 0) cross_boundary(scene_, pt.sp, ls.wi, &stack);
+      c *= shadow_transmittance(scene_, stack, shadow, sampler_, s_.volume_estimator, s_.volume_step, stats_);
+      if (is_black(c)) return c;
+    } else {
+      ++stats_.rays;
+      if (scene_.geometry.occluded(shadow)) return Spectrum(0.0f);
+    }
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
     return c * mis_weight(light, camera, &sampled, 1, t);
   }
   // s >= 2: join two surface vertices with a shadow ray.
   PathVertex& qs = light[s - 1];
-  if (qs.type != VertexType::Surface || !qs.bsdf.has_non_delta()) return Spectrum(0.0f);
+  if (!scatters(qs)) return Spectrum(0.0f);
   Vec3 d = pt.p - qs.p;
   float d2 = length_squared(d);
   if (!(d2 > 0)) return Spectrum(0.0f);
@@ -518,13 +613,15 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   Spectrum c = qs.beta * f(qs, w, Mode::Importance) * f(pt, -w, Mode::Radiance) * pt.beta;
   if (is_black(c)) return c;
   c *= cos_at(qs, w) * cos_at(pt, w) / d2;
-  if (is_black(c) || !visible(qs, pt)) return Spectrum(0.0f);
+  if (is_black(c)) return c;
+  c *= transmittance(qs, pt);
+  if (is_black(c)) return c;
   return c * mis_weight(light, camera, nullptr, s, t);
 }
 
 void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats) {
   const PathVertex& qs = light[s - 1];
-  if (qs.type != VertexType::Surface || !qs.bsdf.has_non_delta()) return;
+  if (!scatters(qs)) return;
   if (!within_kind_limits(light, camera, s, 1)) return;
   const Camera& cam = ctx_.camera;
   Vec2 film;
@@ -535,7 +632,8 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   if (is_black(base)) return;
   PathVertex& z0 = endpoint(VertexType::Camera);
   z0.p = cam.position();
-  if (!visible(qs, z0)) return;
+  base *= transmittance(qs, z0);
+  if (is_black(base)) return;
   float c = dot(dir, cam.forward());
   // Pixel j's importance is W_j = h_j(x) / (a cos^4) (a: view-plane area of a pixel); with the
   // geometry term cos * cos_qs / d^2 the contribution is h_j cos_qs / (a cos^3 d^2). The film
@@ -587,7 +685,10 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   z0.type = VertexType::Camera;
   z0.p = cs_.ray.o;
   z0.delta = ctx_.camera.orthographic();  // a delta direction: t = 1 cannot reach it
-  int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, camera);
+  VolumeStack stack;
+  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, cs_.ray, &stack, stats_);
+  z0.stack = stack;
+  int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, stack, camera);
   int ns = generate_light_subpath(light);
 
   // s = 1 takes a fresh light sample and needs no light subpath (there is none when the picked
@@ -613,15 +714,15 @@ std::vector<float> Bdpt::weight_sums() {
   z0.type = VertexType::Camera;
   z0.p = cs_.ray.o;
   z0.delta = ctx_.camera.orthographic();
-  int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, camera);
+  VolumeStack stack;
+  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, cs_.ray, &stack, stats_);
+  int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, stack, camera);
   int ns = generate_light_subpath(light);
   for (int t = 2; t <= nt; ++t)
     for (int s = 2; s <= ns; ++s) {
       if (s + t - 2 > max_depth()) break;
       PathVertex &qs = light[s - 1], &pt = camera[t - 1];
-      if (pt.type != VertexType::Surface || qs.type != VertexType::Surface || !pt.bsdf.has_non_delta() ||
-          !qs.bsdf.has_non_delta() || !visible(qs, pt))
-        continue;
+      if (!scatters(pt) || !scatters(qs) || is_black(transmittance(qs, pt))) continue;
       if (is_black(f(qs, normalize(pt.p - qs.p), Mode::Importance)) || is_black(f(pt, normalize(qs.p - pt.p), Mode::Radiance)))
         continue;
       // The full path x[0] = camera ... x[k] = light, with both densities of every vertex:
@@ -654,8 +755,8 @@ std::vector<float> Bdpt::weight_sums() {
         if (t2 >= 1 && s2 >= 1) {
           const PathVertex& a = c2[t2 - 1];
           const PathVertex& b = l2[s2 - 1];
-          bool a_ok = a.type == VertexType::Camera ? !ctx_.camera.orthographic() : (a.type == VertexType::Surface && !a.delta);
-          bool b_ok = b.type == VertexType::Light ? !b.delta_direction : (b.type == VertexType::Surface && !b.delta);
+          bool a_ok = a.type == VertexType::Camera ? !ctx_.camera.orthographic() : (scatters(a) && !a.delta);
+          bool b_ok = b.type == VertexType::Light ? !b.delta_direction : (scatters(b) && !b.delta);
           if (!a_ok || !b_ok) continue;
         }
         if (s2 == 0 && is_delta_light(x[k])) continue;

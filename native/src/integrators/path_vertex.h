@@ -6,6 +6,7 @@
 #include "core/math.h"
 #include "geometry/hit.h"
 #include "scene/bsdf.h"
+#include "scene/volume_stack.h"
 
 namespace lt {
 
@@ -13,7 +14,7 @@ enum class VertexType : uint8_t {
   Camera,
   Light,
   Surface,
-  Medium,  // scattering inside a participating medium (phase function instead of BSDF)
+  Medium,  // scattering inside a participating medium (its phase function instead of a BSDF)
 };
 
 struct PathVertex {
@@ -28,9 +29,11 @@ struct PathVertex {
   Vec3 p;
   Vec3 n;                 // geometric normal (zero for points in space: point lights, camera, media)
   Frame frame;            // shading frame, z facing the side the vertex was reached from
-  Vec3 wo;                // local direction towards the predecessor
+  Vec3 wo;                // direction towards the predecessor: local (surfaces), world (media)
   SurfacePoint sp;
   Bsdf bsdf;
+  int medium = -1;        // Medium vertices: the medium whose phase function scatters
+  VolumeStack stack;      // scenes with media: the media around the vertex on the side it was reached from
 
   bool on_surface() const { return n.x != 0 || n.y != 0 || n.z != 0; }
   bool connectible() const {
