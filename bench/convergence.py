@@ -131,9 +131,13 @@ def trimmed_mean(e, floor_map, fraction=TRIM):
 class Renderer:
     def __init__(self, scene, threads, tmpdir):
         self.scene, self.threads, self.tmpdir = scene, threads, tmpdir
+        # In a scene with media the path tracer is the volumetric one (PATH ignores media).
+        self.media = render_utils.export(scene)[0].get("media", 0) > 0
 
     def __call__(self, method, samples, seed):
         engine, integrator = METHODS[method]
+        if self.media and integrator == "PATH":
+            integrator = "VOLPATH"
         c0 = time.process_time()
         out = render_utils.render(self.scene, engine, samples, seed, threads=self.threads,
                                   outdir=self.tmpdir, integrator=integrator,
@@ -264,7 +268,8 @@ def run_scene(name, args, tmpdir):
             t = trimmed_mean(e, floor_map)
             r["relmse_trimmed"] = t if t > 0 else None
 
-    res = {"width": args.width, "height": args.height, "methods": rows}
+    res = {"width": args.width, "height": args.height, "methods": rows,
+           "path_integrator": "VOLPATH" if render.media else "PATH"}
     analyse(res)
     t_eq = res["equal_time"]["seconds"]
 
