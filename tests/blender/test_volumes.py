@@ -169,6 +169,18 @@ def test_media_with_another_integrator_are_reported(scene_factory):
     assert summary["media"] >= 1
 
 
+def test_render_report_says_which_integrators_render_media(scene_factory):
+    """The render report lists the smoke; under PATH it says the media are ignored, under
+    VOLPATH and BIDIRECTIONAL it does not."""
+    from lantern import engine
+    scene = scene_factory("smoke_box")
+    for integrator in ("PATH", "VOLPATH", "BIDIRECTIONAL"):
+        ru.render(scene, ru.LANTERN, 2, seed=0, integrator=integrator)
+        text = engine.LAST_RENDER["report"]
+        assert "media: 1 homogeneous" in text, text
+        assert ("IGNORED" in text) == (integrator == "PATH"), (integrator, text)
+
+
 # ---- World volume ------------------------------------------------------------------------------
 def test_world_volume_is_exported_and_counted(scene_factory):
     scene = scene_factory("world_fog")

@@ -45,8 +45,9 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
   };
   // NEE from p (a medium point when sp is null): one light picked by power, MIS-weighted against
   // the scattering; f(wi, &pdf) returns the BSDF x cos or phase value. `st` is the volume stack on
-  // the side the shadow ray leaves into.
-  auto next_event = [&](const Vec3& p, const SurfacePoint* sp, const VolumeStack& st, auto f) {
+  // the side the path arrived from, whose geometric normal is `side`: a shadow ray leaving
+  // through the surface crosses it (one on that side must not enter the surface's medium again).
+  auto next_event = [&](const Vec3& p, const SurfacePoint* sp, const Vec3& side, const VolumeStack& st, auto f) {
     float pmf, u_light;
     int li = lights.pick(sampler.next_1d(), &pmf, &u_light);
     Vec2 u = sampler.next_2d();
@@ -63,7 +64,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
     Spectrum T(1.0f);
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;
-      if (sp) cross_boundary(scene, *sp, ls.wi, &shadow_stack);
+      if (sp && dot(ls.wi, side) < 0) cross_boundary(scene, *sp, ls.wi, &shadow_stack);
       T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats);
       if (is_black(T)) return;
     } else {
@@ -108,7 +109,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       const PhaseHG& phase = scene.media[medium].phase();
       const Vec3 wo = normalize(-ray.d);
       if (!lights.empty())
-        next_event(mi.p, nullptr, stack, [&](const Vec3& wi, float* pdf) {
+        next_event(mi.p, nullptr, Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf) {
           float p = phase.eval(wo, wi);
           *pdf = p;
           return Spectrum(p);
@@ -172,7 +173,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       const Frame frame(ns);
       const Vec3 wo = frame.to_local(-ray.d);
       if (bsdf.has_non_delta() && !lights.empty())
-        next_event(sp.p, &sp, stack, [&](const Vec3& wi_world, float* pdf) {
+        next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf) {
           Vec3 wi = frame.to_local(wi_world);
           Spectrum f = bsdf.eval(wo, wi, pdf);
           // The geometric normal decides which side the light is on; shading normals only shade.
