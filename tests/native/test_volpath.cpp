@@ -163,14 +163,20 @@ TEST(VolPath, ExtremesAreFiniteAndBounded) {
     cam.clip_end = 1e3f * k.scale;
     set_camera(s.get(), cam);
     check(lt_scene_commit(s.get()), "commit");
-    lt_render_settings rs = volpath_settings(16, 16, 4);
-    rs.volume_bounces = 64;
-    auto t0 = std::chrono::steady_clock::now();
-    Passes p = render(s.get(), rs);
-    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    EXPECT_EQ(p.first_non_finite(), "") << "density " << k.density << " albedo " << k.albedo << " g " << k.g;
-    EXPECT_EQ(p.status.nan_samples, 0u) << "density " << k.density << " scale " << k.scale;
-    EXPECT_LT(secs, 20.0) << "density " << k.density << " albedo " << k.albedo << " scale " << k.scale;
+    for (int integrator : {LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+      lt_render_settings rs = volpath_settings(16, 16, 4);
+      rs.integrator = integrator;
+      rs.volume_bounces = 64;
+      auto t0 = std::chrono::steady_clock::now();
+      Passes p = render(s.get(), rs);
+      double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const std::string what = "integrator " + std::to_string(integrator) + " density " + std::to_string(k.density) +
+                               " albedo " + std::to_string(k.albedo) + " g " + std::to_string(k.g) + " scale " +
+                               std::to_string(k.scale);
+      EXPECT_EQ(p.first_non_finite(), "") << what;
+      EXPECT_EQ(p.status.nan_samples, 0u) << what;
+      EXPECT_LT(secs, 20.0) << what;
+    }
   }
 }
 
