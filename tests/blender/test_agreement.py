@@ -81,9 +81,10 @@ def student_t_upper(p, dof):
     return 0.5 * (lo + hi)
 
 
-# smoke_box and world_fog: media (a smoke box behind an invisible boundary, a World volume)
+# smoke_box, world_fog and vdb_cloud: media (a smoke box behind an invisible boundary, a World
+# volume, a VDB grid by delta and ratio tracking)
 BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "door", "door_bounce", "smoke_box",
-               "world_fog"]
+               "world_fog", "vdb_cloud"]
 K = 12
 
 

@@ -297,6 +297,12 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     if (prev.delta) return 0.0f;
     return pdf(prev, count >= 2 ? &path[count - 2] : nullptr, v);
   };
+  // The density of the vertex before prev as sampled from prev, arriving from v (the other
+  // direction). Every vertex the walk reaches sets it, emitters ended on included: the s = 0 weight
+  // of a path that escapes to the world or crosses a lamp reads it.
+  auto reverse_density = [&](int count, const PathVertex& v) {
+    if (count >= 2) path[count - 2].pdf_rev = path[count - 1].delta ? 0.0f : pdf(path[count - 1], &v, path[count - 2]);
+  };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
   int count = 1, bounces = 0, nulls = 0;
   const float beta_start = max_component(beta);
@@ -332,6 +338,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
           v.n = l.type == LightType::Area ? l.direction : -ray.d;
           v.beta = medium >= 0 ? beta_before : beta;  // the segment before the collision (exact for grey media)
           v.pdf_fwd = density_of(count, v);
+          reverse_density(count, v);
           emitter_reached(path, count + 1, h.radiance);
         });
       }
@@ -347,6 +354,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
             v.p = prev.p + ray.d;
             v.beta = beta;
             v.pdf_fwd = density_of(count, v);
+            reverse_density(count, v);
             emitter_reached(path, count + 1, le);
           };
           if (lights_.world_light() >= 0 && (!background || scene_.world.camera_visible))
@@ -373,7 +381,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.beta = beta;
       v.pdf_rev = 0;
       v.pdf_fwd = density_of(count, v);
-      if (count >= 2) path[count - 2].pdf_rev = prev.delta ? 0.0f : pdf(prev, &v, path[count - 2]);
+      reverse_density(count, v);
       if (mode == Mode::Importance && count >= 2 && exceeds_kind_limit(kinds, kVolume)) break;
       ++count;
       if (mode == Mode::Radiance && count == 2) out_.alpha = 1;
@@ -410,7 +418,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.beta = beta;
       v.pdf_rev = 0;
       v.pdf_fwd = density_of(count, v);
-      if (count >= 2) path[count - 2].pdf_rev = prev.delta ? 0.0f : pdf(prev, &v, path[count - 2]);
+      reverse_density(count, v);
       const Material& material = scene_.material(sp.material);
       Spectrum le = material.evaluate(scene_.images, sp.uv, backface, &v.bsdf);
       v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
@@ -744,6 +752,7 @@ std::vector<float> Bdpt::weight_sums() {
       for (int t2 = 1; t2 <= k + 1; ++t2) {
         const int s2 = k + 1 - t2;
         if (s2 + t2 - 2 > max_depth() || (s2 == 1 && t2 == 1)) continue;
+        if (s2 > s_.max_light_length || t2 - 1 > camera_depth()) continue;  // the subpath limits exclude it
         std::vector<PathVertex> c2(x.begin(), x.begin() + t2), l2(s2);
         for (int i = 0; i < t2; ++i) { c2[i].pdf_fwd = cam[i]; c2[i].pdf_rev = lig[i]; }
         for (int i = 0; i < s2; ++i) {

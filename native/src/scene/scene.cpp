@@ -58,7 +58,15 @@ void Scene::commit() {
     w.type = LightType::World;
     all.push_back(w);
   }
-  lights.build(std::move(all), world_set ? &world : nullptr, geometry);
+  Bounds media_bounds;
+  for (int m : global_media) {
+    Vec3 lo, hi;
+    if (media[m].bounds(&lo, &hi)) {
+      media_bounds.extend(lo);
+      media_bounds.extend(hi);
+    }
+  }
+  lights.build(std::move(all), world_set ? &world : nullptr, geometry, media_bounds);
   ++light_builds_;
   material_medium.resize(materials.size(), -1);
   material_null.resize(materials.size(), 0);
