@@ -87,7 +87,7 @@ class Geometry {
   std::vector<unsigned> instance_visibility_;
   // Instances whose transform flattens the mesh (zero scale on an axis: no inverse, which Embree's
   // instancing needs) are traced through a copy of the mesh baked into world space, rebuilt when
-  // the transform changes. Cycles renders such objects.
+  // the transform changes (Cycles 3.4 renders such objects black).
   struct Baked {
     RTCScene rtc = nullptr;
     Transform xf;

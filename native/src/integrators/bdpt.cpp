@@ -64,10 +64,7 @@ class Bdpt {
         stats_(stats),
         pixel_center_(cs.pixel_center),
         film_area_(ctx.camera.pixel_plane_area() * float(ctx.width) * float(ctx.height)),
-        media_(ctx.scene.has_media()),
-        world_volume_(media_ && std::any_of(ctx.scene.global_media.begin(), ctx.scene.global_media.end(), [&](int m) {
-          return ctx.scene.media[m].is_homogeneous() && !ctx.scene.media[m].empty();
-        })) {}
+        media_(ctx.scene.has_media()) {}
 
   SampleValue run(std::vector<Splat>& splats, Spectrum* strategies);
   std::vector<float> weight_sums();
@@ -169,8 +166,6 @@ class Bdpt {
   }
   // Transmittance of the segment from a to b: 0 or 1 without media; with media the product of
   // the media's transmittances (through invisible boundaries), 0 if a surface is in the way.
-  // a's volume stack is the side a was reached from; a segment leaving through a's surface
-  // crosses it.
   Spectrum transmittance(const PathVertex& a, const PathVertex& b) const {
     Ray r;
     Vec3 d = b.p - a.p;
@@ -186,9 +181,13 @@ class Bdpt {
       Vec3 end = b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p;
       r.tmax = length(end - r.o) * (1 - 1e-4f);
     }
+    return transmittance(a, r);
+  }
+  // The same along a shadow ray leaving a: a's volume stack is the side a was reached from.
+  Spectrum transmittance(const PathVertex& a, const Ray& r) const {
     if (media_) {
       VolumeStack stack = a.stack;
-      if (a.type == VertexType::Surface && dot(r.d, a.n) < 0) cross_boundary(scene_, a.sp, r.d, &stack);
+      if (a.type == VertexType::Surface) leave_surface(scene_, a.sp, a.n, r.d, &stack);
       return shadow_transmittance(scene_, stack, r, sampler_, s_.volume_estimator, s_.volume_step, stats_);
     }
     ++stats_.rays;
@@ -200,6 +199,7 @@ class Bdpt {
 
   int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeStack stack, std::vector<PathVertex>& path);
   void emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le);
+  int generate_camera_subpath(std::vector<PathVertex>& path);
   int generate_light_subpath(std::vector<PathVertex>& path);
   float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, PathVertex* sampled, int s, int t,
                    double* light_sum = nullptr);
@@ -270,7 +270,6 @@ class Bdpt {
   Vec2 pixel_center_;
   float film_area_;  // view-plane area of the render region at unit distance
   bool media_;       // the scene has media: walks sample free flights, connections transmittance
-  bool world_volume_;  // a World volume: it attenuates light from infinity completely (as in Cycles)
   SampleValue out_;
   Spectrum L_{0.0f};
   Spectrum* strategies_ = nullptr;
@@ -310,7 +309,6 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   // stops where every strategy using its further vertices would fail them, so no work is spent
   // on vertices no strategy can use.
   int kinds[5] = {0, 0, 0, 0, 0};
-  auto scattering = [](const PathVertex& v) { return v.type == VertexType::Surface || v.type == VertexType::Medium; };
   for (;;) {
     PathVertex& prev = path[count - 1];
     PathVertex& v = path[count];
@@ -365,37 +363,10 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     }
     if (!is_finite(beta) || is_black(beta)) break;
 
-    Vec3 wi;
-    if (medium >= 0) {
-      // A real collision: beta holds sigma_s T / pdf (medium.h). A medium vertex.
-      v.type = VertexType::Medium;
-      v.delta = false;
-      v.infinite = false;
-      v.p = mi.p;
-      v.n = Vec3(0.0f);
-      v.wo = normalize(-ray.d);
-      v.medium = medium;
-      v.stack = stack;
-      v.light = -1;
-      v.kind = kVolume;
-      v.beta = beta;
-      v.pdf_rev = 0;
-      v.pdf_fwd = density_of(count, v);
-      reverse_density(count, v);
-      if (mode == Mode::Importance && count >= 2 && exceeds_kind_limit(kinds, kVolume)) break;
-      ++count;
-      if (mode == Mode::Radiance && count == 2) out_.alpha = 1;
-      if (++bounces >= max_depth) break;
-      if (mode == Mode::Radiance && count >= 3 && scattering(path[count - 2]) &&
-          exceeds_kind_limit(kinds, path[count - 2].kind))
-        break;
-      float pdf_dir;
-      if (!phase(v).sample(v.wo, sampler_.next_2d(), &wi, &pdf_dir) || !(pdf_dir > 0)) break;
-      visibility = kVisDiffuse;  // beta *= p / pdf = 1: HG sampling is exact
-      ray.o = mi.p;
-    } else {
+    SurfacePoint sp;
+    if (medium < 0) {
       if (!found) break;
-      SurfacePoint sp = scene_.geometry.surface(hit);
+      sp = scene_.geometry.surface(hit);
       if (media_ && scene_.null_surface(sp.material)) {
         // An invisible medium boundary: update the stack and continue along the same line.
         if (++nulls > kMaxNullCrossings) break;
@@ -405,43 +376,66 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
         ray.tmin = 0;
         continue;
       }
-      const bool backface = dot(ray.d, sp.ng) > 0;
+    }
+    // The vertex: a medium vertex at a real collision (beta holds sigma_s T / pdf, medium.h), else
+    // a surface vertex.
+    const bool backface = medium < 0 && dot(ray.d, sp.ng) > 0;
+    Spectrum le(0.0f);
+    v.delta = false;
+    v.infinite = false;
+    v.stack = stack;
+    v.beta = beta;
+    v.pdf_rev = 0;
+    if (medium >= 0) {
+      v.type = VertexType::Medium;
+      v.p = mi.p;
+      v.n = Vec3(0.0f);
+      v.wo = normalize(-ray.d);
+      v.medium = medium;
+    } else {
       v.type = VertexType::Surface;
-      v.delta = false;
-      v.infinite = false;
       v.sp = sp;
       v.p = sp.p;
       v.n = backface ? -sp.ng : sp.ng;
       v.frame = Frame(backface ? -sp.ns : sp.ns);
       v.wo = v.frame.to_local(-ray.d);
-      v.stack = stack;
-      v.beta = beta;
-      v.pdf_rev = 0;
-      v.pdf_fwd = density_of(count, v);
-      reverse_density(count, v);
-      const Material& material = scene_.material(sp.material);
-      Spectrum le = material.evaluate(scene_.images, sp.uv, backface, &v.bsdf);
+    }
+    v.pdf_fwd = density_of(count, v);
+    reverse_density(count, v);
+    if (medium >= 0) {
+      v.light = -1;
+      v.kind = kVolume;
+    } else {
+      le = scene_.material(sp.material).evaluate(scene_.images, sp.uv, backface, &v.bsdf);
       v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
       v.kind = kind_of(v.bsdf);
-      // Light subpaths: strategies with s >= count + 1 count the kinds of light[2..count].
-      if (mode == Mode::Importance && count >= 2 && exceeds_kind_limit(kinds, v.kind)) break;
-      ++count;
-      if (mode == Mode::Radiance) {
-        if (count == 2) {
-          out_.alpha = 1;
+    }
+    // Light subpaths: strategies with s >= count + 1 count the kinds of light[2..count].
+    if (mode == Mode::Importance && count >= 2 && exceeds_kind_limit(kinds, v.kind)) break;
+    ++count;
+    if (mode == Mode::Radiance) {
+      if (count == 2) {
+        out_.alpha = 1;
+        if (medium < 0) {
           out_.depth = hit.t;
           out_.normal = v.frame.n;
           out_.albedo = v.bsdf.albedo();
         }
-        if (v.light >= 0) emitter_reached(path, count, le);
-        else if (!is_black(le)) add(beta * le, 0, count);  // emission no light sampler knows: no MIS partner
       }
-      if (++bounces >= max_depth || v.bsdf.count() == 0) break;
-      // Camera subpaths: every strategy using vertex `count` counts the kinds of camera[1..count-2].
-      if (mode == Mode::Radiance && count >= 3 && scattering(path[count - 2]) &&
-          exceeds_kind_limit(kinds, path[count - 2].kind))
-        break;
+      if (v.light >= 0) emitter_reached(path, count, le);
+      else if (!is_black(le)) add(beta * le, 0, count);  // emission no light sampler knows: no MIS partner
+    }
+    if (++bounces >= max_depth || (medium < 0 && v.bsdf.count() == 0)) break;
+    // Camera subpaths: every strategy using vertex `count` counts the kinds of camera[1..count-2].
+    if (mode == Mode::Radiance && count >= 3 && exceeds_kind_limit(kinds, path[count - 2].kind)) break;
 
+    Vec3 wi;
+    if (medium >= 0) {
+      float pdf_dir;  // HG sampling is exact: beta *= p / pdf = 1
+      if (!phase(v).sample(v.wo, sampler_.next_2d(), &wi, &pdf_dir) || !(pdf_dir > 0)) break;
+      visibility = kVisDiffuse;
+      ray.o = mi.p;
+    } else {
       BsdfSample bs;
       float u_lobe = sampler_.next_1d();
       Vec2 u = sampler_.next_2d();
@@ -466,6 +460,17 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   return count;
 }
 
+// z0 on the pinhole; z1's density is the filter's choice of film position.
+int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
+  PathVertex& z0 = path[0];
+  z0 = PathVertex();
+  z0.type = VertexType::Camera;
+  z0.p = cs_.ray.o;
+  z0.delta = ctx_.camera.orthographic();  // a delta direction: t = 1 cannot reach it
+  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, cs_.ray, &z0.stack, stats_);
+  return random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, z0.stack, path);
+}
+
 int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   if (lights_.empty() || s_.max_light_length <= 0) return 0;
   float pmf, u_remapped;
@@ -475,7 +480,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   if (l.faces_receiver()) return 0;
   // Light arriving from infinity through a World volume is gone (as for s = 0 and s = 1, which
   // cross it to infinity); a subpath from the scene's bounding disk would cross a finite stretch.
-  if (world_volume_ && l.infinite()) return 0;
+  if (l.infinite() && scene_.has_world_volume()) return 0;
   EmissionSample e;
   if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
     return 0;
@@ -494,11 +499,9 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   Ray ray = e.ray;
   ray.tmin = 0;
   if (l.type == LightType::Area || l.type == LightType::Triangle) ray.o = offset_ray_origin(e.ray.o, e.n);
-  VolumeStack stack;
-  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, ray, &stack, stats_);
-  y0.stack = stack;
+  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, ray, &y0.stack, stats_);
   // No strategy uses more than max_depth() + 2 light vertices (t = 1: s - 1 <= max_depth()).
-  int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, stack,
+  int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, y0.stack,
                           path);
   // An infinite light's vertex is a direction: its density is the direction's (pbrt 3, 16.3.2);
   // y1's is the disk's (pdf_light handles it).
@@ -599,15 +602,8 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     shadow.d = ls.wi;
     shadow.tmin = 0;
     shadow.tmax = std::isinf(ls.distance) ? INFINITY : ls.distance * (1 - 1e-4f);
-    if (media_) {
-      VolumeStack stack = pt.stack;
-      if (pt.type == VertexType::Surface && dot(ls.wi, pt.n) < 0) cross_boundary(scene_, pt.sp, ls.wi, &stack);
-      c *= shadow_transmittance(scene_, stack, shadow, sampler_, s_.volume_estimator, s_.volume_step, stats_);
-      if (is_black(c)) return c;
-    } else {
-      ++stats_.rays;
-      if (scene_.geometry.occluded(shadow)) return Spectrum(0.0f);
-    }
+    c *= transmittance(pt, shadow);
+    if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
     return c * mis_weight(light, camera, &sampled, 1, t);
   }
@@ -687,16 +683,7 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   std::vector<PathVertex>& camera = sc.camera;
   std::vector<PathVertex>& light = sc.light;
 
-  // Camera subpath: z0 on the pinhole; z1's density is the filter's choice of film position.
-  PathVertex& z0 = camera[0];
-  z0 = PathVertex();
-  z0.type = VertexType::Camera;
-  z0.p = cs_.ray.o;
-  z0.delta = ctx_.camera.orthographic();  // a delta direction: t = 1 cannot reach it
-  VolumeStack stack;
-  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, cs_.ray, &stack, stats_);
-  z0.stack = stack;
-  int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, stack, camera);
+  int nt = generate_camera_subpath(camera);
   int ns = generate_light_subpath(light);
 
   // s = 1 takes a fresh light sample and needs no light subpath (there is none when the picked
@@ -718,13 +705,7 @@ std::vector<float> Bdpt::weight_sums() {
   std::vector<float> sums;
   const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
   std::vector<PathVertex> camera(capacity), light(capacity);
-  PathVertex& z0 = camera[0];
-  z0.type = VertexType::Camera;
-  z0.p = cs_.ray.o;
-  z0.delta = ctx_.camera.orthographic();
-  VolumeStack stack;
-  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, cs_.ray, &stack, stats_);
-  int nt = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, stack, camera);
+  int nt = generate_camera_subpath(camera);
   int ns = generate_light_subpath(light);
   for (int t = 2; t <= nt; ++t)
     for (int s = 2; s <= ns; ++s) {

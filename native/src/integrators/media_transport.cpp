@@ -46,6 +46,10 @@ void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir,
   if (m >= 0) stack->cross(m, dot(dir, sp.ng) < 0);
 }
 
+void leave_surface(const Scene& scene, const SurfacePoint& sp, const Vec3& side, const Vec3& dir, VolumeStack* stack) {
+  if (dot(dir, side) < 0) cross_boundary(scene, sp, dir, stack);
+}
+
 Spectrum media_transmittance(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
                              Sampler& sampler, VolumeEstimator est, float step) {
   Spectrum T(1.0f);

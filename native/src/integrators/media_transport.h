@@ -16,6 +16,11 @@ void init_volume_stack(const Scene& scene, const Ray& ray, VolumeStack* stack, S
 // goes against the geometric normal's outside, i.e. into the closed mesh).
 void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir, VolumeStack* stack);
 
+// For a ray leaving a surface point that a path reached from the side of geometric normal `side`:
+// crosses the boundary only if the ray goes through the surface (a reflection stays in the media
+// it arrived in).
+void leave_surface(const Scene& scene, const SurfacePoint& sp, const Vec3& side, const Vec3& dir, VolumeStack* stack);
+
 // Product of the transmittances of every medium of the stack and every global medium on [t0, t1].
 Spectrum media_transmittance(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
                              Sampler& sampler, VolumeEstimator est, float step);

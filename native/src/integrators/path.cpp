@@ -64,7 +64,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
     Spectrum T(1.0f);
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;
-      if (sp && dot(ls.wi, side) < 0) cross_boundary(scene, *sp, ls.wi, &shadow_stack);
+      if (sp) leave_surface(scene, *sp, side, ls.wi, &shadow_stack);
       T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats);
       if (is_black(T)) return;
     } else {

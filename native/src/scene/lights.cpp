@@ -58,18 +58,12 @@ Spectrum LightSet::sun_radiance(const Light& l) const {
   return l.power * (1.0f / (kPi * l.tan_half_angle * l.tan_half_angle));
 }
 
-void LightSet::build(std::vector<Light> lights, const World* world, const Geometry& geometry,
-                     const Bounds& media_bounds) {
+void LightSet::build(std::vector<Light> lights, const World* world, const Bounds& b) {
   lights_ = std::move(lights);
   hittable_.clear();
   suns_.clear();
   triangle_index_.clear();
   world_light_ = -1;
-  Bounds b = geometry.bounds();
-  if (!media_bounds.empty()) {
-    b.extend(media_bounds.lo);
-    b.extend(media_bounds.hi);
-  }
   scene_radius_ = b.empty() ? 1.0f : std::max(1e-3f, 0.5f * length(b.hi - b.lo));
   scene_center_ = b.empty() ? Vec3(0.0f) : (b.lo + b.hi) * 0.5f;
   std::vector<float> power(lights_.size());

@@ -78,9 +78,9 @@ class Scene;
 
 class LightSet {
  public:
-  // media_bounds: the bounded global media (Volume objects), which the scene's bounding sphere
-  // (infinite lights' emission disk) must enclose with the geometry.
-  void build(std::vector<Light> lights, const World* world, const Geometry& geometry, const Bounds& media_bounds);
+  // bounds: everything light can scatter from (geometry and Volume objects); infinite lights emit
+  // from a disk over its bounding sphere.
+  void build(std::vector<Light> lights, const World* world, const Bounds& bounds);
   size_t size() const { return lights_.size(); }
   const Light& light(int i) const { return lights_[i]; }
   bool empty() const { return lights_.empty(); }

@@ -58,15 +58,19 @@ void Scene::commit() {
     w.type = LightType::World;
     all.push_back(w);
   }
-  Bounds media_bounds;
+  // Bounded global media are Volume objects, unbounded ones World volumes.
+  Bounds bounds = geometry.bounds();
+  has_world_volume_ = false;
   for (int m : global_media) {
     Vec3 lo, hi;
     if (media[m].bounds(&lo, &hi)) {
-      media_bounds.extend(lo);
-      media_bounds.extend(hi);
+      bounds.extend(lo);
+      bounds.extend(hi);
+    } else {
+      has_world_volume_ = true;
     }
   }
-  lights.build(std::move(all), world_set ? &world : nullptr, geometry, media_bounds);
+  lights.build(std::move(all), world_set ? &world : nullptr, bounds);
   ++light_builds_;
   material_medium.resize(materials.size(), -1);
   material_null.resize(materials.size(), 0);

@@ -46,6 +46,8 @@ class Scene {
   // Set by commit(): the scene has media at all, and mesh boundaries of media.
   bool has_media() const { return has_media_; }
   bool has_boundaries() const { return has_boundaries_; }
+  // A World volume: escaping rays cross it to infinity, so no light arrives from the world or suns.
+  bool has_world_volume() const { return has_world_volume_; }
 
   // First call: builds the BVHs and the light sampler. After edits that are allowed on a committed
   // scene (mark_edited: instance transforms, materials, lamps, world, camera), a later call
@@ -63,7 +65,7 @@ class Scene {
  private:
   bool committed_ = false, edited_ = false;
   uint64_t light_builds_ = 0;
-  bool has_media_ = false, has_boundaries_ = false;
+  bool has_media_ = false, has_boundaries_ = false, has_world_volume_ = false;
 };
 
 }  // namespace lt
