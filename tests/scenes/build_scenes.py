@@ -501,7 +501,7 @@ def build_door(scene, lamp_up=False):
 
 def build_door_bounce(scene):
     """The door ajar with the lamp facing the ceiling: the camera's room is lit only by light that
-    bounced in the lit room before passing the gap (closer to Veach's scene)."""
+    bounced in the lit room before passing the gap."""
     build_door(scene, lamp_up=True)
 
 
