@@ -10,7 +10,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 3
+ABI_VERSION = 4
 
 # lt_status
 OK = 0
@@ -270,6 +270,8 @@ class SceneStats(ctypes.Structure):
         ("mesh_bvh_builds", ctypes.c_uint64),
         ("top_bvh_builds", ctypes.c_uint64),
         ("light_sampler_builds", ctypes.c_uint64),
+        ("emissive_triangles", ctypes.c_uint64),
+        ("emissive_instances", ctypes.c_uint64),
     ]
 
 
@@ -308,7 +310,7 @@ def _declare(lib):
         "lt_scene_set_world": ([scene_p, P(WorldDesc)], c_int),
         "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int], c_int),
         "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc)], c_int),
-        "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, P(VolumeDesc),
+        "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, ctypes.c_float, P(VolumeDesc),
                                       P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
         "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
@@ -545,12 +547,13 @@ class Scene:
         _check(self._lib.lt_scene_set_world_volume(self.handle, ctypes.byref(d)), "lt_scene_set_world_volume")
 
     def add_volume_grid(self, path, grid, transform, node, color, density,
-                        absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0):
-        """A Volume object's .vdb grid; raises LanternError (LT_ERROR_IO) with the core's message."""
+                        absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0, step=0.0):
+        """A Volume object's .vdb grid (step: ray-marching step in world units, 0 for the voxel
+        size); raises LanternError (LT_ERROR_IO) with the core's message."""
         d = self._volume_desc(node, color, density, absorption_color, anisotropy)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_volume_grid(self.handle, os.fsencode(path), grid.encode("utf-8"),
-                                                   _transform(transform), ctypes.byref(d),
+                                                   _transform(transform), float(step), ctypes.byref(d),
                                                    ctypes.byref(out)),
                "lt_scene_add_volume_grid")
         return out.value
@@ -574,7 +577,8 @@ class Scene:
         _check(self._lib.lt_scene_clear_lights(self.handle), "lt_scene_clear_lights")
 
     def stats(self):
-        """How often commits built mesh BVHs, the top-level BVH and the light sampler."""
+        """How often commits built mesh BVHs, the top-level BVH and the light sampler, and the
+        emissive triangles and instances the last commit found."""
         st = SceneStats()
         _check(self._lib.lt_scene_get_stats(self.handle, ctypes.byref(st)), "lt_scene_get_stats")
         return {k: getattr(st, k) for k, _ in SceneStats._fields_}

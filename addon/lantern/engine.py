@@ -195,6 +195,9 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
                      "against BSDF sampling")
     kinds = summary.get("light_kinds", {})
     lights = ", ".join("%d %s" % (n, _LIGHT_NAMES.get(k, k.lower())) for k, n in sorted(kinds.items()))
+    if summary.get("emissive_triangles"):
+        lights = ", ".join(filter(None, (lights, "%d emissive mesh object(s) (%d triangles, two-sided)"
+                                         % (summary["emissive_objects"], summary["emissive_triangles"]))))
     lines.append("lights: %s; world: %s" % (lights or "none", summary.get("world") or "none"))
     homogeneous = summary.get("material_media", 0) + summary.get("world_media", 0)
     grids = summary.get("volumes", 0)
@@ -204,7 +207,7 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
             media.append("%d homogeneous (closed-form distance sampling and transmittance)" % homogeneous)
         if grids:
             est = ("ray marching, step %s (biased)" % ("%g m" % s.volume_step if s.volume_step > 0
-                                                        else "= voxel size")
+                                                        else "= each object's Step Size or voxel size")
                    if s.volume_estimator == core.VOLUME_RAY_MARCHING else
                    "delta tracking and ratio tracking against per-cell majorants (unbiased)")
             media.append("%d heterogeneous VDB grid(s): %s" % (grids, est))
@@ -343,6 +346,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                 return
             self.update_stats("", "Building acceleration structures")
             core_scene.commit()
+            stats = core_scene.stats()
+            summary.update(emissive_triangles=stats["emissive_triangles"],
+                           emissive_objects=stats["emissive_instances"])
             for w in core_scene.warnings():
                 report({'WARNING'}, w)
             print("Lantern: exported %s in %.2f s" % (summary, time.monotonic() - t0))

@@ -200,8 +200,9 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
     )
     volume_step: FloatProperty(
         name="Step Size",
-        description="Ray-marching step in world units; 0 uses each grid's voxel size. Smaller "
-                    "steps are less biased but slower",
+        description="Ray-marching step in world units for every Volume object; 0 uses each "
+                    "object's own Step Size (Volume data > Render), or its voxel size when that "
+                    "is 0. Smaller steps are less biased but slower",
         default=0.0, min=0.0, subtype='DISTANCE',
     )
     volume_bounces: IntProperty(

@@ -334,13 +334,48 @@ def tile_mean_and_se2(run_a, run_b, tile=16):
     return mean, se2
 
 
-def tile_report(name, mean_l, mean_c, bound, outdir, images):
+def image_mean_and_se2(runs, independent_pixels=True):
+    """The image mean (over pixels, of the RGB average) of the average of `runs`, and its squared
+    standard error. With independent pixels, from two renders' per-pixel noise as in
+    tile_mean_and_se2 (many degrees of freedom); otherwise (BDPT's splats tie pixels together)
+    from the spread of the runs' own image means (len(runs) - 1 degrees of freedom)."""
+    means = [np.asarray(r, np.float64)[..., :3].mean(axis=-1) for r in runs]
+    if independent_pixels:
+        assert len(runs) == 2, "the per-pixel noise estimate takes two renders"
+        d = means[0] - means[1]
+        return 0.5 * float((means[0] + means[1]).mean()), float((d * d / 4.0).sum()) / d.size ** 2
+    m = np.array([x.mean() for x in means])
+    return float(m.mean()), float(m.var(ddof=1)) / len(m)
+
+
+# A global image-mean check beside every per-tile check: a bias of a few percent spread over the
+# image hides in per-tile noise, not in the mean of the whole image.
+MEAN_Z = 3.0         # standard errors of the two images' combined noise
+MEAN_POWER = 0.005   # that noise must be below this fraction of the mean, else the check is blind
+
+
+def global_mean_report(name, a, b, labels=("Lantern", "Cycles"), rounding=1e-5):
+    """a, b: (image mean, squared standard error) of two engines or integrators. Returns "" when the
+    means agree within MEAN_Z combined standard errors (plus `rounding` relative) and that noise
+    is under MEAN_POWER of the mean, else a line saying which failed."""
+    (ma, sa), (mb, sb) = a, b
+    se = math.sqrt(sa + sb)
+    line = "%s: image mean %s %.6f, %s %.6f (ratio %.4f), combined standard error %.6f (%.3f%%)" % (
+        name, labels[0], ma, labels[1], mb, ma / mb if mb else float("nan"), se, 100 * se / abs(mb) if mb else 0)
+    if not se <= MEAN_POWER * abs(mb):
+        return line + ": noise above %.1f%% of the mean, render more samples" % (100 * MEAN_POWER)
+    if abs(ma - mb) > MEAN_Z * se + rounding * abs(mb):
+        return line + ": differ by more than %g standard errors" % MEAN_Z
+    return ""
+
+
+def tile_report(name, mean_l, mean_c, bound, outdir, images, labels=("Lantern", "Cycles")):
     """The 8 tiles furthest past their bound, as text; writes `images` ({tag: image}) as PNGs."""
     diff = np.abs(mean_l - mean_c)
     order = np.argsort((diff / np.maximum(bound, 1e-30)).ravel())[::-1][:8]
-    lines = ["%s: tile (row %d, col %d) channel %d: Lantern %.5f Cycles %.5f |d| %.5f bound %.5f"
-             % (name, i // 3 // mean_l.shape[1], i // 3 % mean_l.shape[1], i % 3,
-                mean_l.ravel()[i], mean_c.ravel()[i], diff.ravel()[i], bound.ravel()[i])
+    lines = ["%s: tile (row %d, col %d) channel %d: %s %.5f %s %.5f |d| %.5f bound %.5f"
+             % (name, i // 3 // mean_l.shape[1], i // 3 % mean_l.shape[1], i % 3, labels[0],
+                mean_l.ravel()[i], labels[1], mean_c.ravel()[i], diff.ravel()[i], bound.ravel()[i])
              for i in order]
     for tag, img in images.items():
         write_png(os.path.join(outdir, "%s_%s.png" % (name, tag)), img)
@@ -350,16 +385,26 @@ def tile_report(name, mean_l, mean_c, bound, outdir, images):
 def two_seed_agreement(scene, samples, integrator, name, outdir, tile=16, rounding=1e-5):
     """test_agreement.py's rule for independent pixels: each engine renders seeds 0 and 1; every
     tile mean and RGB channel must agree within a Bonferroni z bound (family-wise false alarms
-    1e-3) of both engines' noise, plus `rounding` relative (float32 and EXR). Lantern's renders
-    must be finite. Returns (report, Lantern's tile means); the report is "" when all agree."""
+    1e-3) of both engines' noise, plus `rounding` relative (float32 and EXR), and the image means
+    as global_mean_report says. Lantern's renders must be finite. Returns (report, Lantern's tile
+    means); the report is "" when all agree."""
     runs = {engine: [render(scene, engine, samples, seed=s, integrator=integrator).combined for s in (0, 1)]
             for engine in (CYCLES, LANTERN)}
-    for img in runs[LANTERN]:
+    return agreement_report(name, runs[LANTERN], runs[CYCLES], outdir, tile, rounding)
+
+
+def agreement_report(name, runs_a, runs_b, outdir, tile=16, rounding=1e-5, labels=("lantern", "cycles")):
+    """two_seed_agreement's rule on two renders (seeds 0 and 1) of each side: returns (report, the
+    first side's tile means)."""
+    for img in runs_a:
         assert np.isfinite(img).all(), "%s: non-finite pixels" % name
-    mean_c, se2_c = tile_mean_and_se2(*runs[CYCLES], tile)
-    mean_l, se2_l = tile_mean_and_se2(*runs[LANTERN], tile)
-    bound = bonferroni_z(mean_c.size) * np.sqrt(se2_c + se2_l) + rounding * np.abs(mean_c)
-    if (np.abs(mean_l - mean_c) <= bound).all():
-        return "", mean_l
-    return tile_report(name, mean_l, mean_c, bound, outdir,
-                       {"lantern": 0.5 * sum(runs[LANTERN]), "cycles": 0.5 * sum(runs[CYCLES])}), mean_l
+    mean_b, se2_b = tile_mean_and_se2(*runs_b, tile)
+    mean_a, se2_a = tile_mean_and_se2(*runs_a, tile)
+    bound = bonferroni_z(mean_b.size) * np.sqrt(se2_b + se2_a) + rounding * np.abs(mean_b)
+    report = global_mean_report(name, image_mean_and_se2(runs_a), image_mean_and_se2(runs_b),
+                                (labels[0].capitalize(), labels[1].capitalize()), rounding)
+    if not (np.abs(mean_a - mean_b) <= bound).all():
+        report = "\n".join(filter(None, (report, tile_report(
+            name, mean_a, mean_b, bound, outdir, {labels[0]: 0.5 * sum(runs_a), labels[1]: 0.5 * sum(runs_b)},
+            (labels[0].capitalize(), labels[1].capitalize())))))
+    return report, mean_a

@@ -8,9 +8,17 @@ normal quantile for a family-wise false-alarm rate of 1e-3 Bonferroni-corrected 
 channels of the scene. Neither engine clamps, filters glossy or adapts its sampling (see
 tests/scenes/build_scenes.py).
 
+Beside the tiles, the image means (render_utils.global_mean_report): within 3 standard errors of
+both images' combined noise, which must be under 0.5 % of the mean (a bias of a few percent spread
+over the image hides in per-tile noise). Every integrator is checked so against Cycles, and the
+volumetric and bidirectional integrators against Lantern's own path tracer where it converges.
+
 The bidirectional integrator splats light-tracing samples into several pixels, so its pixels are
 not independent: there the tile means' variance comes from K independent renders and the
 critical value is Student's t with K - 1 degrees of freedom (same Bonferroni correction).
+
+Renders are deterministic for a seed, so each (scene, engine, integrator, seed) is rendered once
+per session and shared by the tests below.
 """
 import math
 
@@ -19,16 +27,50 @@ import pytest
 
 import render_utils as ru
 
-PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "sun_world",
+# cornell_mesh_light: lit by an emissive quad 10 cm under the ceiling (two-sided mesh light)
+PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "sun_world",
                "textured", "instanced"]
 SAMPLES = 128
 TILE = 16
 ROUNDING = 1e-5  # float32 accumulation and EXR round trip
 
+_RUNS = {}
+
+
+def runs(scene_factory, name, engine, integrator="PATH", samples=SAMPLES, seeds=(0, 1)):
+    """Combined images of test scene `name` for each seed (rendered once per session)."""
+    out = []
+    scene = None
+    for seed in seeds:
+        key = (name, engine, integrator, samples, seed)
+        if key not in _RUNS:
+            scene = scene or scene_factory(name)
+            _RUNS[key] = ru.render(scene, engine, samples, seed=seed, integrator=integrator).combined
+        out.append(_RUNS[key])
+    return out
+
+
+def lantern_and_cycles(scene_factory, name, integrator, samples=SAMPLES):
+    return {ru.LANTERN: runs(scene_factory, name, ru.LANTERN, integrator, samples),
+            ru.CYCLES: runs(scene_factory, name, ru.CYCLES, "PATH", samples)}
+
 
 @pytest.mark.parametrize("name", PATH_SCENES)
 def test_path_tracer_agrees_with_cycles(name, scene_factory, outdir):
-    report, _ = ru.two_seed_agreement(scene_factory(name), SAMPLES, "PATH", name, outdir, TILE, ROUNDING)
+    both = lantern_and_cycles(scene_factory, name, "PATH")
+    report, _ = ru.agreement_report(name, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
+@pytest.mark.parametrize("name", PATH_SCENES)
+def test_volumetric_path_tracer_agrees_with_cycles_and_path_without_media(name, scene_factory, outdir):
+    """Without media VOLPATH is the path tracer: against Cycles, and against PATH's renders."""
+    both = lantern_and_cycles(scene_factory, name, "VOLPATH")
+    report, _ = ru.agreement_report(name + "_volpath", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+    report, _ = ru.agreement_report(name + "_volpath_vs_path", both[ru.LANTERN],
+                                    runs(scene_factory, name, ru.LANTERN, "PATH"), outdir, TILE, ROUNDING,
+                                    ("volpath", "path"))
     assert report == "", report
 
 
@@ -83,29 +125,25 @@ def student_t_upper(p, dof):
 
 # smoke_box, world_fog and vdb_cloud: media (a smoke box behind an invisible boundary, a World
 # volume, a VDB grid by delta and ratio tracking)
-BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "door", "door_bounce", "smoke_box",
-               "world_fog", "vdb_cloud"]
+BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "door",
+               "door_bounce", "smoke_box", "world_fog", "vdb_cloud"]
+# Scenes without media whose path-traced image mean is known within MEAN_POWER at their samples:
+# BDPT's image mean must equal PATH's there too (the door scenes' path tracing is too noisy).
+BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass"]
 K = 12
 
 
 @pytest.mark.parametrize("name", BDPT_SCENES)
 def test_bidirectional_agrees_with_cycles(name, scene_factory, outdir):
     import build_scenes
-    scene = scene_factory(name)
     samples = build_scenes.SCENES[name][2]
-    c0 = ru.render(scene, ru.CYCLES, samples, seed=0).combined
-    c1 = ru.render(scene, ru.CYCLES, samples, seed=1).combined
+    c0, c1 = runs(scene_factory, name, ru.CYCLES, samples=samples)
     mean_c, se2_c = ru.tile_mean_and_se2(c0, c1, TILE)
     per_run = max(1, samples // K)
-    means = []
-    images = []
-    for k in range(K):
-        out = ru.render(scene, ru.LANTERN, per_run, seed=100 + k, integrator="BIDIRECTIONAL")
-        img = out.combined
+    images = runs(scene_factory, name, ru.LANTERN, "BIDIRECTIONAL", per_run, seeds=range(100, 100 + K))
+    for img in images:
         assert np.isfinite(img).all()
-        images.append(img)
-        means.append(ru.tile_view(np.asarray(img, np.float64)[..., :3], TILE).mean(axis=2))
-    means = np.array(means)
+    means = np.array([ru.tile_view(np.asarray(img, np.float64)[..., :3], TILE).mean(axis=2) for img in images])
     mean_l = means.mean(axis=0)
     se2_l = means.var(axis=0, ddof=1) / K
     n = mean_c.size
@@ -114,5 +152,14 @@ def test_bidirectional_agrees_with_cycles(name, scene_factory, outdir):
     t = student_t_upper(1e-3 / (2.0 * n), K - 1)
     bound = t * np.sqrt(se2_c + se2_l) + ROUNDING * np.abs(mean_c)
     ok = np.abs(mean_l - mean_c) <= bound
-    assert ok.all(), ru.tile_report(name + "_bdpt", mean_l, mean_c, bound, outdir,
-                                    {"lantern": np.mean(images, axis=0), "cycles": 0.5 * (c0 + c1)})
+    global_l = ru.image_mean_and_se2(images, independent_pixels=False)
+    reports = [ru.global_mean_report(name + "_bdpt", global_l, ru.image_mean_and_se2([c0, c1]))]
+    if name in BDPT_VS_PATH:
+        reports.append(ru.global_mean_report(
+            name + "_bdpt_vs_path", global_l,
+            ru.image_mean_and_se2(runs(scene_factory, name, ru.LANTERN, "PATH", samples)), ("BDPT", "PATH")))
+    if not ok.all():
+        reports.append(ru.tile_report(name + "_bdpt", mean_l, mean_c, bound, outdir,
+                                      {"lantern": np.mean(images, axis=0), "cycles": 0.5 * (c0 + c1)}))
+    report = "\n".join(filter(None, reports))
+    assert report == "", report

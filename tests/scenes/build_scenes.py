@@ -376,6 +376,19 @@ def build_cornell_spot(scene):
               spot_size=math.radians(60.0), spot_blend=0.2, show_cone=False)
 
 
+def emission(name, color, strength):
+    return _bsdf_material(name, "ShaderNodeEmission", color, Strength=strength)
+
+
+def build_cornell_mesh_light(scene):
+    """The Cornell box lit only by an Emission-shader quad (strength 50, no light objects) hanging
+    10 cm below the ceiling, its front facing down: Cycles' mesh lights emit from both sides, so
+    the ceiling above the quad is lit by its back."""
+    cornell_box(scene)
+    quad = mesh_plane("LampQuad", 0.5, 0.5, matrix=Matrix.Rotation(math.pi, 4, "X"))
+    assign(add_object(scene, "LampQuad", quad, (0, 0, 1.9)), emission("LampQuadEmission", (1, 1, 1), 50.0))
+
+
 def build_glossy_glass(scene):
     set_world(scene, (0.05, 0.07, 0.1), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 12.0))
@@ -634,6 +647,21 @@ def build_vdb_cloud(scene):
     scene.cycles.volume_bounces = 2
 
 
+def build_vdb_cloud_scaled(scene):
+    """vdb_cloud's grid in a Volume object scaled unevenly to about half its size (render space
+    Object, Blender's default: density 1 per object-space unit, so Cycles renders it as dense as
+    unscaled, 1 / |M n| times per metre for n the unit diagonal), read through the Principled
+    Volume's Density Attribute 'cloud' of a file whose 'density' grid is a different shape."""
+    build_vdb_cloud(scene)
+    cloud = scene.objects["Cloud"]
+    cloud.scale = (0.8, 0.5, 0.3)
+    cloud.data.filepath = test_vdb_path("two_grids.vdb")
+    volume = cloud.active_material.node_tree.nodes["Principled Volume"]
+    volume.inputs["Density Attribute"].default_value = "cloud"
+    volume.inputs["Density"].default_value = 1.0  # thin: the image mean follows the density
+    scene.camera.data.lens = 140.0
+
+
 def build_vdb_smoke(scene):
     """smoke.vdb (a rising noisy plume, 40x40x64 voxels of 3 cm) on a grey floor under a sun."""
     set_world(scene, (0.4, 0.45, 0.55), 0.6)
@@ -675,6 +703,7 @@ SCENES = {
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),
     "cornell_spot": (build_cornell_spot, (96, 96), 128),
+    "cornell_mesh_light": (build_cornell_mesh_light, (96, 96), 128),
     "glossy_glass": (build_glossy_glass, (96, 96), 128),
     "sun_world": (build_sun_world, (96, 96), 128),
     "textured": (build_textured, (96, 96), 128),
@@ -688,6 +717,7 @@ SCENES = {
     "dense_fog": (build_dense_fog, (64, 64), 128),
     "world_fog": (build_world_fog, (64, 64), 128),
     "vdb_cloud": (build_vdb_cloud, (64, 64), 128),
+    "vdb_cloud_scaled": (build_vdb_cloud_scaled, (64, 64), 128),
     "vdb_smoke": (build_vdb_smoke, (64, 64), 64),
     "smoke_interior": (build_smoke_interior, (64, 64), 64),
 }

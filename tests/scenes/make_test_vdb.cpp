@@ -6,6 +6,8 @@
 //   tiles.vdb       "density" (float) made of constant tiles
 //   cloud.vdb       "density" (float): a procedural cloud, a few noisy blobs in 48^3 voxels
 //   smoke.vdb       "density" (float): a rising, widening noisy smoke plume in 40x40x64 voxels
+//   two_grids.vdb   "density" (the smoke plume) and "cloud" (the cloud): a material's Density
+//                   Attribute picks one
 // Usage: make_test_vdb <output directory>
 #include <openvdb/openvdb.h>
 
@@ -166,5 +168,8 @@ int main(int argc, char** argv) {
 
   write(dir + "/cloud.vdb", {cloud_grid()});
   write(dir + "/smoke.vdb", {smoke_grid()});
+  auto cloud = cloud_grid();
+  cloud->setName("cloud");
+  write(dir + "/two_grids.vdb", {smoke_grid(), cloud});
   return 0;
 }

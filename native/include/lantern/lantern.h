@@ -23,7 +23,9 @@ extern "C" {
 #define LT_API __attribute__((visibility("default")))
 #endif
 
-#define LT_ABI_VERSION 3  /* 2: lt_render_settings.sample_offset; 3: halting settings and status */
+#define LT_ABI_VERSION 4  /* 2: lt_render_settings.sample_offset; 3: halting settings and status;
+                             4: lt_scene_stats counts emissive triangles, lt_scene_add_volume_grid
+                                takes a step */
 
 enum lt_status {
   LT_OK = 0,
@@ -208,12 +210,14 @@ LT_API int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_
 LT_API int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* desc);
 
 /* A Volume object: the float grid `grid` of the .vdb file at `path` (its density multiplies the
- * desc's Density), placed by `transform` (object to world, row-major 3x4) after the grid's own
- * index-to-object transform. The medium is bounded by the grid; no geometry. Errors: LT_ERROR_IO
- * with the message (missing, unreadable or corrupt file; no such grid, listing those present; a
- * grid that is empty or not a float grid). */
+ * desc's Density, per world unit: the add-on folds Blender's render space into Density), placed by
+ * `transform` (object to world, row-major 3x4) after the grid's own index-to-object transform.
+ * `step`: its ray-marching step in world units (0: the grid's smallest world-space voxel edge);
+ * a render's volume_step > 0 overrides it. The medium is bounded by the grid; no geometry.
+ * Errors: LT_ERROR_IO with the message (missing, unreadable or corrupt file; no such grid, listing
+ * those present; a grid that is empty or not a float grid). */
 LT_API int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
-                                    const lt_volume_desc* desc, int* out_id);
+                                    float step, const lt_volume_desc* desc, int* out_id);
 
 /* Builds acceleration structures and light samplers. Must be called before rendering. After a
  * commit, adding images, materials, meshes, instances or volumes is refused with LT_ERROR_STATE;
@@ -240,11 +244,14 @@ LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_
 /* Removes every light added with lt_scene_add_light (to add the edited set again). */
 LT_API int lt_scene_clear_lights(lt_scene* scene);
 
-/* How often the scene's commits built each structure (for tests and benchmarks). */
+/* How often the scene's commits built each structure (for tests and benchmarks), and the mesh
+ * lights the last commit found: triangles of emissive materials and the instances holding them. */
 typedef struct lt_scene_stats {
   uint64_t mesh_bvh_builds;
   uint64_t top_bvh_builds;
   uint64_t light_sampler_builds;
+  uint64_t emissive_triangles;
+  uint64_t emissive_instances;
 } lt_scene_stats;
 LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);
 
@@ -295,7 +302,7 @@ typedef struct lt_render_settings {
   int strategy_view_depth;
   /* Volumes: Cycles' volume bounce limit (default 0: single scattering), the estimator for
    * heterogeneous media (lt_volume_estimator; homogeneous media are always exact) and the
-   * ray-marching step in world units (0: each grid's voxel size). */
+   * ray-marching step in world units (0: each Volume object's own step, lt_scene_add_volume_grid). */
   int volume_bounces;
   int volume_estimator;
   float volume_step;

@@ -349,6 +349,8 @@ int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out) {
     out->mesh_bvh_builds = scene->scene.geometry.mesh_builds();
     out->top_bvh_builds = scene->scene.geometry.top_builds();
     out->light_sampler_builds = scene->scene.light_builds();
+    out->emissive_triangles = scene->scene.emissive_triangles();
+    out->emissive_instances = scene->scene.emissive_instances();
   });
 }
 
@@ -430,13 +432,14 @@ int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* d) {
 }
 
 int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
-                             const lt_volume_desc* d, int* out_id) {
+                             float step, const lt_volume_desc* d, int* out_id) {
   return guarded([&] {
     require(scene && path && transform && d && out_id, "lt_scene_add_volume_grid: NULL argument");
     scene->scene.require_editable();
     lt::VolumeCoefficients c = to_volume(d);
     lt::Transform xf = to_transform(transform, "volume");
     require(std::abs(xf.determinant()) > 1e-30f, "volume transform is singular");
+    require(std::isfinite(step) && step >= 0, "volume step must be finite and >= 0 (0: the voxel size)");
     const std::string grid_name = grid && *grid ? grid : "density";
     std::shared_ptr<lt::GridData> data;
     try {
@@ -446,6 +449,7 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
     }
     lt::Scene& sc = scene->scene;
     sc.media.push_back(lt::Medium::heterogeneous(data, c.sigma_a, c.sigma_s, c.g, xf));
+    if (step > 0) sc.media.back().set_march_step(step);
     *out_id = int(sc.media.size()) - 1;
     if (sc.media.back().empty()) sc.warnings.push_back(std::string(path) + ": volume has no density; left out");
     else sc.global_media.push_back(*out_id);

@@ -51,4 +51,19 @@ inline Vec3 spawn_origin(const SurfacePoint& sp, const Vec3& d) {
   return offset_ray_origin(sp.p, dot(d, sp.ng) >= 0 ? sp.ng : -sp.ng);
 }
 
+// The shadow ray from `from` to `to`, both already offset off their surfaces, aimed at `to` itself
+// and ending just short of it (pbrt-v4's SpawnRayTo). Aiming from an offset origin at the unmoved
+// target tilts the ray by the offset; at grazing angles it then meets the target's surface well
+// before its end (an emitter 10 cm from a ceiling lit none of it).
+inline Ray spawn_ray_to(const Vec3& from, const Vec3& to) {
+  Ray r;
+  r.o = from;
+  Vec3 d = to - from;
+  float dist = length(d);
+  r.d = dist > 0 ? d / dist : Vec3(0.0f);
+  r.tmin = 0;
+  r.tmax = dist * (1 - 1e-4f);
+  return r;
+}
+
 }  // namespace lt

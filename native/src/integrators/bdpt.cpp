@@ -174,13 +174,7 @@ class Bdpt {
     r.d = d / dist;
     r.o = a.type == VertexType::Surface ? spawn_origin(a.sp, r.d) : a.p;
     r.tmin = 0;
-    if (b.infinite) {
-      r.d = normalize(b.p - a.p);
-      r.tmax = INFINITY;
-    } else {
-      Vec3 end = b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p;
-      r.tmax = length(end - r.o) * (1 - 1e-4f);
-    }
+    if (!b.infinite) r = spawn_ray_to(r.o, b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p);
     return transmittance(a, r);
   }
   // The same along a shadow ray leaving a: a's volume stack is the side a was reached from.
@@ -585,24 +579,11 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     sampled.light = li;
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
-    sampled.n = l.type == LightType::Area ? l.direction
-                : (l.type == LightType::Triangle || ((l.type == LightType::Point || l.type == LightType::Spot) && l.radius > 0))
-                    ? -ls.wi
-                    : Vec3(0.0f);
-    if (l.type == LightType::Triangle) {
-      Vec3 p0, p1, p2;
-      scene_.geometry.triangle(l.instance, l.primitive, &p0, &p1, &p2);
-      sampled.n = normalize(cross(p1 - p0, p2 - p0));
-    }
+    sampled.n = l.faces_receiver() ? -ls.wi : ls.n;
     sampled.beta = ls.radiance / (pmf * ls.pdf);
     Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance) * sampled.beta * cos_at(pt, ls.wi);
     if (is_black(c)) return c;
-    Ray shadow;
-    shadow.o = pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p;
-    shadow.d = ls.wi;
-    shadow.tmin = 0;
-    shadow.tmax = std::isinf(ls.distance) ? INFINITY : ls.distance * (1 - 1e-4f);
-    c *= transmittance(pt, shadow);
+    c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls));
     if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
     return c * mis_weight(light, camera, &sampled, 1, t);

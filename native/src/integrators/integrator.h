@@ -26,7 +26,7 @@ struct IntegratorSettings {
   float clamp_direct = 0, clamp_indirect = 0;  // 0: off
   bool transparent_background = false;
   // Volumes: Cycles' volume bounce limit (0: single scattering), the estimator for heterogeneous
-  // media and the ray-marching step in world units (<= 0: each medium's voxel size).
+  // media and the ray-marching step in world units (<= 0: each medium's own, Medium::march_step).
   int volume_bounces = 0;
   VolumeEstimator volume_estimator = VolumeEstimator::Tracking;
   float volume_step = 0;

@@ -56,11 +56,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
     float scatter_pdf;
     Spectrum fv = f(ls.wi, &scatter_pdf);
     if (is_black(fv)) return;
-    Ray shadow;
-    shadow.o = sp ? spawn_origin(*sp, ls.wi) : p;
-    shadow.d = ls.wi;
-    shadow.tmin = 0;
-    shadow.tmax = std::isinf(ls.distance) ? INFINITY : ls.distance * (1 - 1e-4f);
+    const Ray shadow = shadow_ray(sp ? spawn_origin(*sp, ls.wi) : p, ls);
     Spectrum T(1.0f);
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;

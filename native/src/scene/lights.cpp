@@ -122,6 +122,8 @@ bool LightSet::sample(const Scene& scene, int i, const Vec3& p, Vec2 u, LightSam
       if (!(d2 > 0)) return false;
       s->distance = std::sqrt(d2);
       s->wi = to / s->distance;
+      s->p = q;
+      s->n = Vec3(0.0f);  // the disk faces each receiver: no surface of the scene
       float atten = spot_attenuation(l, -s->wi);
       if (atten == 0) return false;
       if (l.radius > 0) {
@@ -145,6 +147,8 @@ bool LightSet::sample(const Scene& scene, int i, const Vec3& p, Vec2 u, LightSam
       if (!(d2 > 0)) return false;
       s->distance = std::sqrt(d2);
       s->wi = to / s->distance;
+      s->p = q;
+      s->n = l.direction;
       float cos_l = dot(l.direction, -s->wi);
       if (cos_l <= 0) return false;
       s->pdf = d2 / (l.area * cos_l);
@@ -185,6 +189,8 @@ bool LightSet::sample(const Scene& scene, int i, const Vec3& p, Vec2 u, LightSam
       float cos_l = std::abs(dot(ng, s->wi));
       if (!(cos_l > 0)) return false;
       s->pdf = d2 / (l.area * cos_l);
+      s->p = q;
+      s->n = ng;
       Hit h;
       h.instance = l.instance;
       h.primitive = l.primitive;

@@ -59,6 +59,7 @@ struct World {
 struct LightSample {
   Vec3 wi;             // from the shaded point towards the light
   float distance = 0;  // INFINITY for sun and world
+  Vec3 p, n;           // the point on the light and, on a surface (area lamp, emissive triangle), its normal
   Spectrum radiance;   // emitted radiance arriving along -wi (spot falloff included)
   float pdf = 0;       // solid angle pdf of this light's sampling (not including selection)
   bool delta = false;
@@ -75,6 +76,19 @@ struct EmissionSample {
 };
 
 class Scene;
+
+// The shadow ray from `origin` (already offset off its surface) to a sampled light: to infinity for
+// sun and world, else to the light point, moved off an emissive surface towards the origin.
+inline Ray shadow_ray(const Vec3& origin, const LightSample& ls) {
+  if (std::isinf(ls.distance)) {
+    Ray r;
+    r.o = origin;
+    r.d = ls.wi;
+    return r;
+  }
+  const bool surface = ls.n.x != 0 || ls.n.y != 0 || ls.n.z != 0;
+  return spawn_ray_to(origin, surface ? offset_ray_origin(ls.p, dot(ls.n, origin - ls.p) >= 0 ? ls.n : -ls.n) : ls.p);
+}
 
 class LightSet {
  public:

@@ -222,6 +222,7 @@ Medium::Medium(const Medium& o)
       world_to_index_(o.world_to_index_),
       majorant_(o.majorant_),
       voxel_size_(o.voxel_size_),
+      march_step_(o.march_step_),
       capped_(o.capped_.load()) {}
 
 Medium& Medium::operator=(const Medium& o) {
@@ -234,6 +235,7 @@ Medium& Medium::operator=(const Medium& o) {
   world_to_index_ = o.world_to_index_;
   majorant_ = o.majorant_;
   voxel_size_ = o.voxel_size_;
+  march_step_ = o.march_step_;
   capped_.store(o.capped_.load());
   return *this;
 }
@@ -267,6 +269,7 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
   m.world_to_index_ = affine_inverse(index_to_world);
   m.voxel_size_ = std::min({length(index_to_world.column(0)), length(index_to_world.column(1)),
                             length(index_to_world.column(2))});
+  m.march_step_ = m.voxel_size_;
   if (!grid->empty()) {
     // The interpolated density can be non-zero only within one voxel of the non-background voxels.
     int lo[3], hi[3];
@@ -393,7 +396,7 @@ Spectrum Medium::transmittance(const Ray& ray, float t0, float t1, Sampler& s, V
 
   if (e == VolumeEstimator::RayMarching) {
     // tau = sigma_t_unit * integral of the density; one scalar integral serves all channels.
-    float h = (step > 0 ? step : voxel_size_) / len;
+    float h = (step > 0 ? step : march_step_) / len;
     double integral = 0;
     int steps = 0;
     // Stop once every extinguishing channel is below float's smallest normal number.
@@ -489,7 +492,7 @@ bool Medium::sample_distance(const Ray& ray, float t0, float t1, Sampler& s, Vol
     const int c = std::min(2, int(s.next_1d() * 3));
     const double target = free_path(s.next_1d());
     const float sc = r.st[c];
-    const float h = (step > 0 ? step : voxel_size_) / len;
+    const float h = (step > 0 ? step : march_step_) / len;
     double integral = 0, hit_integral = 0;
     float hit_t = 0, hit_rho = 0;
     bool hit = false;

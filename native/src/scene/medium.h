@@ -132,9 +132,12 @@ class Medium {
   float density(const Vec3& p) const;  // 1 for homogeneous media
   const Spectrum& sigma_a_unit() const { return sigma_a_; }
   const Spectrum& sigma_s_unit() const { return sigma_s_; }
-  // Smallest world-space edge of a voxel (0 for homogeneous media): the default ray-marching
-  // step (a step <= 0 or NaN passed to the estimators means this), as Cycles' step rate 1.
+  // Smallest world-space edge of a voxel (0 for homogeneous media).
   float voxel_size() const { return voxel_size_; }
+  // The ray-marching step in world units when the render gives none (a step <= 0 or NaN passed
+  // to the estimators): the voxel size, as Cycles' step rate 1, or the Volume object's Step Size.
+  float march_step() const { return march_step_; }
+  void set_march_step(float step) { march_step_ = step; }
   const MajorantGrid& majorant_grid() const { return majorant_; }
   const Transform& world_to_index() const { return world_to_index_; }
   std::shared_ptr<const GridData> grid() const { return grid_; }
@@ -152,7 +155,7 @@ class Medium {
   std::shared_ptr<const GridData> grid_;
   Transform world_to_index_;
   MajorantGrid majorant_;
-  float voxel_size_ = 0;
+  float voxel_size_ = 0, march_step_ = 0;
   mutable std::atomic<uint64_t> capped_{0};
 };
 

@@ -14,8 +14,10 @@ void Scene::commit() {
   if (committed_ && !edited_) return;
   geometry.commit();
   std::vector<Light> all = lamp_lights;
+  emissive_triangles_ = emissive_instances_ = 0;
   // Every triangle of an emissive material becomes a light (Cycles' mesh lights).
   for (size_t i = 0; i < geometry.instance_count(); ++i) {
+    const size_t before = all.size();
     const Instance& inst = geometry.instance(int(i));
     const Mesh& m = geometry.mesh(inst.mesh);
     if (!m.rtc) continue;
@@ -34,6 +36,8 @@ void Scene::commit() {
       l.power = Spectrum(mat.emission_power_estimate() * l.area * kPi);
       all.push_back(l);
     }
+    emissive_triangles_ += all.size() - before;
+    emissive_instances_ += all.size() > before;
   }
   if (world_set && !world.black()) {
     if (world.image) {

@@ -57,6 +57,9 @@ class Scene {
   void mark_edited() { edited_ = true; }
   bool edited() const { return edited_; }
   uint64_t light_builds() const { return light_builds_; }
+  // Mesh lights found by the last commit.
+  uint64_t emissive_triangles() const { return emissive_triangles_; }
+  uint64_t emissive_instances() const { return emissive_instances_; }
   const Material& material(int id) const {
     return id >= 0 && id < int(materials.size()) ? materials[id] : default_material;
   }
@@ -65,6 +68,7 @@ class Scene {
  private:
   bool committed_ = false, edited_ = false;
   uint64_t light_builds_ = 0;
+  uint64_t emissive_triangles_ = 0, emissive_instances_ = 0;
   bool has_media_ = false, has_boundaries_ = false, has_world_volume_ = false;
 };
 
