@@ -347,19 +347,55 @@ def tile_report(name, mean_l, mean_c, bound, outdir, images):
     return "\n".join(lines)
 
 
-def two_seed_agreement(scene, samples, integrator, name, outdir, tile=16, rounding=1e-5):
+def image_mean_and_se2(run_a, run_b):
+    """Per RGB channel: the image mean of the average of two independent renders and its squared
+    standard error (tile_mean_and_se2 with the whole image as one tile)."""
+    a = np.asarray(run_a, np.float64)[..., :3].reshape(-1, 3)
+    b = np.asarray(run_b, np.float64)[..., :3].reshape(-1, 3)
+    n = a.shape[0]
+    return (0.5 * (a + b)).mean(axis=0), ((a - b) ** 2 / 4.0).sum(axis=0) / (n * n)
+
+
+def image_mean_report(name, runs, z=3.0, rounding=1e-5):
+    """The global image-mean check: per channel, Lantern's and Cycles' image means (each the average
+    of two seeds) within z standard errors of both engines' combined noise. Returns (report, text
+    with the means); the report is "" when they agree."""
+    mean_c, se2_c = image_mean_and_se2(*runs[CYCLES])
+    mean_l, se2_l = image_mean_and_se2(*runs[LANTERN])
+    bound = z * np.sqrt(se2_c + se2_l) + rounding * np.abs(mean_c)
+    text = "%s image mean: Lantern %s Cycles %s (3 SE %s)" % (
+        name, np.array2string(mean_l, precision=5), np.array2string(mean_c, precision=5),
+        np.array2string(bound, precision=5))
+    return ("" if (np.abs(mean_l - mean_c) <= bound).all() else text), text
+
+
+def two_seed_agreement(scene, samples, integrator, name, outdir, tile=16, rounding=1e-5, image_mean=None):
     """test_agreement.py's rule for independent pixels: each engine renders seeds 0 and 1; every
     tile mean and RGB channel must agree within a Bonferroni z bound (family-wise false alarms
     1e-3) of both engines' noise, plus `rounding` relative (float32 and EXR). Lantern's renders
-    must be finite. Returns (report, Lantern's tile means); the report is "" when all agree."""
+    must be finite. With image_mean (a list), the global image-mean check (image_mean_report) is
+    part of the report and its text is appended to the list. Returns (report, Lantern's tile
+    means); the report is "" when all agree."""
     runs = {engine: [render(scene, engine, samples, seed=s, integrator=integrator).combined for s in (0, 1)]
             for engine in (CYCLES, LANTERN)}
+    return compare_runs(runs, name, outdir, tile, rounding, image_mean)
+
+
+def compare_runs(runs, name, outdir, tile=16, rounding=1e-5, image_mean=None):
+    """two_seed_agreement's comparison of given renders: runs = {CYCLES: [seed 0, seed 1], LANTERN:
+    [seed 0, seed 1]} (each pair independent)."""
     for img in runs[LANTERN]:
         assert np.isfinite(img).all(), "%s: non-finite pixels" % name
+    mean_failure = ""
+    if image_mean is not None:
+        mean_failure, text = image_mean_report(name, runs, rounding=rounding)
+        image_mean.append(text)
+        print(text)
     mean_c, se2_c = tile_mean_and_se2(*runs[CYCLES], tile)
     mean_l, se2_l = tile_mean_and_se2(*runs[LANTERN], tile)
     bound = bonferroni_z(mean_c.size) * np.sqrt(se2_c + se2_l) + rounding * np.abs(mean_c)
-    if (np.abs(mean_l - mean_c) <= bound).all():
+    if (np.abs(mean_l - mean_c) <= bound).all() and not mean_failure:
         return "", mean_l
-    return tile_report(name, mean_l, mean_c, bound, outdir,
-                       {"lantern": 0.5 * sum(runs[LANTERN]), "cycles": 0.5 * sum(runs[CYCLES])}), mean_l
+    tiles = tile_report(name, mean_l, mean_c, bound, outdir,
+                        {"lantern": 0.5 * sum(runs[LANTERN]), "cycles": 0.5 * sum(runs[CYCLES])})
+    return "\n".join(t for t in (mean_failure, tiles) if t), mean_l

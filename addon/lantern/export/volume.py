@@ -4,6 +4,7 @@ import bpy
 from mathutils import Matrix, Vector
 
 from .. import core
+from .material import emissive_nodes, without_emission
 
 # Cycles' default volume shader for a Volume object without material: Principled Volume defaults.
 _DEFAULT = dict(node=core.VOLUME_PRINCIPLED, color=(0.5, 0.5, 0.5), density=1.0,
@@ -50,9 +51,17 @@ def export_volume(obj, matrix, core_scene, report, materials):
     material = obj.active_material
     desc = materials.volume(material) if material is not None else None
     if desc is None:
-        desc = _DEFAULT
+        desc = [_DEFAULT]
+    emitting = emissive_nodes(desc)
+    if emitting:
+        report({'WARNING'}, "Volume '%s': volume emission (%s) is supported in material volumes of "
+                            "meshes only; left out" % (obj.name, ", ".join("'%s'" % n for n in emitting)))
+        desc = without_emission(desc)
+    if not desc:
+        report({'WARNING'}, "Volume '%s' left out: its material has no usable volume shader" % obj.name)
+        return 0
     try:
-        core_scene.add_volume_grid(path, "density", matrix, **desc)
+        core_scene.add_volume_grid(path, "density", matrix, desc)
     except core.LanternError as e:
         report({'WARNING'}, "Volume '%s' left out: %s" % (obj.name, e))
         return 0
