@@ -56,7 +56,7 @@ SENSOR_AUTO, SENSOR_HORIZONTAL, SENSOR_VERTICAL = 0, 1, 2
 INTEGRATOR_PATH, INTEGRATOR_BIDIRECTIONAL, INTEGRATOR_VOLPATH, INTEGRATOR_VOLUME_DEBUG = 0, 1, 2, 3
 # lt_volume_estimator, lt_volume_node
 VOLUME_RAY_MARCHING, VOLUME_TRACKING = 0, 1
-VOLUME_PRINCIPLED, VOLUME_SCATTER, VOLUME_ABSORPTION = 0, 1, 2
+VOLUME_PRINCIPLED, VOLUME_SCATTER, VOLUME_ABSORPTION, VOLUME_EMISSION = 0, 1, 2, 3
 MIS_POWER, MIS_BALANCE, MIS_UNIFORM = 0, 1, 2
 FILTER_BOX, FILTER_GAUSSIAN, FILTER_BLACKMAN_HARRIS = 0, 1, 2
 
@@ -247,6 +247,11 @@ class VolumeDesc(ctypes.Structure):
         ("density", ctypes.c_float),
         ("absorption_color", ctypes.c_float * 3),
         ("anisotropy", ctypes.c_float),
+        ("emission_strength", ctypes.c_float),
+        ("emission_color", ctypes.c_float * 3),
+        ("blackbody_intensity", ctypes.c_float),
+        ("blackbody_tint", ctypes.c_float * 3),
+        ("temperature", ctypes.c_float),
     ]
 
 
@@ -308,10 +313,10 @@ def _declare(lib):
         "lt_scene_add_light": ([scene_p, P(LightDesc)], c_int),
         "lt_scene_set_camera": ([scene_p, P(CameraDesc)], c_int),
         "lt_scene_set_world": ([scene_p, P(WorldDesc)], c_int),
-        "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int], c_int),
-        "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc)], c_int),
+        "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int, c_int], c_int),
+        "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc), c_int], c_int),
         "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, ctypes.c_float, P(VolumeDesc),
-                                      P(c_int)], c_int),
+                                      c_int, P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
         "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
         "lt_scene_set_material": ([scene_p, c_int, P(ShaderNode), c_int, c_int], c_int),
@@ -523,37 +528,49 @@ class Scene:
         _check(self._lib.lt_scene_set_world(self.handle, ctypes.byref(d)), "lt_scene_set_world")
 
     @staticmethod
-    def _volume_desc(node, color, density, absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0):
-        d = VolumeDesc()
-        d.node = int(node)
-        d.color[:] = [float(c) for c in color[:3]]
-        d.density = float(density)
-        d.absorption_color[:] = [float(c) for c in absorption_color[:3]]
-        d.anisotropy = float(anisotropy)
-        return d
+    def _volume_descs(components):
+        """A volume's components (one keyword dict, or a list of them; keywords as VolumeDesc's
+        fields: node, color, density, absorption_color, anisotropy, emission_strength,
+        emission_color, blackbody_intensity, blackbody_tint, temperature) as a VolumeDesc array."""
+        if isinstance(components, dict):
+            components = [components]
+        components = list(components)
+        if not components:
+            raise ValueError("a volume needs at least one component")
+        arr = (VolumeDesc * len(components))()
+        for d, c in zip(arr, components):
+            d.node = int(c["node"])
+            d.color[:] = [float(v) for v in tuple(c.get("color", (1.0, 1.0, 1.0)))[:3]]
+            d.density = float(c.get("density", 1.0))
+            d.absorption_color[:] = [float(v) for v in tuple(c.get("absorption_color", (0.0, 0.0, 0.0)))[:3]]
+            d.anisotropy = float(c.get("anisotropy", 0.0))
+            d.emission_strength = float(c.get("emission_strength", 0.0))
+            d.emission_color[:] = [float(v) for v in tuple(c.get("emission_color", (1.0, 1.0, 1.0)))[:3]]
+            d.blackbody_intensity = float(c.get("blackbody_intensity", 0.0))
+            d.blackbody_tint[:] = [float(v) for v in tuple(c.get("blackbody_tint", (1.0, 1.0, 1.0)))[:3]]
+            d.temperature = float(c.get("temperature", 1000.0))
+        return arr, len(components)
 
-    def set_material_volume(self, material, node, color, density, absorption_color=(0.0, 0.0, 0.0),
-                            anisotropy=0.0, null_surface=True):
-        """A homogeneous medium inside the closed meshes using `material` (Cycles' formulas)."""
-        d = self._volume_desc(node, color, density, absorption_color, anisotropy)
-        _check(self._lib.lt_scene_set_material_volume(self.handle, int(material), ctypes.byref(d),
-                                                       int(bool(null_surface))),
+    def set_material_volume(self, material, components, null_surface=True):
+        """A homogeneous medium inside the closed meshes using `material`: the sum of `components`
+        (Cycles' formulas; lantern.h)."""
+        arr, n = self._volume_descs(components)
+        _check(self._lib.lt_scene_set_material_volume(self.handle, int(material), arr, n, int(bool(null_surface))),
                "lt_scene_set_material_volume")
 
-    def set_world_volume(self, node, color, density, absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0):
+    def set_world_volume(self, components):
         """A homogeneous World volume filling the scene (Cycles' formulas); escaped rays cross it to
         infinity."""
-        d = self._volume_desc(node, color, density, absorption_color, anisotropy)
-        _check(self._lib.lt_scene_set_world_volume(self.handle, ctypes.byref(d)), "lt_scene_set_world_volume")
+        arr, n = self._volume_descs(components)
+        _check(self._lib.lt_scene_set_world_volume(self.handle, arr, n), "lt_scene_set_world_volume")
 
-    def add_volume_grid(self, path, grid, transform, node, color, density,
-                        absorption_color=(0.0, 0.0, 0.0), anisotropy=0.0, step=0.0):
+    def add_volume_grid(self, path, grid, transform, components, step=0.0):
         """A Volume object's .vdb grid (step: ray-marching step in world units, 0 for the voxel
         size); raises LanternError (LT_ERROR_IO) with the core's message."""
-        d = self._volume_desc(node, color, density, absorption_color, anisotropy)
+        arr, n = self._volume_descs(components)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_volume_grid(self.handle, os.fsencode(path), grid.encode("utf-8"),
-                                                   _transform(transform), float(step), ctypes.byref(d),
+                                                   _transform(transform), float(step), arr, n,
                                                    ctypes.byref(out)),
                "lt_scene_add_volume_grid")
         return out.value

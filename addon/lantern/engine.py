@@ -211,6 +211,10 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
                    if s.volume_estimator == core.VOLUME_RAY_MARCHING else
                    "delta tracking and ratio tracking against per-cell majorants (unbiased)")
             media.append("%d heterogeneous VDB grid(s): %s" % (grids, est))
+        if summary.get("emissive_media"):
+            media.append("%d emitting (volume emission integrated in closed form along camera-path "
+                         "segments, never light-sampled, as Cycles 3.4; Bidirectional: strategy s = 0 "
+                         "only)" % summary["emissive_media"])
         text = "media: " + "; ".join(media)
         if s.integrator == core.INTEGRATOR_PATH:
             text += " -- IGNORED by this integrator (use Volumetric Path or Bidirectional)"

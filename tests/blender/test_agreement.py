@@ -25,20 +25,26 @@ import math
 import numpy as np
 import pytest
 
+import build_scenes
 import render_utils as ru
 
 # cornell_mesh_light: lit by an emissive quad 10 cm under the ceiling (two-sided mesh light)
 PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "sun_world",
                "textured", "instanced"]
-SAMPLES = 128
 TILE = 16
 ROUNDING = 1e-5  # float32 accumulation and EXR round trip
 
 _RUNS = {}
 
 
-def runs(scene_factory, name, engine, integrator="PATH", samples=SAMPLES, seeds=(0, 1)):
-    """Combined images of test scene `name` for each seed (rendered once per session)."""
+def samples_of(name):
+    return build_scenes.SCENES[name][2]
+
+
+def runs(scene_factory, name, engine, integrator="PATH", samples=None, seeds=(0, 1)):
+    """Combined images of test scene `name` (at its own samples by default) for each seed, rendered
+    once per session."""
+    samples = samples or samples_of(name)
     out = []
     scene = None
     for seed in seeds:
@@ -50,9 +56,9 @@ def runs(scene_factory, name, engine, integrator="PATH", samples=SAMPLES, seeds=
     return out
 
 
-def lantern_and_cycles(scene_factory, name, integrator, samples=SAMPLES):
-    return {ru.LANTERN: runs(scene_factory, name, ru.LANTERN, integrator, samples),
-            ru.CYCLES: runs(scene_factory, name, ru.CYCLES, "PATH", samples)}
+def lantern_and_cycles(scene_factory, name, integrator):
+    return {ru.LANTERN: runs(scene_factory, name, ru.LANTERN, integrator),
+            ru.CYCLES: runs(scene_factory, name, ru.CYCLES, "PATH")}
 
 
 @pytest.mark.parametrize("name", PATH_SCENES)
@@ -135,9 +141,8 @@ K = 12
 
 @pytest.mark.parametrize("name", BDPT_SCENES)
 def test_bidirectional_agrees_with_cycles(name, scene_factory, outdir):
-    import build_scenes
-    samples = build_scenes.SCENES[name][2]
-    c0, c1 = runs(scene_factory, name, ru.CYCLES, samples=samples)
+    samples = samples_of(name)
+    c0, c1 = runs(scene_factory, name, ru.CYCLES)
     mean_c, se2_c = ru.tile_mean_and_se2(c0, c1, TILE)
     per_run = max(1, samples // K)
     images = runs(scene_factory, name, ru.LANTERN, "BIDIRECTIONAL", per_run, seeds=range(100, 100 + K))
@@ -157,7 +162,7 @@ def test_bidirectional_agrees_with_cycles(name, scene_factory, outdir):
     if name in BDPT_VS_PATH:
         reports.append(ru.global_mean_report(
             name + "_bdpt_vs_path", global_l,
-            ru.image_mean_and_se2(runs(scene_factory, name, ru.LANTERN, "PATH", samples)), ("BDPT", "PATH")))
+            ru.image_mean_and_se2(runs(scene_factory, name, ru.LANTERN, "PATH")), ("BDPT", "PATH")))
     if not ok.all():
         reports.append(ru.tile_report(name + "_bdpt", mean_l, mean_c, bound, outdir,
                                       {"lantern": np.mean(images, axis=0), "cycles": 0.5 * (c0 + c1)}))

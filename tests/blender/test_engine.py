@@ -127,3 +127,12 @@ def test_cancel_stops_quickly_and_keeps_a_partial_image(scene_factory):
             render.close()
     finally:
         core_scene.close()
+
+
+def test_render_report_counts_mesh_lights(scene_factory):
+    """A scene lit only by an emissive mesh says so (it said "lights: none")."""
+    scene = scene_factory("cornell_mesh_light")
+    ru.render(scene, ru.LANTERN, 1, seed=0)
+    lights = [line for line in engine.LAST_RENDER["report"].splitlines() if line.startswith("lights:")]
+    assert len(lights) == 1 and lights[0].startswith("lights: 1 emissive mesh object(s) (2 triangles, two-sided);"), \
+        lights

@@ -29,7 +29,9 @@ def _export(scene):
 def test_volume_agrees_with_cycles(name, volume_bounces, scene_factory, outdir):
     scene = scene_factory(name)
     scene.cycles.volume_bounces = volume_bounces
-    report, _ = ru.two_seed_agreement(scene, SAMPLES, "VOLPATH", "%s_vb%d" % (name, volume_bounces), outdir,
+    import build_scenes
+    samples = build_scenes.SCENES[name][2]  # enough for the image-mean check's power
+    report, _ = ru.two_seed_agreement(scene, samples, "VOLPATH", "%s_vb%d" % (name, volume_bounces), outdir,
                                       TILE, ROUNDING)
     assert report == "", report
 
@@ -48,10 +50,99 @@ def test_unsupported_volume_node_is_reported(scene_factory):
     mat = bpy.data.materials["Smoke"]
     nt = mat.node_tree
     out = nt.get_output_node('CYCLES')
-    emission = nt.nodes.new("ShaderNodeEmission")
-    nt.links.new(emission.outputs[0], out.inputs["Volume"])
+    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    nt.links.new(diffuse.outputs[0], out.inputs["Volume"])
     _, text = _export(scene)
-    assert "Smoke" in text and "Emission" in text, text
+    assert "Smoke" in text and diffuse.name in text, text
+
+
+# ---- volume shader mixes and emission (issue 12 item 2) ----------------------------------------
+# Each renders 64x64 at 128 samples, two seeds per engine; besides the tile rule, the image means
+# (render_utils.global_mean_report).
+@pytest.mark.parametrize("integrator", ["VOLPATH", "BIDIRECTIONAL"])
+def test_add_shader_volume_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Add Shader(Volume Scatter, Volume Absorption) on a volume-only cube: once dropped (and the
+    cube rendered as an opaque black box), now the sum of both, as Cycles."""
+    scene = scene_factory("volume_add")
+    scene.cycles.volume_bounces = 2
+    summary, text = _export(scene)
+    assert text == "", text
+    report, _ = ru.two_seed_agreement(scene, SAMPLES, integrator, "volume_add_%s" % integrator, outdir,
+                                      TILE, ROUNDING)
+    assert report == "", report
+
+
+@pytest.mark.parametrize("integrator", ["VOLPATH", "BIDIRECTIONAL"])
+def test_mix_shader_of_two_scatters_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Mix Shader(0.35, Volume Scatter g = 0.8, Volume Scatter g = -0.5): coefficients mixed, the
+    phase function the mixture of both lobes weighted by their scattering.
+
+    Cycles 3.4 does not render a mix of two Volume Scatter nodes as the equivalent medium
+    (measured, docs/volumes.md: even with equal anisotropies its image differs from the single
+    node's; its next-event estimation sums the phase closures unweighted), so the reference is
+    built from what Cycles renders right, single Scatter nodes: with single scattering
+    (volume_bounces 0) every path scatters at most once in the medium and the image is linear in
+    the phase function, so the mixture's image is w I(g_a) + (1 - w) I(g_b), I(g) the image of
+    one Scatter node with the mix's total sigma_s and anisotropy g, w = sigma_s,a / sigma_s."""
+    import build_scenes
+    p = build_scenes.VOLUME_MIX
+    scene = scene_factory("volume_mix")
+    scene.cycles.volume_bounces = 0
+    summary, text = _export(scene)
+    assert text == "", text
+    lantern = [ru.render(scene, ru.LANTERN, SAMPLES, seed=s, integrator=integrator).combined for s in (0, 1)]
+    sa = (1 - p["fac"]) * p["color_a"] * p["density"]
+    sb = p["fac"] * p["color_b"] * p["density"]
+    w = sa / (sa + sb)
+    nt = bpy.data.materials["MixVolume"].node_tree
+    single = nt.nodes.new("ShaderNodeVolumeScatter")
+    single.inputs["Color"].default_value = ((sa + sb) / p["density"],) * 3 + (1.0,)
+    single.inputs["Density"].default_value = p["density"]
+    nt.links.new(single.outputs[0], nt.get_output_node('CYCLES').inputs["Volume"])
+    ref = {}
+    for g in (p["g_a"], p["g_b"]):
+        single.inputs["Anisotropy"].default_value = g
+        ref[g] = [ru.render(scene, ru.CYCLES, SAMPLES, seed=s).combined for s in (0, 1)]
+    cycles = [w * ref[p["g_a"]][s] + (1 - w) * ref[p["g_b"]][s] for s in (0, 1)]
+    report, _ = ru.agreement_report("volume_mix_%s" % integrator, lantern, cycles, outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
+@pytest.mark.parametrize("integrator", ["VOLPATH", "BIDIRECTIONAL"])
+@pytest.mark.parametrize("name", ["volume_emission", "volume_blackbody"])
+def test_emissive_principled_volume_agrees_with_cycles(name, integrator, scene_factory, outdir):
+    """Principled Volume's emission (colour x strength) and blackbody emission."""
+    scene = scene_factory(name)
+    scene.cycles.volume_bounces = 1
+    summary, text = _export(scene)
+    assert text == "", text
+    report, _ = ru.two_seed_agreement(scene, SAMPLES, integrator, "%s_%s" % (name, integrator), outdir,
+                                      TILE, ROUNDING)
+    assert report == "", report
+
+
+def test_volume_only_material_with_unusable_volume_stays_invisible(scene_factory, outdir):
+    """A volume-only material whose volume cannot be used keeps its invisible boundary: the scene
+    renders as without the cube (never an opaque black box), and the export says so, naming the
+    material and the node."""
+    runs = {}
+    for with_cube in (True, False):
+        scene = scene_factory("smoke_box")
+        if with_cube:
+            nt = bpy.data.materials["Smoke"].node_tree
+            out = nt.get_output_node('CYCLES')
+            bad = nt.nodes.new("ShaderNodeBsdfGlossy")
+            bad.name = "NotAVolume"
+            nt.links.new(bad.outputs[0], out.inputs["Volume"])
+            _, text = _export(scene)
+            assert "Smoke" in text and "NotAVolume" in text and "invisible" in text, text
+        else:
+            bpy.data.objects.remove(bpy.data.objects["SmokeCube"])
+        runs[with_cube] = [ru.render(scene, ru.LANTERN, 32, seed=s, integrator="VOLPATH").combined
+                           for s in (0, 1)]
+    report, _ = ru.agreement_report("unusable_volume", runs[True], runs[False], outdir, TILE, ROUNDING,
+                                    ("with cube", "without"))
+    assert report == "", report
 
 
 def test_volume_object_with_missing_file_is_reported(scene_factory, tmp_path):

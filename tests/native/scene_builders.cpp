@@ -355,7 +355,7 @@ int add_volume_material(lt_scene* s, const lt_volume_desc& d) {
   n.color.value[0] = n.color.value[1] = n.color.value[2] = 1;
   int id;
   check(lt_scene_add_material(s, &n, 1, 0, &id), "add_material");
-  check(lt_scene_set_material_volume(s, id, &d, 1), "set_material_volume");
+  check(lt_scene_set_material_volume(s, id, &d, 1, 1), "set_material_volume");
   return id;
 }
 

@@ -74,7 +74,7 @@ ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1
     check(lt_scene_add_material(sc, &glass, 1, 0, &glass_id), "glass");
     if (media) {
       lt_volume_desc inside = volume(LT_VOLUME_PRINCIPLED, 3.0f, 0.9f, -0.3f);
-      check(lt_scene_set_material_volume(sc, glass_id, &inside, 0), "glass medium");
+      check(lt_scene_set_material_volume(sc, glass_id, &inside, 1, 0), "glass medium");
     }
     add_object(sc, icosphere(0.25f, 3), glass_id, translate({0.1f, -0.4f, 0.25f}));
   }
@@ -82,7 +82,7 @@ ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1
     int fog = add_volume_material(sc, volume(LT_VOLUME_PRINCIPLED, 0.6f, 0.8f, 0.4f));
     add_object(sc, box({-0.95f, -1.55f, 0.02f}, {0.95f, 0.95f, 0.9f}), fog);
     lt_volume_desc air = volume(LT_VOLUME_PRINCIPLED, 0.05f, 0.9f);
-    check(lt_scene_set_world_volume(sc, &air), "world volume");
+    check(lt_scene_set_world_volume(sc, &air, 1), "world volume");
   }
   switch (lights) {
     case Lights::Area:
@@ -267,7 +267,7 @@ TEST(Bdpt, AgreesWithVolumetricPathTracingInAGrid) {
     Xform xf = identity();
     int id = -1;
     ASSERT_EQ(lt_scene_add_volume_grid(s.get(), (std::string(LANTERN_TEST_VDB_DIR) + "/density.vdb").c_str(),
-                                       "density", xf.data(), 0, &d, &id),
+                                       "density", xf.data(), 0, &d, 1, &id),
               LT_OK)
         << lt_last_error();
     if (alone) {
@@ -293,7 +293,7 @@ TEST(Bdpt, WorldVolumeHidesLightFromInfinity) {
   add_light(s.get(), sun_light({0.3f, 0.2f, -1}, 4, 0.05f));
   set_world(s.get(), {0.3f, 0.4f, 0.6f}, 1);
   lt_volume_desc air = volume(LT_VOLUME_PRINCIPLED, 0.05f, 0.9f);
-  check(lt_scene_set_world_volume(s.get(), &air), "world volume");
+  check(lt_scene_set_world_volume(s.get(), &air, 1), "world volume");
   set_camera(s.get(), perspective_camera(look_at({0, -3, 1.5f}, {0, 0, 0}), 40));
   check(lt_scene_commit(s.get()), "commit");
   for (int integrator : {LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {

@@ -12,6 +12,7 @@
 #include "chi2.h"
 #include "core/error.h"
 #include "scene/medium.h"
+#include "scene/volume_material.h"
 #include "test_media_util.h"
 
 namespace lt {
@@ -112,6 +113,70 @@ TEST_P(PhaseChi2, SamplingFollowsPdf) {
 }
 
 INSTANTIATE_TEST_SUITE_P(PhaseHG, PhaseChi2, ::testing::Values(-0.99f, -0.5f, 0.0f, 0.5f, 0.99f));
+
+// Mixtures of HG lobes (volume shader mixes, scene/phase.h): sampling follows the mixture's pdf.
+struct MixtureCase {
+  std::vector<float> g, w;
+};
+
+class PhaseMixtureChi2 : public ::testing::TestWithParam<MixtureCase> {};
+
+TEST_P(PhaseMixtureChi2, SamplingFollowsPdf) {
+  const MixtureCase& c = GetParam();
+  const Phase phase = Phase::mixture(c.g.data(), c.w.data(), int(c.g.size()));
+  ASSERT_EQ(phase.count, int(c.g.size()));
+  const Vec3 wo = normalize(Vec3(-0.6f, 0.2f, 0.7f));
+  test::Chi2Options o;
+  o.name = "phase_mixture";
+  for (size_t i = 0; i < c.g.size(); ++i) o.name += "_g" + std::to_string(c.g[i]) + "w" + std::to_string(c.w[i]);
+  o.pole = -wo;  // the forward peak; backward lobes are resolved by the theta bins too
+  o.theta_power = 2;
+  o.expected_integral = 1;
+  o.seed = 1234 + uint32_t(c.g.size());
+  test::Chi2Result r = test::chi2_test(
+      [&](Sampler& rng, test::DirectionSample* s) {
+        float pdf;
+        if (!phase.sample(wo, rng.next_2d(), &s->dir, &pdf)) return false;
+        s->pdf = pdf;
+        return true;
+      },
+      [&](const Vec3& wi) { return double(phase.eval(wo, wi)); }, o);
+  EXPECT_TRUE(r.passed()) << r.summary;
+  EXPECT_EQ(r.pdf_mismatches, 0u) << r.summary;  // pdf == eval of the whole mixture
+}
+
+INSTANTIATE_TEST_SUITE_P(Phase, PhaseMixtureChi2,
+                         ::testing::Values(MixtureCase{{0.8f, -0.5f}, {0.3f, 0.7f}},
+                                           MixtureCase{{0.95f, 0.0f, -0.9f}, {0.5f, 0.25f, 0.25f}},
+                                           MixtureCase{{0.6f, 0.3f}, {1.0f, 3.0f}}));
+
+TEST(Phase, MixtureWeightsMergeAndSingleLobe) {
+  // Equal anisotropies merge (as Cycles merges identical HG closures); weights are normalised.
+  const float g[] = {0.5f, 0.5f, -0.2f, 0.1f}, w[] = {1.0f, 1.0f, 2.0f, 0.0f};
+  Phase p = Phase::mixture(g, w, 4);
+  ASSERT_EQ(p.count, 2);
+  EXPECT_FLOAT_EQ(p.g[0], 0.5f);
+  EXPECT_FLOAT_EQ(p.weight[0], 0.5f);
+  EXPECT_FLOAT_EQ(p.weight[1], 0.5f);
+  const Vec3 wo = normalize(Vec3(0.1f, 0.2f, 0.9f)), wi = normalize(Vec3(-0.3f, 0.5f, -0.4f));
+  EXPECT_NEAR(p.eval(wo, wi), 0.5f * hg_phase(dot(wo, wi), 0.5f) + 0.5f * hg_phase(dot(wo, wi), -0.2f), 1e-6f);
+  // One lobe is exactly the HG phase function, also in sampling.
+  Phase one = Phase::hg(0.7f);
+  Sampler rng(media_test::seed(9), 0, 0);
+  for (int i = 0; i < 100; ++i) {
+    Vec2 u = rng.next_2d();
+    Vec3 a, b;
+    float pa, pb;
+    ASSERT_TRUE(one.sample(wo, u, &a, &pa));
+    ASSERT_TRUE(PhaseHG{0.7f}.sample(wo, u, &b, &pb));
+    EXPECT_EQ(a.x, b.x);
+    EXPECT_EQ(pa, pb);
+  }
+  const float bad_w[] = {-1.0f};
+  EXPECT_THROW(Phase::mixture(g, bad_w, 1), InvalidArgument);
+  const float zero_w[] = {0.0f, 0.0f};
+  EXPECT_THROW(Phase::mixture(g, zero_w, 2), InvalidArgument);
+}
 
 TEST(PhaseHG, Normalisation) {
   // 2 pi * integral of p over cos in [-1, 1] by Simpson's rule; 2e6 intervals resolve even the
@@ -769,6 +834,55 @@ TEST(MediaStats, ChecksRejectWrongDistributionsAndBias) {
   const double coarse = h.transmittance(rb, 0.2f, 3.6f, s, kMarch, 12.0f / 16).x;
   EXPECT_FALSE(within_se(mt, coarse)) << "ratio tracking " << mt.mean() << " +- " << mt.se() << ", marching " << coarse;
   EXPECT_TRUE(within_se(mt, h.transmittance(rb, 0.2f, 3.6f, s, kMarch, 0.25f / 16).x));
+}
+
+
+// ---- volume shader mixes and emission (scene/volume_material.h) ------------------------------
+
+TEST(VolumeMaterial, ComponentsAddAndPhaseLobesFollowScattering) {
+  // Add Shader(Volume Scatter, Volume Absorption): the coefficients add; one lobe.
+  VolumeCoefficients c[3];
+  c[0] = volume_coefficients(VolumeNode::Scatter, Spectrum(0.8f, 0.5f, 0.2f), 2.0f, Spectrum(0.0f), 0.6f);
+  c[1] = volume_coefficients(VolumeNode::Absorption, Spectrum(0.25f), 4.0f, Spectrum(0.0f), 0.0f);
+  VolumeMix m = sum_volume_components(c, 2);
+  EXPECT_FLOAT_EQ(m.sigma_s.x, 1.6f);
+  EXPECT_FLOAT_EQ(m.sigma_s.z, 0.4f);
+  EXPECT_FLOAT_EQ(m.sigma_a.y, 3.0f);
+  ASSERT_EQ(m.phase.count, 1);
+  EXPECT_FLOAT_EQ(m.phase.g[0], 0.6f);
+  // A second scatter with another anisotropy: lobes weighted by their average sigma_s.
+  c[2] = volume_coefficients(VolumeNode::Scatter, Spectrum(0.5f), 1.0f, Spectrum(0.0f), -0.4f);
+  m = sum_volume_components(c, 3);
+  ASSERT_EQ(m.phase.count, 2);
+  const float avg0 = (1.6f + 1.0f + 0.4f) / 3, avg2 = 0.5f;
+  EXPECT_NEAR(m.phase.weight[0], avg0 / (avg0 + avg2), 1e-6f);
+  EXPECT_FLOAT_EQ(m.phase.g[1], -0.4f);
+}
+
+TEST(VolumeMaterial, BlackbodyMatchesCyclesAndHasUnitLuminance) {
+  // Cycles 3.4.1's Blackbody node rendered at these temperatures (independent of the fitted samples).
+  struct {
+    float T;
+    Spectrum c;
+  } cycles[] = {{1000, Spectrum(4.60136175f, 0.03904079f, 0.0f)},
+                {1500, Spectrum(3.26430678f, 0.43404534f, 0.0f)},
+                {2500, Spectrum(2.06762958f, 0.76932192f, 0.13942985f)},
+                {4000, Spectrum(1.41411519f, 0.92364097f, 0.53367424f)},
+                {6500, Spectrum(1.04255068f, 0.98405147f, 1.03527117f)},
+                {12000, Spectrum(0.82629371f, 0.99450684f, 1.56630695f)}};
+  for (const auto& k : cycles) {
+    Spectrum c = blackbody_rec709(k.T);
+    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], k.c[ch], 2e-5f) << k.T << " channel " << ch;
+  }
+  for (float T = 2000; T < 20000; T *= 1.1f) {  // unclamped range: Y = 1 (Rec. 709 luminance)
+    Spectrum c = blackbody_rec709(T);
+    EXPECT_NEAR(0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z, 1.0f, 2e-3f) << T;
+  }
+  // Principled Volume: strength x colour + tint x sigma_SB 1e-6 / pi x T^4 x blackbody(T).
+  Spectrum e = principled_volume_emission(2.0f, Spectrum(0.5f, 0.25f, 1.0f), 1.0f, Spectrum(1.0f), 3000.0f);
+  Spectrum bb = blackbody_rec709(3000.0f) * float(5.670373e-14 / kPi * 81e12);
+  EXPECT_NEAR(e.x, 1.0f + bb.x, 1e-4f);
+  EXPECT_NEAR(e.z, 2.0f + bb.z, 1e-4f);
 }
 
 }  // namespace

@@ -40,7 +40,7 @@ ScenePtr merge_scene(bool media) {
     d.node = LT_VOLUME_SCATTER;
     d.color[0] = d.color[1] = d.color[2] = 0.9f;
     d.density = 2;
-    check(lt_scene_set_material_volume(s.get(), vm, &d, 1), "set_material_volume");
+    check(lt_scene_set_material_volume(s.get(), vm, &d, 1, 1), "set_material_volume");
     add_object(s.get(), icosphere(0.4f, 2), vm, translate({0.1f, -0.9f, 0.6f}));
   }
   add_light(s.get(), area_light(LT_AREA_SQUARE, 0.5f, 0.5f, look_at({0, -1, 2.5f}, {0, 0, 0}), 200));

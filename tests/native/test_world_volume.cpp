@@ -30,7 +30,7 @@ ScenePtr world_fog_scene(const lt_volume_desc& d, float h, float L) {
   add_object(s.get(), plane(20, 20), add_emission(s.get(), {1, 1, 1}, L));
   set_world(s.get(), {1, 1, 1}, 1);
   set_camera(s.get(), orthographic_camera(look_at({0, 0, h}, {0, 0, 0}, {0, 1, 0}), 2));
-  check(lt_scene_set_world_volume(s.get(), &d), "set_world_volume");
+  check(lt_scene_set_world_volume(s.get(), &d, 1), "set_world_volume");
   check(lt_scene_commit(s.get()), "commit");
   return s;
 }
@@ -66,7 +66,7 @@ TEST(VolPathWorldVolume, HidesTheBackgroundAndSunLikeCycles) {
   cam.clip_end = 20;
   set_camera(s.get(), cam);
   lt_volume_desc d = volume(LT_VOLUME_SCATTER, 0.05f);
-  check(lt_scene_set_world_volume(s.get(), &d), "set_world_volume");
+  check(lt_scene_set_world_volume(s.get(), &d, 1), "set_world_volume");
   check(lt_scene_commit(s.get()), "commit");
   Passes p = render(s.get(), volpath_settings(16, 16, 16, 2));
   ASSERT_EQ(p.first_non_finite(), "");
@@ -81,10 +81,10 @@ TEST(VolPathWorldVolume, LitByAPointLightScattersAndConvergesAcrossSeeds) {
   add_light(s.get(), point_light({0, 0, 0}, 100));
   set_camera(s.get(), perspective_camera(look_at({0, -3, 0}, {0, 0, 0}), 35));
   lt_volume_desc d = volume(LT_VOLUME_PRINCIPLED, 0.2f, 0.7f, 0.3f);
-  EXPECT_NE(lt_scene_set_world_volume(s.get(), nullptr), LT_OK);
-  check(lt_scene_set_world_volume(s.get(), &d), "set_world_volume");
+  EXPECT_NE(lt_scene_set_world_volume(s.get(), nullptr, 1), LT_OK);
+  check(lt_scene_set_world_volume(s.get(), &d, 1), "set_world_volume");
   check(lt_scene_commit(s.get()), "commit");
-  EXPECT_EQ(lt_scene_set_world_volume(s.get(), &d), LT_ERROR_STATE);
+  EXPECT_EQ(lt_scene_set_world_volume(s.get(), &d, 1), LT_ERROR_STATE);
   Passes a = render(s.get(), volpath_settings(16, 16, 64, 1)), b = render(s.get(), volpath_settings(16, 16, 64, 2));
   ASSERT_EQ(a.first_non_finite(), "");
   for (int ty = 0; ty < 4; ++ty)

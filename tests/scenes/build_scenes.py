@@ -573,6 +573,74 @@ def build_smoke_box(scene):
            smoke)
 
 
+def _volume_node(nt, kind, color, density, anisotropy=0.0):
+    node = nt.nodes.new(kind)
+    node.inputs["Color"].default_value = (*color, 1.0)
+    node.inputs["Density"].default_value = density
+    if "Anisotropy" in node.inputs:
+        node.inputs["Anisotropy"].default_value = anisotropy
+    return node
+
+
+def _volume_box(scene, mat):
+    """The area-lit Cornell box with a 0.7 m cube of `mat` (a volume-only material)."""
+    build_cornell_area(scene)
+    assign(add_object(scene, "VolumeCube", mesh_box("VolumeCube", (0.7, 0.7, 0.7)), (0.2, -0.45, 0.7)), mat)
+
+
+def build_volume_add(scene):
+    """A cube whose Volume output is Add Shader(Volume Scatter, Volume Absorption): the usual Cycles
+    way to set scattering and absorption apart (issue 12 item 2)."""
+    mat, nt, out = _material("AddVolume")
+    scatter = _volume_node(nt, "ShaderNodeVolumeScatter", (0.9, 0.7, 0.5), 2.5, anisotropy=0.4)
+    absorb = _volume_node(nt, "ShaderNodeVolumeAbsorption", (0.6, 0.8, 0.9), 1.5)
+    add = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.new(scatter.outputs[0], add.inputs[0])
+    nt.links.new(absorb.outputs[0], add.inputs[1])
+    nt.links.new(add.outputs[0], out.inputs["Volume"])
+    _volume_box(scene, mat)
+
+
+VOLUME_MIX = dict(fac=0.35, g_a=0.8, g_b=-0.5, color_a=0.9, color_b=0.6, density=4.0)
+
+
+def build_volume_mix(scene):
+    """A cube whose Volume output is Mix Shader(0.35, Volume Scatter g = 0.8, Volume Scatter
+    g = -0.5), both of density 4, grey colours 0.9 and 0.6 (so the lobes' weights are the same in
+    every channel), in the area-lit Cornell box (VOLUME_MIX holds the parameters)."""
+    p = VOLUME_MIX
+    mat, nt, out = _material("MixVolume")
+    a = _volume_node(nt, "ShaderNodeVolumeScatter", (p["color_a"],) * 3, p["density"], anisotropy=p["g_a"])
+    b = _volume_node(nt, "ShaderNodeVolumeScatter", (p["color_b"],) * 3, p["density"], anisotropy=p["g_b"])
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    mix.inputs[0].default_value = p["fac"]
+    nt.links.new(a.outputs[0], mix.inputs[1])
+    nt.links.new(b.outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs["Volume"])
+    _volume_box(scene, mat)
+
+
+def build_volume_emission(scene, blackbody=False):
+    """A cube of emissive Principled Volume (density 0.8, emission colour x strength, or blackbody
+    at 2500 K) in the Cornell box under a dim area light."""
+    mat, nt, out = _material("GlowVolume")
+    vol = _volume_node(nt, "ShaderNodeVolumePrincipled", (0.7, 0.7, 0.7), 0.8, anisotropy=0.2)
+    if blackbody:
+        vol.inputs["Blackbody Intensity"].default_value = 1.0
+        vol.inputs["Temperature"].default_value = 2500.0
+    else:
+        vol.inputs["Emission Strength"].default_value = 1.5
+        vol.inputs["Emission Color"].default_value = (1.0, 0.5, 0.2, 1.0)
+    nt.links.new(vol.outputs[0], out.inputs["Volume"])
+    cornell_box(scene)
+    add_light(scene, "AreaLight", "AREA", 10.0, (0, 0, 1.98), shape="SQUARE", size=0.5)
+    assign(add_object(scene, "VolumeCube", mesh_box("VolumeCube", (0.7, 0.7, 0.7)), (0.2, -0.45, 0.7)), mat)
+
+
+def build_volume_blackbody(scene):
+    build_volume_emission(scene, blackbody=True)
+
+
 def _fog_room(scene, density):
     """The area-lit Cornell box filled by a fog cube slightly smaller than the room."""
     build_cornell_area(scene)
@@ -703,19 +771,23 @@ SCENES = {
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),
     "cornell_spot": (build_cornell_spot, (96, 96), 128),
-    "cornell_mesh_light": (build_cornell_mesh_light, (96, 96), 128),
+    "cornell_mesh_light": (build_cornell_mesh_light, (96, 96), 512),
     "glossy_glass": (build_glossy_glass, (96, 96), 128),
     "sun_world": (build_sun_world, (96, 96), 128),
     "textured": (build_textured, (96, 96), 128),
     "instanced": (build_instanced, (96, 96), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
-    "door_bounce": (build_door_bounce, (96, 96), 512),
+    "door_bounce": (build_door_bounce, (96, 96), 1280),
     "caustic": (build_caustic, (96, 96), 256),
     "smoke_box": (build_smoke_box, (64, 64), 128),
+    "volume_add": (build_volume_add, (64, 64), 128),
+    "volume_mix": (build_volume_mix, (64, 64), 128),
+    "volume_emission": (build_volume_emission, (64, 64), 128),
+    "volume_blackbody": (build_volume_blackbody, (64, 64), 128),
     "thin_fog": (build_thin_fog, (64, 64), 128),
-    "dense_fog": (build_dense_fog, (64, 64), 128),
-    "world_fog": (build_world_fog, (64, 64), 128),
+    "dense_fog": (build_dense_fog, (64, 64), 256),
+    "world_fog": (build_world_fog, (64, 64), 1024),
     "vdb_cloud": (build_vdb_cloud, (64, 64), 128),
     "vdb_cloud_scaled": (build_vdb_cloud_scaled, (64, 64), 128),
     "vdb_smoke": (build_vdb_smoke, (64, 64), 64),

@@ -109,5 +109,6 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
                                                             if v is not None),
                    lights=lights, light_kinds=light_kinds, volumes=volumes,
                    material_media=materials.media, world_media=world_media,
+                   emissive_media=materials.emissive_media,
                    media=volumes + materials.media + world_media)
     return summary

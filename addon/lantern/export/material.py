@@ -104,34 +104,112 @@ def _follow(socket):
 
 
 _VOLUME_KINDS = {'PRINCIPLED_VOLUME': core.VOLUME_PRINCIPLED, 'VOLUME_SCATTER': core.VOLUME_SCATTER,
-                 'VOLUME_ABSORPTION': core.VOLUME_ABSORPTION}
+                 'VOLUME_ABSORPTION': core.VOLUME_ABSORPTION, 'EMISSION': core.VOLUME_EMISSION}
+_VOLUME_INPUTS = ("Color", "Density", "Anisotropy", "Absorption Color", "Emission Strength",
+                  "Emission Color", "Blackbody Intensity", "Blackbody Tint", "Temperature", "Strength")
+
+
+def _constant_value(socket, warn, where):
+    """A socket's value when unlinked or linked from an RGB / Value node; otherwise the socket's
+    own value, reported."""
+    out = _follow(socket)
+    if out is None:
+        return socket.default_value
+    if out.node.type in {'RGB', 'VALUE'}:
+        v = out.default_value
+        if isinstance(socket.default_value, float) and not isinstance(v, float):
+            return _convert(tuple(v), False)
+        if not isinstance(socket.default_value, float) and isinstance(v, float):
+            return (v, v, v, 1.0)
+        return v
+    warn("'%s' of %s is linked from '%s' (%s); only constant volume inputs are supported, the "
+         "socket's value is used" % (socket.name, where, out.node.name, out.node.bl_idname))
+    return socket.default_value
 
 
 def volume_keywords(output, warn):
-    """The Volume input of an output node (Material Output or World Output) as the keywords of
-    set_material_volume / set_world_volume, or None; warn(message) reports what is left out."""
+    """The Volume input of an output node (Material Output or World Output) as the list of
+    components set_material_volume / set_world_volume / add_volume_grid take, [] when a Volume
+    input is linked but nothing in it can be used (reported), or None without a Volume input.
+
+    Add Shader sums its inputs and Mix Shader weights them by (1 - fac, fac), as Cycles mixes
+    closures: the weight scales a component's Density (and an Emission node's Strength). Cycles
+    3.4's Principled Volume does not scale its own emission by the mix weight (svm_closure.h), and
+    neither does this. Unsupported nodes are reported and left out."""
     if output is None or "Volume" not in output.inputs:
         return None
-    out = _follow(output.inputs["Volume"])
-    if out is None:
+    if _follow(output.inputs["Volume"]) is None:
         return None
-    node = out.node
-    if node.type not in _VOLUME_KINDS:
-        warn("volume node '%s' (%s) is not supported (Principled Volume, Volume Scatter "
-             "and Volume Absorption are); the volume is left out" % (node.name, node.bl_idname))
-        return None
-    for s in node.inputs:
-        if s.is_linked and s.name in ("Color", "Density", "Anisotropy", "Absorption Color"):
-            warn("'%s' of volume '%s' is linked; only constant volume inputs are "
-                 "supported, the socket's value is used" % (s.name, node.name))
+    components = []
+    seen = set()
 
-    def value(name, default):
-        s = node.inputs.get(name)
-        return default if s is None else s.default_value
-    return dict(node=_VOLUME_KINDS[node.type], color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3],
-                density=float(value("Density", 1.0)),
-                absorption_color=tuple(value("Absorption Color", (0.0, 0.0, 0.0)))[:3],
-                anisotropy=float(value("Anisotropy", 0.0)))
+    def walk(socket, weight, depth):
+        out = _follow(socket)
+        if out is None or weight <= 0.0 or depth > 64:
+            return
+        node = out.node
+        if node.type == 'ADD_SHADER':
+            walk(node.inputs[0], weight, depth + 1)
+            walk(node.inputs[1], weight, depth + 1)
+            return
+        if node.type == 'MIX_SHADER':
+            fac = _constant_value(node.inputs[0], warn, "mix shader '%s'" % node.name)
+            fac = min(1.0, max(0.0, float(fac)))
+            walk(node.inputs[1], weight * (1.0 - fac), depth + 1)
+            walk(node.inputs[2], weight * fac, depth + 1)
+            return
+        if node.type not in _VOLUME_KINDS:
+            if node.name not in seen:
+                seen.add(node.name)
+                warn("volume node '%s' (%s) is not supported (Principled Volume, Volume Scatter, "
+                     "Volume Absorption, Emission, Add Shader and Mix Shader are); it is left out"
+                     % (node.name, node.bl_idname))
+            return
+        where = "volume '%s'" % node.name
+
+        def value(name, default):
+            s = node.inputs.get(name)
+            return default if s is None else _constant_value(s, warn, where)
+
+        kind = _VOLUME_KINDS[node.type]
+        if kind == core.VOLUME_EMISSION:
+            components.append(dict(node=kind, name=node.name, density=0.0,
+                                   emission_strength=float(value("Strength", 1.0)) * weight,
+                                   emission_color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3]))
+            return
+        c = dict(node=kind, name=node.name, color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3],
+                 density=float(value("Density", 1.0)) * weight,
+                 absorption_color=tuple(value("Absorption Color", (0.0, 0.0, 0.0)))[:3],
+                 anisotropy=float(value("Anisotropy", 0.0)))
+        if kind == core.VOLUME_PRINCIPLED:
+            c.update(emission_strength=float(value("Emission Strength", 0.0)),
+                     emission_color=tuple(value("Emission Color", (1.0, 1.0, 1.0)))[:3],
+                     blackbody_intensity=float(value("Blackbody Intensity", 0.0)),
+                     blackbody_tint=tuple(value("Blackbody Tint", (1.0, 1.0, 1.0)))[:3],
+                     temperature=float(value("Temperature", 1000.0)))
+        components.append(c)
+
+    walk(output.inputs["Volume"], 1.0, 0)
+    return components
+
+
+def emissive_nodes(components):
+    """Names of the nodes among `components` that emit (volume emission)."""
+    return [c.get("name", "?") for c in components or ()
+            if c.get("emission_strength", 0.0) > 0.0 or c.get("blackbody_intensity", 0.0) > 0.0]
+
+
+def without_emission(components):
+    """The components with their emission removed (World volumes and Volume objects)."""
+    out = []
+    for c in components:
+        if c["node"] == core.VOLUME_EMISSION:
+            continue
+        c = dict(c)
+        c.pop("emission_strength", None)
+        c.pop("blackbody_intensity", None)
+        out.append(c)
+    return out
 
 
 class MaterialExporter:
@@ -144,6 +222,7 @@ class MaterialExporter:
         self.ids = {}
         self.volumes = {}  # material key -> (volume keywords or None, null surface) as exported
         self.media = 0  # materials with a Volume output
+        self.emissive_media = 0  # of those, volumes that emit
 
     # -- public --------------------------------------------------------------------------------
 
@@ -155,9 +234,16 @@ class MaterialExporter:
             return self.ids[key]
         nodes, root, volume, null_surface = self._translate(material)
         mat_id = self.core_scene.add_material(nodes, root)
-        if volume is not None:
-            self.core_scene.set_material_volume(mat_id, null_surface=null_surface, **volume)
+        if volume:
+            self.core_scene.set_material_volume(mat_id, volume, null_surface=null_surface)
             self.media += 1
+            self.emissive_media += bool(emissive_nodes(volume))
+        elif null_surface:
+            # A volume-only material whose volume cannot be used: no medium, but the boundary stays
+            # invisible (an empty medium), as the material would be without its volume in Cycles;
+            # never an opaque black surface.
+            self.core_scene.set_material_volume(mat_id, [dict(node=core.VOLUME_SCATTER, density=0.0)],
+                                                null_surface=True)
         self.ids[key] = mat_id
         self.volumes[key] = (volume, null_surface)
         return mat_id
@@ -187,7 +273,11 @@ class MaterialExporter:
             volume = self.volume(material)
             output = material.node_tree.get_output_node('CYCLES')
             if volume is not None and _follow(output.inputs["Surface"]) is None:
-                # Volume only: Cycles' invisible boundary (Transparent for the surface integrators).
+                # Volume only: Cycles' invisible boundary (Transparent for the surface integrators),
+                # also when nothing in the volume can be used (volume == [], reported).
+                if not volume:
+                    self._warn("no usable volume shader; the volume is left out and its boundary "
+                               "stays invisible")
                 root = self._add(core.NODE_TRANSPARENT, color=core.make_input((1.0, 1.0, 1.0)))
                 null_surface = True
             else:
@@ -197,7 +287,7 @@ class MaterialExporter:
         return self._nodes, root, volume, null_surface
 
     def volume(self, material):
-        """The material's Volume output as set_material_volume's keywords, or None."""
+        """The material's Volume output as set_material_volume's components, [] (unusable) or None."""
         self._material = material
         if not material.use_nodes or material.node_tree is None:
             return None

@@ -4,7 +4,7 @@ import bpy
 from mathutils import Matrix, Vector
 
 from .. import core
-from .material import _follow
+from .material import _follow, emissive_nodes, without_emission
 
 # Cycles' default volume shader for a Volume object without material: Principled Volume defaults.
 _DEFAULT = dict(node=core.VOLUME_PRINCIPLED, color=(0.5, 0.5, 0.5), density=1.0,
@@ -85,7 +85,15 @@ def export_volume(obj, matrix, core_scene, report, materials):
                             "ignored" % (obj.name, ", ".join("'%s'" % n for n in others), grid_name))
     desc = materials.volume(material) if material is not None else None
     if desc is None:
-        desc = dict(_DEFAULT)
+        desc = [_DEFAULT]
+    emitting = emissive_nodes(desc)
+    if emitting:
+        report({'WARNING'}, "Volume '%s': volume emission (%s) is supported in material volumes of "
+                            "meshes only; left out" % (obj.name, ", ".join("'%s'" % n for n in emitting)))
+        desc = without_emission(desc)
+    if not desc:
+        report({'WARNING'}, "Volume '%s' left out: its material has no usable volume shader" % obj.name)
+        return 0
     # Render space Object (Blender's default): density and step size are per object-space unit, so
     # a Volume scaled by 1/50 is as dense as unscaled; Cycles scales them by the length of the
     # object's transform applied to a unit diagonal (BKE_volume_density_scale). World: per metre.
@@ -94,10 +102,11 @@ def export_volume(obj, matrix, core_scene, report, materials):
     step = render.step_size
     if render.space == 'OBJECT':
         stretch = (linear @ Vector((1.0, 1.0, 1.0)).normalized()).length
-        desc = dict(desc, density=desc["density"] / stretch if stretch > 0 else desc["density"])
+        if stretch > 0:
+            desc = [dict(c, density=c.get("density", 1.0) / stretch) for c in desc]
         step = min(abs(c) for c in linear @ Vector((step, step, step)))
     try:
-        core_scene.add_volume_grid(path, grid_name, matrix, step=step, **desc)
+        core_scene.add_volume_grid(path, grid_name, matrix, desc, step=step)
     except core.LanternError as e:
         report({'WARNING'}, "Volume '%s' left out: %s" % (obj.name, e))
         return 0

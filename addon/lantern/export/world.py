@@ -3,7 +3,7 @@ World Output's Volume as a medium filling the scene."""
 
 import math
 
-from .material import _follow, volume_keywords
+from .material import _follow, emissive_nodes, volume_keywords, without_emission
 
 _CAMERA_DEFAULT = 1
 
@@ -136,7 +136,12 @@ def export_world_volume(depsgraph, core_scene, report):
         report({'WARNING'}, "World '%s': %s" % (world.name, msg))
 
     volume = volume_keywords(world.node_tree.get_output_node('CYCLES'), warn)
-    if volume is None:
+    emitting = emissive_nodes(volume)
+    if emitting:
+        warn("volume emission (%s) is supported in material volumes only; the World volume's "
+             "emission is left out" % ", ".join("'%s'" % n for n in emitting))
+        volume = without_emission(volume)
+    if not volume:
         return 0
-    core_scene.set_world_volume(**volume)
+    core_scene.set_world_volume(volume)
     return 1

@@ -24,8 +24,8 @@ extern "C" {
 #endif
 
 #define LT_ABI_VERSION 4  /* 2: lt_render_settings.sample_offset; 3: halting settings and status;
-                             4: lt_scene_stats counts emissive triangles, lt_scene_add_volume_grid
-                                takes a step */
+                             4: volumes are arrays of components with emission; lt_scene_stats
+                                counts emissive triangles; lt_scene_add_volume_grid takes a step */
 
 enum lt_status {
   LT_OK = 0,
@@ -184,40 +184,58 @@ typedef struct lt_world_desc {
 LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
 
 /* ---- volumes (docs/volumes.md) ---------------------------------------------------------------
- * A volume shader node with Cycles' formulas: Principled Volume (sigma_s = d colour, sigma_t =
- * d (colour + (1 - colour)(1 - sqrt(absorption_color)))), Volume Scatter (sigma_s = d colour),
- * Volume Absorption (sigma_a = d (1 - colour)); Henyey-Greenstein anisotropy, g > 0 forward. */
-enum lt_volume_node { LT_VOLUME_PRINCIPLED = 0, LT_VOLUME_SCATTER = 1, LT_VOLUME_ABSORPTION = 2 };
+ * A volume is a list of components, each a volume shader node with Cycles' formulas: Principled
+ * Volume (sigma_s = d colour, sigma_t = d (colour + (1 - colour)(1 - sqrt(absorption_color)))),
+ * Volume Scatter (sigma_s = d colour), Volume Absorption (sigma_a = d (1 - colour)), Emission
+ * (emission only: emission_strength x emission_color); Henyey-Greenstein anisotropy, g > 0
+ * forward. The components add, as Cycles adds closures (Add Shader; a Mix Shader's factor is the
+ * caller's: it scales each side's density, and an Emission node's strength): sigma_a, sigma_s
+ * and emission are summed, and the phase function is the mixture of the components' HG lobes
+ * weighted by their sigma_s averaged over RGB (at most 8 distinct anisotropies).
+ * Emission (Principled and Emission nodes) is radiance per unit length, not scaled by density:
+ * emission_strength x emission_color, plus for Principled Volume with blackbody_intensity > 0:
+ * blackbody_tint x (Stefan-Boltzmann / pi x 1e-6) x mix(1, T^4, blackbody_intensity) x the
+ * unit-luminance blackbody colour of `temperature` kelvin (Cycles' formula). Emission is
+ * supported for material volumes only (World volumes and grids refuse it). Fields after
+ * `anisotropy` may be left zero: no emission. */
+enum lt_volume_node { LT_VOLUME_PRINCIPLED = 0, LT_VOLUME_SCATTER = 1, LT_VOLUME_ABSORPTION = 2, LT_VOLUME_EMISSION = 3 };
 typedef struct lt_volume_desc {
   int node; /* lt_volume_node */
   float color[3];
   float density;
   float absorption_color[3]; /* Principled only */
   float anisotropy;
+  float emission_strength;   /* Principled and Emission */
+  float emission_color[3];
+  float blackbody_intensity; /* Principled only */
+  float blackbody_tint[3];
+  float temperature;
 } lt_volume_desc;
 
-/* Gives a material a homogeneous medium inside the closed meshes that use it (entered through
- * front faces, left through back faces). null_surface != 0: the material has no Surface output and
- * its boundary is invisible to the integrators that render media, VOLPATH and BIDIRECTIONAL (the
- * add-on exports a Transparent surface for PATH). */
-LT_API int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* desc, int null_surface);
+/* Gives a material a homogeneous medium, the sum of `count` >= 1 components, inside the closed
+ * meshes that use it (entered through front faces, left through back faces). null_surface != 0:
+ * the material has no Surface output and its boundary is invisible to the integrators that render
+ * media, VOLPATH and BIDIRECTIONAL (the add-on exports a Transparent surface for PATH). */
+LT_API int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* components, int count,
+                                        int null_surface);
 
-/* A World volume: a homogeneous medium filling the whole scene, active along every ray (it adds to
- * the media of closed meshes the ray is in). As in Cycles 3.4, rays that escape travel an infinite
- * distance through it: the background seen through a world volume with sigma_t > 0 is fully
- * attenuated, and so are shadow rays to the world and to sun lights (they reach infinity). The
- * volumetric and bidirectional integrators see it. Calling it again adds another world medium. */
-LT_API int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* desc);
+/* A World volume: a homogeneous medium (the sum of `count` components, no emission) filling the
+ * whole scene, active along every ray (it adds to the media of closed meshes the ray is in). As in
+ * Cycles 3.4, rays that escape travel an infinite distance through it: the background seen through
+ * a world volume with sigma_t > 0 is fully attenuated, and so are shadow rays to the world and to
+ * sun lights (they reach infinity). The volumetric and bidirectional integrators see it. Calling it
+ * again adds another world medium. */
+LT_API int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* components, int count);
 
 /* A Volume object: the float grid `grid` of the .vdb file at `path` (its density multiplies the
- * desc's Density, per world unit: the add-on folds Blender's render space into Density), placed by
- * `transform` (object to world, row-major 3x4) after the grid's own index-to-object transform.
- * `step`: its ray-marching step in world units (0: the grid's smallest world-space voxel edge);
- * a render's volume_step > 0 overrides it. The medium is bounded by the grid; no geometry.
- * Errors: LT_ERROR_IO with the message (missing, unreadable or corrupt file; no such grid, listing
- * those present; a grid that is empty or not a float grid). */
+ * components' Density, per world unit: the add-on folds Blender's render space into Density; no
+ * emission), placed by `transform` (object to world, row-major 3x4) after the grid's own
+ * index-to-object transform. `step`: its ray-marching step in world units (0: the grid's smallest
+ * world-space voxel edge); a render's volume_step > 0 overrides it. The medium is bounded by the
+ * grid; no geometry. Errors: LT_ERROR_IO with the message (missing, unreadable or corrupt file; no
+ * such grid, listing those present; a grid that is empty or not a float grid). */
 LT_API int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
-                                    float step, const lt_volume_desc* desc, int* out_id);
+                                    float step, const lt_volume_desc* components, int count, int* out_id);
 
 /* Builds acceleration structures and light samplers. Must be called before rendering. After a
  * commit, adding images, materials, meshes, instances or volumes is refused with LT_ERROR_STATE;

@@ -77,14 +77,45 @@ lt::Input to_input(const lt_input& in, size_t image_count, const char* what, int
 
 lt::VolumeCoefficients to_volume(const lt_volume_desc* d) {
   require(d != nullptr, "volume description is NULL");
-  require(d->node >= LT_VOLUME_PRINCIPLED && d->node <= LT_VOLUME_ABSORPTION,
-          "unknown volume node " + std::to_string(d->node) + "; valid: PRINCIPLED, SCATTER, ABSORPTION");
+  require(d->node >= LT_VOLUME_PRINCIPLED && d->node <= LT_VOLUME_EMISSION,
+          "unknown volume node " + std::to_string(d->node) + "; valid: PRINCIPLED, SCATTER, ABSORPTION, EMISSION");
   require(finite_array(d->color, 3) && finite_array(d->absorption_color, 3) && std::isfinite(d->density) &&
               std::isfinite(d->anisotropy),
           "volume colour, density, absorption colour and anisotropy must be finite");
-  return lt::volume_coefficients(lt::VolumeNode(d->node), lt::Vec3(d->color[0], d->color[1], d->color[2]), d->density,
-                                 lt::Vec3(d->absorption_color[0], d->absorption_color[1], d->absorption_color[2]),
-                                 d->anisotropy);
+  require(std::isfinite(d->emission_strength) && finite_array(d->emission_color, 3) &&
+              std::isfinite(d->blackbody_intensity) && finite_array(d->blackbody_tint, 3) &&
+              std::isfinite(d->temperature),
+          "volume emission strength, colour, blackbody intensity, tint and temperature must be finite");
+  lt::VolumeCoefficients c = lt::volume_coefficients(
+      lt::VolumeNode(d->node), lt::Vec3(d->color[0], d->color[1], d->color[2]), d->density,
+      lt::Vec3(d->absorption_color[0], d->absorption_color[1], d->absorption_color[2]), d->anisotropy);
+  const lt::Vec3 emission_color(d->emission_color[0], d->emission_color[1], d->emission_color[2]);
+  if (d->node == LT_VOLUME_PRINCIPLED)
+    c.emission = lt::principled_volume_emission(
+        d->emission_strength, emission_color, d->blackbody_intensity,
+        lt::Vec3(d->blackbody_tint[0], d->blackbody_tint[1], d->blackbody_tint[2]), d->temperature);
+  else if (d->node == LT_VOLUME_EMISSION)
+    c.emission = lt::principled_volume_emission(d->emission_strength, emission_color, 0, lt::Vec3(0.0f), 0);
+  return c;
+}
+
+// The sum of a volume's components (docs/volumes.md, "Volume shader mixes").
+lt::VolumeMix to_volume_mix(const lt_volume_desc* d, int count, bool allow_emission) {
+  require(d != nullptr, "volume description is NULL");
+  require(count >= 1 && count <= 64, "volume component count must be in [1, 64], got " + std::to_string(count));
+  std::vector<lt::VolumeCoefficients> c;
+  for (int i = 0; i < count; ++i) c.push_back(to_volume(d + i));
+  lt::VolumeMix m = lt::sum_volume_components(c.data(), count);
+  require(allow_emission || lt::is_black(m.emission),
+          "volume emission is supported for material volumes only (not World volumes or Volume objects)");
+  return m;
+}
+
+lt::Medium homogeneous_medium(const lt::VolumeMix& v) {
+  lt::Medium m = lt::Medium::homogeneous(v.sigma_a, v.sigma_s, v.phase.g[0]);
+  m.set_phase(v.phase);
+  m.set_emission(v.emission);
+  return m;
 }
 
 // Edits that a committed scene also takes (viewport updates): refused while a render reads it.
@@ -404,39 +435,40 @@ int lt_scene_set_world(lt_scene* scene, const lt_world_desc* d) {
   });
 }
 
-int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* d, int null_surface) {
+int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* d, int count,
+                                 int null_surface) {
   return guarded([&] {
     require(scene && d, "lt_scene_set_material_volume: NULL argument");
     scene->scene.require_editable();
     lt::Scene& sc = scene->scene;
     require(material >= 0 && material < int(sc.materials.size()),
             "material " + std::to_string(material) + " does not exist");
-    lt::VolumeCoefficients c = to_volume(d);
+    lt::VolumeMix c = to_volume_mix(d, count, true);
     sc.material_medium.resize(sc.materials.size(), -1);
     sc.material_null.resize(sc.materials.size(), 0);
-    sc.media.push_back(lt::Medium::homogeneous(c.sigma_a, c.sigma_s, c.g));
+    sc.media.push_back(homogeneous_medium(c));
     sc.material_medium[material] = int(sc.media.size()) - 1;
     sc.material_null[material] = null_surface != 0;
   });
 }
 
-int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* d) {
+int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* d, int count) {
   return guarded([&] {
     require(scene && d, "lt_scene_set_world_volume: NULL argument");
     scene->scene.require_editable();
-    lt::VolumeCoefficients c = to_volume(d);
+    lt::VolumeMix c = to_volume_mix(d, count, false);
     lt::Scene& sc = scene->scene;
-    sc.media.push_back(lt::Medium::homogeneous(c.sigma_a, c.sigma_s, c.g));
+    sc.media.push_back(homogeneous_medium(c));
     if (!sc.media.back().empty()) sc.global_media.push_back(int(sc.media.size()) - 1);
   });
 }
 
 int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
-                             float step, const lt_volume_desc* d, int* out_id) {
+                             float step, const lt_volume_desc* d, int count, int* out_id) {
   return guarded([&] {
     require(scene && path && transform && d && out_id, "lt_scene_add_volume_grid: NULL argument");
     scene->scene.require_editable();
-    lt::VolumeCoefficients c = to_volume(d);
+    lt::VolumeMix c = to_volume_mix(d, count, false);
     lt::Transform xf = to_transform(transform, "volume");
     require(std::abs(xf.determinant()) > 1e-30f, "volume transform is singular");
     require(std::isfinite(step) && step >= 0, "volume step must be finite and >= 0 (0: the voxel size)");
@@ -448,7 +480,8 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
       throw lt::IoError(std::string(path) + ": " + e.what());  // a file that cannot be used is an I/O error
     }
     lt::Scene& sc = scene->scene;
-    sc.media.push_back(lt::Medium::heterogeneous(data, c.sigma_a, c.sigma_s, c.g, xf));
+    sc.media.push_back(lt::Medium::heterogeneous(data, c.sigma_a, c.sigma_s, c.phase.g[0], xf));
+    sc.media.back().set_phase(c.phase);
     if (step > 0) sc.media.back().set_march_step(step);
     *out_id = int(sc.media.size()) - 1;
     if (sc.media.back().empty()) sc.warnings.push_back(std::string(path) + ": volume has no density; left out");

@@ -5,8 +5,9 @@
 // they stay finite on paths of hundreds of vertices.
 //
 // Strategies: s = 0 (the camera subpath reaches an emitter: a mesh light, a lamp, the sun or the
-// world), s = 1 (a fresh light sample at the camera vertex, as next-event estimation), s >= 2,
-// and t = 1 (a light vertex connected to the pinhole and splatted through the pixel filter).
+// world, or crosses an emitting medium: volume emission, found by s = 0 only, weight 1), s = 1 (a
+// fresh light sample at the camera vertex, as next-event estimation), s >= 2, and t = 1 (a light
+// vertex connected to the pinhole and splatted through the pixel filter).
 //
 // Media (scenes with volumes; pbrt 3, section 16.3): both walks sample free flights along every
 // segment as the volumetric path tracer does and scatter at medium vertices with the phase
@@ -96,7 +97,7 @@ class Bdpt {
     if (v.type == VertexType::Medium) return phase(v).pdf(to_prev, to_next);
     return v.bsdf.pdf(v.frame.to_local(to_prev), v.frame.to_local(to_next));
   }
-  const PhaseHG& phase(const PathVertex& v) const { return scene_.media[v.medium].phase(); }
+  const Phase& phase(const PathVertex& v) const { return scene_.media[v.medium].phase(); }
   // Density (area measure at `next`) that vertex v samples `next`, having been reached from prev.
   float pdf(const PathVertex& v, const PathVertex* prev, const PathVertex& next) const {
     if (v.type == VertexType::Light) return pdf_light(v, next);
@@ -313,6 +314,19 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     const Spectrum beta_before = beta;
     MediumInteraction mi;
     int medium = -1;
+    // Volume emission along this segment (media_transport.h): light that only camera subpaths find
+    // (no light subpath starts in a medium, and connections never end on one), so strategy
+    // s = 0, t = count + 1 is its only estimator and takes it with MIS weight 1. The same depth and
+    // per-kind limits as an emitter reached at vertex count (emitter_reached).
+    if (mode == Mode::Radiance && media_ && scene_.has_emissive_media() && stack.size > 0 &&
+        count - 1 <= this->max_depth()) {
+      v.type = VertexType::Light;  // the emission point: not a scattering vertex for the kind limits
+      if (within_kind_limits(path, path, 0, count + 1)) {
+        Spectrum le = media_emission(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_,
+                                     s_.volume_estimator, s_.volume_step);
+        if (!is_black(le)) add(beta * le, 0, count + 1);
+      }
+    }
     if (media_)
       medium = sample_media(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_, s_.volume_estimator,
                             s_.volume_step, &beta, &mi);

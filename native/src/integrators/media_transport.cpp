@@ -59,6 +59,58 @@ Spectrum media_transmittance(const Scene& scene, const VolumeStack& stack, const
   return T;
 }
 
+Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
+                        Sampler& sampler, VolumeEstimator est, float step) {
+  Spectrum E(0.0f);
+  for (int i = 0; i < stack.size; ++i) {
+    const Medium& m = scene.media[stack.media[i]];
+    if (m.emissive()) E += m.emission();
+  }
+  if (is_black(E) || !(t1 > t0)) return Spectrum(0.0f);
+  Spectrum sigma(0.0f);
+  bool heterogeneous = false;
+  for_each_medium(scene, stack, [&](int i) {
+    const Medium& m = scene.media[i];
+    if (m.is_homogeneous())
+      sigma += m.sigma_a_unit() + m.sigma_s_unit();
+    else
+      heterogeneous = true;
+  });
+  const double len = length(ray.d), d = double(t1 - t0) * len;  // d may be infinite
+  Spectrum L(0.0f);
+  for (int k = 0; k < 3; ++k) {
+    if (sigma[k] > 0)
+      L[k] = float(E[k] * -std::expm1(-double(sigma[k]) * d) / sigma[k]);
+    else if (std::isfinite(d))
+      L[k] = float(E[k] * d);  // no extinction: E d (an infinite segment without extinction adds nothing)
+  }
+  if (!heterogeneous || is_black(L)) return L;
+  // Heterogeneous media too: sample s in [0, d] with pdf proportional to exp(-sbar s) (sbar the
+  // channel-averaged homogeneous sigma_t; uniform if 0), and weight each channel by
+  // exp(-sigma_k s) T_het(s) / pdf(s) against its closed form.
+  const double sbar = (double(sigma.x) + sigma.y + sigma.z) / 3;
+  const double u = sampler.next_1d();
+  double s, pdf;
+  if (sbar > 0) {
+    const double norm = std::isfinite(d) ? -std::expm1(-sbar * d) : 1.0;
+    s = -std::log1p(-u * norm) / sbar;
+    pdf = sbar * std::exp(-sbar * s) / norm;
+  } else {
+    if (!std::isfinite(d)) return Spectrum(0.0f);
+    s = u * d;
+    pdf = 1 / d;
+  }
+  if (!(pdf > 0) || !std::isfinite(s)) return Spectrum(0.0f);
+  Spectrum T_het(1.0f);
+  const float ts = t0 + float(s / len);
+  for_each_medium(scene, stack, [&](int i) {
+    const Medium& m = scene.media[i];
+    if (!m.is_homogeneous() && !is_black(T_het)) T_het *= m.transmittance(ray, t0, ts, sampler, est, step);
+  });
+  for (int k = 0; k < 3; ++k) L[k] = float(E[k] * std::exp(-double(sigma[k]) * s) * T_het[k] / pdf);
+  return L;
+}
+
 int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1, Sampler& sampler,
                  VolumeEstimator est, float step, Spectrum* beta, MediumInteraction* mi) {
   int winner = -1;

@@ -32,6 +32,16 @@ Spectrum media_transmittance(const Scene& scene, const VolumeStack& stack, const
 int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1, Sampler& sampler,
                  VolumeEstimator est, float step, Spectrum* beta, MediumInteraction* mi);
 
+// Volume emission reaching ray.o from [t0, t1] (t1 may be infinite): the emitted radiance per unit
+// length of the stack's media, integrated against the transmittance of every medium the ray is
+// in. Closed form over the homogeneous media (E (1 - exp(-sigma_t d)) / sigma_t per channel, as
+// Cycles' volume_emission_integrate); if heterogeneous global media (Volume objects) overlap, their
+// transmittance to one point sampled with density proportional to the homogeneous transmittance
+// multiplies it (unbiased). Emission is found only along path segments, never by light sampling
+// (Cycles 3.4 does the same); it gets full weight.
+Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
+                        Sampler& sampler, VolumeEstimator est, float step);
+
 // Transmittance of a shadow ray (ray.tmax: distance to the light) through invisible boundaries
 // (updating a copy of the stack) and media; 0 if an opaque surface is in the way.
 Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sampler& sampler, VolumeEstimator est,

@@ -84,6 +84,10 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
     const Spectrum beta_before = beta;
     MediumInteraction mi;
     int medium = -1;
+    // Volume emission along the whole segment (closed form; before the free flight decides where
+    // the path goes on, as Cycles 3.4 does).
+    if (kMedia && scene.has_emissive_media() && stack.size > 0)
+      add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step));
     if constexpr (kMedia)
       medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
     const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;
@@ -102,7 +106,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       // A real collision: beta already holds sigma_s T / pdf (medium.h).
       if (b.from_camera()) out.alpha = 1;
       if (is_black(beta) || volume > s.volume_bounces || b.total > s.max_bounces) break;
-      const PhaseHG& phase = scene.media[medium].phase();
+      const Phase& phase = scene.media[medium].phase();
       const Vec3 wo = normalize(-ray.d);
       if (!lights.empty())
         next_event(mi.p, nullptr, Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf) {

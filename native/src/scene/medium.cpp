@@ -217,7 +217,9 @@ Medium::Medium(const Medium& o)
     : sigma_a_(o.sigma_a_),
       sigma_s_(o.sigma_s_),
       phase_(o.phase_),
+      emission_(o.emission_),
       empty_(o.empty_),
+      emissive_(o.emissive_),
       grid_(o.grid_),
       world_to_index_(o.world_to_index_),
       majorant_(o.majorant_),
@@ -230,7 +232,9 @@ Medium& Medium::operator=(const Medium& o) {
   sigma_a_ = o.sigma_a_;
   sigma_s_ = o.sigma_s_;
   phase_ = o.phase_;
+  emission_ = o.emission_;
   empty_ = o.empty_;
+  emissive_ = o.emissive_;
   grid_ = o.grid_;
   world_to_index_ = o.world_to_index_;
   majorant_ = o.majorant_;
@@ -240,6 +244,13 @@ Medium& Medium::operator=(const Medium& o) {
   return *this;
 }
 
+void Medium::set_emission(const Spectrum& e) {
+  if (!valid_coefficients(e)) throw InvalidArgument("medium emission must be finite and >= 0");
+  if (grid_ && !is_black(e)) throw InvalidArgument("emission is supported for homogeneous media only");
+  emission_ = e;
+  emissive_ = !is_black(e);
+}
+
 Medium Medium::homogeneous(const Spectrum& sigma_a, const Spectrum& sigma_s, float g) {
   if (!valid_coefficients(sigma_a) || !valid_coefficients(sigma_s))
     throw InvalidArgument("homogeneous medium: sigma_a and sigma_s must be finite and >= 0");
@@ -247,7 +258,7 @@ Medium Medium::homogeneous(const Spectrum& sigma_a, const Spectrum& sigma_s, flo
   Medium m;
   m.sigma_a_ = sigma_a;
   m.sigma_s_ = sigma_s;
-  m.phase_.g = clamp(g, -PhaseHG::kMaxG, PhaseHG::kMaxG);
+  m.phase_ = Phase::hg(g);
   m.empty_ = is_black(sigma_a + sigma_s);
   return m;
 }
@@ -263,7 +274,7 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
   Medium m;
   m.sigma_a_ = sigma_a;
   m.sigma_s_ = sigma_s;
-  m.phase_.g = clamp(g, -PhaseHG::kMaxG, PhaseHG::kMaxG);
+  m.phase_ = Phase::hg(g);
   m.grid_ = grid;
   Transform index_to_world = compose(object_to_world, grid->index_to_object);
   m.world_to_index_ = affine_inverse(index_to_world);

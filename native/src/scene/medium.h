@@ -125,7 +125,15 @@ class Medium {
   bool sample_distance(const Ray& ray, float t0, float t1, Sampler& s, VolumeEstimator e, float step,
                        MediumInteraction* out) const;
 
-  const PhaseHG& phase() const { return phase_; }
+  const Phase& phase() const { return phase_; }
+  // A mixture of HG lobes (volume shader mixes; scene/volume_material.h) replaces the single lobe.
+  void set_phase(const Phase& p) { phase_ = p; }
+  // Emitted radiance per unit length (Cycles' volume emission, not scaled by density); homogeneous
+  // media only (throws InvalidArgument otherwise, or for negative / non-finite values). Emission is
+  // light no estimator samples: the integrators add its closed-form integral along each segment.
+  void set_emission(const Spectrum& e);
+  const Spectrum& emission() const { return emission_; }
+  bool emissive() const { return emissive_; }
   // Coefficients at a world point (exact lookups; for tests and quadrature).
   Spectrum sigma_t(const Vec3& p) const { return (sigma_a_ + sigma_s_) * density(p); }
   Spectrum sigma_s(const Vec3& p) const { return sigma_s_ * density(p); }
@@ -150,8 +158,9 @@ class Medium {
   void count_capped() const { capped_.fetch_add(1, std::memory_order_relaxed); }
 
   Spectrum sigma_a_{0.0f}, sigma_s_{0.0f};
-  PhaseHG phase_;
-  bool empty_ = true;
+  Phase phase_;
+  Spectrum emission_{0.0f};
+  bool empty_ = true, emissive_ = false;
   std::shared_ptr<const GridData> grid_;
   Transform world_to_index_;
   MajorantGrid majorant_;

@@ -79,7 +79,11 @@ void Scene::commit() {
   material_medium.resize(materials.size(), -1);
   material_null.resize(materials.size(), 0);
   has_boundaries_ = false;
-  for (int m : material_medium) has_boundaries_ = has_boundaries_ || m >= 0;
+  has_emissive_media_ = false;
+  for (int m : material_medium) {
+    has_boundaries_ = has_boundaries_ || m >= 0;
+    has_emissive_media_ = has_emissive_media_ || (m >= 0 && media[m].emissive());
+  }
   has_media_ = has_boundaries_ || !global_media.empty();
   committed_ = true;
   edited_ = false;

@@ -46,6 +46,8 @@ class Scene {
   // Set by commit(): the scene has media at all, and mesh boundaries of media.
   bool has_media() const { return has_media_; }
   bool has_boundaries() const { return has_boundaries_; }
+  // A material's medium emits (volume emission; integrators add it along segments in media).
+  bool has_emissive_media() const { return has_emissive_media_; }
   // A World volume: escaping rays cross it to infinity, so no light arrives from the world or suns.
   bool has_world_volume() const { return has_world_volume_; }
 
@@ -69,7 +71,7 @@ class Scene {
   bool committed_ = false, edited_ = false;
   uint64_t light_builds_ = 0;
   uint64_t emissive_triangles_ = 0, emissive_instances_ = 0;
-  bool has_media_ = false, has_boundaries_ = false, has_world_volume_ = false;
+  bool has_media_ = false, has_boundaries_ = false, has_world_volume_ = false, has_emissive_media_ = false;
 };
 
 }  // namespace lt

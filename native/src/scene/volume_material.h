@@ -3,15 +3,38 @@
 #pragma once
 
 #include "core/math.h"
+#include "scene/phase.h"
 
 namespace lt {
 
-enum class VolumeNode { Principled = 0, Scatter = 1, Absorption = 2 };
+enum class VolumeNode { Principled = 0, Scatter = 1, Absorption = 2, Emission = 3 };
 
 struct VolumeCoefficients {
   Spectrum sigma_a{0.0f}, sigma_s{0.0f};  // per world unit (per unit grid density for VDB volumes)
   float g = 0;
+  Spectrum emission{0.0f};  // emitted radiance per unit length (not scaled by density, as Cycles)
 };
+
+// Blackbody colour of temperature `kelvin` in linear Rec.709, as Cycles 3.4.1 computes it (unit
+// luminance, negative components clamped to 0; constant below 800 K and above 12000 K): a
+// piecewise fit to Cycles' own output (volume_material.cpp says how it was measured).
+Spectrum blackbody_rec709(float kelvin);
+
+// Principled Volume's emission per unit length (Cycles' svm_node_principled_volume): strength x
+// colour, plus blackbody: tint x (sigma_SB 1e-6 / pi) x mix(1, T^4, intensity) x blackbody(T)
+// when intensity > 0 (sigma_SB the Stefan-Boltzmann constant). Colours clamped to >= 0.
+Spectrum principled_volume_emission(float strength, const Spectrum& color, float blackbody_intensity,
+                                    const Spectrum& blackbody_tint, float temperature);
+
+// A volume shader made of several components (Add Shader: their sum; Mix Shader: the add-on
+// scales each side's density / strength by its factor), as Cycles sums closures: absorption,
+// scattering and emission add; the scattering components keep their own phase function, mixed by
+// their scattering coefficients averaged over RGB (Phase::mixture; Cycles' sample_weight).
+struct VolumeMix {
+  Spectrum sigma_a{0.0f}, sigma_s{0.0f}, emission{0.0f};
+  Phase phase;
+};
+VolumeMix sum_volume_components(const VolumeCoefficients* components, int count);
 
 // Principled Volume: sigma_s = d colour, sigma_t = d (colour + (1 - colour)(1 - sqrt(absorption colour)));
 // Volume Scatter: sigma_s = d colour; Volume Absorption: sigma_a = d (1 - colour). Colours are
@@ -32,6 +55,7 @@ inline VolumeCoefficients volume_coefficients(VolumeNode node, const Spectrum& c
     }
     case VolumeNode::Scatter: c.sigma_s = col * d; break;
     case VolumeNode::Absorption: c.sigma_a = (Spectrum(1.0f) - col) * d; break;
+    case VolumeNode::Emission: break;  // emission only (principled_volume_emission's first term)
   }
   c.g = clamp(anisotropy, -0.9999f, 0.9999f);
   return c;
