@@ -82,9 +82,10 @@ def student_t_upper(p, dof):
 
 
 # smoke_box, world_fog and vdb_cloud: media (a smoke box behind an invisible boundary, a World
-# volume, a VDB grid by delta and ratio tracking)
-BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "door", "door_bounce", "smoke_box",
-               "world_fog", "vdb_cloud"]
+# volume, a VDB grid by delta and ratio tracking); door_slabs: Cycles' per-kind bounce limits on
+# walls of two lobe kinds (issue 12, item 4)
+BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "glossy_glass", "door", "door_bounce", "door_slabs",
+               "smoke_box", "world_fog", "vdb_cloud"]
 K = 12
 
 
