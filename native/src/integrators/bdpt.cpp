@@ -874,6 +874,16 @@ std::vector<float> Bdpt::weight_sums() {
       cam[t] = pdf(pt, &camera[t - 2], qs);
       cam[t + 1] = pdf(qs, &pt, light[s - 2]);
       lig[k] = light[0].pdf_fwd;
+      // Cycles' bounce-kind limits scale every strategy's contribution by the same factor (see
+      // kind_limit_factor): the weights times each strategy's factor, over the factor this
+      // connection gets in the render, must sum to one too. Inside the joined path every vertex
+      // has both neighbours; the ones the walks did not store are set here.
+      const float factor = kind_limit_factor(light, camera, s, t);
+      if (!(factor > 0)) continue;
+      for (int i = 1; i < k; ++i)
+        if (x[i].type == VertexType::Surface && x[i].kind == kMixed &&
+            !mixed_kind(x[i], x[i - 1].p, x[i + 1].p, i != t - 1 && i != t && x[i].delta, x[i].kind_p))
+          x[i].kind_p[0] = -1;
       float sum = 0;
       for (int t2 = 1; t2 <= k + 1; ++t2) {
         const int s2 = k + 1 - t2;
@@ -901,7 +911,7 @@ std::vector<float> Bdpt::weight_sums() {
         if (sampled) sampled_copy = *sampled;
         float w = mis_weight(l2, c2, sampled ? &sampled_copy : nullptr, s2, t2);
         if (!(w >= 0 && w <= 1 + 1e-5f)) sum = NAN;  // a weight outside [0, 1] fails the check
-        sum += w;
+        sum += w * kind_limit_factor(l2, c2, s2, t2) / factor;
       }
       sums.push_back(sum);
     }
