@@ -130,9 +130,10 @@ def student_t_upper(p, dof):
 
 
 # smoke_box, world_fog and vdb_cloud: media (a smoke box behind an invisible boundary, a World
-# volume, a VDB grid by delta and ratio tracking)
+# volume, a VDB grid by delta and ratio tracking); door_slabs: Cycles' per-kind bounce limits on
+# walls of two lobe kinds (issue 12, item 4)
 BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "door",
-               "door_bounce", "smoke_box", "world_fog", "vdb_cloud"]
+               "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud"]
 # Scenes without media whose path-traced image mean is known within MEAN_POWER at their samples:
 # BDPT's image mean must equal PATH's there too (the door scenes' path tracing is too noisy).
 BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass"]

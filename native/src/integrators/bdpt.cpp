@@ -32,19 +32,35 @@ constexpr int kMaxNullCrossings = 1024;
 
 enum class Mode { Radiance, Importance };
 
-// Bounce kinds, as Cycles limits them: a vertex counts as the kind of its BSDF's dominant lobe
-// (a property of the path, so every strategy of a path agrees on it and MIS stays consistent).
-enum Kind : uint8_t { kNone = 0, kDiffuse = 1, kGlossy = 2, kTransmission = 3, kVolume = 4 };
-uint8_t kind_of(const Bsdf& bsdf) {
-  uint32_t f = bsdf.dominant_flags();
-  if (!f || (f == (kLobeSpecular | kLobeTransmission) && bsdf.count() > 0 &&
-             bsdf.lobe(0).type == LobeType::Transparent))
-    return kNone;
-  if (f & kLobeTransmission) return kTransmission;
-  if (f & kLobeDiffuse) return kDiffuse;
-  return kGlossy;
+// Bounce kinds, as Cycles limits them. Cycles' path tracer (and path.cpp) counts a bounce as the
+// kind of the lobe (closure) it sampled: at a vertex whose BSDF has lobes of several kinds (the
+// Principled BSDF's diffuse and specular, a Mix of Diffuse and Glossy) the same path is counted
+// as a diffuse bounce by some samples and as a glossy one by others. kMixed marks such vertices;
+// the others count as one kind whatever the directions.
+enum Kind : uint8_t { kNone = 0, kDiffuse = 1, kGlossy = 2, kTransmission = 3, kVolume = 4, kMixed = 5 };
+// The kind of a scattering by lobe l, by reflection or transmission (path.cpp's Bounces::count:
+// a pass-through without refraction is transparent, not a bounce).
+uint8_t lobe_kind(const Lobe& l, bool transmit) {
+  switch (l.type) {
+    case LobeType::Diffuse: return kDiffuse;
+    case LobeType::GlossyGGX:
+    case LobeType::SpecularGGX: return kGlossy;
+    case LobeType::Dielectric: return transmit ? (l.eta == 1 && (lobe_flags(l) & kLobeSpecular) ? kNone : kTransmission) : kGlossy;
+    case LobeType::Transparent: return kNone;
+  }
+  return kNone;
 }
-
+uint8_t kind_of(const Bsdf& bsdf) {
+  uint8_t kind = kNone;
+  for (int k = 0; k < bsdf.count(); ++k) {
+    const Lobe& l = bsdf.lobe(k);
+    if (l.type == LobeType::Dielectric) return kMixed;  // reflection or refraction
+    uint8_t lk = lobe_kind(l, false);
+    if (k > 0 && lk != kind) return kMixed;
+    kind = lk;
+  }
+  return kind;
+}
 
 // Scratch subpaths, allocated once per thread and reused: no heap allocation per sample.
 struct Scratch {
@@ -232,23 +248,140 @@ class Bdpt {
     return r;
   }
   int max_depth() const { return s_.max_bounces + 1; }  // s + t - 2: the path tracer's limit
-  // The path tracer's per-kind limits: it scatters at every vertex but the last before the light,
-  // so those vertices' kinds are counted (the last one's is free).
-  bool within_kind_limits(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s,
+  // Cycles' per-kind bounce limits, as its path tracer (and path.cpp) applies them to this path.
+  // It scatters at every vertex but x[k-1], the last before the light x[k] (next-event estimation
+  // there, or the emitter hit by the ray it samples there), so the kinds of x[1..k-2] count. The
+  // kind of a bounce is that of the lobe the path tracer sampled at the vertex, coming from the
+  // camera side: given the direction towards the light side, lobe j with probability
+  // part_j / pdf (Bsdf::lobe_pdfs; the one-sample mixture of Bsdf::sample). The path tracer's
+  // estimate of this path is therefore f / p times the probability that the kinds stay within
+  // the limits; that factor, returned here, is a property of the path alone (it reads only the
+  // path's vertices and the directions between them), so every strategy applies the same one
+  // and the MIS weights still sum to one over the strategies (Veach 1997, eq. 9.3). Counting
+  // one fixed kind per vertex instead (the dominant lobe's, as before) cuts paths the path
+  // tracer keeps: the door_slabs scene (walls a Mix of Diffuse and Glossy) came out 16 % dark
+  // (test_bdpt.cpp, DoorSlabsBounceKindsAgreeWithPathTracing).
+  float kind_limit_factor(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s,
                           int t) const {
-    int n[5] = {0, 0, 0, 0, 0};
-    for (int i = 1; i < t; ++i)
-      if (camera[i].type == VertexType::Surface || camera[i].type == VertexType::Medium) ++n[camera[i].kind];
-    for (int i = 1; i < s; ++i)
-      if (light[i].type == VertexType::Surface || light[i].type == VertexType::Medium) ++n[light[i].kind];
-    // The scattering vertex next to the light end.
-    const PathVertex* last = s >= 2 ? &light[1] : (s == 1 ? &camera[t - 1] : (t >= 3 ? &camera[t - 2] : nullptr));
-    if (last && (last->type == VertexType::Surface || last->type == VertexType::Medium)) --n[last->kind];
-    return n[kDiffuse] <= s_.diffuse_bounces && n[kGlossy] <= s_.glossy_bounces &&
-           n[kTransmission] <= s_.transmission_bounces && n[kVolume] <= s_.volume_bounces;
+    const int k = s + t - 1;  // x[0] the camera ... x[k] the light
+    auto x = [&](int i) -> const PathVertex& { return i < t ? camera[i] : light[k - i]; };
+    int n[6] = {0, 0, 0, 0, 0, 0};
+    // Vertices whose kind depends on the lobe: the probabilities of diffuse, glossy, transmission.
+    constexpr int kMaxMixed = 64;
+    float mixed[kMaxMixed][3];
+    int m = 0, m_kind[3] = {0, 0, 0};
+    for (int i = 1; i <= k - 2; ++i) {
+      const PathVertex& v = x(i);
+      if (v.type == VertexType::Medium) {
+        ++n[kVolume];
+        continue;
+      }
+      if (v.type != VertexType::Surface) continue;
+      if (v.kind != kMixed) {
+        ++n[v.kind];
+        continue;
+      }
+      // The walks stored the probabilities of vertices inside a subpath; the connection vertices
+      // x[t-1] and x[t] scatter (by their non-delta lobes) towards the other subpath.
+      float p[3];
+      if (i == t - 1 || i == t) {
+        if (!mixed_kind(v, x(i - 1).p, x(i + 1).p, false, p)) return 0;
+      } else {
+        if (v.kind_p[0] < 0) return 0;
+        p[0] = v.kind_p[0], p[1] = v.kind_p[1], p[2] = v.kind_p[2];
+      }
+      int only = -1, nonzero = 0;
+      for (int j = 0; j < 3; ++j)
+        if (p[j] > 0) ++nonzero, only = j;
+      if (nonzero == 0) continue;  // transparent
+      if (nonzero == 1) {
+        ++n[kDiffuse + only];
+        continue;
+      }
+      if (m == kMaxMixed) return 0;
+      for (int j = 0; j < 3; ++j) {
+        mixed[m][j] = p[j];
+        if (p[j] > 0) ++m_kind[j];
+      }
+      ++m;
+    }
+    const int limit[3] = {s_.diffuse_bounces, s_.glossy_bounces, s_.transmission_bounces};
+    int cap[3];
+    for (int j = 0; j < 3; ++j)
+      if ((cap[j] = limit[j] - n[kDiffuse + j]) < 0) return 0;
+    if (n[kVolume] > s_.volume_bounces) return 0;
+    if (m == 0) return 1;
+    // Probability that the mixed vertices' kinds keep within the remaining capacities: dynamic
+    // programming over their counts, tracking only the kinds that could exceed their capacity.
+    int dim[3], stride[3], states = 1;
+    for (int j = 0; j < 3; ++j) {
+      dim[j] = m_kind[j] > cap[j] ? cap[j] + 1 : 1;
+      stride[j] = states;
+      states *= dim[j];
+    }
+    if (states == 1) return 1;
+    thread_local std::vector<double> prob, next;
+    if (prob.size() < size_t(states)) {
+      prob.resize(size_t(states));
+      next.resize(size_t(states));
+    }
+    std::fill(prob.begin(), prob.begin() + states, 0.0);
+    prob[0] = 1;
+    for (int v = 0; v < m; ++v) {
+      std::fill(next.begin(), next.begin() + states, 0.0);
+      for (int st = 0; st < states; ++st) {
+        if (prob[st] == 0) continue;
+        for (int j = 0; j < 3; ++j) {
+          if (mixed[v][j] == 0) continue;
+          if (dim[j] == 1) {
+            next[st] += prob[st] * mixed[v][j];
+            continue;
+          }
+          int c = (st / stride[j]) % dim[j];
+          if (c + 1 < dim[j]) next[st + stride[j]] += prob[st] * mixed[v][j];  // else past the limit
+        }
+      }
+      std::swap(prob, next);
+    }
+    double sum = 0;
+    for (int st = 0; st < states; ++st) sum += prob[st];
+    return float(std::min(1.0, sum));
   }
-  // Adds a vertex of kind k to the counts; true if that takes them past its limit.
+  // The probabilities (diffuse, glossy, transmission) that the path tracer counts a bounce at a
+  // surface vertex of kind kMixed as each kind, scattering from the neighbour at `camera_side`
+  // towards the one at `light_side` (delta: through a delta lobe). False if no lobe can.
+  bool mixed_kind(const PathVertex& v, const Vec3& camera_side, const Vec3& light_side, bool delta, float* p) const {
+    const Vec3 wo_w = normalize(camera_side - v.p), wi_w = normalize(light_side - v.p);
+    const bool transmit = (dot(wo_w, v.n) > 0) != (dot(wi_w, v.n) > 0);
+    const Vec3 wo = v.frame.to_local(wo_w), wi = v.frame.to_local(wi_w);
+    float part[kMaxLobes];
+    float total = 0;
+    if (delta) {
+      // Only delta lobes reach this direction: each with its selection probability (Fresnel's
+      // split inside a dielectric lobe does not change its kind).
+      float sel[kMaxLobes];
+      if (!v.bsdf.selection(wo, sel)) return false;
+      for (int j = 0; j < v.bsdf.count(); ++j) {
+        const uint32_t f = lobe_flags(v.bsdf.lobe(j));
+        const bool can = (f & kLobeSpecular) && (f & (transmit ? kLobeTransmission : kLobeReflection));
+        total += (part[j] = can ? sel[j] : 0.0f);
+      }
+    } else {
+      total = v.bsdf.lobe_pdfs(wo, wi, part);
+    }
+    p[0] = p[1] = p[2] = 0;
+    if (!(total > 0)) return false;
+    for (int j = 0; j < v.bsdf.count(); ++j) {
+      uint8_t kind = lobe_kind(v.bsdf.lobe(j), transmit);
+      if (kind >= kDiffuse && kind <= kTransmission) p[kind - kDiffuse] += part[j] / total;
+    }
+    return true;
+  }
+  // Adds a vertex of kind k to the counts; true if that takes them past its limit. A walk counts
+  // only the vertices whose kind is certain (kMixed ones may count as any of theirs), so it stops
+  // only where every strategy using its further vertices would fail the limits.
   bool exceeds_kind_limit(int* n, uint8_t k) const {
+    if (k == kMixed) return false;
     ++n[k];
     return (k == kDiffuse && n[k] > s_.diffuse_bounces) || (k == kGlossy && n[k] > s_.glossy_bounces) ||
            (k == kTransmission && n[k] > s_.transmission_bounces) || (k == kVolume && n[k] > s_.volume_bounces);
@@ -273,9 +406,11 @@ class Bdpt {
 
 // Adds the s = 0 strategy for a camera subpath whose vertex t - 1 is on an emitter.
 void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le) {
-  if (t - 2 > max_depth() || is_black(le) || !within_kind_limits(camera, camera, 0, t)) return;
+  if (t - 2 > max_depth() || is_black(le)) return;
   const PathVertex& v = camera[t - 1];
   Spectrum c = v.beta * le;
+  if (is_black(c)) return;
+  c *= kind_limit_factor(camera /*unused light*/, camera, 0, t);
   if (is_black(c)) return;
   add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t), 0, t);
 }
@@ -300,7 +435,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
   int count = 1, bounces = 0, nulls = 0;
   const float beta_start = max_component(beta);
-  // Bounce kinds counted so far towards Cycles' per-kind limits (see within_kind_limits): a walk
+  // Bounce kinds counted so far towards Cycles' per-kind limits (see kind_limit_factor): a walk
   // stops where every strategy using its further vertices would fail them, so no work is spent
   // on vertices no strategy can use.
   int kinds[5] = {0, 0, 0, 0, 0};
@@ -410,6 +545,14 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     }
     v.pdf_fwd = density_of(count, v);
     reverse_density(count, v);
+    // prev's neighbours are known now: the kind probabilities of a vertex of several kinds, seen
+    // from the camera side (the camera walk's path[count - 2], the light walk's v).
+    if (count >= 2 && prev.type == VertexType::Surface && prev.kind == kMixed) {
+      const bool camera_walk = mode == Mode::Radiance;
+      if (!mixed_kind(prev, camera_walk ? path[count - 2].p : v.p, camera_walk ? v.p : path[count - 2].p, prev.delta,
+                      prev.kind_p))
+        prev.kind_p[0] = -1;
+    }
     if (medium >= 0) {
       v.light = -1;
       v.kind = kVolume;
@@ -579,7 +722,8 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
 Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, int t) {
   PathVertex& pt = camera[t - 1];
   if (!scatters(pt)) return Spectrum(0.0f);
-  if (!within_kind_limits(light, camera, s, t)) return Spectrum(0.0f);
+  const float kinds = kind_limit_factor(light, camera, s, t);
+  if (!(kinds > 0)) return Spectrum(0.0f);
   if (s == 1) {
     // A fresh light sample at the camera vertex: exactly the path tracer's next-event estimation.
     float pmf, u_remapped;
@@ -600,7 +744,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls));
     if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
-    return c * mis_weight(light, camera, &sampled, 1, t);
+    return c * (kinds * mis_weight(light, camera, &sampled, 1, t));
   }
   // s >= 2: join two surface vertices with a shadow ray.
   PathVertex& qs = light[s - 1];
@@ -615,19 +759,20 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   if (is_black(c)) return c;
   c *= transmittance(qs, pt);
   if (is_black(c)) return c;
-  return c * mis_weight(light, camera, nullptr, s, t);
+  return c * (kinds * mis_weight(light, camera, nullptr, s, t));
 }
 
 void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats) {
   const PathVertex& qs = light[s - 1];
   if (!scatters(qs)) return;
-  if (!within_kind_limits(light, camera, s, 1)) return;
+  const float kinds = kind_limit_factor(light, camera, s, 1);
+  if (!(kinds > 0)) return;
   const Camera& cam = ctx_.camera;
   Vec2 film;
   Vec3 dir;
   float dist;
   if (!cam.project(qs.p, ctx_.filter.radius(), &film, &dir, &dist)) return;
-  Spectrum base = qs.beta * f(qs, -dir, Mode::Importance);
+  Spectrum base = qs.beta * f(qs, -dir, Mode::Importance) * kinds;
   if (is_black(base)) return;
   PathVertex& z0 = endpoint(VertexType::Camera);
   z0.p = cam.position();
@@ -724,6 +869,16 @@ std::vector<float> Bdpt::weight_sums() {
       cam[t] = pdf(pt, &camera[t - 2], qs);
       cam[t + 1] = pdf(qs, &pt, light[s - 2]);
       lig[k] = light[0].pdf_fwd;
+      // Cycles' bounce-kind limits scale every strategy's contribution by the same factor (see
+      // kind_limit_factor): the weights times each strategy's factor, over the factor this
+      // connection gets in the render, must sum to one too. Inside the joined path every vertex
+      // has both neighbours; the ones the walks did not store are set here.
+      const float factor = kind_limit_factor(light, camera, s, t);
+      if (!(factor > 0)) continue;
+      for (int i = 1; i < k; ++i)
+        if (x[i].type == VertexType::Surface && x[i].kind == kMixed &&
+            !mixed_kind(x[i], x[i - 1].p, x[i + 1].p, i != t - 1 && i != t && x[i].delta, x[i].kind_p))
+          x[i].kind_p[0] = -1;
       float sum = 0;
       for (int t2 = 1; t2 <= k + 1; ++t2) {
         const int s2 = k + 1 - t2;
@@ -751,7 +906,7 @@ std::vector<float> Bdpt::weight_sums() {
         if (sampled) sampled_copy = *sampled;
         float w = mis_weight(l2, c2, sampled ? &sampled_copy : nullptr, s2, t2);
         if (!(w >= 0 && w <= 1 + 1e-5f)) sum = NAN;  // a weight outside [0, 1] fails the check
-        sum += w;
+        sum += w * kind_limit_factor(l2, c2, s2, t2) / factor;
       }
       sums.push_back(sum);
     }

@@ -23,6 +23,10 @@ struct PathVertex {
   bool infinite = false;  // sun or world light vertex: a direction rather than a point
   int light = -1;         // light index: Light vertices, and Surface vertices on emissive meshes
   uint8_t kind = 0;       // bounce kind for Cycles' per-kind limits (see bdpt.cpp), 0: uncounted
+  // Vertices of several possible kinds, between two vertices of the same subpath: the probabilities
+  // that the path tracer counts their bounce as diffuse, glossy, transmission (-1: it cannot
+  // sample the path there). Set by the walk once both neighbours are known (bdpt.cpp).
+  float kind_p[3] = {0, 0, 0};
   Spectrum beta{1.0f};    // throughput of the subpath up to and including this vertex
   float pdf_fwd = 0;      // density of sampling this vertex from its predecessor
   float pdf_rev = 0;      // density of sampling it from its successor (the other direction)

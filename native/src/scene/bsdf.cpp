@@ -398,17 +398,17 @@ void Bsdf::add(const Lobe& lobe) {
   lobes_[count_++] = lobe;
 }
 
-uint32_t Bsdf::dominant_flags() const {
-  int best = -1;
-  float w = -1;
-  for (int i = 0; i < count_; ++i) {
-    float wi = selection_weight(i);
-    if (wi > w) { w = wi; best = i; }
-  }
-  return best >= 0 ? lobe_flags(lobes_[best]) : 0u;
-}
+bool Bsdf::selection(const Vec3& wo, float* p) const { return selection_probabilities(*this, wo, p); }
 
-float Bsdf::selection_weight(int i) const { return selection_estimate(lobes_[i], Vec3(0, 0, 1)); }
+float Bsdf::lobe_pdfs(const Vec3& wo, const Vec3& wi, float* part) const {
+  float p[kMaxLobes];
+  for (int k = 0; k < count_; ++k) part[k] = 0;
+  if (!selection_probabilities(*this, wo, p)) return 0;
+  float total = 0;
+  for (int k = 0; k < count_; ++k)
+    if (!lobe_is_delta(lobes_[k])) total += (part[k] = p[k] * lobe_pdf(lobes_[k], wo, wi));
+  return std::isfinite(total) ? total : 0.0f;
+}
 
 Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf) const {
   Spectrum f(0.0f);

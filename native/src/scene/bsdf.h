@@ -79,12 +79,14 @@ class Bsdf {
   Spectrum albedo() const;
   uint32_t flags() const;  // union of lobe flags
   bool has_non_delta() const;
-  // Flags of the lobe with the largest selection weight (0 without lobes): how a bidirectional
-  // path classifies this vertex for Cycles' per-kind bounce limits.
-  uint32_t dominant_flags() const;
+  // The probabilities with which sample() picks each lobe for this wo; false if none can be.
+  bool selection(const Vec3& wo, float* p) const;
+  // Each lobe's part of pdf(wo, wi): its selection probability times its own pdf (0 for delta
+  // lobes). Given that sample() produced wi, lobe k picked it with probability part[k] / pdf.
+  // Returns their sum, pdf(wo, wi).
+  float lobe_pdfs(const Vec3& wo, const Vec3& wi, float* part) const;
 
  private:
-  float selection_weight(int i) const;
   Lobe lobes_[kMaxLobes];
   int count_ = 0;
   bool overflowed_ = false;
