@@ -354,18 +354,20 @@ MEAN_Z = 3.0         # standard errors of the two images' combined noise
 MEAN_POWER = 0.005   # that noise must be below this fraction of the mean, else the check is blind
 
 
-def global_mean_report(name, a, b, labels=("Lantern", "Cycles"), rounding=1e-5):
+def global_mean_report(name, a, b, labels=("Lantern", "Cycles"), rounding=1e-5, z=MEAN_Z):
     """a, b: (image mean, squared standard error) of two engines or integrators. Returns "" when the
-    means agree within MEAN_Z combined standard errors (plus `rounding` relative) and that noise
-    is under MEAN_POWER of the mean, else a line saying which failed."""
+    means agree within z combined standard errors (plus `rounding` relative) and that noise is
+    under MEAN_POWER of the mean, else a line saying which failed. z: MEAN_Z for errors known with
+    many degrees of freedom; for one estimated from a few runs' spread, the Student t quantile of
+    the same false-alarm rate (test_agreement.py)."""
     (ma, sa), (mb, sb) = a, b
     se = math.sqrt(sa + sb)
     line = "%s: image mean %s %.6f, %s %.6f (ratio %.4f), combined standard error %.6f (%.3f%%)" % (
         name, labels[0], ma, labels[1], mb, ma / mb if mb else float("nan"), se, 100 * se / abs(mb) if mb else 0)
     if not se <= MEAN_POWER * abs(mb):
         return line + ": noise above %.1f%% of the mean, render more samples" % (100 * MEAN_POWER)
-    if abs(ma - mb) > MEAN_Z * se + rounding * abs(mb):
-        return line + ": differ by more than %g standard errors" % MEAN_Z
+    if abs(ma - mb) > z * se + rounding * abs(mb):
+        return line + ": differ by more than %.2f standard errors" % z
     return ""
 
 

@@ -158,12 +158,15 @@ def test_bidirectional_agrees_with_cycles(name, scene_factory, outdir):
     t = student_t_upper(1e-3 / (2.0 * n), K - 1)
     bound = t * np.sqrt(se2_c + se2_l) + ROUNDING * np.abs(mean_c)
     ok = np.abs(mean_l - mean_c) <= bound
+    # The image mean's error comes from the K runs' spread: the critical value is Student's t with
+    # K - 1 degrees of freedom at the false-alarm rate of MEAN_Z standard normal errors.
     global_l = ru.image_mean_and_se2(images, independent_pixels=False)
-    reports = [ru.global_mean_report(name + "_bdpt", global_l, ru.image_mean_and_se2([c0, c1]))]
+    t_mean = student_t_upper(0.5 * math.erfc(ru.MEAN_Z / math.sqrt(2.0)), K - 1)
+    reports = [ru.global_mean_report(name + "_bdpt", global_l, ru.image_mean_and_se2([c0, c1]), z=t_mean)]
     if name in BDPT_VS_PATH:
         reports.append(ru.global_mean_report(
             name + "_bdpt_vs_path", global_l,
-            ru.image_mean_and_se2(runs(scene_factory, name, ru.LANTERN, "PATH")), ("BDPT", "PATH")))
+            ru.image_mean_and_se2(runs(scene_factory, name, ru.LANTERN, "PATH")), ("BDPT", "PATH"), z=t_mean))
     if not ok.all():
         reports.append(ru.tile_report(name + "_bdpt", mean_l, mean_c, bound, outdir,
                                       {"lantern": np.mean(images, axis=0), "cycles": 0.5 * (c0 + c1)}))

@@ -452,14 +452,15 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     // Volume emission along this segment (media_transport.h): light that only camera subpaths find
     // (no light subpath starts in a medium, and connections never end on one), so strategy
     // s = 0, t = count + 1 is its only estimator and takes it with MIS weight 1. The same depth and
-    // per-kind limits as an emitter reached at vertex count (emitter_reached).
+    // per-kind limits (kind_limit_factor) as an emitter reached at vertex count (emitter_reached).
     if (mode == Mode::Radiance && media_ && scene_.has_emissive_media() && stack.size > 0 &&
         count - 1 <= this->max_depth()) {
       v.type = VertexType::Light;  // the emission point: not a scattering vertex for the kind limits
-      if (within_kind_limits(path, path, 0, count + 1)) {
+      const float kinds_within = kind_limit_factor(path, path, 0, count + 1);
+      if (kinds_within > 0) {
         Spectrum le = media_emission(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_,
                                      s_.volume_estimator, s_.volume_step);
-        if (!is_black(le)) add(beta * le, 0, count + 1);
+        if (!is_black(le)) add(beta * le * kinds_within, 0, count + 1);
       }
     }
     if (media_)
