@@ -82,12 +82,14 @@ def main():
     build = os.path.abspath(args.build)
     work = tempfile.mkdtemp(prefix="lantern_farm_bench_")
     try:
-        # examples.blend reads its .vdb files from //assets/ (scripts/render_examples.sh).
+        # examples.blend reads its .vdb files from //assets/ (scripts/render_examples.sh)...
         blend = os.path.join(work, "examples.blend")
         shutil.copy(args.blend, blend)
         os.makedirs(os.path.join(work, "assets"))
         for vdb in ("cloud.vdb", "smoke.vdb"):
             shutil.copy(os.path.join(build, "test_vdb", vdb), os.path.join(work, "assets"))
+        # and the cathedral's textures from //models/ (README: Example scenes).
+        os.symlink(os.path.join(REPO, "models"), os.path.join(work, "models"))
         env = dict(os.environ, LANTERN_ADDON_DIR=os.path.join(REPO, "addon"),
                    LANTERN_LIBRARY=os.path.join(build, "liblantern.so"))
         # Blender's embedded Python takes its prefix from the first python3 on PATH: not this one's

@@ -1,11 +1,19 @@
-"""Builds Lantern's test scenes and examples.blend with bpy only (no external assets).
+"""Builds Lantern's test scenes (with bpy only, no external files) and examples.blend.
 
     blender -b --factory-startup --python tests/scenes/build_scenes.py -- OUTDIR [--only a,b]
     blender -b --factory-startup --python tests/scenes/build_scenes.py -- --examples [PATH]
 
 The first form writes OUTDIR/<name>.blend for every test scene, each holding one Scene named after
-itself. The second writes examples.blend (default: the repository root) with one scene per example.
-Both can be given together.
+itself. The second writes examples.blend (default: the repository root) with one scene per example;
+its scenes get Lantern as render engine, with their integrator and samples, only when the add-on is
+registered, so write it with the checkout's add-on:
+
+    LANTERN_LIBRARY=$PWD/build/liblantern.so blender -b --factory-startup --python-expr \
+      "import sys; sys.path.insert(0, 'addon'); import lantern; lantern.register()" \
+      --python tests/scenes/build_scenes.py -- --examples
+
+Both can be given together. Besides the test scenes' builders, the examples use the models in
+models/ (MODEL_SCENES: the Sibenik cathedral and Sponza), imported with Blender's OBJ importer.
 
 Every scene is made by one builder function, `build_<name>(scene)`, which fills a Scene made by
 `new_scene()`; tests (tests/blender/conftest.py) call `build(name)` in-process, the examples reuse
@@ -830,6 +838,161 @@ def build_smoke_interior(scene):
     scene.cycles.volume_bounces = 1
 
 
+# ---- Scenes from the models in models/ (the exercise sheet's a05_sibenik and a05_spz) ----------
+# The OBJ files are stored gzip-compressed with their SOURCE.md notes (authors, licences) in
+# models/<name>/; they are decompressed to a temporary folder and read by Blender's own OBJ
+# importer (3.4: the C++ importer, bpy.ops.wm.obj_import). Both models are +Y up; the importer
+# turns them to Blender's +Z up with an object rotation. Only examples.blend uses them (the test
+# scenes above need no files).
+MODELS = os.path.join(REPO, "models")
+
+
+def import_obj(name, rewrite=None):
+    """Imports models/<name>/<name>.obj.gz (its .mtl and textures from the same folder) and returns
+    the imported objects. `rewrite(line)` may change each line of the OBJ text on the way (returns
+    the line to write, or None to drop it). Images keep the paths of the model's own texture files
+    (write_examples makes them relative to examples.blend: //models/<name>/textures/...)."""
+    import gzip
+    import tempfile
+
+    folder = os.path.join(MODELS, name)
+    before = set(bpy.data.objects)
+    with tempfile.TemporaryDirectory(prefix="lantern_obj_") as tmp:
+        obj_path = os.path.join(tmp, name + ".obj")
+        with gzip.open(os.path.join(folder, name + ".obj.gz"), "rt") as src, \
+                open(obj_path, "w") as dst:
+            for line in src:
+                line = rewrite(line) if rewrite else line
+                if line is not None:
+                    dst.write(line)
+        # The importer looks for the .mtl beside the .obj and for textures relative to the .mtl.
+        for entry in os.listdir(folder):
+            if entry.endswith(".mtl") or entry == "textures":
+                os.symlink(os.path.join(folder, entry), os.path.join(tmp, entry))
+        bpy.ops.wm.obj_import(filepath=obj_path, forward_axis="NEGATIVE_Z", up_axis="Y",
+                              validate_meshes=True)
+        imported = [o for o in bpy.data.objects if o not in before]
+        for image in {n.image for o in imported for m in o.data.materials if m and m.node_tree
+                      for n in m.node_tree.nodes if n.type == "TEX_IMAGE" and n.image}:
+            loaded = bpy.path.abspath(image.filepath)
+            if os.path.commonpath([loaded, tmp]) == tmp:  # found through the symlinks above
+                image.filepath = os.path.join(folder, os.path.relpath(loaded, tmp))
+    for obj in imported:
+        set_visibility(obj)
+    return imported
+
+
+def _collection(name, objects):
+    coll = bpy.data.collections.new(name)
+    for obj in objects:
+        for c in obj.users_collection:
+            c.objects.unlink(obj)
+        coll.objects.link(obj)
+    return coll
+
+
+def import_sibenik():
+    """The Sibenik cathedral (models/sibenik) in a collection "Sibenik" (imported once per file and
+    shared by the scenes that link it): floor at z = 0, the nave along +X from the rose window
+    (west front, x = -19.8) to the apse. What is changed in the importer's materials:
+    - Transmission 0 everywhere: Blender 3.4's importer reads the MTL transmission filter `Tf 1 1 1`
+      as a Principled Transmission weight of 1, which would turn the stone into glass; alpha 1
+      (opaque) for the window glass (`d` < 1), which Lantern does not support, so the coloured
+      panes of the rose window are glossy and opaque;
+    - the bump maps are dropped: the importer reads `map_bump` height maps as tangent-space normal
+      maps (and Lantern ignores normal maps anyway)."""
+    coll = bpy.data.collections.get("Sibenik")
+    if coll is not None:
+        return coll
+    objects = import_obj("sibenik")
+    for obj in objects:
+        obj.location.z += 15.15  # the nave floor is at y = -15.15 in the OBJ
+    for mat in {m for o in objects for m in o.data.materials if m}:
+        nt = mat.node_tree
+        for node in [n for n in nt.nodes if n.type == "NORMAL_MAP"]:
+            for link in node.inputs["Color"].links:
+                nt.nodes.remove(link.from_node)
+            nt.nodes.remove(node)
+        for node in nt.nodes:
+            if node.type == "BSDF_PRINCIPLED":
+                node.inputs["Transmission"].default_value = 0.0
+                node.inputs["Alpha"].default_value = 1.0
+        mat.blend_method = "OPAQUE"
+    return _collection("Sibenik", objects)
+
+
+# Sponza (models/sponza) has no materials: a diffuse colour per OBJ group; groups not listed here
+# (arches, pillars and their bases, the object* parts of the colonnades) are the light stone.
+SPONZA_STONE = (0.62, 0.57, 0.48)
+SPONZA_COLOURS = {
+    "floors": (0.42, 0.36, 0.30),  # the courtyard and the galleries' floors
+    "walls": (0.66, 0.58, 0.46), "ceiling": (0.55, 0.50, 0.42), "outside01": (0.55, 0.50, 0.42),
+    "doors": (0.30, 0.17, 0.08), "windows": (0.30, 0.17, 0.08),
+    "parapet": (0.50, 0.45, 0.38), "relief": (0.50, 0.45, 0.38),
+}
+
+
+def import_sponza():
+    """The Dabrovic Sponza atrium (models/sponza) in a collection "Sponza": the courtyard floor
+    near z = 0, the atrium along X, open to the sky. Each named OBJ group (`g name`) is turned into `usemtl name`
+    on the way (Blender 3.4's importer ignores groups), and each of the resulting material slots
+    gets a Diffuse BSDF from SPONZA_COLOURS. The OBJ's UVs and normals are dropped (below)."""
+    coll = bpy.data.collections.get("Sponza")
+    if coll is not None:
+        return coll
+
+    def group_to_material(line):
+        if line.startswith("g"):
+            words = line.split()
+            return "usemtl %s\n" % words[1] if len(words) > 1 and words[0] == "g" else None
+        return line
+
+    objects = import_obj("sponza", group_to_material)
+    for obj in objects:
+        me = obj.data
+        while me.uv_layers:  # untextured: its UVs would only take room in examples.blend
+            me.uv_layers.remove(me.uv_layers[0])
+        # The OBJ's vertex normals face away from the winding of about 7,500 of its triangles
+        # (faces flipped in the original export). Cycles still lights those faces, Lantern shades
+        # them dark (measured with the OBJ's normals: dark bands under the nearest arches, image
+        # mean Lantern/Cycles 0.98; 1.00 with these). Blender's own normals follow the faces:
+        # smooth up to 40 degrees.
+        with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj]):
+            bpy.ops.mesh.customdata_custom_splitnormals_clear()
+        me.use_auto_smooth = True
+        me.auto_smooth_angle = math.radians(40.0)
+        for i, old in enumerate(me.materials):
+            me.materials[i] = diffuse("spz_" + old.name, SPONZA_COLOURS.get(old.name, SPONZA_STONE))
+            bpy.data.materials.remove(old)
+    return _collection("Sponza", objects)
+
+
+def build_sibenik(scene):
+    """The Sibenik cathedral lit by a lamp inside (the sheet's a05_sibenik): a small point lamp
+    high in the nave, a black world; the camera at the west end looks down the nave to the apse."""
+    scene.collection.children.link(import_sibenik())
+    add_light(scene, "Lamp", "POINT", 1500.0, (-2.0, 0.0, 7.0), radius=0.25)
+    add_camera(scene, (-17.0, 0.0, 3.0), (10.0, 0.0, 5.5), lens=18.0)
+
+
+def build_sibenik_smoke(scene):
+    """a05_sibenik filled with thin homogeneous smoke (the sheet's a05_sibenik_smoke, its Figure 3):
+    a box covering the interior with a Principled Volume (no surface), density 0.06 per metre."""
+    build_sibenik(scene)
+    smoke = volume_material("CathedralSmoke", 0.06, color=(0.9, 0.9, 0.9), anisotropy=0.3)
+    box = add_object(scene, "Smoke", mesh_box("Smoke", (39.0, 16.0, 28.0)), (-0.5, 0.0, 0.02))
+    assign(box, smoke)
+    scene.cycles.volume_bounces = 1
+
+
+def build_sponza(scene):
+    """The Sponza atrium under a sun and a blue sky through its open roof (the sheet's a05_spz)."""
+    scene.collection.children.link(import_sponza())
+    set_world(scene, (0.45, 0.6, 0.9), 1.0)
+    add_light(scene, "Sun", "SUN", 5.0, (0, 0, 20), rotation=(30, 0, 100), angle=math.radians(0.5))
+    add_camera(scene, (-13.5, 0.0, 1.6), (10.0, 0.0, 4.0), lens=18.0)
+
+
 SCENES = {
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),
@@ -858,6 +1021,13 @@ SCENES = {
     "smoke_interior": (build_smoke_interior, (64, 64), 64),
 }
 
+# Scenes made from the models in models/ (examples only; not part of the test suite).
+MODEL_SCENES = {
+    "sibenik": (build_sibenik, (160, 120), 64),
+    "sibenik_smoke": (build_sibenik_smoke, (160, 120), 64),
+    "sponza": (build_sponza, (160, 120), 64),
+}
+
 # example scene name: (builder scene, resolution, samples, Lantern integrator[, other Lantern
 # settings])
 EXAMPLES = {
@@ -871,6 +1041,10 @@ EXAMPLES = {
                         dict(volume_estimator="RAY_MARCHING", volume_step=0.0)),
     "a05_cloud_track": ("vdb_cloud", (256, 256), 128, "VOLPATH", dict(volume_estimator="TRACKING")),
     "a05_smoke_interior": ("smoke_interior", (320, 240), 256, "VOLPATH"),
+    # the sheet's model scenes (models/, imported with Blender's OBJ importer)
+    "a05_sibenik": ("sibenik", (320, 240), 64, "BIDIRECTIONAL"),
+    "a05_sibenik_smoke": ("sibenik_smoke", (320, 240), 64, "VOLPATH", dict(volume_bounces=1)),
+    "a05_spz": ("sponza", (320, 240), 128, "PATH"),
 }
 
 # Where examples.blend's Volume objects find their .vdb files: next to the .blend.
@@ -879,7 +1053,7 @@ EXAMPLE_ASSETS = "//assets/"
 
 def build(name, scene_name=None, resolution=None, samples=None):
     """Builds test scene `name` into a new Scene (called scene_name, default name) and returns it."""
-    builder, res, spp = SCENES[name]
+    builder, res, spp = SCENES[name] if name in SCENES else MODEL_SCENES[name]
     scene = new_scene(scene_name or name, resolution or res, samples or spp)
     builder(scene)
     return scene
@@ -935,6 +1109,11 @@ def write_examples(path=EXAMPLES_PATH):
     # assets/ next to examples.blend (a build directory is not part of a user's checkout).
     for volume in bpy.data.volumes:
         volume.filepath = EXAMPLE_ASSETS + os.path.basename(volume.filepath)
+    # The models' textures stay in models/ (not packed: examples.blend stays small), found
+    # relative to the .blend.
+    for image in bpy.data.images:
+        if image.source == "FILE" and os.path.isabs(image.filepath):
+            image.filepath = bpy.path.relpath(image.filepath, start=os.path.dirname(os.path.abspath(path)))
     for window in bpy.context.window_manager.windows:
         window.scene = bpy.data.scenes["a05_box"]
     _save(path, placeholder)
@@ -955,8 +1134,8 @@ def main(argv):
         p.error("give OUTDIR and/or --examples")
     names = [n for n in args.only.split(",") if n] or None
     for n in names or ():
-        if n not in SCENES:
-            p.error("unknown scene %r; known: %s" % (n, ", ".join(SCENES)))
+        if n not in SCENES and n not in MODEL_SCENES:
+            p.error("unknown scene %r; known: %s" % (n, ", ".join([*SCENES, *MODEL_SCENES])))
     if args.outdir:
         write_test_blends(args.outdir, names)
     if args.examples:
