@@ -252,6 +252,15 @@ int add_diffuse(lt_scene* s, V3 color, float roughness) {
   return id;
 }
 
+int add_glossy(lt_scene* s, V3 color, float roughness) {
+  lt_shader_node n = node(LT_NODE_GLOSSY);
+  n.color = constant(color);
+  n.roughness = constant(roughness);
+  int id = -1;
+  check(lt_scene_add_material(s, &n, 1, 0, &id), "lt_scene_add_material");
+  return id;
+}
+
 int add_emission(lt_scene* s, V3 color, float strength) {
   lt_shader_node n = node(LT_NODE_EMISSION);
   n.color = constant(color);

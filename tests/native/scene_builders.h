@@ -68,6 +68,7 @@ void check(int status, const char* what);
 lt_shader_node node(int type);
 int add_diffuse(lt_scene* s, V3 color, float roughness = 0);
 int add_emission(lt_scene* s, V3 color, float strength);
+int add_glossy(lt_scene* s, V3 color, float roughness);  // GGX
 int add_mesh(lt_scene* s, const MeshData& m);
 int add_instance(lt_scene* s, int mesh, int material, const Xform& xf = identity(),
                  unsigned visibility = LT_VISIBLE_ALL);

@@ -20,11 +20,7 @@ ScenePtr varied_scene(bool fog = false) {
   add_object(s, plane(20, 20), floor);
   add_object(s, box({-1.5f, -0.5f, 0}, {-0.5f, 0.5f, 1}), add_diffuse(s, {0.2f, 0.5f, 0.8f}, 0.5f));
 
-  lt_shader_node glossy = node(LT_NODE_GLOSSY);
-  glossy.color.value[0] = glossy.color.value[1] = glossy.color.value[2] = 0.9f;
-  glossy.roughness.value[0] = 0.3f;
-  int glossy_id = -1;
-  check(lt_scene_add_material(s, &glossy, 1, 0, &glossy_id), "glossy");
+  const int glossy_id = add_glossy(s, {0.9f, 0.9f, 0.9f}, 0.3f);
   add_object(s, icosphere(0.5f, 3), glossy_id, translate({0.3f, 0, 0.5f}));
   if (fog)
     add_object(s, box({-0.5f, -0.8f, 0.01f}, {1.1f, 0.8f, 1.2f}),

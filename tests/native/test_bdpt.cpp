@@ -59,11 +59,7 @@ ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1
   add_object(sc, front, white, compose(translate({0, -1.6f, 1}), rotate({1, 0, 0}, float(-M_PI / 2))));
   add_object(sc, box({-0.7f, 0.1f, 0}, {-0.2f, 0.6f, 0.8f}), white);
 
-  lt_shader_node glossy = node(LT_NODE_GLOSSY);
-  glossy.color.value[0] = glossy.color.value[1] = glossy.color.value[2] = 0.8f;
-  glossy.roughness.value[0] = 0.3f;
-  int glossy_id;
-  check(lt_scene_add_material(sc, &glossy, 1, 0, &glossy_id), "glossy");
+  const int glossy_id = add_glossy(sc, {0.8f, 0.8f, 0.8f}, 0.3f);
   add_object(sc, icosphere(0.3f, 3), glossy_id, translate({0.45f, 0.3f, 0.3f}));
   {
     lt_shader_node glass = node(LT_NODE_GLASS);
@@ -549,11 +545,7 @@ static ScenePtr door_slabs() {
   add_object(sc, box({0, -(y1 - y0), 0}, {0.04f, 0, dh - 0.005f}), wood,
              compose(translate({pt / 2, y1, 0}), rotate({0, 0, 1}, float(8 * M_PI / 180))));
   add_object(sc, box({-1.5f, 0.5f, 0}, {-0.9f, 1.1f, 0.6f}), wood);
-  lt_shader_node ggx = node(LT_NODE_GLOSSY);
-  ggx.color.value[0] = ggx.color.value[1] = ggx.color.value[2] = 0.8f;
-  ggx.roughness.value[0] = 0.2f;
-  int ggx_id;
-  check(lt_scene_add_material(sc, &ggx, 1, 0, &ggx_id), "ball");
+  const int ggx_id = add_glossy(sc, {0.8f, 0.8f, 0.8f}, 0.2f);
   add_object(sc, uv_sphere(0.3f, 32, 16, true), ggx_id, translate({-0.6f, 0.2f, 0.3f}));
   add_light(sc, area_light(LT_AREA_RECTANGLE, 1.0f, 0.8f, translate({1.0f, 0.0f, h - 0.05f}), 1000));
   set_camera(sc, perspective_camera(look_at({-1.9f, -1.3f, 1.5f}, {0.0f, 0.5f, 0.9f}), 22));

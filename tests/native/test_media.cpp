@@ -88,6 +88,19 @@ int bin_of(float t, float t0, float t1, int nb) { return clamp(int((t - t0) / (t
 
 // ---- phase function ---------------------------------------------------------------------------
 
+// Chi-square test of a phase function's sampling (a single HG lobe or a mixture) seen from wo.
+template <class P>
+test::Chi2Result phase_chi2(const P& phase, const Vec3& wo, const test::Chi2Options& o) {
+  return test::chi2_test(
+      [&](Sampler& rng, test::DirectionSample* s) {
+        float pdf;
+        if (!phase.sample(wo, rng.next_2d(), &s->dir, &pdf)) return false;
+        s->pdf = pdf;
+        return true;
+      },
+      [&](const Vec3& wi) { return double(phase.eval(wo, wi)); }, o);
+}
+
 class PhaseChi2 : public ::testing::TestWithParam<float> {};
 
 TEST_P(PhaseChi2, SamplingFollowsPdf) {
@@ -100,14 +113,7 @@ TEST_P(PhaseChi2, SamplingFollowsPdf) {
   o.theta_power = std::abs(phase.g) > 0.9f ? 2 : 1;
   o.expected_integral = 1;
   o.seed = 77 + uint32_t(std::abs(phase.g) * 100);
-  test::Chi2Result r = test::chi2_test(
-      [&](Sampler& rng, test::DirectionSample* s) {
-        float pdf;
-        if (!phase.sample(wo, rng.next_2d(), &s->dir, &pdf)) return false;
-        s->pdf = pdf;
-        return true;
-      },
-      [&](const Vec3& wi) { return double(phase.eval(wo, wi)); }, o);
+  test::Chi2Result r = phase_chi2(phase, wo, o);
   EXPECT_TRUE(r.passed()) << r.summary;
   EXPECT_EQ(r.pdf_mismatches, 0u) << r.summary;  // pdf == value by construction
 }
@@ -133,14 +139,7 @@ TEST_P(PhaseMixtureChi2, SamplingFollowsPdf) {
   o.theta_power = 2;
   o.expected_integral = 1;
   o.seed = 1234 + uint32_t(c.g.size());
-  test::Chi2Result r = test::chi2_test(
-      [&](Sampler& rng, test::DirectionSample* s) {
-        float pdf;
-        if (!phase.sample(wo, rng.next_2d(), &s->dir, &pdf)) return false;
-        s->pdf = pdf;
-        return true;
-      },
-      [&](const Vec3& wi) { return double(phase.eval(wo, wi)); }, o);
+  test::Chi2Result r = phase_chi2(phase, wo, o);
   EXPECT_TRUE(r.passed()) << r.summary;
   EXPECT_EQ(r.pdf_mismatches, 0u) << r.summary;  // pdf == eval of the whole mixture
 }

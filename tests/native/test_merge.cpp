@@ -25,11 +25,7 @@ ScenePtr merge_scene(bool media) {
   ScenePtr s = new_scene();
   add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.7f, 0.6f, 0.5f}));
   add_object(s.get(), icosphere(0.5f, 2), add_diffuse(s.get(), {0.2f, 0.5f, 0.8f}), translate({-0.6f, 0, 0.5f}));
-  lt_shader_node glossy = node(LT_NODE_GLOSSY);
-  glossy.color.value[0] = glossy.color.value[1] = glossy.color.value[2] = 0.8f;
-  glossy.roughness.value[0] = 0.3f;
-  int gm;
-  check(lt_scene_add_material(s.get(), &glossy, 1, 0, &gm), "add_material");
+  const int gm = add_glossy(s.get(), {0.8f, 0.8f, 0.8f}, 0.3f);
   add_object(s.get(), box({0.2f, -0.3f, 0}, {0.9f, 0.4f, 0.7f}), gm);
   if (media) {
     lt_shader_node n = node(LT_NODE_TRANSPARENT);
