@@ -29,6 +29,12 @@ def _export(scene):
 def test_volume_agrees_with_cycles(name, volume_bounces, scene_factory, outdir):
     scene = scene_factory(name)
     scene.cycles.volume_bounces = volume_bounces
+    if name == "world_fog":
+        # A point light of radius 0 inside a medium gives next-event estimation from the medium
+        # points near it infinite variance (the integral of r^-4 r^2 dr diverges at the light: the
+        # two-seed error estimate grew from 0.58 % to 0.66 % going from 1024 to 1536 samples), so
+        # no sample count gives the image-mean check its power. Blender's lights have a radius.
+        scene.objects["Lamp"].data.shadow_soft_size = 0.1
     import build_scenes
     samples = build_scenes.SCENES[name][2]  # enough for the image-mean check's power
     report, _ = ru.two_seed_agreement(scene, samples, "VOLPATH", "%s_vb%d" % (name, volume_bounces), outdir,

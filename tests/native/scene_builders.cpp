@@ -243,31 +243,28 @@ lt_shader_node node(int type) {
   return n;
 }
 
-int add_diffuse(lt_scene* s, V3 color, float roughness) {
-  lt_shader_node n = node(LT_NODE_DIFFUSE);
+namespace {
+// A material of one node with a colour and one scalar input.
+int add_one_node(lt_scene* s, int type, V3 color, lt_input lt_shader_node::*scalar, float value) {
+  lt_shader_node n = node(type);
   n.color = constant(color);
-  n.roughness = constant(roughness);
+  n.*scalar = constant(value);
   int id = -1;
   check(lt_scene_add_material(s, &n, 1, 0, &id), "lt_scene_add_material");
   return id;
+}
+}  // namespace
+
+int add_diffuse(lt_scene* s, V3 color, float roughness) {
+  return add_one_node(s, LT_NODE_DIFFUSE, color, &lt_shader_node::roughness, roughness);
 }
 
 int add_glossy(lt_scene* s, V3 color, float roughness) {
-  lt_shader_node n = node(LT_NODE_GLOSSY);
-  n.color = constant(color);
-  n.roughness = constant(roughness);
-  int id = -1;
-  check(lt_scene_add_material(s, &n, 1, 0, &id), "lt_scene_add_material");
-  return id;
+  return add_one_node(s, LT_NODE_GLOSSY, color, &lt_shader_node::roughness, roughness);
 }
 
 int add_emission(lt_scene* s, V3 color, float strength) {
-  lt_shader_node n = node(LT_NODE_EMISSION);
-  n.color = constant(color);
-  n.strength = constant(strength);
-  int id = -1;
-  check(lt_scene_add_material(s, &n, 1, 0, &id), "lt_scene_add_material");
-  return id;
+  return add_one_node(s, LT_NODE_EMISSION, color, &lt_shader_node::strength, strength);
 }
 
 int add_mesh(lt_scene* s, const MeshData& m) {
