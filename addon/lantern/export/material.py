@@ -82,7 +82,7 @@ class ImageExporter:
         return image_id
 
 
-def _follow(socket):
+def follow(socket):
     """The output socket feeding an input socket through reroutes and muted nodes, or None."""
     seen = 0
     while socket is not None and seen < 256:
@@ -112,7 +112,7 @@ _VOLUME_INPUTS = ("Color", "Density", "Anisotropy", "Absorption Color", "Emissio
 def _constant_value(socket, warn, where):
     """A socket's value when unlinked or linked from an RGB / Value node; otherwise the socket's
     own value, reported."""
-    out = _follow(socket)
+    out = follow(socket)
     if out is None:
         return socket.default_value
     if out.node.type in {'RGB', 'VALUE'}:
@@ -138,13 +138,13 @@ def volume_keywords(output, warn):
     neither does this. Unsupported nodes are reported and left out."""
     if output is None or "Volume" not in output.inputs:
         return None
-    if _follow(output.inputs["Volume"]) is None:
+    if follow(output.inputs["Volume"]) is None:
         return None
     components = []
     seen = set()
 
     def walk(socket, weight, depth):
-        out = _follow(socket)
+        out = follow(socket)
         if out is None or weight <= 0.0 or depth > 64:
             return
         node = out.node
@@ -272,7 +272,7 @@ class MaterialExporter:
         if material.use_nodes and material.node_tree is not None:
             volume = self.volume(material)
             output = material.node_tree.get_output_node('CYCLES')
-            if volume is not None and _follow(output.inputs["Surface"]) is None:
+            if volume is not None and follow(output.inputs["Surface"]) is None:
                 # Volume only: Cycles' invisible boundary (Transparent for the surface integrators),
                 # also when nothing in the volume can be used (volume == [], reported).
                 if not volume:
@@ -319,7 +319,7 @@ class MaterialExporter:
 
     def _shader(self, socket):
         """Index of the node tree feeding a shader input socket."""
-        out = _follow(socket)
+        out = follow(socket)
         if out is None:
             return self._black()
         key = out.as_pointer()
@@ -380,7 +380,7 @@ class MaterialExporter:
                 ignored.append(name)
         for name in ("Normal", "Clearcoat Normal", "Tangent"):
             s = inp.get(name)
-            if s is not None and _follow(s) is not None:
+            if s is not None and follow(s) is not None:
                 ignored.append(name)
         if ignored:
             self._warn("Principled BSDF '%s': %s not supported, ignored"
@@ -409,8 +409,8 @@ class MaterialExporter:
     def _constant(self, node, name):
         """A float that the ABI takes as a constant (IOR): linked inputs use the socket value."""
         s = self._socket(node, name)
-        if _follow(s) is not None:
-            src = _follow(s).node
+        if follow(s) is not None:
+            src = follow(s).node
             if src.type == 'VALUE':
                 return float(src.outputs[0].default_value)
             self._warn("'%s' of '%s' must be a constant, its link from '%s' is ignored"
@@ -426,7 +426,7 @@ class MaterialExporter:
     def _input(self, node, name, colour):
         s = self._socket(node, name)
         default = _socket_value(s, colour)
-        out = _follow(s)
+        out = follow(s)
         if out is None:
             return core.make_input(default)
         src = out.node
@@ -450,7 +450,7 @@ class MaterialExporter:
         if tex.projection != 'FLAT':
             self._warn("image texture '%s': %s projection treated as Flat (UV)"
                        % (tex.name, tex.projection))
-        vec = _follow(tex.inputs["Vector"])
+        vec = follow(tex.inputs["Vector"])
         if vec is not None and not _is_uv_source(vec):
             self._warn("image texture '%s': vector input from '%s' is not supported, the active "
                        "render UV map is used" % (tex.name, vec.node.name))
@@ -465,7 +465,7 @@ def _differs(value, default):
 def _is_rough(node):
     """Whether the microfacet distribution matters: roughness linked or above zero."""
     s = node.inputs["Roughness"]
-    return _follow(s) is not None or s.default_value > 0.0
+    return follow(s) is not None or s.default_value > 0.0
 
 
 def _is_uv_source(out):

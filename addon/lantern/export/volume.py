@@ -4,7 +4,7 @@ import bpy
 from mathutils import Matrix, Vector
 
 from .. import core
-from .material import _follow, emissive_nodes, without_emission
+from .material import follow, emissive_nodes, without_emission
 
 # Cycles' default volume shader for a Volume object without material: Principled Volume defaults.
 _DEFAULT = dict(node=core.VOLUME_PRINCIPLED, color=(0.5, 0.5, 0.5), density=1.0,
@@ -34,7 +34,7 @@ def _density_grid(material, warn):
     output = material.node_tree.get_output_node('CYCLES')
     names, stack = [], [output.inputs.get("Volume")] if output is not None else []
     while stack:
-        out = _follow(stack.pop())
+        out = follow(stack.pop())
         if out is None:
             continue
         node = out.node
@@ -43,7 +43,7 @@ def _density_grid(material, warn):
         elif node.type == 'PRINCIPLED_VOLUME' and node.inputs["Density Attribute"].default_value:
             names.append(node.inputs["Density Attribute"].default_value)
         elif "Density" in node.inputs:
-            src = _follow(node.inputs["Density"])
+            src = follow(node.inputs["Density"])
             if src is not None and src.node.type == 'ATTRIBUTE':
                 names.append(src.node.attribute_name)
     if len(set(names)) > 1:

@@ -3,7 +3,7 @@ World Output's Volume as a medium filling the scene."""
 
 import math
 
-from .material import _follow, emissive_nodes, volume_keywords, without_emission
+from .material import follow, emissive_nodes, volume_keywords, without_emission
 
 _CAMERA_DEFAULT = 1
 
@@ -15,7 +15,7 @@ def _visibility(world):
 
 def _value(socket):
     """Constant of a socket, from its own value or an RGB/Value node; None if unsupported."""
-    out = _follow(socket)
+    out = follow(socket)
     if out is None:
         v = socket.default_value
         return tuple(v)[:3] if hasattr(v, "__len__") else float(v)
@@ -27,7 +27,7 @@ def _value(socket):
 
 def _rotation_z(tex, warn):
     """Z rotation of a Mapping node between Texture Coordinate and the environment texture."""
-    out = _follow(tex.inputs["Vector"])
+    out = follow(tex.inputs["Vector"])
     if out is None:
         return 0.0
     node = out.node
@@ -36,14 +36,14 @@ def _rotation_z(tex, warn):
     if node.type != 'MAPPING':
         warn("environment texture vector from '%s' is not supported, ignored" % node.name)
         return 0.0
-    src = _follow(node.inputs["Vector"])
+    src = follow(node.inputs["Vector"])
     if src is not None and src.node.type != 'TEX_COORD':
         warn("Mapping node '%s' input from '%s' is not supported, ignored"
              % (node.name, src.node.name))
     rot = node.inputs["Rotation"]
     loc = node.inputs.get("Location")
     scale = node.inputs.get("Scale")
-    if any(s is not None and _follow(s) is not None for s in (rot, loc, scale)):
+    if any(s is not None and follow(s) is not None for s in (rot, loc, scale)):
         warn("Mapping node '%s' with linked inputs is not supported, ignored" % node.name)
         return 0.0
     r = rot.default_value
@@ -83,7 +83,7 @@ def export_world(depsgraph, core_scene, report, images):
     if output is None:
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=visibility)
         return "none"
-    out = _follow(output.inputs["Surface"])
+    out = follow(output.inputs["Surface"])
     if out is None:
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=visibility)
         return "none"
@@ -95,7 +95,7 @@ def export_world(depsgraph, core_scene, report, images):
     strength = _value(bg.inputs["Strength"])
     if strength is None:
         warn("Background strength from a '%s' node is not supported, using its value"
-             % _follow(bg.inputs["Strength"]).node.name)
+             % follow(bg.inputs["Strength"]).node.name)
         strength = float(bg.inputs["Strength"].default_value)
 
     color_in = bg.inputs["Color"]
@@ -104,7 +104,7 @@ def export_world(depsgraph, core_scene, report, images):
         core_scene.set_world(color=color, strength=strength, visibility=visibility)
         return "color"
 
-    src = _follow(color_in)
+    src = follow(color_in)
     tex = src.node
     if tex.type != 'TEX_ENVIRONMENT' or src.name != "Color":
         return fallback("node '%s' (%s) feeding the Background colour is not supported"
