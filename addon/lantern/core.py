@@ -10,7 +10,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 4
+ABI_VERSION = 5
 
 # lt_status
 OK = 0
@@ -267,6 +267,7 @@ class RenderStatus(ctypes.Structure):
         ("rel_error", ctypes.c_double),
         ("halt_reason", ctypes.c_int),
         ("active_pixels", ctypes.c_uint64),
+        ("unestimated_pixels", ctypes.c_uint64),
     ]
 
 

@@ -139,6 +139,8 @@ def format_stats(st, pixels=0):
                                        format_error(st.rel_error), _seconds(st.elapsed_seconds))
     if pixels and st.active_pixels < pixels:
         text += " | %.0f%% of pixels sampling" % (100.0 * st.active_pixels / pixels)
+    if st.unestimated_pixels:
+        text += " | %d pixel(s) without finite samples" % st.unestimated_pixels
     if st.state == core.STATE_RUNNING:
         text += " | Remaining %s" % _clock(st.remaining_seconds)
     elif st.halt_reason in (core.HALT_CANCELLED, core.HALT_FAILED):
@@ -424,6 +426,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if st.nan_samples:
                 self.report({'WARNING'}, "%d samples were not finite and were discarded"
                             % st.nan_samples)
+            if st.unestimated_pixels:
+                self.report({'WARNING'}, "%d pixel(s) had fewer than 2 finite samples and are left "
+                            "out of the noise estimate" % st.unestimated_pixels)
         finally:
             # Never cancel=True: that would drop the (partial) image.
             self.end_result(result)

@@ -19,6 +19,8 @@ float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 V3 normalize(V3 a) { return mul(a, 1.0f / std::sqrt(dot(a, a))); }
 
+}  // namespace
+
 lt_input constant(float v) {
   lt_input in;
   in.value[0] = in.value[1] = in.value[2] = v;
@@ -33,8 +35,6 @@ lt_input constant(V3 c) {
   in.image = -1;
   return in;
 }
-
-}  // namespace
 
 // ---- transforms ------------------------------------------------------------------------------
 

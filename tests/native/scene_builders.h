@@ -64,6 +64,9 @@ ScenePtr new_scene();
 // Throws std::runtime_error("<what>: <lt_last_error()>") unless status == LT_OK.
 void check(int status, const char* what);
 
+// A material input that is the constant v (grey) or c, without an image.
+lt_input constant(float v);
+lt_input constant(V3 c);
 // Material node with every input constant 0, no image, no children, ior 1.45.
 lt_shader_node node(int type);
 int add_diffuse(lt_scene* s, V3 color, float roughness = 0);

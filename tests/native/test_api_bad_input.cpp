@@ -838,3 +838,40 @@ TEST(ApiBadInput, SharedNodesCannotHideTreeDepth) {
   commit_and_render(s, 1);
   ADD_FAILURE() << "a material 121 levels deep was accepted (the evaluator holds 64)";
 }
+
+TEST(ApiBadInput, GlassIorBelowOneReflectsTotallyAsCycles) {
+  // A smooth glass slab of IOR 0.75 (an optically thinner inside, as an air bubble in water) in
+  // front of an emitter, in a black world. Seen head-on the emitter shows through it; seen at 60
+  // degrees from the slab's normal, beyond the critical angle asin(0.75) = 48.6 degrees, the slab
+  // reflects totally and shows the black world. Clamping the IOR to 1 (as Lantern once did) makes
+  // the slab vanish and both views see the emitter. IOR 0 is 1e-5 (Cycles' fmaxf(ior, 1e-5f)): a
+  // near-perfect mirror from outside, and finite.
+  for (float ior : {0.75f, 0.0f}) {
+    ScenePtr sp = new_scene();
+    lt_scene* s = sp.get();
+    lt_shader_node glass = node(LT_NODE_GLASS);
+    glass.color = constant(V3{1, 1, 1});
+    glass.ior = ior;
+    int material = -1;
+    check(lt_scene_add_material(s, &glass, 1, 0, &material), "lt_scene_add_material");
+    add_object(s, box({-20, -0.2f, -20}, {20, 0.2f, 20}), material);
+    add_object(s, plane(60, 60), add_emission(s, {1, 1, 1}, 1), compose(translate({0, 2, 0}), rotate({1, 0, 0}, 1.5707964f)));
+    const float a = 60 * 3.14159265f / 180;
+    double mean[2];
+    for (int view = 0; view < 2; ++view) {
+      const float angle = view ? a : 0;
+      set_camera(s, perspective_camera(look_at({-4 * std::sin(angle), -4 * std::cos(angle), 0}, {0, 0, 0}), 200));
+      check(lt_scene_commit(s), "commit");
+      Passes p = render(s, render_settings(8, 8, 16, 1));
+      ASSERT_EQ(p.first_non_finite(), "") << "ior " << ior;
+      EXPECT_EQ(p.status.nan_samples, 0u) << "ior " << ior;
+      mean[view] = region_stats(p, 0, 0, 8, 0, 8).mean;
+    }
+    if (ior > 0) {
+      EXPECT_GT(mean[0], 0.9) << "head-on, the emitter shows through the slab (transmittance (1 - 0.02)^2)";
+      EXPECT_LT(mean[1], 1e-3) << "at 60 degrees the slab reflects totally";
+    } else {
+      EXPECT_LT(mean[0], 1e-3) << "IOR 1e-5 is a mirror head-on";
+    }
+  }
+}

@@ -129,3 +129,43 @@ TEST(ApiFurnace, ConcaveOpenBoxWithSphereManyBounces) {
   RegionStats st = region_stats(one, 0, 0, one.width, 0, one.height);
   EXPECT_LT(st.mean, 0.9) << "one bounce already gives almost everything: the scene does not test many bounces";
 }
+
+TEST(ApiFurnace, ClosedMirrorBoxRunsToTheBounceLimitUnamplified) {
+  // A camera inside a closed box whose walls are perfect mirrors (reflectance 1) that also emit Le:
+  // every camera path is deterministic and sees Le at each of its N + 2 hits (N = the bounce
+  // limit; as in Cycles, N = 0 still lights the first hit), so every pixel is exactly (N + 2) Le
+  // with zero variance. Russian roulette must neither
+  // end nor amplify a path of throughput 1: a survival cap below 1 (0.95) makes the survivors of
+  // 256 bounces weigh 1/0.95^253 ~ 4e5 and the image a handful of fireflies.
+  const float le = 0.5f;
+  const int bounces = 256;
+  ScenePtr s = new_scene();
+  lt_shader_node nodes[3] = {node(LT_NODE_ADD), node(LT_NODE_EMISSION), node(LT_NODE_GLOSSY)};
+  nodes[0].child[0] = 1;
+  nodes[0].child[1] = 2;
+  nodes[1].color = nodes[2].color = constant(V3{1, 1, 1});
+  nodes[1].strength = constant(le);
+  nodes[2].roughness = constant(0.0f);
+  int mirror = -1;
+  check(lt_scene_add_material(s.get(), nodes, 3, 0, &mirror), "lt_scene_add_material");
+  add_object(s.get(), box({-1, -1, -1}, {1, 1, 1}), mirror);
+  camera_towards(s.get(), {0.1f, -0.7f, 0.05f}, {0.3f, 1, 0.2f}, 30);
+  ASSERT_EQ(lt_scene_commit(s.get()), LT_OK) << lt_last_error();
+
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_VOLPATH}) {
+    lt_render_settings rs = render_settings(16, 16, 8, 5);
+    rs.integrator = integrator;
+    rs.max_bounces = rs.glossy_bounces = bounces;
+    Passes p = render(s.get(), rs);
+    ASSERT_EQ(p.first_non_finite(), "");
+    EXPECT_EQ(p.status.nan_samples, 0u);
+    const double expected = double(bounces + 2) * le;
+    int failures = 0;
+    for (int y = 0; y < p.height; ++y)
+      for (int x = 0; x < p.width; ++x)
+        for (int c = 0; c < 3; ++c)
+          if (std::abs(p.rgba(x, y)[c] - expected) > 1e-3 * expected && failures++ < 5)
+            ADD_FAILURE() << "integrator " << integrator << ", pixel (" << x << ", " << y << ") channel " << c
+                          << ": " << p.rgba(x, y)[c] << ", expected " << expected;
+  }
+}

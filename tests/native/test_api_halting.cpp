@@ -147,3 +147,30 @@ TEST(ApiHalting, BadHaltingSettingsAreRefused) {
   rs.min_samples = 0;
   refused(rs, "min samples");
 }
+
+TEST(ApiHalting, PixelsWithoutFiniteSamplesDoNotBlockTheNoiseTarget) {
+  // An emitter so strong (colour 10 x strength 1e38) that every sample seeing it overflows to
+  // infinity and is discarded: those pixels never hold 2 finite samples. They are left out of the
+  // estimate and counted, so the noise target still stops the render (it never did before: the
+  // estimate waited for every pixel's second sample).
+  ScenePtr sp = new_scene();
+  lt_scene* s = sp.get();
+  add_object(s, plane(10, 10), add_diffuse(s, {0.7f, 0.6f, 0.5f}));
+  add_object(s, plane(1, 1), add_emission(s, {10, 10, 10}, 1e38f), translate({0, 0, 1}));
+  set_world(s, {0.5f, 0.5f, 0.5f}, 1);
+  set_camera(s, perspective_camera(look_at({0, -0.01f, 5}, {0, 0, 0}), 35));
+  check(lt_scene_commit(s), "commit");
+  lt_render_settings rs = render_settings(24, 24, 4096, 3);
+  rs.noise_target = 0.05f;
+  rs.min_samples = 4;
+  rs.max_bounces = rs.diffuse_bounces = 0;  // the floor's light from the emitter would overflow too
+  Passes p = render(s, rs);
+  ASSERT_EQ(p.first_non_finite(), "");
+  EXPECT_EQ(p.status.halt_reason, LT_HALT_NOISE_TARGET);
+  EXPECT_LT(p.status.samples_done, 4096);
+  EXPECT_GT(p.status.nan_samples, 0u);
+  EXPECT_GT(p.status.unestimated_pixels, 0u);
+  EXPECT_LT(p.status.unestimated_pixels, 24u * 24u / 4);
+  EXPECT_GE(p.status.rel_error, 0.0);
+  EXPECT_LE(p.status.rel_error, 0.05);
+}

@@ -23,9 +23,10 @@ extern "C" {
 #define LT_API __attribute__((visibility("default")))
 #endif
 
-#define LT_ABI_VERSION 4  /* 2: lt_render_settings.sample_offset; 3: halting settings and status;
+#define LT_ABI_VERSION 5  /* 2: lt_render_settings.sample_offset; 3: halting settings and status;
                              4: volumes are arrays of components with emission; lt_scene_stats
-                                counts emissive triangles; lt_scene_add_volume_grid takes a step */
+                                counts emissive triangles; lt_scene_add_volume_grid takes a step;
+                             5: lt_render_status.unestimated_pixels */
 
 enum lt_status {
   LT_OK = 0,
@@ -359,11 +360,12 @@ typedef struct lt_render_status {
   /* Estimated relative error of the Combined image after the last pass: the RMS error relative to
    * the RMS of the converged image, sqrt(E[sum_pc (I_pc - R_pc)^2] / sum_pc R_pc^2) over pixels p
    * and RGB channels c, from two independent half images (each pixel's even- and odd-numbered
-   * samples; core/film.h). Negative while a pixel has fewer than 2 samples; +inf when the noise
-   * is as large as the image. */
+   * samples; core/film.h). Negative before 2 passes; +inf when the noise is as large as the
+   * image. Pixels with fewer than 2 finite samples are left out (unestimated_pixels). */
   double rel_error;
   int halt_reason;          /* lt_halt_reason */
   uint64_t active_pixels;   /* pixels still sampling (fewer than the region's with adaptive sampling) */
+  uint64_t unestimated_pixels; /* pixels left out of rel_error: fewer than 2 finite samples */
 } lt_render_status;
 enum lt_halt_reason {
   LT_HALT_NONE = 0, /* still running */

@@ -629,6 +629,7 @@ int lt_render_poll(lt_render* render, lt_render_status* st) {
     st->rel_error = s.rel_error;
     st->halt_reason = int(s.halt_reason);
     st->active_pixels = s.active_pixels;
+    st->unestimated_pixels = s.unestimated_pixels;
   });
 }
 

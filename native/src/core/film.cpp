@@ -4,7 +4,6 @@
 
 #include <tbb/parallel_for.h>
 
-#include <atomic>
 #include <limits>
 
 namespace lt {
@@ -102,23 +101,23 @@ void Film::add(int x, int y, const SampleValue& s) {
   a.count += 1;
 }
 
-ErrorEstimate Film::error_estimate() const {
+ErrorEstimate Film::error_estimate(int passes) const {
   ErrorEstimate e;
-  const size_t n_pixels = accum_.size();
+  if (passes < 2) return e;
   const bool splats = !splat_.empty() && light_paths_half_ > 0 && light_paths_ > light_paths_half_;
   const double inv_la = splats ? 1.0 / double(light_paths_ - light_paths_half_) : 0.0;
   const double inv_lb = splats ? 1.0 / double(light_paths_half_) : 0.0;
   const double inv_l = splats ? 1.0 / double(light_paths_) : 0.0;
   // Per-row sums in parallel, added in row order: the same bits for any thread count.
   std::vector<double> row_var(height_, 0.0), row_sq(height_, 0.0);
-  std::atomic<bool> incomplete{false};
+  std::vector<uint64_t> row_skipped(height_, 0);
   tbb::parallel_for(0, height_, [&](int y) {
     double var_sum = 0, square_sum = 0;
     for (size_t i = size_t(y) * width_; i < size_t(y + 1) * width_; ++i) {
       const PixelAccum& a = accum_[i];
       if (a.count < 2) {
-        incomplete.store(true, std::memory_order_relaxed);
-        return;
+        ++row_skipped[y];
+        continue;
       }
       const double n = a.count, nb = double(a.count / 2), na = n - nb;
       for (int k = 0; k < 3; ++k) {
@@ -137,12 +136,14 @@ ErrorEstimate Film::error_estimate() const {
     row_var[y] = var_sum;
     row_sq[y] = square_sum;
   });
-  if (incomplete.load()) return e;
   double var_sum = 0, square_sum = 0;
   for (int y = 0; y < height_; ++y) {
     var_sum += row_var[y];
     square_sum += row_sq[y];
+    e.unestimated_pixels += row_skipped[y];
   }
+  const uint64_t n_pixels = accum_.size() - e.unestimated_pixels;
+  if (!n_pixels) return e;
   const double signal = square_sum - var_sum;
   e.mean_square = std::max(0.0, signal) / double(n_pixels);
   e.variance = var_sum;

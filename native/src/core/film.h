@@ -64,10 +64,14 @@ int pass_channels(Pass pass);
 // converged image R. Since E[(A - B)^2] = Var A + Var B for independent halves, v_p needs no model
 // of the noise; BDPT splats are split into halves the same way (by the sample that traced the
 // light path) and normalised by each half's light paths.
+// Pixels holding fewer than 2 finite samples once 2 or more passes are done (every sample there was
+// discarded as not finite, e.g. under an emitter of strength 1e38) cannot be estimated: they are
+// left out of both sums and counted, so that they neither block the estimate nor the noise target.
 struct ErrorEstimate {
-  double rel_error = -1;   // E; negative until every pixel has 2 samples; +inf if noise >= signal
+  double rel_error = -1;   // E; negative before 2 passes; +inf if noise >= signal
   double mean_square = 0;  // sum_pc R_pc^2 / pixels (estimated): the adaptive sampler's scale
   double variance = 0;     // sum_p v_p
+  uint64_t unestimated_pixels = 0;  // pixels with fewer than 2 finite samples, left out
 };
 
 class Film {
@@ -100,8 +104,9 @@ class Film {
     light_paths_ += n;
     light_paths_half_ += n_half;
   }
-  // Of the accumulators (the rendering thread, between passes); see ErrorEstimate.
-  ErrorEstimate error_estimate() const;
+  // Of the accumulators (the rendering thread, between passes) after `passes` passes over every
+  // pixel (fewer than 2: no estimate); see ErrorEstimate.
+  ErrorEstimate error_estimate(int passes) const;
   // Variance of the pixel's Combined RGB mean (summed over channels) from its camera samples'
   // sample variance; 0 below 2 samples.
   double pixel_variance(int x, int y) const;

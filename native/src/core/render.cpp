@@ -250,8 +250,9 @@ void RenderJob::run() {
           if (pass_samples_.load() == active_pixels_.load()) samples_done_.store(s + 1);
           break;
         }
-        const ErrorEstimate e = film_.error_estimate();
+        const ErrorEstimate e = film_.error_estimate(s + 1);
         rel_error_.store(e.rel_error);
+        unestimated_pixels_.store(e.unestimated_pixels);
         bool reached = false;
         if (settings_.noise_target > 0 && s + 1 >= settings_.min_samples && e.rel_error >= 0) {
           reached = e.rel_error <= settings_.noise_target;
@@ -271,7 +272,11 @@ void RenderJob::run() {
       }
     });
     film_.publish();
-    arena.execute([&] { rel_error_.store(film_.error_estimate().rel_error); });  // also after a cut pass
+    arena.execute([&] {  // also after a cut pass
+      const ErrorEstimate e = film_.error_estimate(samples_done_.load());
+      rel_error_.store(e.rel_error);
+      unestimated_pixels_.store(e.unestimated_pixels);
+    });
     finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
     halt_reason_.store(int(cancel_.load() ? HaltReason::Cancelled : halt));
     state_.store(cancel_.load() ? int(RenderState::Cancelled) : int(RenderState::Done));
@@ -296,6 +301,7 @@ RenderStatus RenderJob::status() const {
   st.rel_error = rel_error_.load();
   st.halt_reason = HaltReason(halt_reason_.load());
   st.active_pixels = active_pixels_.load();
+  st.unestimated_pixels = unestimated_pixels_.load();
   if (st.state != RenderState::Running) {
     st.remaining = 0;
   } else if (st.samples_done > 0) {

@@ -53,6 +53,7 @@ struct RenderStatus {
   double rel_error = -1;  // ErrorEstimate::rel_error after the last complete pass
   HaltReason halt_reason = HaltReason::None;
   uint64_t active_pixels = 0;  // pixels still sampling (all of them without adaptive sampling)
+  uint64_t unestimated_pixels = 0;  // ErrorEstimate::unestimated_pixels of the last estimate
 };
 
 class RenderJob {
@@ -90,7 +91,7 @@ class RenderJob {
   std::atomic<uint64_t> nan_samples_{0}, rays_{0};
   std::atomic<double> rel_error_{-1};
   std::atomic<int> halt_reason_{0};
-  std::atomic<uint64_t> active_pixels_{0};
+  std::atomic<uint64_t> active_pixels_{0}, unestimated_pixels_{0};
   // Samples traced in the current pass, of them in half B (BDPT: one light path each).
   std::atomic<uint64_t> pass_samples_{0}, pass_samples_half_{0};
   std::vector<uint8_t> active_;  // per pixel of the region: still sampling

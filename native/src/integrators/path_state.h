@@ -53,11 +53,18 @@ struct Bounces {
 // Russian roulette once the path has had a chance to gather light (unbiased: divide by q), on the
 // throughput relative to the path's start (`start`: the largest component of its initial beta),
 // so a light subpath, whose beta carries the emitted power, is ended by the albedos it meets as a
-// camera path is, whatever the light's units. Returns false when the path ends.
+// camera path is, whatever the light's units. Survival q = min(1, beta / start) (pbrt-v4's rule):
+// a survivor's relative throughput becomes max(beta / start, 1), so a path at or below its start
+// is never amplified past it, and one at or above it (a mirror's 1) runs on unchanged to the bounce
+// limit, as in Cycles. A cap below 1 would multiply such a path by 1/cap at every bounce: 256
+// mirror bounces at 0.95 weigh 5e5 (heavy-tailed, visible as fireflies and a wrong-looking mean).
+// Returns false when the path ends.
 inline bool russian_roulette(int bounce, Spectrum* beta, Sampler& sampler, float start = 1.0f) {
   if (bounce < 3) return true;
-  float q = std::min(0.95f, max_component(*beta) / start);
-  if (sampler.next_1d() >= q) return false;
+  const float u = sampler.next_1d();  // drawn either way: one dimension per bounce
+  const float q = max_component(*beta) / start;
+  if (q >= 1) return true;
+  if (u >= q) return false;
   *beta /= q;
   return true;
 }

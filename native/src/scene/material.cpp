@@ -20,6 +20,10 @@ Vec3 non_negative(Vec3 c) {
   for (int k = 0; k < 3; ++k) c[k] = std::isfinite(c[k]) ? std::max(0.0f, c[k]) : 0.0f;
   return c;
 }
+// Glass and Principled IOR as Cycles 3.4 takes it (fmaxf(ior, 1e-5f)): below 1 is an optically
+// thinner inside (an air bubble in water, IOR 0.75, reflects totally beyond asin(0.75) = 48.6
+// degrees from its normal); 0 or less becomes 1e-5, a near-perfect mirror.
+float glass_ior(float ior) { return std::max(ior, 1e-5f); }
 
 constexpr int kMaxDepth = 64;
 
@@ -168,7 +172,7 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
             t.type = LobeType::Dielectric;
             t.weight = weight * base * transmission;
             t.alpha = r * r;
-            float ior = std::max(1.0f + 1e-4f, s.ior);
+            const float ior = glass_ior(s.ior);
             t.eta = backface ? 1 / ior : ior;
             bsdf->add(t);
           }
@@ -185,7 +189,7 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
             case NodeType::Glass: {
               l.type = LobeType::Dielectric;
               l.alpha = r * r;
-              float ior = std::max(1.0f + 1e-4f, s.ior);
+              const float ior = glass_ior(s.ior);
               l.eta = backface ? 1 / ior : ior;
               break;
             }
