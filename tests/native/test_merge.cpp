@@ -217,6 +217,15 @@ TEST(MergeRefusals, EveryMismatchIsRefusedAndNothingIsOverwritten) {
     EXPECT_EQ(slurp(out), "previous result") << c.part << " overwrote the output";
   }
   EXPECT_EQ(merge(out, {}), LT_ERROR_INVALID_ARGUMENT);
+  // The output among the parts, by the same path, another spelling or a link: refused, untouched.
+  const std::string b_copy = slurp(p("b.exr"));
+  std::filesystem::create_symlink(p("b.exr"), p("link.exr"));
+  for (const std::string& o : {p("b.exr"), dir.path + "/./b.exr", p("link.exr")}) {
+    EXPECT_EQ(merge(o, {p("a.exr"), p("b.exr")}), LT_ERROR_INVALID_ARGUMENT) << o;
+    EXPECT_NE(std::string(lt_last_error()).find("is also a part"), std::string::npos) << lt_last_error();
+    EXPECT_EQ(slurp(p("b.exr")), b_copy) << o << " overwrote a part";
+  }
+  std::filesystem::remove(p("link.exr"));
   // No temporary files left behind, and the good pair merges.
   int files = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir.path))

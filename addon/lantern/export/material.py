@@ -347,7 +347,7 @@ class MaterialExporter:
             rough = core.make_input(0.0) if node.distribution == 'SHARP' else \
                 self._scalar(node, "Roughness")
             return self._add(core.NODE_GLASS, color=self._color(node, "Color"), roughness=rough,
-                             ior=self._constant(node, "IOR"))
+                             ior=self._ior(node))
         if t == 'EMISSION':
             return self._add(core.NODE_EMISSION, color=self._color(node, "Color"),
                              strength=self._scalar(node, "Strength"))
@@ -392,7 +392,7 @@ class MaterialExporter:
             roughness=self._scalar(node, "Roughness"),
             specular=self._scalar(node, "Specular"),
             transmission=self._scalar(node, "Transmission"),
-            ior=self._constant(node, "IOR"),
+            ior=self._ior(node),
             emission=self._color(node, "Emission"),
             strength=self._scalar(node, "Emission Strength"),
         )
@@ -416,6 +416,15 @@ class MaterialExporter:
             self._warn("'%s' of '%s' must be a constant, its link from '%s' is ignored"
                        % (s.name, node.name, src.name))
         return float(s.default_value)
+
+    def _ior(self, node):
+        """IOR below 1 renders as Cycles renders it (an optically thinner inside); 0 or less is
+        1e-5 there, as in Cycles: a near-perfect mirror, worth a word."""
+        ior = self._constant(node, "IOR")
+        if not ior > 0:
+            self._warn("'%s' has IOR %g; rendered as IOR 0.00001 (as Cycles): a near-perfect mirror"
+                       % (node.name, ior))
+        return ior
 
     def _color(self, node, name):
         return self._input(node, name, colour=True)

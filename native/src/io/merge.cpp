@@ -5,6 +5,7 @@
 // the parts is the mean over all their samples, exactly up to float rounding.
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 #include <sstream>
 
 #include "core/error.h"
@@ -56,6 +57,14 @@ std::string channel_list(const ExrImage& img) {
 
 std::string merge_exr(const std::string& out_path, const std::vector<std::string>& paths) {
   if (paths.empty()) throw InvalidArgument("merge: no parts given");
+  // The output is written last, over whatever is there: never over one of the parts (also through
+  // a symbolic or hard link, or another spelling of the path).
+  std::error_code ec;
+  for (const std::string& p : paths)
+    if (std::filesystem::equivalent(out_path, p, ec) ||
+        std::filesystem::weakly_canonical(out_path, ec) == std::filesystem::weakly_canonical(p, ec))
+      throw InvalidArgument("merge: the output " + out_path + " is also a part (" + p +
+                            "); merging would overwrite it: give another output path");
   // Headers first: everything is checked before any pixel is read or anything written.
   std::vector<ExrImage> parts;
   for (const std::string& p : paths) parts.push_back(read_exr(p, false));
