@@ -21,10 +21,11 @@ inline unsigned visibility_of(uint32_t lobe) {
   return kVisGlossy;
 }
 
-// Cycles' sample clamp: scale a contribution so that its largest channel is at most `limit`.
+// Cycles' sample clamp: scale a contribution so that its largest channel is at most `limit` in
+// magnitude (a negative light's contribution is clamped as a positive one).
 inline Spectrum clamp_contribution(const Spectrum& c, float limit) {
   if (limit <= 0) return c;
-  float m = max_component(c);
+  float m = max_abs_component(c);
   return m > limit ? c * (limit / m) : c;
 }
 
@@ -53,10 +54,11 @@ struct Bounces {
 // Russian roulette once the path has had a chance to gather light (unbiased: divide by q), on the
 // throughput relative to the path's start (`start`: the largest component of its initial beta),
 // so a light subpath, whose beta carries the emitted power, is ended by the albedos it meets as a
-// camera path is, whatever the light's units. Returns false when the path ends.
+// camera path is, whatever the light's units (and sign: a negative light's beta is negative).
+// Returns false when the path ends.
 inline bool russian_roulette(int bounce, Spectrum* beta, Sampler& sampler, float start = 1.0f) {
   if (bounce < 3) return true;
-  float q = std::min(0.95f, max_component(*beta) / start);
+  float q = std::min(0.95f, max_abs_component(*beta) / start);
   if (sampler.next_1d() >= q) return false;
   *beta /= q;
   return true;
