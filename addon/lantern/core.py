@@ -79,9 +79,13 @@ PASS_COUNT = 6
 class LanternError(RuntimeError):
     """A failing Lantern call; `status` is the lt_status code, the message lt_last_error()."""
 
-    def __init__(self, message, status=None):
+    def __init__(self, message, status=None, detail=None):
         super().__init__(message)
         self.status = status
+        self.detail = detail or message  # lt_last_error() alone, without the call's name
+
+
+ERROR_INVALID_ARGUMENT = 1
 
 
 # ---- structures (field order and types exactly as in lantern.h) ---------------------------------
@@ -380,7 +384,7 @@ def _check(status, what):
         msg = lib().lt_last_error()
         msg = msg.decode("utf-8", "replace") if msg else ""
         kind = _STATUS_NAMES.get(status, "status %d" % status)
-        raise LanternError("%s failed (%s): %s" % (what, kind, msg or "no message"), status)
+        raise LanternError("%s failed (%s): %s" % (what, kind, msg or "no message"), status, msg)
 
 
 def pass_channels(pass_id):
@@ -507,6 +511,7 @@ class Scene:
         d.shape, d.size_x, d.size_y, d.angle = int(shape), size_x, size_y, angle
         d.visibility = int(visibility)
         _check(self._lib.lt_scene_add_light(self.handle, ctypes.byref(d)), "lt_scene_add_light")
+        return True
 
     def set_camera(self, transform, type=CAMERA_PERSPECTIVE, focal_length=50.0,
                    sensor_width=36.0, sensor_height=24.0, sensor_fit=SENSOR_AUTO,
@@ -609,6 +614,13 @@ class Scene:
             if w:
                 out.append(w.decode("utf-8", "replace"))
         return out
+
+    def take_warnings(self):
+        """The warnings added since the last take_warnings() (export names what they are about)."""
+        out = self.warnings()
+        taken = getattr(self, "_warnings_taken", 0)
+        self._warnings_taken = len(out)
+        return out[taken:]
 
     def render(self, settings):
         return Render(self, settings)

@@ -9,6 +9,7 @@ from gpu_extras.presets import draw_texture_2d
 
 from . import core
 from .export import export_scene
+from .export.camera import export_camera
 from .viewport import ViewportSession, view_camera
 
 REDRAW_SECONDS = 0.05      # while a viewport refines, it is redrawn this often
@@ -355,7 +356,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             stats = core_scene.stats()
             summary.update(emissive_triangles=stats["emissive_triangles"],
                            emissive_objects=stats["emissive_instances"])
-            for w in core_scene.warnings():
+            for w in core_scene.take_warnings():  # those export did not already report by name
                 report({'WARNING'}, w)
             print("Lantern: exported %s in %.2f s" % (summary, time.monotonic() - t0))
             if summary.get("media") and scene.lantern.integrator == 'PATH':
@@ -366,9 +367,12 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             settings = render_settings(scene, width, height, border)
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
-            render = core.Render(core_scene, settings)
-            render.start()
-            st = self._progress(render, view_layer, border)
+            if scene.render.use_multiview and not self.is_preview:
+                render, st = self._render_views(depsgraph, core_scene, settings, view_layer, border, report)
+            else:
+                render = core.Render(core_scene, settings)
+                render.start()
+                st = self._progress([render], view_layer, border)
             rw, rh = render.region_size
             text = scene_report(summary, render.settings, warnings, st, rw * rh)
             LAST_RENDER["report"] = text
@@ -383,30 +387,80 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if core_scene is not None:
                 core_scene.close()
 
-    def _progress(self, render, view_layer, border):
-        rw, rh = render.region_size
+    def _render_views(self, depsgraph, core_scene, settings, view_layer, border, report):
+        """Multiview and stereo: every view of the render result, each with its own camera (as
+        Cycles: the view's model matrix and shift from Blender, which also picks the camera of a
+        multiview view by its suffix) and its own seed. Returns the last view's render (closed)
+        and status."""
+        scene = depsgraph.scene
+        camera_object = self.camera_override or scene.camera
+        renders = []
+        said = set()
+
+        def report_once(level, message):  # the camera's warnings, once for all views
+            if message not in said:
+                said.add(message)
+                report(level, message)
+
+        def view_render(index, view):
+            if renders:
+                renders[-1].close()  # the scene's camera can change only once no render reads it
+            self.active_view_set(view)
+            cam = camera_object
+            if cam is not None:
+                spherical = self.use_spherical_stereo(cam)
+                export_camera(depsgraph, core_scene, report_once, cam,
+                              matrix=self.camera_model_matrix(cam, use_spherical_stereo=spherical),
+                              shift_x=self.camera_shift_x(cam, use_spherical_stereo=spherical))
+            s = dict(settings)
+            if index:  # independent noise in each view, as Cycles gives its views
+                s["seed"] = (settings["seed"] ^ (0x9E3779B9 * index)) & 0xFFFFFFFF
+            render = core.Render(core_scene, s)
+            renders.append(render)
+            render.start()
+            return render
+        try:
+            st = self._progress(view_render, view_layer, border, (settings["width"], settings["height"]))
+        except BaseException:
+            for r in renders:
+                r.close()
+            raise
+        return renders[-1], st
+
+    def _progress(self, renders, view_layer, border, size=None):
+        """Polls the render of each view into its passes. renders: [the started core.Render] for
+        one view (mono), or view_render(index, view name) -> a started render, called for every
+        view of the render result (multiview)."""
         passes = enabled_passes(view_layer)
+        first = renders[0] if isinstance(renders, list) else None
+        settings = first.settings if first is not None else None
         # Blender clamps the requested size to its render rectangle (the border when there is
         # one): asking for the full frame gives that rectangle's true size to check against.
-        fw, fh = render.settings.width, render.settings.height
+        fw, fh = (settings.width, settings.height) if first is not None else size
         result = self.begin_result(0, 0, fw, fh, layer=view_layer.name)
         try:
-            if (result.resolution_x, result.resolution_y) != (rw, rh):
-                raise core.LanternError(
-                    "Render result is %dx%d but Lantern renders %dx%d (border %s)"
-                    % (result.resolution_x, result.resolution_y, rw, rh, border))
-            writer = _PassWriter(render, result.layers[0], self.active_view_get(), passes)
-            self._poll_loop(render, result, writer)
-            try:
-                render.wait()
-                failed = False
-            except core.LanternError as e:
-                self.report({'ERROR'}, str(e))
-                failed = True
-            st = render.poll()
-            if st.state == core.STATE_FAILED and not failed:
-                self.report({'ERROR'}, "Lantern render failed")
-            writer.write()  # all passes, whatever was rendered (cancelled: partial image)
+            views = [self.active_view_get()] if first is not None else [v.name for v in result.views]
+            for index, view in enumerate(views):
+                render = first if first is not None else renders(index, view)
+                rw, rh = render.region_size
+                if (result.resolution_x, result.resolution_y) != (rw, rh):
+                    raise core.LanternError(
+                        "Render result is %dx%d but Lantern renders %dx%d (border %s)"
+                        % (result.resolution_x, result.resolution_y, rw, rh, border))
+                writer = _PassWriter(render, result.layers[0], view, passes)
+                cancelled = self._poll_loop(render, result, writer)
+                try:
+                    render.wait()
+                    failed = False
+                except core.LanternError as e:
+                    self.report({'ERROR'}, str(e))
+                    failed = True
+                st = render.poll()
+                if st.state == core.STATE_FAILED and not failed:
+                    self.report({'ERROR'}, "Lantern render failed")
+                writer.write()  # all passes, whatever was rendered (cancelled: partial image)
+                if cancelled or st.state == core.STATE_FAILED:
+                    break
             metadata = render_metadata(st, render.settings)
             # Stamp data goes on the final result (get_result), not on the tile being written.
             final = self.get_result()

@@ -486,7 +486,7 @@ TEST(ApiBadInput, NonFiniteParametersAreRefused) {
   lt_light_desc l = point_light({0, 0, 1}, 10);
   l.color[1] = kNaN;
   EXPECT_INVALID(lt_scene_add_light(s, &l));
-  l = point_light({0, 0, 1}, -10);
+  l = point_light({0, 0, 1}, -kInf);
   EXPECT_INVALID(lt_scene_add_light(s, &l));
   l = point_light({0, 0, 1}, 10);
   l.transform[3] = kInf;

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from .. import core
 from .camera import export_camera
 from .light import export_light
 from .material import ImageExporter, MaterialExporter
@@ -57,7 +58,16 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
     images = ImageExporter(core_scene, report)
     materials = MaterialExporter(core_scene, report, images)
     meshes = MeshExporter(depsgraph, core_scene, report, materials)
-    summary["world"] = export_world(depsgraph, core_scene, report, images)
+    try:
+        summary["world"] = export_world(depsgraph, core_scene, report, images)
+    except core.LanternError as e:  # a value the core refuses (not finite): no world, the render goes on
+        if e.status != core.ERROR_INVALID_ARGUMENT:
+            raise
+        report({'WARNING'}, "World '%s' left out: %s" % (depsgraph.scene_eval.world.name, e.detail))
+        core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=1)
+        summary["world"] = "none (left out)"
+    for w in core_scene.take_warnings():
+        report({'WARNING'}, w)
     world_media = export_world_volume(depsgraph, core_scene, report)
 
     lights = volumes = 0

@@ -11,8 +11,10 @@ _SENSOR_FIT = {
 }
 
 
-def export_camera(depsgraph, core_scene, report, camera_object=None):
-    """Sets the render camera (camera_object, else the scene's); returns its name."""
+def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None, shift_x=None):
+    """Sets the render camera (camera_object, else the scene's); returns its name. matrix and
+    shift_x, when given, replace the object's (a stereo or multiview view's, from
+    RenderEngine.camera_model_matrix and camera_shift_x)."""
     scene = depsgraph.scene
     obj = camera_object or scene.camera
     if obj is None:
@@ -21,7 +23,7 @@ def export_camera(depsgraph, core_scene, report, camera_object=None):
     obj = obj.evaluated_get(depsgraph)
     rd = scene.render
     kw = dict(
-        transform=np.array(obj.matrix_world, dtype=np.float32),
+        transform=np.array(obj.matrix_world if matrix is None else matrix, dtype=np.float32),
         pixel_aspect=rd.pixel_aspect_y / rd.pixel_aspect_x,
     )
     if obj.type != 'CAMERA':
@@ -48,7 +50,7 @@ def export_camera(depsgraph, core_scene, report, camera_object=None):
         sensor_height=cam.sensor_height,
         sensor_fit=_SENSOR_FIT.get(cam.sensor_fit, core.SENSOR_AUTO),
         ortho_scale=cam.ortho_scale,
-        shift_x=cam.shift_x,
+        shift_x=cam.shift_x if shift_x is None else shift_x,
         shift_y=cam.shift_y,
         clip_start=cam.clip_start,
         clip_end=cam.clip_end,

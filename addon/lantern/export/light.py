@@ -3,12 +3,20 @@
 import numpy as np
 
 from .. import core
+from .names import core_call, is_finite
 
 _TYPES = {
     'POINT': core.LIGHT_POINT,
     'SPOT': core.LIGHT_SPOT,
     'AREA': core.LIGHT_AREA,
     'SUN': core.LIGHT_SUN,
+}
+# The shape values each light type exports.
+_SHAPE_VALUES = {
+    'POINT': ("shadow_soft_size",),
+    'SPOT': ("shadow_soft_size", "spot_size", "spot_blend"),
+    'AREA': ("size", "size_y"),
+    'SUN': ("angle",),
 }
 _SHAPES = {
     'SQUARE': core.AREA_SQUARE,
@@ -60,7 +68,18 @@ def export_light(obj, matrix_world, core_scene, report):
     if light.use_nodes and not _has_default_nodes(light):
         report({'WARNING'}, "Light '%s': light nodes are not supported, using its colour and "
                             "power only" % obj.name)
-    color = np.array(light.color[:3], dtype=np.float32) * np.float32(light.energy)
+    # Negative energy is negative light (Cycles renders it so); non-finite values leave the light out.
+    subject = "Light '%s'" % obj.name
+    values = dict(energy=light.energy, color=tuple(light.color[:3]), transform=np.asarray(matrix_world).ravel())
+    values.update((name, getattr(light, name)) for name in _SHAPE_VALUES[light.type])
+    bad = [name for name, v in values.items() if not is_finite(v)]
+    with np.errstate(over='ignore'):  # an overflow is reported below
+        color = np.array(light.color[:3], dtype=np.float32) * np.float32(light.energy)
+    if not bad and not is_finite(color):
+        bad = ["colour x energy (%g)" % light.energy]
+    if bad:
+        report({'WARNING'}, "%s left out: %s not finite" % (subject, ", ".join(bad)))
+        return False
     kw = dict(type=kind, color=color, transform=matrix_world, visibility=visibility_bits(obj))
     if light.type in {'POINT', 'SPOT'}:
         kw["radius"] = light.shadow_soft_size
@@ -74,5 +93,5 @@ def export_light(obj, matrix_world, core_scene, report):
         kw["size_y"] = light.size_y if light.shape in {'RECTANGLE', 'ELLIPSE'} else light.size
     elif light.type == 'SUN':
         kw["angle"] = light.angle
-    core_scene.add_light(**kw)
-    return True
+    # The core leaves out black and zero-area lights with a warning (reported naming the light).
+    return core_call(core_scene, report, subject, "add_light", **kw) is not None

@@ -10,6 +10,7 @@ default value.
 import numpy as np
 
 from .. import core
+from .names import core_call, is_finite
 
 FALLBACK_GREY = 0.5
 
@@ -221,6 +222,7 @@ class MaterialExporter:
         self.images = images
         self.ids = {}
         self.volumes = {}  # material key -> (volume keywords or None, null surface) as exported
+        self.volume_names = {}  # core id -> name, of the materials with a medium
         self.media = 0  # materials with a Volume output
         self.emissive_media = 0  # of those, volumes that emit
 
@@ -233,8 +235,19 @@ class MaterialExporter:
         if key in self.ids:
             return self.ids[key]
         nodes, root, volume, null_surface = self._translate(material)
-        mat_id = self.core_scene.add_material(nodes, root)
-        if volume:
+        subject = "Material '%s'" % material.name
+        mat_id = -1
+        if self._bad:
+            # One bad value leaves the material out, not the render: its objects get the default
+            # surface, as an empty material slot.
+            self.report({'WARNING'}, "%s left out: %s not finite; objects using it render with the default "
+                        "surface (grey diffuse, as an empty material slot)" % (subject, ", ".join(self._bad)))
+        else:
+            mat_id = core_call(self.core_scene, self.report, subject, "add_material", nodes, root)
+            mat_id = -1 if mat_id is None else mat_id
+        if mat_id < 0:
+            volume, null_surface = None, False
+        elif volume:
             self.core_scene.set_material_volume(mat_id, volume, null_surface=null_surface)
             self.media += 1
             self.emissive_media += bool(emissive_nodes(volume))
@@ -246,7 +259,13 @@ class MaterialExporter:
                                                 null_surface=True)
         self.ids[key] = mat_id
         self.volumes[key] = (volume, null_surface)
+        if volume:
+            self.volume_names[mat_id] = material.name
         return mat_id
+
+    def volume_name(self, mat_id):
+        """The name of the material of core id `mat_id` if it has a medium, else None."""
+        return self.volume_names.get(mat_id)
 
     def update(self, material):
         """Replaces an exported material's surface in a committed scene (viewport edits).
@@ -258,8 +277,8 @@ class MaterialExporter:
         if key not in self.ids:
             return False
         nodes, root, volume, null_surface = self._translate(material)
-        if self.volumes.get(key) != (volume, null_surface):
-            return False
+        if self._bad or self.ids[key] < 0 or self.volumes.get(key) != (volume, null_surface):
+            return False  # a new scene, whose export reports the bad values
         self.core_scene.set_material(self.ids[key], nodes, root)
         return True
 
@@ -268,6 +287,7 @@ class MaterialExporter:
         self._material = material
         self._nodes = []
         self._memo = {}
+        self._bad = []  # the inputs whose values are not finite ("'Strength' of 'Emission'")
         volume, null_surface = None, False
         if material.use_nodes and material.node_tree is not None:
             volume = self.volume(material)
@@ -291,7 +311,12 @@ class MaterialExporter:
         self._material = material
         if not material.use_nodes or material.node_tree is None:
             return None
-        return volume_keywords(material.node_tree.get_output_node('CYCLES'), self._warn)
+        components = volume_keywords(material.node_tree.get_output_node('CYCLES'), self._warn)
+        bad = [c.get("name", "?") for c in components or () if not is_finite(*_numbers(c))]
+        if bad:
+            self._warn("volume %s left out: values not finite" % ", ".join("'%s'" % n for n in bad))
+            return []
+        return components
 
     # -- tree walk -----------------------------------------------------------------------------
 
@@ -409,13 +434,21 @@ class MaterialExporter:
     def _constant(self, node, name):
         """A float that the ABI takes as a constant (IOR): linked inputs use the socket value."""
         s = self._socket(node, name)
+        value = float(s.default_value)
         if follow(s) is not None:
             src = follow(s).node
             if src.type == 'VALUE':
-                return float(src.outputs[0].default_value)
-            self._warn("'%s' of '%s' must be a constant, its link from '%s' is ignored"
-                       % (s.name, node.name, src.name))
-        return float(s.default_value)
+                value = float(src.outputs[0].default_value)
+            else:
+                self._warn("'%s' of '%s' must be a constant, its link from '%s' is ignored"
+                           % (s.name, node.name, src.name))
+        return self._finite(value, s, node)
+
+    def _finite(self, value, socket, node):
+        """Records a non-finite input value (the material is then left out)."""
+        if not is_finite(value):
+            self._bad.append("'%s' of '%s' (%s)" % (socket.name, node.name, value))
+        return value
 
     def _ior(self, node):
         """IOR below 1 renders as Cycles renders it (an optically thinner inside); 0 or less is
@@ -437,10 +470,10 @@ class MaterialExporter:
         default = _socket_value(s, colour)
         out = follow(s)
         if out is None:
-            return core.make_input(default)
+            return core.make_input(self._finite(default, s, node))
         src = out.node
         if src.type in {'RGB', 'VALUE'}:
-            return core.make_input(_convert(out.default_value, colour))
+            return core.make_input(self._finite(_convert(out.default_value, colour), s, node))
         if src.type == 'TEX_IMAGE':
             image_id = self._image_texture(src, out, s, node)
             if image_id is not None:
@@ -464,6 +497,16 @@ class MaterialExporter:
             self._warn("image texture '%s': vector input from '%s' is not supported, the active "
                        "render UV map is used" % (tex.name, vec.node.name))
         return self.images.export(tex.image, tex.interpolation, tex.extension, where)
+
+
+def _numbers(component):
+    """The numeric values of a volume component (set_material_volume's keywords)."""
+    out = []
+    for k, v in component.items():
+        if k in ("node", "name"):
+            continue
+        out.extend(v if isinstance(v, (tuple, list)) else (v,))
+    return out
 
 
 def _differs(value, default):

@@ -4,6 +4,7 @@ import numpy as np
 
 from .. import core
 from .light import visibility_bits
+from .names import core_call, transform_problem
 
 # Object types Blender can turn into a mesh with to_mesh().
 CONVERTIBLE_TYPES = {'CURVE', 'SURFACE', 'FONT', 'META'}
@@ -68,6 +69,16 @@ def mesh_arrays(mesh):
                 corner_uvs=corner_uvs, material_slots=material_slots)
 
 
+def open_edge_count(triangles):
+    """Edges used by exactly one triangle (0 for a closed mesh)."""
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    e.sort(axis=1)
+    keys = e[:, 0] * (int(t.max()) + 1) + e[:, 1]
+    _, counts = np.unique(keys, return_counts=True)
+    return int((counts == 1).sum())
+
+
 class MeshExporter:
     """Adds geometry once per distinct evaluated datablock and an instance per object instance."""
 
@@ -77,6 +88,7 @@ class MeshExporter:
         self.report = report
         self.materials = materials
         self.mesh_ids = {}  # geometry key -> core mesh id, or None for empty geometry
+        self.open_edges = {}  # geometry key -> edges with one triangle (meshes with volumes only)
         self.instance_count = 0
 
     def _geometry_key(self, obj):
@@ -101,7 +113,10 @@ class MeshExporter:
                 if warn_empty:
                     self.report({'WARNING'}, "Object '%s' has no faces, skipped" % obj.name)
             else:
-                mesh_id = self.core_scene.add_mesh(**arrays)
+                # Degenerate or non-finite triangles are dropped by the core (reported by name).
+                mesh_id = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_mesh", **arrays)
+                if arrays["triangles"].size and self.materials.media:
+                    self.open_edges[key] = open_edge_count(arrays["triangles"])
         finally:
             if temporary:
                 obj.to_mesh_clear()
@@ -120,16 +135,48 @@ class MeshExporter:
     def export_instance(self, obj, matrix_world, warn_empty=True):
         """obj: an evaluated object of a mesh or convertible type. Returns the core instance id,
         or None when the object has no geometry."""
+        problem = transform_problem(matrix_world)
+        if problem is not None:
+            self.report({'WARNING'}, "Object '%s' left out: %s" % (obj.name, problem))
+            return None
         mesh_id = self._mesh_id(obj, warn_empty)
         if mesh_id is None:
             return None
+        material_ids = self._material_ids(obj)
         if np.linalg.det(np.asarray(matrix_world, dtype=np.float64)[:3, :3]) == 0:
             self.report({'WARNING'}, "Object '%s' has zero scale on an axis: rendered as the flat shape it "
                         "becomes (Cycles 3.4 renders such objects black)" % obj.name)
-        instance = self.core_scene.add_instance(mesh_id, matrix_world, self._material_ids(obj),
-                                                visibility_bits(obj))
-        self.instance_count += 1
+        self._check_closed(obj, material_ids)
+        instance = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_instance",
+                             mesh_id, matrix_world, material_ids, visibility_bits(obj))
+        if instance is not None:
+            self.instance_count += 1
         return instance
+
+    def _check_closed(self, obj, material_ids):
+        """Warns when a mesh carrying a volume material is open: the volume stack enters a medium
+        where a ray crosses one of its faces from the front and leaves it only where a ray crosses
+        one from the back, so an open mesh's medium has no defined inside."""
+        volumes = [self.materials.volume_name(m) for m in material_ids]
+        volumes = [v for v in volumes if v is not None]
+        if not volumes:
+            return
+        key = self._geometry_key(obj)
+        if key not in self.open_edges:  # the mesh was exported before any volume material
+            mesh, temporary = (obj.data, False) if obj.type == 'MESH' else (obj.to_mesh(), True)
+            try:
+                arrays = mesh_arrays(mesh) if mesh is not None else None
+                self.open_edges[key] = open_edge_count(arrays["triangles"]) if arrays else 0
+            finally:
+                if temporary:
+                    obj.to_mesh_clear()
+        n = self.open_edges[key]
+        if n:
+            self.report({'WARNING'}, "Object '%s': its mesh is not closed (%d open edge(s)) but carries the volume "
+                        "of material %s. Lantern enters a medium where a ray crosses one of the mesh's faces from "
+                        "the front and leaves it where a ray crosses one from the back: through the opening, rays "
+                        "stay inside the medium (or outside it) beyond the mesh; close the mesh for a defined "
+                        "volume" % (obj.name, n, ", ".join("'%s'" % v for v in sorted(set(volumes)))))
 
     @property
     def mesh_count(self):

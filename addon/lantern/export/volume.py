@@ -108,6 +108,9 @@ def export_volume(obj, matrix, core_scene, report, materials):
     try:
         core_scene.add_volume_grid(path, grid_name, matrix, desc, step=step)
     except core.LanternError as e:
-        report({'WARNING'}, "Volume '%s' left out: %s" % (obj.name, e))
+        report({'WARNING'}, "Volume '%s' left out: %s" % (obj.name, e.detail))
         return 0
+    finally:
+        for w in core_scene.take_warnings():
+            report({'WARNING'}, "Volume '%s': %s" % (obj.name, w))
     return 1

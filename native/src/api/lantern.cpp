@@ -295,8 +295,8 @@ int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
     begin_edit(scene);
     require(d->type >= LT_LIGHT_POINT && d->type <= LT_LIGHT_SUN,
             "unknown light type " + std::to_string(d->type) + "; valid types are POINT, SPOT, AREA, SUN");
-    require(finite_array(d->color, 3) && d->color[0] >= 0 && d->color[1] >= 0 && d->color[2] >= 0,
-            "light colour x energy must be finite and non-negative");
+    // Negative energy is negative light, as Cycles renders it.
+    require(finite_array(d->color, 3), "light colour x energy must be finite");
     lt::Transform xf = to_transform(d->transform, "light");
     lt::Light l;
     l.power = lt::Spectrum(d->color[0], d->color[1], d->color[2]);
@@ -336,7 +336,7 @@ int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
         l.area = l.shape == lt::AreaShape::Rectangle ? 4 * a : lt::kPi * a;
         l.direction = normalize(cross(l.axis_u, l.axis_v)) * -1.0f;
         if (!(l.area > 1e-12f) || !std::isfinite(l.area) || !lt::is_finite(l.direction)) {
-          warnings.push_back(name + " (area) has zero area; left out");
+          warnings.push_back(name + ": area light of zero area; left out");
           return;
         }
         break;

@@ -43,7 +43,10 @@ inline float length(const Vec3& a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(const Vec3& a) { return a / length(a); }
 inline Vec3 vmin(const Vec3& a, const Vec3& b) { return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)}; }
 inline Vec3 vmax(const Vec3& a, const Vec3& b) { return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}; }
+inline Vec3 abs(const Vec3& a) { return {std::abs(a.x), std::abs(a.y), std::abs(a.z)}; }
 inline float max_component(const Vec3& a) { return std::max(a.x, std::max(a.y, a.z)); }
+// Largest magnitude: negative lights (Blender allows negative energy) carry negative radiance.
+inline float max_abs_component(const Vec3& a) { return std::max(std::abs(a.x), std::max(std::abs(a.y), std::abs(a.z))); }
 inline float average(const Vec3& a) { return (a.x + a.y + a.z) * (1.0f / 3.0f); }
 inline bool is_black(const Vec3& a) { return a.x == 0 && a.y == 0 && a.z == 0; }
 inline bool is_finite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }

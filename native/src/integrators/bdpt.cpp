@@ -434,7 +434,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
   int count = 1, bounces = 0, nulls = 0;
-  const float beta_start = max_component(beta);
+  const float beta_start = max_abs_component(beta);
   // Bounce kinds counted so far towards Cycles' per-kind limits (see kind_limit_factor): a walk
   // stops where every strategy using its further vertices would fail them, so no work is spent
   // on vertices no strategy can use.

@@ -21,10 +21,11 @@ inline unsigned visibility_of(uint32_t lobe) {
   return kVisGlossy;
 }
 
-// Cycles' sample clamp: scale a contribution so that its largest channel is at most `limit`.
+// Cycles' sample clamp: scale a contribution so that its largest channel is at most `limit` in
+// magnitude (a negative light's contribution is clamped as a positive one).
 inline Spectrum clamp_contribution(const Spectrum& c, float limit) {
   if (limit <= 0) return c;
-  float m = max_component(c);
+  float m = max_abs_component(c);
   return m > limit ? c * (limit / m) : c;
 }
 
@@ -53,16 +54,16 @@ struct Bounces {
 // Russian roulette once the path has had a chance to gather light (unbiased: divide by q), on the
 // throughput relative to the path's start (`start`: the largest component of its initial beta),
 // so a light subpath, whose beta carries the emitted power, is ended by the albedos it meets as a
-// camera path is, whatever the light's units. Survival q = min(1, beta / start) (pbrt-v4's rule):
-// a survivor's relative throughput becomes max(beta / start, 1), so a path at or below its start
-// is never amplified past it, and one at or above it (a mirror's 1) runs on unchanged to the bounce
-// limit, as in Cycles. A cap below 1 would multiply such a path by 1/cap at every bounce: 256
-// mirror bounces at 0.95 weigh 5e5 (heavy-tailed, visible as fireflies and a wrong-looking mean).
-// Returns false when the path ends.
+// camera path is, whatever the light's units (and sign: a negative light's beta is negative).
+// Survival q = min(1, |beta| / start) (pbrt-v4's rule): a survivor's relative throughput becomes
+// max(|beta| / start, 1), so a path at or below its start is never amplified past it, and one at
+// or above it (a mirror's 1) runs on unchanged to the bounce limit, as in Cycles. A cap below 1
+// would multiply such a path by 1/cap at every bounce: 256 mirror bounces at 0.95 weigh 5e5
+// (heavy-tailed, visible as fireflies and a wrong-looking mean). Returns false when the path ends.
 inline bool russian_roulette(int bounce, Spectrum* beta, Sampler& sampler, float start = 1.0f) {
   if (bounce < 3) return true;
   const float u = sampler.next_1d();  // drawn either way: one dimension per bounce
-  const float q = max_component(*beta) / start;
+  const float q = max_abs_component(*beta) / start;
   if (q >= 1) return true;
   if (u >= q) return false;
   *beta /= q;

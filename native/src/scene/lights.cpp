@@ -69,7 +69,10 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Bounds
   std::vector<float> power(lights_.size());
   for (size_t i = 0; i < lights_.size(); ++i) {
     const Light& l = lights_[i];
-    float p = average(l.power);
+    // Picked by the magnitude of the power: a negative light (Blender allows negative energy, Cycles
+    // renders it as negative light) is sampled as often as its positive twin, its sign kept in the
+    // radiance.
+    float p = average(abs(l.power));
     switch (l.type) {
       case LightType::Sun: p *= kPi * scene_radius_ * scene_radius_; break;
       case LightType::World: {

@@ -68,7 +68,8 @@ Material::Material(std::vector<ShaderNode> nodes, int root, size_t image_count) 
     if (s.type == NodeType::Emission || s.type == NodeType::Principled) {
       Input c = s.type == NodeType::Emission ? s.color : s.emission;
       float strength = s.strength.image >= 0 ? 1.0f : s.strength.value.x;
-      float e = (c.image >= 0 ? 1.0f : max_component(non_negative(c.value))) * std::max(0.0f, strength);
+      // Negative strength is negative light (as Cycles renders it): the estimate is its magnitude.
+      float e = (c.image >= 0 ? 1.0f : max_component(non_negative(c.value))) * std::abs(strength);
       if (std::isfinite(e) && e > 0) {
         emissive = true;
         estimate = std::max(estimate, e);
@@ -143,11 +144,11 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
         push(s.child[1], weight);
         break;
       case NodeType::Emission:
-        emitted += weight * non_negative(color_of(s.color, images, uv)) * std::max(0.0f, value_of(s.strength, images, uv));
+        emitted += weight * non_negative(color_of(s.color, images, uv)) * value_of(s.strength, images, uv);
         break;
       case NodeType::Principled:
         if (s.emission.image >= 0 || !is_black(s.emission.value))
-          emitted += weight * non_negative(color_of(s.emission, images, uv)) * std::max(0.0f, value_of(s.strength, images, uv));
+          emitted += weight * non_negative(color_of(s.emission, images, uv)) * value_of(s.strength, images, uv);
         if constexpr (kLobes) {
           // Cycles 3.x Principled v1, reduced to its main lobes (README: departures): Lambert
           // diffuse (no retro-reflection, sheen, subsurface or clearcoat), a GGX specular layer with
