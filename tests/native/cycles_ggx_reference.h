@@ -55,10 +55,11 @@ struct Closure {
   double alpha;          // roughness^2
   bool fresnel = false;  // Principled v1 Fresnel
   double ior = 1.5, cspec0 = 1;
-  double F(double cos_lh) const { return fresnel ? principled_fresnel(cos_lh, ior, cspec0) : 1.0; }
+  double weight = 1;     // the closure's weight (Glossy BSDF: its colour)
+  double F(double cos_lh) const { return weight * (fresnel ? principled_fresnel(cos_lh, ior, cspec0) : 1.0); }
 };
 
-// The BSDF value f(o, i), without the cosine: F G1(o) G1(i) D / (4 cos_o cos_i).
+// The BSDF value f(o, i), without the cosine: weight F G1(o) G1(i) D / (4 cos_o cos_i).
 inline double eval(const Closure& c, D3 o, D3 i) {
   if (!(o.z > 0 && i.z > 0)) return 0;
   D3 m = normalize({o.x + i.x, o.y + i.y, o.z + i.z});
