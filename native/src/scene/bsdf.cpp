@@ -259,8 +259,9 @@ Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i) {
   if (!(eta < INFINITY)) return Spectrum(1.0f);       // F(1) = 1: a perfect mirror
   const float r = (eta - 1) / (eta + 1), F0 = r * r;  // fresnel_dielectric_cos(1, eta)
   // FH <= 1; FH < 0 where the dielectric Fresnel dips below F0 (at Specular 5, not at 2), but the
-  // blend stays >= (f0 - F0) / (1 - F0) >= 0 for f0 >= F0 (what the Principled BSDF passes), and
-  // equals the dielectric Fresnel itself for f0 = F0. The clamp guards other callers and rounding.
+  // blend stays >= (f0 - F0) / (1 - F0) >= 0 for f0 >= F0 (the Principled BSDF's f0 unless its
+  // base colour is below 0.08 specular at metallic > 0), and equals the dielectric Fresnel itself
+  // for f0 = F0. The clamp keeps the rest (and rounding) in [0, 1].
   const float fh = (fresnel_dielectric(clamp(cos_i, 0.0f, 1.0f), eta) - F0) / (1 - F0);
   return vmin(vmax(c0 * (1 - fh) + Spectrum(fh), Spectrum(0.0f)), Spectrum(1.0f));
 }
