@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "chi2.h"
+#include "cycles_ggx_reference.h"
 #include "scene/bsdf.h"
 
 namespace lt {
@@ -49,11 +50,13 @@ Lobe dielectric(float alpha, float eta, Spectrum w = Spectrum(1.0f)) {
   l.weight = w;
   return l;
 }
-Lobe specular(float alpha, Spectrum f0, Spectrum w = Spectrum(1.0f)) {
+// The Principled BSDF's specular layer: f0 is Cycles' cspec0, `spec` the Specular input.
+Lobe specular(float alpha, Spectrum f0, Spectrum w = Spectrum(1.0f), float spec = 0.5f) {
   Lobe l;
   l.type = LobeType::SpecularGGX;
   l.alpha = alpha;
   l.f0 = f0;
+  l.eta = principled_specular_ior(spec);
   l.weight = w;
   return l;
 }
@@ -422,9 +425,11 @@ TEST(DeltaLobes, MirrorsAndPassThrough) {
     Spectrum f0(0.04f, 0.5f, 0.9f);
     ASSERT_TRUE(lobe_sample(specular(5e-5f, f0, w), wo, rng.next_2d(), rng.next_1d(), &s));
     EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeReflection));
-    float c5 = std::pow(1 - std::abs(wo.z), 5.0f);
-    for (int c = 0; c < 3; ++c)
-      EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, w[c] * (f0[c] + (1 - f0[c]) * c5), 1e-5f);
+    // Cycles' Principled Fresnel at the macro normal (its sharp case: reflection_color(wi, N)).
+    for (int c = 0; c < 3; ++c) {
+      const double fr = cycles_ref::principled_fresnel(std::abs(wo.z), 1.5, f0[c]);
+      EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, w[c] * fr, 1e-5f);
+    }
 
     ASSERT_TRUE(lobe_sample(transparent(w), wo, rng.next_2d(), rng.next_1d(), &s));
     EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeTransmission));
@@ -519,6 +524,103 @@ TEST(BsdfSanity, EnergyConservation) {
   // shadowing loss (no 1/eta^2 radiance scaling, as in Cycles).
   Estimate d = albedo(dielectric(0.05f, 1.5f), from_angles(20), n, 97);
   EXPECT_GT(d.mean, 0.98);
+}
+
+// ---- the GGX lobes against Cycles 3.4.1's closures (cycles_ggx_reference.h) ------------------------
+
+cycles_ref::D3 d3(const Vec3& v) { return {v.x, v.y, v.z}; }
+
+// The Cycles closure a Lantern GGX lobe stands for, for colour channel c (the weight excluded).
+cycles_ref::Closure cycles_closure(const Lobe& l, int c, float spec = 0.5f) {
+  cycles_ref::Closure k;
+  k.alpha = l.alpha;
+  if (l.type == LobeType::SpecularGGX) {
+    k.fresnel = true;
+    k.ior = cycles_ref::principled_ior(spec);
+    k.cspec0 = std::min(1.0f, std::max(0.0f, l.f0[c]));
+  }
+  return k;
+}
+
+// f(wo, wi) of Glossy BSDF and of the Principled specular layer (metallic, coloured metal,
+// dielectric, Specular 0 / 0.5 / 2 / 8, cspec0 above 1, which Cycles saturates) equals Cycles'
+// formula at random direction pairs. Schlick's approximation of the Fresnel misses by up to 40 %.
+TEST(BsdfCycles, GgxValuesMatchCyclesClosures) {
+  struct Case {
+    Lobe lobe;
+    float spec;
+  };
+  const Case cases[] = {
+      {glossy(0.04f), 0.5f},
+      {glossy(0.3f), 0.5f},
+      {specular(0.04f, Spectrum(0.8f)), 0.5f},
+      {specular(0.25f, Spectrum(1.0f, 0.77f, 0.34f)), 0.5f},
+      {specular(0.5f, Spectrum(0.04f)), 0.5f},
+      {specular(0.3f, Spectrum(0.0f), Spectrum(1.0f), 0.0f), 0.0f},
+      {specular(0.3f, Spectrum(0.16f, 0.5f, 0.9f), Spectrum(1.0f), 2.0f), 2.0f},
+      {specular(0.3f, Spectrum(0.64f, 0.8f, 0.95f), Spectrum(1.0f), 8.0f), 8.0f},
+      {specular(0.2f, Spectrum(1.5f, 2.0f, 0.5f)), 0.5f},
+  };
+  Sampler rng(41, 0, 0);
+  for (const Case& k : cases)
+    for (int n = 0; n < 20000; ++n) {
+      Vec3 o = sample_uniform_sphere(rng.next_2d()), i = sample_uniform_sphere(rng.next_2d());
+      o.z = std::abs(o.z);
+      i.z = std::abs(i.z);
+      if (o.z < 1e-3f || i.z < 1e-3f) continue;
+      const Spectrum f = lobe_eval(k.lobe, o, i);
+      for (int c = 0; c < 3; ++c) {
+        const double ref = cycles_ref::eval(cycles_closure(k.lobe, c, k.spec), d3(o), d3(i));
+        ASSERT_NEAR(f[c], ref, 2e-4 * ref + 1e-7) << "lobe type " << int(k.lobe.type) << " alpha " << k.lobe.alpha
+                                                  << " f0 " << k.lobe.f0[c] << " specular " << k.spec << " channel "
+                                                  << c << " o " << o.z << " i " << i.z;
+      }
+    }
+}
+
+// The white furnace of a lobe: its directional albedo E(wo) = E[f |cos| / pdf] under its own
+// sampling is at most 1 at every incidence and equals Cycles' closure's albedo (midpoint
+// quadrature of Cycles' formula over microfacet normals) within 5 standard errors + 3e-4 (the
+// quadrature's 600^2 nodes against 2400^2 differ by at most 1.1e-4 on these cases). Rough metal reflecting
+// more than Cycles after several bounces (issue 18) would show here as E above Cycles'.
+TEST(BsdfFurnace, GgxDirectionalAlbedoMatchesCycles) {
+  struct Case {
+    const char* name;
+    Lobe lobe;
+  };
+  const Case cases[] = {
+      {"glossy_r0.2", glossy(0.04f)},
+      {"glossy_r0.5", glossy(0.25f)},
+      {"metal_0.8_r0.2", specular(0.04f, Spectrum(0.8f))},
+      {"gold_r0.5", specular(0.25f, Spectrum(1.0f, 0.77f, 0.34f))},
+      {"dielectric_r0.7", specular(0.49f, Spectrum(0.04f))},
+  };
+  const int n = 200000;
+  uint32_t seed = 100;
+  for (const Case& k : cases)
+    for (float t : {0.0f, 30.0f, 60.0f, 75.0f, 85.0f, 89.0f}) {
+      const Vec3 wo = from_angles(t, 40);
+      Sampler rng(++seed, 2, 0);
+      double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+      for (int j = 0; j < n; ++j) {
+        BsdfSample s;
+        if (!lobe_sample(k.lobe, wo, rng.next_2d(), rng.next_1d(), &s)) continue;
+        const Spectrum w = s.f * std::abs(s.wi.z) / s.pdf;
+        for (int c = 0; c < 3; ++c) {
+          sum[c] += w[c];
+          sum2[c] += double(w[c]) * w[c];
+        }
+      }
+      const cycles_ref::Albedo e = cycles_ref::albedo(cycles_closure(k.lobe, 0), t * kDeg);
+      for (int c = 0; c < 3; ++c) {
+        const double mean = sum[c] / n, se = std::sqrt(std::max(0.0, sum2[c] / n - mean * mean) / n);
+        const double ref = e(cycles_closure(k.lobe, c).cspec0);
+        EXPECT_LE(ref, 1.0) << k.name << " theta " << t;
+        EXPECT_LE(mean, 1 + 5 * se) << k.name << " theta " << t << " channel " << c;
+        EXPECT_NEAR(mean, ref, 5 * se + 3e-4) << k.name << " theta " << t << " channel " << c << " (standard error "
+                                              << se << ")";
+      }
+    }
 }
 
 bool finite_nonneg(const Spectrum& f) { return is_finite(f) && f.x >= 0 && f.y >= 0 && f.z >= 0; }

@@ -5,7 +5,9 @@
 //   Dielectric   Cycles' Glass BSDF node: a GGX reflection closure weighted by F(wo.n) and a GGX
 //                refraction closure (Walter et al. 2007) weighted by 1 - F(wo.n), F the exact
 //                dielectric Fresnel at the macro normal; no 1/eta^2 radiance scaling
-//   SpecularGGX  GGX reflection times Schlick's Fresnel f0 + (1 - f0)(1 - wi.m)^5
+//   SpecularGGX  bsdf_microfacet_ggx_fresnel_setup as the Principled BSDF sets it up: GGX
+//                reflection times interpolate_fresnel_color, f0 (1 - FH) + FH with
+//                FH = (F(wi.m, eta) - F(1, eta)) / (1 - F(1, eta)), F the dielectric Fresnel
 //   Transparent  bsdf_transparent
 // Microfacet normals are sampled from the distribution of visible normals (Heitz 2018, "Sampling
 // the GGX Distribution of Visible Normals"), so the sampling weight is G1(wi) (times Fresnel).
@@ -55,12 +57,6 @@ bool lobe_is_delta(const Lobe& l) {
     case LobeType::Transparent: return true;
   }
   return true;
-}
-
-inline Spectrum schlick(const Spectrum& f0, float cos_theta) {
-  float c = clamp(1 - cos_theta, 0.0f, 1.0f);
-  float c2 = c * c;
-  return f0 + (Spectrum(1.0f) - f0) * (c2 * c2 * c);
 }
 
 // G1(w) / |w.z| for GGX, finite down to w.z = 0 (then 2 / (alpha sin)).
@@ -156,7 +152,7 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
     case LobeType::SpecularGGX: {
       float cos_oh = 0;
       float v = ggx_reflect(o, i, lobe_alpha(l), pdf, &cos_oh);
-      return v > 0 ? l.weight * schlick(l.f0, cos_oh) * v : Spectrum(0.0f);
+      return v > 0 ? l.weight * fresnel_principled(l.f0, l.eta, cos_oh) * v : Spectrum(0.0f);
     }
     case LobeType::Dielectric: {
       float alpha = lobe_alpha(l), eta = lobe_eta(l);
@@ -182,16 +178,14 @@ bool sanitize(BsdfSample* s) {
   return true;
 }
 
-// Lobe selection estimate: the average of the weight, times Schlick's Fresnel for the specular
-// layer (at wo, but never below its hemispherical average f0 + (1 - f0)/21, so a lobe that f
-// can reach is never left unsampled). Glass needs no factor: its Fresnel split is internal.
+// Lobe selection estimate: the average of the weight, times the specular layer's Fresnel at wo
+// (Cycles' sample_weight), but never below its value at 60 degrees, so that a layer black at
+// normal incidence (f0 = 0) that reflects at other angles is still sampled. Glass needs no
+// factor: its Fresnel split is internal.
 float selection_estimate(const Lobe& l, const Vec3& wo) {
   Spectrum w = vmax(l.weight, Spectrum(0.0f));
-  if (l.type == LobeType::SpecularGGX) {
-    Spectrum f0 = vmin(vmax(l.f0, Spectrum(0.0f)), Spectrum(1.0f));
-    Spectrum hemi = f0 + (Spectrum(1.0f) - f0) * (1.0f / 21.0f);
-    w *= vmax(schlick(f0, std::abs(wo.z)), hemi);
-  }
+  if (l.type == LobeType::SpecularGGX)
+    w *= vmax(fresnel_principled(l.f0, l.eta, std::abs(wo.z)), fresnel_principled(l.f0, l.eta, 0.5f));
   float e = average(w);
   return std::isfinite(e) && e > 0 ? e : 0.0f;
 }
@@ -259,6 +253,24 @@ float fresnel_dielectric(float cos_i, float eta) {
   return std::isfinite(f) ? clamp(f, 0.0f, 1.0f) : 1.0f;
 }
 
+Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i) {
+  const Spectrum c0 = vmin(vmax(f0, Spectrum(0.0f)), Spectrum(1.0f));  // saturate(cspec0), as Cycles
+  if (!(eta > 1)) return c0;                          // IOR 1 (Specular 0): F(1) = F(cos) = 0
+  if (!(eta < INFINITY)) return Spectrum(1.0f);       // F(1) = 1: a perfect mirror
+  const float r = (eta - 1) / (eta + 1), F0 = r * r;  // fresnel_dielectric_cos(1, eta)
+  // FH <= 1; FH < 0 where the dielectric Fresnel dips below F0 (at Specular 5, not at 2), but the
+  // blend stays >= (f0 - F0) / (1 - F0) >= 0 for f0 >= F0 (the Principled BSDF's f0 unless its
+  // base colour is below 0.08 specular at metallic > 0), and equals the dielectric Fresnel itself
+  // for f0 = F0. The clamp keeps the rest (and rounding) in [0, 1].
+  const float fh = (fresnel_dielectric(clamp(cos_i, 0.0f, 1.0f), eta) - F0) / (1 - F0);
+  return vmin(vmax(c0 * (1 - fh) + Spectrum(fh), Spectrum(0.0f)), Spectrum(1.0f));
+}
+
+float principled_specular_ior(float specular) {
+  const float s = std::sqrt(std::isfinite(specular) ? clamp(0.08f * specular, 0.0f, 1.0f) : 0.0f);
+  return s < 1 ? 2 / (1 - s) - 1 : INFINITY;
+}
+
 // ---- single lobes -------------------------------------------------------------------------------
 
 uint32_t lobe_flags(const Lobe& l) {
@@ -319,7 +331,7 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
       case LobeType::SpecularGGX:
         s.wi = mirror;
         s.pdf = 1;
-        s.f = l.weight * schlick(l.f0, o.z) / o.z;
+        s.f = l.weight * fresnel_principled(l.f0, l.eta, o.z) / o.z;
         s.flags = kLobeSpecular | kLobeReflection;
         break;
       case LobeType::Dielectric: {

@@ -29,7 +29,7 @@ enum class LobeType : uint8_t {
   Diffuse,     // Lambert (roughness 0) or Oren-Nayar as Cycles' Diffuse BSDF
   GlossyGGX,   // GGX reflection, colour as constant reflectance (Cycles' Glossy BSDF, no Fresnel)
   Dielectric,  // Fresnel-weighted GGX reflection + refraction (Cycles' Glass BSDF); delta at alpha 0
-  SpecularGGX, // GGX reflection with Schlick Fresnel from f0 to 1 (Principled BSDF's specular)
+  SpecularGGX, // GGX reflection with Cycles' Principled v1 Fresnel from f0 to 1 (its specular layer)
   Transparent, // straight pass-through (delta transmission)
 };
 
@@ -38,8 +38,9 @@ struct Lobe {
   Spectrum weight{1.0f};  // colour x mix weight
   float roughness = 0;    // Diffuse: Oren-Nayar sigma; microfacet: unused (see alpha)
   float alpha = 0;        // GGX alpha = roughness^2; below kSmoothAlpha the lobe is delta
-  float eta = 1.5f;       // Dielectric: relative IOR across the surface from wo's side
-  Spectrum f0{0.04f};     // SpecularGGX: reflectance at normal incidence
+  float eta = 1.5f;       // Dielectric: relative IOR across the surface from wo's side;
+                          // SpecularGGX: the IOR whose dielectric Fresnel shapes the blend to 1
+  Spectrum f0{0.04f};     // SpecularGGX: reflectance at normal incidence (Cycles' cspec0)
 };
 
 struct BsdfSample {
@@ -71,7 +72,7 @@ class Bsdf {
   // The mixture pdf alone: eval()'s *pdf to the last bit, without evaluating f.
   float pdf(const Vec3& wo, const Vec3& wi) const;
   // Picks a lobe with probability proportional to its weight's estimate (the weight's average,
-  // times Schlick's Fresnel at wo for SpecularGGX; see bsdf.cpp), samples it, then (for non-delta
+  // times the Fresnel at wo for SpecularGGX; see bsdf.cpp), samples it, then (for non-delta
   // lobes) evaluates all non-delta lobes for f and the mixture pdf. For a delta lobe, f and pdf
   // are that lobe's, the pdf times its selection probability.
   bool sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const;
@@ -103,5 +104,11 @@ float ggx_D(const Vec3& m, float alpha);
 float ggx_G1(const Vec3& w, float alpha);
 Vec3 ggx_sample_visible_normal(const Vec3& wo, float alpha, Vec2 u);
 float fresnel_dielectric(float cos_i, float eta);
+// Cycles 3.4's Principled v1 specular Fresnel (interpolate_fresnel_color): f0 blended to 1 by the
+// dielectric Fresnel of IOR eta at cos_i, renormalised to [0, 1]; f0 (cspec0) clamped to [0, 1].
+Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i);
+// The IOR Cycles 3.4 derives from the Principled BSDF's Specular input: 2 / (1 - sqrt(0.08 s)) - 1
+// (1.5 at the default 0.5); infinite from s = 12.5 on, where Cycles' own value is not finite.
+float principled_specular_ior(float specular);
 
 }  // namespace lt

@@ -26,6 +26,7 @@ Vec3 non_negative(Vec3 c) {
 float glass_ior(float ior) { return std::max(ior, 1e-5f); }
 
 constexpr int kMaxDepth = 64;
+constexpr float kClosureCutoff = 1e-5f;  // Cycles' CLOSURE_WEIGHT_CUTOFF
 
 }  // namespace
 
@@ -151,23 +152,29 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
           emitted += weight * non_negative(color_of(s.emission, images, uv)) * value_of(s.strength, images, uv);
         if constexpr (kLobes) {
           // Cycles 3.x Principled v1, reduced to its main lobes (README: departures): Lambert
-          // diffuse (no retro-reflection, sheen, subsurface or clearcoat), a GGX specular layer with
-          // Schlick Fresnel from f0 = mix(0.08 specular, base, metallic), and a GGX glass lobe.
+          // diffuse (no retro-reflection, sheen, subsurface or clearcoat), a GGX specular layer as
+          // Cycles' (its Fresnel blends cspec0 = mix(0.08 specular, base, metallic), saturated, to 1
+          // along the dielectric Fresnel of the IOR Specular stands for), and a GGX glass lobe.
           Vec3 base = non_negative(color_of(s.color, images, uv));
           float metallic = unit(value_of(s.metallic, images, uv));
           float transmission = unit(value_of(s.transmission, images, uv)) * (1 - metallic);
           float r = unit(value_of(s.roughness, images, uv));
-          float spec = std::max(0.0f, value_of(s.specular, images, uv));
+          // 12.5 is where 0.08 specular reaches 1 (an infinite IOR); NaN becomes 0.
+          float spec = std::min(std::max(0.0f, value_of(s.specular, images, uv)), 12.5f);
           Lobe d;
           d.type = LobeType::Diffuse;
           d.weight = weight * base * ((1 - metallic) * (1 - transmission));
           bsdf->add(d);
-          Lobe g;
-          g.type = LobeType::SpecularGGX;
-          g.weight = weight * (1 - transmission);
-          g.alpha = r * r;
-          g.f0 = lerp(metallic, Vec3(std::min(1.0f, 0.08f * spec)), base);
-          bsdf->add(g);
+          // Cycles leaves the layer out when Specular and Metallic are both below its closure cutoff.
+          if (spec > kClosureCutoff || metallic > kClosureCutoff) {
+            Lobe g;
+            g.type = LobeType::SpecularGGX;
+            g.weight = weight * (1 - transmission);
+            g.alpha = r * r;
+            g.f0 = lerp(metallic, Vec3(0.08f * spec), base);  // fresnel_principled saturates it
+            g.eta = principled_specular_ior(spec);
+            bsdf->add(g);
+          }
           if (transmission > 0) {
             Lobe t;
             t.type = LobeType::Dielectric;
