@@ -1,8 +1,9 @@
 // Writes seed corpora for the fuzz targets (docs/testing.md, "Fuzzing"):
 //   make_fuzz_seeds generated DIR   DIR/exr: EXR parts of small renders as fuzz_exr_merge reads them
 //                                   (4-byte length, first part, second part); DIR/vdb: small VDB
-//                                   files, uncompressed (so that mutations reach OpenVDB's parser
-//                                   rather than only the decompressor) and compressed
+//                                   files without zip (so that mutations reach OpenVDB's parser
+//                                   rather than only the decompressor; inactive values are still
+//                                   left out, or a one-voxel file is 160 kB) and one with zip
 //   make_fuzz_seeds abi DIR         the ABI seeds kept in tests/fuzz/corpus/abi (abi_stream.h
 //                                   programs): rerun when the stream format changes
 #include <openvdb/openvdb.h>
@@ -470,7 +471,7 @@ void write_vdbs(const fs::path& dir) {
   vec->tree().setValue(openvdb::Coord(0, 0, 0), openvdb::Vec3s(1, 2, 3));
   auto temperature = one->deepCopy();
   temperature->setName("temperature");
-  const uint32_t none = openvdb::io::COMPRESS_NONE, zip = openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK;
+  const uint32_t none = openvdb::io::COMPRESS_ACTIVE_MASK, zip = openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK;
   write_vdb(dir / "one_voxel.vdb", {one}, none);
   write_vdb(dir / "ramp.vdb", {ramp}, none);
   write_vdb(dir / "ramp_zip.vdb", {ramp}, zip);
