@@ -60,3 +60,22 @@ TEST(FuzzRegressions, ExrAttributeSizeBeyondTheFileIsRefusedBeforeAllocating) {
   EXPECT_EQ(lt_merge_exr(out.c_str(), parts, 1), LT_ERROR_IO);
   EXPECT_NE(std::string(lt_last_error()).find("claims"), std::string::npos) << lt_last_error();
 }
+
+// fuzz_abi: a bidirectional render of a scene without any light (no lamp, no emissive surface, a
+// black world) took the s = 1 strategy anyway and picked a light from the empty set: a read
+// through a null pointer (UBSan; a segmentation fault in Release builds).
+TEST(FuzzRegressions, BidirectionalRenderWithoutLightsIsBlack) {
+  using namespace lt_test;
+  ScenePtr s = new_scene();
+  add_object(s.get(), plane(4, 4), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}));
+  set_world(s.get(), {0, 0, 0}, 0);
+  set_camera(s.get(), perspective_camera(look_at({0, -3, 2}, {0, 0, 0})));
+  check(lt_scene_commit(s.get()), "commit");
+  lt_render_settings rs = render_settings(8, 6, 2);
+  rs.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
+  Passes p = render(s.get(), rs);
+  EXPECT_EQ(p.status.state, LT_STATE_DONE);
+  ASSERT_EQ(p.first_non_finite(), "");
+  for (size_t i = 0; i < p.combined.size(); i += 4)
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(p.combined[i + c], 0.0f);
+}
