@@ -37,6 +37,7 @@ if [[ " $STEPS " == *" asan "* || " $STEPS " == *" fuzz "* ]]; then
 fi
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:external_symbolizer_path=$SYMBOLIZER"
 export UBSAN_OPTIONS="print_stacktrace=1:external_symbolizer_path=$SYMBOLIZER"
+export LSAN_OPTIONS="suppressions=$ROOT/tests/sanitizers/lsan.supp:print_suppressions=0"
 
 if [[ " $STEPS " == *" asan "* ]]; then
   step "native tests under ASan + UBSan"

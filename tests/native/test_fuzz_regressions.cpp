@@ -1,10 +1,14 @@
 // Inputs the fuzz targets (tests/fuzz, docs/testing.md) found, kept as tests: each failed before
 // its fix.
 #include <gtest/gtest.h>
+#include <openvdb/openvdb.h>
 
 #include <chrono>
+#include <climits>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -78,4 +82,43 @@ TEST(FuzzRegressions, BidirectionalRenderWithoutLightsIsBlack) {
   ASSERT_EQ(p.first_non_finite(), "");
   for (size_t i = 0; i < p.combined.size(); i += 4)
     for (int c = 0; c < 3; ++c) ASSERT_EQ(p.combined[i + c], 0.0f);
+}
+
+// fuzz_vdb: a VDB whose root tile sits at the edge of the int32 index space (one coordinate
+// changed in the file) overflowed `index_max + 1` and `origin + dim - 1` while the majorant grid
+// was built (UBSan: signed overflow), and bounds spanning the index space asked for billions of
+// majorant cells; NanoVDB's conversion overflows there too. Such a file is refused with
+// LT_ERROR_IO and a message.
+TEST(FuzzRegressions, VdbTileAtTheEdgeOfTheIndexSpace) {
+  lt_test::TempDir dir;
+  const std::string path = dir.path + "/edge_tile.vdb";
+  openvdb::initialize();
+  auto grid = openvdb::FloatGrid::create(0.0f);
+  grid->setName("density");
+  grid->tree().addTile(3, openvdb::Coord(0, 0, 0), 1.0f, true);     // 4096^3 root tiles
+  grid->tree().addTile(3, openvdb::Coord(4096, 0, 0), 1.0f, true);
+  {
+    openvdb::io::File file(path);
+    file.setCompression(openvdb::io::COMPRESS_NONE);
+    file.write({grid});
+    file.close();
+  }
+  // A root tile is stored as its origin (3 x int32), value (float) and active flag (1 byte): move
+  // the second to x = 2^31 - 4096, the last tile origin whose voxels all fit in int32.
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  const std::string tile("\0\x10\0\0\0\0\0\0\0\0\0\0\0\0\x80\x3f\x01", 17);
+  const size_t at = bytes.find(tile);
+  ASSERT_NE(at, std::string::npos) << "root tile not found in the file";
+  const int32_t edge = INT32_MAX - 4095;
+  std::memcpy(&bytes[at], &edge, 4);
+  std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+
+  lt_test::ScenePtr s = lt_test::new_scene();
+  const float identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+  lt_volume_desc d = lt_test::volume(LT_VOLUME_SCATTER, 1);
+  int id = -1;
+  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), path.c_str(), "density", identity, 0, &d, 1, &id), LT_ERROR_IO);
+  EXPECT_NE(std::string(lt_last_error()).find("beyond the supported index range"), std::string::npos) << lt_last_error();
 }
