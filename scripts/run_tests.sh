@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds everything (scripts/setup.sh) and runs the whole test suite: the native GoogleTest suite
-# under ctest, then the add-on's pytest suite inside `blender -b`. Exits non-zero on any failure.
+# under ctest, then the add-on's pytest suite inside `blender -b`, then the sanitizer builds and
+# bounded fuzzing (scripts/run_sanitizers.sh). Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -14,3 +15,6 @@ echo "== Blender tests (pytest inside blender -b) =="
 export LANTERN_LIBRARY="$PWD/$BUILD_DIR/liblantern.so"
 export LANTERN_TEST_VDB_DIR="$PWD/$BUILD_DIR/test_vdb"  # .vdb files the build generates
 blender -b --factory-startup --python-exit-code 1 --python tests/blender/run_pytest.py -- -q
+
+echo "== sanitizers and fuzzing (scripts/run_sanitizers.sh) =="
+bash scripts/run_sanitizers.sh

@@ -473,14 +473,15 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
     require(std::abs(xf.determinant()) > 1e-30f, "volume transform is singular");
     require(std::isfinite(step) && step >= 0, "volume step must be finite and >= 0 (0: the voxel size)");
     const std::string grid_name = grid && *grid ? grid : "density";
-    std::shared_ptr<lt::GridData> data;
+    lt::Medium medium;
     try {
-      data = std::make_shared<lt::GridData>(lt::load_density_grid(path, grid_name));
+      auto data = std::make_shared<lt::GridData>(lt::load_density_grid(path, grid_name));
+      medium = lt::Medium::heterogeneous(data, c.sigma_a, c.sigma_s, c.phase.g[0], xf);
     } catch (const lt::InvalidArgument& e) {
       throw lt::IoError(std::string(path) + ": " + e.what());  // a file that cannot be used is an I/O error
     }
     lt::Scene& sc = scene->scene;
-    sc.media.push_back(lt::Medium::heterogeneous(data, c.sigma_a, c.sigma_s, c.phase.g[0], xf));
+    sc.media.push_back(std::move(medium));
     sc.media.back().set_phase(c.phase);
     if (step > 0) sc.media.back().set_march_step(step);
     *out_id = int(sc.media.size()) - 1;

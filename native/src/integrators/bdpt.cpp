@@ -828,8 +828,9 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   int ns = generate_light_subpath(light);
 
   // s = 1 takes a fresh light sample and needs no light subpath (there is none when the picked
-  // lamp faces its receiver, or emission sampling failed).
-  const int s_max = s_.max_light_length >= 1 ? std::max(ns, 1) : 0;
+  // lamp faces its receiver, or emission sampling failed); a scene without lights has no s >= 1
+  // (fuzz_abi: picking from the empty light set read through a null pointer).
+  const int s_max = s_.max_light_length >= 1 && !lights_.empty() ? std::max(ns, 1) : 0;
   for (int t = 2; t <= nt; ++t)
     for (int s = 1; s <= s_max; ++s) {
       if (s + t - 2 > max_depth()) break;

@@ -7,8 +7,10 @@
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "core/error.h"
@@ -54,7 +56,56 @@ void write_exr(const std::string& path, int width, int height, const std::vector
   }
 }
 
+namespace {
+
+// OpenEXR 3.1 allocates what an attribute's size field says before it reads the value, so a
+// corrupt or hostile file made a merge allocate gigabytes before failing (found by
+// tests/fuzz/fuzz_exr_merge). The headers are walked here first, and a size that runs past the end
+// of the file is refused. Anything else wrong is left to OpenEXR's own messages.
+void check_attribute_sizes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return;
+  f.seekg(0, std::ios::end);
+  const std::streamoff file_size = f.tellg();
+  f.seekg(0);
+  auto u32 = [&f]() {
+    unsigned char b[4] = {0, 0, 0, 0};
+    f.read(reinterpret_cast<char*>(b), 4);
+    return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+  };
+  auto truncated = [&path]() { throw IoError("could not read " + path + ": the header is truncated"); };
+  // A NUL-terminated name (at most 255 characters with long names, 31 without).
+  auto name = [&]() {
+    std::string s;
+    for (char c; f.get(c) && c != '\0';) {
+      if (s.size() == 255) throw IoError("could not read " + path + ": a header name is longer than 255 characters");
+      s += c;
+    }
+    if (!f) truncated();
+    return s;
+  };
+  if (u32() != 20000630u) return;  // not OpenEXR: OpenEXR says so
+  const bool multipart = (u32() & 0x1000u) != 0;
+  if (!f) return;
+  for (;;) {
+    for (std::string attr = name(); !attr.empty(); attr = name()) {
+      name();  // type
+      const uint32_t size = u32();
+      if (!f) truncated();
+      const std::streamoff left = file_size - f.tellg();
+      if (int32_t(size) < 0 || std::streamoff(size) > left)
+        throw IoError("could not read " + path + ": header attribute '" + attr + "' claims " +
+                      std::to_string(int32_t(size)) + " bytes, but the file has " + std::to_string(left) + " left");
+      f.seekg(std::streamoff(size), std::ios::cur);
+    }
+    if (!multipart || f.peek() == 0 || f.peek() == std::char_traits<char>::eof()) return;
+  }
+}
+
+}  // namespace
+
 ExrImage read_exr(const std::string& path, bool pixels) {
+  check_attribute_sizes(path);
   try {
     Imf::InputFile file(path.c_str());
     const Imf::Header& h = file.header();

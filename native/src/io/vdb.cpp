@@ -114,6 +114,14 @@ GridData load_density_grid(const std::string& path, const std::string& grid_name
     out.index_to_object.m[r * 4 + 3] = float(origin[r]);
   }
   const openvdb::CoordBBox bbox = grid->evalActiveVoxelBoundingBox();
+  // NanoVDB's conversion and the majorant grid compute bounds + 1: voxels at the edge of the int32
+  // index space overflow them (fuzz_vdb: a tile moved there by one changed coordinate).
+  constexpr int kMaxIndex = 1 << 30;
+  for (int a = 0; a < 3; ++a)
+    if (bbox.min()[a] < -kMaxIndex || bbox.max()[a] > kMaxIndex)
+      throw InvalidArgument("VDB grid " + quoted(grid_name) + " in " + quoted(path) + " has active voxels at index " +
+                            std::to_string(bbox.min()[a] < -kMaxIndex ? bbox.min()[a] : bbox.max()[a]) +
+                            ", beyond the supported index range [-2^30, 2^30]");
   for (int a = 0; a < 3; ++a) {
     out.index_min[a] = bbox.min()[a];
     out.index_max[a] = bbox.max()[a];

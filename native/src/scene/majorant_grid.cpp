@@ -1,14 +1,28 @@
 #include "scene/majorant_grid.h"
 
+#include <cstdint>
+#include <string>
+
+#include "core/error.h"
+
 namespace lt {
 
 MajorantGrid::MajorantGrid(const int lo[3], const int hi[3], int cell) : cell_(std::max(1, cell)) {
+  // In 64 bits: a corrupt VDB's bounds may span the whole int32 index space (fuzz_vdb).
+  int64_t res[3], cells = 1;
   for (int a = 0; a < 3; ++a) {
     lo_[a] = lo[a];
-    hi_[a] = std::max(hi[a], lo[a] + 1);
-    res_[a] = std::max(1, (hi_[a] - lo_[a] + cell_ - 1) / cell_);
+    hi_[a] = int(std::min<int64_t>(std::max<int64_t>(hi[a], int64_t(lo[a]) + 1), INT32_MAX));
+    res[a] = std::max<int64_t>(1, (int64_t(hi_[a]) - lo_[a] + cell_ - 1) / cell_);
+    cells = std::min<int64_t>(cells * res[a], int64_t(1) << 62);
   }
-  values_.assign(size_t(res_[0]) * res_[1] * res_[2], 0.0f);
+  if (cells > kMaxCells)
+    throw InvalidArgument("the grid's bounds (" + std::to_string(int64_t(hi_[0]) - lo_[0]) + " x " +
+                          std::to_string(int64_t(hi_[1]) - lo_[1]) + " x " + std::to_string(int64_t(hi_[2]) - lo_[2]) +
+                          " voxels) need " + std::to_string(cells) + " majorant cells; at most " +
+                          std::to_string(kMaxCells) + " are supported");
+  for (int a = 0; a < 3; ++a) res_[a] = int(res[a]);
+  values_.assign(size_t(cells), 0.0f);
 }
 
 void MajorantGrid::add_voxels(const int a[3], const int b[3], float v) {

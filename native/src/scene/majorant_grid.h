@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "core/math.h"
@@ -29,7 +30,9 @@ class MajorantGrid {
   MajorantGrid() = default;
   // Domain [lo, hi] in index space (hi > lo per axis), `cell` voxels per cell edge (>= 1). All cells
   // start at 0.
+  // Throws InvalidArgument when the bounds need more than kMaxCells cells (1 GiB of floats).
   MajorantGrid(const int lo[3], const int hi[3], int cell);
+  static constexpr int64_t kMaxCells = int64_t(1) << 28;
 
   // Raises to v the bound of every cell whose footprint contains a voxel of the inclusive index
   // box [a, b] (a voxel value, or a tile of equal values); voxels outside [lo, hi] are ignored.

@@ -284,9 +284,9 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
   if (!grid->empty()) {
     // The interpolated density can be non-zero only within one voxel of the non-background voxels.
     int lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = grid->index_min[a] - 1;
-      hi[a] = grid->index_max[a] + 1;
+    for (int a = 0; a < 3; ++a) {  // clamped: a corrupt VDB may reach the int32 limits (fuzz_vdb)
+      lo[a] = int(std::max<int64_t>(int64_t(grid->index_min[a]) - 1, INT32_MIN));
+      hi[a] = int(std::min<int64_t>(int64_t(grid->index_max[a]) + 1, INT32_MAX));
     }
     MajorantGrid& maj = m.majorant_ = MajorantGrid(lo, hi, majorant_cell);
     if (grid->is_nanovdb()) {
@@ -301,8 +301,8 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
       const Root& root = ng->tree().root();
       maj.raise_all(std::max(0.0f, root.background()));
       auto add_tile = [&](const nanovdb::Coord& origin, int dim, float v) {
-        int a[3] = {origin[0], origin[1], origin[2]};
-        int b[3] = {origin[0] + dim - 1, origin[1] + dim - 1, origin[2] + dim - 1};
+        int a[3] = {origin[0], origin[1], origin[2]}, b[3];
+        for (int k = 0; k < 3; ++k) b[k] = int(std::min<int64_t>(int64_t(origin[k]) + dim - 1, INT32_MAX));
         maj.add_voxels(a, b, v);
       };
       auto visit_leaf = [&](const Leaf* leaf) {

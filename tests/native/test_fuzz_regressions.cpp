@@ -1,0 +1,124 @@
+// Inputs the fuzz targets (tests/fuzz, docs/testing.md) found, kept as tests: each failed before
+// its fix.
+#include <gtest/gtest.h>
+#include <openvdb/openvdb.h>
+
+#include <chrono>
+#include <climits>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "io/exr.h"
+#include "scene_builders.h"
+
+namespace {
+
+void write_bytes(const std::string& path, const std::vector<uint8_t>& bytes) {
+  std::ofstream f(path, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+
+void append(std::vector<uint8_t>& out, const std::string& s) {
+  out.insert(out.end(), s.begin(), s.end());
+  out.push_back(0);
+}
+
+void append_u32(std::vector<uint8_t>& out, uint32_t v) {
+  for (int k = 0; k < 4; ++k) out.push_back(uint8_t(v >> (8 * k)));
+}
+
+}  // namespace
+
+// fuzz_exr_merge: an EXR header attribute whose size field says 2 GB made OpenEXR allocate (and
+// clear) 2 GB before it found the file too short: seconds and gigabytes for a 40-byte file.
+TEST(FuzzRegressions, ExrAttributeSizeBeyondTheFileIsRefusedBeforeAllocating) {
+  lt_test::TempDir dir;
+  const std::string path = dir.path + "/huge_attribute.exr";
+  std::vector<uint8_t> bytes;
+  append_u32(bytes, 20000630u);  // magic
+  append_u32(bytes, 2);          // version 2, single part, scanlines
+  append(bytes, "owner");
+  append(bytes, "string");
+  append_u32(bytes, 0x7ffffff0u);  // 2 GB
+  bytes.insert(bytes.end(), 16, uint8_t('x'));
+  write_bytes(path, bytes);
+  for (bool pixels : {false, true}) {
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      lt::read_exr(path, pixels);
+      FAIL() << "a header claiming 2 GB in a " << bytes.size() << "-byte file was read";
+    } catch (const lt::IoError& e) {
+      EXPECT_NE(std::string(e.what()).find("header attribute 'owner' claims 2147483632 bytes"), std::string::npos)
+          << e.what();
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.5);
+  }
+  // Through the ABI, as `lantern merge` reads its parts.
+  const std::string out = dir.path + "/merged.exr";
+  const char* parts[] = {path.c_str()};
+  EXPECT_EQ(lt_merge_exr(out.c_str(), parts, 1), LT_ERROR_IO);
+  EXPECT_NE(std::string(lt_last_error()).find("claims"), std::string::npos) << lt_last_error();
+}
+
+// fuzz_abi: a bidirectional render of a scene without any light (no lamp, no emissive surface, a
+// black world) took the s = 1 strategy anyway and picked a light from the empty set: a read
+// through a null pointer (UBSan; a segmentation fault in Release builds).
+TEST(FuzzRegressions, BidirectionalRenderWithoutLightsIsBlack) {
+  using namespace lt_test;
+  ScenePtr s = new_scene();
+  add_object(s.get(), plane(4, 4), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}));
+  set_world(s.get(), {0, 0, 0}, 0);
+  set_camera(s.get(), perspective_camera(look_at({0, -3, 2}, {0, 0, 0})));
+  check(lt_scene_commit(s.get()), "commit");
+  lt_render_settings rs = render_settings(8, 6, 2);
+  rs.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
+  Passes p = render(s.get(), rs);
+  EXPECT_EQ(p.status.state, LT_STATE_DONE);
+  ASSERT_EQ(p.first_non_finite(), "");
+  for (size_t i = 0; i < p.combined.size(); i += 4)
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(p.combined[i + c], 0.0f);
+}
+
+// fuzz_vdb: a VDB whose root tile sits at the edge of the int32 index space (one coordinate
+// changed in the file) overflowed `index_max + 1` and `origin + dim - 1` while the majorant grid
+// was built (UBSan: signed overflow), and bounds spanning the index space asked for billions of
+// majorant cells; NanoVDB's conversion overflows there too. Such a file is refused with
+// LT_ERROR_IO and a message.
+TEST(FuzzRegressions, VdbTileAtTheEdgeOfTheIndexSpace) {
+  lt_test::TempDir dir;
+  const std::string path = dir.path + "/edge_tile.vdb";
+  openvdb::initialize();
+  auto grid = openvdb::FloatGrid::create(0.0f);
+  grid->setName("density");
+  grid->tree().addTile(3, openvdb::Coord(0, 0, 0), 1.0f, true);     // 4096^3 root tiles
+  grid->tree().addTile(3, openvdb::Coord(4096, 0, 0), 1.0f, true);
+  {
+    openvdb::io::File file(path);
+    file.setCompression(openvdb::io::COMPRESS_NONE);
+    file.write({grid});
+    file.close();
+  }
+  // A root tile is stored as its origin (3 x int32), value (float) and active flag (1 byte): move
+  // the second to x = 2^31 - 4096, the last tile origin whose voxels all fit in int32.
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  const std::string tile("\0\x10\0\0\0\0\0\0\0\0\0\0\0\0\x80\x3f\x01", 17);
+  const size_t at = bytes.find(tile);
+  ASSERT_NE(at, std::string::npos) << "root tile not found in the file";
+  const int32_t edge = INT32_MAX - 4095;
+  std::memcpy(&bytes[at], &edge, 4);
+  std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+
+  lt_test::ScenePtr s = lt_test::new_scene();
+  const float identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+  lt_volume_desc d = lt_test::volume(LT_VOLUME_SCATTER, 1);
+  int id = -1;
+  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), path.c_str(), "density", identity, 0, &d, 1, &id), LT_ERROR_IO);
+  EXPECT_NE(std::string(lt_last_error()).find("beyond the supported index range"), std::string::npos) << lt_last_error();
+}
