@@ -13,7 +13,7 @@ adds (film, Blender's RenderResult, the add-on's buffers).
 
 "default" passes are the view layer's defaults (Combined, Depth); "all" also enables Normal and, for
 Cycles, its Denoising Data and Debug Sample Count passes, for Lantern the Albedo, Variance and Sample
-Count passes (scene.lantern.extra_passes).
+Count passes (View Layer > Passes, lantern_extra_passes).
 
 Textures: a plane with an N x N image (generated once into bench/results/: an 8-bit sRGB PNG and a
 32-bit float OpenEXR), rendered at 256 x 256, 1 sample; bytes per texel = (peak - peak of the same
@@ -82,26 +82,16 @@ def worker(args):
         layer.use_pass_normal = True
         layer.cycles.denoising_store_passes = True
         layer.cycles.pass_debug_sample_count = True
-        scene.lantern.extra_passes = True
-    bpy.context.window_scene = scene if bpy.context.window else None
+        layer.lantern_extra_passes = True
     if not args.no_render:
         t0 = time.perf_counter()
-        with bpy.context.temp_override(scene=scene) if hasattr(bpy.context, "temp_override") else _null():
-            bpy.ops.render.render(scene=scene.name)
+        bpy.ops.render.render(scene=scene.name)
         print("MEMBENCH render_seconds %.3f" % (time.perf_counter() - t0))
         report = getattr(lantern.engine, "LAST_RENDER", {}).get("report")
         if report and args.engine == "lantern":
             for line in report.splitlines():
                 if "memory" in line.lower():
                     print("MEMBENCH report " + line.strip())
-
-
-class _null:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *a):
-        return False
 
 
 # ---- parent -------------------------------------------------------------------------------------
@@ -113,7 +103,10 @@ def run(args, **kw):
             cmd.append("--" + k.replace("_", "-"))
         elif v not in (None, False):
             cmd += ["--" + k.replace("_", "-"), str(v)]
-    env = dict(os.environ, LANTERN_LIBRARY=os.path.abspath(args.library))
+    # Blender's embedded (Debian) Python must not see a pyenv interpreter this script may run under.
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PYENV")}
+    env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep) if ".pyenv" not in p)
+    env["LANTERN_LIBRARY"] = os.path.abspath(args.library)
     p = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     out = p.stdout.read()
     _, status, usage = os.wait4(p.pid, 0)
