@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -98,12 +99,12 @@ TEST(Memory, FilmKeepsOnlyThePassesAskedFor) {
   lt::FilmLayout lean;
   lean.passes = lt::pass_bit(lt::Pass::Combined) | lt::pass_bit(lt::Pass::Depth);
   lean.squares = false;
-  // mean RGB, alpha, half RGB, count, depth, published RGBA: 13 floats. Cycles' render buffer
-  // for Combined + Depth with adaptive sampling (its default) is 10 floats, Blender's
-  // RenderResult adds 5 more for either engine (bench/memory.py measures the whole process).
-  EXPECT_EQ(lean.bytes_per_pixel(), 13u * 4u);
+  // mean RGB, alpha, half RGB, count, depth and the published RGBA in half floats: 11 floats.
+  // Cycles' render buffer for Combined + Depth with adaptive sampling (its default) is 10
+  // floats; Blender's RenderResult adds 5 more for either engine (bench/memory.py measures it).
+  EXPECT_EQ(lean.bytes_per_pixel(), 11u * 4u);
   lt::FilmLayout all;
-  EXPECT_EQ(all.bytes_per_pixel(), (13u + 3 + 3 + 3) * 4u);
+  EXPECT_EQ(all.bytes_per_pixel(), (11u + 3 + 3 + 3) * 4u);
   // Reading a pass the film does not keep is an error, never zeros that look like data.
   lt::Film film(4, 3, lean);
   film.finish();
@@ -146,6 +147,37 @@ TEST(Memory, ConstantPixelsKeepTheirValueAndZeroVariance) {
   EXPECT_EQ(rgba[2], 1e-3f);
   EXPECT_EQ(rgba[3], 1.0f);
   EXPECT_EQ(var[0] + var[1] + var[2], 0.0f);
+}
+
+TEST(Memory, PublishedImageIsHalfFloatAndFinalReadsAreExact) {
+  // Readers see Combined in half floats while the render runs (a display's precision, 8 bytes a
+  // pixel); once it has stopped they read the float accumulators.
+  const float values[] = {0.5f, 0.2f, 1e-6f, 3e-8f, 1234.567f, 1e6f, 0.0f};
+  const int n = int(sizeof values / sizeof values[0]);
+  lt::Film film(n, 1);
+  float rgba[4 * n];
+  film.read(lt::Pass::Combined, rgba);  // before the first publish: zeros
+  for (float v : rgba) EXPECT_EQ(v, 0.0f);
+  for (int x = 0; x < n; ++x) {
+    lt::SampleValue s;
+    s.radiance = lt::Spectrum(values[x], -values[x], values[x] * 0.75f);
+    s.alpha = 1;
+    film.add(x, 0, s);
+  }
+  film.publish();
+  film.read(lt::Pass::Combined, rgba);
+  for (int x = 0; x < n; ++x) {
+    const float v = values[x];
+    // Half: 11 significant bits above 2^-14, steps of 2^-24 below it, at most 65504.
+    const float tol = std::max(std::abs(v) * 0x1p-11f, 0x1p-25f);
+    EXPECT_NEAR(rgba[4 * x], std::min(v, 65504.0f), v > 65504 ? 0 : tol) << v;
+    EXPECT_NEAR(rgba[4 * x + 1], -std::min(v, 65504.0f), v > 65504 ? 0 : tol) << v;
+    EXPECT_EQ(rgba[4 * x + 3], 1.0f);
+  }
+  EXPECT_EQ(rgba[0], 0.5f);
+  film.finish();
+  film.read(lt::Pass::Combined, rgba);
+  for (int x = 0; x < n; ++x) EXPECT_EQ(rgba[4 * x], values[x]);
 }
 
 TEST(Memory, RenderThatDoesNotFitIsRefusedBeforeAllocating) {

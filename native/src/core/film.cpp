@@ -7,13 +7,48 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace lt {
 
 namespace {
 constexpr int kFilterTableSize = 1024;
+
+// IEEE half floats for the published image (what a display needs, as Cycles' display buffer):
+// round to nearest even, finite values beyond the range clamped to +-65504.
+uint16_t float_to_half(float f) {
+  uint32_t x;
+  std::memcpy(&x, &f, 4);
+  const uint16_t sign = uint16_t((x >> 16) & 0x8000u);
+  x &= 0x7fffffffu;
+  if (x >= 0x477ff000u) return uint16_t(sign | (x > 0x7f800000u ? 0x7e00u : 0x7bffu));  // >= 65520 (rounds past max); NaN
+  if (x < 0x38800000u) {  // subnormal half (or zero)
+    if (x < 0x33000000u) return sign;
+    const uint32_t m = (x & 0x7fffffu) | 0x800000u;
+    const int shift = 126 - int(x >> 23);  // the value in units of 2^-24: (1.m * 2^23) >> shift
+    const uint32_t r = m >> shift, rem = m & ((1u << shift) - 1u), half = 1u << (shift - 1);
+    return uint16_t(sign | (r + (rem > half || (rem == half && (r & 1u)))));
+  }
+  const uint32_t r = ((x - 0x38000000u) >> 13), rem = x & 0x1fffu;
+  return uint16_t(sign | (r + (rem > 0x1000u || (rem == 0x1000u && (r & 1u)))));
 }
+
+float half_to_float(uint16_t h) {
+  const uint32_t sign = uint32_t(h & 0x8000u) << 16, e = (h >> 10) & 0x1fu, m = h & 0x3ffu;
+  float f;
+  if (e == 0) {
+    f = std::ldexp(float(m), -24);
+  } else if (e == 31) {
+    f = m ? std::numeric_limits<float>::quiet_NaN() : std::numeric_limits<float>::infinity();
+  } else {
+    const uint32_t x = ((e + 112u) << 23) | (m << 13);
+    std::memcpy(&f, &x, 4);
+  }
+  return sign ? -f : f;
+}
+}  // namespace
 
 FilterSampler::FilterSampler(FilterType type, float width) {
   width = std::max(width, 1e-3f);
@@ -91,7 +126,7 @@ int pass_channels(Pass pass) {
 size_t FilmLayout::bytes_per_pixel() const {
   auto has = [&](Pass p) { return (passes & pass_bit(p)) != 0; };
   size_t floats = 3 + 1 + 3 + 1;  // mean, alpha, half, count
-  floats += 4;                     // the published Combined
+  floats += 2;                     // the published Combined, RGBA in half floats
   if (has(Pass::Depth)) floats += 1;
   if (has(Pass::Normal)) floats += 3;
   if (has(Pass::Albedo)) floats += 3;
@@ -109,7 +144,7 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
   half_.assign(3 * n, 0.0f);
   alpha_.assign(n, 0.0f);
   count_.assign(n, 0u);
-  published_.assign(4 * n, 0.0f);
+  published_.assign(4 * n, 0);
   if (layout_.squares) m2_.assign(3 * n, 0.0f);
   if (has(Pass::Depth)) depth_.assign(n, 1e10f);
   if (has(Pass::Normal)) normal_.assign(3 * n, 0.0f);
@@ -221,7 +256,11 @@ void Film::publish() {
   std::lock_guard<std::mutex> lock(mutex_);
   const size_t n = count_.size();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) resolve_combined(i, &published_[4 * i]);
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      float o[4];
+      resolve_combined(i, o);
+      for (int k = 0; k < 4; ++k) published_[4 * i + k] = float_to_half(o[k]);
+    }
   });
   published_light_paths_ = light_paths_;
   published_valid_ = true;
@@ -296,8 +335,7 @@ void Film::read(Pass pass, float* out, bool labels) const {
     lock = lock_accumulators();
   }
   if (published) {
-    if (published_valid_) std::copy(published_.begin(), published_.end(), out);
-    else std::fill(out, out + 4 * n, 0.0f);
+    for (size_t i = 0; i < 4 * n; ++i) out[i] = published_valid_ ? half_to_float(published_[i]) : 0.0f;
   } else {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
      for (size_t i = r.begin(); i < r.end(); ++i) {

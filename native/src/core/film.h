@@ -161,7 +161,7 @@ class Film {
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;
-  std::vector<float> published_;  // Combined RGBA
+  std::vector<uint16_t> published_;  // Combined RGBA, half floats
   bool published_valid_ = false, finished_ = false, writing_ = false;
   mutable int readers_waiting_ = 0;
   mutable std::mutex mutex_;
