@@ -60,7 +60,7 @@ def worker(args):
         img.filepath_raw = path
         img.file_format = "OPEN_EXR" if is_float else "PNG"
         if is_float:
-            bpy.context.scene.render.image_settings.color_depth = "32"
+            img.use_half_precision = False  # 32-bit float EXR
         img.save()
         return
     build_scenes.reset_file()
