@@ -474,7 +474,9 @@ class Scene:
         ptr = ctypes.POINTER(ctypes.c_float)()
         _check(self._lib.lt_scene_begin_image(self.handle, ctypes.byref(d), ctypes.byref(ptr)),
                "lt_scene_begin_image")
-        fill(np.ctypeslib.as_array(ptr, shape=(int(width) * int(height) * int(channels),)))
+        n = int(width) * int(height) * int(channels)
+        # Native float32 ("f"): Blender's foreach_get refuses ctypes' explicit "<f" buffer format.
+        fill(np.ctypeslib.as_array(ptr, shape=(n,)).view(np.float32))
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_end_image(self.handle, ctypes.byref(out)), "lt_scene_end_image")
         return out.value

@@ -34,3 +34,14 @@ def test_render_too_large_for_the_address_space_is_refused_with_a_message():
     # The same cap leaves room for a frame that fits.
     errors, r = _child(64, 64, 1024)
     assert not errors and "result:" in r["result"], (errors, r)
+
+
+def test_byte_images_are_kept_at_8_bits_and_reported(scene_factory):
+    """The textured scene's two packed 8-bit images (sRGB and Non-Color) reach the core as
+    Blender's b / 255 values and are kept as 3 bytes a texel (alpha dropped); the report says so."""
+    import render_utils as ru
+    from lantern import engine
+    scene = scene_factory("textured")
+    ru.render(scene, ru.LANTERN, 1, seed=0)
+    line = [l for l in engine.LAST_RENDER["report"].splitlines() if l.startswith("texture memory:")]
+    assert line == ["texture memory: 0.0 MiB for 2 image(s), 2 of them 8-bit (3.00 bytes per texel)"], line
