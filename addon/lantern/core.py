@@ -241,6 +241,8 @@ class RenderSettings(ctypes.Structure):
         ("noise_target", ctypes.c_float),
         ("adaptive", ctypes.c_int),
         ("min_samples", ctypes.c_int),
+        ("passes", ctypes.c_uint),
+        ("caller_bytes", ctypes.c_ulonglong),
     ]
 
 
@@ -282,6 +284,9 @@ class SceneStats(ctypes.Structure):
         ("light_sampler_builds", ctypes.c_uint64),
         ("emissive_triangles", ctypes.c_uint64),
         ("emissive_instances", ctypes.c_uint64),
+        ("image_bytes", ctypes.c_uint64),
+        ("image_texels", ctypes.c_uint64),
+        ("byte_images", ctypes.c_uint64),
     ]
 
 
@@ -312,6 +317,8 @@ def _declare(lib):
         "lt_scene_warning_count": ([scene_p], c_int),
         "lt_scene_warning": ([scene_p, c_int], c_char_p),
         "lt_scene_add_image": ([scene_p, P(ImageDesc), P(c_int)], c_int),
+        "lt_scene_begin_image": ([scene_p, P(ImageDesc), P(P(ctypes.c_float))], c_int),
+        "lt_scene_end_image": ([scene_p, P(c_int)], c_int),
         "lt_scene_add_material": ([scene_p, P(ShaderNode), c_int, c_int, P(c_int)], c_int),
         "lt_scene_add_mesh": ([scene_p, P(MeshDesc), P(c_int)], c_int),
         "lt_scene_add_instance": ([scene_p, P(InstanceDesc), P(c_int)], c_int),
@@ -461,6 +468,22 @@ class Scene:
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_image(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_image")
+        return out.value
+
+    def add_image_filled(self, fill, width, height, channels, srgb=False,
+                         interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT):
+        """Adds an image whose pixels `fill(array)` writes into the core's own buffer (a float32
+        array of width*height*channels): the pixels are copied once. Returns the image id."""
+        d = ImageDesc(int(width), int(height), int(channels), None, int(bool(srgb)),
+                      int(interpolation), int(extension))
+        ptr = ctypes.POINTER(ctypes.c_float)()
+        _check(self._lib.lt_scene_begin_image(self.handle, ctypes.byref(d), ctypes.byref(ptr)),
+               "lt_scene_begin_image")
+        n = int(width) * int(height) * int(channels)
+        # Native float32 ("f"): Blender's foreach_get refuses ctypes' explicit "<f" buffer format.
+        fill(np.ctypeslib.as_array(ptr, shape=(n,)).view(np.float32))
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_end_image(self.handle, ctypes.byref(out)), "lt_scene_end_image")
         return out.value
 
     def add_material(self, nodes, root=0):

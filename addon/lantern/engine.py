@@ -23,9 +23,9 @@ PASSES = (
     ("Combined", core.PASS_COMBINED, 4, "RGBA", 'COLOR', None),
     ("Depth", core.PASS_DEPTH, 1, "Z", 'VALUE', "use_pass_z"),
     ("Normal", core.PASS_NORMAL, 3, "XYZ", 'VECTOR', "use_pass_normal"),
-    ("Albedo", core.PASS_ALBEDO, 3, "RGB", 'COLOR', None),
-    ("Variance", core.PASS_VARIANCE, 3, "RGB", 'COLOR', None),
-    ("Sample Count", core.PASS_SAMPLE_COUNT, 1, "X", 'VALUE', None),
+    ("Albedo", core.PASS_ALBEDO, 3, "RGB", 'COLOR', "lantern_extra_passes"),
+    ("Variance", core.PASS_VARIANCE, 3, "RGB", 'COLOR', "lantern_extra_passes"),
+    ("Sample Count", core.PASS_SAMPLE_COUNT, 1, "X", 'VALUE', "lantern_extra_passes"),
 )
 
 _FILTERS = {
@@ -37,6 +37,17 @@ _FILTERS = {
 
 def enabled_passes(view_layer):
     return [p for p in PASSES if p[5] is None or getattr(view_layer, p[5], False)]
+
+
+def pass_settings(passes, pixels):
+    """The render settings for these passes: the core keeps only them (lt_render_settings.passes),
+    and counts what the add-on and Blender hold besides (caller_bytes) in its memory check: the
+    RenderResult's passes and the one buffer _PassWriter reads through."""
+    mask = 0
+    for p in passes:
+        mask |= 1 << p[1]
+    floats = sum(p[2] for p in passes) + max(core.pass_channels(p[1]) for p in passes)
+    return dict(passes=mask, caller_bytes=pixels * floats * 4)
 
 
 def frame_size(rd):
@@ -202,6 +213,10 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
         lights = ", ".join(filter(None, (lights, "%d emissive mesh object(s) (%d triangles, two-sided)"
                                          % (summary["emissive_objects"], summary["emissive_triangles"]))))
     lines.append("lights: %s; world: %s" % (lights or "none", summary.get("world") or "none"))
+    if summary.get("image_texels"):
+        lines.append("texture memory: %.1f MiB for %d image(s), %d of them 8-bit (%.2f bytes per texel)"
+                     % (summary["image_bytes"] / 2.0 ** 20, summary.get("images", 0),
+                        summary.get("byte_images", 0), summary["image_bytes"] / summary["image_texels"]))
     homogeneous = summary.get("material_media", 0) + summary.get("world_media", 0)
     grids = summary.get("volumes", 0)
     if homogeneous or grids:
@@ -276,21 +291,25 @@ class _PassWriter:
     def __init__(self, render, layer, view, passes):
         self.render = render
         self.targets = []
+        size = 0
         for name, pass_id, channels, _, _, _ in passes:
             bpass = layer.passes.find_by_name(name, view)
             if bpass is None:
                 continue
             core_channels = core.pass_channels(pass_id)
-            buf = np.empty(render.pass_size(pass_id), dtype=np.float32)
+            size = max(size, render.pass_size(pass_id))
             pad = None
             if core_channels != channels:
-                pad = np.zeros(buf.size // core_channels * channels, dtype=np.float32)
-            self.targets.append((name, pass_id, bpass, buf, pad, core_channels, channels))
+                pad = np.zeros(render.pass_size(pass_id) // core_channels * channels, dtype=np.float32)
+            self.targets.append((name, pass_id, bpass, pad, core_channels, channels))
+        # One buffer for every pass (Blender copies out of it): a pass's worth of memory, not all.
+        self.buffer = np.empty(size, dtype=np.float32)
 
     def write(self, only=None):
-        for name, pass_id, bpass, buf, pad, cc, bc in self.targets:
+        for name, pass_id, bpass, pad, cc, bc in self.targets:
             if only is not None and name not in only:
                 continue
+            buf = self.buffer[:self.render.pass_size(pass_id)]
             self.render.read_pass(pass_id, buf)
             if pad is not None:
                 n = min(cc, bc)
@@ -355,7 +374,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             core_scene.commit()
             stats = core_scene.stats()
             summary.update(emissive_triangles=stats["emissive_triangles"],
-                           emissive_objects=stats["emissive_instances"])
+                            emissive_objects=stats["emissive_instances"],
+                            image_bytes=stats["image_bytes"], image_texels=stats["image_texels"],
+                            byte_images=stats["byte_images"])
             for w in core_scene.take_warnings():  # those export did not already report by name
                 report({'WARNING'}, w)
             print("Lantern: exported %s in %.2f s" % (summary, time.monotonic() - t0))
@@ -365,6 +386,8 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                        % summary["media"])
 
             settings = render_settings(scene, width, height, border)
+            region = ((border[1] - border[0]) * (border[3] - border[2])) if any(border) else width * height
+            settings.update(pass_settings(enabled_passes(view_layer), region))
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:

@@ -227,9 +227,17 @@ def register():
     for c in classes:
         bpy.utils.register_class(c)
     bpy.types.Scene.lantern = PointerProperty(type=LanternRenderSettings)
+    # A pass toggle where Blender keeps the others (View Layer > Passes), off by default as in
+    # Cycles: each pass costs film memory for every pixel.
+    bpy.types.ViewLayer.lantern_extra_passes = BoolProperty(
+        name="Albedo, Variance, Sample Count",
+        description="Also render the Albedo, Variance and Sample Count passes (each costs memory "
+                    "for every pixel)",
+        default=False)
 
 
 def unregister():
+    del bpy.types.ViewLayer.lantern_extra_passes
     del bpy.types.Scene.lantern
     for c in reversed(classes):
         bpy.utils.unregister_class(c)

@@ -249,7 +249,7 @@ class LANTERN_VIEWLAYER_PT_passes(LanternButtonsPanel, Panel):
         col.prop(view_layer, "use_pass_combined")
         col.prop(view_layer, "use_pass_z")
         col.prop(view_layer, "use_pass_normal")
-        layout.label(text="Albedo, Variance and Sample Count are always written")
+        col.prop(view_layer, "lantern_extra_passes")
 
 
 # ---- object, light, material, world ----------------------------------------------------------

@@ -264,6 +264,7 @@ class ViewportSession:
     def _start(self, settings):
         self._stop()
         s = dict(settings)
+        s["passes"] = 1 << core.PASS_COMBINED  # the viewport shows Combined only: no other film memory
         if self.stage == 0:
             s.update(width=max(1, s["width"] // self.divider), height=max(1, s["height"] // self.divider),
                      samples=1)

@@ -28,6 +28,7 @@ import render_utils as ru  # noqa: E402
 after = float(sys.argv[sys.argv.index("--") + 1])
 lantern.register()
 scene = build_scenes.build("cornell_area")
+scene.view_layers[0].lantern_extra_passes = True  # the Sample Count pass
 total = 1 << 20
 state = {}
 

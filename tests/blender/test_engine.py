@@ -15,6 +15,7 @@ def test_every_pass_is_present_and_finite(scene_factory):
     layer = scene.view_layers[0]
     layer.use_pass_z = True
     layer.use_pass_normal = True
+    layer.lantern_extra_passes = True
     out = ru.render(scene, ru.LANTERN, 16, seed=0)
     names = set(out)
     for name in ("Combined", "Depth", "Normal", "Albedo", "Variance", "Sample Count"):
@@ -24,6 +25,21 @@ def test_every_pass_is_present_and_finite(scene_factory):
     assert np.allclose(out["Sample Count"][..., 0], 16)
     # Depth: every pixel sees the box, nearer than the back wall's distance from the camera.
     assert (out["Depth"][..., 0] > 1.0).all() and (out["Depth"][..., 0] < 6.0).all()
+
+
+def test_passes_not_enabled_are_not_rendered(scene_factory):
+    """Albedo, Variance and Sample Count are opt-in (View Layer > Passes), as Cycles' data passes:
+    without them the core keeps no memory for them, and Combined is the same image."""
+    scene = scene_factory("cornell_area")
+    layer = scene.view_layers[0]
+    layer.use_pass_z, layer.use_pass_normal, layer.lantern_extra_passes = True, False, False
+    lean = ru.render(scene, ru.LANTERN, 4, seed=3)
+    assert sorted(lean) == ["Combined", "Depth"], sorted(lean)
+    layer.lantern_extra_passes = True
+    full = ru.render(scene, ru.LANTERN, 4, seed=3)
+    assert {"Albedo", "Variance", "Sample Count"} <= set(full)
+    assert np.array_equal(lean["Combined"], full["Combined"])
+    assert np.array_equal(lean["Depth"], full["Depth"])
 
 
 def test_transparent_film_gives_alpha_zero_on_background(scene_factory):

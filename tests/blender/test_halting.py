@@ -27,6 +27,7 @@ _REFS = {}
 
 def _reset_halting(scene, percent=PERCENT):
     scene.render.resolution_percentage = percent
+    scene.view_layers[0].lantern_extra_passes = True  # the Sample Count pass
     lt = scene.lantern
     lt.time_limit, lt.noise_target, lt.adaptive, lt.min_samples = 0.0, 0.0, False, 16
 

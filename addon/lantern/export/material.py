@@ -7,7 +7,6 @@ shader node by mid-grey diffuse (0.5), an unsupported node feeding an input by t
 default value.
 """
 
-import numpy as np
 
 from .. import core
 from .names import core_call, is_finite
@@ -58,8 +57,6 @@ class ImageExporter:
                                      "uses the socket value" % (where, image.name))
             self.ids[key] = None
             return None
-        pixels = np.empty(width * height * channels, dtype=np.float32)
-        image.pixels.foreach_get(pixels)
         # Byte images give their stored values: sRGB-encoded when the colour space is sRGB.
         # Float images are already linear; Non-Color data is raw.
         space = image.colorspace_settings.name
@@ -77,8 +74,11 @@ class ImageExporter:
             self.report({'WARNING'}, "%s: %s extension is not supported, treated as Repeat"
                                      % (where, extension))
             ext = core.EXTENSION_REPEAT
-        image_id = self.core_scene.add_image(pixels, width, height, channels, srgb=srgb,
-                                             interpolation=interp, extension=ext)
+        # Blender's pixels go straight into the core's buffer (one copy); the core keeps byte
+        # images at 8 bits (their values are exactly b / 255) and drops the unused alpha.
+        image_id = self.core_scene.add_image_filled(image.pixels.foreach_get, width, height,
+                                                    channels, srgb=srgb, interpolation=interp,
+                                                    extension=ext)
         self.ids[key] = image_id
         return image_id
 

@@ -26,7 +26,9 @@ extern "C" {
 #define LT_ABI_VERSION 5  /* 2: lt_render_settings.sample_offset; 3: halting settings and status;
                              4: volumes are arrays of components with emission; lt_scene_stats
                                 counts emissive triangles; lt_scene_add_volume_grid takes a step;
-                             5: lt_render_status.unestimated_pixels */
+                             5: lt_render_settings.passes and caller_bytes; lt_render_wait
+                                reports a failed render; lt_scene_begin/end_image; image memory
+                                in lt_scene_stats; lt_render_status.unestimated_pixels */
 
 enum lt_status {
   LT_OK = 0,
@@ -66,6 +68,14 @@ typedef struct lt_image_desc {
   int extension;     /* lt_extension */
 } lt_image_desc;
 LT_API int lt_scene_add_image(lt_scene* scene, const lt_image_desc* desc, int* out_id);
+/* The same without a caller's copy of the pixels: lt_scene_begin_image allocates the image's
+ * width*height*channels floats (desc->pixels is ignored) and returns them in *out_pixels for the
+ * caller to fill; lt_scene_end_image takes them over and gives the image id. Images are stored at
+ * the source's precision: 8 bits per channel when every value is b * (1.0f / 255.0f) for a byte b
+ * (what Blender gives for byte images; lossless), else 32-bit float; 1 channel for grey images,
+ * else RGB (alpha is not used). Beginning another image drops an unfinished one. */
+LT_API int lt_scene_begin_image(lt_scene* scene, const lt_image_desc* desc, float** out_pixels);
+LT_API int lt_scene_end_image(lt_scene* scene, int* out_id);
 
 /* Materials are small shader trees flattened into an array of nodes; children refer to indices in
  * the same array. A texture-able input is a constant value or an image looked up at the UV. */
@@ -271,6 +281,9 @@ typedef struct lt_scene_stats {
   uint64_t light_sampler_builds;
   uint64_t emissive_triangles;
   uint64_t emissive_instances;
+  uint64_t image_bytes;       /* memory the scene's images hold */
+  uint64_t image_texels;      /* and their texels, all images */
+  uint64_t byte_images;       /* images stored at 8 bits per channel */
 } lt_scene_stats;
 LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);
 
@@ -335,6 +348,15 @@ typedef struct lt_render_settings {
   float noise_target;
   int adaptive;
   int min_samples;
+  /* Passes the film keeps: bits 1 << lt_pass (Combined and Sample Count are always kept; adaptive
+   * sampling also keeps what Variance needs). lt_render_settings_default sets every pass; reading
+   * a pass that is not kept is LT_ERROR_STATE. */
+  unsigned passes;
+  /* Bytes the caller will also allocate for this render (its copies of the passes): added to the
+   * core's estimate of the render's memory. lt_render_start refuses with LT_ERROR_OUT_OF_MEMORY
+   * and a message giving both when the sum exceeds what the process can allocate (MemAvailable,
+   * RLIMIT_AS), before allocating anything. */
+  unsigned long long caller_bytes;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -377,7 +399,9 @@ enum lt_halt_reason {
 };
 LT_API int lt_render_poll(lt_render* render, lt_render_status* status);
 
-/* Requests cancellation; lt_render_wait returns within the time one pixel's sample takes. */
+/* Requests cancellation; lt_render_wait returns within the time one pixel's sample takes. When the
+ * render failed (state LT_STATE_FAILED, e.g. an allocation on its threads), lt_render_wait returns
+ * LT_ERROR_OUT_OF_MEMORY or LT_ERROR_INTERNAL with the reason; its passes stay readable. */
 LT_API int lt_render_cancel(lt_render* render);
 LT_API int lt_render_wait(lt_render* render);
 
@@ -393,8 +417,9 @@ enum lt_pass {
 LT_API int lt_pass_channels(int pass);
 
 /* Copies a pass of the render region (width*height*channels floats, rows bottom to top, as
- * Blender's RenderResult stores them). Can be called while rendering: gives the samples
- * accumulated so far. */
+ * Blender's RenderResult stores them). While rendering only LT_PASS_COMBINED can be read (the
+ * image last published, at most 0.25 s old; zeros before the first pass); every other kept pass
+ * once the render has stopped (LT_ERROR_STATE before). */
 LT_API int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count);
 
 /* The strategy view of a finished (or cancelled) bidirectional render: a grid of RGB images of

@@ -6,10 +6,18 @@
 #include <memory>
 
 #include "core/render.h"
+#include "lantern/lantern.h"
+#include "scene/image.h"
 #include "scene/scene.h"
 
 struct lt_scene {
   lt::Scene scene;
+  // lt_scene_begin_image's buffer, until lt_scene_end_image takes it.
+  struct PendingImage {
+    lt_image_desc desc{};
+    lt::FloatBuffer pixels;
+  };
+  std::unique_ptr<PendingImage> pending_image;
   std::atomic<int> live_renders{0};  // renders started and not yet destroyed: they read the scene
 };
 struct lt_render {

@@ -2,6 +2,7 @@
 // and lt_last_error() messages. No exception crosses this boundary.
 #include "lantern/lantern.h"
 
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <new>
@@ -34,6 +35,9 @@ int guarded(F f) {
   } catch (const lt::IoError& e) {
     lt::set_last_error(e.what());
     return LT_ERROR_IO;
+  } catch (const lt::OutOfMemory& e) {
+    lt::set_last_error(e.what());
+    return LT_ERROR_OUT_OF_MEMORY;
   } catch (const std::bad_alloc&) {
     lt::set_last_error("out of memory");
     return LT_ERROR_OUT_OF_MEMORY;
@@ -130,7 +134,20 @@ lt::Material to_material(const lt_scene* scene, const lt_shader_node* nodes, int
 
 constexpr int kMaxDimension = 65536;
 
-constexpr long long kMaxPixels = 1LL << 28;  // 268 M pixels: beyond this a render is a mistake
+constexpr long long kMaxPixels = 1LL << 28;
+
+void check_image(const lt_image_desc& d) {
+  require(d.width > 0 && d.height > 0 && d.width <= kMaxDimension && d.height <= kMaxDimension,
+          "image size " + std::to_string(d.width) + "x" + std::to_string(d.height) + " is out of range");
+  require(d.channels == 1 || d.channels == 3 || d.channels == 4,
+          "image has " + std::to_string(d.channels) + " channels; 1, 3 or 4 are supported");
+  require(d.interpolation == LT_INTERP_LINEAR || d.interpolation == LT_INTERP_CLOSEST, "unknown image interpolation");
+  require(d.extension >= LT_EXTENSION_REPEAT && d.extension <= LT_EXTENSION_CLIP, "unknown image extension");
+}
+
+lt::Interpolation interpolation(const lt_image_desc& d) {
+  return d.interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest : lt::Interpolation::Linear;
+}  // 268 M pixels: beyond this a render is a mistake
 
 lt::Material to_material(const lt_scene* scene, const lt_shader_node* nodes, int node_count, int root) {
     require(node_count > 0 && node_count <= 4096, "material node count " + std::to_string(node_count) + " is out of range");
@@ -187,18 +204,41 @@ int lt_scene_add_image(lt_scene* scene, const lt_image_desc* d, int* out_id) {
   return guarded([&] {
     require(scene && d && out_id, "lt_scene_add_image: NULL argument");
     scene->scene.require_editable();
-    require(d->width > 0 && d->height > 0 && d->width <= kMaxDimension && d->height <= kMaxDimension,
-            "image size " + std::to_string(d->width) + "x" + std::to_string(d->height) + " is out of range");
-    require(d->channels == 1 || d->channels == 3 || d->channels == 4,
-            "image has " + std::to_string(d->channels) + " channels; 1, 3 or 4 are supported");
+    check_image(*d);
     require(d->pixels != nullptr, "image pixels are NULL");
-    require(d->interpolation == LT_INTERP_LINEAR || d->interpolation == LT_INTERP_CLOSEST, "unknown image interpolation");
-    require(d->extension >= LT_EXTENSION_REPEAT && d->extension <= LT_EXTENSION_CLIP, "unknown image extension");
     auto& images = scene->scene.images;
-    images.push_back(std::make_unique<lt::Image>(
-        d->width, d->height, d->channels, d->pixels, d->srgb != 0,
-        d->interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest : lt::Interpolation::Linear,
-        lt::Extension(d->extension)));
+    images.push_back(std::make_unique<lt::Image>(d->width, d->height, d->channels, d->pixels, d->srgb != 0,
+                                                 interpolation(*d), lt::Extension(d->extension)));
+    *out_id = int(images.size()) - 1;
+  });
+}
+
+int lt_scene_begin_image(lt_scene* scene, const lt_image_desc* d, float** out_pixels) {
+  return guarded([&] {
+    require(scene && d && out_pixels, "lt_scene_begin_image: NULL argument");
+    scene->scene.require_editable();
+    check_image(*d);
+    *out_pixels = nullptr;
+    scene->pending_image.reset();  // an unfinished image is dropped
+    auto p = std::make_unique<lt_scene::PendingImage>();
+    p->desc = *d;
+    p->desc.pixels = nullptr;
+    p->pixels = lt::FloatBuffer(size_t(d->width) * d->height * d->channels);
+    *out_pixels = p->pixels.data();
+    scene->pending_image = std::move(p);
+  });
+}
+
+int lt_scene_end_image(lt_scene* scene, int* out_id) {
+  return guarded([&] {
+    require(scene && out_id, "lt_scene_end_image: NULL argument");
+    scene->scene.require_editable();
+    if (!scene->pending_image) throw lt::StateError("lt_scene_end_image: no image was begun");
+    std::unique_ptr<lt_scene::PendingImage> p = std::move(scene->pending_image);
+    const lt_image_desc& d = p->desc;
+    auto& images = scene->scene.images;
+    images.push_back(std::make_unique<lt::Image>(d.width, d.height, d.channels, std::move(p->pixels), d.srgb != 0,
+                                                 interpolation(d), lt::Extension(d.extension)));
     *out_id = int(images.size()) - 1;
   });
 }
@@ -382,6 +422,12 @@ int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out) {
     out->light_sampler_builds = scene->scene.light_builds();
     out->emissive_triangles = scene->scene.emissive_triangles();
     out->emissive_instances = scene->scene.emissive_instances();
+    out->image_bytes = out->image_texels = out->byte_images = 0;
+    for (const auto& im : scene->scene.images) {
+      out->image_bytes += im->bytes();
+      out->image_texels += uint64_t(im->width()) * im->height();
+      out->byte_images += im->is_byte() ? 1 : 0;
+    }
   });
 }
 
@@ -518,7 +564,17 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->volume_estimator = LT_VOLUME_TRACKING;
   s->volume_step = 0;
   s->min_samples = 16;
+  s->passes = (1u << LT_PASS_COUNT) - 1;
+  s->caller_bytes = 0;
 }
+
+namespace {
+std::string gib(double bytes) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.2f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
+  return b;
+}
+}  // namespace
 
 int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** out) {
   return guarded([&] {
@@ -568,6 +624,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     require(std::isfinite(s->noise_target) && s->noise_target >= 0, "noise target must be finite and >= 0 (0: none)");
     require(!s->adaptive || s->noise_target > 0, "adaptive sampling needs a noise target > 0");
     require(s->min_samples >= 1 && s->min_samples <= (1 << 24), "min samples must be in [1, 16777216]");
+    require((s->passes & ~((1u << LT_PASS_COUNT) - 1)) == 0, "passes has bits beyond LT_PASS_COUNT");
     lt::RenderSettings rs;
     rs.width = s->width;
     rs.height = s->height;
@@ -607,6 +664,17 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.noise_target = s->noise_target;
     rs.adaptive = s->adaptive != 0;
     rs.min_samples = s->min_samples;
+    rs.passes = s->passes;
+    // Refuse before allocating, with what it would take, rather than fail (or be killed) later.
+    const lt::MemoryEstimate need = lt::RenderJob::estimate_bytes(rs);
+    const double total = double(need.total()) + double(s->caller_bytes);
+    const size_t avail = lt::available_memory();
+    if (total > double(avail))
+      throw lt::OutOfMemory("a " + std::to_string(rs.x1 - rs.x0) + "x" + std::to_string(rs.y1 - rs.y0) +
+                            " render needs about " + gib(total) + " (film " + gib(double(need.film)) +
+                            ", other buffers " + gib(double(need.other)) + ", caller " +
+                            gib(double(s->caller_bytes)) + ") but only " + gib(double(avail)) +
+                            " is available; lower the resolution, render a border or fewer passes");
     auto r = std::make_unique<lt_render>();
     r->job = std::make_unique<lt::RenderJob>(scene->scene, rs);
     r->scene = scene;
@@ -645,6 +713,11 @@ int lt_render_wait(lt_render* render) {
   return guarded([&] {
     require(render != nullptr, "lt_render_wait: NULL render");
     render->job->wait();
+    if (render->job->status().state == lt::RenderState::Failed) {
+      const std::string what = std::string("render failed: ") + render->job->error();
+      if (render->job->out_of_memory()) throw lt::OutOfMemory(what);
+      throw std::runtime_error(what);
+    }
   });
 }
 

@@ -16,6 +16,10 @@ struct StateError : std::runtime_error {
 struct IoError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+// Refused before allocating: what an operation would need exceeds what the process can get.
+struct OutOfMemory : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 void set_last_error(const std::string& message);
 const char* last_error();

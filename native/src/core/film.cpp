@@ -1,16 +1,53 @@
 #include "core/film.h"
 
+#include "core/error.h"
 #include "core/label_font.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace lt {
 
 namespace {
 constexpr int kFilterTableSize = 1024;
+
+// IEEE half floats for the published image (what a display needs, as Cycles' display buffer):
+// round to nearest even, finite values beyond the range clamped to +-65504.
+uint16_t float_to_half(float f) {
+  uint32_t x;
+  std::memcpy(&x, &f, 4);
+  const uint16_t sign = uint16_t((x >> 16) & 0x8000u);
+  x &= 0x7fffffffu;
+  if (x >= 0x477ff000u) return uint16_t(sign | (x > 0x7f800000u ? 0x7e00u : 0x7bffu));  // >= 65520 (rounds past max); NaN
+  if (x < 0x38800000u) {  // subnormal half (or zero)
+    if (x < 0x33000000u) return sign;
+    const uint32_t m = (x & 0x7fffffu) | 0x800000u;
+    const int shift = 126 - int(x >> 23);  // the value in units of 2^-24: (1.m * 2^23) >> shift
+    const uint32_t r = m >> shift, rem = m & ((1u << shift) - 1u), half = 1u << (shift - 1);
+    return uint16_t(sign | (r + (rem > half || (rem == half && (r & 1u)))));
+  }
+  const uint32_t r = ((x - 0x38000000u) >> 13), rem = x & 0x1fffu;
+  return uint16_t(sign | (r + (rem > 0x1000u || (rem == 0x1000u && (r & 1u)))));
 }
+
+float half_to_float(uint16_t h) {
+  const uint32_t sign = uint32_t(h & 0x8000u) << 16, e = (h >> 10) & 0x1fu, m = h & 0x3ffu;
+  float f;
+  if (e == 0) {
+    f = std::ldexp(float(m), -24);
+  } else if (e == 31) {
+    f = m ? std::numeric_limits<float>::quiet_NaN() : std::numeric_limits<float>::infinity();
+  } else {
+    const uint32_t x = ((e + 112u) << 23) | (m << 13);
+    std::memcpy(&f, &x, 4);
+  }
+  return sign ? -f : f;
+}
+}  // namespace
 
 FilterSampler::FilterSampler(FilterType type, float width) {
   width = std::max(width, 1e-3f);
@@ -85,20 +122,66 @@ int pass_channels(Pass pass) {
   }
 }
 
-void Film::add(int x, int y, const SampleValue& s) {
-  PixelAccum& a = accum_[size_t(y) * width_ + x];
-  const bool half = a.count & 1u;
-  for (int k = 0; k < 3; ++k) {
-    double v = s.radiance[k];
-    a.rgb[k] += v;
-    a.rgb2[k] += v * v;
-    if (half) a.half[k] += v;
-    a.normal[k] += s.normal[k];
-    a.albedo[k] += s.albedo[k];
+size_t FilmLayout::bytes_per_pixel() const {
+  auto has = [&](Pass p) { return (passes & pass_bit(p)) != 0; };
+  size_t floats = 3 + 1 + 3 + 1;  // mean, alpha, half, count
+  floats += 2;                     // the published Combined, RGBA in half floats
+  if (has(Pass::Depth)) floats += 1;
+  if (has(Pass::Normal)) floats += 3;
+  if (has(Pass::Albedo)) floats += 3;
+  if (squares) floats += 3;
+  if (splats) floats += 6;
+  floats += size_t(strategy_cells) * 6;
+  return floats * sizeof(float);
+}
+
+Film::Film(int width, int height, const FilmLayout& layout) : width_(width), height_(height), layout_(layout) {
+  layout_.passes |= pass_bit(Pass::Combined) | pass_bit(Pass::SampleCount);
+  if (has(Pass::Variance)) layout_.squares = true;
+  const size_t n = size_t(width) * height;
+  mean_.assign(3 * n, 0.0f);
+  half_.assign(3 * n, 0.0f);
+  alpha_.assign(n, 0.0f);
+  count_.assign(n, 0u);
+  published_.assign(4 * n, 0);
+  if (layout_.squares) m2_.assign(3 * n, 0.0f);
+  if (has(Pass::Depth)) depth_.assign(n, 1e10f);
+  if (has(Pass::Normal)) normal_.assign(3 * n, 0.0f);
+  if (has(Pass::Albedo)) albedo_.assign(3 * n, 0.0f);
+  if (layout_.splats) {
+    splat_.assign(3 * n, 0.0f);
+    splat_half_.assign(3 * n, 0.0f);
   }
-  a.alpha += s.alpha;
-  a.depth = std::min(a.depth, s.depth);
-  a.count += 1;
+  if (layout_.strategy_cells > 0) {
+    strategies_.assign(n * layout_.strategy_cells * 3, 0.0f);
+    strategy_splats_.assign(strategies_.size(), 0.0f);
+  }
+}
+
+void Film::add(int x, int y, const SampleValue& s) {
+  const size_t i = size_t(y) * width_ + x;
+  const uint32_t n = count_[i] + 1;
+  const bool half = n % 2 == 0;  // the pixel's 2nd, 4th, ... sample
+  // Running means (Welford): a pixel whose samples are all equal keeps exactly that value and a
+  // zero sum of squared deviations, which float sums (n * v rounded) would not.
+  float* mean = &mean_[3 * i];
+  const float inv_n = 1.0f / float(n);
+  for (int k = 0; k < 3; ++k) {
+    const float v = s.radiance[k], delta = v - mean[k];
+    mean[k] += delta * inv_n;
+    if (!m2_.empty()) m2_[3 * i + k] += delta * (v - mean[k]);
+  }
+  if (half) {
+    const float inv_b = 1.0f / float(n / 2);
+    for (int k = 0; k < 3; ++k) half_[3 * i + k] += (s.radiance[k] - half_[3 * i + k]) * inv_b;
+  }
+  if (!normal_.empty())
+    for (int k = 0; k < 3; ++k) normal_[3 * i + k] += s.normal[k];
+  if (!albedo_.empty())
+    for (int k = 0; k < 3; ++k) albedo_[3 * i + k] += s.albedo[k];
+  alpha_[i] += s.alpha;
+  if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
+  count_[i] = n;
 }
 
 ErrorEstimate Film::error_estimate(int passes) const {
@@ -114,14 +197,15 @@ ErrorEstimate Film::error_estimate(int passes) const {
   tbb::parallel_for(0, height_, [&](int y) {
     double var_sum = 0, square_sum = 0;
     for (size_t i = size_t(y) * width_; i < size_t(y + 1) * width_; ++i) {
-      const PixelAccum& a = accum_[i];
-      if (a.count < 2) {
+      const uint32_t count = count_[i];
+      if (count < 2) {
         ++row_skipped[y];
         continue;
       }
-      const double n = a.count, nb = double(a.count / 2), na = n - nb;
+      const double n = count, nb = double(count / 2), na = n - nb;
       for (int k = 0; k < 3; ++k) {
-        double mean_a = (a.rgb[k] - a.half[k]) / na, mean_b = a.half[k] / nb, mean = a.rgb[k] / n;
+        double mean = mean_[3 * i + k], mean_b = half_[3 * i + k];
+        double mean_a = (mean * n - mean_b * nb) / na;
         if (splats) {
           const double s = splat_[3 * i + k], sb = splat_half_[3 * i + k];
           mean_a += (s - sb) * inv_la;
@@ -142,7 +226,7 @@ ErrorEstimate Film::error_estimate(int passes) const {
     square_sum += row_sq[y];
     e.unestimated_pixels += row_skipped[y];
   }
-  const uint64_t n_pixels = accum_.size() - e.unestimated_pixels;
+  const uint64_t n_pixels = count_.size() - e.unestimated_pixels;
   if (!n_pixels) return e;
   const double signal = square_sum - var_sum;
   e.mean_square = std::max(0.0, signal) / double(n_pixels);
@@ -153,82 +237,132 @@ ErrorEstimate Film::error_estimate(int passes) const {
 }
 
 double Film::pixel_variance(int x, int y) const {
-  const PixelAccum& a = accum_[size_t(y) * width_ + x];
-  if (a.count < 2) return 0;
-  const double n = a.count;
+  const size_t i = size_t(y) * width_ + x;
+  if (count_[i] < 2) return 0;
+  const double n = count_[i];
   double v = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double mean = a.rgb[k] / n;
-    v += std::max(0.0, a.rgb2[k] / n - mean * mean) / (n - 1.0);
-  }
+  for (int k = 0; k < 3; ++k) v += std::max(0.0, double(m2_[3 * i + k])) / ((n - 1.0) * n);
   return v;
+}
+
+void Film::resolve_combined(size_t i, float* o) const {
+  const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+  const double splat_scale = light_paths_ && !splat_.empty() ? 1.0 / double(light_paths_) : 0.0;
+  for (int k = 0; k < 3; ++k)
+    o[k] = splat_scale > 0 ? float(double(mean_[3 * i + k]) + splat_[3 * i + k] * splat_scale) : mean_[3 * i + k];
+  o[3] = float(alpha_[i] * inv);
 }
 
 void Film::publish() {
   std::lock_guard<std::mutex> lock(mutex_);
-  published_ = accum_;
-  published_splat_ = splat_;
+  const size_t n = count_.size();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      float o[4];
+      resolve_combined(i, o);
+      for (int k = 0; k < 4; ++k) published_[4 * i + k] = float_to_half(o[k]);
+    }
+  });
   published_light_paths_ = light_paths_;
+  published_valid_ = true;
+}
+
+void Film::begin_writing() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [&] { return readers_waiting_ == 0; });
+  writing_ = true;
+}
+
+void Film::end_writing() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    writing_ = false;
+  }
+  changed_.notify_all();
+}
+
+void Film::finish() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    published_light_paths_ = light_paths_;
+    finished_ = true;
+    writing_ = false;
+  }
+  changed_.notify_all();
+}
+
+std::unique_lock<std::mutex> Film::lock_accumulators() const {
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (writing_) {
+    ++readers_waiting_;
+    changed_.wait(lock, [&] { return !writing_; });
+    --readers_waiting_;
+    if (!readers_waiting_) changed_.notify_all();  // the next pass may start (after this read)
+  }
+  return lock;
 }
 
 bool Film::read_light_tracing(float* out) const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (!published_light_paths_) return false;
-  const double scale = 1.0 / double(published_light_paths_);
-  for (size_t i = 0; i < published_splat_.size(); ++i) out[i] = float(published_splat_[i] * scale);
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  if (!light_paths_ || splat_.empty()) return false;
+  const double scale = 1.0 / double(light_paths_);
+  for (size_t i = 0; i < splat_.size(); ++i) out[i] = float(splat_[i] * scale);
   return true;
 }
 
 uint64_t Film::total_samples() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::unique_lock<std::mutex> lock = lock_accumulators();
   uint64_t n = 0;
-  for (const PixelAccum& a : published_) n += a.count;
+  for (uint32_t c : count_) n += c;
   return n;
 }
 
+namespace {
+const char* pass_name(Pass p) {
+  static const char* const kNames[] = {"Combined", "Depth", "Normal", "Albedo", "Variance", "Sample Count"};
+  return unsigned(p) < unsigned(Pass::Count) ? kNames[int(p)] : "?";
+}
+}  // namespace
+
 void Film::read(Pass pass, float* out, bool labels) const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  if (!has(pass))
+    throw StateError(std::string("this render does not keep the ") + pass_name(pass) + " pass (not enabled when it started)");
   const int c = pass_channels(pass);
   const size_t n = size_t(width_) * height_;
-  const double splat_scale =
-      published_light_paths_ && !published_splat_.empty() ? 1.0 / double(published_light_paths_) : 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    float* o = out + i * c;
-    if (published_.empty()) {
-      for (int k = 0; k < c; ++k) o[k] = pass == Pass::Depth ? 1e10f : 0.0f;
-      continue;
-    }
-    const PixelAccum& a = published_[i];
-    const double inv = a.count ? 1.0 / a.count : 0.0;
-    switch (pass) {
-      case Pass::Combined:
-        for (int k = 0; k < 3; ++k)
-          o[k] = float(a.rgb[k] * inv + (splat_scale > 0 ? published_splat_[3 * i + k] * splat_scale : 0.0));
-        o[3] = float(a.alpha * inv);
-        break;
-      case Pass::Depth: o[0] = a.depth; break;
-      case Pass::Normal:
-        // The mean of the samples' normals, as in Cycles (not renormalised: shorter at edges), so
-        // that sample-split parts average into the full render's pass.
-        for (int k = 0; k < 3; ++k) o[k] = float(a.normal[k] * inv);
-        break;
-      case Pass::Albedo:
-        for (int k = 0; k < 3; ++k) o[k] = float(a.albedo[k] * inv);
-        break;
-      case Pass::Variance:
-        // Variance of the pixel mean: the unbiased sample variance over n.
-        for (int k = 0; k < 3; ++k) {
-          double var = 0;
-          if (a.count > 1) {
-            double mean = a.rgb[k] * inv;
-            var = std::max(0.0, (a.rgb2[k] * inv - mean * mean)) * a.count / (a.count - 1.0) * inv;
-          }
-          o[k] = float(var);
-        }
-        break;
-      case Pass::SampleCount: o[0] = float(a.count); break;
-      case Pass::Count: break;
-    }
+  std::unique_lock<std::mutex> lock(mutex_);
+  const bool published = !finished_ && pass == Pass::Combined;
+  if (!published) {
+    lock.unlock();
+    lock = lock_accumulators();
+  }
+  if (published) {
+    for (size_t i = 0; i < 4 * n; ++i) out[i] = published_valid_ ? half_to_float(published_[i]) : 0.0f;
+  } else {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+     for (size_t i = r.begin(); i < r.end(); ++i) {
+      float* o = out + i * c;
+      const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+      switch (pass) {
+        case Pass::Combined: resolve_combined(i, o); break;
+        case Pass::Depth: o[0] = depth_[i]; break;
+        case Pass::Normal:
+          // The mean of the samples' normals, as in Cycles (not renormalised: shorter at edges), so
+          // that sample-split parts average into the full render's pass.
+          for (int k = 0; k < 3; ++k) o[k] = float(normal_[3 * i + k] * inv);
+          break;
+        case Pass::Albedo:
+          for (int k = 0; k < 3; ++k) o[k] = float(albedo_[3 * i + k] * inv);
+          break;
+        case Pass::Variance:
+          // Variance of the pixel mean: the unbiased sample variance over n.
+          for (int k = 0; k < 3; ++k)
+            o[k] = count_[i] > 1 ? float(std::max(0.0, double(m2_[3 * i + k])) / ((count_[i] - 1.0) * count_[i])) : 0.0f;
+          break;
+        case Pass::SampleCount: o[0] = float(count_[i]); break;
+        case Pass::Count: break;
+      }
+     }
+    });
   }
   if (pass != Pass::Combined || !labels || labels_.empty()) return;
   for (size_t i = 0; i < n; ++i)
@@ -253,11 +387,12 @@ void Film::read_strategy_grid(int columns, int rows, float* out) const {
       for (int y = 0; y < height_; ++y)
         for (int x = 0; x < width_; ++x) {
           const size_t i = size_t(y) * width_ + x;
-          const uint32_t n = accum_[i].count;
+          const uint32_t n = count_[i];
           float* o = out + (size_t(oy + y) * gw + ox + x) * 3;
           for (int k = 0; k < 3; ++k) {
-            double v = strategy_splats_[(i * strategy_cells_ + cell) * 3 + k] * splat_scale;
-            if (n) v += strategies_[(i * strategy_cells_ + cell) * 3 + k] / double(n);
+            const size_t at = (i * layout_.strategy_cells + cell) * 3 + k;
+            double v = strategy_splats_[at] * splat_scale;
+            if (n) v += strategies_[at] / double(n);
             o[k] = float(v);
           }
         }

@@ -1,7 +1,8 @@
-// The film: per-pixel accumulators for every pass (double precision), the pixel filter, and a
-// published copy that readers see while rendering goes on.
+// The film: per-pixel accumulators (float sums, as Cycles' render buffers) of the passes a render
+// asks for, the pixel filter, and a published Combined image that readers see while it renders.
 #pragma once
 
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -40,21 +41,21 @@ struct SampleValue {
   Spectrum albedo{0.0f};
 };
 
-struct PixelAccum {
-  double rgb[3] = {0, 0, 0};
-  double rgb2[3] = {0, 0, 0};
-  // The pixel's odd-numbered samples (its 2nd, 4th, ...): with the rest, two independent half
-  // images for the error estimate (core/film.cpp, Film::error_estimate).
-  double half[3] = {0, 0, 0};
-  double alpha = 0;
-  double normal[3] = {0, 0, 0};
-  double albedo[3] = {0, 0, 0};
-  float depth = 1e10f;
-  uint32_t count = 0;
-};
-
 enum class Pass { Combined = 0, Depth = 1, Normal = 2, Albedo = 3, Variance = 4, SampleCount = 5, Count = 6 };
 int pass_channels(Pass pass);
+constexpr unsigned pass_bit(Pass p) { return 1u << unsigned(p); }
+constexpr unsigned kAllPasses = (1u << unsigned(Pass::Count)) - 1;
+
+// What a film keeps: the passes (Combined and Sample Count always), and whether it keeps the sum
+// of squares (the Variance pass, adaptive sampling), splats (BDPT) and a strategy grid.
+struct FilmLayout {
+  unsigned passes = kAllPasses;
+  bool squares = true;
+  bool splats = false;
+  int strategy_cells = 0;
+  // Bytes per pixel of the accumulators and the published image.
+  size_t bytes_per_pixel() const;
+};
 
 // The image's relative error, estimated from two independent half images A (a pixel's even-
 // numbered samples, its 1st, 3rd, ...) and B (its odd-numbered ones) of the Combined RGB:
@@ -76,20 +77,19 @@ struct ErrorEstimate {
 
 class Film {
  public:
-  Film(int width, int height) : width_(width), height_(height), accum_(size_t(width) * height) {}
+  // Allocates everything a render writes (publishing and reading allocate nothing more).
+  Film(int width, int height, const FilmLayout& layout = FilmLayout());
   int width() const { return width_; }
   int height() const { return height_; }
+  bool has(Pass pass) const { return (layout_.passes & pass_bit(pass)) != 0; }
+  const FilmLayout& layout() const { return layout_; }
   // Only the thread that owns the pixel in the current pass writes it.
   void add(int x, int y, const SampleValue& s);
   // The half (0: A, 1: B) the pixel's next sample goes to.
-  int next_half(int x, int y) const { return int(accum_[size_t(y) * width_ + x].count & 1u); }
+  int next_half(int x, int y) const { return int(count_[size_t(y) * width_ + x] & 1u); }
   // Light-tracing contributions (BDPT's t = 1): summed per pixel and divided, when read, by the
   // number of light paths traced for the whole region (each one may reach any pixel). `half`:
-  // that of the camera sample whose light path made the splat.
-  void enable_splats() {
-    splat_.assign(size_t(width_) * height_ * 3, 0.0);
-    splat_half_ = splat_;
-  }
+  // that of the camera sample whose light path made the splat. Needs FilmLayout::splats.
   void add_splat(uint32_t pixel, const Spectrum& v, int half) {
     for (int k = 0; k < 3; ++k) splat_[3 * size_t(pixel) + k] += v[k];
     if (half)
@@ -108,52 +108,69 @@ class Film {
   // pixel (fewer than 2: no estimate); see ErrorEstimate.
   ErrorEstimate error_estimate(int passes) const;
   // Variance of the pixel's Combined RGB mean (summed over channels) from its camera samples'
-  // sample variance; 0 below 2 samples.
+  // sample variance; 0 below 2 samples. Needs FilmLayout::squares.
   double pixel_variance(int x, int y) const;
-  uint32_t count(int x, int y) const { return accum_[size_t(y) * width_ + x].count; }
+  uint32_t count(int x, int y) const { return count_[size_t(y) * width_ + x]; }
   // BDPT's strategy view: per pixel, one RGB accumulator per strategy cell. Camera-side
   // contributions are averaged over the pixel's samples, splats over the light paths.
-  void enable_strategies(int cells) {
-    strategy_cells_ = cells;
-    strategies_.assign(size_t(width_) * height_ * cells * 3, 0.0f);
-    strategy_splats_.assign(strategies_.size(), 0.0f);
-  }
-  int strategy_cells() const { return strategy_cells_; }
+  int strategy_cells() const { return layout_.strategy_cells; }
   void add_strategies(int x, int y, const Spectrum* values) {
-    float* o = &strategies_[(size_t(y) * width_ + x) * strategy_cells_ * 3];
-    for (int c = 0; c < strategy_cells_; ++c)
+    const int cells = layout_.strategy_cells;
+    float* o = &strategies_[(size_t(y) * width_ + x) * cells * 3];
+    for (int c = 0; c < cells; ++c)
       for (int k = 0; k < 3; ++k) o[3 * c + k] += values[c][k];
   }
   void add_strategy_splat(uint32_t pixel, int cell, const Spectrum& v) {
-    float* o = &strategy_splats_[(size_t(pixel) * strategy_cells_ + cell) * 3];
+    float* o = &strategy_splats_[(size_t(pixel) * layout_.strategy_cells + cell) * 3];
     for (int k = 0; k < 3; ++k) o[k] += v[k];
   }
   // The grid of strategy images: `columns` x `rows` cells of the region's size, RGB, rows bottom
   // to top with depth 0 at the top. Only valid once rendering has stopped.
   void read_strategy_grid(int columns, int rows, float* out) const;
-  // Copies the accumulators to the published buffer readers use.
+  // Resolves Combined into the published image readers see while rendering (the rendering
+  // thread, between passes). Allocates nothing.
   void publish();
+  // The rendering thread writes the accumulators between these (one pass); readers of anything
+  // but Combined wait for the end of the pass, and the next pass waits for readers waiting.
+  void begin_writing();
+  void end_writing();
+  // Rendering has stopped: from now on readers read the accumulators themselves (every pass).
+  void finish();
   // Labels drawn over Combined when it is read (never accumulated): per pixel a LabelPixel of
   // core/label_font.h, rows bottom to top; empty for none. Set before rendering starts.
   void set_labels(std::vector<uint8_t> mask) { labels_ = std::move(mask); }
-  // Resolves a pass of the published buffer: width*height*channels floats, rows bottom to top.
+  // Resolves a pass: width*height*channels floats, rows bottom to top. While rendering, Combined
+  // is the published image (zeros before the first publish) and the other passes are read between
+  // two passes (waiting for the one being rendered); only the passes the film keeps (StateError).
   // `labels` false: Combined without the labels (tests).
   void read(Pass pass, float* out, bool labels = true) const;
   // The light-tracing (t = 1 splat) part of Combined, RGB per pixel; false when the render traced
-  // no light paths (not bidirectional).
+  // no light paths (not bidirectional). Between passes, as read().
   bool read_light_tracing(float* out) const;
   uint64_t total_samples() const;
 
  private:
+  void resolve_combined(size_t i, float* o) const;
+  // Locks the film for reading the accumulators: waits while a pass is being rendered.
+  std::unique_lock<std::mutex> lock_accumulators() const;
   int width_, height_;
-  std::vector<PixelAccum> accum_;
-  std::vector<PixelAccum> published_;
-  std::vector<double> splat_, splat_half_, published_splat_;  // empty without splats
+  FilmLayout layout_;
+  // Structure of arrays, so that a pass nobody asked for costs nothing.
+  // mean_: the running mean of Combined RGB; m2_: the sum of squared deviations from it (Welford);
+  // half_: the running mean of the pixel's odd-numbered samples (its 2nd, 4th, ...), which with
+  // the rest make two independent half images for the error estimate (Film::error_estimate).
+  // alpha_, normal_, albedo_: sums; depth_: the minimum.
+  std::vector<float> mean_, m2_, half_, alpha_, normal_, albedo_, depth_;
+  std::vector<uint32_t> count_;
+  std::vector<float> splat_, splat_half_;  // empty without splats
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
-  int strategy_cells_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;
+  std::vector<uint16_t> published_;  // Combined RGBA, half floats
+  bool published_valid_ = false, finished_ = false, writing_ = false;
+  mutable int readers_waiting_ = 0;
   mutable std::mutex mutex_;
+  mutable std::condition_variable changed_;
 };
 
 }  // namespace lt

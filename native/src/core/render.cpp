@@ -7,6 +7,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <new>
+
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include "core/label_font.h"
 
@@ -45,13 +50,57 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
       settings_(s),
       camera_(scene.camera, s.width, s.height),
       filter_(s.filter, s.filter_width),
-      film_(s.x1 - s.x0, s.y1 - s.y0),
+      film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
       active_(size_t(film_.width()) * film_.height(), 1) {
   active_pixels_.store(active_.size());
-  if (s.integrator == IntegratorType::Bidirectional) film_.enable_splats();
-  const int depth = s.integrator_settings.strategy_depth;
-  if (s.integrator == IntegratorType::Bidirectional && depth > 0) film_.enable_strategies(depth * strategy_columns(depth));
   if (s.integrator == IntegratorType::VolumeDebug) film_.set_labels(volume_debug_labels(s, film_.width(), film_.height()));
+}
+
+FilmLayout RenderJob::film_layout(const RenderSettings& s) {
+  FilmLayout l;
+  l.passes = s.passes;
+  l.squares = (s.passes & pass_bit(Pass::Variance)) || s.adaptive;
+  l.splats = s.integrator == IntegratorType::Bidirectional;
+  const int depth = s.integrator_settings.strategy_depth;
+  if (l.splats && depth > 0) l.strategy_cells = depth * strategy_columns(depth);
+  return l;
+}
+
+MemoryEstimate RenderJob::estimate_bytes(const RenderSettings& s) {
+  const size_t pixels = size_t(s.x1 - s.x0) * size_t(s.y1 - s.y0);
+  MemoryEstimate m;
+  m.film = pixels * film_layout(s).bytes_per_pixel();
+  m.other = pixels;                                // active_
+  if (s.adaptive) m.other += pixels * 8;           // update_active's per-pixel variances
+  if (s.integrator == IntegratorType::Bidirectional)
+    m.other += pixels * sizeof(Splat);             // a pass's splats: about one per camera sample
+  return m;
+}
+
+size_t available_memory() {
+  size_t avail = SIZE_MAX;
+  if (FILE* f = std::fopen("/proc/meminfo", "r")) {
+    char line[256];
+    unsigned long long kb = 0;
+    while (std::fgets(line, sizeof line, f))
+      if (std::sscanf(line, "MemAvailable: %llu kB", &kb) == 1) {
+        avail = size_t(kb) * 1024;
+        break;
+      }
+    std::fclose(f);
+  }
+  struct rlimit rl;
+  if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
+    size_t used = 0;
+    if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+      unsigned long long pages = 0;
+      if (std::fscanf(f, "%llu", &pages) == 1) used = size_t(pages) * size_t(sysconf(_SC_PAGESIZE));
+      std::fclose(f);
+    }
+    const size_t limit = size_t(rl.rlim_cur);
+    avail = std::min(avail, limit > used ? limit - used : size_t(0));
+  }
+  return avail;
 }
 
 RenderJob::~RenderJob() {
@@ -227,7 +276,7 @@ void RenderJob::update_active(const ErrorEstimate& e) {
   active_pixels_.store(active);
 }
 
-void RenderJob::run() {
+void RenderJob::run() noexcept {
   if (start_ == std::chrono::steady_clock::time_point()) start_ = std::chrono::steady_clock::now();
   try {
     tbb::task_arena arena(settings_.threads > 0 ? settings_.threads : tbb::task_arena::automatic);
@@ -241,7 +290,14 @@ void RenderJob::run() {
           break;
         }
         passes_started_.store(s + 1);
-        render_pass(settings_.sample_offset + s);
+        {
+          struct Writing {  // ends the pass's writing also when it throws
+            Film& f;
+            explicit Writing(Film& film) : f(film) { f.begin_writing(); }
+            ~Writing() { f.end_writing(); }
+          } writing(film_);
+          render_pass(settings_.sample_offset + s);
+        }
         if (cancel_.load()) break;
         // A pass cut by the time limit leaves some pixels one sample short: samples_done counts
         // complete passes.
@@ -271,23 +327,37 @@ void RenderJob::run() {
         if (reached) break;
       }
     });
-    film_.publish();
     arena.execute([&] {  // also after a cut pass
       const ErrorEstimate e = film_.error_estimate(samples_done_.load());
       rel_error_.store(e.rel_error);
       unestimated_pixels_.store(e.unestimated_pixels);
     });
+    film_.finish();
     finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
     halt_reason_.store(int(cancel_.load() ? HaltReason::Cancelled : halt));
     state_.store(cancel_.load() ? int(RenderState::Cancelled) : int(RenderState::Done));
+  } catch (const std::bad_alloc&) {
+    fail("out of memory while rendering", true);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "lantern: render failed: %s\n", e.what());
-    error_ = e.what();
-    film_.publish();
-    finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
-    halt_reason_.store(int(HaltReason::Failed));
-    state_.store(int(RenderState::Failed));
+    fail(e.what(), false);
+  } catch (...) {
+    fail("unknown error", false);
   }
+}
+
+// Ends the render as Failed. Allocates nothing (the failure may be an allocation's): the film
+// already holds every pass, and readers read it as it is.
+void RenderJob::fail(const char* what, bool out_of_memory) noexcept {
+  std::snprintf(error_, sizeof error_, "%s", what);
+  std::fprintf(stderr, "lantern: render failed: %s\n", error_);
+  out_of_memory_.store(out_of_memory);
+  try {
+    film_.finish();
+  } catch (...) {  // std::mutex::lock may throw std::system_error; the film stays unpublished
+  }
+  finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+  halt_reason_.store(int(HaltReason::Failed));
+  state_.store(int(RenderState::Failed));
 }
 
 RenderStatus RenderJob::status() const {

@@ -36,7 +36,17 @@ struct RenderSettings {
   double noise_target = 0;
   bool adaptive = false;
   int min_samples = 16;
+  unsigned passes = kAllPasses;  // what the film keeps (FilmLayout::passes)
 };
+
+// The film and per-pixel buffers a render allocates, in bytes (RenderJob::estimate_bytes).
+struct MemoryEstimate {
+  size_t film = 0, other = 0;
+  size_t total() const { return film + other; }
+};
+// What this process can still allocate: the smaller of MemAvailable (/proc/meminfo) and the
+// address-space limit (RLIMIT_AS) minus the address space in use; SIZE_MAX when neither is known.
+size_t available_memory();
 
 enum class RenderState { Running = 0, Done = 1, Cancelled = 2, Failed = 3 };
 // Why a render stopped (None while it runs).
@@ -58,7 +68,10 @@ struct RenderStatus {
 
 class RenderJob {
  public:
+  // Allocates the film; throws std::bad_alloc when it cannot (check estimate_bytes first).
   RenderJob(const Scene& scene, const RenderSettings& settings);
+  static FilmLayout film_layout(const RenderSettings& settings);
+  static MemoryEstimate estimate_bytes(const RenderSettings& settings);
   ~RenderJob();
   void start();
   void cancel() { cancel_.store(true); }
@@ -68,14 +81,19 @@ class RenderJob {
   const RenderSettings& settings() const { return settings_; }
   int region_width() const { return film_.width(); }
   int region_height() const { return film_.height(); }
-  // Renders synchronously on the calling thread's arena (tests, CLI).
-  void run();
+  // Renders synchronously on the calling thread's arena (tests, CLI). Never throws: a failure
+  // (an allocation included) ends the render as Failed, keeping what was rendered.
+  void run() noexcept;
+  // Why the render failed (empty unless Failed), and whether it ran out of memory.
+  const char* error() const { return error_; }
+  bool out_of_memory() const { return out_of_memory_.load(); }
 
  private:
   void render_pass(int sample_index);
   template <class Trace>
   void render_pass_with(int sample_index, Trace trace);
   bool past_deadline() const;
+  void fail(const char* what, bool out_of_memory) noexcept;
   // Adaptive sampling: clears active_ for pixels whose variance meets their share of the target.
   void update_active(const ErrorEstimate& e);
   const Scene& scene_;
@@ -97,7 +115,9 @@ class RenderJob {
   std::vector<uint8_t> active_;  // per pixel of the region: still sampling
   std::chrono::steady_clock::time_point start_;
   std::atomic<double> finished_elapsed_{-1};
-  std::string error_;
+  // Written without allocating (the failure may be an allocation's).
+  char error_[512] = {0};
+  std::atomic<bool> out_of_memory_{false};
   // Light-tracing splats of the current pass, two lists per tile (half A, half B), merged in tile
   // order so that the image does not depend on the thread count.
   std::vector<std::vector<Splat>> tile_splats_;

@@ -1,5 +1,9 @@
 #include "scene/image.h"
 
+#include <algorithm>
+#include <cstdlib>
+#include <new>
+
 namespace lt {
 
 float srgb_to_linear(float c) {
@@ -7,21 +11,94 @@ float srgb_to_linear(float c) {
   return std::pow((c + 0.055f) * (1.0f / 1.055f), 2.4f);
 }
 
-Image::Image(int width, int height, int channels, const float* pixels, bool srgb, Interpolation interp,
-             Extension ext)
-    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb) {
-  size_t n = size_t(width) * height;
-  texels_.resize(n);
-  first_.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    const float* px = pixels + i * channels;
-    Vec3 c = channels >= 3 ? Vec3(px[0], px[1], px[2]) : Vec3(px[0]);
-    for (int k = 0; k < 3; ++k) c[k] = std::isfinite(c[k]) ? c[k] : 0.0f;  // never let a bad texel poison the image
-    texels_[i] = c;
-    first_[i] = c.x;
-  }
+FloatBuffer::FloatBuffer(size_t n) : p_(static_cast<float*>(std::malloc(std::max<size_t>(n, 1) * sizeof(float)))), n_(n) {
+  if (!p_) throw std::bad_alloc();
 }
 
+FloatBuffer& FloatBuffer::operator=(FloatBuffer&& o) noexcept {
+  if (this != &o) {
+    reset();
+    p_ = o.p_;
+    n_ = o.n_;
+    o.p_ = nullptr;
+    o.n_ = 0;
+  }
+  return *this;
+}
+
+FloatBuffer::~FloatBuffer() { reset(); }
+
+void FloatBuffer::reset() {
+  std::free(p_);
+  p_ = nullptr;
+  n_ = 0;
+}
+
+void FloatBuffer::shrink(size_t n) {
+  if (n >= n_) return;
+  if (void* q = std::realloc(p_, std::max<size_t>(n, 1) * sizeof(float))) p_ = static_cast<float*>(q);
+  n_ = n;  // a failed shrink keeps the larger block, which is still valid
+}
+
+namespace {
+// The value Blender gives for byte b of a byte image (Image.pixels: b * (1.0f / 255.0f)).
+inline float byte_value(uint8_t b) { return float(b) * (1.0f / 255.0f); }
+}  // namespace
+
+Image::Image(int width, int height, int channels, const float* pixels, bool srgb, Interpolation interp, Extension ext)
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb) {
+  const size_t n = size_t(width) * height * channels;
+  FloatBuffer copy(n);
+  std::copy(pixels, pixels + n, copy.data());
+  store(channels, std::move(copy));
+}
+
+Image::Image(int width, int height, int channels, FloatBuffer pixels, bool srgb, Interpolation interp, Extension ext)
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb) {
+  store(channels, std::move(pixels));
+}
+
+void Image::store(int channels, FloatBuffer pixels) {
+  const size_t n = size_t(width_) * height_;
+  channels_ = channels >= 3 ? 3 : 1;
+  float* p = pixels.data();
+  // In place: RGB(A) to RGB (the write index never passes the read index), non-finite values to 0
+  // (never let a bad texel poison the image), and whether every value is an exact byte value.
+  bool bytes = true;
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < channels_; ++k) {
+      float v = p[i * channels + k];
+      if (!std::isfinite(v)) v = 0.0f;
+      p[i * channels_ + k] = v;
+      if (bytes) {
+        const float b = std::nearbyint(v * 255.0f);
+        bytes = b >= 0.0f && b <= 255.0f && byte_value(uint8_t(b)) == v;
+      }
+    }
+  if (bytes) {
+    bytes_.resize(n * channels_);
+    for (size_t i = 0; i < bytes_.size(); ++i) bytes_[i] = uint8_t(std::nearbyint(p[i] * 255.0f));
+    return;  // `pixels` is freed here
+  }
+  pixels.shrink(n * channels_);
+  floats_ = std::move(pixels);
+}
+
+Vec3 Image::fetch(size_t i) const {
+  if (!bytes_.empty()) {
+    if (channels_ == 1) return Vec3(byte_value(bytes_[i]));
+    const uint8_t* b = &bytes_[3 * i];
+    return Vec3(byte_value(b[0]), byte_value(b[1]), byte_value(b[2]));
+  }
+  const float* f = floats_.data();
+  if (channels_ == 1) return Vec3(f[i]);
+  return Vec3(f[3 * i], f[3 * i + 1], f[3 * i + 2]);
+}
+
+float Image::fetch_first(size_t i) const {
+  if (!bytes_.empty()) return byte_value(bytes_[i * channels_]);
+  return floats_.data()[i * channels_];
+}
 
 template <class T, class F>
 T Image::filtered(Vec2 uv, F get) const {
@@ -54,17 +131,17 @@ T Image::filtered(Vec2 uv, F get) const {
 }
 
 Vec3 Image::texel(int x, int y) const {
-  Vec3 c = texels_[size_t(y) * width_ + x];
+  Vec3 c = fetch(size_t(y) * width_ + x);
   return srgb_ ? Vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) : c;
 }
 
 Vec3 Image::lookup(Vec2 uv) const {
-  Vec3 c = filtered<Vec3>(uv, [&](int x, int y) { return texels_[size_t(y) * width_ + x]; });
+  Vec3 c = filtered<Vec3>(uv, [&](int x, int y) { return fetch(size_t(y) * width_ + x); });
   return srgb_ ? Vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) : c;
 }
 
 float Image::lookup_value(Vec2 uv) const {
-  float v = filtered<float>(uv, [&](int x, int y) { return first_[size_t(y) * width_ + x]; });
+  float v = filtered<float>(uv, [&](int x, int y) { return fetch_first(size_t(y) * width_ + x); });
   return srgb_ ? srgb_to_linear(v) : v;
 }
 

@@ -1,7 +1,11 @@
-// Images for textures and environment maps: float RGB, rows bottom to top as Blender stores them,
-// looked up like Cycles (pixel centres at (i + 0.5) / width).
+// Images for textures and environment maps, rows bottom to top as Blender stores them, looked up
+// like Cycles (pixel centres at (i + 0.5) / width). Stored at the source's precision: 8 bits per
+// channel when every value is one Blender gives for a byte image (b * (1/255)), else 32-bit float;
+// grey images keep one channel, others RGB (alpha is not used).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "core/math.h"
@@ -12,16 +16,40 @@ namespace lt {
 enum class Interpolation { Linear, Closest };
 enum class Extension { Repeat, Extend, Clip };
 
+// A malloc'd float buffer: an image's pixels as the caller fills them (lt_scene_begin_image),
+// shrunk in place once converted.
+class FloatBuffer {
+ public:
+  FloatBuffer() = default;
+  explicit FloatBuffer(size_t n);  // throws std::bad_alloc
+  FloatBuffer(FloatBuffer&& o) noexcept : p_(o.p_), n_(o.n_) { o.p_ = nullptr; o.n_ = 0; }
+  FloatBuffer& operator=(FloatBuffer&& o) noexcept;
+  ~FloatBuffer();
+  float* data() const { return p_; }
+  size_t size() const { return n_; }
+  void shrink(size_t n);  // keeps the first n floats (realloc: in place for large blocks)
+  void reset();
+
+ private:
+  float* p_ = nullptr;
+  size_t n_ = 0;
+};
+
 class Image {
  public:
-  // channels 1, 3 or 4; srgb: decode the sRGB transfer function to linear.
+  // channels 1, 3 or 4; srgb: decode the sRGB transfer function to linear. Copies the pixels.
   Image(int width, int height, int channels, const float* pixels, bool srgb, Interpolation interp,
+        Extension ext);
+  // Takes `pixels` (width*height*channels floats) and converts it in place: no second copy.
+  Image(int width, int height, int channels, FloatBuffer pixels, bool srgb, Interpolation interp,
         Extension ext);
   int width() const { return width_; }
   int height() const { return height_; }
   Vec3 lookup(Vec2 uv) const;            // RGB
   float lookup_value(Vec2 uv) const;     // first channel, for scalar inputs
   Vec3 texel(int x, int y) const;  // linear
+  size_t bytes() const { return bytes_.size() + floats_.size() * sizeof(float); }
+  bool is_byte() const { return !bytes_.empty(); }
 
  private:
   int width_, height_;
@@ -30,8 +58,12 @@ class Image {
   // sRGB images stay encoded and are decoded after interpolation, as Cycles does for 8-bit sRGB
   // textures (they differ from interpolating decoded values at sharp edges).
   bool srgb_ = false;
-  std::vector<Vec3> texels_;
-  std::vector<float> first_;  // first channel
+  int channels_ = 3;  // stored: 1 or 3
+  std::vector<uint8_t> bytes_;  // 8-bit storage, or
+  FloatBuffer floats_;          // float storage
+  void store(int channels, FloatBuffer pixels);
+  Vec3 fetch(size_t i) const;
+  float fetch_first(size_t i) const;
   template <class T, class F> T filtered(Vec2 uv, F fetch) const;
 };
 
