@@ -73,33 +73,41 @@ inline double eval(const Closure& c, D3 o, D3 i) {
 // E = integral over v, phi of F G1(o) G1(i) (o.m) / (cos_o cos_m) 2 v dv dphi / (2 pi).
 // F = cspec0 (1 - FH) + FH is linear in cspec0: returns the albedos for cspec0 = 0 and 1, so that
 // E(cspec0) = E0 + cspec0 (E1 - E0) (E0 = E1 without Fresnel).
-struct Albedo {
-  double e0, e1;
-  double operator()(double cspec0) const { return e0 + cspec0 * (e1 - e0); }
-};
-inline Albedo albedo(const Closure& c, double theta_o, int n = 600) {
-  const D3 o{std::sin(theta_o), 0, std::cos(theta_o)};
-  const double a2 = c.alpha * c.alpha;
-  double s0 = 0, s1 = 0;
-  Closure black = c, white = c;
-  black.cspec0 = 0;
-  white.cspec0 = 1;
+// The midpoint rule above: calls visit(i, om, w) for every reflected direction i of the n x n
+// grid (half the azimuths: every integrand here is even in phi), w its weight without Fresnel
+// (om = o.m, Fresnel's argument), the weights summing to the albedo at F = 1.
+template <class Visit>
+void for_each_reflection(const D3& o, double alpha, int n, Visit visit) {
+  const double a2 = alpha * alpha;
   for (int a = 0; a < n; ++a) {
     const double v = (a + 0.5) / n, u = 1 - v * v;
     const double t2 = a2 * u / (v * v), cos_m = 1 / std::sqrt(1 + t2), sin_m = std::sqrt(t2) * cos_m;
-    for (int b = 0; b < n; ++b) {  // half the azimuths: the integrand is even in phi
+    for (int b = 0; b < n; ++b) {
       const double phi = kPi * (b + 0.5) / n;
       const D3 m{sin_m * std::cos(phi), sin_m * std::sin(phi), cos_m};
       const double om = dot(o, m);
       if (om <= 0) continue;
       const D3 i{2 * om * m.x - o.x, 2 * om * m.y - o.y, 2 * om * m.z - o.z};
       if (i.z <= 0) continue;
-      const double g = ggx_G1(o.z, a2) * ggx_G1(i.z, a2) * om / (o.z * cos_m) * 2 * v;
-      s0 += black.F(om) * g;
-      s1 += white.F(om) * g;
+      visit(i, om, ggx_G1(o.z, a2) * ggx_G1(i.z, a2) * om / (o.z * cos_m) * 2 * v / (double(n) * n));
     }
   }
-  return {s0 / (double(n) * n), s1 / (double(n) * n)};
+}
+
+struct Albedo {
+  double e0, e1;
+  double operator()(double cspec0) const { return e0 + cspec0 * (e1 - e0); }
+};
+inline Albedo albedo(const Closure& c, double theta_o, int n = 600) {
+  Closure black = c, white = c;
+  black.cspec0 = 0;
+  white.cspec0 = 1;
+  double s0 = 0, s1 = 0;
+  for_each_reflection({std::sin(theta_o), 0, std::cos(theta_o)}, c.alpha, n, [&](const D3&, double om, double w) {
+    s0 += black.F(om) * w;
+    s1 += white.F(om) * w;
+  });
+  return {s0, s1};
 }
 
 }  // namespace cycles_ref

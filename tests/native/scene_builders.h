@@ -100,6 +100,11 @@ lt_volume_desc volume(int node, float density, float color = 1, float g = 0);
 // for the integrators that render media.
 int add_volume_material(lt_scene* s, const lt_volume_desc& d);
 
+// A committed scene that exercises most of the path tracer: diffuse, glossy, glass and emissive
+// surfaces, an area light, a soft point light, a sun and the world; with fog, a fog box around the
+// glossy sphere (the determinism tests and the ThreadSanitizer driver).
+ScenePtr varied_scene(bool fog = false);
+
 // Defaults with the given size, samples and seed.
 lt_render_settings render_settings(int width, int height, int samples, unsigned seed = 0);
 

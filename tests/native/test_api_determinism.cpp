@@ -11,40 +11,6 @@ using namespace lt_test;
 
 namespace {
 
-// A scene that exercises most of the path tracer: diffuse, glossy, glass and emissive surfaces, an
-// area light, a soft point light, a sun and the world; with fog, a fog box around the glossy sphere.
-ScenePtr varied_scene(bool fog = false) {
-  ScenePtr sp = new_scene();
-  lt_scene* s = sp.get();
-  int floor = add_diffuse(s, {0.7f, 0.6f, 0.5f});
-  add_object(s, plane(20, 20), floor);
-  add_object(s, box({-1.5f, -0.5f, 0}, {-0.5f, 0.5f, 1}), add_diffuse(s, {0.2f, 0.5f, 0.8f}, 0.5f));
-
-  const int glossy_id = add_glossy(s, {0.9f, 0.9f, 0.9f}, 0.3f);
-  add_object(s, icosphere(0.5f, 3), glossy_id, translate({0.3f, 0, 0.5f}));
-  if (fog)
-    add_object(s, box({-0.5f, -0.8f, 0.01f}, {1.1f, 0.8f, 1.2f}),
-               add_volume_material(s, volume(LT_VOLUME_PRINCIPLED, 1.5f, 0.8f, 0.3f)));
-
-  lt_shader_node glass = node(LT_NODE_GLASS);
-  glass.color.value[0] = glass.color.value[1] = glass.color.value[2] = 1;
-  glass.ior = 1.5f;
-  int glass_id = -1;
-  check(lt_scene_add_material(s, &glass, 1, 0, &glass_id), "glass");
-  add_object(s, uv_sphere(0.4f, 24, 12, true), glass_id, translate({1.3f, -0.3f, 0.4f}));
-
-  add_object(s, plane(0.5f, 0.5f), add_emission(s, {1, 0.8f, 0.6f}, 5), compose(translate({0, 1.5f, 1}), rotate({1, 0, 0}, 1.2f)));
-  add_light(s, area_light(LT_AREA_RECTANGLE, 1, 0.5f, look_at({0, -1, 3}, {0, 0, 0}), 300));
-  lt_light_desc pt = point_light({-1, -2, 2}, 200);
-  pt.radius = 0.2f;
-  add_light(s, pt);
-  add_light(s, sun_light({0.3f, 0.2f, -1}, 2, 0.05f));
-  set_world(s, {0.2f, 0.3f, 0.5f}, 0.5f);
-  set_camera(s, perspective_camera(look_at({0.5f, -5, 2.5f}, {0, 0, 0.5f}), 35));
-  check(lt_scene_commit(s), "commit");
-  return sp;
-}
-
 bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }

@@ -186,27 +186,14 @@ std::vector<double> sphere_radiance_per_bounce_limit(const cycles_ref::Closure& 
   using namespace cycles_ref;
   const double step = (kPi / 2) / (J - 1);  // nodes at 0 .. 90 degrees
   std::vector<double> K(size_t(J) * J, 0.0);
-  const double a2 = c.alpha * c.alpha;
-  for (int j = 0; j < J - 1; ++j) {  // grazing (90 degrees) reflects nothing
-    const D3 o{std::sin(j * step), 0, std::cos(j * step)};
-    for (int a = 0; a < n; ++a) {
-      const double v = (a + 0.5) / n, u = 1 - v * v;
-      const double t2 = a2 * u / (v * v), cos_m = 1 / std::sqrt(1 + t2), sin_m = std::sqrt(t2) * cos_m;
-      for (int b = 0; b < n; ++b) {
-        const double phi = kPi * (b + 0.5) / n;
-        const D3 m{sin_m * std::cos(phi), sin_m * std::sin(phi), cos_m};
-        const double om = dot(o, m);
-        if (om <= 0) continue;
-        const D3 i{2 * om * m.x - o.x, 2 * om * m.y - o.y, 2 * om * m.z - o.z};
-        if (i.z <= 0) continue;
-        const double w = c.F(om) * ggx_G1(o.z, a2) * ggx_G1(i.z, a2) * om / (o.z * cos_m) * 2 * v / (double(n) * n);
-        const double x = std::acos(std::min(1.0, i.z)) / step;
-        const int l = std::min(int(x), J - 2);
-        K[size_t(j) * J + l] += w * (l + 1 - x);
-        K[size_t(j) * J + l + 1] += w * (x - l);
-      }
-    }
-  }
+  for (int j = 0; j < J - 1; ++j)  // grazing (90 degrees) reflects nothing
+    for_each_reflection({std::sin(j * step), 0, std::cos(j * step)}, c.alpha, n, [&](const D3& i, double om, double w) {
+      w *= c.F(om);
+      const double x = std::acos(std::min(1.0, i.z)) / step;
+      const int l = std::min(int(x), J - 2);
+      K[size_t(j) * J + l] += w * (l + 1 - x);
+      K[size_t(j) * J + l + 1] += w * (x - l);
+    });
   std::vector<double> g(J, 1.0), out;
   double total = le;  // the first hit's own emission
   for (int k = 1; k <= max_bounces + 1; ++k) {

@@ -18,32 +18,6 @@ using namespace lt_test;
 
 namespace {
 
-// Diffuse, glossy and glass surfaces, an emissive quad, an area and a point light, and a fog box.
-ScenePtr scene() {
-  ScenePtr sp = new_scene();
-  lt_scene* s = sp.get();
-  add_object(s, plane(20, 20), add_diffuse(s, {0.7f, 0.6f, 0.5f}));
-  add_object(s, box({-1.5f, -0.5f, 0}, {-0.5f, 0.5f, 1}), add_diffuse(s, {0.2f, 0.5f, 0.8f}, 0.5f));
-  add_object(s, icosphere(0.5f, 2), add_glossy(s, {0.9f, 0.9f, 0.9f}, 0.3f), translate({0.3f, 0, 0.5f}));
-  add_object(s, box({-0.5f, -0.8f, 0.01f}, {1.1f, 0.8f, 1.2f}),
-             add_volume_material(s, volume(LT_VOLUME_PRINCIPLED, 1.5f, 0.8f, 0.3f)));
-  lt_shader_node glass = node(LT_NODE_GLASS);
-  glass.color.value[0] = glass.color.value[1] = glass.color.value[2] = 1;
-  glass.ior = 1.5f;
-  int glass_id = -1;
-  check(lt_scene_add_material(s, &glass, 1, 0, &glass_id), "glass");
-  add_object(s, uv_sphere(0.4f, 12, 6, true), glass_id, translate({1.3f, -0.3f, 0.4f}));
-  add_object(s, plane(0.5f, 0.5f), add_emission(s, {1, 0.8f, 0.6f}, 5), compose(translate({0, 1.5f, 1}), rotate({1, 0, 0}, 1.2f)));
-  add_light(s, area_light(LT_AREA_RECTANGLE, 1, 0.5f, look_at({0, -1, 3}, {0, 0, 0}), 300));
-  lt_light_desc pt = point_light({-1, -2, 2}, 200);
-  pt.radius = 0.2f;
-  add_light(s, pt);
-  set_world(s, {0.2f, 0.3f, 0.5f}, 0.5f);
-  set_camera(s, perspective_camera(look_at({0.5f, -5, 2.5f}, {0, 0, 0.5f}), 35));
-  check(lt_scene_commit(s), "commit");
-  return sp;
-}
-
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::runtime_error(what);
 }
@@ -80,7 +54,7 @@ int main() {
   // Four render threads whatever the machine has (CI has two cores).
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 4);
   try {
-    ScenePtr s = scene();
+    ScenePtr s = varied_scene(/*fog=*/true);
     TempDir dir;
 
     std::printf("bidirectional, strategy view, 4 threads\n");
