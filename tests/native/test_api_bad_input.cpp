@@ -875,3 +875,29 @@ TEST(ApiBadInput, GlassIorBelowOneReflectsTotallyAsCycles) {
     }
   }
 }
+
+// Embree traces only rays whose origin and direction components are within 1.844e18 (its
+// FLT_LARGE; Debian's build asserts on others and aborts the process). A camera, geometry or a
+// light beyond that range must render (such rays miss and such shadow rays are blocked), finite,
+// with a warning that says so, never abort. Found by fuzz_abi (a camera 1e19 away).
+TEST(ApiBadInput, CoordinatesBeyondEmbreesRangeRenderWithAWarning) {
+  {  // the camera far away
+    ScenePtr sp = basic_scene();
+    set_camera(sp.get(), perspective_camera(look_at({0, -1e19f, 3}, {0, 0, 0}), 35));
+    commit_and_render(sp.get());
+    EXPECT_TRUE(has_warning(sp.get(), "beyond")) << "camera";
+  }
+  {  // an orthographic camera wider than the range
+    ScenePtr sp = basic_scene();
+    set_camera(sp.get(), orthographic_camera(look_at({0, -4, 3}, {0, 0, 0}), 1e30f));
+    commit_and_render(sp.get());
+    EXPECT_TRUE(has_warning(sp.get(), "beyond")) << "orthographic camera";
+  }
+  {  // geometry scaled beyond the range, and a lamp out there
+    ScenePtr sp = basic_scene();
+    add_object(sp.get(), icosphere(1, 1), add_diffuse(sp.get(), {0.5f, 0.5f, 0.5f}), scale({1e25f, 1e25f, 1e25f}));
+    add_light(sp.get(), point_light({1e30f, 0, 0}, 1e30f));
+    commit_and_render(sp.get());
+    EXPECT_TRUE(has_warning(sp.get(), "beyond")) << "geometry";
+  }
+}

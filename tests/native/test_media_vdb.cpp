@@ -175,13 +175,14 @@ TEST(VdbErrors, MissingFile) {
 }
 
 TEST(VdbErrors, CorruptAndTruncatedFiles) {
-  // Every truncation of a valid file either fails with IoError or, if only grids after the
-  // density grid were cut, still loads the same density grid: never a crash, never wrong values.
+  // Every truncation of a valid file fails with IoError naming the file, never a crash. Cut after
+  // its header, the header's grid descriptors show the cut and the file is refused before OpenVDB
+  // reads it (OpenVDB reads past the end and allocates what unset length fields say: gigabytes for
+  // some cuts, run to run).
   std::ifstream in(vdb("density.vdb"), std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(bytes.size(), 1000u);
   const std::string path = std::string(LANTERN_TEST_VDB_DIR) + "/truncated_test.vdb";
-  int failed = 0, loaded = 0;
   std::vector<size_t> lengths = {0, 1, 4, 8, 16, 100, 300};
   for (size_t len = 500; len < bytes.size(); len += 997) lengths.push_back(len);
   lengths.push_back(bytes.size() - 1);
@@ -190,22 +191,11 @@ TEST(VdbErrors, CorruptAndTruncatedFiles) {
       std::ofstream out(path, std::ios::binary | std::ios::trunc);
       out.write(bytes.data(), std::streamsize(len));
     }
-    std::string kind, msg;
-    GridData g;
-    msg = error_of([&] { g = load_density_grid(path); }, &kind);
-    if (kind == "none") {
-      ++loaded;
-      EXPECT_EQ(g.active_voxels, 16u * 16u * 16u) << "length " << len;
-      EXPECT_FLOAT_EQ(g.voxel(5, 7, 9), float(tv::ramp(5, 7, 9))) << "length " << len;
-    } else {
-      ++failed;
-      EXPECT_EQ(kind, "IoError") << "length " << len << ": " << msg;
-      EXPECT_NE(msg.find("truncated_test.vdb"), std::string::npos) << msg;
-    }
+    std::string kind, msg = error_of([&] { load_density_grid(path); }, &kind);
+    EXPECT_EQ(kind, "IoError") << "length " << len << ": " << msg;
+    EXPECT_NE(msg.find("truncated_test.vdb"), std::string::npos) << msg;
+    if (len >= 100) EXPECT_NE(msg.find("(truncated: "), std::string::npos) << "length " << len << ": " << msg;
   }
-  EXPECT_GT(failed, 3);
-  std::printf("[ media    ] truncations: %d failed cleanly, %d still loaded the intact density grid\n", failed,
-              loaded);
   // Garbage that is not a VDB file at all.
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);

@@ -14,7 +14,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "make_test_vdb.h"
@@ -23,10 +25,23 @@ namespace tv = lt::test_vdb;
 
 namespace {
 
+// Writes the grids, then replaces the random UUID OpenVDB puts in the header (36 ASCII characters
+// at byte 21: magic, version, library version, offsets flag) by a fixed one, so that every machine
+// generates the same bytes and tests that cut or corrupt these files see the same input.
 void write(const std::string& path, const openvdb::GridPtrVec& grids) {
   openvdb::io::File file(path);
   file.write(grids);
   file.close();
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  char uuid[36];
+  f.seekg(21);
+  f.read(uuid, 36);
+  if (!f || uuid[8] != '-' || uuid[13] != '-' || uuid[18] != '-' || uuid[23] != '-') {
+    std::fprintf(stderr, "make_test_vdb: unexpected VDB header in %s\n", path.c_str());
+    std::exit(1);
+  }
+  f.seekp(21);
+  f.write("00000000-0000-4000-8000-000000000000", 36);
 }
 
 openvdb::FloatGrid::Ptr ramp_grid() {

@@ -458,6 +458,10 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     c.clip_start = d->clip_start;
     c.clip_end = d->clip_end;
     c.pixel_aspect = d->pixel_aspect;
+    const float reach = c.orthographic ? 0.5f * c.ortho_scale * (1 + std::max(std::abs(c.shift_x), std::abs(c.shift_y))) : 0;
+    if (!lt::within_traceable_range(c.xf.point(lt::Vec3(0.0f))) || !(reach <= lt::kTraceableRange))
+      scene->scene.warnings.push_back("the camera reaches beyond 1.8e18 from the origin, the range within which rays "
+                                      "can be traced (Embree's); its rays from beyond it miss");
     begin_edit(scene, false);
     scene->scene.camera = c;
     scene->scene.camera_set = true;

@@ -232,7 +232,14 @@ RTCScene Geometry::baked_scene(int instance) {
   return b.rtc;
 }
 
+namespace {
+bool traceable(const Ray& r) {
+  return within_traceable_range(r.o) && within_traceable_range(r.d) && !std::isnan(r.tmin) && !std::isnan(r.tmax);
+}
+}  // namespace
+
 bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
+  if (!traceable(ray)) return false;
   VisibilityContext c;
   rtcInitIntersectContext(&c.ctx);
   if (partial_visibility_) {
@@ -265,6 +272,7 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
 }
 
 bool Geometry::occluded(const Ray& ray) const {
+  if (!traceable(ray)) return true;
   VisibilityContext c;
   rtcInitIntersectContext(&c.ctx);
   if (partial_visibility_) {

@@ -4,6 +4,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,14 @@ struct Bounds {
   bool empty() const { return lo.x > hi.x; }
 };
 
+// Embree 3 traverses only rays whose origin and direction components lie within FLT_LARGE
+// (RayK::valid() in its kernels/common/ray.h; Debian's build asserts on others). Geometry, lamps
+// and cameras beyond it get a warning (Scene::commit, the camera), and rays outside it miss.
+constexpr float kTraceableRange = 1.844e18f;
+inline bool within_traceable_range(const Vec3& p) {
+  return std::abs(p.x) <= kTraceableRange && std::abs(p.y) <= kTraceableRange && std::abs(p.z) <= kTraceableRange;
+}
+
 class Geometry {
  public:
   Geometry();
@@ -64,7 +73,8 @@ class Geometry {
   uint64_t mesh_builds() const { return mesh_builds_; }
   uint64_t top_builds() const { return top_builds_; }
 
-  // Closest hit among instances visible to rays of the given visibility bit.
+  // Closest hit among instances visible to rays of the given visibility bit. A ray outside
+  // kTraceableRange (or with a NaN direction or extent) hits nothing and is occluded.
   bool intersect(const Ray& ray, unsigned visibility, Hit* hit) const;
   // Any hit among instances that cast shadows.
   bool occluded(const Ray& ray) const;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <mutex>
 
@@ -21,12 +22,68 @@ void init_openvdb() {
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
+// OpenVDB reads without checking its stream: from a file cut short it reads past the end and then
+// allocates (and clears) what unset length fields say, gigabytes for some cuts, differently from
+// run to run. The header's grid descriptors say where each grid's data ends (each descriptor is
+// followed by its grid): a file shorter than that is refused before OpenVDB reads it. Parses
+// OpenVDB's File layout of versions 222 to 224 (io/Archive.cc readHeader, MetaMap::readMeta,
+// GridDescriptor::read, File::readGridDescriptors); files of another layout are left to OpenVDB.
+void refuse_truncated(const std::string& path) {
+  std::error_code ec;
+  const uint64_t size = std::filesystem::file_size(path, ec);
+  std::ifstream in(path, std::ios::binary);
+  if (ec || !in) return;
+  auto read = [&](void* p, size_t n) { return bool(in.read(static_cast<char*>(p), std::streamsize(n))); };
+  auto truncated = [&](const std::string& what) {
+    throw IoError("cannot read VDB file " + quoted(path) + " (truncated: " + what + ", the file ends at byte " +
+                  std::to_string(size) + ")");
+  };
+  int64_t magic = 0;
+  uint32_t version = 0, library[2];
+  char offsets = 0, uuid[36];
+  if (!read(&magic, 8) || magic != int64_t(openvdb::OPENVDB_MAGIC) || !read(&version, 4) || version < 222 ||
+      version > 224 || !read(library, 8) || !read(&offsets, 1) || !offsets || !read(uuid, 36))
+    return;
+  // From here on every field is the layout's: a read that fails is a read past the end.
+  auto skip = [&](uint64_t n) {
+    if (uint64_t(in.tellg()) + n > size) truncated("a header field runs past the end");
+    in.seekg(std::streamoff(n), std::ios::cur);
+  };
+  auto u32 = [&] {
+    uint32_t v = 0;
+    if (!read(&v, 4)) truncated("the header is cut");
+    return v;
+  };
+  auto string = [&] {
+    std::string v(u32(), '\0');
+    if (v.size() > size || !read(v.data(), v.size())) truncated("the header is cut");
+    return v;
+  };
+  for (uint32_t i = 0, n = u32(); i < n; ++i) {  // file metadata: name, type name, byte count, value
+    string();
+    string();
+    skip(u32());
+  }
+  const uint32_t grids = u32();
+  for (uint32_t i = 0; i < grids; ++i) {
+    const std::string name = string();
+    string();  // type
+    string();  // instance parent
+    int64_t pos[3];  // grid, block, end
+    if (!read(pos, sizeof(pos))) truncated("the header is cut");
+    const std::string shown = quoted(name.substr(0, name.find('\x1e')));  // unique names: name, 0x1e, number
+    if (pos[2] < 0 || uint64_t(pos[2]) > size) truncated("grid " + shown + " ends at byte " + std::to_string(pos[2]));
+    in.seekg(pos[2]);
+  }
+}
+
 // Opens the file without delayed loading (no memory mapping: a file truncated or replaced later
 // cannot fault a render) and returns the metadata of all grids.
 openvdb::GridPtrVecPtr open_metadata(openvdb::io::File& file, const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw IoError("VDB file not found: " + quoted(path));
   if (std::filesystem::is_directory(path, ec)) throw IoError("VDB path is a directory, not a file: " + quoted(path));
+  refuse_truncated(path);
   try {
     file.open(/*delayLoad=*/false);
     openvdb::GridPtrVecPtr grids = file.readAllGridMetadata();
