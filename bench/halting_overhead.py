@@ -5,7 +5,7 @@ built without it (e.g. the commit before halting landed), same scene, same setti
         [--repeats 3] [--out bench/results/halting_overhead.json]
 
 The script is its own worker: each render runs in a fresh `blender -b` process that builds the test
-scene (tests/scenes/build_scenes.py), exports it with this checkout's add-on and renders through
+scene (scenes/build_scenes.py), exports it with this checkout's add-on and renders through
 core.Render with the given library (no halting, no adaptive sampling: only the always-on half image
 and the per-pass estimate differ), printing the core's render time. Renders of the two libraries
 alternate, `--repeats` each per configuration; ratios use the best time of each (other processes
@@ -27,7 +27,7 @@ CONFIGS = [  # (scene, integrator, width, height, samples)
 
 
 def worker(args):
-    sys.path[:0] = [os.path.join(REPO, "addon"), os.path.join(REPO, "tests", "scenes")]
+    sys.path[:0] = [os.path.join(REPO, "addon"), os.path.join(REPO, "scenes")]
     import build_scenes
     import lantern
     from lantern import core, engine
@@ -35,6 +35,7 @@ def worker(args):
     from lantern.export import export_scene
     if args.abi:
         core.ABI_VERSION = args.abi  # a baseline from before the ABI grew: it reads the prefix
+        core.CHECK_LAYOUT = False  # and has no lt_abi_layout (ABI < 6)
     build_scenes.reset_file()
     scene = build_scenes.build(args.scene)
     scene.lantern.integrator = args.integrator

@@ -2,6 +2,11 @@
 
 This is the only module that knows the ABI: structures, signatures and status codes live here.
 Bulk arrays are numpy contiguous float32/int32 passed by pointer; the core copies what it keeps.
+
+The declarations below are Python's spelling of lantern.h, checked against the library when it
+loads (lt_abi_layout: every struct's size, every field's offset and size, every constant's value):
+a library built from another lantern.h is refused with a message naming what differs. Enum names
+(integrators, ...) and render-setting defaults are read from the core, not repeated here.
 """
 
 import ctypes
@@ -10,10 +15,11 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 5
+ABI_VERSION = 6
 
 # lt_status
 OK = 0
+ERROR_INVALID_ARGUMENT, ERROR_OUT_OF_MEMORY, ERROR_IO, ERROR_STATE, ERROR_INTERNAL = 1, 2, 3, 4, 5
 _STATUS_NAMES = {
     1: "invalid argument",
     2: "out of memory",
@@ -52,8 +58,7 @@ AREA_SQUARE, AREA_RECTANGLE, AREA_DISK, AREA_ELLIPSE = 0, 1, 2, 3
 CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC = 0, 1
 SENSOR_AUTO, SENSOR_HORIZONTAL, SENSOR_VERTICAL = 0, 1, 2
 
-# lt_integrator, lt_filter
-INTEGRATOR_PATH, INTEGRATOR_BIDIRECTIONAL, INTEGRATOR_VOLPATH, INTEGRATOR_VOLUME_DEBUG = 0, 1, 2, 3
+# lt_integrator: by name from the core (enum_value("lt_integrator", "PATH"), enum_names).
 # lt_volume_estimator, lt_volume_node
 VOLUME_RAY_MARCHING, VOLUME_TRACKING = 0, 1
 VOLUME_PRINCIPLED, VOLUME_SCATTER, VOLUME_ABSORPTION, VOLUME_EMISSION = 0, 1, 2, 3
@@ -85,16 +90,14 @@ class LanternError(RuntimeError):
         self.detail = detail or message  # lt_last_error() alone, without the call's name
 
 
-ERROR_INVALID_ARGUMENT = 1
-
-
-# ---- structures (field order and types exactly as in lantern.h) ---------------------------------
+# ---- structures (field order and types exactly as in lantern.h; _c_name_ names the C struct) -----
 
 _f_p = ctypes.POINTER(ctypes.c_float)
 _i_p = ctypes.POINTER(ctypes.c_int)
 
 
 class ImageDesc(ctypes.Structure):
+    _c_name_ = "lt_image_desc"
     _fields_ = [
         ("width", ctypes.c_int),
         ("height", ctypes.c_int),
@@ -107,6 +110,7 @@ class ImageDesc(ctypes.Structure):
 
 
 class Input(ctypes.Structure):
+    _c_name_ = "lt_input"
     _fields_ = [("value", ctypes.c_float * 3), ("image", ctypes.c_int)]
 
     def __init__(self, value=(0.0, 0.0, 0.0), image=-1):
@@ -118,6 +122,7 @@ _INPUT_FIELDS = ("color", "roughness", "fac", "metallic", "specular", "transmiss
 
 
 class ShaderNode(ctypes.Structure):
+    _c_name_ = "lt_shader_node"
     _fields_ = [
         ("type", ctypes.c_int),
         ("color", Input),
@@ -146,6 +151,7 @@ class ShaderNode(ctypes.Structure):
 
 
 class MeshDesc(ctypes.Structure):
+    _c_name_ = "lt_mesh_desc"
     _fields_ = [
         ("positions", _f_p),
         ("vertex_count", ctypes.c_int),
@@ -158,6 +164,7 @@ class MeshDesc(ctypes.Structure):
 
 
 class InstanceDesc(ctypes.Structure):
+    _c_name_ = "lt_instance_desc"
     _fields_ = [
         ("mesh", ctypes.c_int),
         ("transform", ctypes.c_float * 12),
@@ -168,6 +175,7 @@ class InstanceDesc(ctypes.Structure):
 
 
 class LightDesc(ctypes.Structure):
+    _c_name_ = "lt_light_desc"
     _fields_ = [
         ("type", ctypes.c_int),
         ("color", ctypes.c_float * 3),
@@ -184,6 +192,7 @@ class LightDesc(ctypes.Structure):
 
 
 class CameraDesc(ctypes.Structure):
+    _c_name_ = "lt_camera_desc"
     _fields_ = [
         ("type", ctypes.c_int),
         ("transform", ctypes.c_float * 12),
@@ -201,6 +210,7 @@ class CameraDesc(ctypes.Structure):
 
 
 class WorldDesc(ctypes.Structure):
+    _c_name_ = "lt_world_desc"
     _fields_ = [
         ("color", ctypes.c_float * 3),
         ("strength", ctypes.c_float),
@@ -211,6 +221,7 @@ class WorldDesc(ctypes.Structure):
 
 
 class RenderSettings(ctypes.Structure):
+    _c_name_ = "lt_render_settings"
     _fields_ = [
         ("width", ctypes.c_int),
         ("height", ctypes.c_int),
@@ -247,6 +258,7 @@ class RenderSettings(ctypes.Structure):
 
 
 class VolumeDesc(ctypes.Structure):
+    _c_name_ = "lt_volume_desc"
     _fields_ = [
         ("node", ctypes.c_int),
         ("color", ctypes.c_float * 3),
@@ -262,6 +274,7 @@ class VolumeDesc(ctypes.Structure):
 
 
 class RenderStatus(ctypes.Structure):
+    _c_name_ = "lt_render_status"
     _fields_ = [
         ("state", ctypes.c_int),
         ("samples_done", ctypes.c_int),
@@ -278,6 +291,7 @@ class RenderStatus(ctypes.Structure):
 
 
 class SceneStats(ctypes.Structure):
+    _c_name_ = "lt_scene_stats"
     _fields_ = [
         ("mesh_bvh_builds", ctypes.c_uint64),
         ("top_bvh_builds", ctypes.c_uint64),
@@ -288,6 +302,20 @@ class SceneStats(ctypes.Structure):
         ("image_texels", ctypes.c_uint64),
         ("byte_images", ctypes.c_uint64),
     ]
+
+
+class AbiEntry(ctypes.Structure):
+    _c_name_ = "lt_abi_entry"
+    _fields_ = [
+        ("type", ctypes.c_char_p),
+        ("field", ctypes.c_char_p),
+        ("value", ctypes.c_longlong),
+        ("size", ctypes.c_longlong),
+    ]
+
+
+STRUCTS = (AbiEntry, ImageDesc, Input, ShaderNode, MeshDesc, InstanceDesc, LightDesc, CameraDesc, WorldDesc,
+           VolumeDesc, SceneStats, RenderSettings, RenderStatus)
 
 
 # ---- library loading -----------------------------------------------------------------------------
@@ -303,7 +331,7 @@ def library_path():
     return os.path.join(os.path.dirname(os.path.abspath(__file__)), "liblantern.so")
 
 
-def _declare(lib):
+def _declare(lib, layout=True):
     c_int, c_char_p, c_void_p = ctypes.c_int, ctypes.c_char_p, ctypes.c_void_p
     P = ctypes.POINTER
     scene_p = c_void_p  # opaque lt_scene*
@@ -312,6 +340,7 @@ def _declare(lib):
         "lt_abi_version": ([], c_int),
         "lt_version": ([], c_char_p),
         "lt_last_error": ([], c_char_p),
+        "lt_abi_layout": ([P(c_int)], P(AbiEntry)),
         "lt_scene_create": ([P(scene_p)], c_int),
         "lt_scene_destroy": ([scene_p], None),
         "lt_scene_warning_count": ([scene_p], c_int),
@@ -348,6 +377,8 @@ def _declare(lib):
         "lt_render_write_exr_attributes": ([render_p, c_char_p, P(c_char_p)], c_int),
         "lt_merge_exr": ([c_char_p, P(c_char_p), c_int], c_int),
     }
+    if not layout:
+        del sig["lt_abi_layout"]
     for name, (argtypes, restype) in sig.items():
         try:
             fn = getattr(lib, name)
@@ -356,6 +387,99 @@ def _declare(lib):
                                % (lib._name, name)) from None
         fn.argtypes = argtypes
         fn.restype = restype
+
+
+_enums = {}  # C enum name -> [(constant name without its prefix, value)], from lt_abi_layout
+
+
+def check_layout(entries, path, structs=STRUCTS, constants=None):
+    """Compares this module's declarations with a library's lt_abi_layout table (a list of
+    (type, field, value, size)); raises LanternError listing every difference. constants: the
+    {NAME: value} declared here for lantern.h's LT_NAME (default: this module's)."""
+    if constants is None:
+        constants = {k: v for k, v in globals().items() if k.isupper() and type(v) is int and k != "ABI_VERSION"}
+    sizes, fields, values = {}, {}, {}
+    for t, f, value, size in entries:
+        if f is None:
+            sizes[t] = value
+        elif f.startswith("LT_"):
+            values[f[3:]] = value
+        else:
+            fields.setdefault(t, []).append((f, value, size))
+    problems = []
+    for cls in structs:
+        c = cls._c_name_
+        if c not in sizes:
+            problems.append("%s is not in the library" % c)
+            continue
+        if ctypes.sizeof(cls) != sizes[c]:
+            problems.append("sizeof(%s) is %d in the library, %d here" % (c, sizes[c], ctypes.sizeof(cls)))
+        ours = [(f, getattr(cls, f).offset, getattr(cls, f).size) for f, _ in cls._fields_]
+        theirs = fields.get(c, [])
+        if [f for f, _, _ in ours] != [f for f, _, _ in theirs]:
+            problems.append("%s's fields are %s in the library, %s here"
+                            % (c, ", ".join(f for f, _, _ in theirs), ", ".join(f for f, _, _ in ours)))
+        for (f, off, size), (_, toff, tsize) in zip(ours, theirs):
+            if (off, size) != (toff, tsize):
+                problems.append("%s.%s has offset %d and size %d in the library, %d and %d here"
+                                % (c, f, toff, tsize, off, size))
+    for name, value in sorted(constants.items()):
+        if name not in values:
+            problems.append("LT_%s is not in the library" % name)
+        elif values[name] != value:
+            problems.append("LT_%s is %d in the library, %d here" % (name, values[name], value))
+    if problems:
+        raise LanternError("Lantern library %s does not match this add-on's declarations of lantern.h "
+                           "(rebuild the library and the add-on from the same checkout): %s"
+                           % (path, "; ".join(problems)))
+
+
+def _layout(loaded):
+    n = ctypes.c_int(0)
+    table = loaded.lt_abi_layout(ctypes.byref(n))
+    return [(e.type.decode(), None if e.field is None else e.field.decode(), e.value, e.size)
+            for e in table[:n.value]]
+
+
+def _enum_table(entries):
+    """{C enum: [(name, value)]} with each constant's common prefix removed (LT_INTEGRATOR_PATH:
+    PATH), *_COUNT sentinels left out."""
+    out = {}
+    for t, f, value, size in entries:
+        if f is not None and f.startswith("LT_"):
+            out.setdefault(t, []).append((f, value))
+    for t, consts in out.items():
+        names = [f for f, _ in consts]
+        prefix = os.path.commonprefix(names) if len(names) > 1 else names[0].rsplit("_", 1)[0] + "_"
+        prefix = prefix[:prefix.rfind("_") + 1]
+        out[t] = [(f[len(prefix):], v) for f, v in consts if f[len(prefix):] != "COUNT"]
+    return out
+
+
+def enum_names(enum):
+    """The constants of a lantern.h enum without their prefix, in declaration order:
+    enum_names("lt_integrator") == ["PATH", "BIDIRECTIONAL", "VOLPATH", "VOLUME_DEBUG"]."""
+    lib()
+    return [name for name, _ in _enums[enum]]
+
+
+def enum_value(enum, name):
+    """enum_value("lt_integrator", "VOLPATH") == LT_INTEGRATOR_VOLPATH, from the library."""
+    lib()
+    for n, v in _enums[enum]:
+        if n == name:
+            return v
+    raise LanternError("%s has no constant %r (valid: %s)" % (enum, name, ", ".join(enum_names(enum))))
+
+
+def enum_name(enum, value):
+    """The name of value `value` of a lantern.h enum ("?" for none)."""
+    lib()
+    return next((n for n, v in _enums[enum] if v == value), "?")
+
+
+# A benchmark against a library from before lt_abi_layout (ABI < 6) turns the check off.
+CHECK_LAYOUT = True
 
 
 def lib():
@@ -373,11 +497,16 @@ def lib():
                 loaded = ctypes.CDLL(path)
             except OSError as e:
                 raise LanternError("Could not load Lantern's native library %s: %s" % (path, e)) from e
-            _declare(loaded)
+            loaded.lt_abi_version.restype = ctypes.c_int
             version = loaded.lt_abi_version()
             if version != ABI_VERSION:
                 raise LanternError("Lantern library %s has ABI version %d, this add-on needs %d"
                                    % (path, version, ABI_VERSION))
+            _declare(loaded, CHECK_LAYOUT)
+            if CHECK_LAYOUT:
+                entries = _layout(loaded)
+                check_layout(entries, path)
+                _enums.update(_enum_table(entries))
             _lib = loaded
         return _lib
 

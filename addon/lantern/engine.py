@@ -28,13 +28,6 @@ PASSES = (
     ("Sample Count", core.PASS_SAMPLE_COUNT, 1, "X", 'VALUE', "lantern_extra_passes"),
 )
 
-_FILTERS = {
-    'BOX': core.FILTER_BOX,
-    'GAUSSIAN': core.FILTER_GAUSSIAN,
-    'BLACKMAN_HARRIS': core.FILTER_BLACKMAN_HARRIS,
-}
-
-
 def enabled_passes(view_layer):
     return [p for p in PASSES if p[5] is None or getattr(view_layer, p[5], False)]
 
@@ -69,21 +62,20 @@ def render_settings(scene, width, height, border):
     lt = scene.lantern
     cycles = getattr(scene, "cycles", None)
     if cycles is not None:
-        filter_type = _FILTERS.get(cycles.pixel_filter_type, core.FILTER_BLACKMAN_HARRIS)
+        # Cycles' pixel filter identifiers are the core's lt_filter names.
+        filter_type = core.enum_value("lt_filter", cycles.pixel_filter_type)
         # Cycles ignores the width for the box filter: one pixel.
         filter_width = 1.0 if filter_type == core.FILTER_BOX else cycles.filter_width
     else:
-        filter_type, filter_width = core.FILTER_BLACKMAN_HARRIS, 1.5
-    integrators = {'PATH': core.INTEGRATOR_PATH, 'BIDIRECTIONAL': core.INTEGRATOR_BIDIRECTIONAL,
-                   'VOLPATH': core.INTEGRATOR_VOLPATH, 'VOLUME_DEBUG': core.INTEGRATOR_VOLUME_DEBUG}
-    estimators = {'RAY_MARCHING': core.VOLUME_RAY_MARCHING, 'TRACKING': core.VOLUME_TRACKING}
-    heuristics = {'POWER': core.MIS_POWER, 'BALANCE': core.MIS_BALANCE, 'UNIFORM': core.MIS_UNIFORM}
+        default = core.default_settings()
+        filter_type, filter_width = default.filter, default.filter_width
     return dict(
         width=width, height=height, border=border,
         samples=lt.samples, seed=lt.seed & 0xFFFFFFFF, sample_offset=lt.sample_offset,
         time_limit=lt.time_limit, noise_target=lt.noise_target,
         adaptive=int(lt.adaptive and lt.noise_target > 0), min_samples=lt.min_samples,
-        integrator=integrators[lt.integrator],
+        # The enum properties' identifiers are the core's names (properties.py).
+        integrator=core.enum_value("lt_integrator", lt.integrator),
         max_bounces=lt.max_bounces, diffuse_bounces=lt.diffuse_bounces,
         glossy_bounces=lt.glossy_bounces, transmission_bounces=lt.transmission_bounces,
         transparent_bounces=lt.transparent_bounces,
@@ -92,9 +84,9 @@ def render_settings(scene, width, height, border):
         filter=filter_type, filter_width=filter_width,
         transparent_background=int(scene.render.film_transparent),
         max_camera_length=lt.max_camera_length, max_light_length=lt.max_light_length,
-        mis_heuristic=heuristics[lt.mis_heuristic],
+        mis_heuristic=core.enum_value("lt_mis", lt.mis_heuristic),
         strategy_view_depth=lt.strategy_view_depth if lt.integrator == 'BIDIRECTIONAL' else 0,
-        volume_bounces=lt.volume_bounces, volume_estimator=estimators[lt.volume_estimator],
+        volume_bounces=lt.volume_bounces, volume_estimator=core.enum_value("lt_volume_estimator", lt.volume_estimator),
         volume_step=lt.volume_step,
     )
 
@@ -162,11 +154,6 @@ def format_stats(st, pixels=0):
     return text
 
 
-# As lt_render_write_exr names them (native/src/io/exr.cpp).
-_INTEGRATOR_NAMES = {core.INTEGRATOR_PATH: "PATH", core.INTEGRATOR_BIDIRECTIONAL: "BIDIRECTIONAL",
-                     core.INTEGRATOR_VOLPATH: "VOLPATH", core.INTEGRATOR_VOLUME_DEBUG: "VOLUME_DEBUG"}
-
-
 def render_metadata(st, settings):
     """What the image is worth and how it was made: stored with the image as "lantern.*" fields
     (RenderResult stamp data, which Blender writes into EXR and PNG headers; a JSON file beside
@@ -182,7 +169,7 @@ def render_metadata(st, settings):
         "lantern.adaptive": "%d" % settings.adaptive,
         "lantern.min_samples": "%d" % settings.min_samples,
         "lantern.seed": "%d" % settings.seed,
-        "lantern.integrator": _INTEGRATOR_NAMES.get(settings.integrator, "?"),
+        "lantern.integrator": core.enum_name("lt_integrator", settings.integrator),
     }
 
 
@@ -193,16 +180,16 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
     """One report of what the scene used and what Lantern did with it (Info editor and log)."""
     s = settings
     lines = ["Lantern render report"]
-    if s.integrator == core.INTEGRATOR_BIDIRECTIONAL:
-        heuristic = {core.MIS_POWER: "power", core.MIS_BALANCE: "balance",
-                     core.MIS_UNIFORM: "uniform"}[s.mis_heuristic]
+    integrator = core.enum_name("lt_integrator", s.integrator)
+    if integrator == "BIDIRECTIONAL":
+        heuristic = core.enum_name("lt_mis", s.mis_heuristic).lower()
         lines.append("integrator: bidirectional path tracing, every (s, t) strategy, %s-heuristic MIS "
                      "(camera path <= %d, light path <= %d vertices); media scatter on both subpaths"
                      % (heuristic, s.max_camera_length, s.max_light_length))
-    elif s.integrator == core.INTEGRATOR_VOLPATH:
+    elif integrator == "VOLPATH":
         lines.append("integrator: volumetric path tracing, next-event estimation from surfaces and "
                      "media with MIS against BSDF/phase sampling")
-    elif s.integrator == core.INTEGRATOR_VOLUME_DEBUG:
+    elif integrator == "VOLUME_DEBUG":
         lines.append("integrator: volume debug view (estimator panels)")
     else:
         lines.append("integrator: path tracing, next-event estimation with power-heuristic MIS "
@@ -234,7 +221,7 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
                          "segments, never light-sampled, as Cycles 3.4; Bidirectional: strategy s = 0 "
                          "only)" % summary["emissive_media"])
         text = "media: " + "; ".join(media)
-        if s.integrator == core.INTEGRATOR_PATH:
+        if integrator == "PATH":
             text += " -- IGNORED by this integrator (use Volumetric Path or Bidirectional)"
         lines.append(text)
     else:

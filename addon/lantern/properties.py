@@ -30,6 +30,11 @@ def apply_preset(settings, key):
         setattr(settings, name, value)
 
 
+# Blender declares properties when the add-on registers, before (and without) the native library,
+# so the defaults below are written out; they are the core's (lt_render_settings_default) and the
+# enum identifiers are the core's enum names (lt_integrator, lt_mis, lt_volume_estimator without
+# their prefix), which engine.render_settings passes through core.enum_value. test_engine's
+# test_properties_match_core holds both to the library.
 class LanternRenderSettings(bpy.types.PropertyGroup):
     samples: IntProperty(
         name="Samples",

@@ -1,8 +1,11 @@
 """The engine inside Blender: passes, cancellation, transparent film, warnings for unsupported nodes
 and flattened objects."""
+import ctypes
+import re
 import time
 
 import numpy as np
+import pytest
 
 import bpy
 import render_utils as ru
@@ -152,3 +155,50 @@ def test_render_report_counts_mesh_lights(scene_factory):
     lights = [line for line in engine.LAST_RENDER["report"].splitlines() if line.startswith("lights:")]
     assert len(lights) == 1 and lights[0].startswith("lights: 1 emissive mesh object(s) (2 triangles, two-sided);"), \
         lights
+
+
+def test_properties_match_core():
+    """The add-on's property defaults are lt_render_settings_default's and its enum identifiers the
+    core's enum names (Blender needs both before the library loads, so properties.py writes them out;
+    this holds them to the library)."""
+    props = bpy.types.Scene.bl_rna.properties["lantern"].fixed_type.properties
+    default = core.default_settings()
+    enums = {"integrator": "lt_integrator", "mis_heuristic": "lt_mis", "volume_estimator": "lt_volume_estimator"}
+    checked = []
+    for name, _ in core.RenderSettings._fields_:
+        if name not in props:
+            continue
+        p = props[name]
+        if name in enums:
+            assert [i.identifier for i in p.enum_items] == core.enum_names(enums[name]), name
+            assert core.enum_value(enums[name], p.default) == getattr(default, name), name
+        else:
+            assert p.default == getattr(default, name), "%s: add-on %r, core %r" % (name, p.default,
+                                                                                   getattr(default, name))
+        checked.append(name)
+    assert {"samples", "integrator", "max_bounces", "min_samples", "volume_estimator"} <= set(checked)
+
+
+def test_layout_mismatch_is_refused():
+    """core.py's declarations are checked against the library's lt_abi_layout: the real ones pass, and
+    a struct, a field or a constant that differs from lantern.h is refused with a message naming it."""
+    entries = core._layout(core.lib())
+    core.check_layout(entries, "liblantern.so")  # what lib() did when it loaded
+
+    class Settings(ctypes.Structure):  # lt_render_settings with samples and seed swapped
+        _c_name_ = "lt_render_settings"
+        _fields_ = [(f, t) for f, t in core.RenderSettings._fields_]
+        _fields_[3], _fields_[4] = _fields_[4], _fields_[3]
+
+    class Status(ctypes.Structure):  # lt_render_status with an int where a double is
+        _c_name_ = "lt_render_status"
+        _fields_ = [(f, ctypes.c_int if f == "elapsed_seconds" else t) for f, t in core.RenderStatus._fields_]
+
+    for structs, constants, expect in (
+            ((Settings,), {}, "lt_render_settings's fields"),
+            ((Status,), {}, "lt_render_status.elapsed_seconds has offset"),
+            ((Status,), {}, "sizeof(lt_render_status)"),
+            ((), {"PASS_DEPTH": 2}, "LT_PASS_DEPTH is 1 in the library, 2 here"),
+            ((), {"PASS_STENCIL": 9}, "LT_PASS_STENCIL is not in the library")):
+        with pytest.raises(core.LanternError, match=re.escape(expect)):
+            core.check_layout(entries, "liblantern.so", structs, constants)

@@ -23,12 +23,13 @@ extern "C" {
 #define LT_API __attribute__((visibility("default")))
 #endif
 
-#define LT_ABI_VERSION 5  /* 2: lt_render_settings.sample_offset; 3: halting settings and status;
+#define LT_ABI_VERSION 6  /* 2: lt_render_settings.sample_offset; 3: halting settings and status;
                              4: volumes are arrays of components with emission; lt_scene_stats
                                 counts emissive triangles; lt_scene_add_volume_grid takes a step;
                              5: lt_render_settings.passes and caller_bytes; lt_render_wait
                                 reports a failed render; lt_scene_begin/end_image; image memory
-                                in lt_scene_stats; lt_render_status.unestimated_pixels */
+                                in lt_scene_stats; lt_render_status.unestimated_pixels;
+                             6: lt_abi_layout; default samples 64 (the add-on's) */
 
 enum lt_status {
   LT_OK = 0,
@@ -45,6 +46,19 @@ typedef struct lt_render lt_render;
 LT_API int lt_abi_version(void);
 LT_API const char* lt_version(void);
 LT_API const char* lt_last_error(void);
+
+/* The ABI's layout as this library was compiled, for bindings that declare it by hand (the add-on's
+ * ctypes, addon/lantern/core.py) to check at load and to take enum names from. One entry per struct
+ * (field NULL: value = sizeof), per struct field (value = offsetof, size = its sizeof) and per enum
+ * constant (type = the enum's name, field = the constant's name, value = its value, size 0), in
+ * declaration order. The table is static; *count is set to its length. */
+typedef struct lt_abi_entry {
+  const char* type;  /* "lt_render_settings", "lt_integrator", ... */
+  const char* field; /* "samples", "LT_INTEGRATOR_PATH", ...; NULL for a struct's own entry */
+  long long value;
+  long long size;
+} lt_abi_entry;
+LT_API const lt_abi_entry* lt_abi_layout(int* count);
 
 /* ---- scene ------------------------------------------------------------------------------- */
 

@@ -8,6 +8,7 @@
 #include <new>
 #include <string>
 
+#include "api/abi_layout.h"
 #include "api/handles.h"
 #include "core/error.h"
 #include "core/render.h"
@@ -552,7 +553,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   std::memset(s, 0, sizeof(*s));
   s->width = 640;
   s->height = 480;
-  s->samples = 16;
+  s->samples = 64;
   s->integrator = LT_INTEGRATOR_PATH;
   s->max_bounces = 12;
   s->diffuse_bounces = 4;
@@ -595,7 +596,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
             "sample offset must be in [0, 2^30 - samples]");
     bool full = s->border[0] == 0 && s->border[1] == 0 && s->border[2] == 0 && s->border[3] == 0;
     require(s->integrator >= 0 && s->integrator < LT_INTEGRATOR_COUNT,
-            "unknown integrator " + std::to_string(s->integrator) + "; valid: PATH, BIDIRECTIONAL, VOLPATH, VOLUME_DEBUG");
+            "unknown integrator " + std::to_string(s->integrator) + "; valid: " + lt::abi_enum_names("lt_integrator", "LT_INTEGRATOR_"));
     require(s->volume_bounces >= 0 && s->volume_bounces <= 1024, "volume bounces must be in [0, 1024]");
     require(s->volume_estimator == LT_VOLUME_RAY_MARCHING || s->volume_estimator == LT_VOLUME_TRACKING,
             "unknown volume estimator " + std::to_string(s->volume_estimator) + "; valid: RAY_MARCHING, TRACKING");
