@@ -10,9 +10,11 @@
 
 #include <cmath>
 
+#include "scene_builders.h"
+
 namespace cycles_ref {
 
-constexpr double kPi = 3.14159265358979323846;
+using lt_test::kPi;
 
 struct D3 {
   double x, y, z;

@@ -393,6 +393,12 @@ lt_light_desc area_light(int shape, float size_x, float size_y, const Xform& xf,
 
 void add_light(lt_scene* s, const lt_light_desc& l) { check(lt_scene_add_light(s, &l), "lt_scene_add_light"); }
 
+lt_render_settings volpath_settings(int width, int height, int samples, unsigned seed) {
+  lt_render_settings r = render_settings(width, height, samples, seed);
+  r.integrator = LT_INTEGRATOR_VOLPATH;
+  return r;
+}
+
 lt_render_settings render_settings(int width, int height, int samples, unsigned seed) {
   lt_render_settings r;
   lt_render_settings_default(&r);

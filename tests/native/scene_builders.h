@@ -16,6 +16,10 @@
 
 namespace lt_test {
 
+constexpr double kPi = 3.14159265358979323846;
+// Statistical checks allow this many standard errors (a false alarm about once in 1.7 million).
+constexpr double kSigmas = 5.0;
+
 struct V3 {
   float x = 0, y = 0, z = 0;
 };
@@ -107,6 +111,8 @@ ScenePtr varied_scene(bool fog = false);
 
 // Defaults with the given size, samples and seed.
 lt_render_settings render_settings(int width, int height, int samples, unsigned seed = 0);
+// The same with the volumetric path tracer.
+lt_render_settings volpath_settings(int width, int height, int samples, unsigned seed = 1);
 
 // Every pass of a finished (or cancelled) render, rows bottom to top as the ABI gives them.
 struct Passes {

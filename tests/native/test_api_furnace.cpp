@@ -17,8 +17,6 @@ using namespace lt_test;
 
 namespace {
 
-constexpr double kSigmas = 5.0;
-
 // Checks every selected pixel's R, G, B mean against `expected` and the selected image mean.
 // select(x, y) picks the pixels to test; returns how many were tested.
 template <class Select>

@@ -25,8 +25,6 @@ using namespace lt_test;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // delta = max over faces of 1 - h / R for a mesh whose vertices lie at distance R from the origin.
 double tessellation_delta(const MeshData& m, double radius) {
   double delta = 0;

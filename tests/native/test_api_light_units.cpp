@@ -25,8 +25,6 @@ using namespace lt_test;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // Ortho camera 0.5 m above the origin looking down; image x = world x, image y = world y.
 struct View {
   int size = 16;

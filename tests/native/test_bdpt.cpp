@@ -515,7 +515,7 @@ TEST(Bdpt, StrategyViewSumsToImage) {
 // walls' footprint, the walls reach into them and into each other, the partition into both), a
 // door opened 8 degrees between them, the camera in one room and a 1 x 0.8 m lamp facing down in
 // the other, a GGX (roughness 0.2) ball. The walls are a Mix of Diffuse and Glossy (0.3), as
-// build_door_slabs in tests/scenes/build_scenes.py: a BSDF with lobes of two kinds, which Cycles'
+// build_door_slabs in scenes/build_scenes.py: a BSDF with lobes of two kinds, which Cycles'
 // per-kind bounce limits count as the kind of the lobe each sample picked.
 static ScenePtr door_slabs() {
   ScenePtr s = new_scene();

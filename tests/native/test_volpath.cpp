@@ -16,14 +16,6 @@ using namespace lt_test;
 
 namespace {
 
-constexpr double kSigmas = 5.0;
-
-lt_render_settings volpath_settings(int w, int h, int spp, unsigned seed = 1) {
-  lt_render_settings rs = render_settings(w, h, spp, seed);
-  rs.integrator = LT_INTEGRATOR_VOLPATH;
-  return rs;
-}
-
 std::string vdb(const std::string& name) { return std::string(LANTERN_TEST_VDB_DIR) + "/" + name; }
 
 // A medium sphere of radius `r` at the origin seen from -Y, in a uniform white world.

@@ -10,19 +10,6 @@ using namespace lt_test;
 
 namespace {
 
-constexpr double kSigmas = 5.0;
-
-lt_render_settings volpath_settings(int w, int h, int spp, unsigned seed = 1) {
-  lt_render_settings rs = render_settings(w, h, spp, seed);
-  rs.integrator = LT_INTEGRATOR_VOLPATH;
-  return rs;
-}
-
-}  // namespace
-
-
-namespace {
-
 // An orthographic camera at height h looking down at an emitter plane (radiance L) that fills the
 // view, all inside a World volume; a white world behind. Every camera ray crosses exactly h.
 ScenePtr world_fog_scene(const lt_volume_desc& d, float h, float L) {
