@@ -7,7 +7,7 @@ Run inside Blender (bench/run_convergence.sh does the build and the call):
         --python bench/convergence.py -- [--quick] [--out bench/results] [--scenes door,caustic]
 
 What it does, per scene ("door", "door_bounce", "caustic", "cornell_area" of
-tests/scenes/build_scenes.py, at 160x120, --quick: 96x72), in one Blender process, all threads for
+scenes/build_scenes.py, at 160x120, --quick: 96x72), in one Blender process, all threads for
 every engine:
   * Warm-up: one 1-sample render per method (not recorded).
   * Ladder: each method (Lantern PATH, Lantern BIDIRECTIONAL, Cycles) renders at 4, 8, 16, ...
@@ -52,10 +52,10 @@ BENCH = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(BENCH)
 sys.path.insert(0, BENCH)
 sys.path.insert(0, os.path.join(REPO, "addon"))
-sys.path.insert(0, os.path.join(REPO, "tests", "scenes"))
-sys.path.insert(0, os.path.join(REPO, "tests", "blender"))
+sys.path.insert(0, os.path.join(REPO, "scenes"))
 
 import build_scenes  # noqa: E402  (the test scenes' builders)
+from curves import interp_loglog  # noqa: E402
 from machine import cpu_model  # noqa: E402
 import lantern  # noqa: E402
 import render_utils  # noqa: E402  (render to EXR and read back; PNG writer)
@@ -148,22 +148,6 @@ class Renderer:
             print("bench: WARNING %s %s %d spp: %d non-finite values" % (
                 self.scene.name, method, samples, int(np.sum(~np.isfinite(img)))), flush=True)
         return img, out.seconds, cpu
-
-
-def interp_loglog(ts, ys, t):
-    """log y interpolated linearly in log t at t (ts ascending); None outside [ts[0], ts[-1]]."""
-    pts = [(math.log(a), math.log(b)) for a, b in zip(ts, ys) if a > 0 and b is not None and b > 0]
-    if not pts:
-        return None
-    pts.sort()
-    lt = math.log(t)
-    if lt < pts[0][0] - 1e-9 or lt > pts[-1][0] + 1e-9:
-        return None
-    for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
-        if x0 <= lt <= x1:
-            w = 0.0 if x1 == x0 else (lt - x0) / (x1 - x0)
-            return math.exp(y0 + w * (y1 - y0))
-    return math.exp(pts[0][1]) if abs(lt - pts[0][0]) < 1e-9 else math.exp(pts[-1][1])
 
 
 def equal_time(curves, time_key, err_key):

@@ -8,7 +8,7 @@ Run inside Blender (bench/run_throughput.sh does the build and the call):
 
 What it measures (one process, one run; ratios are taken between renders of this same run):
   * Cycles (CPU, all threads) and Lantern (path tracer, all threads) render the test scene
-    `cornell_area` of tests/scenes/build_scenes.py at equal resolution, samples, bounce limits,
+    `cornell_area` of scenes/build_scenes.py at equal resolution, samples, bounce limits,
     pixel filter and clamping (none). Each engine is warmed up once (1 sample), then rendered
     `--repeats` times alternately; the best (smallest) time is used for the ratios, since other
     processes only ever add time (medians are in the JSON too). Per render: wall time of
@@ -45,7 +45,7 @@ BENCH = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(BENCH)
 sys.path.insert(0, BENCH)
 sys.path.insert(0, os.path.join(REPO, "addon"))
-sys.path.insert(0, os.path.join(REPO, "tests", "scenes"))
+sys.path.insert(0, os.path.join(REPO, "scenes"))
 
 import build_scenes  # noqa: E402  (the test scenes' builders: the same Cornell box as the tests)
 from machine import cpu_model  # noqa: E402

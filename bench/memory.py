@@ -4,7 +4,7 @@
         [--texture 8192] [--out bench/results/memory.json]
 
 Each measurement is a fresh `blender -b --factory-startup` process (this script is its own worker):
-it builds `cornell_area` from tests/scenes/build_scenes.py, sets the resolution, 1 sample, and
+it builds `cornell_area` from scenes/build_scenes.py, sets the resolution, 1 sample, and
 renders with bpy.ops.render.render (Cycles on the CPU, or Lantern through this checkout's add-on).
 The parent takes the process's peak resident set size from os.wait4 (ru_maxrss, the kernel's
 high-water mark of the whole process, Blender included). A run that builds the scene and does not
@@ -41,7 +41,7 @@ def _parse_size(s):
 def worker(args):
     import bpy
     import numpy as np
-    sys.path[:0] = [os.path.join(REPO, "addon"), os.path.join(REPO, "tests", "scenes")]
+    sys.path[:0] = [os.path.join(REPO, "addon"), os.path.join(REPO, "scenes")]
     import build_scenes
     import lantern
     lantern.register()

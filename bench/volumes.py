@@ -9,7 +9,7 @@ Run inside Blender from the repository root, after a build with the tests (make_
         [--out bench/results] [--tests build/lantern_tests] [--threads 2]
 
 What it does (all renders 64x64, --threads threads, one Blender process):
-  * Error against time on "vdb_cloud" and "smoke_box" (tests/scenes/build_scenes.py), integrator
+  * Error against time on "vdb_cloud" and "smoke_box" (scenes/build_scenes.py), integrator
     VOLPATH. Methods: ray marching at step = voxel x {1, 1/2, 1/4} (vdb_cloud only: smoke_box is
     homogeneous, where every estimator uses the closed forms), delta/ratio tracking, and Cycles
     (which ray-marches at voxel x volume_step_rate). Each renders 16, 64, 256 samples (other seeds
@@ -27,7 +27,6 @@ Nothing asserts.
 """
 import argparse
 import json
-import math
 import os
 import re
 import subprocess
@@ -37,8 +36,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
-for p in (os.path.join(REPO, "tests", "scenes"), os.path.join(REPO, "tests", "blender"),
-          os.path.join(REPO, "addon")):
+for p in (HERE, os.path.join(REPO, "scenes"), os.path.join(REPO, "addon")):
     if p not in sys.path:
         sys.path.insert(0, p)
 
@@ -46,6 +44,7 @@ import numpy as np  # noqa: E402
 
 import build_scenes  # noqa: E402
 import render_utils as ru  # noqa: E402
+from curves import interp_loglog  # noqa: E402  (None outside a curve's times: no extrapolation)
 
 RUNGS = (16, 64, 256)
 
@@ -84,13 +83,6 @@ def render(scene, engine, settings, spp, seed, threads):
     return rgb(out.combined), out.seconds
 
 
-def interp_loglog(ts, ys, t):
-    lt, ly = np.log(ts), np.log(np.maximum(ys, 1e-30))
-    if t <= lt[0] or len(ts) == 1:
-        return float(ys[0]) if t <= lt[0] else float(ys[-1])
-    return float(np.exp(np.interp(math.log(t), lt, ly)))
-
-
 def run_scene(name, args):
     build_scenes.reset_file()
     scene = build_scenes.build(name)
@@ -126,9 +118,10 @@ def run_scene(name, args):
                reference=dict(samples=args.ref_samples, seconds=ref_seconds,
                               floor=float(np.mean(floor_map)), mean=float(ref.mean())),
                curves=curves, equal_time=dict(seconds=t_common, relmse_corrected=at),
-               tracking_over_cycles=at["tracking"] / at["cycles"])
+               tracking_over_cycles=None if None in (at["tracking"], at["cycles"]) else at["tracking"] / at["cycles"])
     print("bench: %s at %.2f s: %s; tracking/cycles %.3f" % (
-        name, t_common, ", ".join("%s %.3e" % kv for kv in at.items()), res["tracking_over_cycles"]))
+        name, t_common, ", ".join("%s %s" % (m, "--" if e is None else "%.3e" % e) for m, e in at.items()),
+        res["tracking_over_cycles"] or float("nan")))
     return res
 
 

@@ -1,7 +1,7 @@
 """Builds Lantern's test scenes (with bpy only, no external files) and examples.blend.
 
-    blender -b --factory-startup --python tests/scenes/build_scenes.py -- OUTDIR [--only a,b]
-    blender -b --factory-startup --python tests/scenes/build_scenes.py -- --examples [PATH]
+    blender -b --factory-startup --python scenes/build_scenes.py -- OUTDIR [--only a,b]
+    blender -b --factory-startup --python scenes/build_scenes.py -- --examples [PATH]
 
 The first form writes OUTDIR/<name>.blend for every test scene, each holding one Scene named after
 itself. The second writes examples.blend (default: the repository root) with one scene per example;
@@ -10,7 +10,7 @@ registered, so write it with the checkout's add-on:
 
     LANTERN_LIBRARY=$PWD/build/liblantern.so blender -b --factory-startup --python-expr \
       "import sys; sys.path.insert(0, 'addon'); import lantern; lantern.register()" \
-      --python tests/scenes/build_scenes.py -- --examples
+      --python scenes/build_scenes.py -- --examples
 
 Both can be given together. Besides the test scenes' builders, the examples use the models in
 models/ (MODEL_SCENES: the Sibenik cathedral and Sponza), imported with Blender's OBJ importer.
@@ -31,7 +31,7 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
-REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXAMPLES_PATH = os.path.join(REPO, "examples.blend")
 
 # Cornell box colours (reflectances of the classic measured box, rounded).

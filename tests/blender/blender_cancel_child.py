@@ -15,7 +15,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-for path in (os.path.join(REPO, "tests", "scenes"), HERE, os.path.join(REPO, "addon")):
+for path in (os.path.join(REPO, "scenes"), HERE, os.path.join(REPO, "addon")):
     if path not in sys.path:
         sys.path.insert(0, path)
 

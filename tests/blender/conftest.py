@@ -1,4 +1,4 @@
-"""Fixtures for the Blender tests: scenes are built in-process by tests/scenes/build_scenes.py."""
+"""Fixtures for the Blender tests: scenes are built in-process by scenes/build_scenes.py."""
 import os
 import tempfile
 

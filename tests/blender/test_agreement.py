@@ -6,7 +6,7 @@ variance of a 16x16 tile's mean is that summed over the tile divided by N^2. For
 channel, |mean_Lantern - mean_Cycles| <= z * sqrt(se_Lantern^2 + se_Cycles^2), with z the two-sided
 normal quantile for a family-wise false-alarm rate of 1e-3 Bonferroni-corrected over all tiles and
 channels of the scene. Neither engine clamps, filters glossy or adapts its sampling (see
-tests/scenes/build_scenes.py).
+scenes/build_scenes.py).
 
 Beside the tiles, the image means (render_utils.global_mean_report): within 3 standard errors of
 both images' combined noise, which must be under 0.5 % of the mean (a bias of a few percent spread

@@ -175,7 +175,7 @@ def _need_vdb(filename):
 
 @pytest.mark.parametrize("estimator", ["TRACKING"])
 def test_vdb_cloud_agrees_with_cycles(estimator, scene_factory, outdir):
-    """vdb_cloud (tests/scenes/build_scenes.py): a Volume object reading cloud.vdb, white Principled
+    """vdb_cloud (scenes/build_scenes.py): a Volume object reading cloud.vdb, white Principled
     Volume of density 5, sun and world, two volume bounces; Lantern's unbiased delta/ratio
     tracking against Cycles, same rule as above.
 

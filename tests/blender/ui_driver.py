@@ -20,7 +20,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-for path in (os.path.join(REPO, "tests", "scenes"), os.path.join(REPO, "addon")):
+for path in (os.path.join(REPO, "scenes"), os.path.join(REPO, "addon")):
     if path not in sys.path:
         sys.path.insert(0, path)
 
