@@ -89,6 +89,12 @@ lt_render* start_long_render(lt_scene* s) {
 
 TEST(ApiBadInput, VersionAndNoCrashOnNullHandles) {
   EXPECT_EQ(lt_abi_version(), LT_ABI_VERSION);
+  int n = 0;
+  const lt_abi_entry* layout = lt_abi_layout(&n);
+  ASSERT_GT(n, 0);
+  EXPECT_STREQ(layout[0].type, "lt_abi_entry");  // bindings read the table's own layout first
+  EXPECT_EQ(layout[0].value, (long long)sizeof(lt_abi_entry));
+  EXPECT_EQ(lt_abi_layout(nullptr), layout);
   ASSERT_NE(lt_version(), nullptr);
   EXPECT_GT(std::string(lt_version()).size(), 0u);
   // Functions without a status: NULL is a no-op.
@@ -470,7 +476,8 @@ TEST(ApiBadInput, UnknownEnumValuesListTheValidNames) {
   lt_render* r = nullptr;
   lt_render_settings rs = render_settings(8, 8, 1);
   rs.integrator = LT_INTEGRATOR_COUNT;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_render_start(s, &rs, &r)), "PATH");
+  // The valid names come from lt_abi_layout's table, without the sentinel.
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_render_start(s, &rs, &r)), "valid: PATH, BIDIRECTIONAL, VOLPATH, VOLUME_DEBUG");
   rs = render_settings(8, 8, 1);
   rs.filter = 3;
   EXPECT_INVALID(lt_render_start(s, &rs, &r));
