@@ -4,6 +4,7 @@ import bpy
 from bpy.props import EnumProperty
 from bpy.types import Menu, Operator, Panel
 
+from . import core
 from .properties import PRESETS, apply_preset
 
 ENGINE = 'LANTERN'
@@ -209,7 +210,12 @@ class LANTERN_RENDER_PT_film_pixel_filter(LanternButtonsPanel, Panel):
         # Lantern uses Cycles' pixel filter settings so both engines render a scene alike.
         cscene = getattr(context.scene, "cycles", None)
         if cscene is None:
-            layout.label(text="Blackman-Harris, 1.5 px (enable Cycles to change it)")
+            try:  # the core's default filter is used
+                d = core.default_settings()
+                name = "%s, %g px" % (core.enum_name("lt_filter", d.filter).replace("_", "-").title(), d.filter_width)
+            except core.LanternError:  # no library: nothing renders anyway
+                name = "The core's default"
+            layout.label(text="%s (enable Cycles to change it)" % name)
             return
         col = layout.column()
         col.prop(cscene, "pixel_filter_type", text="Type")
