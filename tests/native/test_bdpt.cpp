@@ -12,6 +12,7 @@
 
 #include "api/handles.h"
 #include "core/film.h"
+#include "integrators/bdpt_test_hooks.h"
 #include "integrators/integrator.h"
 #include "scene_builders.h"
 

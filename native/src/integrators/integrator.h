@@ -74,12 +74,6 @@ struct RenderContext {
 SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
                        std::vector<Splat>& splats, Spectrum* strategies = nullptr);
 
-// For tests: runs one BDPT sample and, for every full path it connects (strategies s >= 1,
-// t >= 2), re-splits that path into every other strategy (s', t') that could have sampled it and
-// returns the sums of their MIS weights, computed by the integrator's own weight code (each sum
-// must be 1; a sum is NaN if any single weight falls outside [0, 1]).
-std::vector<float> bdpt_mis_weight_sums(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler);
-
 // Radiance along a camera ray, plus the first-hit data passes. One call is one sample.
 SampleValue trace_path(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
                        Sampler& sampler, SampleStats& stats);
