@@ -10,9 +10,9 @@
 
 #include "api/handles.h"
 #include "core/error.h"
-#include "core/render.h"
 #include "io/exr.h"
 #include "io/vdb.h"
+#include "render/render.h"
 #include "scene/volume_material.h"
 #include "scene/scene.h"
 

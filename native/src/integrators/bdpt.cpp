@@ -633,10 +633,50 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   return out_;
 }
 
-SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
-                       std::vector<Splat>& splats, Spectrum* strategies) {
-  Bdpt b(ctx, cs, sampler, stats);
-  return b.run(splats, strategies);
+namespace {
+
+class BdptIntegrator final : public Integrator {
+ public:
+  using Integrator::Integrator;
+  void begin_pass(Film& film) override {
+    film_ = &film;
+    cells_ = film.strategy_cells();
+  }
+  SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
+                    std::vector<Splat>& splats) const override {
+    Bdpt b(ctx_, cs, sampler, stats);
+    if (!cells_) return b.run(splats, nullptr);
+    // The strategy view: this sample's weighted contribution per cell, added to its pixel.
+    thread_local std::vector<Spectrum> strategies;
+    strategies.assign(size_t(cells_), Spectrum(0.0f));
+    SampleValue v = b.run(splats, strategies.data());
+    if (is_finite(v.radiance))
+      film_->add_strategies(int(cs.pixel_center.x) - ctx_.x0, int(cs.pixel_center.y) - ctx_.y0, strategies.data());
+    return v;
+  }
+  void end_pass(Film& film, const PassSplats& p) override {
+    // Merge the splats tile by tile in a fixed order (deterministic for any thread count).
+    for (size_t i = 0; i < p.tiles.size(); ++i)
+      for (const Splat& sp : p.tiles[i]) {
+        film.add_splat(sp.pixel, sp.value, int(i & 1));
+        if (sp.strategy >= 0) film.add_strategy_splat(sp.pixel, sp.strategy, sp.value);
+      }
+    // One light path per camera sample traced (fewer than the region's pixels when adaptive
+    // sampling has stopped some, or when the pass was cut short): dividing by the paths actually
+    // traced keeps the splat estimate unbiased, as every light path is independent of the pixel
+    // whose sample traced it.
+    film.add_light_paths(p.samples, p.samples_half);
+  }
+
+ private:
+  Film* film_ = nullptr;  // the strategy view's, during a pass
+  int cells_ = 0;         // strategy view cells (0: off)
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> make_bdpt_integrator(const RenderContext& ctx) {
+  return std::make_unique<BdptIntegrator>(ctx);
 }
 
 }  // namespace lt
