@@ -423,7 +423,8 @@ TEST(Bdpt, NoHeapAllocationPerSample) {
     lt::IntegratorSettings is;
     is.volume_bounces = 8;
     lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
-    const std::unique_ptr<lt::Integrator> bdpt = lt::make_bdpt_integrator(ctx), path = lt::make_path_integrator(ctx, media);
+    const std::unique_ptr<lt::Integrator> bdpt = lt::make_bdpt_integrator(ctx);
+    const std::unique_ptr<lt::Integrator> path = lt::make_path_integrator(ctx, media);
     std::vector<lt::Splat> splats;
     splats.reserve(1 << 16);
     lt::SampleStats stats;

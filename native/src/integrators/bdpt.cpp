@@ -140,7 +140,8 @@ float Bdpt::kind_limit_factor(const std::vector<PathVertex>& light, const std::v
   return float(std::min(1.0, sum));
 }
 
-bool Bdpt::mixed_kind(const PathVertex& v, const Vec3& camera_side, const Vec3& light_side, bool delta, float* p) const {
+bool Bdpt::mixed_kind(const PathVertex& v, const Vec3& camera_side, const Vec3& light_side, bool delta,
+                      float* p) const {
   const Vec3 wo_w = normalize(camera_side - v.p), wi_w = normalize(light_side - v.p);
   const bool transmit = (dot(wo_w, v.n) > 0) != (dot(wi_w, v.n) > 0);
   const Vec3 wo = v.frame.to_local(wo_w), wi = v.frame.to_local(wi_w);
@@ -219,7 +220,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   // direction). Every vertex the walk reaches sets it, emitters ended on included: the s = 0 weight
   // of a path that escapes to the world or crosses a lamp reads it.
   auto reverse_density = [&](int count, const PathVertex& v) {
-    if (count >= 2) path[count - 2].pdf_rev = path[count - 1].delta ? 0.0f : pdf(path[count - 1], &v, path[count - 2], pixel_center_);
+    if (count >= 2)
+      path[count - 2].pdf_rev = path[count - 1].delta ? 0.0f : pdf(path[count - 1], &v, path[count - 2], pixel_center_);
   };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
   int count = 1, bounces = 0, nulls = 0;

@@ -17,7 +17,8 @@ std::vector<float> Bdpt::weight_sums() {
       if (s + t - 2 > max_depth()) break;
       PathVertex &qs = light[s - 1], &pt = camera[t - 1];
       if (!scatters(pt) || !scatters(qs) || is_black(transmittance(qs, pt))) continue;
-      if (is_black(f(qs, normalize(pt.p - qs.p), Mode::Importance)) || is_black(f(pt, normalize(qs.p - pt.p), Mode::Radiance)))
+      if (is_black(f(qs, normalize(pt.p - qs.p), Mode::Importance)) ||
+          is_black(f(pt, normalize(qs.p - pt.p), Mode::Radiance)))
         continue;
       // The full path x[0] = camera ... x[k] = light, with both densities of every vertex:
       // cam[i] (sampled from x[i-1]) and lig[i] (sampled from x[i+1]).
