@@ -8,10 +8,12 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <memory>
 #include <new>
 
 #include "api/handles.h"
 #include "core/film.h"
+#include "integrators/bdpt_test_hooks.h"
 #include "integrators/integrator.h"
 #include "scene_builders.h"
 
@@ -421,6 +423,8 @@ TEST(Bdpt, NoHeapAllocationPerSample) {
     lt::IntegratorSettings is;
     is.volume_bounces = 8;
     lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
+    const std::unique_ptr<lt::Integrator> bdpt = lt::make_bdpt_integrator(ctx);
+    const std::unique_ptr<lt::Integrator> path = lt::make_path_integrator(ctx, media);
     std::vector<lt::Splat> splats;
     splats.reserve(1 << 16);
     lt::SampleStats stats;
@@ -431,9 +435,8 @@ TEST(Bdpt, NoHeapAllocationPerSample) {
         cs.film = {float(i % size) + 0.5f, float((i / size) % size) + 0.5f};
         cs.pixel_center = cs.film;
         cs.ray = camera.generate(cs.film.x, cs.film.y);
-        lt::trace_bdpt(ctx, cs, sampler, stats, splats);
-        if (media) lt::trace_volpath(scene, is, cs.ray, sampler, stats);
-        else lt::trace_path(scene, is, cs.ray, sampler, stats);
+        bdpt->trace(cs, sampler, stats, splats);
+        path->trace(cs, sampler, stats, splats);
         if (splats.size() > (1 << 15)) splats.clear();
       }
     };

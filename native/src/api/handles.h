@@ -5,8 +5,8 @@
 #include <atomic>
 #include <memory>
 
-#include "core/render.h"
 #include "lantern/lantern.h"
+#include "render/render.h"
 #include "scene/image.h"
 #include "scene/scene.h"
 

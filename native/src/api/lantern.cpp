@@ -11,9 +11,9 @@
 #include "api/abi_layout.h"
 #include "api/handles.h"
 #include "core/error.h"
-#include "core/render.h"
 #include "io/exr.h"
 #include "io/vdb.h"
+#include "render/render.h"
 #include "scene/volume_material.h"
 #include "scene/scene.h"
 

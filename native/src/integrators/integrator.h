@@ -1,7 +1,10 @@
-// What every integrator shares: its settings and the per-camera-sample entry point.
+// What every integrator shares: its settings and one interface the render job drives (trace one
+// camera sample, with optional hooks around a pass; pbrt-v4's ImageTileIntegrator, Mitsuba's
+// SamplingIntegrator), and the factory that picks an integrator from the settings.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/film.h"
@@ -10,6 +13,9 @@
 #include "scene/scene.h"
 
 namespace lt {
+
+// VolumeDebug: the 2x2 estimator view of integrators/volume_debug.cpp (each panel a half-size view).
+enum class IntegratorType { Path = 0, Bidirectional = 1, VolPath = 2, VolumeDebug = 3, Count = 4 };
 
 enum class MisHeuristic { Power = 0, Balance = 1, Uniform = 2 };
 
@@ -59,6 +65,8 @@ inline int strategy_cell(int s, int t, int depth) {
   return d >= 0 && d < depth && s < strategy_columns(depth) ? d * strategy_columns(depth) + s : -1;
 }
 
+// What an integrator renders: the scene through the camera (whose film is the full frame), and the
+// render region inside the frame.
 struct RenderContext {
   const Scene& scene;
   const Camera& camera;
@@ -67,32 +75,47 @@ struct RenderContext {
   int x0, y0, width, height;  // render region in full-frame pixels
 };
 
-// Bidirectional path tracing: one camera subpath and one light subpath per sample, every
-// connection strategy weighted by MIS; t = 1 contributions go to `splats`.
-// `strategies`, when not null, receives this sample's weighted contribution per strategy cell
-// (strategy_depth * strategy_columns entries, zeroed by the caller).
-SampleValue trace_bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats,
-                       std::vector<Splat>& splats, Spectrum* strategies = nullptr);
+// A pass's light-tracing splats, two lists per tile (halves A and B) in tile order, and the camera
+// samples traced in it (of them in half B).
+struct PassSplats {
+  const std::vector<std::vector<Splat>>& tiles;
+  uint64_t samples, samples_half;
+};
 
-// For tests: runs one BDPT sample and, for every full path it connects (strategies s >= 1,
-// t >= 2), re-splits that path into every other strategy (s', t') that could have sampled it and
-// returns the sums of their MIS weights, computed by the integrator's own weight code (each sum
-// must be 1; a sum is NaN if any single weight falls outside [0, 1]).
-std::vector<float> bdpt_mis_weight_sums(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler);
+class Integrator {
+ public:
+  explicit Integrator(const RenderContext& ctx) : ctx_(ctx) {}
+  virtual ~Integrator() = default;
+  // The film's label mask (Film::set_labels), for views that name their parts; empty for none.
+  virtual std::vector<uint8_t> film_labels() const { return {}; }
+  // Before a pass; the film receives per-pixel extras during it (BDPT's strategy view).
+  virtual void begin_pass(Film& film) {}
+  // One camera sample (thread-safe): the value of its pixel; contributions to other pixels of the
+  // region (light tracing) go to `splats`, dropped by the caller if the value is not finite.
+  virtual SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
+                            std::vector<Splat>& splats) const = 0;
+  // After a pass: the pass's splats into the film, in a fixed order (the same image for any
+  // thread count).
+  virtual void end_pass(Film& film, const PassSplats& splats) {}
 
-// Radiance along a camera ray, plus the first-hit data passes. One call is one sample.
-SampleValue trace_path(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
-                       Sampler& sampler, SampleStats& stats);
+ protected:
+  RenderContext ctx_;
+};
 
-// Volumetric path tracing (integrators/path.cpp, the same code with media): a volume stack,
-// free-flight sampling, NEE through media and invisible boundaries. Only for scenes with media.
-SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
-                          Sampler& sampler, SampleStats& stats);
+// The integrator for `type`; "Volumetric Path" on a scene without media is the path tracer (the
+// same estimator, without the media code).
+std::unique_ptr<Integrator> make_integrator(IntegratorType type, const RenderContext& ctx);
 
-// Volume debug view (integrators/volume_debug.cpp): for the camera ray of a panel pixel, panel
-// 0 = transmittance by ray marching, 1 = by ratio tracking, 2 = sampled distance by ray marching,
-// 3 = by delta tracking (distance from the ray origin in world units, 0 without a collision).
-SampleValue trace_volume_debug(const Scene& scene, const IntegratorSettings& settings, const Ray& camera_ray,
-                               int panel, Sampler& sampler, SampleStats& stats);
+// The integrators, one file each; make_integrator picks among them.
+// Unidirectional path tracing (path.cpp); `media`: volumetric path tracing, only for scenes with media.
+std::unique_ptr<Integrator> make_path_integrator(const RenderContext& ctx, bool media);
+// Bidirectional path tracing (bdpt.cpp): one camera subpath and one light subpath per sample, every
+// connection strategy weighted by MIS; t = 1 contributions are splats. With the film's strategy
+// view on, each sample's weighted contribution per strategy cell goes to the film too.
+std::unique_ptr<Integrator> make_bdpt_integrator(const RenderContext& ctx);
+// Volume debug view (volume_debug.cpp): a 2x2 grid of panels, each the whole view at half size:
+// transmittance by ray marching | by ratio tracking (top), distance sampled by ray marching | by
+// delta tracking (bottom).
+std::unique_ptr<Integrator> make_volume_debug_integrator(const RenderContext& ctx);
 
 }  // namespace lt

@@ -4,7 +4,7 @@
 // free-flight sampling in the media along every segment, NEE from medium vertices with the phase
 // function and from surfaces with transmittance through invisible boundaries, MIS against
 // phase/BSDF sampling, and Cycles' volume bounce limit (0: single scattering). One template, so a
-// scene without media runs none of the media code (render.cpp picks trace_path for it).
+// scene without media runs none of the media code (make_integrator picks kMedia = false for it).
 #include "integrators/media_transport.h"
 #include "integrators/path_state.h"
 
@@ -210,16 +210,21 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
   return out;
 }
 
+template <bool kMedia>
+class PathIntegrator final : public Integrator {
+ public:
+  using Integrator::Integrator;
+  SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
+                    std::vector<Splat>&) const override {
+    return lt::trace<kMedia>(ctx_.scene, ctx_.settings, cs.ray, sampler, stats);
+  }
+};
+
 }  // namespace
 
-SampleValue trace_path(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
-                       SampleStats& stats) {
-  return trace<false>(scene, s, camera_ray, sampler, stats);
-}
-
-SampleValue trace_volpath(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
-                          SampleStats& stats) {
-  return trace<true>(scene, s, camera_ray, sampler, stats);
+std::unique_ptr<Integrator> make_path_integrator(const RenderContext& ctx, bool media) {
+  if (media) return std::make_unique<PathIntegrator<true>>(ctx);
+  return std::make_unique<PathIntegrator<false>>(ctx);
 }
 
 }  // namespace lt

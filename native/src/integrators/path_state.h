@@ -1,6 +1,6 @@
-// What the unidirectional integrators track along a path the way Cycles does: ray kinds (Cycles'
-// ray visibility flags, lt_visibility), bounce counts and their limits, the sample clamp and
-// Russian roulette.
+// What the integrators track along a path the way Cycles does: ray kinds (Cycles' ray visibility
+// flags, lt_visibility), bounce kinds, counts and their limits, the sample clamp and Russian
+// roulette.
 #pragma once
 
 #include <cstdint>
@@ -29,20 +29,43 @@ inline Spectrum clamp_contribution(const Spectrum& c, float limit) {
   return m > limit ? c * (limit / m) : c;
 }
 
+// Bounce kinds, as Cycles limits them: a scattering counts as the kind of the lobe (closure) that
+// sampled it. Volume and Mixed are BDPT's (a vertex whose BSDF has lobes of several kinds, which
+// the path tracer counts as one or another by the lobe it picks; bdpt.cpp).
+enum class BounceKind : uint8_t { None = 0, Diffuse = 1, Glossy = 2, Transmission = 3, Volume = 4, Mixed = 5 };
+
+// A pass-through without refraction (a Transparent lobe, or glass of IOR 1 at roughness 0): Cycles
+// counts it as transparent, not as a bounce, and the ray keeps its kind.
+inline bool is_transparent(uint32_t lobe_flags, float eta) {
+  return lobe_flags == (kLobeSpecular | kLobeTransmission) && eta == 1;
+}
+// The kind of a scattering by a lobe of these flags (BsdfSample::flags) across relative IOR eta.
+inline BounceKind bounce_kind(uint32_t lobe_flags, float eta) {
+  if (is_transparent(lobe_flags, eta)) return BounceKind::None;
+  if (lobe_flags & kLobeDiffuse) return BounceKind::Diffuse;
+  if (lobe_flags & kLobeTransmission) return BounceKind::Transmission;
+  return BounceKind::Glossy;
+}
+// The same for lobe l reflecting or transmitting (a Transparent lobe only transmits).
+inline BounceKind bounce_kind(const Lobe& l, bool transmit) {
+  if (l.type == LobeType::Transparent) transmit = true;
+  const uint32_t flags = lobe_flags(l) & ~(transmit ? kLobeReflection : kLobeTransmission);
+  return bounce_kind(flags, transmit && l.type == LobeType::Dielectric ? l.eta : 1.0f);
+}
+
 // Cycles' bounce bookkeeping: transparent pass-throughs are counted apart from the bounces.
 struct Bounces {
   int total = 0, diffuse = 0, glossy = 0, transmission = 0, transparent = 0;
   bool from_camera() const { return total == 0 && transparent == 0; }  // still on the camera ray
   // Counts the scattering a BSDF sample made; a bounce changes the next ray's kind.
   void count(const BsdfSample& bs, unsigned* visibility) {
-    if (bs.flags == (kLobeSpecular | kLobeTransmission) && bs.eta == 1) {
-      ++transparent;
-      return;
+    switch (bounce_kind(bs.flags, bs.eta)) {
+      case BounceKind::None: ++transparent; return;
+      case BounceKind::Diffuse: ++diffuse; break;
+      case BounceKind::Transmission: ++transmission; break;
+      default: ++glossy; break;
     }
     ++total;
-    if (bs.flags & kLobeDiffuse) ++diffuse;
-    else if (bs.flags & kLobeTransmission) ++transmission;
-    else ++glossy;
     *visibility = visibility_of(bs.flags);
   }
   bool exceeded(const IntegratorSettings& s) const {

@@ -5,6 +5,7 @@
 
 #include "core/math.h"
 #include "geometry/hit.h"
+#include "integrators/path_state.h"
 #include "scene/bsdf.h"
 #include "scene/volume_stack.h"
 
@@ -22,7 +23,7 @@ struct PathVertex {
   bool delta = false;     // reached by sampling a delta lobe, or a delta light/camera position
   bool infinite = false;  // sun or world light vertex: a direction rather than a point
   int light = -1;         // light index: Light vertices, and Surface vertices on emissive meshes
-  uint8_t kind = 0;       // bounce kind for Cycles' per-kind limits (see bdpt.cpp), 0: uncounted
+  BounceKind kind = BounceKind::None;  // for Cycles' per-kind limits (see bdpt.cpp)
   // Vertices of several possible kinds, between two vertices of the same subpath: the probabilities
   // that the path tracer counts their bounce as diffuse, glossy, transmission (-1: it cannot
   // sample the path there). Set by the walk once both neighbours are known (bdpt.cpp).

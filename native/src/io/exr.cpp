@@ -14,7 +14,7 @@
 #include <random>
 
 #include "core/error.h"
-#include "core/render.h"
+#include "render/render.h"
 
 namespace lt {
 

@@ -29,6 +29,8 @@ class Camera {
   Vec3 position() const { return origin_; }
   Vec3 forward() const { return -forward_neg_; }
   bool orthographic() const { return d_.orthographic; }
+  int width() const { return width_; }  // the film: the full frame in pixels
+  int height() const { return height_; }
 
   // For connecting a point to the pinhole (BDPT's t = 1): the full-frame film position (pixels,
   // y up) where the point is seen, the unit direction from the camera to it and the distance.

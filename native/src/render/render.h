@@ -1,5 +1,6 @@
-// A render job: passes over the image on the core's own TBB threads, progress, cancellation and
-// the film readers poll. Nothing here calls back into the caller.
+// A render job: passes over the image on the core's own TBB threads, each camera sample traced by
+// the integrator the settings pick (integrators/integrator.h), progress, cancellation and the film
+// readers poll. Nothing here calls back into the caller.
 #pragma once
 
 #include <atomic>
@@ -13,9 +14,6 @@
 #include "scene/scene.h"
 
 namespace lt {
-
-// VolumeDebug: the 2x2 estimator view of integrators/volume_debug.cpp (each panel a half-size view).
-enum class IntegratorType { Path = 0, Bidirectional = 1, VolPath = 2, VolumeDebug = 3, Count = 4 };
 
 struct RenderSettings {
   int width = 640, height = 480;
@@ -90,8 +88,6 @@ class RenderJob {
 
  private:
   void render_pass(int sample_index);
-  template <class Trace>
-  void render_pass_with(int sample_index, Trace trace);
   bool past_deadline() const;
   void fail(const char* what, bool out_of_memory) noexcept;
   // Adaptive sampling: clears active_ for pixels whose variance meets their share of the target.
@@ -100,6 +96,7 @@ class RenderJob {
   RenderSettings settings_;
   Camera camera_;
   FilterSampler filter_;
+  std::unique_ptr<Integrator> integrator_;
   Film film_;
   std::thread thread_;
   std::atomic<bool> cancel_{false};

@@ -1,4 +1,4 @@
-#include "core/render.h"
+#include "render/render.h"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
@@ -13,8 +13,6 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include "core/label_font.h"
-
 namespace lt {
 
 namespace {
@@ -24,25 +22,6 @@ constexpr int kTile = 16;
 constexpr int kAdaptiveTile = 4;
 // Readers see a new image at most this often while rendering (publishing copies the film).
 constexpr double kPublishInterval = 0.25;
-
-// The volume debug view's panel names, stamped at each panel's top-left corner (in the region's
-// pixels): 2x for panels 200 px wide or more, skipped for panels too small to hold them.
-std::vector<uint8_t> volume_debug_labels(const RenderSettings& s, int region_w, int region_h) {
-  static const char* const kNames[4] = {"T MARCH", "T RATIO", "D MARCH", "D DELTA"};
-  const int hw = std::max(1, s.width / 2), hh = std::max(1, s.height / 2);
-  const int pw = std::min(hw, s.width - hw), ph = std::min(hh, s.height - hh);
-  constexpr int kMargin = 1;
-  int scale = pw >= 200 ? 2 : 1;
-  while (scale > 0 && (label_width("T MARCH", scale) + 2 * kMargin > pw || label_height(scale) + 2 * kMargin > ph))
-    --scale;
-  if (!scale) return {};
-  std::vector<uint8_t> mask(size_t(region_w) * region_h, kLabelNone);
-  for (int panel = 0; panel < 4; ++panel) {
-    const int x = (panel % 2) * hw + kMargin, y_top = (panel < 2 ? s.height : hh) - 1 - kMargin;
-    stamp_label(mask, region_w, region_h, x - s.x0, y_top - s.y0, kNames[panel], scale);
-  }
-  return mask;
-}
 }  // namespace
 
 RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
@@ -50,10 +29,12 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
       settings_(s),
       camera_(scene.camera, s.width, s.height),
       filter_(s.filter, s.filter_width),
+      integrator_(make_integrator(
+          s.integrator, RenderContext{scene, camera_, filter_, s.integrator_settings, s.x0, s.y0, s.x1 - s.x0, s.y1 - s.y0})),
       film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
       active_(size_t(film_.width()) * film_.height(), 1) {
   active_pixels_.store(active_.size());
-  if (s.integrator == IntegratorType::VolumeDebug) film_.set_labels(volume_debug_labels(s, film_.width(), film_.height()));
+  film_.set_labels(integrator_->film_labels());
 }
 
 FilmLayout RenderJob::film_layout(const RenderSettings& s) {
@@ -118,57 +99,6 @@ void RenderJob::wait() {
 }
 
 void RenderJob::render_pass(int sample_index) {
-  if (settings_.integrator == IntegratorType::Bidirectional) {
-    RenderContext ctx{scene_, camera_, filter_, settings_.integrator_settings,
-                      settings_.x0, settings_.y0, film_.width(), film_.height()};
-    const int cells = film_.strategy_cells();
-    render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>& splats) {
-      if (!cells) return trace_bdpt(ctx, cs, sampler, stats, splats);
-      thread_local std::vector<Spectrum> strategies;
-      strategies.assign(size_t(cells), Spectrum(0.0f));
-      SampleValue v = trace_bdpt(ctx, cs, sampler, stats, splats, strategies.data());
-      if (is_finite(v.radiance))
-        film_.add_strategies(int(cs.pixel_center.x) - settings_.x0, int(cs.pixel_center.y) - settings_.y0, strategies.data());
-      return v;
-    });
-    // Merge the splats tile by tile in a fixed order (deterministic for any thread count).
-    for (size_t i = 0; i < tile_splats_.size(); ++i) {
-      for (const Splat& sp : tile_splats_[i]) {
-        film_.add_splat(sp.pixel, sp.value, int(i & 1));
-        if (sp.strategy >= 0) film_.add_strategy_splat(sp.pixel, sp.strategy, sp.value);
-      }
-      tile_splats_[i].clear();
-    }
-    // One light path per camera sample traced (fewer than the region's pixels when adaptive
-    // sampling has stopped some, or when the pass was cut short): dividing by the paths actually
-    // traced keeps the splat estimate unbiased, as every light path is independent of the pixel
-    // whose sample traced it.
-    film_.add_light_paths(pass_samples_.load(), pass_samples_half_.load());
-  } else if (settings_.integrator == IntegratorType::VolumeDebug) {
-    // Panels: top row transmittance (marching | ratio tracking), bottom row sampled distance
-    // (marching | delta tracking); each panel is the whole view at half the resolution.
-    const int hw = std::max(1, settings_.width / 2), hh = std::max(1, settings_.height / 2);
-    render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) {
-      const int col = cs.film.x >= hw ? 1 : 0, top = cs.film.y >= hh ? 1 : 0;
-      float fx = std::min(cs.film.x - col * hw, float(hw)) * settings_.width / float(hw);
-      float fy = std::min(cs.film.y - top * hh, float(hh)) * settings_.height / float(hh);
-      return trace_volume_debug(scene_, settings_.integrator_settings, camera_.generate(fx, fy), (1 - top) * 2 + col,
-                                sampler, stats);
-    });
-  } else if (settings_.integrator == IntegratorType::VolPath && scene_.has_media()) {
-    render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) {
-      return trace_volpath(scene_, settings_.integrator_settings, cs.ray, sampler, stats);
-    });
-  } else {
-    // Path tracing; also "Volumetric Path" on a scene without media (the same estimator, no cost).
-    render_pass_with(sample_index, [&](const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) {
-      return trace_path(scene_, settings_.integrator_settings, cs.ray, sampler, stats);
-    });
-  }
-}
-
-template <class Trace>
-void RenderJob::render_pass_with(int sample_index, Trace trace) {
   const int w = film_.width(), h = film_.height();
   const int tile_size = settings_.adaptive ? kAdaptiveTile : kTile;
   const int tiles_x = (w + tile_size - 1) / tile_size, tiles_y = (h + tile_size - 1) / tile_size;
@@ -177,6 +107,7 @@ void RenderJob::render_pass_with(int sample_index, Trace trace) {
   pass_samples_half_.store(0);
   // The time limit may cut any pass but the first, so that every pixel has a sample.
   const bool may_cut = sample_index > 0 && settings_.time_limit > 0;
+  integrator_->begin_pass(film_);
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
     SampleStats stats;
     uint64_t nans = 0, traced = 0, traced_half = 0;
@@ -200,7 +131,7 @@ void RenderJob::render_pass_with(int sample_index, Trace trace) {
             cs.film = {fx + 0.5f + ox, fy + 0.5f + oy};
             cs.ray = camera_.generate(cs.film.x, cs.film.y);
             size_t splat_mark = splats.size();
-            SampleValue v = trace(cs, sampler, stats, splats);
+            SampleValue v = integrator_->trace(cs, sampler, stats, splats);
             if (!is_finite(v.radiance) || !std::isfinite(v.alpha) || !is_finite(v.albedo) || !is_finite(v.normal)) {
               ++nans;  // never written into the film; counted in the render statistics
               splats.resize(splat_mark);
@@ -215,6 +146,8 @@ void RenderJob::render_pass_with(int sample_index, Trace trace) {
     pass_samples_half_.fetch_add(traced_half, std::memory_order_relaxed);
     if (nans) nan_samples_.fetch_add(nans, std::memory_order_relaxed);
   });
+  integrator_->end_pass(film_, PassSplats{tile_splats_, pass_samples_.load(), pass_samples_half_.load()});
+  for (std::vector<Splat>& splats : tile_splats_) splats.clear();
 }
 
 bool RenderJob::past_deadline() const {

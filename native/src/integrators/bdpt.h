@@ -1,0 +1,260 @@
+// Bidirectional path tracing's estimator (bdpt.cpp): internal to the integrators, declared here for
+// the test hooks (bdpt_test_hooks.cpp), which read its densities and MIS weights.
+#pragma once
+
+#include <algorithm>
+#include <vector>
+
+#include "integrators/integrator.h"
+#include "integrators/media_transport.h"
+#include "integrators/path_state.h"
+#include "integrators/path_vertex.h"
+
+namespace lt {
+
+// Per-thread scratch, allocated once and reused: no heap allocation per sample.
+struct BdptScratch {
+  std::vector<PathVertex> camera, light;  // the subpaths
+  PathVertex endpoint;                    // the sampled light vertex of s = 1, the camera vertex of t = 1
+  std::vector<double> prob, next;         // kind_limit_factor's dynamic programming
+};
+
+// One BDPT sample (Veach 1997, ch. 10; pbrt-v4's BDPTIntegrator): subpaths by random walks,
+// every (s, t) strategy connected and weighted by MIS.
+class Bdpt {
+ public:
+  enum class Mode { Radiance, Importance };
+
+  Bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats);
+
+  // One sample: both subpaths, then every strategy (pbrt-v4's BDPTIntegrator::Li).
+  SampleValue run(std::vector<Splat>& splats, Spectrum* strategies);
+  // Test hook (bdpt_test_hooks.cpp): see bdpt_mis_weight_sums.
+  std::vector<float> weight_sums();
+
+ private:
+  // ---- densities ---------------------------------------------------------------------------
+  float convert_density(float pdf, const PathVertex& from, const PathVertex& to) const {
+    if (to.infinite) return pdf;
+    Vec3 w = to.p - from.p;
+    float d2 = length_squared(w);
+    if (!(d2 > 0)) return 0;
+    if (to.on_surface()) pdf *= std::abs(dot(to.n, w)) / std::sqrt(d2);
+    return pdf / d2;
+  }
+  // Solid-angle density with which the camera, for the pixel centred at `pixel`, shoots towards p,
+  // as MIS must see it: each pixel has spp camera samples but N * spp light paths (N pixels in the
+  // region), so the camera's per-pixel density is divided by N (Veach's sample-count-weighted
+  // heuristics; it equals pbrt's density normalised over the whole film).
+  float camera_pdf_dir(const Vec3& p, const Vec2& pixel) const {
+    Vec2 film;
+    Vec3 dir;
+    float dist;
+    if (!ctx_.camera.project(p, ctx_.filter.radius() + 1, &film, &dir, &dist)) return 0;
+    float h = ctx_.filter.pdf(film.x - pixel.x) * ctx_.filter.pdf(film.y - pixel.y);
+    float c = dot(dir, ctx_.camera.forward());
+    return h / (film_area_ * c * c * c);
+  }
+  float bsdf_pdf(const PathVertex& v, const Vec3& to_prev, const Vec3& to_next) const {
+    if (v.type == VertexType::Medium) return phase(v).pdf(to_prev, to_next);
+    return v.bsdf.pdf(v.frame.to_local(to_prev), v.frame.to_local(to_next));
+  }
+  const Phase& phase(const PathVertex& v) const { return scene_.media[v.medium].phase(); }
+  // Density (area measure at `next`) that vertex v samples `next`, having been reached from prev
+  // (a camera vertex: for the pixel centred at `pixel`).
+  float pdf(const PathVertex& v, const PathVertex* prev, const PathVertex& next, const Vec2& pixel) const {
+    if (v.type == VertexType::Light) return pdf_light(v, next);
+    Vec3 wn = next.p - v.p;
+    if (!(length_squared(wn) > 0)) return 0;
+    float p;
+    if (v.type == VertexType::Camera) {
+      p = camera_pdf_dir(next.p, pixel);
+    } else {
+      Vec3 wp = normalize(prev->p - v.p);
+      p = bsdf_pdf(v, wp, normalize(wn));
+    }
+    return convert_density(p, v, next);
+  }
+  // Density that a light subpath starting at light vertex v continues to `to` (area at `to`).
+  float pdf_light(const PathVertex& v, const PathVertex& to) const {
+    Vec3 w = to.p - v.p;
+    float d2 = length_squared(w);
+    if (!(d2 > 0)) return 0;
+    w = w / std::sqrt(d2);
+    float p;
+    if (v.infinite) {
+      p = 1 / (kPi * lights_.scene_radius() * lights_.scene_radius());
+    } else {
+      float pdf_pos, pdf_dir;
+      lights_.pdf_emission(scene_, v.light, v.p, v.n, w, &pdf_pos, &pdf_dir);
+      p = pdf_dir / d2;
+    }
+    if (to.on_surface()) p *= std::abs(dot(to.n, w));
+    return p;
+  }
+  // Density that a light subpath starts at v (light choice included).
+  float pdf_light_origin(const PathVertex& v, const PathVertex& to) const {
+    float pmf = lights_.pmf(v.light);
+    if (v.infinite) {
+      Vec3 w = normalize(v.p - to.p);
+      return pmf * lights_.pdf(scene_, v.light, to.p, w, INFINITY);
+    }
+    float pdf_pos, pdf_dir;
+    lights_.pdf_emission(scene_, v.light, v.p, v.n, normalize(to.p - v.p), &pdf_pos, &pdf_dir);
+    return pmf * pdf_pos;
+  }
+  bool is_delta_light(const PathVertex& v) const {
+    return v.type == VertexType::Light && lights_.light(v.light).delta();
+  }
+
+  // ---- scattering ----------------------------------------------------------------------------
+  // BSDF towards `to` at a vertex, with pbrt's shading-normal correction for importance transport.
+  Spectrum f(const PathVertex& v, const Vec3& to_world, Mode mode) const {
+    if (v.type == VertexType::Medium) return Spectrum(phase(v).eval(v.wo, to_world));
+    if (v.type != VertexType::Surface) return Spectrum(0.0f);
+    Vec3 wi = v.frame.to_local(to_world);
+    if ((dot(to_world, v.n) > 0) != (wi.z > 0)) return Spectrum(0.0f);  // shading normal would leak
+    Spectrum r = v.bsdf.eval(v.wo, wi, nullptr);
+    if (mode == Mode::Importance) r *= shading_correction(v, v.frame.to_world(v.wo), to_world);
+    return r;
+  }
+  static float shading_correction(const PathVertex& v, const Vec3& wo, const Vec3& wi) {
+    float num = std::abs(dot(wo, v.frame.n)) * std::abs(dot(wi, v.n));
+    float den = std::abs(dot(wo, v.n)) * std::abs(dot(wi, v.frame.n));
+    return den > 0 ? num / den : 0.0f;
+  }
+  float cos_at(const PathVertex& v, const Vec3& w) const {
+    if (v.type == VertexType::Surface) return std::abs(dot(v.frame.n, w));
+    if (v.type == VertexType::Light && v.on_surface()) return std::abs(dot(v.n, w));
+    return 1.0f;
+  }
+  // Transmittance of the segment from a to b: 0 or 1 without media; with media the product of
+  // the media's transmittances (through invisible boundaries), 0 if a surface is in the way.
+  Spectrum transmittance(const PathVertex& a, const PathVertex& b) const {
+    Ray r;
+    Vec3 d = b.p - a.p;
+    float dist = length(d);
+    if (!(dist > 0)) return Spectrum(0.0f);
+    r.d = d / dist;
+    r.o = a.type == VertexType::Surface ? spawn_origin(a.sp, r.d) : a.p;
+    r.tmin = 0;
+    if (!b.infinite) r = spawn_ray_to(r.o, b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p);
+    return transmittance(a, r);
+  }
+  // The same along a shadow ray leaving a: a's volume stack is the side a was reached from.
+  Spectrum transmittance(const PathVertex& a, const Ray& r) const {
+    if (media_) {
+      VolumeStack stack = a.stack;
+      if (a.type == VertexType::Surface) leave_surface(scene_, a.sp, a.n, r.d, &stack);
+      return shadow_transmittance(scene_, stack, r, sampler_, s_.volume_estimator, s_.volume_step, stats_);
+    }
+    ++stats_.rays;
+    return scene_.geometry.occluded(r) ? Spectrum(0.0f) : Spectrum(1.0f);
+  }
+  static bool scatters(const PathVertex& v) {
+    return v.type == VertexType::Medium || (v.type == VertexType::Surface && v.bsdf.has_non_delta());
+  }
+
+  // ---- subpaths (pbrt-v4's GenerateCameraSubpath, GenerateLightSubpath, RandomWalk) ----------
+  // How the camera ray's first segment ended, for the data passes: escaped to the background, or
+  // at the first vertex, t along the last ray (as the path tracer's depth).
+  struct FirstSegment {
+    bool escaped = false;
+    float t = 1e30f;
+  };
+  int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeStack stack, std::vector<PathVertex>& path,
+                  FirstSegment* first);
+  int generate_camera_subpath(std::vector<PathVertex>& path);
+  int generate_light_subpath(std::vector<PathVertex>& path);
+
+  // ---- strategies (pbrt-v4's ConnectBDPT and MISWeight) ----------------------------------------
+  // s = 0, reported by the camera walk as it goes: an emitter at camera vertex t - 1 (a lamp, the
+  // world or a sun the walk's ray reached, or an emissive surface), and the emission of the media
+  // along the walk's segment before vertex `count` (its estimate draws on the walk's sampler).
+  void emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le);
+  void media_emission_reached(std::vector<PathVertex>& camera, int count, const Ray& ray, float t_end,
+                              const VolumeStack& stack, const Spectrum& beta);
+  float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, PathVertex* sampled, int s, int t,
+                   const Vec2& pixel, double* light_sum = nullptr);
+  // A light or camera vertex for a strategy's sampled endpoint, reset without constructing a
+  // PathVertex (whose BSDF those types never use).
+  PathVertex& endpoint(VertexType type) {
+    PathVertex& v = scratch_.endpoint;
+    v.type = type;
+    v.delta = v.infinite = v.delta_direction = false;
+    v.light = -1;
+    v.kind = BounceKind::None;
+    v.beta = Spectrum(1.0f);
+    v.pdf_fwd = v.pdf_rev = 0;
+    v.n = Vec3(0.0f);
+    return v;
+  }
+  Spectrum connect(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, int t);
+  void splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats);
+
+  // Adds a strategy's weighted contribution to the sample and to the strategy view.
+  void add(const Spectrum& c, int s, int t) {
+    L_ += c;
+    if (strategies_) {
+      int cell = strategy_cell(s, t, s_.strategy_depth);
+      if (cell >= 0) strategies_[cell] += c;
+    }
+  }
+
+  float heuristic(float r) const {
+    switch (s_.mis) {
+      case MisHeuristic::Power: return r * r;
+      case MisHeuristic::Balance: return r;
+      case MisHeuristic::Uniform: return r != 0 ? 1.0f : 0.0f;
+    }
+    return r;
+  }
+  int max_depth() const { return s_.max_bounces + 1; }  // s + t - 2: the path tracer's limit
+  // Cycles' per-kind bounce limits, as its path tracer (and path.cpp) applies them to this path.
+  // It scatters at every vertex but x[k-1], the last before the light x[k] (next-event estimation
+  // there, or the emitter hit by the ray it samples there), so the kinds of x[1..k-2] count. The
+  // kind of a bounce is that of the lobe the path tracer sampled at the vertex, coming from the
+  // camera side: given the direction towards the light side, lobe j with probability
+  // part_j / pdf (Bsdf::lobe_pdfs; the one-sample mixture of Bsdf::sample). The path tracer's
+  // estimate of this path is therefore f / p times the probability that the kinds stay within
+  // the limits; that factor, returned here, is a property of the path alone (it reads only the
+  // path's vertices and the directions between them), so every strategy applies the same one
+  // and the MIS weights still sum to one over the strategies (Veach 1997, eq. 9.3). Counting
+  // one fixed kind per vertex instead (the dominant lobe's, as before) cuts paths the path
+  // tracer keeps: the door_slabs scene (walls a Mix of Diffuse and Glossy) came out 16 % dark
+  // (test_bdpt.cpp, DoorSlabsBounceKindsAgreeWithPathTracing).
+  float kind_limit_factor(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s,
+                          int t) const;
+  // The probabilities (diffuse, glossy, transmission) that the path tracer counts a bounce at a
+  // surface vertex of kind Mixed as each kind, scattering from the neighbour at `camera_side`
+  // towards the one at `light_side` (delta: through a delta lobe). False if no lobe can.
+  bool mixed_kind(const PathVertex& v, const Vec3& camera_side, const Vec3& light_side, bool delta, float* p) const;
+  // Adds a vertex of kind k to the counts; true if that takes them past its limit. A walk counts
+  // only the vertices whose kind is certain (Mixed ones may count as any of theirs), so it stops
+  // only where every strategy using its further vertices would fail the limits.
+  bool exceeds_kind_limit(int* n, BounceKind k) const {
+    if (k == BounceKind::Mixed) return false;
+    const int c = ++n[int(k)];
+    return (k == BounceKind::Diffuse && c > s_.diffuse_bounces) || (k == BounceKind::Glossy && c > s_.glossy_bounces) ||
+           (k == BounceKind::Transmission && c > s_.transmission_bounces) ||
+           (k == BounceKind::Volume && c > s_.volume_bounces);
+  }
+  int camera_depth() const { return std::min(s_.max_camera_length, s_.max_bounces + 2); }
+
+  const RenderContext& ctx_;
+  const Scene& scene_;
+  const LightSet& lights_;
+  const IntegratorSettings& s_;
+  const CameraSample& cs_;
+  Sampler& sampler_;
+  SampleStats& stats_;
+  BdptScratch& scratch_;
+  const Vec2 pixel_center_;  // of the pixel this sample estimates
+  float film_area_;  // view-plane area of the render region at unit distance
+  bool media_;       // the scene has media: walks sample free flights, connections transmittance
+  SampleValue out_;
+  Spectrum L_{0.0f};
+  Spectrum* strategies_ = nullptr;
+};
+
+}  // namespace lt

@@ -1,0 +1,88 @@
+// Test hooks of bidirectional path tracing (bdpt_test_hooks.h): compiled into the library, which
+// the tests link, and kept out of the integrator's own file.
+#include "integrators/bdpt_test_hooks.h"
+
+#include "integrators/bdpt.h"
+
+namespace lt {
+
+std::vector<float> Bdpt::weight_sums() {
+  std::vector<float> sums;
+  const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
+  std::vector<PathVertex> camera(capacity), light(capacity);
+  int nt = generate_camera_subpath(camera);
+  int ns = generate_light_subpath(light);
+  for (int t = 2; t <= nt; ++t)
+    for (int s = 2; s <= ns; ++s) {
+      if (s + t - 2 > max_depth()) break;
+      PathVertex &qs = light[s - 1], &pt = camera[t - 1];
+      if (!scatters(pt) || !scatters(qs) || is_black(transmittance(qs, pt))) continue;
+      if (is_black(f(qs, normalize(pt.p - qs.p), Mode::Importance)) ||
+          is_black(f(pt, normalize(qs.p - pt.p), Mode::Radiance)))
+        continue;
+      // The full path x[0] = camera ... x[k] = light, with both densities of every vertex:
+      // cam[i] (sampled from x[i-1]) and lig[i] (sampled from x[i+1]).
+      const int k = s + t - 1;
+      std::vector<PathVertex> x(k + 1);
+      for (int i = 0; i < t; ++i) x[i] = camera[i];
+      for (int i = 0; i < s; ++i) x[t + i] = light[s - 1 - i];
+      std::vector<float> cam(k + 1), lig(k + 1);
+      for (int i = 0; i < t; ++i) { cam[i] = camera[i].pdf_fwd; lig[i] = camera[i].pdf_rev; }
+      for (int i = 0; i < s; ++i) { lig[t + i] = light[s - 1 - i].pdf_fwd; cam[t + i] = light[s - 1 - i].pdf_rev; }
+      // Densities across the connection, which neither walk produced.
+      lig[t - 1] = pdf(qs, s > 1 ? &light[s - 2] : nullptr, pt, pixel_center_);
+      lig[t - 2] = pdf(pt, &qs, camera[t - 2], pixel_center_);
+      cam[t] = pdf(pt, &camera[t - 2], qs, pixel_center_);
+      cam[t + 1] = pdf(qs, &pt, light[s - 2], pixel_center_);
+      lig[k] = light[0].pdf_fwd;
+      // Cycles' bounce-kind limits scale every strategy's contribution by the same factor (see
+      // kind_limit_factor): the weights times each strategy's factor, over the factor this
+      // connection gets in the render, must sum to one too. Inside the joined path every vertex
+      // has both neighbours; the ones the walks did not store are set here.
+      const float factor = kind_limit_factor(light, camera, s, t);
+      if (!(factor > 0)) continue;
+      for (int i = 1; i < k; ++i)
+        if (x[i].type == VertexType::Surface && x[i].kind == BounceKind::Mixed &&
+            !mixed_kind(x[i], x[i - 1].p, x[i + 1].p, i != t - 1 && i != t && x[i].delta, x[i].kind_p))
+          x[i].kind_p[0] = -1;
+      float sum = 0;
+      for (int t2 = 1; t2 <= k + 1; ++t2) {
+        const int s2 = k + 1 - t2;
+        if (s2 + t2 - 2 > max_depth() || (s2 == 1 && t2 == 1)) continue;
+        if (s2 > s_.max_light_length || t2 - 1 > camera_depth()) continue;  // the subpath limits exclude it
+        std::vector<PathVertex> c2(x.begin(), x.begin() + t2), l2(s2);
+        for (int i = 0; i < t2; ++i) { c2[i].pdf_fwd = cam[i]; c2[i].pdf_rev = lig[i]; }
+        for (int i = 0; i < s2; ++i) {
+          l2[i] = x[k - i];
+          l2[i].pdf_fwd = lig[k - i];
+          l2[i].pdf_rev = cam[k - i];
+        }
+        // Only strategies whose connection can be made sample this path.
+        if (t2 >= 1 && s2 >= 1) {
+          const PathVertex& a = c2[t2 - 1];
+          const PathVertex& b = l2[s2 - 1];
+          bool a_ok = a.type == VertexType::Camera ? !ctx_.camera.orthographic() : (scatters(a) && !a.delta);
+          bool b_ok = b.type == VertexType::Light ? !b.delta_direction : (scatters(b) && !b.delta);
+          if (!a_ok || !b_ok) continue;
+        }
+        if (s2 == 0 && is_delta_light(x[k])) continue;
+        if (t2 == 1 && x[1].delta) continue;
+        const PathVertex* sampled = s2 == 1 ? &l2[0] : (t2 == 1 ? &c2[0] : nullptr);
+        PathVertex sampled_copy;
+        if (sampled) sampled_copy = *sampled;
+        float w = mis_weight(l2, c2, sampled ? &sampled_copy : nullptr, s2, t2, pixel_center_);
+        if (!(w >= 0 && w <= 1 + 1e-5f)) sum = NAN;  // a weight outside [0, 1] fails the check
+        sum += w * kind_limit_factor(l2, c2, s2, t2) / factor;
+      }
+      sums.push_back(sum);
+    }
+  return sums;
+}
+
+std::vector<float> bdpt_mis_weight_sums(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler) {
+  SampleStats stats;
+  Bdpt b(ctx, cs, sampler, stats);
+  return b.weight_sums();
+}
+
+}  // namespace lt
