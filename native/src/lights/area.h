@@ -29,12 +29,8 @@ inline Vec3 area_lamp_point(const Light& l, Vec2 u) {
 
 inline bool area_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample* s) {
   Vec3 q = area_lamp_point(l, u);
-  Vec3 to = q - p;
-  float d2 = length_squared(to);
-  if (!(d2 > 0)) return false;
-  s->distance = std::sqrt(d2);
-  s->wi = to / s->distance;
-  s->p = q;
+  float d2;
+  if (!aim_at(p, q, s, &d2)) return false;
   s->n = l.direction;
   s->on_surface = true;
   float cos_l = dot(l.direction, -s->wi);

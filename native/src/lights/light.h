@@ -68,6 +68,18 @@ struct LightSample {
   bool delta = false;
 };
 
+// Aims a sample from the shaded point p at the light point q: wi, distance, p; d2 the squared
+// distance. False where the two coincide.
+inline bool aim_at(const Vec3& p, const Vec3& q, LightSample* s, float* d2) {
+  Vec3 to = q - p;
+  *d2 = length_squared(to);
+  if (!(*d2 > 0)) return false;
+  s->distance = std::sqrt(*d2);
+  s->wi = to / s->distance;
+  s->p = q;
+  return true;
+}
+
 // A light sampled as the start of a light subpath (BDPT): a point and a direction of emission.
 struct EmissionSample {
   Ray ray;

@@ -52,12 +52,8 @@ inline bool point_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample
     Vec2 d = sample_disk_concentric(u);
     q = l.position + f.to_world(Vec3(d.x * l.radius, d.y * l.radius, 0));
   }
-  Vec3 to = q - p;
-  float d2 = length_squared(to);
-  if (!(d2 > 0)) return false;
-  s->distance = std::sqrt(d2);
-  s->wi = to / s->distance;
-  s->p = q;
+  float d2;
+  if (!aim_at(p, q, s, &d2)) return false;
   s->n = l.radius > 0 ? -s->wi : Vec3(0.0f);
   s->on_surface = false;  // the disk faces each receiver: no surface of the scene
   float atten = spot_attenuation(l, -s->wi);

@@ -46,15 +46,11 @@ inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3
   Vec3 ng = triangle_light_corners(scene, l, &p0, &p1, &p2);
   Vec2 b = sample_triangle(u);
   Vec3 q = p0 * (1 - b.x - b.y) + p1 * b.x + p2 * b.y;
-  Vec3 to = q - p;
-  float d2 = length_squared(to);
-  if (!(d2 > 0)) return false;
-  s->distance = std::sqrt(d2);
-  s->wi = to / s->distance;
+  float d2;
+  if (!aim_at(p, q, s, &d2)) return false;
   float cos_l = std::abs(dot(ng, s->wi));
   if (!(cos_l > 0)) return false;
   s->pdf = d2 / (l.area * cos_l);
-  s->p = q;
   s->n = ng;
   s->on_surface = true;
   s->radiance = triangle_light_radiance(scene, triangle_light_surface(scene, l, b));
