@@ -13,6 +13,9 @@
 #include "core/error.h"
 #include "io/exr.h"
 #include "io/vdb.h"
+#include "lights/area.h"
+#include "lights/point.h"
+#include "lights/sun.h"
 #include "render/render.h"
 #include "scene/volume_material.h"
 #include "scene/scene.h"
@@ -339,59 +342,47 @@ int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
     // Negative energy is negative light, as Cycles renders it.
     require(finite_array(d->color, 3), "light colour x energy must be finite");
     lt::Transform xf = to_transform(d->transform, "light");
-    lt::Light l;
-    l.power = lt::Spectrum(d->color[0], d->color[1], d->color[2]);
-    l.position = xf.point(lt::Vec3(0.0f));
-    l.direction = normalize(xf.vector(lt::Vec3(0, 0, -1)));
-    l.visibility = d->visibility & LT_VISIBLE_ALL;
+    const lt::Spectrum power(d->color[0], d->color[1], d->color[2]);
     auto& warnings = scene->scene.warnings;
     const std::string name = "light " + std::to_string(scene->scene.lamp_lights.size());
-    if (lt::is_black(l.power)) {
+    if (lt::is_black(power)) {
       warnings.push_back(name + " emits nothing; left out");
       return;
     }
+    // Blender's numbers become lights (and radiance) in lights/: point.h, area.h, sun.h.
+    lt::Light l;
     switch (d->type) {
       case LT_LIGHT_POINT:
       case LT_LIGHT_SPOT:
         require(std::isfinite(d->radius) && d->radius >= 0, name + ": radius must be finite and >= 0");
-        l.type = d->type == LT_LIGHT_POINT ? lt::LightType::Point : lt::LightType::Spot;
-        l.radius = d->radius;
-        if (l.type == lt::LightType::Spot) {
+        if (d->type == LT_LIGHT_POINT) {
+          l = lt::point_lamp(power, xf, d->radius);
+        } else {
           require(std::isfinite(d->spot_size) && std::isfinite(d->spot_blend), name + ": spot size/blend not finite");
-          float size = lt::clamp(d->spot_size, 0.0f, lt::kPi);
-          l.cos_half_angle = std::cos(0.5f * size);
-          l.smooth = (1 - l.cos_half_angle) * lt::clamp(d->spot_blend, 0.0f, 1.0f);
+          l = lt::spot_lamp(power, xf, d->radius, d->spot_size, d->spot_blend);
           require(lt::is_finite(l.direction), name + ": the spot's transform has no direction");
         }
         break;
       case LT_LIGHT_AREA: {
         require(d->shape >= LT_AREA_SQUARE && d->shape <= LT_AREA_ELLIPSE, name + ": unknown area shape");
         require(std::isfinite(d->size_x) && std::isfinite(d->size_y), name + ": size not finite");
-        l.type = lt::LightType::Area;
-        bool square = d->shape == LT_AREA_SQUARE || d->shape == LT_AREA_DISK;
-        float sx = std::abs(d->size_x), sy = square ? sx : std::abs(d->size_y);
-        l.shape = (d->shape == LT_AREA_DISK || d->shape == LT_AREA_ELLIPSE) ? lt::AreaShape::Ellipse : lt::AreaShape::Rectangle;
-        l.axis_u = xf.vector(lt::Vec3(1, 0, 0)) * (0.5f * sx);
-        l.axis_v = xf.vector(lt::Vec3(0, 1, 0)) * (0.5f * sy);
-        float a = length(cross(l.axis_u, l.axis_v));
-        l.area = l.shape == lt::AreaShape::Rectangle ? 4 * a : lt::kPi * a;
-        l.direction = normalize(cross(l.axis_u, l.axis_v)) * -1.0f;
+        const bool square = d->shape == LT_AREA_SQUARE || d->shape == LT_AREA_DISK;
+        const bool round = d->shape == LT_AREA_DISK || d->shape == LT_AREA_ELLIPSE;
+        l = lt::area_lamp(power, xf, round ? lt::AreaShape::Ellipse : lt::AreaShape::Rectangle, d->size_x,
+                          square ? d->size_x : d->size_y);
         if (!(l.area > 1e-12f) || !std::isfinite(l.area) || !lt::is_finite(l.direction)) {
           warnings.push_back(name + ": area light of zero area; left out");
           return;
         }
         break;
       }
-      case LT_LIGHT_SUN: {
+      case LT_LIGHT_SUN:
         require(std::isfinite(d->angle) && d->angle >= 0, name + ": sun angle must be finite and >= 0");
+        l = lt::sun_lamp(power, xf, d->angle);
         require(lt::is_finite(l.direction), name + ": the sun's transform has no direction");
-        l.type = lt::LightType::Sun;
-        float half = 0.5f * std::min(d->angle, 3.0f);  // Blender caps the angle at 180 degrees
-        l.tan_half_angle = half > 1e-6f ? std::tan(half) : 0.0f;
-        l.cos_half_angle_sun = std::cos(half);
         break;
-      }
     }
+    l.visibility = d->visibility & LT_VISIBLE_ALL;
     scene->scene.lamp_lights.push_back(l);
   });
 }

@@ -251,12 +251,11 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
         Ray r = ray;
         r.tmax = medium >= 0 ? std::min(mi.t, found ? hit.t : ray.tmax) : (found ? hit.t : ray.tmax);
         lights_.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
-          const Light& l = lights_.light(h.light);
           v = PathVertex();
           v.type = VertexType::Light;
           v.light = h.light;
           v.p = ray.o + ray.d * h.t;
-          v.n = l.type == LightType::Area ? l.direction : -ray.d;
+          v.n = h.n;
           v.beta = medium >= 0 ? beta_before : beta;  // the segment before the collision (exact for grey media)
           v.pdf_fwd = density_of(count, v);
           reverse_density(count, v);
@@ -425,14 +424,14 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   y0.infinite = l.infinite();
   y0.delta_direction = e.delta_dir;
   y0.p = e.ray.o;
-  y0.n = (l.type == LightType::Area || l.type == LightType::Triangle || (l.radius > 0 && !l.infinite())) ? e.n : Vec3(0.0f);
+  y0.n = y0.infinite ? Vec3(0.0f) : e.n;
   y0.beta = e.radiance;
   y0.pdf_fwd = pmf * e.pdf_pos;
   float cos_l = is_black(e.n) ? 1.0f : std::abs(dot(e.n, e.ray.d));
   Spectrum beta = e.radiance * (cos_l / (pmf * e.pdf_pos * e.pdf_dir));
   Ray ray = e.ray;
   ray.tmin = 0;
-  if (l.type == LightType::Area || l.type == LightType::Triangle) ray.o = offset_ray_origin(e.ray.o, e.n);
+  if (y0.on_surface()) ray.o = offset_ray_origin(e.ray.o, e.n);
   if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, ray, &y0.stack, stats_);
   // No strategy uses more than max_depth() + 2 light vertices (t = 1: s - 1 <= max_depth()).
   int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, y0.stack,
@@ -531,7 +530,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     sampled.light = li;
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
-    sampled.n = l.faces_receiver() ? -ls.wi : ls.n;
+    sampled.n = ls.n;
     sampled.beta = ls.radiance / (pmf * ls.pdf);
     Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance) * sampled.beta * cos_at(pt, ls.wi);
     if (is_black(c)) return c;

@@ -1,6 +1,7 @@
 #include "scene/scene.h"
 
 #include "core/error.h"
+#include "lights/triangle.h"
 
 namespace lt {
 
@@ -26,38 +27,13 @@ void Scene::commit() {
       const Material& mat = material(inst.material_for(m.slots.empty() ? 0 : m.slots[t]));
       if (!mat.emissive()) continue;
       Light l;
-      l.type = LightType::Triangle;
-      l.instance = int(i);
-      l.primitive = int(t);
-      Vec3 p0, p1, p2;
-      geometry.triangle(int(i), int(t), &p0, &p1, &p2);
-      l.area = 0.5f * length(cross(p1 - p0, p2 - p0));
-      if (!(l.area > 0) || !std::isfinite(l.area)) continue;
-      l.power = Spectrum(mat.emission_power_estimate() * l.area * kPi);
-      all.push_back(l);
+      if (triangle_light(geometry, int(i), int(t), mat, &l)) all.push_back(l);
     }
     emissive_triangles_ += all.size() - before;
     emissive_instances_ += all.size() > before;
   }
   if (world_set && !world.black()) {
-    if (world.image) {
-      const Image& img = *world.image;
-      std::vector<float> f(size_t(img.width()) * img.height());
-      for (int y = 0; y < img.height(); ++y) {
-        float sin_theta = std::sin(kPi * (y + 0.5f) / img.height());
-        for (int x = 0; x < img.width(); ++x) f[size_t(y) * img.width() + x] = luminance(img.texel(x, y)) * sin_theta;
-      }
-      world.distribution = Distribution2D(f, img.width(), img.height());
-      double sum = 0, weight = 0;
-      for (int y = 0; y < img.height(); ++y) {
-        float sin_theta = std::sin(kPi * (y + 0.5f) / img.height());
-        for (int x = 0; x < img.width(); ++x) {
-          sum += f[size_t(y) * img.width() + x];
-          weight += sin_theta;
-        }
-      }
-      world.image_mean = weight > 0 ? float(sum / weight) : 0.0f;
-    }
+    if (world.image) world.build_distribution();
     Light w;
     w.type = LightType::World;
     all.push_back(w);

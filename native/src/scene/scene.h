@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "geometry/geometry.h"
+#include "lights/light_set.h"
 #include "scene/camera.h"
 #include "scene/image.h"
-#include "scene/lights.h"
 #include "scene/material.h"
 #include "scene/medium.h"
 

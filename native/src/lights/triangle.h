@@ -1,0 +1,94 @@
+// Emissive triangles (Cycles' mesh lights): every triangle of an emissive material, two-sided,
+// its radiance the material's emission at the point; sampled uniformly by area.
+#pragma once
+
+#include "lights/light.h"
+#include "scene/scene.h"
+
+namespace lt {
+
+// The light of triangle `primitive` of `instance`, picked by power estimate x area x pi; false for
+// a degenerate triangle.
+inline bool triangle_light(const Geometry& geometry, int instance, int primitive, const Material& material, Light* l) {
+  *l = Light();
+  l->type = LightType::Triangle;
+  l->instance = instance;
+  l->primitive = primitive;
+  Vec3 p0, p1, p2;
+  geometry.triangle(instance, primitive, &p0, &p1, &p2);
+  l->area = 0.5f * length(cross(p1 - p0, p2 - p0));
+  if (!(l->area > 0) || !std::isfinite(l->area)) return false;
+  l->power = Spectrum(material.emission_power_estimate() * l->area * kPi);
+  return true;
+}
+
+// The triangle's corners and its geometric normal.
+inline Vec3 triangle_light_corners(const Scene& scene, const Light& l, Vec3* p0, Vec3* p1, Vec3* p2) {
+  scene.geometry.triangle(l.instance, l.primitive, p0, p1, p2);
+  return normalize(cross(*p1 - *p0, *p2 - *p0));
+}
+
+// The surface at barycentrics b, and the radiance it emits.
+inline SurfacePoint triangle_light_surface(const Scene& scene, const Light& l, Vec2 b) {
+  Hit h;
+  h.instance = l.instance;
+  h.primitive = l.primitive;
+  h.u = b.x;
+  h.v = b.y;
+  return scene.geometry.surface(h);
+}
+inline Spectrum triangle_light_radiance(const Scene& scene, const SurfacePoint& sp) {
+  return scene.material(sp.material).emission(scene.images, sp.uv);
+}
+
+inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3& p, Vec2 u, LightSample* s) {
+  Vec3 p0, p1, p2;
+  Vec3 ng = triangle_light_corners(scene, l, &p0, &p1, &p2);
+  Vec2 b = sample_triangle(u);
+  Vec3 q = p0 * (1 - b.x - b.y) + p1 * b.x + p2 * b.y;
+  float d2;
+  if (!aim_at(p, q, s, &d2)) return false;
+  float cos_l = std::abs(dot(ng, s->wi));
+  if (!(cos_l > 0)) return false;
+  s->pdf = d2 / (l.area * cos_l);
+  s->n = ng;
+  s->on_surface = true;
+  s->radiance = triangle_light_radiance(scene, triangle_light_surface(scene, l, b));
+  s->delta = false;
+  return !is_black(s->radiance);
+}
+
+// Solid-angle density of triangle_light_sample for direction wi, the triangle at distance t.
+inline float triangle_light_pdf(const Scene& scene, const Light& l, const Vec3& wi, float t) {
+  Vec3 p0, p1, p2;
+  Vec3 ng = triangle_light_corners(scene, l, &p0, &p1, &p2);
+  float cos_l = std::abs(dot(ng, wi));
+  return cos_l > 0 ? t * t / (l.area * cos_l) : 0;
+}
+
+// Both sides emit: the first half of ud.x picks the side, cosine-weighted directions on it.
+inline bool triangle_light_sample_emission(const Scene& scene, const Light& l, Vec2 up, Vec2 ud, EmissionSample* e) {
+  Vec3 p0, p1, p2;
+  Vec3 ng = triangle_light_corners(scene, l, &p0, &p1, &p2);
+  Vec2 b = sample_triangle(up);
+  float ux = ud.x < 0.5f ? 2 * ud.x : 2 * ud.x - 1;
+  Vec3 n = ud.x < 0.5f ? ng : -ng;
+  Vec3 local = sample_cosine_hemisphere({std::min(ux, kOneMinusEpsilon), ud.y});
+  SurfacePoint sp = triangle_light_surface(scene, l, b);
+  e->ray.o = sp.p;
+  e->ray.d = Frame(n).to_world(local);
+  e->n = n;
+  e->pdf_pos = 1 / l.area;
+  e->pdf_dir = 0.5f * cosine_hemisphere_pdf(local.z);
+  e->radiance = triangle_light_radiance(scene, sp);
+  return e->pdf_dir > 0 && !is_black(e->radiance);
+}
+
+// n: the normal of the side the direction leaves from.
+inline void triangle_light_pdf_emission(const Light& l, const Vec3& n, const Vec3& dir, float* pdf_pos,
+                                        float* pdf_dir) {
+  *pdf_pos = 1 / l.area;
+  *pdf_dir = 0.5f * std::abs(dot(dir, n)) * kInvPi;
+}
+
+}  // namespace lt
