@@ -13,7 +13,7 @@
 #include "core/render.h"
 #include "io/exr.h"
 #include "io/vdb.h"
-#include "scene/volume_material.h"
+#include "media/volume_material.h"
 #include "scene/scene.h"
 
 

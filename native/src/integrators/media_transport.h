@@ -4,7 +4,7 @@
 #pragma once
 
 #include "integrators/integrator.h"
-#include "scene/volume_stack.h"
+#include "media/volume_stack.h"
 
 namespace lt {
 

@@ -6,7 +6,7 @@
 #include "core/math.h"
 #include "geometry/hit.h"
 #include "scene/bsdf.h"
-#include "scene/volume_stack.h"
+#include "media/volume_stack.h"
 
 namespace lt {
 

@@ -11,7 +11,7 @@
 #include "scene/image.h"
 #include "scene/lights.h"
 #include "scene/material.h"
-#include "scene/medium.h"
+#include "media/medium.h"
 
 namespace lt {
 

@@ -1,4 +1,4 @@
-#include "scene/majorant_grid.h"
+#include "media/majorant_grid.h"
 
 #include <cstdint>
 #include <string>

@@ -9,7 +9,7 @@
 //  * Tracking (unbiased): ratio tracking for transmittance (Novak et al. 2014) and delta tracking
 //    for distances (Woodcock et al. 1965), generalised to chromatic media as spectral tracking
 //    (Kutz et al. 2017). The majorant is piecewise constant: a coarse grid of per-cell maxima of
-//    the interpolated density (scene/majorant_grid.h), traversed by 3D DDA, not one global maximum.
+//    the interpolated density (media/majorant_grid.h), traversed by 3D DDA, not one global maximum.
 // Homogeneous media always use the closed forms, whatever the estimator.
 //
 // Conventions the caller must follow (pbrt-v3's):
@@ -42,8 +42,8 @@
 
 #include "core/math.h"
 #include "core/sampling.h"
-#include "scene/majorant_grid.h"
-#include "scene/phase.h"
+#include "media/majorant_grid.h"
+#include "media/phase.h"
 
 namespace lt {
 
@@ -126,7 +126,7 @@ class Medium {
                        MediumInteraction* out) const;
 
   const Phase& phase() const { return phase_; }
-  // A mixture of HG lobes (volume shader mixes; scene/volume_material.h) replaces the single lobe.
+  // A mixture of HG lobes (volume shader mixes; media/volume_material.h) replaces the single lobe.
   void set_phase(const Phase& p) { phase_ = p; }
   // Emitted radiance per unit length (Cycles' volume emission, not scaled by density); homogeneous
   // media only (throws InvalidArgument otherwise, or for negative / non-finite values). Emission is

@@ -1,4 +1,4 @@
-#include "scene/medium.h"
+#include "media/medium.h"
 
 #include <nanovdb/NanoVDB.h>
 #include <nanovdb/util/SampleFromVoxels.h>
