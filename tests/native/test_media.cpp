@@ -11,8 +11,8 @@
 
 #include "chi2.h"
 #include "core/error.h"
-#include "scene/medium.h"
-#include "scene/volume_material.h"
+#include "media/medium.h"
+#include "media/volume_material.h"
 #include "test_media_util.h"
 
 namespace lt {
@@ -120,7 +120,7 @@ TEST_P(PhaseChi2, SamplingFollowsPdf) {
 
 INSTANTIATE_TEST_SUITE_P(PhaseHG, PhaseChi2, ::testing::Values(-0.99f, -0.5f, 0.0f, 0.5f, 0.99f));
 
-// Mixtures of HG lobes (volume shader mixes, scene/phase.h): sampling follows the mixture's pdf.
+// Mixtures of HG lobes (volume shader mixes, media/phase.h): sampling follows the mixture's pdf.
 struct MixtureCase {
   std::vector<float> g, w;
 };
@@ -836,7 +836,7 @@ TEST(MediaStats, ChecksRejectWrongDistributionsAndBias) {
 }
 
 
-// ---- volume shader mixes and emission (scene/volume_material.h) ------------------------------
+// ---- volume shader mixes and emission (media/volume_material.h) ------------------------------
 
 TEST(VolumeMaterial, ComponentsAddAndPhaseLobesFollowScattering) {
   // Add Shader(Volume Scatter, Volume Absorption): the coefficients add; one lobe.

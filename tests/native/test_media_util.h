@@ -1,6 +1,6 @@
 // Shared helpers of the participating-media tests (test_media*.cpp): running means with standard
 // errors, a 1D Pearson chi-square test, a double-precision reference of the dense grids' trilinear
-// density, and quadrature of the optical depth along a ray, all independent of scene/medium.cpp.
+// density, and quadrature of the optical depth along a ray, all independent of media/medium.cpp.
 #pragma once
 
 #include <gtest/gtest.h>

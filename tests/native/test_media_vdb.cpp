@@ -13,6 +13,7 @@
 #include "../scenes/make_test_vdb.h"
 #include "core/error.h"
 #include "io/vdb.h"
+#include "media/medium.h"
 #include "test_media_util.h"
 
 namespace lt {

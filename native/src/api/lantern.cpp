@@ -16,8 +16,8 @@
 #include "lights/area.h"
 #include "lights/point.h"
 #include "lights/sun.h"
+#include "media/volume_material.h"
 #include "render/render.h"
-#include "scene/volume_material.h"
 #include "scene/scene.h"
 
 

@@ -100,6 +100,11 @@ struct Transform {
   }
 };
 
+// a after b (b is applied first).
+Transform compose(const Transform& a, const Transform& b);
+// Inverse of an affine transform; throws InvalidArgument if its linear part is singular.
+Transform affine_inverse(const Transform& t);
+
 struct Ray {
   Vec3 o, d;
   float tmin = 0, tmax = INFINITY;

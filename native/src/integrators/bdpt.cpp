@@ -22,7 +22,6 @@ namespace lt {
 namespace {
 
 constexpr unsigned kVisLightRay = kVisDiffuse | kVisGlossy | kVisTransmission;
-constexpr int kMaxNullCrossings = 1024;
 
 // The bounce kind of a surface vertex: its lobes' (path_state.h), or Mixed if they differ or a
 // dielectric may reflect or refract there; the path tracer's count then depends on the lobe it
@@ -291,11 +290,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       sp = scene_.geometry.surface(hit);
       if (media_ && scene_.null_surface(sp.material)) {
         // An invisible medium boundary: update the stack and continue along the same line.
-        if (++nulls > kMaxNullCrossings) break;
-        cross_boundary(scene_, sp, ray.d, &stack);
-        ray.o = spawn_origin(sp, ray.d);
-        ray.tmax -= hit.t;
-        ray.tmin = 0;
+        if (!pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
         continue;
       }
     }

@@ -9,7 +9,7 @@
 
 #include "core/film.h"
 #include "core/sampling.h"
-#include "scene/medium.h"
+#include "media/medium.h"
 #include "scene/scene.h"
 
 namespace lt {

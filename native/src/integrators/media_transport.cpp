@@ -5,8 +5,6 @@ namespace lt {
 
 namespace {
 
-constexpr int kMaxCrossings = 256;  // invisible boundaries a shadow ray or the stack probe passes
-
 // Calls f(medium) for every non-empty medium the ray is in: the stack's, then the global ones.
 template <class F>
 void for_each_medium(const Scene& scene, const VolumeStack& stack, F f) {
@@ -23,7 +21,7 @@ void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* s
   r.tmin = 0;
   r.tmax = INFINITY;
   int decided[VolumeStack::kCapacity * 4], n_decided = 0;
-  for (int i = 0; i < kMaxCrossings; ++i) {
+  for (int i = 0; i < kMaxBoundaryCrossings; ++i) {
     Hit hit;
     ++stats.rays;
     if (!scene.geometry.intersect(r, kVisAll, &hit)) break;
@@ -44,6 +42,16 @@ void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* s
 void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir, VolumeStack* stack) {
   int m = scene.medium_of(sp.material);
   if (m >= 0) stack->cross(m, dot(dir, sp.ng) < 0);
+}
+
+bool pass_boundary(const Scene& scene, const SurfacePoint& sp, float hit_t, Ray* ray, VolumeStack* stack,
+                   int* crossings) {
+  if (++*crossings > kMaxBoundaryCrossings) return false;
+  cross_boundary(scene, sp, ray->d, stack);
+  ray->o = spawn_origin(sp, ray->d);
+  ray->tmax -= hit_t;
+  ray->tmin = 0;
+  return true;
 }
 
 void leave_surface(const Scene& scene, const SurfacePoint& sp, const Vec3& side, const Vec3& dir, VolumeStack* stack) {
@@ -138,20 +146,16 @@ int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, f
 Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sampler& sampler, VolumeEstimator est,
                               float step, SampleStats& stats) {
   Spectrum T(1.0f);
-  for (int i = 0; i < kMaxCrossings; ++i) {
+  for (int crossings = 0;;) {
     Hit hit;
     ++stats.rays;
     bool found = scene.geometry.intersect(ray, kVisShadow, &hit);
     T *= media_transmittance(scene, stack, ray, ray.tmin, found ? hit.t : ray.tmax, sampler, est, step);
     if (!found || is_black(T)) return T;
     SurfacePoint sp = scene.geometry.surface(hit);
-    if (!scene.null_surface(sp.material)) return Spectrum(0.0f);
-    cross_boundary(scene, sp, ray.d, &stack);
-    ray.o = spawn_origin(sp, ray.d);
-    ray.tmax -= hit.t;
-    ray.tmin = 0;
+    if (!scene.null_surface(sp.material) || !pass_boundary(scene, sp, hit.t, &ray, &stack, &crossings))
+      return Spectrum(0.0f);
   }
-  return Spectrum(0.0f);
 }
 
 }  // namespace lt

@@ -4,9 +4,13 @@
 #pragma once
 
 #include "integrators/integrator.h"
-#include "scene/volume_stack.h"
+#include "media/volume_stack.h"
 
 namespace lt {
+
+// Invisible medium boundaries one path, shadow ray or stack probe passes before it is given up: a
+// bound on the work where boundaries nest deeply or a ray grazes along one.
+constexpr int kMaxBoundaryCrossings = 1024;
 
 // The media containing the ray's origin: the first boundary of each medium met along the ray is a
 // back face (closed meshes; parity as in pbrt's medium interfaces). Follows the ray to infinity.
@@ -15,6 +19,13 @@ void init_volume_stack(const Scene& scene, const Ray& ray, VolumeStack* stack, S
 // Applies a boundary crossing at a surface point by a ray leaving towards `dir` (enter when dir
 // goes against the geometric normal's outside, i.e. into the closed mesh).
 void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir, VolumeStack* stack);
+
+// Continues `ray`, which hit the invisible medium boundary sp at ray parameter hit_t, along the same
+// line: crosses the boundary (updating the stack) and moves the origin past the surface, ray.tmax
+// shortened by hit_t so the ray still ends where it did. Returns false, changing nothing, when
+// ++*crossings (counted over a path or shadow ray) exceeds kMaxBoundaryCrossings.
+bool pass_boundary(const Scene& scene, const SurfacePoint& sp, float hit_t, Ray* ray, VolumeStack* stack,
+                   int* crossings);
 
 // For a ray leaving a surface point that a path reached from the side of geometric normal `side`:
 // crosses the boundary only if the ray goes through the surface (a reflection stays in the media

@@ -12,8 +12,6 @@ namespace lt {
 
 namespace {
 
-constexpr int kMaxNullCrossings = 1024;
-
 template <bool kMedia>
 SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
                   SampleStats& stats) {
@@ -143,12 +141,8 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       SurfacePoint sp = scene.geometry.surface(hit);
       if (kMedia && scene.null_surface(sp.material)) {
         // An invisible medium boundary: update the stack and continue along the same line.
-        if (++nulls > kMaxNullCrossings) break;
-        cross_boundary(scene, sp, ray.d, &stack);
+        if (!pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
         t_prev += hit.t * length(ray.d);
-        ray.o = spawn_origin(sp, ray.d);
-        ray.tmax -= hit.t;
-        ray.tmin = 0;
         continue;
       }
       const bool backface = dot(ray.d, sp.ng) > 0;

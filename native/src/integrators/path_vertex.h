@@ -7,7 +7,7 @@
 #include "geometry/hit.h"
 #include "integrators/path_state.h"
 #include "scene/bsdf.h"
-#include "scene/volume_stack.h"
+#include "media/volume_stack.h"
 
 namespace lt {
 

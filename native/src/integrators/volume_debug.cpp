@@ -29,7 +29,7 @@ SampleValue trace_panel(const Scene& scene, const IntegratorSettings& s, const R
   // Distance to the first collision along the camera ray, through invisible boundaries.
   Ray ray = camera_ray;
   float travelled = 0;
-  for (int i = 0; i < 256; ++i) {
+  for (int crossings = 0;;) {
     Hit hit;
     ++stats.rays;
     bool found = scene.geometry.intersect(ray, 1u, &hit);
@@ -41,12 +41,8 @@ SampleValue trace_panel(const Scene& scene, const IntegratorSettings& s, const R
     }
     if (!found) break;
     SurfacePoint sp = scene.geometry.surface(hit);
-    if (!scene.null_surface(sp.material)) break;
-    cross_boundary(scene, sp, ray.d, &stack);
+    if (!scene.null_surface(sp.material) || !pass_boundary(scene, sp, hit.t, &ray, &stack, &crossings)) break;
     travelled += hit.t * length(ray.d);
-    ray.o = spawn_origin(sp, ray.d);
-    ray.tmax -= hit.t;
-    ray.tmin = 0;
   }
   out.radiance = Spectrum(0.0f);
   return out;

@@ -1,12 +1,12 @@
 // OpenVDB loading. The only translation unit that includes OpenVDB (its headers are heavy); grids
-// are converted to NanoVDB at load time and sampled through NanoVDB afterwards (scene/medium.h).
+// are converted to NanoVDB at load time and sampled through NanoVDB afterwards (media/density_grid.h).
 #pragma once
 
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "scene/medium.h"
+#include "media/density_grid.h"
 
 namespace lt {
 

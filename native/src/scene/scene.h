@@ -11,7 +11,7 @@
 #include "scene/camera.h"
 #include "scene/image.h"
 #include "scene/material.h"
-#include "scene/medium.h"
+#include "media/medium.h"
 
 namespace lt {
 

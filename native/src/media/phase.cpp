@@ -1,4 +1,4 @@
-#include "scene/phase.h"
+#include "media/phase.h"
 
 #include <string>
 

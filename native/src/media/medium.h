@@ -8,8 +8,10 @@
 //    taken as constant within a step, so the revert is exact for the marched field).
 //  * Tracking (unbiased): ratio tracking for transmittance (Novak et al. 2014) and delta tracking
 //    for distances (Woodcock et al. 1965), generalised to chromatic media as spectral tracking
-//    (Kutz et al. 2017). The majorant is piecewise constant: a coarse grid of per-cell maxima of
-//    the interpolated density (scene/majorant_grid.h), traversed by 3D DDA, not one global maximum.
+//    (Kutz et al. 2017). Both are callbacks of one track(), which walks the majorant segments and
+//    samples the tentative collisions (pbrt-v4's SampleT_maj). The majorant is piecewise constant: a
+//    coarse grid of per-cell maxima of the interpolated density (media/majorant_grid.h), traversed
+//    by 3D DDA, not one global maximum.
 // Homogeneous media always use the closed forms, whatever the estimator.
 //
 // Conventions the caller must follow (pbrt-v3's):
@@ -37,52 +39,16 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
-#include <string>
-#include <vector>
 
 #include "core/math.h"
 #include "core/sampling.h"
-#include "scene/majorant_grid.h"
-#include "scene/phase.h"
+#include "media/density_grid.h"
+#include "media/majorant_grid.h"
+#include "media/phase.h"
 
 namespace lt {
 
 enum class VolumeEstimator { RayMarching, Tracking };
-
-// A scalar voxel grid in index space: voxel centres at integer index coordinates, values
-// interpolated trilinearly between them (Cycles' convention), clamped to >= 0. Either a NanoVDB
-// float grid (from io/vdb.h) or a dense array.
-struct GridData {
-  std::string name;
-  Transform index_to_object;  // index space -> object space (the VDB's linear transform)
-  int index_min[3] = {0, 0, 0}, index_max[3] = {-1, -1, -1};  // inclusive bounds of non-background voxels
-  uint64_t active_voxels = 0;                                  // VDB: active voxels; dense: non-zero voxels
-  float background = 0;
-
-  // NanoVDB storage: nano_owner keeps the buffer alive (a nanovdb::GridHandle<HostBuffer>, type
-  // erased so that this header needs no NanoVDB), nano_grid points at the nanovdb::FloatGrid in it.
-  std::shared_ptr<void> nano_owner;
-  const void* nano_grid = nullptr;
-  size_t nano_bytes = 0;
-
-  // Dense storage: value (i, j, k) at dense[(k * dims[1] + j) * dims[0] + i], index coordinates
-  // (i, j, k); zero outside.
-  std::vector<float> dense;
-  int dims[3] = {0, 0, 0};
-
-  // Throws InvalidArgument for non-positive dimensions, a size mismatch or non-finite values.
-  static GridData from_dense(std::vector<float> values, int nx, int ny, int nz,
-                             const Transform& index_to_object = Transform(), std::string name = "density");
-
-  bool empty() const { return index_max[0] < index_min[0]; }
-  bool is_nanovdb() const { return nano_grid != nullptr; }
-  float voxel(int i, int j, int k) const;     // the stored value (background / 0 outside)
-  float interpolate(const Vec3& p) const;      // trilinear at an index-space point, clamped >= 0
-  size_t memory_bytes() const;                 // NanoVDB buffer or dense array
-};
-
-// Inverse of an affine transform; throws InvalidArgument if its linear part is singular.
-Transform affine_inverse(const Transform& t);
 
 struct MediumInteraction {
   float t = 0;             // ray parameter of the collision
@@ -126,7 +92,7 @@ class Medium {
                        MediumInteraction* out) const;
 
   const Phase& phase() const { return phase_; }
-  // A mixture of HG lobes (volume shader mixes; scene/volume_material.h) replaces the single lobe.
+  // A mixture of HG lobes (volume shader mixes; media/volume_material.h) replaces the single lobe.
   void set_phase(const Phase& p) { phase_ = p; }
   // Emitted radiance per unit length (Cycles' volume emission, not scaled by density); homogeneous
   // media only (throws InvalidArgument otherwise, or for negative / non-finite values). Emission is

@@ -1,65 +1,14 @@
-#include "scene/medium.h"
-
-#include <nanovdb/NanoVDB.h>
-#include <nanovdb/util/SampleFromVoxels.h>
+#include "media/medium.h"
 
 #include <cstdio>
 #include <limits>
 
 #include "core/error.h"
+#include "media/grid_lookup.h"
 
 namespace lt {
 
 namespace {
-
-const nanovdb::FloatGrid* as_nano(const GridData& g) { return static_cast<const nanovdb::FloatGrid*>(g.nano_grid); }
-
-// Trilinear interpolation of a dense array, zero outside it; voxel centres at integer coordinates.
-struct DenseLookup {
-  const float* v;
-  int nx, ny, nz;
-  float at(int i, int j, int k) const {
-    if (unsigned(i) >= unsigned(nx) || unsigned(j) >= unsigned(ny) || unsigned(k) >= unsigned(nz)) return 0;
-    return v[(size_t(k) * ny + j) * nx + i];
-  }
-  float operator()(const Vec3& p) const {
-    float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
-    int i = int(fx), j = int(fy), k = int(fz);
-    float u = p.x - fx, w = p.y - fy, s = p.z - fz;
-    float c00 = at(i, j, k) * (1 - u) + at(i + 1, j, k) * u;
-    float c10 = at(i, j + 1, k) * (1 - u) + at(i + 1, j + 1, k) * u;
-    float c01 = at(i, j, k + 1) * (1 - u) + at(i + 1, j, k + 1) * u;
-    float c11 = at(i, j + 1, k + 1) * (1 - u) + at(i + 1, j + 1, k + 1) * u;
-    float c0 = c00 * (1 - w) + c10 * w, c1 = c01 * (1 - w) + c11 * w;
-    return std::max(0.0f, c0 * (1 - s) + c1 * s);
-  }
-};
-
-// Calls f with a density lookup (index-space point -> interpolated density >= 0) for the grid's
-// storage, so that the estimators are compiled once per storage type without a per-lookup branch.
-// NanoVDB's cached trilinear sampler needs a read accessor that lives for the whole call.
-template <class F>
-auto with_density(const GridData& g, F&& f) {
-  if (g.nano_grid) {
-    auto acc = as_nano(g)->getAccessor();
-    auto smp = nanovdb::createSampler<1>(acc);  // holds a reference to acc
-    return f([&](const Vec3& p) { return std::max(0.0f, float(smp(nanovdb::Vec3f(p.x, p.y, p.z)))); });
-  }
-  DenseLookup d{g.dense.data(), g.dims[0], g.dims[1], g.dims[2]};
-  return f(d);
-}
-
-Transform compose(const Transform& a, const Transform& b) {  // a after b
-  Transform r;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 4; ++j) {
-      float v = 0;
-      for (int k = 0; k < 3; ++k) v += a.m[i * 4 + k] * b.m[k * 4 + j];
-      r.m[i * 4 + j] = v + (j == 3 ? a.m[i * 4 + 3] : 0.0f);
-    }
-  }
-  return r;
-}
 
 bool valid_coefficients(const Spectrum& s) { return is_finite(s) && s.x >= 0 && s.y >= 0 && s.z >= 0; }
 
@@ -81,7 +30,55 @@ struct HeteroRay {
   Spectrum st, ss;    // sigma_t, sigma_s per unit density and per unit t
   float maj_scale;    // max channel of st: density majorant -> sigma_t majorant per unit t
   const MajorantGrid* maj;
+  const GridData* grid;
 };
+
+HeteroRay hetero_ray(const Medium& m, const Ray& ray, float len) {
+  const Transform& w2i = m.world_to_index();
+  HeteroRay r{w2i.point(ray.o), w2i.vector(ray.d), len, (m.sigma_a_unit() + m.sigma_s_unit()) * len,
+              m.sigma_s_unit() * len, 0, &m.majorant_grid(), m.grid().get()};
+  r.maj_scale = max_component(r.st);
+  return r;
+}
+
+// Where track() stopped.
+struct Tracked {
+  bool capped = false;  // after Medium::kMaxTrackingSteps tentative collisions, at t with density rho
+  float t = 0, rho = 0;
+  int steps = 0;  // tentative collisions taken
+};
+
+// The tentative collisions on [t0, t1] (inside the domain) against the piecewise-constant
+// majorant, pbrt-v4's SampleT_maj: the majorant segments are walked once; in each, free paths are
+// sampled with sigma_bar = majorant x max_c sigma_t (exponential, so the collisions form a Poisson
+// process of rate sigma_bar), and on_collision(t, rho, sigma_bar) is called at each one with the
+// density rho there; it returns false to stop. Ratio and delta tracking are such callbacks.
+template <class F>
+Tracked track(const HeteroRay& r, float t0, float t1, Sampler& rng, F&& on_collision) {
+  return with_density(*r.grid, [&](const auto& density) {
+    Tracked out;
+    MajorantGrid::Iterator it = r.maj->traverse(r.o, r.d, t0, t1);
+    MajorantSegment seg;
+    while (it.next(&seg)) {
+      const float sigma_bar = seg.value * r.maj_scale;
+      if (!(sigma_bar > 0)) continue;
+      float t = seg.t0;
+      for (;;) {
+        t += free_path(rng.next_1d()) / sigma_bar;
+        if (t >= seg.t1) break;
+        const float rho = density(r.o + r.d * t);
+        if (++out.steps > Medium::kMaxTrackingSteps) {
+          out.capped = true;
+          out.t = t;
+          out.rho = rho;
+          return out;
+        }
+        if (!on_collision(t, rho, sigma_bar)) return out;
+      }
+    }
+    return out;
+  });
+}
 
 // Midpoint ray marching over [a, b] (already clipped to the domain) with steps of h (units of t)
 // starting at a; the last step is shortened to end at b. visit(t_start, dt, density_at_midpoint)
@@ -133,83 +130,6 @@ void march(const HeteroRay& r, const D& density, float a, float b, float h, int*
 constexpr float kRouletteThreshold = 0.05f, kRouletteKill = 0.75f;  // pbrt-v4's values
 
 }  // namespace
-
-// ---- GridData -------------------------------------------------------------------------------
-
-GridData GridData::from_dense(std::vector<float> values, int nx, int ny, int nz, const Transform& index_to_object,
-                              std::string name) {
-  if (nx <= 0 || ny <= 0 || nz <= 0)
-    throw InvalidArgument("dense density grid: dimensions must be positive (got " + std::to_string(nx) + " x " +
-                          std::to_string(ny) + " x " + std::to_string(nz) + ")");
-  if (values.size() != size_t(nx) * size_t(ny) * size_t(nz))
-    throw InvalidArgument("dense density grid: " + std::to_string(values.size()) + " values for " +
-                          std::to_string(nx) + " x " + std::to_string(ny) + " x " + std::to_string(nz) + " voxels");
-  GridData g;
-  g.name = std::move(name);
-  g.index_to_object = index_to_object;
-  g.dims[0] = nx;
-  g.dims[1] = ny;
-  g.dims[2] = nz;
-  int lo[3] = {nx, ny, nz}, hi[3] = {-1, -1, -1};
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        float v = values[(size_t(k) * ny + j) * nx + i];
-        if (!std::isfinite(v))
-          throw InvalidArgument("dense density grid: non-finite value at voxel (" + std::to_string(i) + ", " +
-                                std::to_string(j) + ", " + std::to_string(k) + ")");
-        if (v > 0) {
-          ++g.active_voxels;
-          const int ijk[3] = {i, j, k};
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], ijk[a]);
-            hi[a] = std::max(hi[a], ijk[a]);
-          }
-        }
-      }
-  for (int a = 0; a < 3; ++a) {
-    g.index_min[a] = lo[a];
-    g.index_max[a] = hi[a];
-  }
-  g.dense = std::move(values);
-  return g;
-}
-
-float GridData::voxel(int i, int j, int k) const {
-  if (nano_grid) return as_nano(*this)->tree().getValue(nanovdb::Coord(i, j, k));
-  return DenseLookup{dense.data(), dims[0], dims[1], dims[2]}.at(i, j, k);
-}
-
-float GridData::interpolate(const Vec3& p) const {
-  return with_density(*this, [&](const auto& density) { return density(p); });
-}
-
-size_t GridData::memory_bytes() const { return nano_grid ? nano_bytes : dense.capacity() * sizeof(float); }
-
-Transform affine_inverse(const Transform& t) {
-  const float* m = t.m;
-  float det = t.determinant();
-  if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidArgument("transform is singular (determinant 0)");
-  double inv_det = 1.0 / double(det);
-  // Inverse of the 3x3 linear part by cofactors.
-  double a[9] = {
-      double(m[5]) * m[10] - double(m[6]) * m[9], double(m[2]) * m[9] - double(m[1]) * m[10],
-      double(m[1]) * m[6] - double(m[2]) * m[5],  double(m[6]) * m[8] - double(m[4]) * m[10],
-      double(m[0]) * m[10] - double(m[2]) * m[8], double(m[2]) * m[4] - double(m[0]) * m[6],
-      double(m[4]) * m[9] - double(m[5]) * m[8],  double(m[1]) * m[8] - double(m[0]) * m[9],
-      double(m[0]) * m[5] - double(m[1]) * m[4]};
-  Transform r;
-  for (int i = 0; i < 3; ++i) {
-    double tr = 0;
-    for (int j = 0; j < 3; ++j) {
-      double v = a[i * 3 + j] * inv_det;
-      r.m[i * 4 + j] = float(v);
-      tr -= v * m[j * 4 + 3];
-    }
-    r.m[i * 4 + 3] = float(tr);
-  }
-  return r;
-}
 
 // ---- Medium: construction and queries -------------------------------------------------------
 
@@ -281,77 +201,7 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
   m.voxel_size_ = std::min({length(index_to_world.column(0)), length(index_to_world.column(1)),
                             length(index_to_world.column(2))});
   m.march_step_ = m.voxel_size_;
-  if (!grid->empty()) {
-    // The interpolated density can be non-zero only within one voxel of the non-background voxels.
-    int lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) {  // clamped: a corrupt VDB may reach the int32 limits (fuzz_vdb)
-      lo[a] = int(std::max<int64_t>(int64_t(grid->index_min[a]) - 1, INT32_MIN));
-      hi[a] = int(std::min<int64_t>(int64_t(grid->index_max[a]) + 1, INT32_MAX));
-    }
-    MajorantGrid& maj = m.majorant_ = MajorantGrid(lo, hi, majorant_cell);
-    if (grid->is_nanovdb()) {
-      // Every stored value (active or not, voxel or tile) inside the domain raises the cells whose
-      // footprint it lies in; regions with no node read the background.
-      using Tree = nanovdb::FloatTree;
-      using Root = Tree::RootType;
-      using Upper = Root::ChildNodeType;
-      using Lower = Upper::ChildNodeType;
-      using Leaf = Lower::ChildNodeType;
-      const nanovdb::FloatGrid* ng = as_nano(*grid);
-      const Root& root = ng->tree().root();
-      maj.raise_all(std::max(0.0f, root.background()));
-      auto add_tile = [&](const nanovdb::Coord& origin, int dim, float v) {
-        int a[3] = {origin[0], origin[1], origin[2]}, b[3];
-        for (int k = 0; k < 3; ++k) b[k] = int(std::min<int64_t>(int64_t(origin[k]) + dim - 1, INT32_MAX));
-        maj.add_voxels(a, b, v);
-      };
-      auto visit_leaf = [&](const Leaf* leaf) {
-        for (uint32_t n = 0; n < Leaf::SIZE; ++n) {
-          float v = leaf->getValue(n);
-          if (!(v > 0)) continue;
-          nanovdb::Coord c = leaf->offsetToGlobalCoord(n);
-          int a[3] = {c[0], c[1], c[2]};
-          maj.add_voxels(a, a, v);
-        }
-      };
-      auto visit_lower = [&](const Lower* node) {
-        for (uint32_t n = 0; n < Lower::SIZE; ++n) {
-          if (node->data()->isChild(n)) visit_leaf(node->data()->getChild(n));
-          else add_tile(node->offsetToGlobalCoord(n), Leaf::DIM, node->data()->getValue(n));
-        }
-      };
-      auto visit_upper = [&](const Upper* node) {
-        for (uint32_t n = 0; n < Upper::SIZE; ++n) {
-          if (node->data()->isChild(n)) visit_lower(node->data()->getChild(n));
-          else add_tile(node->offsetToGlobalCoord(n), Lower::DIM, node->data()->getValue(n));
-        }
-      };
-      for (uint32_t i = 0; i < root.tileCount(); ++i) {
-        const auto* tile = root.data()->tile(i);
-        if (tile->isChild()) visit_upper(root.data()->getChild(tile));
-        else add_tile(tile->origin(), Upper::DIM, tile->value);
-      }
-    } else {
-      // Dense: each cell's maximum over its footprint directly.
-      DenseLookup d{grid->dense.data(), grid->dims[0], grid->dims[1], grid->dims[2]};
-      for (int z = 0; z < maj.resolution(2); ++z)
-        for (int y = 0; y < maj.resolution(1); ++y)
-          for (int x = 0; x < maj.resolution(0); ++x) {
-            int v0[3], v1[3];
-            const int c[3] = {x, y, z};
-            for (int a = 0; a < 3; ++a) {
-              maj.footprint(a, c[a], &v0[a], &v1[a]);
-              v0[a] = std::max(v0[a], 0);
-              v1[a] = std::min(v1[a], grid->dims[a] - 1);
-            }
-            float mx = 0;
-            for (int k = v0[2]; k <= v1[2]; ++k)
-              for (int j = v0[1]; j <= v1[1]; ++j)
-                for (int i = v0[0]; i <= v1[0]; ++i) mx = std::max(mx, d.at(i, j, k));
-            maj.raise_cell(x, y, z, mx);
-          }
-    }
-  }
+  m.majorant_ = MajorantGrid::build(*grid, majorant_cell);
   m.empty_ = grid->empty() || is_black(sigma_a + sigma_s) || !(m.majorant_.max_value() > 0);
   return m;
 }
@@ -400,9 +250,7 @@ Spectrum Medium::transmittance(const Ray& ray, float t0, float t1, Sampler& s, V
   if (!(len > 0) || !std::isfinite(len)) return Spectrum(1.0f);
   if (!grid_) return beer(sigma_a_ + sigma_s_, (t1 - t0) * len);  // closed form, no random numbers
 
-  HeteroRay r{world_to_index_.point(ray.o), world_to_index_.vector(ray.d), len,
-              (sigma_a_ + sigma_s_) * len, sigma_s_ * len, 0, &majorant_};
-  r.maj_scale = max_component(r.st);
+  const HeteroRay r = hetero_ray(*this, ray, len);
   if (!majorant_.clip(r.o, r.d, &t0, &t1)) return Spectrum(1.0f);
 
   if (e == VolumeEstimator::RayMarching) {
@@ -429,33 +277,24 @@ Spectrum Medium::transmittance(const Ray& ray, float t0, float t1, Sampler& s, V
   // sigma_t: T *= 1 - sigma_t(x) / sigma_bar per channel at each tentative collision; unbiased for
   // every channel because sigma_bar bounds all of them. Russian roulette once T is small
   // (pbrt-v4) keeps dense media cheap without bias.
-  return with_density(*grid_, [&](const auto& density) {
-    Spectrum T(1.0f);
-    int steps = 0;
-    MajorantGrid::Iterator it = majorant_.traverse(r.o, r.d, t0, t1);
-    MajorantSegment seg;
-    while (it.next(&seg)) {
-      const float sigma_bar = seg.value * r.maj_scale;
-      if (!(sigma_bar > 0)) continue;
-      float t = seg.t0;
-      for (;;) {
-        t += free_path(s.next_1d()) / sigma_bar;
-        if (t >= seg.t1) break;
-        if (++steps > kMaxTrackingSteps) {
-          count_capped();
-          return Spectrum(0.0f);
-        }
-        const float rho = density(r.o + r.d * t);
-        T *= Spectrum(1.0f) - r.st * (rho / sigma_bar);
-        const float m = max_component(T);
-        if (m < kRouletteThreshold) {
-          if (!(m > 0) || s.next_1d() < kRouletteKill) return Spectrum(0.0f);
-          T /= 1 - kRouletteKill;
-        }
+  Spectrum T(1.0f);
+  const Tracked end = track(r, t0, t1, s, [&](float, float rho, float sigma_bar) {
+    T *= Spectrum(1.0f) - r.st * (rho / sigma_bar);
+    const float m = max_component(T);
+    if (m < kRouletteThreshold) {
+      if (!(m > 0) || s.next_1d() < kRouletteKill) {
+        T = Spectrum(0.0f);
+        return false;
       }
+      T /= 1 - kRouletteKill;
     }
-    return T;
+    return true;
   });
+  if (end.capped) {
+    count_capped();
+    return Spectrum(0.0f);
+  }
+  return T;
 }
 
 bool Medium::sample_distance(const Ray& ray, float t0, float t1, Sampler& s, VolumeEstimator e, float step,
@@ -490,9 +329,7 @@ bool Medium::sample_distance(const Ray& ray, float t0, float t1, Sampler& s, Vol
     return false;
   }
 
-  HeteroRay r{world_to_index_.point(ray.o), world_to_index_.vector(ray.d), len,
-              (sigma_a_ + sigma_s_) * len, sigma_s_ * len, 0, &majorant_};
-  r.maj_scale = max_component(r.st);
+  const HeteroRay r = hetero_ray(*this, ray, len);
   if (!majorant_.clip(r.o, r.d, &t0, &t1)) return false;
 
   if (e == VolumeEstimator::RayMarching) {
@@ -547,51 +384,44 @@ bool Medium::sample_distance(const Ray& ray, float t0, float t1, Sampler& s, Vol
   // sigma_n = sigma_bar - sigma_t, and the weights become w sigma_s / (sigma_bar P_real) on a real
   // collision (returned) or w sigma_n / (sigma_bar P_null) on a null one (continue). For grey media
   // these are the classic probabilities sigma_t / sigma_bar and weights albedo resp. 1.
-  return with_density(*grid_, [&](const auto& density) {
-    Spectrum w(1.0f);
-    int& steps = out->steps;
-    MajorantGrid::Iterator it = majorant_.traverse(r.o, r.d, t0, t1);
-    MajorantSegment seg;
-    while (it.next(&seg)) {
-      const float sigma_bar = seg.value * r.maj_scale;
-      if (!(sigma_bar > 0)) continue;
-      float t = seg.t0;
-      for (;;) {
-        t += free_path(s.next_1d()) / sigma_bar;
-        if (t >= seg.t1) break;
-        const float rho = density(r.o + r.d * t);
-        const Spectrum st = r.st * rho, ss = r.ss * rho;
-        if (++steps > kMaxTrackingSteps) {
-          // Cap: force a collision here with the albedo as the collision weight (biased).
-          count_capped();
-          out->t = t;
-          out->p = ray.o + ray.d * t;
-          out->sigma_s = sigma_s_ * rho;
-          for (int c = 0; c < 3; ++c) w[c] *= st[c] > 0 ? ss[c] / st[c] : 0.0f;
-          out->weight = w;
-          return true;
-        }
-        const Spectrum sn = Spectrum(sigma_bar) - st;
-        const float p_real = average(w * st);
-        const float p_null = average(w * Spectrum(std::abs(sn.x), std::abs(sn.y), std::abs(sn.z)));
-        const float total = p_real + p_null;
-        if (!(total > 0)) {  // every channel's weight is zero: nothing left to estimate
-          out->weight = Spectrum(0.0f);
-          return false;
-        }
-        if (s.next_1d() * total < p_real) {
-          out->t = t;
-          out->p = ray.o + ray.d * t;
-          out->sigma_s = sigma_s_ * rho;
-          out->weight = w * ss * (total / (sigma_bar * p_real));
-          return true;
-        }
-        w *= sn * (total / (sigma_bar * p_null));
-      }
+  Spectrum w(1.0f);
+  bool collided = false;
+  const Tracked end = track(r, t0, t1, s, [&](float t, float rho, float sigma_bar) {
+    const Spectrum st = r.st * rho, ss = r.ss * rho;
+    const Spectrum sn = Spectrum(sigma_bar) - st;
+    const float p_real = average(w * st);
+    const float p_null = average(w * Spectrum(std::abs(sn.x), std::abs(sn.y), std::abs(sn.z)));
+    const float total = p_real + p_null;
+    if (!(total > 0)) {  // every channel's weight is zero: nothing left to estimate
+      w = Spectrum(0.0f);
+      return false;
     }
-    out->weight = w;
-    return false;
+    if (s.next_1d() * total < p_real) {
+      collided = true;
+      out->t = t;
+      out->p = ray.o + ray.d * t;
+      out->sigma_s = sigma_s_ * rho;
+      out->weight = w * ss * (total / (sigma_bar * p_real));
+      return false;
+    }
+    w *= sn * (total / (sigma_bar * p_null));
+    return true;
   });
+  out->steps = end.steps;
+  if (end.capped) {
+    // Cap: force a collision here with the albedo as the collision weight (biased).
+    count_capped();
+    const Spectrum st = r.st * end.rho, ss = r.ss * end.rho;
+    out->t = end.t;
+    out->p = ray.o + ray.d * end.t;
+    out->sigma_s = sigma_s_ * end.rho;
+    for (int c = 0; c < 3; ++c) w[c] *= st[c] > 0 ? ss[c] / st[c] : 0.0f;
+    out->weight = w;
+    return true;
+  }
+  if (collided) return true;
+  out->weight = w;
+  return false;
 }
 
 }  // namespace lt

@@ -1,4 +1,4 @@
-#include "scene/volume_material.h"
+#include "media/volume_material.h"
 
 #include <cmath>
 

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "core/math.h"
-#include "scene/phase.h"
+#include "media/phase.h"
 
 namespace lt {
 

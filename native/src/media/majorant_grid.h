@@ -20,6 +20,8 @@
 
 namespace lt {
 
+struct GridData;
+
 struct MajorantSegment {
   float t0 = 0, t1 = 0;  // ray parameters
   float value = 0;       // bound of the density on the segment
@@ -33,6 +35,11 @@ class MajorantGrid {
   // Throws InvalidArgument when the bounds need more than kMaxCells cells (1 GiB of floats).
   MajorantGrid(const int lo[3], const int hi[3], int cell);
   static constexpr int64_t kMaxCells = int64_t(1) << 28;
+  // The majorants of a density grid: the domain is the non-background voxels' bounds widened by one
+  // voxel (the interpolation's reach), each cell the maximum of the stored values (NanoVDB: every
+  // voxel and tile, active or not, and the background) over its footprint. An empty grid gives an
+  // invalid grid (no cells).
+  static MajorantGrid build(const GridData& grid, int cell);
 
   // Raises to v the bound of every cell whose footprint contains a voxel of the inclusive index
   // box [a, b] (a voxel value, or a tile of equal values); voxels outside [lo, hi] are ignored.

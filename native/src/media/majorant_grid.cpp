@@ -1,9 +1,10 @@
-#include "scene/majorant_grid.h"
+#include "media/majorant_grid.h"
 
 #include <cstdint>
 #include <string>
 
 #include "core/error.h"
+#include "media/grid_lookup.h"
 
 namespace lt {
 
@@ -23,6 +24,79 @@ MajorantGrid::MajorantGrid(const int lo[3], const int hi[3], int cell) : cell_(s
                           std::to_string(kMaxCells) + " are supported");
   for (int a = 0; a < 3; ++a) res_[a] = int(res[a]);
   values_.assign(size_t(cells), 0.0f);
+}
+
+MajorantGrid MajorantGrid::build(const GridData& grid, int cell) {
+  if (grid.empty()) return MajorantGrid();
+  // The interpolated density can be non-zero only within one voxel of the non-background voxels.
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {  // clamped: a corrupt VDB may reach the int32 limits (fuzz_vdb)
+    lo[a] = int(std::max<int64_t>(int64_t(grid.index_min[a]) - 1, INT32_MIN));
+    hi[a] = int(std::min<int64_t>(int64_t(grid.index_max[a]) + 1, INT32_MAX));
+  }
+  MajorantGrid maj(lo, hi, cell);
+  if (grid.is_nanovdb()) {
+    // Every stored value (active or not, voxel or tile) inside the domain raises the cells whose
+    // footprint it lies in; regions with no node read the background.
+    using Tree = nanovdb::FloatTree;
+    using Root = Tree::RootType;
+    using Upper = Root::ChildNodeType;
+    using Lower = Upper::ChildNodeType;
+    using Leaf = Lower::ChildNodeType;
+    const Root& root = as_nano(grid)->tree().root();
+    maj.raise_all(std::max(0.0f, root.background()));
+    auto add_tile = [&](const nanovdb::Coord& origin, int dim, float v) {
+      int a[3] = {origin[0], origin[1], origin[2]}, b[3];
+      for (int k = 0; k < 3; ++k) b[k] = int(std::min<int64_t>(int64_t(origin[k]) + dim - 1, INT32_MAX));
+      maj.add_voxels(a, b, v);
+    };
+    auto visit_leaf = [&](const Leaf* leaf) {
+      for (uint32_t n = 0; n < Leaf::SIZE; ++n) {
+        float v = leaf->getValue(n);
+        if (!(v > 0)) continue;
+        nanovdb::Coord c = leaf->offsetToGlobalCoord(n);
+        int a[3] = {c[0], c[1], c[2]};
+        maj.add_voxels(a, a, v);
+      }
+    };
+    auto visit_lower = [&](const Lower* node) {
+      for (uint32_t n = 0; n < Lower::SIZE; ++n) {
+        if (node->data()->isChild(n)) visit_leaf(node->data()->getChild(n));
+        else add_tile(node->offsetToGlobalCoord(n), Leaf::DIM, node->data()->getValue(n));
+      }
+    };
+    auto visit_upper = [&](const Upper* node) {
+      for (uint32_t n = 0; n < Upper::SIZE; ++n) {
+        if (node->data()->isChild(n)) visit_lower(node->data()->getChild(n));
+        else add_tile(node->offsetToGlobalCoord(n), Lower::DIM, node->data()->getValue(n));
+      }
+    };
+    for (uint32_t i = 0; i < root.tileCount(); ++i) {
+      const auto* tile = root.data()->tile(i);
+      if (tile->isChild()) visit_upper(root.data()->getChild(tile));
+      else add_tile(tile->origin(), Upper::DIM, tile->value);
+    }
+    return maj;
+  }
+  // Dense: each cell's maximum over its footprint directly.
+  const DenseLookup d = dense_lookup(grid);
+  for (int z = 0; z < maj.res_[2]; ++z)
+    for (int y = 0; y < maj.res_[1]; ++y)
+      for (int x = 0; x < maj.res_[0]; ++x) {
+        int v0[3], v1[3];
+        const int c[3] = {x, y, z};
+        for (int a = 0; a < 3; ++a) {
+          maj.footprint(a, c[a], &v0[a], &v1[a]);
+          v0[a] = std::max(v0[a], 0);
+          v1[a] = std::min(v1[a], grid.dims[a] - 1);
+        }
+        float mx = 0;
+        for (int k = v0[2]; k <= v1[2]; ++k)
+          for (int j = v0[1]; j <= v1[1]; ++j)
+            for (int i = v0[0]; i <= v1[0]; ++i) mx = std::max(mx, d.at(i, j, k));
+        maj.raise_cell(x, y, z, mx);
+      }
+  return maj;
 }
 
 void MajorantGrid::add_voxels(const int a[3], const int b[3], float v) {

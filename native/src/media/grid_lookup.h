@@ -1,0 +1,55 @@
+// Density lookups into a GridData's storage, for the media sources only (the one header of
+// media/ that includes NanoVDB).
+#pragma once
+
+#include <nanovdb/NanoVDB.h>
+#include <nanovdb/util/SampleFromVoxels.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "media/density_grid.h"
+
+namespace lt {
+
+inline const nanovdb::FloatGrid* as_nano(const GridData& g) {
+  return static_cast<const nanovdb::FloatGrid*>(g.nano_grid);
+}
+
+// Trilinear interpolation of a dense array, zero outside it; voxel centres at integer coordinates.
+struct DenseLookup {
+  const float* v;
+  int nx, ny, nz;
+  float at(int i, int j, int k) const {
+    if (unsigned(i) >= unsigned(nx) || unsigned(j) >= unsigned(ny) || unsigned(k) >= unsigned(nz)) return 0;
+    return v[(size_t(k) * ny + j) * nx + i];
+  }
+  float operator()(const Vec3& p) const {
+    float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
+    int i = int(fx), j = int(fy), k = int(fz);
+    float u = p.x - fx, w = p.y - fy, s = p.z - fz;
+    float c00 = at(i, j, k) * (1 - u) + at(i + 1, j, k) * u;
+    float c10 = at(i, j + 1, k) * (1 - u) + at(i + 1, j + 1, k) * u;
+    float c01 = at(i, j, k + 1) * (1 - u) + at(i + 1, j, k + 1) * u;
+    float c11 = at(i, j + 1, k + 1) * (1 - u) + at(i + 1, j + 1, k + 1) * u;
+    float c0 = c00 * (1 - w) + c10 * w, c1 = c01 * (1 - w) + c11 * w;
+    return std::max(0.0f, c0 * (1 - s) + c1 * s);
+  }
+};
+
+inline DenseLookup dense_lookup(const GridData& g) { return {g.dense.data(), g.dims[0], g.dims[1], g.dims[2]}; }
+
+// Calls f with a density lookup (index-space point -> interpolated density >= 0) for the grid's
+// storage, so that the estimators are compiled once per storage type without a per-lookup branch.
+// NanoVDB's cached trilinear sampler needs a read accessor that lives for the whole call.
+template <class F>
+auto with_density(const GridData& g, F&& f) {
+  if (g.nano_grid) {
+    auto acc = as_nano(g)->getAccessor();
+    auto smp = nanovdb::createSampler<1>(acc);  // holds a reference to acc
+    return f([&](const Vec3& p) { return std::max(0.0f, float(smp(nanovdb::Vec3f(p.x, p.y, p.z)))); });
+  }
+  return f(dense_lookup(g));
+}
+
+}  // namespace lt
