@@ -13,9 +13,9 @@
 #include "core/error.h"
 #include "io/exr.h"
 #include "io/vdb.h"
-#include "lights/area.h"
-#include "lights/point.h"
-#include "lights/sun.h"
+#include "scene/lights/area.h"
+#include "scene/lights/point.h"
+#include "scene/lights/sun.h"
 #include "media/volume_material.h"
 #include "render/render.h"
 #include "scene/scene.h"
@@ -349,7 +349,7 @@ int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
       warnings.push_back(name + " emits nothing; left out");
       return;
     }
-    // Blender's numbers become lights (and radiance) in lights/: point.h, area.h, sun.h.
+    // Blender's numbers become lights (and radiance) in scene/lights/: point.h, area.h, sun.h.
     lt::Light l;
     switch (d->type) {
       case LT_LIGHT_POINT:

@@ -1,7 +1,7 @@
 #include "scene/scene.h"
 
 #include "core/error.h"
-#include "lights/triangle.h"
+#include "scene/lights/triangle.h"
 
 namespace lt {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "geometry/geometry.h"
-#include "lights/light_set.h"
+#include "scene/lights/light_set.h"
 #include "scene/camera.h"
 #include "scene/image.h"
 #include "scene/material.h"

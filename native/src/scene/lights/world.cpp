@@ -1,4 +1,4 @@
-#include "lights/world.h"
+#include "scene/lights/world.h"
 
 namespace lt {
 

@@ -6,9 +6,9 @@
 
 #include "core/distribution.h"
 #include "geometry/geometry.h"
-#include "lights/light.h"
-#include "lights/sun.h"
-#include "lights/world.h"
+#include "scene/lights/light.h"
+#include "scene/lights/sun.h"
+#include "scene/lights/world.h"
 
 namespace lt {
 

@@ -3,7 +3,7 @@
 // P / (pi tan^2(angle / 2)), sampled by area.
 #pragma once
 
-#include "lights/light.h"
+#include "scene/lights/light.h"
 
 namespace lt {
 

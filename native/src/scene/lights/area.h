@@ -2,7 +2,7 @@
 // colour x energy, A: the area), sampled uniformly by area; light subpaths leave it cosine-weighted.
 #pragma once
 
-#include "lights/light.h"
+#include "scene/lights/light.h"
 
 namespace lt {
 

@@ -3,7 +3,7 @@
 // Spots keep the cone of Cycles' spot_attenuation.
 #pragma once
 
-#include "lights/light.h"
+#include "scene/lights/light.h"
 
 namespace lt {
 

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "core/distribution.h"
-#include "lights/light.h"
+#include "scene/lights/light.h"
 #include "scene/image.h"
 
 namespace lt {

@@ -1,10 +1,10 @@
-#include "lights/light_set.h"
+#include "scene/lights/light_set.h"
 
 #include <algorithm>
 
-#include "lights/area.h"
-#include "lights/point.h"
-#include "lights/triangle.h"
+#include "scene/lights/area.h"
+#include "scene/lights/point.h"
+#include "scene/lights/triangle.h"
 
 namespace lt {
 

@@ -2,7 +2,7 @@
 // its radiance the material's emission at the point; sampled uniformly by area.
 #pragma once
 
-#include "lights/light.h"
+#include "scene/lights/light.h"
 #include "scene/scene.h"
 
 namespace lt {
