@@ -450,4 +450,5 @@ def reanalyse(args):
         res["plot_png"] = plot(name, res, args)
     finish(result, args)
 
+
 main()

@@ -70,8 +70,8 @@ bool read_scene(const char* path, SceneFile* s) {
   if (!f) return false;
   char magic[4];
   int32_t head[5];
-  bool ok = std::fread(magic, 1, 4, f) == 4 && std::memcmp(magic, "LTRB", 4) == 0 &&
-            std::fread(head, 4, 5, f) == 5 && head[0] == 1;
+  bool ok = std::fread(magic, 1, 4, f) == 4 && std::memcmp(magic, "LTRB", 4) == 0 && std::fread(head, 4, 5, f) == 5 &&
+            head[0] == 1;
   if (ok) {
     s->width = head[3];
     s->height = head[4];
@@ -127,21 +127,30 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--rays") o.rays = std::strtoull(val(), nullptr, 10);
-    else if (a == "--threads") o.threads = std::atoi(val());
-    else if (a == "--max-depth") o.max_depth = std::atoi(val());
-    else if (a == "--rr") o.rr = float(std::atof(val()));
+    if (a == "--rays")
+      o.rays = std::strtoull(val(), nullptr, 10);
+    else if (a == "--threads")
+      o.threads = std::atoi(val());
+    else if (a == "--max-depth")
+      o.max_depth = std::atoi(val());
+    else if (a == "--rr")
+      o.rr = float(std::atof(val()));
     else if (a == "--mode") {
       std::string m = val();
-      if (m == "path") o.shadow = true;
-      else if (m == "closest") o.shadow = false;
+      if (m == "path")
+        o.shadow = true;
+      else if (m == "closest")
+        o.shadow = false;
       else {
         std::fprintf(stderr, "unknown mode %s (path, closest)\n", m.c_str());
         return 2;
       }
-    } else if (a == "--two-level") o.two_level = true;
-    else if (a == "--seed") o.seed = std::strtoull(val(), nullptr, 10);
-    else if (a[0] != '-' && !o.scene) o.scene = argv[i];
+    } else if (a == "--two-level")
+      o.two_level = true;
+    else if (a == "--seed")
+      o.seed = std::strtoull(val(), nullptr, 10);
+    else if (a[0] != '-' && !o.scene)
+      o.scene = argv[i];
     else {
       std::fprintf(stderr,
                    "usage: embree_raw SCENE.bin [--rays N] [--threads N] [--mode path|closest] "
@@ -288,12 +297,14 @@ int main(int argc, char** argv) {
   uint64_t rays = total.intersect + total.occluded;
   std::printf(
       "{\"rays\": %llu, \"intersect_rays\": %llu, \"occluded_rays\": %llu, \"seconds\": %.6f, "
-      "\"rays_per_second\": %.1f, \"cpu_seconds\": %.6f, \"rays_per_cpu_second\": %.1f, \"intersect_rays_per_second\": %.1f, \"threads\": %d, "
+      "\"rays_per_second\": %.1f, \"cpu_seconds\": %.6f, \"rays_per_cpu_second\": %.1f, \"intersect_rays_per_second\": "
+      "%.1f, \"threads\": %d, "
       "\"mode\": \"%s\", \"two_level\": %s, \"max_depth\": %d, \"rr\": %.3f, \"triangles\": %zu, "
       "\"build_seconds\": %.6f, \"pixel_samples\": %llu}\n",
       (unsigned long long)rays, (unsigned long long)total.intersect, (unsigned long long)total.occluded, secs,
-      rays / secs, cpu_secs, rays / cpu_secs, total.intersect / secs, o.threads, o.shadow ? "path" : "closest", o.two_level ? "true" : "false",
-      o.max_depth, o.rr, sf.object.size(), build_s, (unsigned long long)(next_chunk.load() * kChunk));
+      rays / secs, cpu_secs, rays / cpu_secs, total.intersect / secs, o.threads, o.shadow ? "path" : "closest",
+      o.two_level ? "true" : "false", o.max_depth, o.rr, sf.object.size(), build_s,
+      (unsigned long long)(next_chunk.load() * kChunk));
   for (RTCScene s : subscenes) rtcReleaseScene(s);
   rtcReleaseScene(top);
   rtcReleaseDevice(dev);

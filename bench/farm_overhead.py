@@ -8,7 +8,8 @@ Each scene of examples.blend runs as a farm task does (`blender -b --factory-sta
 --scene S --python build/lantern_task.py -- --offset O --samples K --timing`): four times with K = 1,
 then with K = --samples. From the last run: render time per sample r (the core's render stage / K)
 and the fixed cost F = wall time - render time (everything a task pays whatever its sample count).
-The merge cost per part m: (`lantern merge` of all five parts - that of one) / 4, best of 3 each. Model for S = 4096 samples at 1920x1080 (render and
+The merge cost per part m: (`lantern merge` of all five parts - that of one) / 4, best of 3 each.
+Model for S = 4096 samples at 1920x1080 (render and
 EXR write scaled by the pixel count; start-up, export and build do not depend on it):
     T(1) = F + S r,   T(N) = F + (S / N) r + M(N)
 where M(N) is the merge after all tasks as `lantern farm` runs it: N m + w (one merge; w: writing
@@ -166,8 +167,8 @@ def model(row):
 
 def print_tables(rows):
     print("\nPer task, measured (scene resolution, %d samples):\n" % rows[0]["samples"])
-    print("| scene | resolution | start-up + load | export | BVH build | EXR write | fixed cost F | render per sample | "
-          "merge per part |")
+    print("| scene | resolution | start-up + load | export | BVH build | EXR write | fixed cost F | "
+          "render per sample | merge per part |")
     print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         t = r["task"]

@@ -6,7 +6,8 @@ Run from the repository root (the volume examples read ./assets/*.vdb, which
 scripts/render_examples.sh copies from <build>/test_vdb):
 
     LANTERN_LIBRARY=$PWD/build/liblantern.so blender -b --factory-startup examples.blend \\
-        --python-exit-code 1 --python bench/viewport.py -- [--size 640x360] [--threads 2] [--passes 8] [--out bench/results]
+        --python-exit-code 1 --python bench/viewport.py -- \\
+        [--size 640x360] [--threads 2] [--passes 8] [--out bench/results]
 
 Per scene, the viewport looks through the scene camera at --size (Blender's own projection
 matrix for that size, as a camera view gives view_draw):

@@ -120,9 +120,9 @@ def submit_jobs(job, tasks):
     try:
         for m, deps in plan(job, set(tasks)):
             dep = ["%s_%d" % (array, r) if k == "task" else ids[r] for k, r in deps]
-            ids[m["name"]] = sbatch((["--dependency=afterok:" + ":".join(dep), "--kill-on-invalid-dep=yes"] if dep else [])
-                                    + ["--job-name=lantern-merge",
-                                       "--output=" + os.path.join(d, "logs", "merge_%s.log" % m["name"])]
+            after = ["--dependency=afterok:" + ":".join(dep), "--kill-on-invalid-dep=yes"] if dep else []
+            ids[m["name"]] = sbatch(after + ["--job-name=lantern-merge",
+                                             "--output=" + os.path.join(d, "logs", "merge_%s.log" % m["name"])]
                                     + opts + [merge_script(job, m)])
     except SystemExit:
         run(["scancel", array] + list(ids.values()))  # nothing half-submitted
@@ -392,9 +392,9 @@ def resubmit(args):
         d, opts = job["dir"], slurm_options(job)
         for m, deps in plan(job, set()):
             dep = [ids[r] for k, r in deps]
-            ids[m["name"]] = sbatch((["--dependency=afterok:" + ":".join(dep), "--kill-on-invalid-dep=yes"] if dep else [])
-                                    + ["--job-name=lantern-merge",
-                                       "--output=" + os.path.join(d, "logs", "merge_%s.log" % m["name"])]
+            after = ["--dependency=afterok:" + ":".join(dep), "--kill-on-invalid-dep=yes"] if dep else []
+            ids[m["name"]] = sbatch(after + ["--job-name=lantern-merge",
+                                             "--output=" + os.path.join(d, "logs", "merge_%s.log" % m["name"])]
                                     + opts + [merge_script(job, m)])
         job["submissions"].append({"array": None, "tasks": [], "merges": ids})
         save(job)

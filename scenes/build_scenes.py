@@ -752,7 +752,6 @@ def build_dense_fog(scene):
     _fog_room(scene, 1.5)
 
 
-
 def build_world_fog(scene):
     """A ground plane, a sphere, a point light and a sun in a World volume (Principled Volume,
     density 0.15, anisotropy 0.3). As in Cycles 3.4 the background and the sun are fully hidden
@@ -778,6 +777,8 @@ def build_world_fog(scene):
 # LANTERN_TEST_VDB_DIR names that directory (scripts/run_tests.sh exports it). examples.blend points
 # its Volume objects at "//assets/<file>" instead (write_examples; scripts/render_examples.sh copies
 # the files there before rendering).
+
+
 def test_vdb_path(filename):
     """Absolute path of a generated test .vdb (LANTERN_TEST_VDB_DIR, default <repo>/build/test_vdb)."""
     directory = os.environ.get("LANTERN_TEST_VDB_DIR") or os.path.join(REPO, "build", "test_vdb")

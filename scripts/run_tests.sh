@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Builds everything (scripts/setup.sh) and runs the whole test suite: the native GoogleTest suite
-# under ctest, then the add-on's pytest suite inside `blender -b`, then the sanitizer builds and
-# bounded fuzzing (scripts/run_sanitizers.sh). Exits non-zero on any failure.
+# Builds everything (scripts/setup.sh), checks the style (scripts/check_style.sh) and runs the whole
+# test suite: the native GoogleTest suite under ctest, then the add-on's pytest suite inside
+# `blender -b`, then the sanitizer builds and bounded fuzzing (scripts/run_sanitizers.sh). Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+echo "== style (scripts/check_style.sh) =="
+bash scripts/check_style.sh
 BUILD_DIR=${LANTERN_BUILD_DIR:-build}
 
 echo "== native tests (ctest) =="

@@ -17,7 +17,7 @@ if "bpy" in locals():
 else:
     from . import properties, ui, engine, operators
 
-import bpy  # noqa: E402
+import bpy  # noqa: E402,F401 (its name in locals() marks a reload, above)
 
 
 def register():

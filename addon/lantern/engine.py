@@ -28,6 +28,7 @@ PASSES = (
     ("Sample Count", core.PASS_SAMPLE_COUNT, 1, "X", 'VALUE', "lantern_extra_passes"),
 )
 
+
 def enabled_passes(view_layer):
     return [p for p in PASSES if p[5] is None or getattr(view_layer, p[5], False)]
 

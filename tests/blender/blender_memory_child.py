@@ -4,7 +4,8 @@
 
 Caps this process's address space (RLIMIT_AS) at what it uses plus LIMIT_MIB, renders
 cornell_area at W x H with Lantern through bpy.ops.render.render, and prints one line
-"RESULT {json}"; the engine prints its error ("Lantern: error: ...", also reported to Blender). Run in its own process: the cap is for good.
+"RESULT {json}"; the engine prints its error ("Lantern: error: ...", also reported to Blender).
+Run in its own process: the cap is for good.
 """
 import json
 import os

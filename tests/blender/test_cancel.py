@@ -7,7 +7,6 @@ image, which Blender still writes. Runs in a child Blender (a second SIGINT woul
 import json
 import os
 import subprocess
-import sys
 
 import bpy
 

@@ -2,7 +2,6 @@
 says what it trades, the presets order speed against accuracy, and the settings reach the render."""
 import types
 
-import numpy as np
 
 import bpy
 from lantern import core, engine, properties, ui

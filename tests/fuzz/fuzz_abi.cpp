@@ -185,8 +185,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
           slots.resize(size_t(nt));
           for (int& s : slots) s = r.i8();
         }
-        lt_mesh_desc d{pos.data(), nv, tris.data(), nt, (parts & 1) ? normals.data() : nullptr,
-                       (parts & 2) ? uvs.data() : nullptr, (parts & 4) ? slots.data() : nullptr};
+        lt_mesh_desc d{pos.data(),
+                       nv,
+                       tris.data(),
+                       nt,
+                       (parts & 1) ? normals.data() : nullptr,
+                       (parts & 2) ? uvs.data() : nullptr,
+                       (parts & 4) ? slots.data() : nullptr};
         check(lt_scene_add_mesh(scene, &d, &id));
         break;
       }
@@ -249,7 +254,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         const int material = r.i8();
         const int null_surface = r.u8() & 1;
         std::vector<lt_volume_desc> v = volume(r);
-        check(lt_scene_set_material_volume(scene, material, v.empty() ? nullptr : v.data(), int(v.size()), null_surface));
+        check(
+            lt_scene_set_material_volume(scene, material, v.empty() ? nullptr : v.data(), int(v.size()), null_surface));
         break;
       }
       case lt_fuzz::kSetWorldVolume: {
@@ -264,9 +270,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         check(lt_scene_set_instance_transform(scene, instance, xf));
         break;
       }
-      case lt_fuzz::kClearLights: check(lt_scene_clear_lights(scene)); break;
-      case lt_fuzz::kCommit: check(lt_scene_commit(scene)); break;
-      case lt_fuzz::kRender: render(scene, r); break;
+      case lt_fuzz::kClearLights:
+        check(lt_scene_clear_lights(scene));
+        break;
+      case lt_fuzz::kCommit:
+        check(lt_scene_commit(scene));
+        break;
+      case lt_fuzz::kRender:
+        render(scene, r);
+        break;
     }
   }
   lt_scene_destroy(scene);

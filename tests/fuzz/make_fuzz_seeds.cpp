@@ -115,8 +115,8 @@ void box(Writer& w, float s, uint8_t parts = 0) {
   w.u8(12);
   w.u8(parts);
   for (int v = 0; v < 8; ++v) {
-    const float p[3] = {(v == 1 || v == 2 || v == 5 || v == 6) ? s : -s, (v == 2 || v == 3 || v == 6 || v == 7) ? s : -s,
-                        v >= 4 ? s : -s};
+    const float p[3] = {(v == 1 || v == 2 || v == 5 || v == 6) ? s : -s,
+                        (v == 2 || v == 3 || v == 6 || v == 7) ? s : -s, v >= 4 ? s : -s};
     w.floats(p, 3);
   }
   for (const auto& t : kTris)
@@ -378,7 +378,8 @@ std::vector<uint8_t> render_part(const fs::path& path, int integrator, int offse
   lt_shader_node n = {};
   n.type = LT_NODE_DIFFUSE;
   n.color.value[0] = n.color.value[1] = n.color.value[2] = 0.8f;
-  for (lt_input* in : {&n.color, &n.roughness, &n.fac, &n.metallic, &n.specular, &n.transmission, &n.emission, &n.strength})
+  for (lt_input* in :
+       {&n.color, &n.roughness, &n.fac, &n.metallic, &n.specular, &n.transmission, &n.emission, &n.strength})
     in->image = -1;
   n.child[0] = n.child[1] = -1;
   n.ior = 1.45f;
@@ -471,7 +472,8 @@ void write_vdbs(const fs::path& dir) {
   vec->tree().setValue(openvdb::Coord(0, 0, 0), openvdb::Vec3s(1, 2, 3));
   auto temperature = one->deepCopy();
   temperature->setName("temperature");
-  const uint32_t none = openvdb::io::COMPRESS_ACTIVE_MASK, zip = openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK;
+  const uint32_t none = openvdb::io::COMPRESS_ACTIVE_MASK,
+                 zip = openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK;
   write_vdb(dir / "one_voxel.vdb", {one}, none);
   write_vdb(dir / "ramp.vdb", {ramp}, none);
   write_vdb(dir / "ramp_zip.vdb", {ramp}, zip);

@@ -221,7 +221,8 @@ Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, co
     }
   }
   if (pool_e > 0) {
-    if (cells.empty()) cells.push_back({pool_o, pool_e});
+    if (cells.empty())
+      cells.push_back({pool_o, pool_e});
     else {
       cells.back().first += pool_o;
       cells.back().second += pool_e;
@@ -245,7 +246,8 @@ Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, co
   if (const char* dir = std::getenv("LANTERN_CHI2_DUMP")) {
     std::ofstream f(std::string(dir) + "/" + o.name + ".txt");
     f << "# theta_bin phi_bin observed expected\n";
-    for (int b = 0; b < nbins; ++b) f << b / bins.np << ' ' << b % bins.np << ' ' << observed[b] << ' ' << expected[b] << '\n';
+    for (int b = 0; b < nbins; ++b)
+      f << b / bins.np << ' ' << b % bins.np << ' ' << observed[b] << ' ' << expected[b] << '\n';
     f << "# failures " << observed[nbins] << ' ' << expected[nbins] << '\n';
   }
   return r;

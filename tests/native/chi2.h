@@ -25,8 +25,8 @@
 namespace lt::test {
 
 struct DirectionSample {
-  Vec3 dir;         // unit direction
-  double pdf = 0;   // the solid-angle pdf the sampler claims for it
+  Vec3 dir;        // unit direction
+  double pdf = 0;  // the solid-angle pdf the sampler claims for it
 };
 
 // Draws whatever random numbers it needs from rng; returns false when the routine produces no
@@ -44,12 +44,12 @@ struct Chi2Options {
   std::string name = "chi2";
   int theta_bins = 40;
   int phi_bins = 80;
-  Vec3 pole{0, 0, 1};          // bins are laid out around this axis
-  double theta_power = 1;      // >= 1; bins concentrate near the pole as it grows
+  Vec3 pole{0, 0, 1};      // bins are laid out around this axis
+  double theta_power = 1;  // >= 1; bins concentrate near the pole as it grows
   uint64_t samples = 1000000;
   uint32_t seed = 1;
-  double min_expected = 5;     // pool bins below this expected count
-  double significance = 0.01;  // before the Sidak correction
+  double min_expected = 5;           // pool bins below this expected count
+  double significance = 0.01;        // before the Sidak correction
   int test_count = kChi2SuiteTests;  // tests sharing the family-wise level (Sidak)
   double pdf_rel_tolerance = 1e-3;
   // Samples allowed to disagree with pdf() or to land where the expected count is zero, as a

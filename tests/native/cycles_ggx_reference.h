@@ -57,7 +57,7 @@ struct Closure {
   double alpha;          // roughness^2
   bool fresnel = false;  // Principled v1 Fresnel
   double ior = 1.5, cspec0 = 1;
-  double weight = 1;     // the closure's weight (Glossy BSDF: its colour)
+  double weight = 1;  // the closure's weight (Glossy BSDF: its colour)
   double F(double cos_lh) const { return weight * (fresnel ? principled_fresnel(cos_lh, ior, cspec0) : 1.0); }
 };
 

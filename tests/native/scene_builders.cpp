@@ -122,8 +122,8 @@ MeshData plane(float size_x, float size_y) {
 
 MeshData icosphere(float radius, int subdivisions) {
   const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
-  std::vector<V3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                       {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<V3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                       {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   for (V3& p : v) p = normalize(p);
   std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                                        {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
@@ -413,8 +413,8 @@ lt_render_settings render_settings(int width, int height, int samples, unsigned 
 
 std::string Passes::first_non_finite() const {
   const std::pair<const char*, const std::vector<float>*> all[] = {
-      {"Combined", &combined}, {"Depth", &depth},         {"Normal", &normal},
-      {"Albedo", &albedo},     {"Variance", &variance},   {"SampleCount", &sample_count}};
+      {"Combined", &combined}, {"Depth", &depth},       {"Normal", &normal},
+      {"Albedo", &albedo},     {"Variance", &variance}, {"SampleCount", &sample_count}};
   for (const auto& [name, v] : all)
     for (float x : *v)
       if (!std::isfinite(x)) return name;
@@ -440,8 +440,8 @@ Passes render(lt_scene* s, const lt_render_settings& settings) {
   check(lt_render_start(s, &settings, &raw), "lt_render_start");
   RenderPtr r(raw);
   check(lt_render_wait(r.get()), "lt_render_wait");
-  const bool full = settings.border[0] == 0 && settings.border[1] == 0 && settings.border[2] == 0 &&
-                    settings.border[3] == 0;
+  const bool full =
+      settings.border[0] == 0 && settings.border[1] == 0 && settings.border[2] == 0 && settings.border[3] == 0;
   const int w = full ? settings.width : settings.border[1] - settings.border[0];
   const int h = full ? settings.height : settings.border[3] - settings.border[2];
   return read_passes(r.get(), w, h);
@@ -515,7 +515,8 @@ ScenePtr varied_scene(bool fog) {
   check(lt_scene_add_material(s, &glass, 1, 0, &glass_id), "glass");
   add_object(s, uv_sphere(0.4f, 24, 12, true), glass_id, translate({1.3f, -0.3f, 0.4f}));
 
-  add_object(s, plane(0.5f, 0.5f), add_emission(s, {1, 0.8f, 0.6f}, 5), compose(translate({0, 1.5f, 1}), rotate({1, 0, 0}, 1.2f)));
+  add_object(s, plane(0.5f, 0.5f), add_emission(s, {1, 0.8f, 0.6f}, 5),
+             compose(translate({0, 1.5f, 1}), rotate({1, 0, 0}, 1.2f)));
   add_light(s, area_light(LT_AREA_RECTANGLE, 1, 0.5f, look_at({0, -1, 3}, {0, 0, 0}), 300));
   lt_light_desc pt = point_light({-1, -2, 2}, 200);
   pt.radius = 0.2f;

@@ -46,9 +46,9 @@ struct MeshData {
   lt_mesh_desc desc() const;  // points into this object: keep it alive during the ABI call
 };
 
-MeshData box(V3 lo, V3 hi, bool open_top = false);  // outward winding; open_top drops +Z face
-MeshData plane(float size_x, float size_y);        // z = 0, centred, normal +Z
-MeshData icosphere(float radius, int subdivisions); // vertices on the sphere, outward winding
+MeshData box(V3 lo, V3 hi, bool open_top = false);   // outward winding; open_top drops +Z face
+MeshData plane(float size_x, float size_y);          // z = 0, centred, normal +Z
+MeshData icosphere(float radius, int subdivisions);  // vertices on the sphere, outward winding
 MeshData uv_sphere(float radius, int segments, int rings, bool smooth_normals = false);
 void flip_winding(MeshData& m);                     // makes normals face the other way
 void transform_mesh(MeshData& m, const Xform& xf);  // bakes a transform into positions

@@ -23,8 +23,10 @@ const float kInf = std::numeric_limits<float>::infinity();
 // lt_last_error() keeps the last failure's message: before each call under test, a different
 // known failure sets a sentinel message that the call must replace with its own.
 std::string sentinel(int which) {
-  if (which == 0) lt_scene_create(nullptr);
-  else lt_render_wait(nullptr);
+  if (which == 0)
+    lt_scene_create(nullptr);
+  else
+    lt_render_wait(nullptr);
   return lt_last_error();
 }
 
@@ -44,9 +46,9 @@ std::string expect_failure(F call, int code, const char* text, int which_sentine
 #define EXPECT_FAILS(code, expr) expect_failure([&] { return (expr); }, (code), #expr)
 #define EXPECT_INVALID(expr) EXPECT_FAILS(LT_ERROR_INVALID_ARGUMENT, expr)
 // Evaluates `haystack` once (it is often the failing call itself).
-#define EXPECT_CONTAINS(haystack, needle)                                                       \
-  do {                                                                                          \
-    const std::string h_ = (haystack);                                                          \
+#define EXPECT_CONTAINS(haystack, needle)                                                            \
+  do {                                                                                               \
+    const std::string h_ = (haystack);                                                               \
     EXPECT_NE(h_.find(needle), std::string::npos) << "\"" << needle << "\" not in \"" << h_ << "\""; \
   } while (0)
 
@@ -196,10 +198,10 @@ TEST(ApiBadInput, NonFiniteVertexPositionsAreDroppedWithAWarning) {
   lt_scene* s = sp.get();
   // Four triangles: one clean, one with a NaN corner, one with an Inf corner, one with -Inf.
   MeshData m;
-  m.positions = {-1, -1, 0.5f, 1, -1, 0.5f, 0, 1, 0.5f,  // clean
-                 kNaN, 0, 1,   1, 0, 1,    0, 1, 1,      // NaN
-                 0, kInf, 1,   1, 0, 1,    0, 1, 1,      // +Inf
-                 0, 0, -kInf,  1, 0, 1,    0, 1, 1};     // -Inf
+  m.positions = {-1,   -1,   0.5f,  1, -1, 0.5f, 0, 1, 0.5f,  // clean
+                 kNaN, 0,    1,     1, 0,  1,    0, 1, 1,     // NaN
+                 0,    kInf, 1,     1, 0,  1,    0, 1, 1,     // +Inf
+                 0,    0,    -kInf, 1, 0,  1,    0, 1, 1};    // -Inf
   m.triangles = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
   // NaN corner normals too: the mesh falls back to flat shading with a warning.
   for (int t = 0; t < 4; ++t) m.corner_normals.insert(m.corner_normals.end(), {0, 0, 1, kNaN, 0, 1, 0, 0, 1});
@@ -862,7 +864,8 @@ TEST(ApiBadInput, GlassIorBelowOneReflectsTotallyAsCycles) {
     int material = -1;
     check(lt_scene_add_material(s, &glass, 1, 0, &material), "lt_scene_add_material");
     add_object(s, box({-20, -0.2f, -20}, {20, 0.2f, 20}), material);
-    add_object(s, plane(60, 60), add_emission(s, {1, 1, 1}, 1), compose(translate({0, 2, 0}), rotate({1, 0, 0}, 1.5707964f)));
+    add_object(s, plane(60, 60), add_emission(s, {1, 1, 1}, 1),
+               compose(translate({0, 2, 0}), rotate({1, 0, 0}, 1.5707964f)));
     const float a = 60 * 3.14159265f / 180;
     double mean[2];
     for (int view = 0; view < 2; ++view) {

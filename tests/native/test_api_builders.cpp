@@ -19,7 +19,8 @@ double signed_volume(const MeshData& m) {
     const float* b = &m.positions[3 * m.triangles[3 * t + 1]];
     const float* c = &m.positions[3 * m.triangles[3 * t + 2]];
     v += (a[0] * (double(b[1]) * c[2] - double(b[2]) * c[1]) - a[1] * (double(b[0]) * c[2] - double(b[2]) * c[0]) +
-          a[2] * (double(b[0]) * c[1] - double(b[1]) * c[0])) / 6.0;
+          a[2] * (double(b[0]) * c[1] - double(b[1]) * c[0])) /
+         6.0;
   }
   return v;
 }
@@ -28,7 +29,9 @@ double signed_volume(const MeshData& m) {
 // compared by value so that boxes (which repeat corners per face) count as closed.
 bool closed_and_oriented(const MeshData& m) {
   std::map<std::pair<std::array<float, 3>, std::array<float, 3>>, int> edges;
-  auto pos = [&](int i) { return std::array<float, 3>{m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]}; };
+  auto pos = [&](int i) {
+    return std::array<float, 3>{m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]};
+  };
   for (int t = 0; t < m.triangle_count(); ++t)
     for (int k = 0; k < 3; ++k) ++edges[{pos(m.triangles[3 * t + k]), pos(m.triangles[3 * t + (k + 1) % 3])}];
   for (const auto& [e, n] : edges) {

@@ -1,13 +1,12 @@
 // EXR output: lt_render_write_exr writes every pass as 32-bit float channels; OpenEXR reads back
 // the same Combined values (bit for bit; EXR scanlines run top to bottom, the ABI's rows bottom to
 // top), a plausible file size, and the render's metadata.
-#include <gtest/gtest.h>
-
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfStringAttribute.h>
+#include <gtest/gtest.h>
 
 #include <cstring>
 #include <filesystem>
@@ -25,8 +24,7 @@ std::vector<float> read_channel(Imf::InputFile& file, const char* name, int widt
   const Imath::Box2i dw = file.header().dataWindow();
   std::vector<float> top_down(size_t(width) * height, -12345.0f);
   Imf::FrameBuffer fb;
-  char* base = reinterpret_cast<char*>(top_down.data()) -
-               (size_t(dw.min.x) + size_t(dw.min.y) * width) * sizeof(float);
+  char* base = reinterpret_cast<char*>(top_down.data()) - (size_t(dw.min.x) + size_t(dw.min.y) * width) * sizeof(float);
   fb.insert(name, Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * width));
   file.setFrameBuffer(fb);
   file.readPixels(dw.min.y, dw.max.y);

@@ -165,8 +165,8 @@ TEST(ApiFurnace, ClosedMirrorBoxRunsToTheBounceLimitUnamplified) {
       for (int x = 0; x < p.width; ++x)
         for (int c = 0; c < 3; ++c)
           if (std::abs(p.rgba(x, y)[c] - expected) > 1e-3 * expected && failures++ < 5)
-            ADD_FAILURE() << "integrator " << integrator << ", pixel (" << x << ", " << y << ") channel " << c
-                          << ": " << p.rgba(x, y)[c] << ", expected " << expected;
+            ADD_FAILURE() << "integrator " << integrator << ", pixel (" << x << ", " << y << ") channel " << c << ": "
+                          << p.rgba(x, y)[c] << ", expected " << expected;
   }
 }
 

@@ -73,8 +73,8 @@ Moments pixel_moments(const View& v, int px, int py, const std::function<double(
 // per-pixel check uses it instead of the Variance pass's estimate, which is unreliable where a
 // pixel is barely grazed by a cone edge (a few percent of it lit: most pixels of 64 samples see no
 // lit sample and estimate a variance of zero). The image mean uses the Variance pass.
-void check_image(const Passes& p, const View& v, const std::function<double(double, double)>& radiance,
-                 double relative, int sub, bool delta) {
+void check_image(const Passes& p, const View& v, const std::function<double(double, double)>& radiance, double relative,
+                 int sub, bool delta) {
   ASSERT_EQ(p.first_non_finite(), "");
   EXPECT_EQ(p.status.nan_samples, 0u);
   int failures = 0;
@@ -173,9 +173,9 @@ TEST(ApiLightUnits, PointLight) {
   check_centre(render_plane(kNarrow, light, 16, 1), P / (4 * kPi * kPi), 1e-3);
   // Everywhere: L = P / (4 pi^2) cos^3 / h^2 with h = 1.
   const View v;
-  check_image(render_plane(v, light, 16, 1), v,
-              [&](double x, double y) { return P / (4 * kPi * kPi) * std::pow(1 + x * x + y * y, -1.5); }, 1e-3, 32,
-              true);
+  check_image(
+      render_plane(v, light, 16, 1), v,
+      [&](double x, double y) { return P / (4 * kPi * kPi) * std::pow(1 + x * x + y * y, -1.5); }, 1e-3, 32, true);
 }
 
 TEST(ApiLightUnits, SpotLight) {
@@ -207,7 +207,8 @@ TEST(ApiLightUnits, SunLight) {
     const double expected = std::cos(incidence) / kPi;
     check_centre(render_plane(kNarrow, light, 4, 3), expected, 1e-4);
     const View v;
-    check_image(render_plane(v, light, 4, 3), v, [&](double, double) { return expected; }, 1e-4, 1, true);
+    check_image(
+        render_plane(v, light, 4, 3), v, [&](double, double) { return expected; }, 1e-4, 1, true);
   }
 }
 
@@ -222,9 +223,10 @@ TEST(ApiLightUnits, SquareAreaLight) {
   EXPECT_NEAR(centre, 59.86, 0.01);
   check_centre(render_plane(kNarrow, light, 1024, 4), centre, 1e-4);
   const View v;
-  check_image(render_plane(v, light, 256, 4), v, [&](double x, double y) {
-    return L * rectangle_irradiance_per_radiance(0.5 * side, 0.5 * side, h, x, y) / kPi;
-  }, 1e-4, 8, false);
+  check_image(
+      render_plane(v, light, 256, 4), v,
+      [&](double x, double y) { return L * rectangle_irradiance_per_radiance(0.5 * side, 0.5 * side, h, x, y) / kPi; },
+      1e-4, 8, false);
 }
 
 TEST(ApiLightUnits, EmissionPlaneAndWorldSeenDirectly) {

@@ -208,7 +208,10 @@ static std::string differing_tiles_k(lt_scene* s, lt_render_settings a, lt_rende
   std::string report;
   for (int i = 0; i < ma[0].tiles * 3; ++i) {
     double mean_a = 0, mean_b = 0, va = 0, vb = 0;
-    for (int k = 0; k < K; ++k) { mean_a += ma[k].mean[i] / K; mean_b += mb[k].mean[i] / K; }
+    for (int k = 0; k < K; ++k) {
+      mean_a += ma[k].mean[i] / K;
+      mean_b += mb[k].mean[i] / K;
+    }
     for (int k = 0; k < K; ++k) {
       va += (ma[k].mean[i] - mean_a) * (ma[k].mean[i] - mean_a) / (K - 1);
       vb += (mb[k].mean[i] - mean_b) * (mb[k].mean[i] - mean_b) / (K - 1);
@@ -269,8 +272,8 @@ TEST(Bdpt, AgreesWithVolumetricPathTracingInAGrid) {
     lt_volume_desc d = volume(LT_VOLUME_PRINCIPLED, 4, 0.9f, 0.3f);
     Xform xf = identity();
     int id = -1;
-    ASSERT_EQ(lt_scene_add_volume_grid(s.get(), (std::string(LANTERN_TEST_VDB_DIR) + "/density.vdb").c_str(),
-                                       "density", xf.data(), 0, &d, 1, &id),
+    ASSERT_EQ(lt_scene_add_volume_grid(s.get(), (std::string(LANTERN_TEST_VDB_DIR) + "/density.vdb").c_str(), "density",
+                                       xf.data(), 0, &d, 1, &id),
               LT_OK)
         << lt_last_error();
     if (alone) {
@@ -399,7 +402,10 @@ TEST(Bdpt, ImageDoesNotDependOnSceneScale) {
     for (size_t j = 1; j < runs.size(); ++j)
       for (int i = 0; i < ref[0].tiles * 3; ++i) {
         double ma = 0, mb = 0, va = 0, vb = 0;
-        for (int k = 0; k < K; ++k) { ma += ref[k].mean[i] / K; mb += runs[j][k].mean[i] / K; }
+        for (int k = 0; k < K; ++k) {
+          ma += ref[k].mean[i] / K;
+          mb += runs[j][k].mean[i] / K;
+        }
         for (int k = 0; k < K; ++k) {
           va += (ref[k].mean[i] - ma) * (ref[k].mean[i] - ma) / (K - 1);
           vb += (runs[j][k].mean[i] - mb) * (runs[j][k].mean[i] - mb) / (K - 1);
@@ -497,8 +503,7 @@ TEST(Bdpt, StrategyViewSumsToImage) {
       for (int c = 0; c < 3; ++c) {
         double sum = 0;
         for (int row = 0; row < depth; ++row)
-          for (int col = 0; col < depth + 2; ++col)
-            sum += grid[(size_t(row * size + y) * gw + col * size + x) * 3 + c];
+          for (int col = 0; col < depth + 2; ++col) sum += grid[(size_t(row * size + y) * gw + col * size + x) * 3 + c];
         double v = p.rgba(x, y)[c];
         worst = std::max(worst, std::abs(sum - v));
         total += v;
@@ -534,13 +539,13 @@ static ScenePtr door_slabs() {
     check(lt_scene_add_material(sc, n, 3, 0, &wall), "wall");
   }
   const int wood = add_diffuse(sc, {0.6f, 0.45f, 0.3f});
-  const float w = 2.0f, d = 1.5f, h = 2.5f, t = 0.2f;  // half width, half depth, height; slab thickness
+  const float w = 2.0f, d = 1.5f, h = 2.5f, t = 0.2f;                  // half width, half depth, height; slab thickness
   add_object(sc, box({-w - t, -d - t, -t}, {w + t, d + t, 0}), wall);  // floor
   add_object(sc, box({-w - t, -d - t, h}, {w + t, d + t, h + t}), wall);  // ceiling
-  add_object(sc, box({-w - t, -d - t, -t}, {w + t, -d, h + t}), wall);  // south
-  add_object(sc, box({-w - t, d, -t}, {w + t, d + t, h + t}), wall);  // north
-  add_object(sc, box({-w - t, -d - t, -t}, {-w, d + t, h + t}), wall);  // west
-  add_object(sc, box({w, -d - t, -t}, {w + t, d + t, h + t}), wall);  // east
+  add_object(sc, box({-w - t, -d - t, -t}, {w + t, -d, h + t}), wall);    // south
+  add_object(sc, box({-w - t, d, -t}, {w + t, d + t, h + t}), wall);      // north
+  add_object(sc, box({-w - t, -d - t, -t}, {-w, d + t, h + t}), wall);    // west
+  add_object(sc, box({w, -d - t, -t}, {w + t, d + t, h + t}), wall);      // east
   // The partition x in [-0.05, 0.05], its doorway y in [0.2, 1.0] below z = 2, and the door (4 cm)
   // hinged at (0.05, 1.0), turned 8 degrees into the lit room (x > 0).
   const float pt = 0.1f, y0 = 0.2f, y1 = 1.0f, dh = 2.0f, e = 0.1f;
@@ -596,6 +601,6 @@ TEST(Bdpt, DoorSlabsBounceKindsAgreeWithPathTracing) {
   const auto a = image_mean_k(s.get(), pt, 8), b = image_mean_k(s.get(), bd, 8);
   const double se = std::hypot(a.second, b.second);
   EXPECT_LT(std::abs(b.first - a.first), 4 * se)
-      << "PATH " << a.first << " +- " << a.second << ", BIDIRECTIONAL " << b.first << " +- " << b.second
-      << " (ratio " << b.first / a.first << ")";
+      << "PATH " << a.first << " +- " << a.second << ", BIDIRECTIONAL " << b.first << " +- " << b.second << " (ratio "
+      << b.first / a.first << ")";
 }

@@ -184,8 +184,10 @@ std::vector<Chi2Case> make_cases() {
       if (a == 0.3f && t == 89.0f) continue;
       Vec3 wo = from_angles(t, 30);
       Chi2Case c = lobe_case("ggx_a" + std::to_string(a).substr(0, 4) + "_" + std::to_string(int(t)), glossy(a), wo);
-      if (a <= 0.05f) c = with_pole(c, mirror(wo), 2);
-      else if (a < 1) c = with_pole(c, mirror(wo), 1.5);
+      if (a <= 0.05f)
+        c = with_pole(c, mirror(wo), 2);
+      else if (a < 1)
+        c = with_pole(c, mirror(wo), 1.5);
       cs.push_back(c);
     }
 
@@ -295,7 +297,8 @@ TEST(Chi2Tester, CanFail) {
   o.name = "pdf_times_1.1";
   o.samples = 200000;
   o.pdf_rel_tolerance = 1e-3;
-  Chi2Result scaled = test::chi2_test(lobe_sampler(l, wo), [&](const Vec3& wi) { return 1.1 * lobe_pdf(l, wo, wi); }, o);
+  Chi2Result scaled = test::chi2_test(
+      lobe_sampler(l, wo), [&](const Vec3& wi) { return 1.1 * lobe_pdf(l, wo, wi); }, o);
   EXPECT_FALSE(scaled.integral_ok) << scaled.summary;
   EXPECT_FALSE(scaled.chi2_ok) << scaled.summary;
   EXPECT_FALSE(scaled.pdf_ok) << scaled.summary;
@@ -467,8 +470,8 @@ TEST(DeltaLobes, MixtureSelection) {
 // f(wo, wi) == f(wi, wo) for the reflection lobes. (Glass is not reciprocal, as in Cycles: its
 // reflection/refraction split uses Fresnel at wo's angle.)
 TEST(BsdfSanity, Reciprocity) {
-  const Lobe lobes[] = {diffuse(0), diffuse(0.3f), diffuse(1), glossy(0.01f), glossy(0.1f), glossy(0.5f), glossy(1),
-                        specular(0.2f, Spectrum(0.04f, 0.3f, 0.9f))};
+  const Lobe lobes[] = {diffuse(0),   diffuse(0.3f), diffuse(1), glossy(0.01f),
+                        glossy(0.1f), glossy(0.5f),  glossy(1),  specular(0.2f, Spectrum(0.04f, 0.3f, 0.9f))};
   Sampler rng(5, 0, 0);
   for (const Lobe& l : lobes)
     for (int k = 0; k < 20000; ++k) {
@@ -504,17 +507,25 @@ Estimate albedo(const Lobe& l, const Vec3& wo, int n, uint32_t seed) {
 
 TEST(BsdfSanity, EnergyConservation) {
   const int n = 100000;
-  const Lobe lobes[] = {diffuse(0),         diffuse(0.5f),        diffuse(1),
-                        glossy(0.05f),      glossy(0.3f),         glossy(1),
-                        dielectric(0.1f, 1.5f), dielectric(0.5f, 1.5f), dielectric(0.1f, 1 / 1.5f),
-                        dielectric(0.5f, 1 / 1.5f), dielectric(1, 3), specular(0.3f, Spectrum(1.0f)),
+  const Lobe lobes[] = {diffuse(0),
+                        diffuse(0.5f),
+                        diffuse(1),
+                        glossy(0.05f),
+                        glossy(0.3f),
+                        glossy(1),
+                        dielectric(0.1f, 1.5f),
+                        dielectric(0.5f, 1.5f),
+                        dielectric(0.1f, 1 / 1.5f),
+                        dielectric(0.5f, 1 / 1.5f),
+                        dielectric(1, 3),
+                        specular(0.3f, Spectrum(1.0f)),
                         specular(0.8f, Spectrum(0.5f))};
   uint32_t seed = 0;
   for (const Lobe& l : lobes)
     for (float t : {0.0f, 45.0f, 75.0f, 89.0f}) {
       Estimate e = albedo(l, from_angles(t, 60), n, ++seed);
       EXPECT_LE(e.mean, 1 + 5 * e.se + 1e-5) << "lobe type " << int(l.type) << " alpha " << l.alpha << " sigma "
-                                            << l.roughness << " eta " << l.eta << " theta " << t;
+                                             << l.roughness << " eta " << l.eta << " theta " << t;
     }
   // Lambert reflects everything; smooth-ish GGX at normal incidence nearly everything.
   EXPECT_NEAR(albedo(diffuse(0), from_angles(30), n, 99).mean, 1.0, 1e-5);
@@ -571,9 +582,9 @@ TEST(BsdfCycles, GgxValuesMatchCyclesClosures) {
       const Spectrum f = lobe_eval(k.lobe, o, i);
       for (int c = 0; c < 3; ++c) {
         const double ref = cycles_ref::eval(cycles_closure(k.lobe, c, k.spec), d3(o), d3(i));
-        ASSERT_NEAR(f[c], ref, 2e-4 * ref + 1e-7) << "lobe type " << int(k.lobe.type) << " alpha " << k.lobe.alpha
-                                                  << " f0 " << k.lobe.f0[c] << " specular " << k.spec << " channel "
-                                                  << c << " o " << o.z << " i " << i.z;
+        ASSERT_NEAR(f[c], ref, 2e-4 * ref + 1e-7)
+            << "lobe type " << int(k.lobe.type) << " alpha " << k.lobe.alpha << " f0 " << k.lobe.f0[c] << " specular "
+            << k.spec << " channel " << c << " o " << o.z << " i " << i.z;
       }
     }
 }
@@ -617,8 +628,8 @@ TEST(BsdfFurnace, GgxDirectionalAlbedoMatchesCycles) {
         const double ref = e(cycles_closure(k.lobe, c).cspec0);
         EXPECT_LE(ref, 1.0) << k.name << " theta " << t;
         EXPECT_LE(mean, 1 + 5 * se) << k.name << " theta " << t << " channel " << c;
-        EXPECT_NEAR(mean, ref, 5 * se + 3e-4) << k.name << " theta " << t << " channel " << c << " (standard error "
-                                              << se << ")";
+        EXPECT_NEAR(mean, ref, 5 * se + 3e-4)
+            << k.name << " theta " << t << " channel " << c << " (standard error " << se << ")";
       }
     }
 }
@@ -641,10 +652,14 @@ Lobe random_lobe(Sampler& rng) {
 Vec3 random_direction(Sampler& rng) {
   float u = rng.next_1d();
   Vec3 d = sample_uniform_sphere(rng.next_2d());
-  if (u < 0.15f) d.z = (rng.next_1d() - 0.5f) * 1e-4f;  // grazing
-  else if (u < 0.25f) d.z = -1e-2f * rng.next_1d();       // bent shading normal
-  else if (u < 0.3f) d = Vec3(0, 0, 1);
-  else if (u < 0.32f) d = Vec3(1, 0, 0);
+  if (u < 0.15f)
+    d.z = (rng.next_1d() - 0.5f) * 1e-4f;  // grazing
+  else if (u < 0.25f)
+    d.z = -1e-2f * rng.next_1d();  // bent shading normal
+  else if (u < 0.3f)
+    d = Vec3(0, 0, 1);
+  else if (u < 0.32f)
+    d = Vec3(1, 0, 0);
   return normalize(d);
 }
 

@@ -95,7 +95,7 @@ TEST(FuzzRegressions, VdbTileAtTheEdgeOfTheIndexSpace) {
   openvdb::initialize();
   auto grid = openvdb::FloatGrid::create(0.0f);
   grid->setName("density");
-  grid->tree().addTile(3, openvdb::Coord(0, 0, 0), 1.0f, true);     // 4096^3 root tiles
+  grid->tree().addTile(3, openvdb::Coord(0, 0, 0), 1.0f, true);  // 4096^3 root tiles
   grid->tree().addTile(3, openvdb::Coord(4096, 0, 0), 1.0f, true);
   {
     openvdb::io::File file(path);
@@ -120,5 +120,6 @@ TEST(FuzzRegressions, VdbTileAtTheEdgeOfTheIndexSpace) {
   lt_volume_desc d = lt_test::volume(LT_VOLUME_SCATTER, 1);
   int id = -1;
   EXPECT_EQ(lt_scene_add_volume_grid(s.get(), path.c_str(), "density", identity, 0, &d, 1, &id), LT_ERROR_IO);
-  EXPECT_NE(std::string(lt_last_error()).find("beyond the supported index range"), std::string::npos) << lt_last_error();
+  EXPECT_NE(std::string(lt_last_error()).find("beyond the supported index range"), std::string::npos)
+      << lt_last_error();
 }

@@ -22,8 +22,8 @@ struct LightCase {
   std::string name;
   std::unique_ptr<Scene> scene;
   int light = 0;
-  Vec3 p;             // the shaded point
-  Vec3 pole{0, 0, 1}; // bins concentrate around this axis (towards small lights)
+  Vec3 p;              // the shaded point
+  Vec3 pole{0, 0, 1};  // bins concentrate around this axis (towards small lights)
   double power = 1;
 };
 
@@ -61,9 +61,10 @@ LightCase lamp_case(std::string name, const Light& l, Vec3 p, double power) {
 std::vector<LightCase> make_cases() {
   std::vector<LightCase> cs;
   // Area lights: rectangle and ellipse, facing the point and tilted, near and far.
-  cs.push_back(lamp_case("area_rect_facing",
-                         area_light(Vec3(0.3f, -0.2f, 2), Vec3(0, 0, -1), Vec3(0.5f, 0, 0), Vec3(0, 0.8f, 0), AreaShape::Rectangle),
-                         Vec3(0, 0, 0), 1.5));
+  cs.push_back(lamp_case(
+      "area_rect_facing",
+      area_light(Vec3(0.3f, -0.2f, 2), Vec3(0, 0, -1), Vec3(0.5f, 0, 0), Vec3(0, 0.8f, 0), AreaShape::Rectangle),
+      Vec3(0, 0, 0), 1.5));
   {
     Vec3 n = normalize(Vec3(0.3f, 0.2f, -1));
     Frame f(n);
@@ -129,8 +130,10 @@ std::vector<LightCase> make_cases() {
     std::vector<float> px(size_t(w) * h * 3);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x)
-        for (int k = 0; k < 3; ++k) px[(size_t(y) * w + x) * 3 + k] = 0.05f + 0.1f * ((x + y) % 3) + (x == 5 && y == 6 ? 20.0f : 0.0f);
-    c.scene->images.push_back(std::make_unique<Image>(w, h, 3, px.data(), false, Interpolation::Linear, Extension::Repeat));
+        for (int k = 0; k < 3; ++k)
+          px[(size_t(y) * w + x) * 3 + k] = 0.05f + 0.1f * ((x + y) % 3) + (x == 5 && y == 6 ? 20.0f : 0.0f);
+    c.scene->images.push_back(
+        std::make_unique<Image>(w, h, 3, px.data(), false, Interpolation::Linear, Extension::Repeat));
     c.scene->world.color = Spectrum(1.0f);
     c.scene->world.image = c.scene->images.back().get();
     c.scene->world.rotation_z = 0.3f;
@@ -225,7 +228,9 @@ TEST_P(LightChi2, SamplesFollowPdf) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllLights, LightChi2, ::testing::Range(0, int(cases().size())),
-                         [](const ::testing::TestParamInfo<int>& param_info) { return cases()[param_info.param].name; });
+                         [](const ::testing::TestParamInfo<int>& param_info) {
+                           return cases()[param_info.param].name;
+                         });
 
 // Delta lights: the exact direction, pdf 1, and no density for MIS.
 TEST(DeltaLights, PointAndSun) {

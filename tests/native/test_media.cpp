@@ -68,10 +68,8 @@ Medium make_medium(const RefGrid& g, const Spectrum& sigma_a, const Spectrum& si
 std::vector<double> density_integral(const RefGrid& g, const Ray& r, double t0, double t1, int m) {
   double len = length(r.d);
   return cumulative(
-      [&](double t) {
-        return len * g.world_density(r.o.x + t * r.d.x, r.o.y + t * r.d.y, r.o.z + t * r.d.z);
-      },
-      t0, t1, m);
+      [&](double t) { return len * g.world_density(r.o.x + t * r.d.x, r.o.y + t * r.d.y, r.o.z + t * r.d.z); }, t0, t1,
+      m);
 }
 
 // Expected counts for free-flight samples over nb equal bins of [t0, t1] plus a last bin for "no
@@ -431,8 +429,7 @@ MarchedModel marched_model(const RefGrid& g, const Medium& m, const Ray& r, floa
   for (long k = 0; k <= n; ++k) mm.edges.push_back(k == n ? b : a + float(k) * float(h));
   for (long k = 0; k < n; ++k) {
     double mid = 0.5 * (mm.edges[k] + mm.edges[k + 1]);
-    mm.rho.push_back(length(r.d) *
-                     g.world_density(r.o.x + mid * r.d.x, r.o.y + mid * r.d.y, r.o.z + mid * r.d.z));
+    mm.rho.push_back(length(r.d) * g.world_density(r.o.x + mid * r.d.x, r.o.y + mid * r.d.y, r.o.z + mid * r.d.z));
   }
   return mm;
 }
@@ -456,8 +453,10 @@ TEST(MediaHeterogeneous, RayMarchingRevertsExactlyToSampledOpticalDepth) {
   std::vector<double> obs(nb + 1, 0.0);
   for (int i = 0; i < n; ++i) {
     MediumInteraction mi;
-    if (m.sample_distance(r, t0, t1, s, kMarch, step, &mi)) obs[bin_of(mi.t, t0, t1, nb)] += 1;
-    else obs[nb] += 1;
+    if (m.sample_distance(r, t0, t1, s, kMarch, step, &mi))
+      obs[bin_of(mi.t, t0, t1, nb)] += 1;
+    else
+      obs[nb] += 1;
   }
   media_test::Pearson p = pearson_1d(obs, free_flight_expected(D, nb, sigma_t, n));
   EXPECT_TRUE(p.ok()) << p.summary();
@@ -469,8 +468,9 @@ TEST(MediaHeterogeneous, RayMarchingBiasShrinksWithStep) {
   // docs/volumes.md.
   const float voxel = 1.0f / 16;
   const float steps[] = {2.0f, 1.0f, 0.5f, 0.25f};
-  std::string table = "ray-marching bias, midpoint rule, 64 random rays per blob:\n"
-                      "  blob sigma  sigma_t  step/voxel  mean|dT|   max|dT|    mean|dT|/T\n";
+  std::string table =
+      "ray-marching bias, midpoint rule, 64 random rays per blob:\n"
+      "  blob sigma  sigma_t  step/voxel  mean|dT|   max|dT|    mean|dT|/T\n";
   for (double width : {6.0, 1.5}) {
     RefGrid g = blob(1, width);
     const float sigma_t = width > 3 ? 3.0f : 30.0f;  // optical depths through the centre ~2.8 both
@@ -815,8 +815,10 @@ TEST(MediaStats, ChecksRejectWrongDistributionsAndBias) {
   Sampler s(media_test::seed(94), 0, 0);
   for (int i = 0; i < n; ++i) {
     MediumInteraction mi;
-    if (m.sample_distance(r, 0, 2, s, kTrack, 0, &mi)) obs[bin_of(mi.t, 0, 2, nb)] += 1;
-    else obs[nb] += 1;
+    if (m.sample_distance(r, 0, 2, s, kTrack, 0, &mi))
+      obs[bin_of(mi.t, 0, 2, nb)] += 1;
+    else
+      obs[nb] += 1;
   }
   std::vector<double> D(nb + 1);
   for (int b = 0; b <= nb; ++b) D[b] = 2.0 * b / nb;
@@ -834,7 +836,6 @@ TEST(MediaStats, ChecksRejectWrongDistributionsAndBias) {
   EXPECT_FALSE(within_se(mt, coarse)) << "ratio tracking " << mt.mean() << " +- " << mt.se() << ", marching " << coarse;
   EXPECT_TRUE(within_se(mt, h.transmittance(rb, 0.2f, 3.6f, s, kMarch, 0.25f / 16).x));
 }
-
 
 // ---- volume shader mixes and emission (media/volume_material.h) ------------------------------
 

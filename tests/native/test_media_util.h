@@ -46,8 +46,8 @@ inline ::testing::AssertionResult within_se(const Mean& m, double expected, doub
   double tol = k * m.se() + floor * std::max(1.0, std::abs(expected));
   double err = std::abs(m.mean() - expected);
   if (err <= tol) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "mean " << m.mean() << " expected " << expected << " (|err| " << err
-                                       << " > " << k << " SE = " << tol << ", n " << m.n << ")";
+  return ::testing::AssertionFailure() << "mean " << m.mean() << " expected " << expected << " (|err| " << err << " > "
+                                       << k << " SE = " << tol << ", n " << m.n << ")";
 }
 
 struct Pearson {
@@ -75,13 +75,15 @@ inline Pearson pearson_1d(const std::vector<double>& observed, const std::vector
     }
   }
   if (pe > 0 || po > 0) {
-    if (cells.empty()) cells.push_back({po, pe});
+    if (cells.empty())
+      cells.push_back({po, pe});
     else {
       cells.back().first += po;
       cells.back().second += pe;
     }
   }
-  for (auto& c : cells) r.chi2 += c.second > 0 ? (c.first - c.second) * (c.first - c.second) / c.second : (c.first > 0 ? INFINITY : 0);
+  for (auto& c : cells)
+    r.chi2 += c.second > 0 ? (c.first - c.second) * (c.first - c.second) / c.second : (c.first > 0 ? INFINITY : 0);
   r.dof = int(cells.size()) - 1;
   r.p = test::chi2_survival(r.chi2, r.dof);
   r.alpha = test::sidak_alpha(0.01, test::kChi2SuiteTests);
@@ -93,7 +95,7 @@ inline Pearson pearson_1d(const std::vector<double>& observed, const std::vector
 struct RefGrid {
   std::vector<float> v;
   int n[3] = {0, 0, 0};
-  double scale = 1;          // world units per voxel
+  double scale = 1;              // world units per voxel
   double offset[3] = {0, 0, 0};  // world position of index (0, 0, 0)
 
   double at(int i, int j, int k) const {

@@ -66,7 +66,8 @@ TEST(VdbLoad, DensityGridValuesTransformAndBounds) {
   // Voxel centres at integer index coordinates, trilinear in between: the ramp is reproduced.
   Sampler s(media_test::seed(101), 0, 0);
   for (int i = 0; i < 1000; ++i) {
-    Vec3 p(tv::kMin[0] + s.next_1d() * (tv::kMax[0] - tv::kMin[0]), tv::kMin[1] + s.next_1d() * (tv::kMax[1] - tv::kMin[1]),
+    Vec3 p(tv::kMin[0] + s.next_1d() * (tv::kMax[0] - tv::kMin[0]),
+           tv::kMin[1] + s.next_1d() * (tv::kMax[1] - tv::kMin[1]),
            tv::kMin[2] + s.next_1d() * (tv::kMax[2] - tv::kMin[2]));
     ASSERT_NEAR(g.interpolate(p), tv::ramp(p.x, p.y, p.z), 2e-6) << p.x << " " << p.y << " " << p.z;
   }
@@ -160,9 +161,11 @@ TEST(VdbLoad, CloudAndSmokeMemory) {
     const size_t maj = m.majorant_grid().memory_bytes();
     EXPECT_EQ(m.memory_bytes(), g->nano_bytes + maj);
     EXPECT_LT(m.memory_bytes(), 16u * g->active_voxels + 2000000u) << name;
-    std::printf("[ media    ] vdb memory %s: %llu active voxels, NanoVDB %zu bytes, majorant %zu bytes, "
-                "file %llu bytes\n", name, (unsigned long long)g->active_voxels, g->nano_bytes, maj,
-                (unsigned long long)std::filesystem::file_size(vdb(name)));
+    std::printf(
+        "[ media    ] vdb memory %s: %llu active voxels, NanoVDB %zu bytes, majorant %zu bytes, "
+        "file %llu bytes\n",
+        name, (unsigned long long)g->active_voxels, g->nano_bytes, maj,
+        (unsigned long long)std::filesystem::file_size(vdb(name)));
   }
 }
 

@@ -2,15 +2,14 @@
 // not fit is refused before it allocates, an allocation failure on the render thread ends the render
 // as Failed without aborting the process, and images are stored once at the source's precision.
 #include <gtest/gtest.h>
-
 #include <malloc.h>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -88,9 +87,11 @@ int run_child_test(const char* name) {
 }
 
 void expect_clean_exit(int status, const char* what) {
-  EXPECT_TRUE(WIFEXITED(status)) << what << ": the child died of signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0)
+  EXPECT_TRUE(WIFEXITED(status)) << what << ": the child died of signal "
+                                 << (WIFSIGNALED(status) ? WTERMSIG(status) : 0)
                                  << " (an abort is what this test guards against)";
-  if (WIFEXITED(status)) EXPECT_EQ(WEXITSTATUS(status), 0) << what << ": the child's assertions failed (see its output)";
+  if (WIFEXITED(status))
+    EXPECT_EQ(WEXITSTATUS(status), 0) << what << ": the child's assertions failed (see its output)";
 }
 
 }  // namespace

@@ -195,7 +195,11 @@ TEST(MergeRefusals, EveryMismatchIsRefusedAndNothingIsOverwritten) {
 
   const std::string out = p("out.exr");
   std::ofstream(out) << "previous result";
-  struct Case { const char* part; int status; const char* message; };
+  struct Case {
+    const char* part;
+    int status;
+    const char* message;
+  };
   const Case cases[] = {
       {"resolution.exr", LT_ERROR_INVALID_ARGUMENT, "resolution differs"},
       {"region.exr", LT_ERROR_INVALID_ARGUMENT, "differs"},

@@ -139,15 +139,16 @@ TEST(VolPath, ExtremesAreFiniteAndBounded) {
   struct Case {
     float density, albedo, g, scale;
   };
-  const Case cases[] = {{1e-6f, 1, 0, 1},   {1e6f, 1, 0, 1},     {1e6f, 0, 0, 1},    {1, 0, 0, 1},
-                        {1, 1, -0.99f, 1},  {1, 1, 0.99f, 1},    {1e3f, 1, 0, 1e-3f}, {1e-4f, 1, 0, 1e4f},
+  const Case cases[] = {{1e-6f, 1, 0, 1},       {1e6f, 1, 0, 1},          {1e6f, 0, 0, 1},     {1, 0, 0, 1},
+                        {1, 1, -0.99f, 1},      {1, 1, 0.99f, 1},         {1e3f, 1, 0, 1e-3f}, {1e-4f, 1, 0, 1e4f},
                         {1e6f, 1, 0.99f, 1e4f}, {1e-6f, 0, -0.99f, 1e-3f}};
   for (const Case& k : cases) {
     ScenePtr s = new_scene();
     int m = add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, k.density, k.albedo, k.g));
     add_object(s.get(), icosphere(k.scale, 2), m);
     int white = add_diffuse(s.get(), {0.8f, 0.8f, 0.8f});
-    add_object(s.get(), box({-3 * k.scale, -3 * k.scale, -2 * k.scale}, {3 * k.scale, 3 * k.scale, -1.5f * k.scale}), white);
+    add_object(s.get(), box({-3 * k.scale, -3 * k.scale, -2 * k.scale}, {3 * k.scale, 3 * k.scale, -1.5f * k.scale}),
+               white);
     add_light(s.get(), point_light({0, -2 * k.scale, 2 * k.scale}, 100 * k.scale * k.scale));
     set_world(s.get(), {0.5f, 0.5f, 0.5f}, 1);
     lt_camera_desc cam = perspective_camera(look_at({0, -5 * k.scale, 0}, {0, 0, 0}), 35);
@@ -215,7 +216,8 @@ TEST(VolPath, VdbErrorsThroughTheAbi) {
   for (const Case& c : cases) {
     ScenePtr s = new_scene();
     int id = -1;
-    EXPECT_EQ(lt_scene_add_volume_grid(s.get(), vdb(c.file).c_str(), c.grid.c_str(), xf.data(), 0, &d, 1, &id), LT_ERROR_IO)
+    EXPECT_EQ(lt_scene_add_volume_grid(s.get(), vdb(c.file).c_str(), c.grid.c_str(), xf.data(), 0, &d, 1, &id),
+              LT_ERROR_IO)
         << c.file;
     std::string msg = lt_last_error();
     EXPECT_NE(msg.find(c.expect), std::string::npos) << c.file << ": " << msg;
@@ -256,7 +258,8 @@ TEST(VolPath, DebugViewLabelsEachPanel) {
     for (int i = 0; names[panel][i]; ++i)
       for (int gy = 0; gy < 7; ++gy)
         for (int gx = 0; gx < 5; ++gx)
-          if ((lt::label_glyph(names[panel][i])[gy] >> (4 - gx)) & 1) expect[(gy0 - gy) * 96 + gx0 + 6 * i + gx] = lt::kLabelWhite;
+          if ((lt::label_glyph(names[panel][i])[gy] >> (4 - gx)) & 1)
+            expect[(gy0 - gy) * 96 + gx0 + 6 * i + gx] = lt::kLabelWhite;
     // The T's or D's top row: white, outlined above and to the left.
     EXPECT_EQ(expect[gy0 * 96 + gx0 + 1], lt::kLabelWhite);
     EXPECT_EQ(expect[(gy0 + 1) * 96 + gx0], lt::kLabelBlack);
@@ -294,7 +297,8 @@ TEST(VolPath, DebugViewLabelsEachPanel) {
 
   // No labels in panels too small to hold them (20x8), nor for the other integrators.
   for (int integrator : {LT_INTEGRATOR_VOLUME_DEBUG, LT_INTEGRATOR_VOLPATH}) {
-    rs = render_settings(integrator == LT_INTEGRATOR_VOLPATH ? 96 : 40, integrator == LT_INTEGRATOR_VOLPATH ? 40 : 16, 2, 7);
+    rs = render_settings(integrator == LT_INTEGRATOR_VOLPATH ? 96 : 40, integrator == LT_INTEGRATOR_VOLPATH ? 40 : 16,
+                         2, 7);
     rs.integrator = integrator;
     LabelledRender plain = render_labelled(s.get(), rs, rs.width, rs.height);
     EXPECT_EQ(std::memcmp(plain.labelled.data(), plain.plain.data(), plain.labelled.size() * sizeof(float)), 0)

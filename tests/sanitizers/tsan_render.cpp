@@ -67,7 +67,8 @@ int main() {
     lt_render* bd_raw = nullptr;
     Passes bd4 = render_while_reading(s.get(), rs, &bd_raw);
     RenderPtr bd(bd_raw);
-    require(bd4.status.state == LT_STATE_DONE && bd4.status.samples_done == 4, "the bidirectional render did not finish");
+    require(bd4.status.state == LT_STATE_DONE && bd4.status.samples_done == 4,
+            "the bidirectional render did not finish");
     int gw = 0, gh = 0;
     check(lt_render_read_strategy_grid(bd.get(), nullptr, 0, &gw, &gh), "strategy grid size");
     std::vector<float> grid(size_t(gw) * gh * 3);

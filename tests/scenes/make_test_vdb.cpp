@@ -9,6 +9,8 @@
 //   two_grids.vdb   "density" (the smoke plume) and "cloud" (the cloud): a material's Density
 //                   Attribute picks one
 // Usage: make_test_vdb <output directory>
+#include "make_test_vdb.h"
+
 #include <openvdb/openvdb.h>
 
 #include <algorithm>
@@ -18,8 +20,6 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include "make_test_vdb.h"
 
 namespace tv = lt::test_vdb;
 
@@ -54,8 +54,7 @@ openvdb::FloatGrid::Ptr ramp_grid() {
   auto acc = grid->getAccessor();
   for (int k = tv::kMin[2]; k <= tv::kMax[2]; ++k)
     for (int j = tv::kMin[1]; j <= tv::kMax[1]; ++j)
-      for (int i = tv::kMin[0]; i <= tv::kMax[0]; ++i)
-        acc.setValue(openvdb::Coord(i, j, k), float(tv::ramp(i, j, k)));
+      for (int i = tv::kMin[0]; i <= tv::kMax[0]; ++i) acc.setValue(openvdb::Coord(i, j, k), float(tv::ramp(i, j, k)));
   return grid;
 }
 
@@ -76,7 +75,9 @@ openvdb::Vec3SGrid::Ptr velocity(const std::string& name) {
 // Deterministic value noise in [0, 1] (hashed lattice, smoothstep-interpolated), a few octaves.
 double lattice(int x, int y, int z) {
   unsigned h = unsigned(x) * 73856093u ^ unsigned(y) * 19349663u ^ unsigned(z) * 83492791u;
-  h ^= h >> 13; h *= 0x5bd1e995u; h ^= h >> 15;
+  h ^= h >> 13;
+  h *= 0x5bd1e995u;
+  h ^= h >> 15;
   return (h & 0xffffu) / 65535.0;
 }
 
@@ -125,8 +126,7 @@ openvdb::FloatGrid::Ptr procedural(const int n[3], double voxel, double z0, F de
 openvdb::FloatGrid::Ptr cloud_grid() {
   const int n[3] = {48, 48, 48};
   // Blobs (centre in voxels, radius in voxels).
-  const double blobs[5][4] = {{24, 24, 22, 12}, {14, 22, 20, 8}, {33, 27, 21, 9}, {22, 32, 28, 7},
-                              {28, 16, 27, 6}};
+  const double blobs[5][4] = {{24, 24, 22, 12}, {14, 22, 20, 8}, {33, 27, 21, 9}, {22, 32, 28, 7}, {28, 16, 27, 6}};
   return procedural(n, 0.04, -0.94, [&](int i, int j, int k) {
     double shape = 0.0;
     for (const auto& b : blobs) {
@@ -141,8 +141,8 @@ openvdb::FloatGrid::Ptr cloud_grid() {
 openvdb::FloatGrid::Ptr smoke_grid() {
   const int n[3] = {40, 40, 64};
   return procedural(n, 0.03, 0.0, [&](int i, int j, int k) {
-    const double h = k / 63.0;                     // 0 at the source, 1 at the top
-    const double radius = 3.0 + 14.0 * h;          // the plume widens as it rises
+    const double h = k / 63.0;             // 0 at the source, 1 at the top
+    const double radius = 3.0 + 14.0 * h;  // the plume widens as it rises
     const double cx = 19.5 + 4.0 * std::sin(6.0 * h), cy = 19.5 + 3.0 * std::cos(5.0 * h);
     const double r = std::hypot(i - cx, j - cy) / radius;
     const double noise = fbm(i * 0.2, j * 0.2, k * 0.12);

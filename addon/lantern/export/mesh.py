@@ -2,7 +2,6 @@
 
 import numpy as np
 
-from .. import core
 from .light import visibility_bits
 from .names import core_call, transform_problem
 

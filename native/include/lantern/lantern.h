@@ -23,13 +23,12 @@ extern "C" {
 #define LT_API __attribute__((visibility("default")))
 #endif
 
-#define LT_ABI_VERSION 6  /* 2: lt_render_settings.sample_offset; 3: halting settings and status;
-                             4: volumes are arrays of components with emission; lt_scene_stats
-                                counts emissive triangles; lt_scene_add_volume_grid takes a step;
-                             5: lt_render_settings.passes and caller_bytes; lt_render_wait
-                                reports a failed render; lt_scene_begin/end_image; image memory
-                                in lt_scene_stats; lt_render_status.unestimated_pixels;
-                             6: lt_abi_layout; default samples 64 (the add-on's) */
+/* ABI versions: 2: lt_render_settings.sample_offset; 3: halting settings and status; 4: volumes
+ * are arrays of components with emission; lt_scene_stats counts emissive triangles;
+ * lt_scene_add_volume_grid takes a step; 5: lt_render_settings.passes and caller_bytes;
+ * lt_render_wait reports a failed render; lt_scene_begin/end_image; image memory in lt_scene_stats;
+ * lt_render_status.unestimated_pixels; 6: lt_abi_layout; default samples 64 (the add-on's). */
+#define LT_ABI_VERSION 6
 
 enum lt_status {
   LT_OK = 0,
@@ -99,15 +98,15 @@ typedef struct lt_input {
 } lt_input;
 
 enum lt_node_type {
-  LT_NODE_DIFFUSE = 0,    /* color, roughness (Oren-Nayar above 0) */
-  LT_NODE_GLOSSY = 1,     /* color, roughness (GGX, alpha = roughness^2) */
-  LT_NODE_GLASS = 2,      /* color, roughness, ior */
-  LT_NODE_EMISSION = 3,   /* color, strength */
-  LT_NODE_MIX = 4,        /* fac, child[0], child[1] */
-  LT_NODE_ADD = 5,        /* child[0], child[1] */
-  LT_NODE_PRINCIPLED = 6, /* color (base), metallic, roughness, specular, transmission, ior,
-                             emission (colour), strength (emission strength) */
-  LT_NODE_TRANSPARENT = 7,/* color */
+  LT_NODE_DIFFUSE = 0,     /* color, roughness (Oren-Nayar above 0) */
+  LT_NODE_GLOSSY = 1,      /* color, roughness (GGX, alpha = roughness^2) */
+  LT_NODE_GLASS = 2,       /* color, roughness, ior */
+  LT_NODE_EMISSION = 3,    /* color, strength */
+  LT_NODE_MIX = 4,         /* fac, child[0], child[1] */
+  LT_NODE_ADD = 5,         /* child[0], child[1] */
+  LT_NODE_PRINCIPLED = 6,  /* color (base), metallic, roughness, specular, transmission, ior,
+                              emission (colour), strength (emission strength) */
+  LT_NODE_TRANSPARENT = 7, /* color */
   LT_NODE_COUNT = 8
 };
 
@@ -126,8 +125,7 @@ typedef struct lt_shader_node {
 } lt_shader_node;
 
 /* root: index of the node that feeds the Surface output. */
-LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_node* nodes, int node_count,
-                                 int root, int* out_id);
+LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_node* nodes, int node_count, int root, int* out_id);
 
 /* A mesh of triangles. corner_normals (9 floats per triangle) and corner_uvs (6 per triangle) may
  * be NULL; material_slots (one per triangle, index into the instance's material list) may be NULL. */
@@ -162,12 +160,7 @@ typedef struct lt_instance_desc {
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 
 enum lt_light_type { LT_LIGHT_POINT = 0, LT_LIGHT_SPOT = 1, LT_LIGHT_AREA = 2, LT_LIGHT_SUN = 3 };
-enum lt_area_shape {
-  LT_AREA_SQUARE = 0,
-  LT_AREA_RECTANGLE = 1,
-  LT_AREA_DISK = 2,
-  LT_AREA_ELLIPSE = 3
-};
+enum lt_area_shape { LT_AREA_SQUARE = 0, LT_AREA_RECTANGLE = 1, LT_AREA_DISK = 2, LT_AREA_ELLIPSE = 3 };
 typedef struct lt_light_desc {
   int type;
   float color[3]; /* Blender colour x energy */
@@ -186,8 +179,8 @@ enum lt_camera_type { LT_CAMERA_PERSPECTIVE = 0, LT_CAMERA_ORTHOGRAPHIC = 1 };
 enum lt_sensor_fit { LT_SENSOR_AUTO = 0, LT_SENSOR_HORIZONTAL = 1, LT_SENSOR_VERTICAL = 2 };
 typedef struct lt_camera_desc {
   int type;
-  float transform[12]; /* camera looks down local -Z, +Y up */
-  float focal_length;  /* mm */
+  float transform[12];               /* camera looks down local -Z, +Y up */
+  float focal_length;                /* mm */
   float sensor_width, sensor_height; /* mm */
   int sensor_fit;
   float ortho_scale;
@@ -223,14 +216,19 @@ LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
  * unit-luminance blackbody colour of `temperature` kelvin (Cycles' formula). Emission is
  * supported for material volumes only (World volumes and grids refuse it). Fields after
  * `anisotropy` may be left zero: no emission. */
-enum lt_volume_node { LT_VOLUME_PRINCIPLED = 0, LT_VOLUME_SCATTER = 1, LT_VOLUME_ABSORPTION = 2, LT_VOLUME_EMISSION = 3 };
+enum lt_volume_node {
+  LT_VOLUME_PRINCIPLED = 0,
+  LT_VOLUME_SCATTER = 1,
+  LT_VOLUME_ABSORPTION = 2,
+  LT_VOLUME_EMISSION = 3
+};
 typedef struct lt_volume_desc {
   int node; /* lt_volume_node */
   float color[3];
   float density;
   float absorption_color[3]; /* Principled only */
   float anisotropy;
-  float emission_strength;   /* Principled and Emission */
+  float emission_strength; /* Principled and Emission */
   float emission_color[3];
   float blackbody_intensity; /* Principled only */
   float blackbody_tint[3];
@@ -282,8 +280,7 @@ LT_API int lt_scene_commit(lt_scene* scene);
 LT_API int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float transform[12]);
 /* Replaces material `material`'s surface (same node encoding as lt_scene_add_material); its volume
  * (lt_scene_set_material_volume) is kept. */
-LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_node* nodes, int node_count,
-                                 int root);
+LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_node* nodes, int node_count, int root);
 /* Removes every light added with lt_scene_add_light (to add the edited set again). */
 LT_API int lt_scene_clear_lights(lt_scene* scene);
 
@@ -295,9 +292,9 @@ typedef struct lt_scene_stats {
   uint64_t light_sampler_builds;
   uint64_t emissive_triangles;
   uint64_t emissive_instances;
-  uint64_t image_bytes;       /* memory the scene's images hold */
-  uint64_t image_texels;      /* and their texels, all images */
-  uint64_t byte_images;       /* images stored at 8 bits per channel */
+  uint64_t image_bytes;  /* memory the scene's images hold */
+  uint64_t image_texels; /* and their texels, all images */
+  uint64_t byte_images;  /* images stored at 8 bits per channel */
 } lt_scene_stats;
 LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);
 
@@ -340,7 +337,7 @@ typedef struct lt_render_settings {
   /* Bidirectional: vertices of the camera subpath after the camera, vertices of the light
    * subpath including the one on the light (1: only the light vertex, which makes BDPT equal to
    * path tracing with next-event estimation, or VOLPATH in a scene with media), and the MIS
- * heuristic (lt_mis). */
+   * heuristic (lt_mis). */
   int max_camera_length, max_light_length;
   int mis_heuristic;
   /* Bidirectional strategy view: keep each (s, t) strategy's weighted contribution for path
@@ -379,15 +376,10 @@ LT_API void lt_render_settings_default(lt_render_settings* settings);
  * must outlive the render. */
 LT_API int lt_render_start(lt_scene* scene, const lt_render_settings* settings, lt_render** out);
 
-enum lt_render_state {
-  LT_STATE_RUNNING = 0,
-  LT_STATE_DONE = 1,
-  LT_STATE_CANCELLED = 2,
-  LT_STATE_FAILED = 3
-};
+enum lt_render_state { LT_STATE_RUNNING = 0, LT_STATE_DONE = 1, LT_STATE_CANCELLED = 2, LT_STATE_FAILED = 3 };
 typedef struct lt_render_status {
   int state;
-  int samples_done;  /* complete passes over the image */
+  int samples_done; /* complete passes over the image */
   int samples_total;
   double elapsed_seconds;
   double remaining_seconds; /* estimate; negative when unknown */
@@ -399,8 +391,8 @@ typedef struct lt_render_status {
    * samples; core/film.h). Negative before 2 passes; +inf when the noise is as large as the
    * image. Pixels with fewer than 2 finite samples are left out (unestimated_pixels). */
   double rel_error;
-  int halt_reason;          /* lt_halt_reason */
-  uint64_t active_pixels;   /* pixels still sampling (fewer than the region's with adaptive sampling) */
+  int halt_reason;             /* lt_halt_reason */
+  uint64_t active_pixels;      /* pixels still sampling (fewer than the region's with adaptive sampling) */
   uint64_t unestimated_pixels; /* pixels left out of rel_error: fewer than 2 finite samples */
 } lt_render_status;
 enum lt_halt_reason {
@@ -420,11 +412,11 @@ LT_API int lt_render_cancel(lt_render* render);
 LT_API int lt_render_wait(lt_render* render);
 
 enum lt_pass {
-  LT_PASS_COMBINED = 0, /* RGBA */
-  LT_PASS_DEPTH = 1,    /* 1 channel: distance along the camera axis (Blender's Z) */
-  LT_PASS_NORMAL = 2,   /* 3 channels: mean world-space shading normal of the first hits (Cycles) */
-  LT_PASS_ALBEDO = 3,   /* 3 channels: colour of the first non-specular hit */
-  LT_PASS_VARIANCE = 4, /* 3 channels: variance of the Combined pixel mean, per channel */
+  LT_PASS_COMBINED = 0,     /* RGBA */
+  LT_PASS_DEPTH = 1,        /* 1 channel: distance along the camera axis (Blender's Z) */
+  LT_PASS_NORMAL = 2,       /* 3 channels: mean world-space shading normal of the first hits (Cycles) */
+  LT_PASS_ALBEDO = 3,       /* 3 channels: colour of the first non-specular hit */
+  LT_PASS_VARIANCE = 4,     /* 3 channels: variance of the Combined pixel mean, per channel */
   LT_PASS_SAMPLE_COUNT = 5, /* 1 channel: samples accumulated in the pixel */
   LT_PASS_COUNT = 6
 };
@@ -439,8 +431,7 @@ LT_API int lt_render_read_pass(lt_render* render, int pass, float* out, size_t f
 /* The strategy view of a finished (or cancelled) bidirectional render: a grid of RGB images of
  * the region's size, (depth + 2) columns (s = 0, 1, ...) by `depth` rows (path depth s + t - 2,
  * 0 at the top), rows bottom to top. With out == NULL only the grid's size is returned. */
-LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_count, int* width,
-                                        int* height);
+LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_count, int* width, int* height);
 
 LT_API void lt_render_destroy(lt_render* render);
 

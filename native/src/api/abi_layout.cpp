@@ -9,9 +9,12 @@
 
 namespace {
 
-#define LT_STRUCT(T) {#T, nullptr, (long long)sizeof(T), 0}
-#define LT_FIELD(T, f) {#T, #f, (long long)offsetof(T, f), (long long)sizeof(T::f)}
-#define LT_CONST(E, c) {#E, #c, (long long)(c), 0}
+#define LT_STRUCT(T) \
+  { #T, nullptr, (long long)sizeof(T), 0 }
+#define LT_FIELD(T, f) \
+  { #T, #f, (long long)offsetof(T, f), (long long)sizeof(T::f) }
+#define LT_CONST(E, c) \
+  { #E, #c, (long long)(c), 0 }
 
 const lt_abi_entry kLayout[] = {
     LT_STRUCT(lt_abi_entry),

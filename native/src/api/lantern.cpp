@@ -13,13 +13,12 @@
 #include "core/error.h"
 #include "io/exr.h"
 #include "io/vdb.h"
+#include "media/volume_material.h"
+#include "render/render.h"
 #include "scene/lights/area.h"
 #include "scene/lights/point.h"
 #include "scene/lights/sun.h"
-#include "media/volume_material.h"
-#include "render/render.h"
 #include "scene/scene.h"
-
 
 namespace {
 
@@ -154,30 +153,31 @@ lt::Interpolation interpolation(const lt_image_desc& d) {
 }  // 268 M pixels: beyond this a render is a mistake
 
 lt::Material to_material(const lt_scene* scene, const lt_shader_node* nodes, int node_count, int root) {
-    require(node_count > 0 && node_count <= 4096, "material node count " + std::to_string(node_count) + " is out of range");
-    const size_t images = scene->scene.images.size();
-    std::vector<lt::ShaderNode> v(node_count);
-    for (int i = 0; i < node_count; ++i) {
-      const lt_shader_node& n = nodes[i];
-      if (n.type < 0 || n.type >= LT_NODE_COUNT)
-        throw InvalidArgument("material node " + std::to_string(i) + " has unknown type " + std::to_string(n.type) +
-                              "; valid types are DIFFUSE, GLOSSY, GLASS, EMISSION, MIX, ADD, PRINCIPLED, TRANSPARENT");
-      lt::ShaderNode& s = v[i];
-      s.type = lt::NodeType(n.type);
-      s.color = to_input(n.color, images, "color", i);
-      s.roughness = to_input(n.roughness, images, "roughness", i);
-      s.fac = to_input(n.fac, images, "fac", i);
-      s.metallic = to_input(n.metallic, images, "metallic", i);
-      s.specular = to_input(n.specular, images, "specular", i);
-      s.transmission = to_input(n.transmission, images, "transmission", i);
-      s.emission = to_input(n.emission, images, "emission", i);
-      s.strength = to_input(n.strength, images, "strength", i);
-      require(std::isfinite(n.ior), "material node " + std::to_string(i) + ": ior is not finite");
-      s.ior = n.ior;
-      s.child[0] = n.child[0];
-      s.child[1] = n.child[1];
-    }
-    return lt::Material(std::move(v), root, images);
+  require(node_count > 0 && node_count <= 4096,
+          "material node count " + std::to_string(node_count) + " is out of range");
+  const size_t images = scene->scene.images.size();
+  std::vector<lt::ShaderNode> v(node_count);
+  for (int i = 0; i < node_count; ++i) {
+    const lt_shader_node& n = nodes[i];
+    if (n.type < 0 || n.type >= LT_NODE_COUNT)
+      throw InvalidArgument("material node " + std::to_string(i) + " has unknown type " + std::to_string(n.type) +
+                            "; valid types are DIFFUSE, GLOSSY, GLASS, EMISSION, MIX, ADD, PRINCIPLED, TRANSPARENT");
+    lt::ShaderNode& s = v[i];
+    s.type = lt::NodeType(n.type);
+    s.color = to_input(n.color, images, "color", i);
+    s.roughness = to_input(n.roughness, images, "roughness", i);
+    s.fac = to_input(n.fac, images, "fac", i);
+    s.metallic = to_input(n.metallic, images, "metallic", i);
+    s.specular = to_input(n.specular, images, "specular", i);
+    s.transmission = to_input(n.transmission, images, "transmission", i);
+    s.emission = to_input(n.emission, images, "emission", i);
+    s.strength = to_input(n.strength, images, "strength", i);
+    require(std::isfinite(n.ior), "material node " + std::to_string(i) + ": ior is not finite");
+    s.ior = n.ior;
+    s.child[0] = n.child[0];
+    s.child[1] = n.child[1];
+  }
+  return lt::Material(std::move(v), root, images);
 }
 
 }  // namespace
@@ -291,7 +291,8 @@ int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* d, int* out_id) {
     if (d->corner_normals && corners) {
       m.corner_normals.resize(corners);
       for (size_t c = 0; c < corners; ++c)
-        m.corner_normals[c] = lt::Vec3(d->corner_normals[3 * c], d->corner_normals[3 * c + 1], d->corner_normals[3 * c + 2]);
+        m.corner_normals[c] =
+            lt::Vec3(d->corner_normals[3 * c], d->corner_normals[3 * c + 1], d->corner_normals[3 * c + 2]);
     }
     if (d->corner_uvs && corners) {
       m.corner_uvs.resize(corners);
@@ -318,8 +319,10 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
     lt::Instance inst;
     inst.mesh = d->mesh;
     bool finite = finite_array(d->transform, 12);
-    if (finite) std::memcpy(inst.xf.m, d->transform, sizeof(inst.xf.m));
-    else std::memset(inst.xf.m, 0, sizeof(inst.xf.m));  // scaled to a point: nothing is hit
+    if (finite)
+      std::memcpy(inst.xf.m, d->transform, sizeof(inst.xf.m));
+    else
+      std::memset(inst.xf.m, 0, sizeof(inst.xf.m));  // scaled to a point: nothing is hit
     for (int i = 0; i < d->material_count; ++i) {
       int m = d->materials[i];
       require(m >= -1 && m < int(scene->scene.materials.size()),
@@ -432,9 +435,9 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     const float values[] = {d->focal_length, d->sensor_width, d->sensor_height, d->ortho_scale, d->shift_x,
                             d->shift_y,      d->clip_start,   d->clip_end,      d->pixel_aspect};
     require(finite_array(values, 9), "camera parameters must be finite");
-    require(d->focal_length > 0 && d->sensor_width > 0 && d->sensor_height > 0 && d->ortho_scale > 0 &&
-                d->pixel_aspect > 0,
-            "camera focal length, sensor size, ortho scale and pixel aspect must be positive");
+    require(
+        d->focal_length > 0 && d->sensor_width > 0 && d->sensor_height > 0 && d->ortho_scale > 0 && d->pixel_aspect > 0,
+        "camera focal length, sensor size, ortho scale and pixel aspect must be positive");
     require(d->clip_start >= 0 && d->clip_end > d->clip_start, "camera clip end must exceed clip start >= 0");
     lt::CameraDesc c = scene->scene.camera;  // assigned only once valid: a refused call changes nothing
     c.orthographic = d->type == LT_CAMERA_ORTHOGRAPHIC;
@@ -450,10 +453,12 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     c.clip_start = d->clip_start;
     c.clip_end = d->clip_end;
     c.pixel_aspect = d->pixel_aspect;
-    const float reach = c.orthographic ? 0.5f * c.ortho_scale * (1 + std::max(std::abs(c.shift_x), std::abs(c.shift_y))) : 0;
+    const float reach =
+        c.orthographic ? 0.5f * c.ortho_scale * (1 + std::max(std::abs(c.shift_x), std::abs(c.shift_y))) : 0;
     if (!lt::within_traceable_range(c.xf.point(lt::Vec3(0.0f))) || !(reach <= lt::kTraceableRange))
-      scene->scene.warnings.push_back("the camera reaches beyond 1.8e18 from the origin, the range within which rays "
-                                      "can be traced (Embree's); its rays from beyond it miss");
+      scene->scene.warnings.push_back(
+          "the camera reaches beyond 1.8e18 from the origin, the range within which rays "
+          "can be traced (Embree's); its rays from beyond it miss");
     begin_edit(scene, false);
     scene->scene.camera = c;
     scene->scene.camera_set = true;
@@ -477,8 +482,7 @@ int lt_scene_set_world(lt_scene* scene, const lt_world_desc* d) {
   });
 }
 
-int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* d, int count,
-                                 int null_surface) {
+int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* d, int count, int null_surface) {
   return guarded([&] {
     require(scene && d, "lt_scene_set_material_volume: NULL argument");
     scene->scene.require_editable();
@@ -505,8 +509,8 @@ int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* d, int coun
   });
 }
 
-int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
-                             float step, const lt_volume_desc* d, int count, int* out_id) {
+int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12], float step,
+                             const lt_volume_desc* d, int count, int* out_id) {
   return guarded([&] {
     require(scene && path && transform && d && out_id, "lt_scene_add_volume_grid: NULL argument");
     scene->scene.require_editable();
@@ -527,8 +531,10 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
     sc.media.back().set_phase(c.phase);
     if (step > 0) sc.media.back().set_march_step(step);
     *out_id = int(sc.media.size()) - 1;
-    if (sc.media.back().empty()) sc.warnings.push_back(std::string(path) + ": volume has no density; left out");
-    else sc.global_media.push_back(*out_id);
+    if (sc.media.back().empty())
+      sc.warnings.push_back(std::string(path) + ": volume has no density; left out");
+    else
+      sc.global_media.push_back(*out_id);
   });
 }
 
@@ -576,7 +582,8 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
   return guarded([&] {
     require(scene && s && out, "lt_render_start: NULL argument");
     if (!scene->scene.committed()) throw lt::StateError("the scene must be committed before rendering");
-    if (scene->scene.edited()) throw lt::StateError("the scene was edited after its commit: commit it again before rendering");
+    if (scene->scene.edited())
+      throw lt::StateError("the scene was edited after its commit: commit it again before rendering");
     require(scene->scene.camera_set, "the scene has no camera");
     require(s->width > 0 && s->height > 0 && s->width <= kMaxDimension && s->height <= kMaxDimension &&
                 (long long)s->width * s->height <= kMaxPixels,
@@ -587,23 +594,24 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
             "sample offset must be in [0, 2^30 - samples]");
     bool full = s->border[0] == 0 && s->border[1] == 0 && s->border[2] == 0 && s->border[3] == 0;
     require(s->integrator >= 0 && s->integrator < LT_INTEGRATOR_COUNT,
-            "unknown integrator " + std::to_string(s->integrator) + "; valid: " + lt::abi_enum_names("lt_integrator", "LT_INTEGRATOR_"));
+            "unknown integrator " + std::to_string(s->integrator) +
+                "; valid: " + lt::abi_enum_names("lt_integrator", "LT_INTEGRATOR_"));
     require(s->volume_bounces >= 0 && s->volume_bounces <= 1024, "volume bounces must be in [0, 1024]");
     require(s->volume_estimator == LT_VOLUME_RAY_MARCHING || s->volume_estimator == LT_VOLUME_TRACKING,
             "unknown volume estimator " + std::to_string(s->volume_estimator) + "; valid: RAY_MARCHING, TRACKING");
     require(std::isfinite(s->volume_step) && s->volume_step >= 0, "volume step must be finite and >= 0");
-    require(s->integrator != LT_INTEGRATOR_BIDIRECTIONAL ||
-                (s->max_camera_length >= 1 && s->max_camera_length <= 1024 && s->max_light_length >= 0 &&
-                 s->max_light_length <= 1024),
-            "bidirectional path lengths must be in [1, 1024] (camera) and [0, 1024] (light)");
+    require(
+        s->integrator != LT_INTEGRATOR_BIDIRECTIONAL || (s->max_camera_length >= 1 && s->max_camera_length <= 1024 &&
+                                                         s->max_light_length >= 0 && s->max_light_length <= 1024),
+        "bidirectional path lengths must be in [1, 1024] (camera) and [0, 1024] (light)");
     require(s->strategy_view_depth >= 0 && s->strategy_view_depth <= 8, "strategy view depth must be in [0, 8]");
     if (s->integrator == LT_INTEGRATOR_BIDIRECTIONAL && s->strategy_view_depth > 0) {
-      long long region = (long long)(full ? s->width : s->border[1] - s->border[0]) *
-                         (full ? s->height : s->border[3] - s->border[2]);
+      long long region =
+          (long long)(full ? s->width : s->border[1] - s->border[0]) * (full ? s->height : s->border[3] - s->border[2]);
       long long cells = (long long)s->strategy_view_depth * (s->strategy_view_depth + 2);
-      require(region * cells * 6 <= (1LL << 28),
-              "the strategy view of " + std::to_string(cells) + " images at this resolution needs more than 1 GiB; "
-              "lower the depth or the resolution");
+      require(region * cells * 6 <= (1LL << 28), "the strategy view of " + std::to_string(cells) +
+                                                     " images at this resolution needs more than 1 GiB; "
+                                                     "lower the depth or the resolution");
     }
     require(s->mis_heuristic >= LT_MIS_POWER && s->mis_heuristic <= LT_MIS_UNIFORM,
             "unknown MIS heuristic " + std::to_string(s->mis_heuristic) + "; valid: POWER, BALANCE, UNIFORM");
@@ -615,7 +623,8 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
             "clamp values must be finite and >= 0");
     require(s->threads >= 0 && s->threads <= 4096, "threads must be in [0, 4096]");
     require(s->filter >= LT_FILTER_BOX && s->filter <= LT_FILTER_BLACKMAN_HARRIS, "unknown pixel filter");
-    require(std::isfinite(s->filter_width) && s->filter_width > 0 && s->filter_width <= 100, "filter width must be in (0, 100]");
+    require(std::isfinite(s->filter_width) && s->filter_width > 0 && s->filter_width <= 100,
+            "filter width must be in (0, 100]");
     require(std::isfinite(s->time_limit) && s->time_limit >= 0, "time limit must be finite and >= 0 (0: none)");
     require(std::isfinite(s->noise_target) && s->noise_target >= 0, "noise target must be finite and >= 0 (0: none)");
     require(!s->adaptive || s->noise_target > 0, "adaptive sampling needs a noise target > 0");
@@ -625,12 +634,18 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.width = s->width;
     rs.height = s->height;
     if (full) {
-      rs.x0 = 0; rs.y0 = 0; rs.x1 = s->width; rs.y1 = s->height;
+      rs.x0 = 0;
+      rs.y0 = 0;
+      rs.x1 = s->width;
+      rs.y1 = s->height;
     } else {
       require(s->border[0] >= 0 && s->border[0] < s->border[1] && s->border[1] <= s->width && s->border[2] >= 0 &&
                   s->border[2] < s->border[3] && s->border[3] <= s->height,
               "render border is outside the frame or empty");
-      rs.x0 = s->border[0]; rs.x1 = s->border[1]; rs.y0 = s->border[2]; rs.y1 = s->border[3];
+      rs.x0 = s->border[0];
+      rs.x1 = s->border[1];
+      rs.y0 = s->border[2];
+      rs.y1 = s->border[3];
     }
     rs.samples = s->samples;
     rs.seed = s->seed;
@@ -650,7 +665,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.mis = lt::MisHeuristic(s->mis_heuristic);
     is.volume_bounces = s->volume_bounces;
     is.volume_estimator = s->volume_estimator == LT_VOLUME_RAY_MARCHING ? lt::VolumeEstimator::RayMarching
-                                                                       : lt::VolumeEstimator::Tracking;
+                                                                        : lt::VolumeEstimator::Tracking;
     is.volume_step = s->volume_step;
     is.strategy_depth = s->integrator == LT_INTEGRATOR_BIDIRECTIONAL ? s->strategy_view_depth : 0;
     rs.threads = s->threads;
@@ -668,8 +683,8 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     if (total > double(avail))
       throw lt::OutOfMemory("a " + std::to_string(rs.x1 - rs.x0) + "x" + std::to_string(rs.y1 - rs.y0) +
                             " render needs about " + gib(total) + " (film " + gib(double(need.film)) +
-                            ", other buffers " + gib(double(need.other)) + ", caller " +
-                            gib(double(s->caller_bytes)) + ") but only " + gib(double(avail)) +
+                            ", other buffers " + gib(double(need.other)) + ", caller " + gib(double(s->caller_bytes)) +
+                            ") but only " + gib(double(avail)) +
                             " is available; lower the resolution, render a border or fewer passes");
     auto r = std::make_unique<lt_render>();
     r->job = std::make_unique<lt::RenderJob>(scene->scene, rs);
@@ -728,8 +743,8 @@ int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_co
     require(pass >= 0 && pass < LT_PASS_COUNT, "unknown pass " + std::to_string(pass));
     const auto& film = render->job->film();
     size_t need = size_t(film.width()) * film.height() * lt::pass_channels(lt::Pass(pass));
-    require(float_count == need, "pass buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) +
-                                     " are needed");
+    require(float_count == need,
+            "pass buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) + " are needed");
     film.read(lt::Pass(pass), out);
   });
 }
@@ -739,7 +754,8 @@ int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_cou
     require(render && width && height, "lt_render_read_strategy_grid: NULL argument");
     const lt::RenderJob& job = *render->job;
     const int depth = job.settings().integrator_settings.strategy_depth;
-    if (depth <= 0) throw lt::StateError("this render has no strategy view (bidirectional with strategy_view_depth > 0)");
+    if (depth <= 0)
+      throw lt::StateError("this render has no strategy view (bidirectional with strategy_view_depth > 0)");
     const int columns = lt::strategy_columns(depth);
     *width = columns * job.region_width();
     *height = depth * job.region_height();

@@ -1,14 +1,14 @@
 #include "core/film.h"
 
-#include "core/error.h"
-#include "core/label_font.h"
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <cmath>
 #include <cstring>
 #include <limits>
+
+#include "core/error.h"
+#include "core/label_font.h"
 
 namespace lt {
 
@@ -22,8 +22,9 @@ uint16_t float_to_half(float f) {
   std::memcpy(&x, &f, 4);
   const uint16_t sign = uint16_t((x >> 16) & 0x8000u);
   x &= 0x7fffffffu;
-  if (x >= 0x477ff000u) return uint16_t(sign | (x > 0x7f800000u ? 0x7e00u : 0x7bffu));  // >= 65520 (rounds past max); NaN
-  if (x < 0x38800000u) {  // subnormal half (or zero)
+  if (x >= 0x477ff000u)
+    return uint16_t(sign | (x > 0x7f800000u ? 0x7e00u : 0x7bffu));  // >= 65520 (rounds past max); NaN
+  if (x < 0x38800000u) {                                            // subnormal half (or zero)
     if (x < 0x33000000u) return sign;
     const uint32_t m = (x & 0x7fffffu) | 0x800000u;
     const int shift = 126 - int(x >> 23);  // the value in units of 2^-24: (1.m * 2^23) >> shift
@@ -59,7 +60,10 @@ FilterSampler::FilterSampler(FilterType type, float width) {
       break;
     case FilterType::Gaussian:
       half_range_ = 1.5f * width;
-      f = [width](float x) { float v = x * 2.0f / width; return std::exp(-2.0f * v * v); };
+      f = [width](float x) {
+        float v = x * 2.0f / width;
+        return std::exp(-2.0f * v * v);
+      };
       break;
     case FilterType::BlackmanHarris:
       half_range_ = width;
@@ -114,18 +118,23 @@ float FilterSampler::pdf(float offset) const {
 
 int pass_channels(Pass pass) {
   switch (pass) {
-    case Pass::Combined: return 4;
-    case Pass::Depth: return 1;
-    case Pass::SampleCount: return 1;
-    case Pass::Count: return 0;
-    default: return 3;
+    case Pass::Combined:
+      return 4;
+    case Pass::Depth:
+      return 1;
+    case Pass::SampleCount:
+      return 1;
+    case Pass::Count:
+      return 0;
+    default:
+      return 3;
   }
 }
 
 size_t FilmLayout::bytes_per_pixel() const {
   auto has = [&](Pass p) { return (passes & pass_bit(p)) != 0; };
   size_t floats = 3 + 1 + 3 + 1;  // mean, alpha, half, count
-  floats += 2;                     // the published Combined, RGBA in half floats
+  floats += 2;                    // the published Combined, RGBA in half floats
   if (has(Pass::Depth)) floats += 1;
   if (has(Pass::Normal)) floats += 3;
   if (has(Pass::Albedo)) floats += 3;
@@ -231,8 +240,10 @@ ErrorEstimate Film::error_estimate(int passes) const {
   const double signal = square_sum - var_sum;
   e.mean_square = std::max(0.0, signal) / double(n_pixels);
   e.variance = var_sum;
-  if (var_sum <= 0) e.rel_error = 0;
-  else e.rel_error = signal > 0 ? std::sqrt(var_sum / signal) : std::numeric_limits<double>::infinity();
+  if (var_sum <= 0)
+    e.rel_error = 0;
+  else
+    e.rel_error = signal > 0 ? std::sqrt(var_sum / signal) : std::numeric_limits<double>::infinity();
   return e;
 }
 
@@ -326,7 +337,8 @@ const char* pass_name(Pass p) {
 
 void Film::read(Pass pass, float* out, bool labels) const {
   if (!has(pass))
-    throw StateError(std::string("this render does not keep the ") + pass_name(pass) + " pass (not enabled when it started)");
+    throw StateError(std::string("this render does not keep the ") + pass_name(pass) +
+                     " pass (not enabled when it started)");
   const int c = pass_channels(pass);
   const size_t n = size_t(width_) * height_;
   std::unique_lock<std::mutex> lock(mutex_);
@@ -339,29 +351,37 @@ void Film::read(Pass pass, float* out, bool labels) const {
     for (size_t i = 0; i < 4 * n; ++i) out[i] = published_valid_ ? half_to_float(published_[i]) : 0.0f;
   } else {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-     for (size_t i = r.begin(); i < r.end(); ++i) {
-      float* o = out + i * c;
-      const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
-      switch (pass) {
-        case Pass::Combined: resolve_combined(i, o); break;
-        case Pass::Depth: o[0] = depth_[i]; break;
-        case Pass::Normal:
-          // The mean of the samples' normals, as in Cycles (not renormalised: shorter at edges), so
-          // that sample-split parts average into the full render's pass.
-          for (int k = 0; k < 3; ++k) o[k] = float(normal_[3 * i + k] * inv);
-          break;
-        case Pass::Albedo:
-          for (int k = 0; k < 3; ++k) o[k] = float(albedo_[3 * i + k] * inv);
-          break;
-        case Pass::Variance:
-          // Variance of the pixel mean: the unbiased sample variance over n.
-          for (int k = 0; k < 3; ++k)
-            o[k] = count_[i] > 1 ? float(std::max(0.0, double(m2_[3 * i + k])) / ((count_[i] - 1.0) * count_[i])) : 0.0f;
-          break;
-        case Pass::SampleCount: o[0] = float(count_[i]); break;
-        case Pass::Count: break;
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        float* o = out + i * c;
+        const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+        switch (pass) {
+          case Pass::Combined:
+            resolve_combined(i, o);
+            break;
+          case Pass::Depth:
+            o[0] = depth_[i];
+            break;
+          case Pass::Normal:
+            // The mean of the samples' normals, as in Cycles (not renormalised: shorter at edges), so
+            // that sample-split parts average into the full render's pass.
+            for (int k = 0; k < 3; ++k) o[k] = float(normal_[3 * i + k] * inv);
+            break;
+          case Pass::Albedo:
+            for (int k = 0; k < 3; ++k) o[k] = float(albedo_[3 * i + k] * inv);
+            break;
+          case Pass::Variance:
+            // Variance of the pixel mean: the unbiased sample variance over n.
+            for (int k = 0; k < 3; ++k)
+              o[k] =
+                  count_[i] > 1 ? float(std::max(0.0, double(m2_[3 * i + k])) / ((count_[i] - 1.0) * count_[i])) : 0.0f;
+            break;
+          case Pass::SampleCount:
+            o[0] = float(count_[i]);
+            break;
+          case Pass::Count:
+            break;
+        }
       }
-     }
     });
   }
   if (pass != Pass::Combined || !labels || labels_.empty()) return;

@@ -21,7 +21,7 @@ enum class FilterType { Box = 0, Gaussian = 1, BlackmanHarris = 2 };
 class FilterSampler {
  public:
   FilterSampler(FilterType type, float width);
-  float sample(float u) const;  // offset from the pixel centre, in pixels
+  float sample(float u) const;    // offset from the pixel centre, in pixels
   float pdf(float offset) const;  // density of sample() at an offset (normalised: integrates to 1)
   float radius() const { return half_range_; }
 
@@ -69,9 +69,9 @@ struct FilmLayout {
 // discarded as not finite, e.g. under an emitter of strength 1e38) cannot be estimated: they are
 // left out of both sums and counted, so that they neither block the estimate nor the noise target.
 struct ErrorEstimate {
-  double rel_error = -1;   // E; negative before 2 passes; +inf if noise >= signal
-  double mean_square = 0;  // sum_pc R_pc^2 / pixels (estimated): the adaptive sampler's scale
-  double variance = 0;     // sum_p v_p
+  double rel_error = -1;            // E; negative before 2 passes; +inf if noise >= signal
+  double mean_square = 0;           // sum_pc R_pc^2 / pixels (estimated): the adaptive sampler's scale
+  double variance = 0;              // sum_p v_p
   uint64_t unestimated_pixels = 0;  // pixels with fewer than 2 finite samples, left out
 };
 

@@ -22,12 +22,11 @@ Transform affine_inverse(const Transform& t) {
   if (!(std::abs(det) > 0) || !std::isfinite(det)) throw InvalidArgument("transform is singular (determinant 0)");
   double inv_det = 1.0 / double(det);
   // Inverse of the 3x3 linear part by cofactors.
-  double a[9] = {
-      double(m[5]) * m[10] - double(m[6]) * m[9], double(m[2]) * m[9] - double(m[1]) * m[10],
-      double(m[1]) * m[6] - double(m[2]) * m[5],  double(m[6]) * m[8] - double(m[4]) * m[10],
-      double(m[0]) * m[10] - double(m[2]) * m[8], double(m[2]) * m[4] - double(m[0]) * m[6],
-      double(m[4]) * m[9] - double(m[5]) * m[8],  double(m[1]) * m[8] - double(m[0]) * m[9],
-      double(m[0]) * m[5] - double(m[1]) * m[4]};
+  double a[9] = {double(m[5]) * m[10] - double(m[6]) * m[9], double(m[2]) * m[9] - double(m[1]) * m[10],
+                 double(m[1]) * m[6] - double(m[2]) * m[5],  double(m[6]) * m[8] - double(m[4]) * m[10],
+                 double(m[0]) * m[10] - double(m[2]) * m[8], double(m[2]) * m[4] - double(m[0]) * m[6],
+                 double(m[4]) * m[9] - double(m[5]) * m[8],  double(m[1]) * m[8] - double(m[0]) * m[9],
+                 double(m[0]) * m[5] - double(m[1]) * m[4]};
   Transform r;
   for (int i = 0; i < 3; ++i) {
     double tr = 0;

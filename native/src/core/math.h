@@ -20,11 +20,37 @@ struct Vec3 {
   float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
   float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
   Vec3 operator-() const { return {-x, -y, -z}; }
-  Vec3& operator+=(const Vec3& b) { x += b.x; y += b.y; z += b.z; return *this; }
-  Vec3& operator-=(const Vec3& b) { x -= b.x; y -= b.y; z -= b.z; return *this; }
-  Vec3& operator*=(const Vec3& b) { x *= b.x; y *= b.y; z *= b.z; return *this; }
-  Vec3& operator*=(float s) { x *= s; y *= s; z *= s; return *this; }
-  Vec3& operator/=(float s) { float r = 1.0f / s; x *= r; y *= r; z *= r; return *this; }
+  Vec3& operator+=(const Vec3& b) {
+    x += b.x;
+    y += b.y;
+    z += b.z;
+    return *this;
+  }
+  Vec3& operator-=(const Vec3& b) {
+    x -= b.x;
+    y -= b.y;
+    z -= b.z;
+    return *this;
+  }
+  Vec3& operator*=(const Vec3& b) {
+    x *= b.x;
+    y *= b.y;
+    z *= b.z;
+    return *this;
+  }
+  Vec3& operator*=(float s) {
+    x *= s;
+    y *= s;
+    z *= s;
+    return *this;
+  }
+  Vec3& operator/=(float s) {
+    float r = 1.0f / s;
+    x *= r;
+    y *= r;
+    z *= r;
+    return *this;
+  }
 };
 
 inline Vec3 operator+(Vec3 a, const Vec3& b) { return a += b; }
@@ -46,7 +72,9 @@ inline Vec3 vmax(const Vec3& a, const Vec3& b) { return {std::max(a.x, b.x), std
 inline Vec3 abs(const Vec3& a) { return {std::abs(a.x), std::abs(a.y), std::abs(a.z)}; }
 inline float max_component(const Vec3& a) { return std::max(a.x, std::max(a.y, a.z)); }
 // Largest magnitude: negative lights (Blender allows negative energy) carry negative radiance.
-inline float max_abs_component(const Vec3& a) { return std::max(std::abs(a.x), std::max(std::abs(a.y), std::abs(a.z))); }
+inline float max_abs_component(const Vec3& a) {
+  return std::max(std::abs(a.x), std::max(std::abs(a.y), std::abs(a.z)));
+}
 inline float average(const Vec3& a) { return (a.x + a.y + a.z) * (1.0f / 3.0f); }
 inline bool is_black(const Vec3& a) { return a.x == 0 && a.y == 0 && a.z == 0; }
 inline bool is_finite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
@@ -56,7 +84,10 @@ inline float luminance(const Vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0
 
 using Spectrum = Vec3;  // linear RGB
 
-template <class T> inline T clamp(T v, T lo, T hi) { return v < lo ? lo : (v > hi ? hi : v); }
+template <class T>
+inline T clamp(T v, T lo, T hi) {
+  return v < lo ? lo : (v > hi ? hi : v);
+}
 inline float sqr(float x) { return x * x; }
 inline float safe_sqrt(float x) { return std::sqrt(std::max(0.0f, x)); }
 

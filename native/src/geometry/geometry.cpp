@@ -50,15 +50,15 @@ Geometry::~Geometry() {
 RTCScene Geometry::triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices) const {
   RTCScene scene = rtcNewScene(device_);
   RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-  float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                         3 * sizeof(float), positions.size()));
+  float* v = static_cast<float*>(
+      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), positions.size()));
   for (size_t i = 0; i < positions.size(); ++i) {
     v[3 * i] = positions[i].x;
     v[3 * i + 1] = positions[i].y;
     v[3 * i + 2] = positions[i].z;
   }
-  unsigned* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                 3 * sizeof(unsigned), indices.size() / 3));
+  unsigned* idx = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), indices.size() / 3));
   std::copy(indices.begin(), indices.end(), idx);
   rtcCommitGeometry(g);
   rtcAttachGeometryByID(scene, g, 0);
@@ -221,7 +221,8 @@ RTCScene Geometry::baked_scene(int instance) {
   for (size_t i = 0; i < positions.size(); ++i) positions[i] = inst.xf.point(m.positions[i]);
   std::vector<uint32_t> indices = m.indices;
   for (size_t t = 0; t < m.triangle_count(); ++t) {
-    const Vec3 &p0 = positions[indices[3 * t]], &p1 = positions[indices[3 * t + 1]], &p2 = positions[indices[3 * t + 2]];
+    const Vec3 &p0 = positions[indices[3 * t]], &p1 = positions[indices[3 * t + 1]],
+               &p2 = positions[indices[3 * t + 2]];
     if (!(length(cross(p1 - p0, p2 - p0)) > 0)) indices[3 * t + 1] = indices[3 * t + 2] = indices[3 * t];
   }
   b.rtc = triangle_scene(positions, indices);

@@ -28,19 +28,20 @@ struct Instance {
   Transform xf;
   std::vector<int> materials;  // material id per slot
   unsigned visibility = 31;
-  bool flipped = false;        // negative determinant: winding flips the geometric normal
-  Vec3 normal_rows[3];         // inverse transpose of the linear part (up to scale), for normals
+  bool flipped = false;  // negative determinant: winding flips the geometric normal
+  Vec3 normal_rows[3];   // inverse transpose of the linear part (up to scale), for normals
   Vec3 normal_to_world(const Vec3& n) const {
     return {dot(normal_rows[0], n), dot(normal_rows[1], n), dot(normal_rows[2], n)};
   }
-  int material_for(int slot) const {
-    return slot >= 0 && slot < int(materials.size()) ? materials[slot] : -1;
-  }
+  int material_for(int slot) const { return slot >= 0 && slot < int(materials.size()) ? materials[slot] : -1; }
 };
 
 struct Bounds {
   Vec3 lo{INFINITY}, hi{-INFINITY};
-  void extend(const Vec3& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
+  void extend(const Vec3& p) {
+    lo = vmin(lo, p);
+    hi = vmax(hi, p);
+  }
   bool empty() const { return lo.x > hi.x; }
 };
 

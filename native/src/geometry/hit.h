@@ -20,8 +20,8 @@ struct Hit {
 // Everything shading needs at a surface point, in world space.
 struct SurfacePoint {
   Vec3 p;
-  Vec3 ng;         // geometric normal (unit), as wound by the mesh
-  Vec3 ns;         // shading normal (unit), on ng's side
+  Vec3 ng;  // geometric normal (unit), as wound by the mesh
+  Vec3 ns;  // shading normal (unit), on ng's side
   Vec2 uv;
   int material = -1;
   int instance = -1, primitive = -1;

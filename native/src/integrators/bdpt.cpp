@@ -46,8 +46,15 @@ BdptScratch& thread_scratch() {
 }  // namespace
 
 Bdpt::Bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, SampleStats& stats)
-    : ctx_(ctx), scene_(ctx.scene), lights_(ctx.scene.lights), s_(ctx.settings), cs_(cs), sampler_(sampler),
-      stats_(stats), scratch_(thread_scratch()), pixel_center_(cs.pixel_center),
+    : ctx_(ctx),
+      scene_(ctx.scene),
+      lights_(ctx.scene.lights),
+      s_(ctx.settings),
+      cs_(cs),
+      sampler_(sampler),
+      stats_(stats),
+      scratch_(thread_scratch()),
+      pixel_center_(cs.pixel_center),
       film_area_(ctx.camera.pixel_plane_area() * float(ctx.width) * float(ctx.height)),
       media_(ctx.scene.has_media()) {}
 
@@ -410,8 +417,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   // cross it to infinity); a subpath from the scene's bounding disk would cross a finite stretch.
   if (l.infinite() && scene_.has_world_volume()) return 0;
   EmissionSample e;
-  if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
-    return 0;
+  if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0)) return 0;
   PathVertex& y0 = path[0];
   y0 = PathVertex();
   y0.type = VertexType::Light;
@@ -461,7 +467,10 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   PathVertex* pt_minus = t > 1 ? &camera[t - 2] : nullptr;
   auto L = [&](int i) -> const PathVertex& { return i == s - 1 ? *qs : light[i]; };
   auto C = [&](int i) -> const PathVertex& { return i == t - 1 ? *pt : camera[i]; };
-  struct Saved { float* where; float value; };
+  struct Saved {
+    float* where;
+    float value;
+  };
   Saved saved[4];
   int n_saved = 0;
   auto assign = [&](float* where, float value) {
@@ -550,7 +559,8 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   return c * (kinds * mis_weight(light, camera, nullptr, s, t, pixel_center_));
 }
 
-void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats) {
+void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s,
+                    std::vector<Splat>& splats) {
   const PathVertex& qs = light[s - 1];
   if (!scatters(qs)) return;
   const float kinds = kind_limit_factor(light, camera, s, 1);

@@ -203,9 +203,12 @@ class Bdpt {
 
   float heuristic(float r) const {
     switch (s_.mis) {
-      case MisHeuristic::Power: return r * r;
-      case MisHeuristic::Balance: return r;
-      case MisHeuristic::Uniform: return r != 0 ? 1.0f : 0.0f;
+      case MisHeuristic::Power:
+        return r * r;
+      case MisHeuristic::Balance:
+        return r;
+      case MisHeuristic::Uniform:
+        return r != 0 ? 1.0f : 0.0f;
     }
     return r;
   }
@@ -250,8 +253,8 @@ class Bdpt {
   SampleStats& stats_;
   BdptScratch& scratch_;
   const Vec2 pixel_center_;  // of the pixel this sample estimates
-  float film_area_;  // view-plane area of the render region at unit distance
-  bool media_;       // the scene has media: walks sample free flights, connections transmittance
+  float film_area_;          // view-plane area of the render region at unit distance
+  bool media_;               // the scene has media: walks sample free flights, connections transmittance
   SampleValue out_;
   Spectrum L_{0.0f};
   Spectrum* strategies_ = nullptr;

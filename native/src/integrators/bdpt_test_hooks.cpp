@@ -27,8 +27,14 @@ std::vector<float> Bdpt::weight_sums() {
       for (int i = 0; i < t; ++i) x[i] = camera[i];
       for (int i = 0; i < s; ++i) x[t + i] = light[s - 1 - i];
       std::vector<float> cam(k + 1), lig(k + 1);
-      for (int i = 0; i < t; ++i) { cam[i] = camera[i].pdf_fwd; lig[i] = camera[i].pdf_rev; }
-      for (int i = 0; i < s; ++i) { lig[t + i] = light[s - 1 - i].pdf_fwd; cam[t + i] = light[s - 1 - i].pdf_rev; }
+      for (int i = 0; i < t; ++i) {
+        cam[i] = camera[i].pdf_fwd;
+        lig[i] = camera[i].pdf_rev;
+      }
+      for (int i = 0; i < s; ++i) {
+        lig[t + i] = light[s - 1 - i].pdf_fwd;
+        cam[t + i] = light[s - 1 - i].pdf_rev;
+      }
       // Densities across the connection, which neither walk produced.
       lig[t - 1] = pdf(qs, s > 1 ? &light[s - 2] : nullptr, pt, pixel_center_);
       lig[t - 2] = pdf(pt, &qs, camera[t - 2], pixel_center_);
@@ -51,7 +57,10 @@ std::vector<float> Bdpt::weight_sums() {
         if (s2 + t2 - 2 > max_depth() || (s2 == 1 && t2 == 1)) continue;
         if (s2 > s_.max_light_length || t2 - 1 > camera_depth()) continue;  // the subpath limits exclude it
         std::vector<PathVertex> c2(x.begin(), x.begin() + t2), l2(s2);
-        for (int i = 0; i < t2; ++i) { c2[i].pdf_fwd = cam[i]; c2[i].pdf_rev = lig[i]; }
+        for (int i = 0; i < t2; ++i) {
+          c2[i].pdf_fwd = cam[i];
+          c2[i].pdf_rev = lig[i];
+        }
         for (int i = 0; i < s2; ++i) {
           l2[i] = x[k - i];
           l2[i].pdf_fwd = lig[k - i];

@@ -1,4 +1,5 @@
 #include "integrators/media_transport.h"
+
 #include "integrators/path_state.h"
 
 namespace lt {

@@ -33,9 +33,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
   if (kMedia && scene.has_boundaries()) init_volume_stack(scene, camera_ray, &stack, stats);
   Bsdf bsdf;
 
-  auto add = [&](const Spectrum& c) {
-    L += clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
-  };
+  auto add = [&](const Spectrum& c) { L += clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect); };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
     if (prev_delta) return 1.0f;
     float light_pdf = lights.pmf(light) * lights.pdf(scene, light, prev_p, dir, t);
@@ -155,7 +153,8 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       }
       if (!is_black(emitted)) {
         int li = lights.triangle_light(sp.instance, sp.primitive);
-        add(beta * emitted * (li >= 0 ? mis_emitter(li, ray.d, kMedia ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
+        add(beta * emitted *
+            (li >= 0 ? mis_emitter(li, ray.d, kMedia ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
       }
       if (b.from_camera()) {
         out.normal = ns;
@@ -208,8 +207,7 @@ template <bool kMedia>
 class PathIntegrator final : public Integrator {
  public:
   using Integrator::Integrator;
-  SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
-                    std::vector<Splat>&) const override {
+  SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) const override {
     return lt::trace<kMedia>(ctx_.scene, ctx_.settings, cs.ray, sampler, stats);
   }
 };

@@ -60,10 +60,18 @@ struct Bounces {
   // Counts the scattering a BSDF sample made; a bounce changes the next ray's kind.
   void count(const BsdfSample& bs, unsigned* visibility) {
     switch (bounce_kind(bs.flags, bs.eta)) {
-      case BounceKind::None: ++transparent; return;
-      case BounceKind::Diffuse: ++diffuse; break;
-      case BounceKind::Transmission: ++transmission; break;
-      default: ++glossy; break;
+      case BounceKind::None:
+        ++transparent;
+        return;
+      case BounceKind::Diffuse:
+        ++diffuse;
+        break;
+      case BounceKind::Transmission:
+        ++transmission;
+        break;
+      default:
+        ++glossy;
+        break;
     }
     ++total;
     *visibility = visibility_of(bs.flags);

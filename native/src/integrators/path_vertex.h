@@ -6,8 +6,8 @@
 #include "core/math.h"
 #include "geometry/hit.h"
 #include "integrators/path_state.h"
-#include "scene/bsdf.h"
 #include "media/volume_stack.h"
+#include "scene/bsdf.h"
 
 namespace lt {
 
@@ -20,32 +20,35 @@ enum class VertexType : uint8_t {
 
 struct PathVertex {
   VertexType type = VertexType::Surface;
-  bool delta = false;     // reached by sampling a delta lobe, or a delta light/camera position
-  bool infinite = false;  // sun or world light vertex: a direction rather than a point
-  int light = -1;         // light index: Light vertices, and Surface vertices on emissive meshes
+  bool delta = false;                  // reached by sampling a delta lobe, or a delta light/camera position
+  bool infinite = false;               // sun or world light vertex: a direction rather than a point
+  int light = -1;                      // light index: Light vertices, and Surface vertices on emissive meshes
   BounceKind kind = BounceKind::None;  // for Cycles' per-kind limits (see bdpt.cpp)
   // Vertices of several possible kinds, between two vertices of the same subpath: the probabilities
   // that the path tracer counts their bounce as diffuse, glossy, transmission (-1: it cannot
   // sample the path there). Set by the walk once both neighbours are known (bdpt.cpp).
   float kind_p[3] = {0, 0, 0};
-  Spectrum beta{1.0f};    // throughput of the subpath up to and including this vertex
-  float pdf_fwd = 0;      // density of sampling this vertex from its predecessor
-  float pdf_rev = 0;      // density of sampling it from its successor (the other direction)
+  Spectrum beta{1.0f};  // throughput of the subpath up to and including this vertex
+  float pdf_fwd = 0;    // density of sampling this vertex from its predecessor
+  float pdf_rev = 0;    // density of sampling it from its successor (the other direction)
   Vec3 p;
-  Vec3 n;                 // geometric normal (zero for points in space: point lights, camera, media)
-  Frame frame;            // shading frame, z facing the side the vertex was reached from
-  Vec3 wo;                // direction towards the predecessor: local (surfaces), world (media)
+  Vec3 n;       // geometric normal (zero for points in space: point lights, camera, media)
+  Frame frame;  // shading frame, z facing the side the vertex was reached from
+  Vec3 wo;      // direction towards the predecessor: local (surfaces), world (media)
   SurfacePoint sp;
   Bsdf bsdf;
-  int medium = -1;        // Medium vertices: the medium whose phase function scatters
-  VolumeStack stack;      // scenes with media: the media around the vertex on the side it was reached from
+  int medium = -1;    // Medium vertices: the medium whose phase function scatters
+  VolumeStack stack;  // scenes with media: the media around the vertex on the side it was reached from
 
   bool on_surface() const { return n.x != 0 || n.y != 0 || n.z != 0; }
   bool connectible() const {
     switch (type) {
-      case VertexType::Surface: return bsdf.has_non_delta();
-      case VertexType::Light: return !delta_direction;
-      default: return true;
+      case VertexType::Surface:
+        return bsdf.has_non_delta();
+      case VertexType::Light:
+        return !delta_direction;
+      default:
+        return true;
     }
   }
   bool delta_direction = false;  // Light vertices: the light emits in one direction (sun with angle 0)

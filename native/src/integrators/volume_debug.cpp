@@ -35,7 +35,8 @@ SampleValue trace_panel(const Scene& scene, const IntegratorSettings& s, const R
     bool found = scene.geometry.intersect(ray, 1u, &hit);
     Spectrum beta(1.0f);
     MediumInteraction mi;
-    if (sample_media(scene, stack, ray, ray.tmin, found ? hit.t : ray.tmax, sampler, est, s.volume_step, &beta, &mi) >= 0) {
+    if (sample_media(scene, stack, ray, ray.tmin, found ? hit.t : ray.tmax, sampler, est, s.volume_step, &beta, &mi) >=
+        0) {
       out.radiance = Spectrum(travelled + mi.t * length(ray.d));
       return out;
     }
@@ -73,8 +74,7 @@ class VolumeDebugIntegrator final : public Integrator {
   }
 
   // The camera sample's film position within its panel, scaled up to the whole view.
-  SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
-                    std::vector<Splat>&) const override {
+  SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) const override {
     const int hw = std::max(1, w_ / 2), hh = std::max(1, h_ / 2);
     const int col = cs.film.x >= hw ? 1 : 0, top = cs.film.y >= hh ? 1 : 0;
     float fx = std::min(cs.film.x - col * hw, float(hw)) * w_ / float(hw);

@@ -39,7 +39,8 @@ void write_exr(const std::string& path, int width, int height, const std::vector
       // EXR scanlines run top to bottom; Lantern's buffers bottom to top.
       flipped[c].resize(size_t(width) * height);
       for (int y = 0; y < height; ++y)
-        std::copy_n(channels[c].pixels.data() + size_t(height - 1 - y) * width, width, flipped[c].data() + size_t(y) * width);
+        std::copy_n(channels[c].pixels.data() + size_t(height - 1 - y) * width, width,
+                    flipped[c].data() + size_t(y) * width);
       fb.insert(channels[c].name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(flipped[c].data()), sizeof(float),
                                              sizeof(float) * width));
     }
@@ -114,7 +115,8 @@ ExrImage read_exr(const std::string& path, bool pixels) {
     img.width = dw.max.x - dw.min.x + 1;
     img.height = dw.max.y - dw.min.y + 1;
     for (auto it = h.begin(); it != h.end(); ++it)
-      if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) img.attributes[it.name()] = s->value();
+      if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+        img.attributes[it.name()] = s->value();
     for (auto it = h.channels().begin(); it != h.channels().end(); ++it) img.channels.push_back({it.name(), {}});
     if (!pixels) return img;
     std::vector<std::vector<float>> top_down(img.channels.size(), std::vector<float>(size_t(img.width) * img.height));
@@ -130,7 +132,8 @@ ExrImage read_exr(const std::string& path, bool pixels) {
       auto& out = img.channels[c].pixels;
       out.resize(top_down[c].size());
       for (int y = 0; y < img.height; ++y)
-        std::copy_n(top_down[c].data() + size_t(y) * img.width, img.width, out.data() + size_t(img.height - 1 - y) * img.width);
+        std::copy_n(top_down[c].data() + size_t(y) * img.width, img.width,
+                    out.data() + size_t(img.height - 1 - y) * img.width);
     }
     return img;
   } catch (const std::exception& e) {
@@ -141,11 +144,16 @@ ExrImage read_exr(const std::string& path, bool pixels) {
 namespace {
 const char* integrator_name(IntegratorType t) {
   switch (t) {
-    case IntegratorType::Path: return "PATH";
-    case IntegratorType::Bidirectional: return "BIDIRECTIONAL";
-    case IntegratorType::VolPath: return "VOLPATH";
-    case IntegratorType::VolumeDebug: return "VOLUME_DEBUG";
-    default: return "?";
+    case IntegratorType::Path:
+      return "PATH";
+    case IntegratorType::Bidirectional:
+      return "BIDIRECTIONAL";
+    case IntegratorType::VolPath:
+      return "VOLPATH";
+    case IntegratorType::VolumeDebug:
+      return "VOLUME_DEBUG";
+    default:
+      return "?";
   }
 }
 
@@ -163,7 +171,10 @@ void add_channels(std::vector<ExrChannel>& channels, const std::vector<float>& b
 void write_render_exr(const std::string& path, const RenderJob& job, const std::map<std::string, std::string>& extra) {
   const int w = job.region_width(), h = job.region_height();
   const size_t n = size_t(w) * h;
-  struct Out { Pass pass; std::vector<std::string> names; };
+  struct Out {
+    Pass pass;
+    std::vector<std::string> names;
+  };
   const Out outs[] = {
       {Pass::Combined, {"R", "G", "B", "A"}},
       {Pass::Depth, {"Depth.Z"}},
@@ -179,19 +190,22 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
     add_channels(channels, buf, n, o.names);
   }
   std::vector<float> light(n * 3);
-  if (job.film().read_light_tracing(light.data())) add_channels(channels, light, n, {"LightTracing.R", "LightTracing.G", "LightTracing.B"});
+  if (job.film().read_light_tracing(light.data()))
+    add_channels(channels, light, n, {"LightTracing.R", "LightTracing.G", "LightTracing.B"});
   RenderStatus st = job.status();
   const RenderSettings& s = job.settings();
   std::map<std::string, std::string> attrs = extra;
   // The sample indices used (a cut last pass included; per-pixel counts are in SampleCount) and
   // the light paths the splats are divided by, so that merges of such parts stay exact.
   attrs["lantern/samples"] = std::to_string(st.passes_started);
-  attrs["lantern/sample_ranges"] = std::to_string(s.sample_offset) + "-" + std::to_string(s.sample_offset + st.passes_started);
+  attrs["lantern/sample_ranges"] =
+      std::to_string(s.sample_offset) + "-" + std::to_string(s.sample_offset + st.passes_started);
   if (uint64_t lp = job.film().published_light_paths()) attrs["lantern/light_paths"] = std::to_string(lp);
   attrs["lantern/seed"] = std::to_string(s.seed);
   attrs["lantern/integrator"] = integrator_name(s.integrator);
   attrs["lantern/resolution"] = std::to_string(s.width) + "x" + std::to_string(s.height);
-  attrs["lantern/region"] = std::to_string(s.x0) + " " + std::to_string(s.y0) + " " + std::to_string(s.x1) + " " + std::to_string(s.y1);
+  attrs["lantern/region"] =
+      std::to_string(s.x0) + " " + std::to_string(s.y0) + " " + std::to_string(s.x1) + " " + std::to_string(s.y1);
   char secs[32];
   std::snprintf(secs, sizeof(secs), "%.3f", st.elapsed);
   attrs["lantern/render_seconds"] = secs;

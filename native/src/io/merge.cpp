@@ -15,7 +15,10 @@ namespace lt {
 
 namespace {
 
-struct Range { long long begin, end; size_t part; };
+struct Range {
+  long long begin, end;
+  size_t part;
+};
 
 // The attributes that say which render a part belongs to: parts must agree on each.
 const char* const kIdentity[] = {"lantern/scene", "lantern/seed", "lantern/integrator", "lantern/resolution",
@@ -78,13 +81,15 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
     auto s = img.attributes.find("lantern/samples");
     auto r = img.attributes.find("lantern/sample_ranges");
     if (s == img.attributes.end() || r == img.attributes.end() || !img.find("SampleCount.X"))
-      throw InvalidArgument(path + ": no recorded sample counts (needs the lantern/samples and lantern/sample_ranges "
+      throw InvalidArgument(path +
+                            ": no recorded sample counts (needs the lantern/samples and lantern/sample_ranges "
                             "header attributes and the SampleCount.X channel that Lantern writes); not merged");
     samples[i] = std::atoll(s->second.c_str());
     std::vector<Range> own = parse_ranges(r->second, i, path);
     long long total = 0;
     for (const Range& x : own) total += x.end - x.begin;
-    if (samples[i] <= 0) throw InvalidArgument(path + ": the part has no samples (a render cancelled before its first)");
+    if (samples[i] <= 0)
+      throw InvalidArgument(path + ": the part has no samples (a render cancelled before its first)");
     if (total != samples[i])
       throw InvalidArgument(path + ": lantern/samples (" + s->second + ") does not match lantern/sample_ranges (" +
                             r->second + ")");
@@ -102,8 +107,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       const std::string va = a == ref.attributes.end() ? "(none)" : a->second;
       const std::string vb = b == img.attributes.end() ? "(none)" : b->second;
       if (va != vb)
-        throw InvalidArgument(std::string(key + 8) + " differs: " + paths[0] + " has " + va + ", " + path + " has " + vb +
-                              "; parts of different renders cannot be merged");
+        throw InvalidArgument(std::string(key + 8) + " differs: " + paths[0] + " has " + va + ", " + path + " has " +
+                              vb + "; parts of different renders cannot be merged");
     }
     if (img.width != ref.width || img.height != ref.height)
       throw InvalidArgument("resolution differs: " + paths[0] + " is " + std::to_string(ref.width) + "x" +
@@ -137,11 +142,16 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   std::vector<int> rgb_index(nc, -1);
   for (size_t k = 0; k < nc; ++k) {
     const std::string& name = ref.channels[k].name;
-    kind[k] = name == "SampleCount.X" ? Count : name == "Depth.Z" ? Depth
-              : name.rfind("LightTracing.", 0) == 0 ? Light : name.rfind("Variance.", 0) == 0 ? Variance : Mean;
+    kind[k] = name == "SampleCount.X"               ? Count
+              : name == "Depth.Z"                   ? Depth
+              : name.rfind("LightTracing.", 0) == 0 ? Light
+              : name.rfind("Variance.", 0) == 0     ? Variance
+                                                    : Mean;
     for (int c = 0; c < 3; ++c)
-      if (name == std::string(1, "RGB"[c])) kind[k] = CombinedRGB, rgb_index[k] = c;
-      else if (kind[k] == Variance && name == std::string("Variance.") + "RGB"[c]) rgb_index[k] = c;
+      if (name == std::string(1, "RGB"[c]))
+        kind[k] = CombinedRGB, rgb_index[k] = c;
+      else if (kind[k] == Variance && name == std::string("Variance.") + "RGB"[c])
+        rgb_index[k] = c;
   }
   int light_k[3] = {-1, -1, -1};
   for (size_t k = 0; k < nc; ++k)
@@ -168,11 +178,21 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       const float* in = img.channels[k].pixels.data();
       double* a = acc[k].data();
       switch (kind[k]) {
-        case Mean: for (size_t i = 0; i < n; ++i) a[i] += double(c_p[i]) * in[i]; break;
-        case Count: for (size_t i = 0; i < n; ++i) a[i] += in[i]; break;
-        case Depth: for (size_t i = 0; i < n; ++i) a[i] = p == 0 ? in[i] : std::min(a[i], double(in[i])); break;
-        case Light: for (size_t i = 0; i < n; ++i) a[i] += double(light_paths[p]) * in[i]; break;
-        case Variance: case CombinedRGB: break;  // below
+        case Mean:
+          for (size_t i = 0; i < n; ++i) a[i] += double(c_p[i]) * in[i];
+          break;
+        case Count:
+          for (size_t i = 0; i < n; ++i) a[i] += in[i];
+          break;
+        case Depth:
+          for (size_t i = 0; i < n; ++i) a[i] = p == 0 ? in[i] : std::min(a[i], double(in[i]));
+          break;
+        case Light:
+          for (size_t i = 0; i < n; ++i) a[i] += double(light_paths[p]) * in[i];
+          break;
+        case Variance:
+        case CombinedRGB:
+          break;  // below
       }
     }
     for (int c = 0; c < 3; ++c) {
@@ -197,9 +217,16 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
     for (size_t i = 0; i < n; ++i) {
       double v = 0;
       switch (kind[k]) {
-        case Mean: v = count[i] > 0 ? a[i] / count[i] : 0.0; break;
-        case Count: case Depth: v = a[i]; break;
-        case Light: v = a[i] / double(total_light_paths); break;
+        case Mean:
+          v = count[i] > 0 ? a[i] / count[i] : 0.0;
+          break;
+        case Count:
+        case Depth:
+          v = a[i];
+          break;
+        case Light:
+          v = a[i] / double(total_light_paths);
+          break;
         case CombinedRGB: {
           const int c = rgb_index[k];
           v = cam_mean[3 * i + c];

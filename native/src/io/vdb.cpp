@@ -1,7 +1,7 @@
 #include "io/vdb.h"
 
-#include <openvdb/openvdb.h>
 #include <nanovdb/util/OpenToNanoVDB.h>
+#include <openvdb/openvdb.h>
 
 #include <cmath>
 #include <filesystem>
@@ -67,8 +67,8 @@ void refuse_truncated(const std::string& path) {
   const uint32_t grids = u32();
   for (uint32_t i = 0; i < grids; ++i) {
     const std::string name = string();
-    string();  // type
-    string();  // instance parent
+    string();        // type
+    string();        // instance parent
     int64_t pos[3];  // grid, block, end
     if (!read(pos, sizeof(pos))) truncated("the header is cut");
     const std::string shown = quoted(name.substr(0, name.find('\x1e')));  // unique names: name, 0x1e, number

@@ -11,8 +11,8 @@ GridData GridData::from_dense(std::vector<float> values, int nx, int ny, int nz,
     throw InvalidArgument("dense density grid: dimensions must be positive (got " + std::to_string(nx) + " x " +
                           std::to_string(ny) + " x " + std::to_string(nz) + ")");
   if (values.size() != size_t(nx) * size_t(ny) * size_t(nz))
-    throw InvalidArgument("dense density grid: " + std::to_string(values.size()) + " values for " +
-                          std::to_string(nx) + " x " + std::to_string(ny) + " x " + std::to_string(nz) + " voxels");
+    throw InvalidArgument("dense density grid: " + std::to_string(values.size()) + " values for " + std::to_string(nx) +
+                          " x " + std::to_string(ny) + " x " + std::to_string(nz) + " voxels");
   GridData g;
   g.name = std::move(name);
   g.index_to_object = index_to_object;

@@ -18,7 +18,7 @@ struct GridData {
   std::string name;
   Transform index_to_object;  // index space -> object space (the VDB's linear transform)
   int index_min[3] = {0, 0, 0}, index_max[3] = {-1, -1, -1};  // inclusive bounds of non-background voxels
-  uint64_t active_voxels = 0;                                  // VDB: active voxels; dense: non-zero voxels
+  uint64_t active_voxels = 0;                                 // VDB: active voxels; dense: non-zero voxels
   float background = 0;
 
   // NanoVDB storage: nano_owner keeps the buffer alive (a nanovdb::GridHandle<HostBuffer>, type
@@ -38,9 +38,9 @@ struct GridData {
 
   bool empty() const { return index_max[0] < index_min[0]; }
   bool is_nanovdb() const { return nano_grid != nullptr; }
-  float voxel(int i, int j, int k) const;     // the stored value (background / 0 outside)
-  float interpolate(const Vec3& p) const;      // trilinear at an index-space point, clamped >= 0
-  size_t memory_bytes() const;                 // NanoVDB buffer or dense array
+  float voxel(int i, int j, int k) const;  // the stored value (background / 0 outside)
+  float interpolate(const Vec3& p) const;  // trilinear at an index-space point, clamped >= 0
+  size_t memory_bytes() const;             // NanoVDB buffer or dense array
 };
 
 }  // namespace lt

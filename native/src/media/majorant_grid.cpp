@@ -61,20 +61,26 @@ MajorantGrid MajorantGrid::build(const GridData& grid, int cell) {
     };
     auto visit_lower = [&](const Lower* node) {
       for (uint32_t n = 0; n < Lower::SIZE; ++n) {
-        if (node->data()->isChild(n)) visit_leaf(node->data()->getChild(n));
-        else add_tile(node->offsetToGlobalCoord(n), Leaf::DIM, node->data()->getValue(n));
+        if (node->data()->isChild(n))
+          visit_leaf(node->data()->getChild(n));
+        else
+          add_tile(node->offsetToGlobalCoord(n), Leaf::DIM, node->data()->getValue(n));
       }
     };
     auto visit_upper = [&](const Upper* node) {
       for (uint32_t n = 0; n < Upper::SIZE; ++n) {
-        if (node->data()->isChild(n)) visit_lower(node->data()->getChild(n));
-        else add_tile(node->offsetToGlobalCoord(n), Lower::DIM, node->data()->getValue(n));
+        if (node->data()->isChild(n))
+          visit_lower(node->data()->getChild(n));
+        else
+          add_tile(node->offsetToGlobalCoord(n), Lower::DIM, node->data()->getValue(n));
       }
     };
     for (uint32_t i = 0; i < root.tileCount(); ++i) {
       const auto* tile = root.data()->tile(i);
-      if (tile->isChild()) visit_upper(root.data()->getChild(tile));
-      else add_tile(tile->origin(), Upper::DIM, tile->value);
+      if (tile->isChild())
+        visit_upper(root.data()->getChild(tile));
+      else
+        add_tile(tile->origin(), Upper::DIM, tile->value);
     }
     return maj;
   }

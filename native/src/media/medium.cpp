@@ -26,17 +26,23 @@ inline Spectrum safe_div(const Spectrum& a, float b) { return b > 0 && std::isfi
 // A ray in the grid's index space with the coefficients per unit density and per unit of t.
 struct HeteroRay {
   Vec3 o, d;
-  float len;          // |ray.d| in world units
-  Spectrum st, ss;    // sigma_t, sigma_s per unit density and per unit t
-  float maj_scale;    // max channel of st: density majorant -> sigma_t majorant per unit t
+  float len;        // |ray.d| in world units
+  Spectrum st, ss;  // sigma_t, sigma_s per unit density and per unit t
+  float maj_scale;  // max channel of st: density majorant -> sigma_t majorant per unit t
   const MajorantGrid* maj;
   const GridData* grid;
 };
 
 HeteroRay hetero_ray(const Medium& m, const Ray& ray, float len) {
   const Transform& w2i = m.world_to_index();
-  HeteroRay r{w2i.point(ray.o), w2i.vector(ray.d), len, (m.sigma_a_unit() + m.sigma_s_unit()) * len,
-              m.sigma_s_unit() * len, 0, &m.majorant_grid(), m.grid().get()};
+  HeteroRay r{w2i.point(ray.o),
+              w2i.vector(ray.d),
+              len,
+              (m.sigma_a_unit() + m.sigma_s_unit()) * len,
+              m.sigma_s_unit() * len,
+              0,
+              &m.majorant_grid(),
+              m.grid().get()};
   r.maj_scale = max_component(r.st);
   return r;
 }
@@ -198,8 +204,8 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
   m.grid_ = grid;
   Transform index_to_world = compose(object_to_world, grid->index_to_object);
   m.world_to_index_ = affine_inverse(index_to_world);
-  m.voxel_size_ = std::min({length(index_to_world.column(0)), length(index_to_world.column(1)),
-                            length(index_to_world.column(2))});
+  m.voxel_size_ =
+      std::min({length(index_to_world.column(0)), length(index_to_world.column(1)), length(index_to_world.column(2))});
   m.march_step_ = m.voxel_size_;
   m.majorant_ = MajorantGrid::build(*grid, majorant_cell);
   m.empty_ = grid->empty() || is_black(sigma_a + sigma_s) || !(m.majorant_.max_value() > 0);
@@ -225,7 +231,8 @@ bool Medium::bounds(Vec3* lo, Vec3* hi) const {
   *lo = Vec3(INFINITY);
   *hi = Vec3(-INFINITY);
   for (int c = 0; c < 8; ++c) {
-    Vec3 q(float((c & 1) ? majorant_.hi()[0] : majorant_.lo()[0]), float((c & 2) ? majorant_.hi()[1] : majorant_.lo()[1]),
+    Vec3 q(float((c & 1) ? majorant_.hi()[0] : majorant_.lo()[0]),
+           float((c & 2) ? majorant_.hi()[1] : majorant_.lo()[1]),
            float((c & 4) ? majorant_.hi()[2] : majorant_.lo()[2]));
     Vec3 p = index_to_world.point(q);
     *lo = vmin(*lo, p);

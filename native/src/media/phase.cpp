@@ -34,8 +34,8 @@ bool PhaseHG::sample(const Vec3& wo, Vec2 u, Vec3* wi, float* pdf) const {
   double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
   double phi = 2 * double(kPi) * double(u.y);
   Frame frame(wo);
-  *wi = normalize(frame.to_world(
-      Vec3(float(sin_theta * std::cos(phi)), float(sin_theta * std::sin(phi)), float(cos_theta))));
+  *wi = normalize(
+      frame.to_world(Vec3(float(sin_theta * std::cos(phi)), float(sin_theta * std::sin(phi)), float(cos_theta))));
   // The pdf of the direction actually returned (after rounding), so that pdf == eval exactly.
   *pdf = eval(wo, *wi);
   return true;

@@ -59,7 +59,8 @@ Spectrum principled_volume_emission(float strength, const Spectrum& color, float
   if (blackbody_intensity > 0) {
     double T = std::max(0.0f, temperature);
     double T4 = (T * T) * (T * T);
-    double intensity = 5.670373e-8 * 1e-6 / double(kPi) * ((1 - double(blackbody_intensity)) + blackbody_intensity * T4);
+    double intensity =
+        5.670373e-8 * 1e-6 / double(kPi) * ((1 - double(blackbody_intensity)) + blackbody_intensity * T4);
     e += vmax(Spectrum(0.0f), blackbody_tint) * blackbody_rec709(float(T)) * float(intensity);
   }
   return e;

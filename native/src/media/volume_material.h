@@ -53,9 +53,14 @@ inline VolumeCoefficients volume_coefficients(VolumeNode node, const Spectrum& c
       }
       break;
     }
-    case VolumeNode::Scatter: c.sigma_s = col * d; break;
-    case VolumeNode::Absorption: c.sigma_a = (Spectrum(1.0f) - col) * d; break;
-    case VolumeNode::Emission: break;  // emission only (principled_volume_emission's first term)
+    case VolumeNode::Scatter:
+      c.sigma_s = col * d;
+      break;
+    case VolumeNode::Absorption:
+      c.sigma_a = (Spectrum(1.0f) - col) * d;
+      break;
+    case VolumeNode::Emission:
+      break;  // emission only (principled_volume_emission's first term)
   }
   c.g = clamp(anisotropy, -0.9999f, 0.9999f);
   return c;

@@ -1,17 +1,16 @@
 #include "render/render.h"
 
+#include <sys/resource.h>
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <new>
-
-#include <sys/resource.h>
-#include <unistd.h>
 
 namespace lt {
 
@@ -29,8 +28,8 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
       settings_(s),
       camera_(scene.camera, s.width, s.height),
       filter_(s.filter, s.filter_width),
-      integrator_(make_integrator(
-          s.integrator, RenderContext{scene, camera_, filter_, s.integrator_settings, s.x0, s.y0, s.x1 - s.x0, s.y1 - s.y0})),
+      integrator_(make_integrator(s.integrator, RenderContext{scene, camera_, filter_, s.integrator_settings, s.x0,
+                                                              s.y0, s.x1 - s.x0, s.y1 - s.y0})),
       film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
       active_(size_t(film_.width()) * film_.height(), 1) {
   active_pixels_.store(active_.size());
@@ -51,10 +50,10 @@ MemoryEstimate RenderJob::estimate_bytes(const RenderSettings& s) {
   const size_t pixels = size_t(s.x1 - s.x0) * size_t(s.y1 - s.y0);
   MemoryEstimate m;
   m.film = pixels * film_layout(s).bytes_per_pixel();
-  m.other = pixels;                                // active_
-  if (s.adaptive) m.other += pixels * 8;           // update_active's per-pixel variances
+  m.other = pixels;                       // active_
+  if (s.adaptive) m.other += pixels * 8;  // update_active's per-pixel variances
   if (s.integrator == IntegratorType::Bidirectional)
-    m.other += pixels * sizeof(Splat);             // a pass's splats: about one per camera sample
+    m.other += pixels * sizeof(Splat);  // a pass's splats: about one per camera sample
   return m;
 }
 
@@ -124,7 +123,8 @@ void RenderJob::render_pass(int sample_index) {
             std::vector<Splat>& splats = tile_splats_[2 * tile + size_t(half)];
             const int fx = x + settings_.x0, fy = y + settings_.y0;
             // Random numbers depend only on (seed, pixel of the full frame, sample index).
-            Sampler sampler(settings_.seed, uint32_t(fy) * uint32_t(settings_.width) + uint32_t(fx), uint32_t(sample_index));
+            Sampler sampler(settings_.seed, uint32_t(fy) * uint32_t(settings_.width) + uint32_t(fx),
+                            uint32_t(sample_index));
             float ox = filter_.sample(sampler.next_1d()), oy = filter_.sample(sampler.next_1d());
             CameraSample cs;
             cs.pixel_center = {fx + 0.5f, fy + 0.5f};
@@ -245,8 +245,10 @@ void RenderJob::run() noexcept {
         bool reached = false;
         if (settings_.noise_target > 0 && s + 1 >= settings_.min_samples && e.rel_error >= 0) {
           reached = e.rel_error <= settings_.noise_target;
-          if (reached) halt = HaltReason::NoiseTarget;
-          else if (settings_.adaptive) update_active(e);
+          if (reached)
+            halt = HaltReason::NoiseTarget;
+          else if (settings_.adaptive)
+            update_active(e);
         }
         auto now = std::chrono::steady_clock::now();
         // Also after passes 1, 2, 4, 8, ...: early passes change the image most, and the viewport

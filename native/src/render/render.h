@@ -60,7 +60,7 @@ struct RenderStatus {
   uint64_t nan_samples = 0, rays = 0;
   double rel_error = -1;  // ErrorEstimate::rel_error after the last complete pass
   HaltReason halt_reason = HaltReason::None;
-  uint64_t active_pixels = 0;  // pixels still sampling (all of them without adaptive sampling)
+  uint64_t active_pixels = 0;       // pixels still sampling (all of them without adaptive sampling)
   uint64_t unestimated_pixels = 0;  // ErrorEstimate::unestimated_pixels of the last estimate
 };
 

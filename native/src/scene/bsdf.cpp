@@ -46,15 +46,18 @@ const Lobe& lobe_from_below(const Lobe& l, Lobe* tmp) {
 
 bool lobe_is_delta(const Lobe& l) {
   switch (l.type) {
-    case LobeType::Diffuse: return false;
+    case LobeType::Diffuse:
+      return false;
     case LobeType::GlossyGGX:
-    case LobeType::SpecularGGX: return !(lobe_alpha(l) >= kSmoothAlpha);
+    case LobeType::SpecularGGX:
+      return !(lobe_alpha(l) >= kSmoothAlpha);
     case LobeType::Dielectric: {
       float eta = lobe_eta(l);  // symmetric in eta and 1/eta, so both sides agree
       return !(lobe_alpha(l) >= kSmoothAlpha) || std::abs(eta - 1) < kEtaDeltaEpsilon ||
              std::abs(1 / eta - 1) < kEtaDeltaEpsilon;
     }
-    case LobeType::Transparent: return true;
+    case LobeType::Transparent:
+      return true;
   }
   return true;
 }
@@ -148,7 +151,8 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
       if (i.z <= 0) return Spectrum(0.0f);
       *pdf = i.z * kInvPi;
       return diffuse_eval(l, o, i);
-    case LobeType::GlossyGGX: return l.weight * ggx_reflect(o, i, lobe_alpha(l), pdf, nullptr);
+    case LobeType::GlossyGGX:
+      return l.weight * ggx_reflect(o, i, lobe_alpha(l), pdf, nullptr);
     case LobeType::SpecularGGX: {
       float cos_oh = 0;
       float v = ggx_reflect(o, i, lobe_alpha(l), pdf, &cos_oh);
@@ -167,7 +171,8 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
       }
       return l.weight * v;
     }
-    case LobeType::Transparent: break;
+    case LobeType::Transparent:
+      break;
   }
   return Spectrum(0.0f);
 }
@@ -255,9 +260,9 @@ float fresnel_dielectric(float cos_i, float eta) {
 
 Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i) {
   const Spectrum c0 = vmin(vmax(f0, Spectrum(0.0f)), Spectrum(1.0f));  // saturate(cspec0), as Cycles
-  if (!(eta > 1)) return c0;                          // IOR 1 (Specular 0): F(1) = F(cos) = 0
-  if (!(eta < INFINITY)) return Spectrum(1.0f);       // F(1) = 1: a perfect mirror
-  const float r = (eta - 1) / (eta + 1), F0 = r * r;  // fresnel_dielectric_cos(1, eta)
+  if (!(eta > 1)) return c0;                                           // IOR 1 (Specular 0): F(1) = F(cos) = 0
+  if (!(eta < INFINITY)) return Spectrum(1.0f);                        // F(1) = 1: a perfect mirror
+  const float r = (eta - 1) / (eta + 1), F0 = r * r;                   // fresnel_dielectric_cos(1, eta)
   // FH <= 1; FH < 0 where the dielectric Fresnel dips below F0 (at Specular 5, not at 2), but the
   // blend stays >= (f0 - F0) / (1 - F0) >= 0 for f0 >= F0 (the Principled BSDF's f0 unless its
   // base colour is below 0.08 specular at metallic > 0), and equals the dielectric Fresnel itself
@@ -276,11 +281,15 @@ float principled_specular_ior(float specular) {
 uint32_t lobe_flags(const Lobe& l) {
   bool delta = lobe_is_delta(l);
   switch (l.type) {
-    case LobeType::Diffuse: return kLobeDiffuse | kLobeReflection;
+    case LobeType::Diffuse:
+      return kLobeDiffuse | kLobeReflection;
     case LobeType::GlossyGGX:
-    case LobeType::SpecularGGX: return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection;
-    case LobeType::Dielectric: return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection | kLobeTransmission;
-    case LobeType::Transparent: return kLobeSpecular | kLobeTransmission;
+    case LobeType::SpecularGGX:
+      return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection;
+    case LobeType::Dielectric:
+      return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection | kLobeTransmission;
+    case LobeType::Transparent:
+      return kLobeSpecular | kLobeTransmission;
   }
   return 0;
 }
@@ -292,7 +301,8 @@ Spectrum lobe_eval_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf
   if (wo.z == 0 || lobe_is_delta(l)) return Spectrum(0.0f);
   float pdf;
   Lobe tmp;
-  Spectrum f = wo.z > 0 ? eval_upper(l, wo, wi, &pdf) : eval_upper(lobe_from_below(l, &tmp), flip_z(wo), flip_z(wi), &pdf);
+  Spectrum f =
+      wo.z > 0 ? eval_upper(l, wo, wi, &pdf) : eval_upper(lobe_from_below(l, &tmp), flip_z(wo), flip_z(wi), &pdf);
   *pdf_out = std::isfinite(pdf) && pdf > 0 ? pdf : 0.0f;
   return is_finite(f) ? vmax(f, Spectrum(0.0f)) : Spectrum(0.0f);
 }
@@ -360,7 +370,8 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         s.f = l.weight / o.z;
         s.flags = kLobeSpecular | kLobeTransmission;
         break;
-      case LobeType::Diffuse: return false;
+      case LobeType::Diffuse:
+        return false;
     }
   } else {
     const float alpha = lobe_alpha(l);
@@ -388,7 +399,8 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         }
         break;
       }
-      case LobeType::Transparent: return false;
+      case LobeType::Transparent:
+        return false;
     }
     // f and pdf from the evaluation path, so that sample() and pdf() agree to the last bit.
     s.f = eval_upper(l, o, s.wi, &s.pdf);

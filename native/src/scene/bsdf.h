@@ -26,11 +26,11 @@ enum LobeFlags : uint32_t {
 };
 
 enum class LobeType : uint8_t {
-  Diffuse,     // Lambert (roughness 0) or Oren-Nayar as Cycles' Diffuse BSDF
-  GlossyGGX,   // GGX reflection, colour as constant reflectance (Cycles' Glossy BSDF, no Fresnel)
-  Dielectric,  // Fresnel-weighted GGX reflection + refraction (Cycles' Glass BSDF); delta at alpha 0
-  SpecularGGX, // GGX reflection with Cycles' Principled v1 Fresnel from f0 to 1 (its specular layer)
-  Transparent, // straight pass-through (delta transmission)
+  Diffuse,      // Lambert (roughness 0) or Oren-Nayar as Cycles' Diffuse BSDF
+  GlossyGGX,    // GGX reflection, colour as constant reflectance (Cycles' Glossy BSDF, no Fresnel)
+  Dielectric,   // Fresnel-weighted GGX reflection + refraction (Cycles' Glass BSDF); delta at alpha 0
+  SpecularGGX,  // GGX reflection with Cycles' Principled v1 Fresnel from f0 to 1 (its specular layer)
+  Transparent,  // straight pass-through (delta transmission)
 };
 
 struct Lobe {
@@ -45,10 +45,10 @@ struct Lobe {
 
 struct BsdfSample {
   Vec3 wi;
-  Spectrum f;      // BSDF value (cosine excluded); for delta lobes f*|wi.z|/pdf is the weight
-  float pdf = 0;   // solid-angle pdf of the whole mixture, or the discrete probability if delta
+  Spectrum f;          // BSDF value (cosine excluded); for delta lobes f*|wi.z|/pdf is the weight
+  float pdf = 0;       // solid-angle pdf of the whole mixture, or the discrete probability if delta
   uint32_t flags = 0;  // the sampled lobe's LobeFlags
-  float eta = 1;   // relative IOR crossed (1 for reflection)
+  float eta = 1;       // relative IOR crossed (1 for reflection)
 };
 
 constexpr int kMaxLobes = 8;

@@ -8,8 +8,10 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : d_(desc), width_
   float winx = float(width), winy = float(height);
   int fit = desc.sensor_fit;
   float sensor = desc.sensor_width;
-  if (fit == 0) fit = (xasp * winx >= yasp * winy) ? 1 : 2;
-  else if (fit == 2) sensor = desc.sensor_height;
+  if (fit == 0)
+    fit = (xasp * winx >= yasp * winy) ? 1 : 2;
+  else if (fit == 2)
+    sensor = desc.sensor_height;
   float ycor = yasp / xasp;
   float pixsize = desc.orthographic ? desc.ortho_scale : sensor / std::max(1e-6f, desc.focal_length);
   float viewfac = fit == 1 ? winx : ycor * winy;

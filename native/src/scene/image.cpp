@@ -11,7 +11,8 @@ float srgb_to_linear(float c) {
   return std::pow((c + 0.055f) * (1.0f / 1.055f), 2.4f);
 }
 
-FloatBuffer::FloatBuffer(size_t n) : p_(static_cast<float*>(std::malloc(std::max<size_t>(n, 1) * sizeof(float)))), n_(n) {
+FloatBuffer::FloatBuffer(size_t n)
+    : p_(static_cast<float*>(std::malloc(std::max<size_t>(n, 1) * sizeof(float)))), n_(n) {
   if (!p_) throw std::bad_alloc();
 }
 
@@ -104,9 +105,15 @@ template <class T, class F>
 T Image::filtered(Vec2 uv, F get) const {
   auto wrap = [&](int i, int n, bool* inside) {
     switch (ext_) {
-      case Extension::Repeat: { int r = i % n; return r < 0 ? r + n : r; }
-      case Extension::Extend: return clamp(i, 0, n - 1);
-      case Extension::Clip: *inside = *inside && i >= 0 && i < n; return clamp(i, 0, n - 1);
+      case Extension::Repeat: {
+        int r = i % n;
+        return r < 0 ? r + n : r;
+      }
+      case Extension::Extend:
+        return clamp(i, 0, n - 1);
+      case Extension::Clip:
+        *inside = *inside && i >= 0 && i < n;
+        return clamp(i, 0, n - 1);
     }
     return 0;
   };

@@ -22,7 +22,10 @@ class FloatBuffer {
  public:
   FloatBuffer() = default;
   explicit FloatBuffer(size_t n);  // throws std::bad_alloc
-  FloatBuffer(FloatBuffer&& o) noexcept : p_(o.p_), n_(o.n_) { o.p_ = nullptr; o.n_ = 0; }
+  FloatBuffer(FloatBuffer&& o) noexcept : p_(o.p_), n_(o.n_) {
+    o.p_ = nullptr;
+    o.n_ = 0;
+  }
   FloatBuffer& operator=(FloatBuffer&& o) noexcept;
   ~FloatBuffer();
   float* data() const { return p_; }
@@ -38,16 +41,14 @@ class FloatBuffer {
 class Image {
  public:
   // channels 1, 3 or 4; srgb: decode the sRGB transfer function to linear. Copies the pixels.
-  Image(int width, int height, int channels, const float* pixels, bool srgb, Interpolation interp,
-        Extension ext);
+  Image(int width, int height, int channels, const float* pixels, bool srgb, Interpolation interp, Extension ext);
   // Takes `pixels` (width*height*channels floats) and converts it in place: no second copy.
-  Image(int width, int height, int channels, FloatBuffer pixels, bool srgb, Interpolation interp,
-        Extension ext);
+  Image(int width, int height, int channels, FloatBuffer pixels, bool srgb, Interpolation interp, Extension ext);
   int width() const { return width_; }
   int height() const { return height_; }
-  Vec3 lookup(Vec2 uv) const;            // RGB
-  float lookup_value(Vec2 uv) const;     // first channel, for scalar inputs
-  Vec3 texel(int x, int y) const;  // linear
+  Vec3 lookup(Vec2 uv) const;         // RGB
+  float lookup_value(Vec2 uv) const;  // first channel, for scalar inputs
+  Vec3 texel(int x, int y) const;     // linear
   size_t bytes() const { return bytes_.size() + floats_.size() * sizeof(float); }
   bool is_byte() const { return !bytes_.empty(); }
 
@@ -58,13 +59,14 @@ class Image {
   // sRGB images stay encoded and are decoded after interpolation, as Cycles does for 8-bit sRGB
   // textures (they differ from interpolating decoded values at sharp edges).
   bool srgb_ = false;
-  int channels_ = 3;  // stored: 1 or 3
+  int channels_ = 3;            // stored: 1 or 3
   std::vector<uint8_t> bytes_;  // 8-bit storage, or
   FloatBuffer floats_;          // float storage
   void store(int channels, FloatBuffer pixels);
   Vec3 fetch(size_t i) const;
   float fetch_first(size_t i) const;
-  template <class T, class F> T filtered(Vec2 uv, F fetch) const;
+  template <class T, class F>
+  T filtered(Vec2 uv, F fetch) const;
 };
 
 float srgb_to_linear(float c);

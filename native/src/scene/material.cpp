@@ -30,22 +30,26 @@ constexpr float kClosureCutoff = 1e-5f;  // Cycles' CLOSURE_WEIGHT_CUTOFF
 
 }  // namespace
 
-Material::Material(std::vector<ShaderNode> nodes, int root, size_t image_count) : nodes_(std::move(nodes)), root_(root) {
+Material::Material(std::vector<ShaderNode> nodes, int root, size_t image_count)
+    : nodes_(std::move(nodes)), root_(root) {
   const int n = int(nodes_.size());
   if (n == 0) throw InvalidArgument("material has no nodes");
   if (root < 0 || root >= n) throw InvalidArgument("material root " + std::to_string(root) + " is out of range");
   for (int i = 0; i < n; ++i) {
     const ShaderNode& s = nodes_[i];
     if (int(s.type) < 0 || s.type >= NodeType::Count)
-      throw InvalidArgument("material node " + std::to_string(i) + " has an unknown type " + std::to_string(int(s.type)));
-    for (const Input* in : {&s.color, &s.roughness, &s.fac, &s.metallic, &s.specular, &s.transmission, &s.emission, &s.strength})
+      throw InvalidArgument("material node " + std::to_string(i) + " has an unknown type " +
+                            std::to_string(int(s.type)));
+    for (const Input* in :
+         {&s.color, &s.roughness, &s.fac, &s.metallic, &s.specular, &s.transmission, &s.emission, &s.strength})
       if (in->image >= int(image_count))
         throw InvalidArgument("material node " + std::to_string(i) + " refers to image " + std::to_string(in->image) +
                               " which does not exist");
     int kids = s.type == NodeType::Mix || s.type == NodeType::Add ? 2 : 0;
     for (int c = 0; c < kids; ++c)
       if (s.child[c] < 0 || s.child[c] >= n)
-        throw InvalidArgument("material node " + std::to_string(i) + " has child " + std::to_string(s.child[c]) + " out of range");
+        throw InvalidArgument("material node " + std::to_string(i) + " has child " + std::to_string(s.child[c]) +
+                              " out of range");
   }
   // Reject cycles and trees deeper than the evaluator walks (depth-first with colours).
   std::vector<int> state(n, 0);
@@ -55,7 +59,10 @@ Material::Material(std::vector<ShaderNode> nodes, int root, size_t image_count) 
   while (!stack.empty()) {
     auto [i, depth] = stack.back();
     stack.pop_back();
-    if (i < 0) { state[-i - 1] = 2; continue; }
+    if (i < 0) {
+      state[-i - 1] = 2;
+      continue;
+    }
     if (state[i] == 1) throw InvalidArgument("material node graph has a cycle through node " + std::to_string(i));
     if (depth > kMaxDepth) throw InvalidArgument("material node tree is deeper than " + std::to_string(kMaxDepth));
     if (state[i] == 2) continue;
@@ -82,7 +89,7 @@ Material::Material(std::vector<ShaderNode> nodes, int root, size_t image_count) 
   // it, so measure the longest path (the evaluator's stack holds kMaxDepth levels) and the expanded
   // size (sharing can make the walk exponentially long; a tree of n nodes expands to n) here.
   constexpr double kMaxExpanded = 4096;
-  std::vector<std::pair<double, int>> memo(n, {-1.0, 0});  // expanded size, longest path below
+  std::vector<std::pair<double, int>> memo(n, {-1.0, 0});                           // expanded size, longest path below
   std::function<std::pair<double, int>(int, int)> expand = [&](int i, int depth) {  // acyclic here
     if (memo[i].first < 0) {
       if (depth > kMaxDepth) throw InvalidArgument("material node tree is deeper than " + std::to_string(kMaxDepth));
@@ -192,8 +199,14 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
           l.weight = weight * non_negative(color_of(s.color, images, uv));
           float r = unit(value_of(s.roughness, images, uv));
           switch (s.type) {
-            case NodeType::Diffuse: l.type = LobeType::Diffuse; l.roughness = r; break;
-            case NodeType::Glossy: l.type = LobeType::GlossyGGX; l.alpha = r * r; break;
+            case NodeType::Diffuse:
+              l.type = LobeType::Diffuse;
+              l.roughness = r;
+              break;
+            case NodeType::Glossy:
+              l.type = LobeType::GlossyGGX;
+              l.alpha = r * r;
+              break;
             case NodeType::Glass: {
               l.type = LobeType::Dielectric;
               l.alpha = r * r;
@@ -201,8 +214,11 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
               l.eta = backface ? 1 / ior : ior;
               break;
             }
-            case NodeType::Transparent: l.type = LobeType::Transparent; break;
-            default: break;
+            case NodeType::Transparent:
+              l.type = LobeType::Transparent;
+              break;
+            default:
+              break;
           }
           bsdf->add(l);
         }
@@ -212,7 +228,8 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
   return emitted;
 }
 
-Spectrum Material::evaluate(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface, Bsdf* bsdf) const {
+Spectrum Material::evaluate(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface,
+                            Bsdf* bsdf) const {
   bsdf->clear();
   return walk<true>(images, uv, backface, bsdf);
 }

@@ -35,8 +35,7 @@ class Material {
 
   // Fills bsdf with the lobes at a point and returns the emitted radiance there (both sides).
   // backface: the ray arrives from behind the geometric normal (glass uses 1/ior then).
-  Spectrum evaluate(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface,
-                    Bsdf* bsdf) const;
+  Spectrum evaluate(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface, Bsdf* bsdf) const;
   // Emitted radiance only (for light sampling, without building lobes).
   Spectrum emission(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv) const;
   bool emissive() const { return emissive_; }

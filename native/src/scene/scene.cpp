@@ -55,8 +55,9 @@ void Scene::commit() {
   for (const Light& l : lamp_lights)
     beyond = beyond || (l.type != LightType::Sun && !within_traceable_range(l.position));
   if (beyond)
-    warnings.push_back("the scene reaches beyond 1.8e18 from the origin, the range within which rays can be traced "
-                       "(Embree's); rays from beyond it miss");
+    warnings.push_back(
+        "the scene reaches beyond 1.8e18 from the origin, the range within which rays can be traced "
+        "(Embree's); rays from beyond it miss");
   lights.build(std::move(all), world_set ? &world : nullptr, bounds);
   ++light_builds_;
   material_medium.resize(materials.size(), -1);

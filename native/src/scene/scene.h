@@ -7,11 +7,11 @@
 #include <vector>
 
 #include "geometry/geometry.h"
-#include "scene/lights/light_set.h"
+#include "media/medium.h"
 #include "scene/camera.h"
 #include "scene/image.h"
+#include "scene/lights/light_set.h"
 #include "scene/material.h"
-#include "media/medium.h"
 
 namespace lt {
 

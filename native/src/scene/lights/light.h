@@ -17,7 +17,7 @@ enum class AreaShape { Rectangle, Ellipse };
 
 struct Light {
   LightType type = LightType::Point;
-  Spectrum power{0.0f};  // Blender's colour x energy (W; W/m^2 for the sun)
+  Spectrum power{0.0f};      // Blender's colour x energy (W; W/m^2 for the sun)
   Vec3 position, direction;  // direction: the way light travels (spot axis, sun, area normal side)
   // Point / spot: disk radius (Cycles 3.4 samples a disk facing the shaded point).
   float radius = 0;
@@ -63,8 +63,8 @@ struct LightSample {
   // infinite lights.
   Vec3 p, n;
   bool on_surface = false;  // p lies on a surface with a side (area lamp, triangle): shadow rays stop off it
-  Spectrum radiance;   // emitted radiance arriving along -wi (spot falloff included)
-  float pdf = 0;       // solid angle pdf of this light's sampling (not including selection)
+  Spectrum radiance;        // emitted radiance arriving along -wi (spot falloff included)
+  float pdf = 0;            // solid angle pdf of this light's sampling (not including selection)
   bool delta = false;
 };
 
@@ -83,10 +83,10 @@ inline bool aim_at(const Vec3& p, const Vec3& q, LightSample* s, float* d2) {
 // A light sampled as the start of a light subpath (BDPT): a point and a direction of emission.
 struct EmissionSample {
   Ray ray;
-  Vec3 n;                // normal at the origin (zero for points); for infinite lights: ray.d
-  Spectrum radiance;     // Le(origin, ray.d); intensity for point lights, irradiance for delta suns
-  float pdf_pos = 0;     // area density of the origin (1 for delta positions)
-  float pdf_dir = 0;     // solid-angle density of the direction (1 for delta directions)
+  Vec3 n;             // normal at the origin (zero for points); for infinite lights: ray.d
+  Spectrum radiance;  // Le(origin, ray.d); intensity for point lights, irradiance for delta suns
+  float pdf_pos = 0;  // area density of the origin (1 for delta positions)
+  float pdf_dir = 0;  // solid-angle density of the direction (1 for delta directions)
   bool delta_pos = false, delta_dir = false;
 };
 
@@ -108,8 +108,8 @@ inline Ray shadow_ray(const Vec3& origin, const LightSample& ls) {
     r.d = ls.wi;
     return r;
   }
-  return spawn_ray_to(origin, ls.on_surface ? offset_ray_origin(ls.p, dot(ls.n, origin - ls.p) >= 0 ? ls.n : -ls.n)
-                                            : ls.p);
+  return spawn_ray_to(origin,
+                      ls.on_surface ? offset_ray_origin(ls.p, dot(ls.n, origin - ls.p) >= 0 ? ls.n : -ls.n) : ls.p);
 }
 
 // Infinite lights (sun, world) emit from a disk perpendicular to the direction over the scene's

@@ -24,7 +24,9 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Bounds
     // radiance.
     float p = average(abs(l.power));
     switch (l.type) {
-      case LightType::Sun: p *= kPi * scene_radius_ * scene_radius_; break;
+      case LightType::Sun:
+        p *= kPi * scene_radius_ * scene_radius_;
+        break;
       case LightType::World: {
         float mean = average(world->color);
         if (world->image) mean *= world->image_mean;
@@ -35,7 +37,8 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Bounds
       case LightType::Triangle:
         triangle_index_.push_back({(uint64_t(uint32_t(l.instance)) << 32) | uint32_t(l.primitive), int(i)});
         break;
-      default: break;
+      default:
+        break;
     }
     if (l.hittable()) hittable_.push_back(int(i));
     if (l.type == LightType::Sun && l.tan_half_angle > 0) suns_.push_back(int(i));
@@ -59,11 +62,16 @@ bool LightSet::sample(const Scene& scene, int i, const Vec3& p, Vec2 u, LightSam
   const Light& l = lights_[i];
   switch (l.type) {
     case LightType::Point:
-    case LightType::Spot: return point_lamp_sample(l, p, u, s);
-    case LightType::Area: return area_lamp_sample(l, p, u, s);
-    case LightType::Sun: return sun_sample(l, u, s);
-    case LightType::Triangle: return triangle_light_sample(scene, l, p, u, s);
-    case LightType::World: return world_sample(scene.world, u, s);
+    case LightType::Spot:
+      return point_lamp_sample(l, p, u, s);
+    case LightType::Area:
+      return area_lamp_sample(l, p, u, s);
+    case LightType::Sun:
+      return sun_sample(l, u, s);
+    case LightType::Triangle:
+      return triangle_light_sample(scene, l, p, u, s);
+    case LightType::World:
+      return world_sample(scene.world, u, s);
   }
   return false;
 }
@@ -72,11 +80,16 @@ float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, fl
   const Light& l = lights_[i];
   switch (l.type) {
     case LightType::Point:
-    case LightType::Spot: return point_lamp_pdf(l, p, wi, t);
-    case LightType::Area: return area_lamp_pdf(l, wi, t);
-    case LightType::Sun: return sun_pdf(l, wi);
-    case LightType::Triangle: return triangle_light_pdf(scene, l, wi, t);
-    case LightType::World: return world_pdf(scene.world, wi);
+    case LightType::Spot:
+      return point_lamp_pdf(l, p, wi, t);
+    case LightType::Area:
+      return area_lamp_pdf(l, wi, t);
+    case LightType::Sun:
+      return sun_pdf(l, wi);
+    case LightType::Triangle:
+      return triangle_light_pdf(scene, l, wi, t);
+    case LightType::World:
+      return world_pdf(scene.world, wi);
   }
   return 0;
 }
@@ -86,11 +99,16 @@ bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, Emis
   e->delta_pos = e->delta_dir = false;
   switch (l.type) {
     case LightType::Point:
-    case LightType::Spot: return point_lamp_sample_emission(l, ud, e);
-    case LightType::Area: return area_lamp_sample_emission(l, up, ud, e);
-    case LightType::Triangle: return triangle_light_sample_emission(scene, l, up, ud, e);
-    case LightType::Sun: return sun_sample_emission(l, scene_center_, scene_radius_, up, ud, e);
-    case LightType::World: return world_sample_emission(scene.world, scene_center_, scene_radius_, up, ud, e);
+    case LightType::Spot:
+      return point_lamp_sample_emission(l, ud, e);
+    case LightType::Area:
+      return area_lamp_sample_emission(l, up, ud, e);
+    case LightType::Triangle:
+      return triangle_light_sample_emission(scene, l, up, ud, e);
+    case LightType::Sun:
+      return sun_sample_emission(l, scene_center_, scene_radius_, up, ud, e);
+    case LightType::World:
+      return world_sample_emission(scene.world, scene_center_, scene_radius_, up, ud, e);
   }
   return false;
 }
@@ -100,9 +118,12 @@ void LightSet::pdf_emission(const Scene& scene, int i, const Vec3& origin, const
   const Light& l = lights_[i];
   switch (l.type) {
     case LightType::Point:
-    case LightType::Spot: return point_lamp_pdf_emission(l, dir, pdf_pos, pdf_dir);
-    case LightType::Area: return area_lamp_pdf_emission(l, dir, pdf_pos, pdf_dir);
-    case LightType::Triangle: return triangle_light_pdf_emission(l, n, dir, pdf_pos, pdf_dir);
+    case LightType::Spot:
+      return point_lamp_pdf_emission(l, dir, pdf_pos, pdf_dir);
+    case LightType::Area:
+      return area_lamp_pdf_emission(l, dir, pdf_pos, pdf_dir);
+    case LightType::Triangle:
+      return triangle_light_pdf_emission(l, n, dir, pdf_pos, pdf_dir);
     case LightType::Sun:
     case LightType::World:
       *pdf_pos = scene_disk_pdf(scene_radius_);

@@ -38,8 +38,8 @@ class LightSet {
   // Emission sampling for light subpaths, and its densities for a given origin (normal n) and
   // direction. Infinite lights emit from the scene's disk (emit_from_scene_disk).
   bool sample_emission(const Scene& scene, int light, Vec2 u_pos, Vec2 u_dir, EmissionSample* out) const;
-  void pdf_emission(const Scene& scene, int light, const Vec3& origin, const Vec3& n, const Vec3& dir,
-                    float* pdf_pos, float* pdf_dir) const;
+  void pdf_emission(const Scene& scene, int light, const Vec3& origin, const Vec3& n, const Vec3& dir, float* pdf_pos,
+                    float* pdf_dir) const;
   float scene_radius() const { return scene_radius_; }
   Vec3 scene_center() const { return scene_center_; }
 

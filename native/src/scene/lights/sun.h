@@ -51,8 +51,7 @@ inline float sun_pdf(const Light& l, const Vec3& wi) {
 }
 
 // The direction as sun_sample picks it, the origin on the scene's disk (emit_from_scene_disk).
-inline bool sun_sample_emission(const Light& l, const Vec3& center, float radius, Vec2 up, Vec2 ud,
-                                EmissionSample* e) {
+inline bool sun_sample_emission(const Light& l, const Vec3& center, float radius, Vec2 up, Vec2 ud, EmissionSample* e) {
   Vec3 dir;  // direction light travels
   if (l.tan_half_angle == 0) {
     dir = l.direction;

@@ -3,8 +3,8 @@
 #pragma once
 
 #include "core/distribution.h"
-#include "scene/lights/light.h"
 #include "scene/image.h"
+#include "scene/lights/light.h"
 
 namespace lt {
 
