@@ -429,6 +429,31 @@ def principled_metal(name, color, roughness):
     return mat
 
 
+def principled(name, color, roughness, specular=0.5):
+    """A Principled BSDF at Blender's defaults but for Base Color, Roughness and Specular."""
+    mat, nt, out = _material(name)
+    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Base Color"].default_value = (*color, 1.0)
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Specular"].default_value = specular
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    mat.diffuse_color = (*color, 1.0)
+    return mat
+
+
+def build_principled_ground(scene):
+    """Issue 13: a rough Principled ground (Roughness 1, Specular 0) under a low sun behind the
+    camera and a sky, seen at a grazing angle, where Cycles' diffuse retro-reflects (Lantern's
+    Lambert diffuse was 29 % darker there), and a sphere of Blender's default Principled BSDF."""
+    set_world(scene, (0.3, 0.45, 0.7), 1.0)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 40.0))
+    assign(ground, principled("RoughGround", (0.6, 0.6, 0.55), 1.0, specular=0.0))
+    sphere = add_object(scene, "Sphere", mesh_sphere("Sphere", 0.5), (0.3, 0.0, 0.5))
+    assign(sphere, principled("DefaultPrincipled", (0.8, 0.8, 0.8), 0.5))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(75, 0, 10), angle=math.radians(1.0))
+    add_camera(scene, (0, -7.0, 0.7), (0, 0, 0.3), lens=35.0)
+
+
 def build_metal_box(scene):
     """A closed 4 x 4 x 3 m box of rough (0.2) copper-coloured Principled metal with the camera and
     a small point light inside, 8 bounces of every kind (issue 18: rough metal after several
@@ -1029,6 +1054,7 @@ SCENES = {
     "textured": (build_textured, (96, 96), 128),
     "instanced": (build_instanced, (96, 96), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
+    "principled_ground": (build_principled_ground, (96, 64), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
     "door_bounce": (build_door_bounce, (96, 96), 1280),

@@ -80,6 +80,15 @@ def test_volumetric_path_tracer_agrees_with_cycles_and_path_without_media(name, 
     assert report == "", report
 
 
+def test_principled_diffuse_retro_reflects_as_cycles(scene_factory, outdir):
+    """Issue 13: "a rough Principled ground (roughness 1, specular 0) under a sun and sky, seen at
+    a grazing angle, is 29 % darker in Lantern than in Cycles (Lambert instead of Cycles' diffuse
+    with retro-reflection)". principled_ground: per tile and in the image mean as above."""
+    both = lantern_and_cycles(scene_factory, "principled_ground", "PATH")
+    report, _ = ru.agreement_report("principled_ground", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
 def test_rough_metal_after_several_bounces_agrees_with_cycles(scene_factory, outdir):
     """Issue 18: "rough metal seems to reflect more than Cycles after several bounces (+25 % after
     8 bounces at roughness 0.2)". metal_box (closed, copper Principled metal at roughness 0.2, 8

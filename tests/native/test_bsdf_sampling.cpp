@@ -35,6 +35,14 @@ Lobe diffuse(float sigma = 0, Spectrum w = Spectrum(1.0f)) {
   l.weight = w;
   return l;
 }
+// The Principled BSDF's diffuse lobe (Burley's, with retro-reflection) at Principled roughness r.
+Lobe principled_diffuse(float r, Spectrum w = Spectrum(1.0f)) {
+  Lobe l;
+  l.type = LobeType::PrincipledDiffuse;
+  l.roughness = r;
+  l.weight = w;
+  return l;
+}
 Lobe glossy(float alpha, Spectrum w = Spectrum(1.0f)) {
   Lobe l;
   l.type = LobeType::GlossyGGX;
@@ -203,6 +211,9 @@ std::vector<Chi2Case> make_cases() {
         cs.push_back(c);
       }
   cs.push_back(lobe_case("glass_a0.3_wo_below", dielectric(0.3f, 1.5f), normalize(Vec3(-0.5f, 0.4f, -0.08f))));
+
+  // Principled diffuse: cosine-weighted whatever the roughness, also seen at grazing angles.
+  cs.push_back(lobe_case("principled_diffuse_r1_80", principled_diffuse(1), from_angles(80, 30)));
 
   // Principled specular layer (the pdf does not depend on f0).
   cs.push_back(with_pole(lobe_case("specular_a0.2_40", specular(0.2f, Spectrum(0.04f, 0.5f, 0.9f)), from_angles(40, 0)),
@@ -470,8 +481,16 @@ TEST(DeltaLobes, MixtureSelection) {
 // f(wo, wi) == f(wi, wo) for the reflection lobes. (Glass is not reciprocal, as in Cycles: its
 // reflection/refraction split uses Fresnel at wo's angle.)
 TEST(BsdfSanity, Reciprocity) {
-  const Lobe lobes[] = {diffuse(0),   diffuse(0.3f), diffuse(1), glossy(0.01f),
-                        glossy(0.1f), glossy(0.5f),  glossy(1),  specular(0.2f, Spectrum(0.04f, 0.3f, 0.9f))};
+  const Lobe lobes[] = {diffuse(0),
+                        diffuse(0.3f),
+                        diffuse(1),
+                        principled_diffuse(0.5f),
+                        principled_diffuse(1),
+                        glossy(0.01f),
+                        glossy(0.1f),
+                        glossy(0.5f),
+                        glossy(1),
+                        specular(0.2f, Spectrum(0.04f, 0.3f, 0.9f))};
   Sampler rng(5, 0, 0);
   for (const Lobe& l : lobes)
     for (int k = 0; k < 20000; ++k) {
@@ -638,7 +657,8 @@ bool finite_nonneg(const Spectrum& f) { return is_finite(f) && f.x >= 0 && f.y >
 
 Lobe random_lobe(Sampler& rng) {
   Lobe l;
-  l.type = LobeType(std::min(4, int(rng.next_1d() * 5)));
+  constexpr int kTypes = int(LobeType::PrincipledDiffuse) + 1;  // every LobeType
+  l.type = LobeType(std::min(kTypes - 1, int(rng.next_1d() * kTypes)));
   l.weight = Spectrum(rng.next_1d(), rng.next_1d(), rng.next_1d());
   l.roughness = rng.next_1d() < 0.2f ? 0.0f : rng.next_1d();
   float u = rng.next_1d();
@@ -770,6 +790,18 @@ TEST(BsdfValues, ClosedForms) {
   Vec3 wi2 = from_angles(50, 20);
   float s2 = (dot(wi2, wo) - wi2.z * wo.z) / std::max(wi2.z, wo.z);
   EXPECT_NEAR(lobe_eval(diffuse(sigma), wo, wi2).x, a + b * s2, 1e-6f);
+  // Principled diffuse in Burley's own form (2012, eq. 4): f = (1/pi) (1 + (Fd90 - 1) FL)
+  // (1 + (Fd90 - 1) FV), Fd90 = 1/2 + 2 r (wi.h)^2; roughness 0 is below Lambert at grazing
+  // angles, roughness 1 above it (retro-reflection).
+  for (float r : {0.0f, 0.4f, 1.0f})
+    for (const Vec3& w : {wi, from_angles(85, 10)}) {
+      const Vec3 h = normalize(wo + w);
+      const float fd90 = 0.5f + 2 * r * dot(w, h) * dot(w, h);
+      const float fl = std::pow(1 - w.z, 5.0f), fv = std::pow(1 - wo.z, 5.0f);
+      const float burley = kInvPi * (1 + (fd90 - 1) * fl) * (1 + (fd90 - 1) * fv);
+      EXPECT_NEAR(lobe_eval(principled_diffuse(r, Spectrum(0.5f)), wo, w).x, 0.5f * burley, 1e-6f) << r;
+    }
+  EXPECT_TRUE(is_black(lobe_eval(principled_diffuse(1), wo, -wi)));
   // GGX at the mirror configuration: m = n, D = 1 / (pi alpha^2).
   float alpha = 0.2f;
   Vec3 m(0, 0, 1);

@@ -17,4 +17,20 @@ std::unique_ptr<Integrator> make_integrator(IntegratorType type, const RenderCon
   return make_path_integrator(ctx, false);
 }
 
+const char* integrator_name(IntegratorType type) {
+  switch (type) {
+    case IntegratorType::Path:
+      return "PATH";
+    case IntegratorType::Bidirectional:
+      return "BIDIRECTIONAL";
+    case IntegratorType::VolPath:
+      return "VOLPATH";
+    case IntegratorType::VolumeDebug:
+      return "VOLUME_DEBUG";
+    case IntegratorType::Count:
+      break;
+  }
+  return "?";
+}
+
 }  // namespace lt

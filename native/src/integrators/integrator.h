@@ -105,6 +105,8 @@ class Integrator {
 // The integrator for `type`; "Volumetric Path" on a scene without media is the path tracer (the
 // same estimator, without the media code).
 std::unique_ptr<Integrator> make_integrator(IntegratorType type, const RenderContext& ctx);
+// The integrator's name as lt_integrator spells it without LT_INTEGRATOR_ (EXR metadata).
+const char* integrator_name(IntegratorType type);
 
 // The integrators, one file each; make_integrator picks among them.
 // Unidirectional path tracing (path.cpp); `media`: volumetric path tracing, only for scenes with media.

@@ -142,21 +142,6 @@ ExrImage read_exr(const std::string& path, bool pixels) {
 }
 
 namespace {
-const char* integrator_name(IntegratorType t) {
-  switch (t) {
-    case IntegratorType::Path:
-      return "PATH";
-    case IntegratorType::Bidirectional:
-      return "BIDIRECTIONAL";
-    case IntegratorType::VolPath:
-      return "VOLPATH";
-    case IntegratorType::VolumeDebug:
-      return "VOLUME_DEBUG";
-    default:
-      return "?";
-  }
-}
-
 void add_channels(std::vector<ExrChannel>& channels, const std::vector<float>& buf, size_t n,
                   const std::vector<std::string>& names) {
   const size_t c = names.size();

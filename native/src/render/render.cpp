@@ -24,8 +24,7 @@ constexpr double kPublishInterval = 0.25;
 }  // namespace
 
 RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
-    : scene_(scene),
-      settings_(s),
+    : settings_(s),
       camera_(scene.camera, s.width, s.height),
       filter_(s.filter, s.filter_width),
       integrator_(make_integrator(s.integrator, RenderContext{scene, camera_, filter_, s.integrator_settings, s.x0,

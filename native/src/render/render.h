@@ -92,7 +92,6 @@ class RenderJob {
   void fail(const char* what, bool out_of_memory) noexcept;
   // Adaptive sampling: clears active_ for pixels whose variance meets their share of the target.
   void update_active(const ErrorEstimate& e);
-  const Scene& scene_;
   RenderSettings settings_;
   Camera camera_;
   FilterSampler filter_;

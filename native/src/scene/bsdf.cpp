@@ -9,6 +9,7 @@
 //                reflection times interpolate_fresnel_color, f0 (1 - FH) + FH with
 //                FH = (F(wi.m, eta) - F(1, eta)) / (1 - F(1, eta)), F the dielectric Fresnel
 //   Transparent  bsdf_transparent
+//   PrincipledDiffuse  bsdf_principled_diffuse with PRINCIPLED_DIFFUSE_FULL (Burley 2012)
 // Microfacet normals are sampled from the distribution of visible normals (Heitz 2018, "Sampling
 // the GGX Distribution of Visible Normals"), so the sampling weight is G1(wi) (times Fresnel).
 //
@@ -47,6 +48,7 @@ const Lobe& lobe_from_below(const Lobe& l, Lobe* tmp) {
 bool lobe_is_delta(const Lobe& l) {
   switch (l.type) {
     case LobeType::Diffuse:
+    case LobeType::PrincipledDiffuse:
       return false;
     case LobeType::GlossyGGX:
     case LobeType::SpecularGGX:
@@ -83,6 +85,24 @@ Spectrum diffuse_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
   float s = dot(i, o) - i.z * o.z;
   if (s > 0) s /= std::max(std::max(i.z, o.z), 1e-7f);  // Cycles adds FLT_MIN; this bounds f at grazing
   return l.weight * std::max(0.0f, a + b * s);
+}
+
+// Burley 2012 ("Physically Based Shading at Disney", eq. 4 with its retro-reflection), as Cycles
+// 3.4's bsdf_principled_diffuse with PRINCIPLED_DIFFUSE_FULL: f = (1/pi) [(1 - FV/2)(1 - FL/2)
+// + RR (FL + FV + FL FV (RR - 1))], FL = (1 - cos_i)^5, FV = (1 - cos_o)^5, RR = roughness (1 + i.o)
+// (= 2 roughness (i.h)^2). Equal to Burley's (1 + (Fd90 - 1) FL)(1 + (Fd90 - 1) FV) with Fd90 =
+// 1/2 + RR. o.z > 0.
+Spectrum principled_diffuse_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
+  if (i.z <= 0) return Spectrum(0.0f);
+  const float r = lobe_sigma(l);  // the roughness, clamped to [0, 1] as Cycles' node does
+  auto schlick = [](float c) {
+    const float m = clamp(1 - c, 0.0f, 1.0f);
+    return (m * m) * (m * m) * m;
+  };
+  const float fl = schlick(i.z), fv = schlick(o.z);
+  const float rr = r * (1 + dot(i, o));
+  const float f = (1 - 0.5f * fv) * (1 - 0.5f * fl) + rr * (fl + fv + fl * fv * (rr - 1));
+  return l.weight * (kInvPi * f);
 }
 
 // ---- GGX reflection (GlossyGGX, SpecularGGX, Dielectric's reflection) -------------------------
@@ -148,9 +168,10 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
   *pdf = 0;
   switch (l.type) {
     case LobeType::Diffuse:
+    case LobeType::PrincipledDiffuse:
       if (i.z <= 0) return Spectrum(0.0f);
       *pdf = i.z * kInvPi;
-      return diffuse_eval(l, o, i);
+      return l.type == LobeType::Diffuse ? diffuse_eval(l, o, i) : principled_diffuse_eval(l, o, i);
     case LobeType::GlossyGGX:
       return l.weight * ggx_reflect(o, i, lobe_alpha(l), pdf, nullptr);
     case LobeType::SpecularGGX: {
@@ -282,6 +303,7 @@ uint32_t lobe_flags(const Lobe& l) {
   bool delta = lobe_is_delta(l);
   switch (l.type) {
     case LobeType::Diffuse:
+    case LobeType::PrincipledDiffuse:
       return kLobeDiffuse | kLobeReflection;
     case LobeType::GlossyGGX:
     case LobeType::SpecularGGX:
@@ -371,12 +393,14 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         s.flags = kLobeSpecular | kLobeTransmission;
         break;
       case LobeType::Diffuse:
+      case LobeType::PrincipledDiffuse:
         return false;
     }
   } else {
     const float alpha = lobe_alpha(l);
     switch (l.type) {
       case LobeType::Diffuse:
+      case LobeType::PrincipledDiffuse:
         s.wi = sample_cosine_hemisphere(u);
         if (!(s.wi.z > 0)) return false;
         s.flags = kLobeDiffuse | kLobeReflection;

@@ -26,17 +26,19 @@ enum LobeFlags : uint32_t {
 };
 
 enum class LobeType : uint8_t {
-  Diffuse,      // Lambert (roughness 0) or Oren-Nayar as Cycles' Diffuse BSDF
-  GlossyGGX,    // GGX reflection, colour as constant reflectance (Cycles' Glossy BSDF, no Fresnel)
-  Dielectric,   // Fresnel-weighted GGX reflection + refraction (Cycles' Glass BSDF); delta at alpha 0
-  SpecularGGX,  // GGX reflection with Cycles' Principled v1 Fresnel from f0 to 1 (its specular layer)
-  Transparent,  // straight pass-through (delta transmission)
+  Diffuse,            // Lambert (roughness 0) or Oren-Nayar as Cycles' Diffuse BSDF
+  GlossyGGX,          // GGX reflection, colour as constant reflectance (Cycles' Glossy BSDF, no Fresnel)
+  Dielectric,         // Fresnel-weighted GGX reflection + refraction (Cycles' Glass BSDF); delta at alpha 0
+  SpecularGGX,        // GGX reflection with Cycles' Principled v1 Fresnel from f0 to 1 (its specular layer)
+  Transparent,        // straight pass-through (delta transmission)
+  PrincipledDiffuse,  // Burley's diffuse with retro-reflection (Cycles' Principled diffuse closure)
 };
 
 struct Lobe {
   LobeType type = LobeType::Diffuse;
   Spectrum weight{1.0f};  // colour x mix weight
-  float roughness = 0;    // Diffuse: Oren-Nayar sigma; microfacet: unused (see alpha)
+  float roughness = 0;    // Diffuse: Oren-Nayar sigma; PrincipledDiffuse: the Principled roughness;
+                          // microfacet: unused (see alpha)
   float alpha = 0;        // GGX alpha = roughness^2; below kSmoothAlpha the lobe is delta
   float eta = 1.5f;       // Dielectric: relative IOR across the surface from wo's side;
                           // SpecularGGX: the IOR whose dielectric Fresnel shapes the blend to 1

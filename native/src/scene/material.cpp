@@ -158,8 +158,8 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
         if (s.emission.image >= 0 || !is_black(s.emission.value))
           emitted += weight * non_negative(color_of(s.emission, images, uv)) * value_of(s.strength, images, uv);
         if constexpr (kLobes) {
-          // Cycles 3.x Principled v1, reduced to its main lobes (README: departures): Lambert
-          // diffuse (no retro-reflection, sheen, subsurface or clearcoat), a GGX specular layer as
+          // Cycles 3.x Principled v1, reduced to its main lobes (README: departures): Burley's
+          // diffuse with retro-reflection (no sheen, subsurface or clearcoat), a GGX specular layer as
           // Cycles' (its Fresnel blends cspec0 = mix(0.08 specular, base, metallic), saturated, to 1
           // along the dielectric Fresnel of the IOR Specular stands for), and a GGX glass lobe.
           Vec3 base = non_negative(color_of(s.color, images, uv));
@@ -169,7 +169,8 @@ Spectrum Material::walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 
           // 12.5 is where 0.08 specular reaches 1 (an infinite IOR); NaN becomes 0.
           float spec = std::min(std::max(0.0f, value_of(s.specular, images, uv)), 12.5f);
           Lobe d;
-          d.type = LobeType::Diffuse;
+          d.type = LobeType::PrincipledDiffuse;
+          d.roughness = r;
           d.weight = weight * base * ((1 - metallic) * (1 - transmission));
           bsdf->add(d);
           // Cycles leaves the layer out when Specular and Metallic are both below its closure cutoff.
