@@ -417,25 +417,15 @@ def build_glossy_glass(scene):
     add_camera(scene, (0, -5.0, 1.6), (0, 0, 0.45), lens=40.0)
 
 
-def principled_metal(name, color, roughness):
-    """A Principled BSDF at Metallic 1 (its other inputs at their defaults: Specular 0.5, GGX)."""
-    mat, nt, out = _material(name)
-    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
-    bsdf.inputs["Base Color"].default_value = (*color, 1.0)
-    bsdf.inputs["Metallic"].default_value = 1.0
-    bsdf.inputs["Roughness"].default_value = roughness
-    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
-    mat.diffuse_color = (*color, 1.0)
-    return mat
-
-
-def principled(name, color, roughness, specular=0.5):
-    """A Principled BSDF at Blender's defaults but for Base Color, Roughness and Specular."""
+def principled(name, color, roughness, specular=0.5, metallic=0.0):
+    """A Principled BSDF at Blender's defaults (GGX) but for Base Color, Roughness, Specular and
+    Metallic."""
     mat, nt, out = _material(name)
     bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
     bsdf.inputs["Base Color"].default_value = (*color, 1.0)
     bsdf.inputs["Roughness"].default_value = roughness
     bsdf.inputs["Specular"].default_value = specular
+    bsdf.inputs["Metallic"].default_value = metallic
     nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
     mat.diffuse_color = (*color, 1.0)
     return mat
@@ -462,7 +452,7 @@ def build_metal_box(scene):
     c = scene.cycles
     c.max_bounces = c.glossy_bounces = c.diffuse_bounces = c.transmission_bounces = 8
     box = add_object(scene, "MetalBox", mesh_box("MetalBox", (4.0, 4.0, 3.0)))
-    assign(box, principled_metal("Copper", (0.95, 0.64, 0.54), 0.2))
+    assign(box, principled("Copper", (0.95, 0.64, 0.54), 0.2, metallic=1.0))
     add_light(scene, "PointLight", "POINT", 100.0, (0.5, 0.3, 2.0), radius=0.1)
     add_camera(scene, (-1.5, -1.5, 1.0), (1.5, 1.0, 1.5), lens=20.0)
 
