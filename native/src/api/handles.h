@@ -7,7 +7,7 @@
 
 #include "lantern/lantern.h"
 #include "render/render.h"
-#include "scene/image.h"
+#include "shading/image.h"
 #include "scene/scene.h"
 
 struct lt_scene {

@@ -7,7 +7,7 @@
 
 #include "core/sampling.h"
 #include "integrators/integrator.h"
-#include "scene/bsdf.h"
+#include "shading/bsdf.h"
 
 namespace lt {
 

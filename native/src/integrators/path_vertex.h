@@ -7,7 +7,7 @@
 #include "geometry/hit.h"
 #include "integrators/path_state.h"
 #include "media/volume_stack.h"
-#include "scene/bsdf.h"
+#include "shading/bsdf.h"
 
 namespace lt {
 

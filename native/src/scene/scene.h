@@ -9,9 +9,9 @@
 #include "geometry/geometry.h"
 #include "media/medium.h"
 #include "scene/camera.h"
-#include "scene/image.h"
+#include "shading/image.h"
 #include "scene/lights/light_set.h"
-#include "scene/material.h"
+#include "shading/material.h"
 
 namespace lt {
 

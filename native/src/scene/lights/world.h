@@ -3,7 +3,7 @@
 #pragma once
 
 #include "core/distribution.h"
-#include "scene/image.h"
+#include "shading/image.h"
 #include "scene/lights/light.h"
 
 namespace lt {

@@ -1,4 +1,4 @@
-#include "scene/material.h"
+#include "shading/material.h"
 
 #include <functional>
 #include <string>

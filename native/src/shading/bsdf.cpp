@@ -19,7 +19,7 @@
 // and glass sees the inverse relative IOR 1/eta from there. Cycles instead returns black for
 // microfacet closures below the shading normal; mirroring keeps every routine finite and BDPT's
 // reverse pdfs consistent with sampling from the other side.
-#include "scene/bsdf.h"
+#include "shading/bsdf.h"
 
 namespace lt {
 

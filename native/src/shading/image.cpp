@@ -1,4 +1,4 @@
-#include "scene/image.h"
+#include "shading/image.h"
 
 #include <algorithm>
 #include <cstdlib>

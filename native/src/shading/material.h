@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "core/math.h"
-#include "scene/bsdf.h"
-#include "scene/image.h"
+#include "shading/bsdf.h"
+#include "shading/image.h"
 
 namespace lt {
 

@@ -1,0 +1,140 @@
+// Shader programs: a material's node tree, compiled by the add-on (addon/lantern/export/nodes/),
+// runs on a small register machine here, in the spirit of Cycles' SVM (kernel/svm/svm.h). One
+// evaluation context serves every node; new nodes need an opcode, not a new ABI entry point.
+//
+// Encoding (uint32 words; floats live in the constant pool). An instruction is
+//   [opcode] [n_in | n_out << 8 | n_param << 16] [inputs...] [outputs...] [params...]
+// An input operand is a float or a vector (3 floats) in the registers or, with kConstBit set, in
+// the constant pool; an output names registers. Operand word: index (bits 0-23) | size (1 or 3,
+// bits 24-27) | kConstBit. Params are raw words the opcode defines (modes, table offsets into the
+// pool). Registers are written once (the compiler allocates fresh ones), so a pure instruction whose
+// inputs are all constant is folded at load: run once, its outputs moved into the pool.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+
+namespace lt {
+
+class Image;
+class Bsdf;
+
+constexpr uint32_t kConstBit = 0x80000000u;
+constexpr uint32_t kIndexMask = 0x00ffffffu;
+constexpr int kMaxRegisters = 4096;  // floats; larger programs are refused
+constexpr int kMaxProgramWords = 1 << 20;
+
+inline uint32_t operand_size(uint32_t w) { return (w >> 24) & 0xfu; }
+inline uint32_t operand_index(uint32_t w) { return w & kIndexMask; }
+
+// What the nodes see at a shading point (Cycles' ShaderData). World space unless named otherwise.
+struct ShadingContext {
+  Vec3 P;             // position
+  Vec3 N;             // smooth shading normal, facing the incoming ray (Cycles' sd->N)
+  Vec3 Ng;            // geometric normal, facing the incoming ray
+  Vec3 I;             // toward the viewer: the incoming ray's reversed direction
+  Vec2 uv;            // the active render UV map
+  Vec3 generated;     // object-space position normalised to the mesh's bounds (Cycles' Generated)
+  Vec3 object_P;      // object-space position
+  bool backfacing = false;
+  float ray_length = 0;
+  int ray_depth = 0;
+  bool camera_ray = true;  // Light Path outputs: what kind of ray reached this point
+  bool shadow_ray = false;
+  bool diffuse_ray = false;
+  bool glossy_ray = false;
+  bool transmission_ray = false;
+};
+
+// The machine an instruction runs on: read inputs, write outputs.
+struct Machine {
+  float* r;         // registers
+  const float* k;   // constant pool
+  const ShadingContext* ctx;
+  const std::vector<std::unique_ptr<Image>>* images;
+  Bsdf* bsdf;       // null: emission only (light sampling)
+  Spectrum emitted;
+  Vec3 shading_normal;  // set by closures with a Normal input (one normal per shading point)
+  bool has_shading_normal = false;
+
+  float f(uint32_t w) const { return w & kConstBit ? k[w & kIndexMask] : r[w & kIndexMask]; }
+  Vec3 v(uint32_t w) const {
+    const float* p = w & kConstBit ? k + (w & kIndexMask) : r + (w & kIndexMask);
+    return {p[0], p[1], p[2]};
+  }
+  void set(uint32_t w, float x) const { r[w & kIndexMask] = x; }
+  void set(uint32_t w, const Vec3& x) const {
+    float* p = r + (w & kIndexMask);
+    p[0] = x.x;
+    p[1] = x.y;
+    p[2] = x.z;
+  }
+};
+
+// A decoded instruction: pointers into the code.
+struct Instr {
+  uint32_t op;
+  int n_in, n_out, n_param;
+  const uint32_t* in;
+  const uint32_t* out;
+  const uint32_t* param;
+};
+
+// Opcode ranges, one per node family (each family's file executes its range):
+//   0-63     program.cpp: values, closures, inputs that read the context, images
+//   64-191   nodes_math.cpp: Math, Vector Math, Mix, colour, converters
+//   192-319  textures.cpp: procedural textures
+enum Op : uint32_t {
+  kOpNop = 0,
+  // closures (impure): inputs start with the closure weight (vec3) and the normal (vec3)
+  kOpEmission = 1,       // in: weight, color, strength
+  kOpDiffuse = 2,        // in: weight, normal, color, roughness
+  kOpGlossy = 3,         // in: weight, normal, color, roughness; param: distribution
+  kOpGlass = 4,          // in: weight, normal, color, roughness, ior; param: distribution
+  kOpTransparent = 5,    // in: weight, color
+  kOpPrincipled = 6,     // in: weight, normal, base, metallic, roughness, specular, transmission, ior, emission, strength, alpha
+  kOpMixWeights = 7,     // in: weight (vec3), fac -> out: w * (1 - fac), w * fac (pure)
+  // context inputs (impure: read the shading point)
+  kOpTexCoord = 16,      // out: generated, normal, uv, object, camera?, window?, reflection
+  kOpGeometry = 17,      // out: position, normal, tangent, true normal, incoming, parametric, backfacing
+  kOpImage = 18,         // in: vector; out: color, alpha; param: image id
+  kOpNormalMap = 19,
+  kOpLightPath = 20,
+  kOpFresnel = 21,       // in: ior, normal -> out: fac
+  kOpLayerWeight = 22,   // in: blend, normal -> out: fresnel, facing
+  kFamilyMathBegin = 64,
+  kFamilyTexturesBegin = 192,
+  kOpEnd = 320,
+};
+
+// Family executors: run one instruction of their range; false when the opcode is unknown.
+// `pure` reports whether an opcode reads nothing but its inputs (then it may be folded).
+bool exec_math_family(const Instr& in, Machine& m);
+bool math_family_pure(uint32_t op);
+bool exec_textures_family(const Instr& in, Machine& m);
+bool textures_family_pure(uint32_t op);
+
+class Program {
+ public:
+  // Validates (every operand in range, registers written before read and once, known opcodes,
+  // image ids below image_count) and folds constant instructions. Throws InvalidArgument naming
+  // the instruction otherwise.
+  Program(std::vector<uint32_t> code, std::vector<float> constants, int registers, size_t image_count);
+
+  // Runs the program: lobes into bsdf (cleared first; null: emission only), returns emitted radiance.
+  Spectrum run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
+               Vec3* shading_normal) const;
+  size_t instruction_count() const { return count_; }
+
+ private:
+  std::vector<uint32_t> code_;
+  std::vector<float> constants_;
+  int registers_ = 0;
+  size_t count_ = 0;
+};
+
+}  // namespace lt
