@@ -111,12 +111,24 @@ enum Op : uint32_t {
   kOpEnd = 320,
 };
 
-// Family executors: run one instruction of their range; false when the opcode is unknown.
-// `pure` reports whether an opcode reads nothing but its inputs (then it may be folded).
-bool exec_math_family(const Instr& in, Machine& m);
-bool math_family_pure(uint32_t op);
-bool exec_textures_family(const Instr& in, Machine& m);
-bool textures_family_pure(uint32_t op);
+// An opcode's operands, checked when a program is loaded so that executors read them blindly.
+// in / out: one character per operand, 'f' (1 float) or 'v' (3 floats). params: one character
+// per word: 'i' a mode (the executor treats unknown values as documented), 'g' an image id,
+// 't' a table in the pool (its offset; pool[offset] holds the table's float count n, the n floats
+// follow). pure: reads nothing but its operands (folded when they are all constant).
+struct OpSignature {
+  const char* in;
+  const char* out;
+  const char* params;
+  bool pure;
+};
+
+// Family executors: the signature of an opcode of their range (null when unknown), and running one
+// instruction (validated against the signature).
+const OpSignature* math_family_signature(uint32_t op);
+void exec_math_family(const Instr& in, Machine& m);
+const OpSignature* textures_family_signature(uint32_t op);
+void exec_textures_family(const Instr& in, Machine& m);
 
 class Program {
  public:
