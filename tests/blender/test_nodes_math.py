@@ -264,6 +264,19 @@ def _ramp_case(interpolation, color_mode="RGB", hue="NEAR"):
     return fn
 
 
+def _folded_ramp(s):
+    # Every input constant: the core folds the instruction at load (its table read from the pool).
+    ramp = _ramp_case("B_SPLINE")
+    n = s.node("ShaderNodeRGBCurve")
+    n.inputs["Fac"].default_value = 0.7
+    n.inputs["Color"].default_value = (0.2, 0.5, 0.9, 1.0)
+    mix = s.node("ShaderNodeMixRGB", blend_type="MULTIPLY")
+    mix.inputs["Fac"].default_value = 0.8
+    s.link(n.outputs[0], mix.inputs["Color1"])
+    s.link(ramp(s), mix.inputs["Color2"])
+    return mix.outputs[0]
+
+
 def _curve_points(curve, points):
     while len(curve.points) < len(points):
         curve.points.new(0.5, 0.5)
@@ -427,6 +440,7 @@ def test_colour_nodes(outdir):
 def test_ramps_and_curves(outdir):
     cases = [("ramp " + i, _ramp_case(i)) for i in ("CONSTANT", "LINEAR", "EASE", "CARDINAL", "B_SPLINE")]
     cases += [("ramp HSV far", _ramp_case("LINEAR", "HSV", "FAR")), ("ramp HSL near", _ramp_case("LINEAR", "HSL"))]
+    cases.append(("ramp folded (constant input)", _folded_ramp))
     for idname in ("ShaderNodeRGBCurve", "ShaderNodeVectorCurve", "ShaderNodeFloatCurve"):
         for extend in ("EXTRAPOLATED", "HORIZONTAL"):
             cases.append(("%s %s" % (idname, extend), _curves_case(idname, extend)))
