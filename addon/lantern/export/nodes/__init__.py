@@ -343,4 +343,4 @@ def constant_program(op, inputs_fn):
 
 
 # The families register their nodes on import.
-from . import converters, inputs, shaders  # noqa: E402,F401
+from . import converters as _converters, inputs as _inputs, shaders as _shaders  # noqa: E402,F401
