@@ -7,7 +7,6 @@ import bpy
 import pytest
 
 import build_scenes as bs
-import render_utils as ru
 from lantern import core
 from lantern.export import nodes
 from lantern.export.nodes import opcodes

@@ -230,7 +230,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       path[count - 2].pdf_rev = path[count - 1].delta ? 0.0f : pdf(path[count - 1], &v, path[count - 2], pixel_center_);
   };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
-  int count = 1, bounces = 0, nulls = 0;
+  int count = 1, bounces = 0, nulls = 0, transparent = 0;
   const float beta_start = max_abs_component(beta);
   // Bounce kinds counted so far towards Cycles' per-kind limits (see kind_limit_factor): a walk
   // stops where every strategy using its further vertices would fail them, so no work is spent
@@ -292,6 +292,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     if (!is_finite(beta) || is_black(beta)) break;
 
     SurfacePoint sp;
+    Spectrum le(0.0f);
+    Vec3 ns;
     if (medium < 0) {
       if (!found) break;
       sp = scene_.geometry.surface(hit);
@@ -300,11 +302,22 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
         if (!pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
         continue;
       }
+      ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, hit.t * length(ray.d));
+      ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
+      ctx.ray_depth = bounces;
+      ns = ctx.N;
+      const Material& material = scene_.material(sp.material);
+      le = material.evaluate(ctx, scene_.images, &v.bsdf, &ns);
+      // A transparent pass makes no vertex (connections see the surface through
+      // shadow_transmittance); an emitting surface stays a vertex.
+      if (is_black(le) && material.may_be_transparent() && v.bsdf.pass_transparent(sampler_.next_1d(), &beta)) {
+        if (++transparent > s_.transparent_bounces || !pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
+        continue;
+      }
     }
     // The vertex: a medium vertex at a real collision (beta holds sigma_s T / pdf, medium.h), else
     // a surface vertex.
     const bool backface = medium < 0 && dot(ray.d, sp.ng) > 0;
-    Spectrum le(0.0f);
     v.delta = false;
     v.infinite = false;
     v.stack = stack;
@@ -321,11 +334,6 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.sp = sp;
       v.p = sp.p;
       v.n = backface ? -sp.ng : sp.ng;
-      ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, hit.t * length(ray.d));
-      ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
-      ctx.ray_depth = bounces;
-      Vec3 ns = ctx.N;
-      le = scene_.material(sp.material).evaluate(ctx, scene_.images, &v.bsdf, &ns);
       v.frame = Frame(facing_normal(ns, v.n));
       v.wo = v.frame.to_local(-ray.d);
     }

@@ -57,12 +57,11 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;
       if (sp) leave_surface(scene, *sp, side, ls.wi, &shadow_stack);
-      T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats);
-      if (is_black(T)) return;
+      T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats, s.transparent_bounces);
     } else {
-      ++stats.rays;
-      if (scene.geometry.occluded(shadow)) return;
+      T = shadow_transmittance(scene, VolumeStack{}, shadow, sampler, est, step, stats, s.transparent_bounces);
     }
+    if (is_black(T)) return;
     float light_pdf = pmf * ls.pdf;
     float w = ls.delta ? 1.0f : power_heuristic(light_pdf, scatter_pdf);
     add(beta * fv * T * ls.radiance * (w / light_pdf));
@@ -157,7 +156,14 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       if (!is_black(emitted)) {
         int li = lights.triangle_light(sp.instance, sp.primitive);
         add(beta * emitted *
-            (li >= 0 ? mis_emitter(li, ray.d, kMedia ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
+            (li >= 0 ? mis_emitter(li, ray.d, kMedia || t_prev > 0 ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
+      }
+      // A transparent pass continues the line as an invisible boundary does: the MIS state stays
+      // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.
+      if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta)) {
+        if (++b.transparent > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
+        t_prev += hit.t * length(ray.d);
+        continue;
       }
       if (b.from_camera()) {
         out.normal = ns;

@@ -525,6 +525,31 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
 
 // The lobes' weights summed and clamped to [0, 1] (Cycles' denoising albedo likewise sums closure
 // weights); the specular layer counts its Fresnel at the hemispherical average f0 + (1 - f0)/21.
+Spectrum Bsdf::transparency() const {
+  Spectrum t(0.0f);
+  for (int i = 0; i < count_; ++i)
+    if (lobes_[i].type == LobeType::Transparent) t += lobes_[i].weight;
+  return t;
+}
+
+bool Bsdf::pass_transparent(float u, Spectrum* beta) {
+  float through = 0, rest = 0;
+  for (int i = 0; i < count_; ++i)
+    (lobes_[i].type == LobeType::Transparent ? through : rest) += average(lobes_[i].weight);
+  if (!(through > 0)) return false;
+  const float p = rest > 0 ? through / (through + rest) : 1.0f;
+  if (u < p) {
+    *beta *= transparency() * (1 / p);
+    return true;
+  }
+  int kept = 0;
+  for (int i = 0; i < count_; ++i)
+    if (lobes_[i].type != LobeType::Transparent) lobes_[kept++] = lobes_[i];
+  count_ = kept;
+  *beta *= 1 / (1 - p);
+  return false;
+}
+
 Spectrum Bsdf::albedo() const {
   Spectrum a(0.0f);
   for (int k = 0; k < count_; ++k) {

@@ -80,6 +80,13 @@ class Bsdf {
   bool sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const;
   // Directional albedo estimate of the lobes' weights (for the Albedo pass and Russian roulette).
   Spectrum albedo() const;
+  // The summed weights of the Transparent lobes: what a shadow ray passes (Cycles'
+  // shader_bsdf_transparency).
+  Spectrum transparency() const;
+  // Transparency as a choice (the Transparent lobes' share p of the lobes' average weights): with
+  // probability p the ray passes straight on and beta is scaled by transparency() / p (returns
+  // true); else the Transparent lobes are removed and beta is scaled by 1 / (1 - p).
+  bool pass_transparent(float u, Spectrum* beta);
   uint32_t flags() const;  // union of lobe flags
   bool has_non_delta() const;
   // The probabilities with which sample() picks each lobe for this wo; false if none can be.

@@ -30,6 +30,7 @@ class Material {
     return emissive_ ? program_.run(ctx, images, nullptr, nullptr) : Spectrum(0.0f);
   }
   bool emissive() const { return emissive_; }
+  bool may_be_transparent() const { return program_.may_be_transparent(); }
   // A rough scalar for how bright the emission is, for picking lights by power.
   float emission_power_estimate() const { return emission_estimate_; }
   const Program& program() const { return program_; }

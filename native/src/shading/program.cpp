@@ -162,6 +162,25 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
   return m.emitted;
 }
 
+bool Program::may_be_transparent() const {
+  auto zero = [&](uint32_t w) {
+    if (!(w & kConstBit)) return false;
+    for (uint32_t j = 0; j < operand_size(w); ++j)
+      if (constants_[operand_index(w) + j] != 0) return false;
+    return true;
+  };
+  for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
+    Instr in = decode(w);
+    w += words_of(in);
+    if (in.op == kOpHoldout && !zero(in.in[0])) return true;
+    if (in.op == kOpTransparent && !zero(in.in[0]) && !zero(in.in[1])) return true;
+    if (in.op == kOpPrincipled && !zero(in.in[0]) &&
+        (!(in.in[23] & kConstBit) || constants_[operand_index(in.in[23])] < 1))
+      return true;
+  }
+  return false;
+}
+
 bool Program::emission_estimate(float* estimate) const {
   bool emits = false;
   float best = 0;

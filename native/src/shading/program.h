@@ -135,6 +135,9 @@ class Program {
   // Whether the program may emit, and a rough scalar for how bright (for picking lights by power):
   // exact for constant emission, 1 where a texture or a node decides it.
   bool emission_estimate(float* estimate) const;
+  // Whether the program may give a Transparent lobe (Transparent, Holdout, Principled Alpha): then
+  // shadow rays look at it (Cycles' transparent shadows).
+  bool may_be_transparent() const;
 
  private:
   std::vector<uint32_t> code_;
