@@ -12,7 +12,6 @@
 
 #include <cstdint>
 
-#include "core/sampling.h"  // Vec2, which program.h uses without including
 #include "shading/program.h"
 
 namespace lt {
