@@ -9,6 +9,9 @@
 #include <vector>
 
 #include "cycles_texture_reference.h"
+#include "program_builder.h"
+#include "shading/image.h"
+#include "shading/inputs.h"
 #include "shading/textures.h"
 
 namespace {
@@ -176,6 +179,67 @@ TEST(Textures, UnknownModesDoNotCrash) {
     std::vector<uint32_t> params(std::strlen(textures_family_signature(op)->params), 7u);
     ASSERT_LE(input_floats(op), 24);
     for (float v : run(op, params, in)) EXPECT_FALSE(std::isnan(v)) << op;
+  }
+}
+
+// Every Cycles row as a real program (the loader validates the instruction against the signature
+// and folds it, its inputs being constant) whose Fac/Value/Distance... drives an Emission: the
+// emitted value is the row's first output where it is a float, else the colour.
+TEST(Textures, CyclesRowsThroughTheProgramLoader) {
+  int checked = 0;
+  for (const auto& c : cycles_ref::kTextureCases) {
+    const OpSignature* sig = textures_family_signature(c.op);
+    ShaderCode p;
+    std::vector<uint32_t> ins;
+    int at = 0;
+    for (const char* t = sig->in; *t; t++) {
+      ins.push_back(*t == 'v' ? p.c3({c.in[at], c.in[at + 1], c.in[at + 2]}) : p.c1(c.in[at]));
+      at += operand_floats(*t);
+    }
+    std::vector<int> sizes;
+    for (const char* t = sig->out; *t; t++) sizes.push_back(operand_floats(*t));
+    std::vector<uint32_t> outs =
+        p.emit(c.op, ins, sizes, std::vector<uint32_t>(c.params, c.params + std::strlen(sig->params)));
+    // The first output, as a colour.
+    uint32_t shown = outs[0];
+    Vec3 want{c.out[0], c.out[0], c.out[0]};
+    if (sig->out[0] == 'v') {
+      want = {c.out[0], c.out[1], c.out[2]};
+    } else {
+      shown = p.emit(kOpToVector, {outs[0]}, {3})[0];
+    }
+    if (std::isnan(want.x)) continue;
+    p.emit(kOpEmission, {p.one(), shown, p.c1(1.0f)}, {});
+    Program prog(p.code, p.k, p.registers, 0);
+    ShadingContext ctx{};
+    std::vector<std::unique_ptr<Image>> images;
+    Spectrum e = prog.run(ctx, images, nullptr, nullptr);
+    EXPECT_NEAR(e[0], want.x, 2e-5f + 2e-5f * std::fabs(want.x)) << c.label;
+    EXPECT_NEAR(e[2], want.z, 2e-5f + 2e-5f * std::fabs(want.z)) << c.label;
+    checked++;
+  }
+  EXPECT_GT(checked, 100);
+}
+
+// A texture fed by a register (the Generated coordinates) is not folded: it runs per shading point.
+TEST(Textures, RunsOnRegisterInputs) {
+  ShaderCode p;
+  p.k.push_back(0);  // an empty table (the shaded object; no camera), at offset 0
+  std::vector<uint32_t> tc = p.emit(kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {0, 0});
+  std::vector<uint32_t> noise =
+      p.emit(kOpTexNoise, {tc[0], p.c1(0), p.c1(3.0f), p.c1(2.0f), p.c1(0.5f), p.c1(0)}, {1, 3}, {3});
+  p.emit(kOpEmission, {p.one(), noise[1], p.c1(1.0f)}, {});
+  Program prog(p.code, p.k, p.registers, 0);
+  std::vector<std::unique_ptr<Image>> images;
+  for (Vec3 g : {Vec3{0.1f, 0.2f, 0.3f}, Vec3{0.7f, 0.4f, 0.9f}}) {
+    ShadingContext ctx{};
+    ctx.generated = g;
+    Spectrum e = prog.run(ctx, images, nullptr, nullptr);
+    float in[8] = {g.x, g.y, g.z, 0, 3.0f, 2.0f, 0.5f, 0};
+    std::vector<float> want = run(kOpTexNoise, {3}, in);
+    EXPECT_FLOAT_EQ(e[0], want[1]);
+    EXPECT_FLOAT_EQ(e[1], want[2]);
+    EXPECT_FLOAT_EQ(e[2], want[3]);
   }
 }
 
