@@ -444,6 +444,125 @@ def build_principled_ground(scene):
     add_camera(scene, (0, -7.0, 0.7), (0, 0, 0.3), lens=35.0)
 
 
+def _node_group(name, inputs, outputs, build):
+    """A shader node group with (type, name) inputs and outputs; build(tree, group input node)
+    returns {output name: socket} to link to the Group Output."""
+    g = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    for kind, n in inputs:
+        g.inputs.new(kind, n)
+    for kind, n in outputs:
+        g.outputs.new(kind, n)
+    gin, gout = g.nodes.new("NodeGroupInput"), g.nodes.new("NodeGroupOutput")
+    for n, socket in build(g, gin).items():
+        g.links.new(socket, gout.inputs[n])
+    return g
+
+
+def _node(tree, idname, inputs=(), **props):
+    """A node with properties set and inputs fed: values set, sockets linked (by index or name)."""
+    n = tree.nodes.new(idname)
+    for k, v in props.items():
+        setattr(n, k, v)
+    for key, v in (inputs.items() if isinstance(inputs, dict) else enumerate(inputs)):
+        if v is None:
+            continue
+        if isinstance(v, bpy.types.NodeSocket):
+            tree.links.new(v, n.inputs[key])
+        elif isinstance(v, tuple) and len(v) in (3, 4) and len(n.inputs[key].default_value) == 4:
+            n.inputs[key].default_value = (*v[:3], 1.0)
+        else:
+            n.inputs[key].default_value = v
+    return n
+
+
+def layered_material(name):
+    """Issue 13's "material of 50+ nodes with nested groups", as users build them: stripes from a
+    group (Separate XYZ, Math), used twice inside a tint group (Vector Math, Mix RGB, Hue/Saturation,
+    Bright/Contrast, ColorRamp), object coordinates through Mapping, Layer Weight and Fresnel
+    driving the mix and the roughness, a Map Range, Clamp, Gamma, Invert and RGB Curves chain,
+    into a Principled BSDF."""
+    def stripes(g, gin):
+        sep = _node(g, "ShaderNodeSeparateXYZ", [gin.outputs["Vector"]])
+        scaled = _node(g, "ShaderNodeMath", [sep.outputs["X"], 6.0], operation='MULTIPLY')
+        wave = _node(g, "ShaderNodeMath", [scaled.outputs[0]], operation='SINE')
+        tilt = _node(g, "ShaderNodeMath", [sep.outputs["Z"], 2.0, wave.outputs[0]], operation='MULTIPLY_ADD')
+        ranged = _node(g, "ShaderNodeMapRange", {"Value": tilt.outputs[0], "From Min": -1.0, "From Max": 3.0})
+        return {"Fac": _node(g, "ShaderNodeMath", [ranged.outputs[0], 1.4], operation='POWER').outputs[0]}
+
+    stripe_group = _node_group(name + "Stripes", [("NodeSocketVector", "Vector")], [("NodeSocketFloat", "Fac")],
+                               stripes)
+
+    def tint(g, gin):
+        a = _node(g, "ShaderNodeGroup", node_tree=stripe_group)
+        g.links.new(gin.outputs["Vector"], a.inputs["Vector"])
+        rotated = _node(g, "ShaderNodeVectorRotate", {"Vector": gin.outputs["Vector"], "Angle": 0.7},
+                        rotation_type='Z_AXIS')
+        twice = _node(g, "ShaderNodeVectorMath", [rotated.outputs[0], (2.0, 2.0, 2.0)], operation='MULTIPLY')
+        b = _node(g, "ShaderNodeGroup", node_tree=stripe_group)
+        g.links.new(twice.outputs[0], b.inputs["Vector"])
+        both = _node(g, "ShaderNodeMath", [a.outputs["Fac"], b.outputs["Fac"]], operation='MAXIMUM')
+        ramp = _node(g, "ShaderNodeValToRGB", [both.outputs[0]])
+        ramp.color_ramp.elements[0].color = (0.05, 0.1, 0.3, 1.0)
+        ramp.color_ramp.elements[1].color = (0.9, 0.7, 0.3, 1.0)
+        mixed = _node(g, "ShaderNodeMixRGB", [a.outputs["Fac"], ramp.outputs["Color"], gin.outputs["Color"]],
+                      blend_type='OVERLAY')
+        hsv = _node(g, "ShaderNodeHueSaturation", {"Hue": 0.55, "Saturation": 1.2, "Color": mixed.outputs[0]})
+        bc = _node(g, "ShaderNodeBrightContrast", {"Color": hsv.outputs[0], "Bright": 0.05, "Contrast": 0.2})
+        return {"Color": bc.outputs[0], "Fac": both.outputs[0]}
+
+    tint_group = _node_group(name + "Tint", [("NodeSocketVector", "Vector"), ("NodeSocketColor", "Color")],
+                             [("NodeSocketColor", "Color"), ("NodeSocketFloat", "Fac")], tint)
+    mat, nt, out = _material(name)
+    coords = _node(nt, "ShaderNodeTexCoord")
+    mapping = _node(nt, "ShaderNodeMapping", {"Vector": coords.outputs["Object"], "Location": (0.1, 0.2, 0.0),
+                                              "Rotation": (0.2, 0.0, 0.4), "Scale": (1.5, 1.5, 1.0)})
+    t1 = _node(nt, "ShaderNodeGroup", node_tree=tint_group)
+    nt.links.new(mapping.outputs[0], t1.inputs["Vector"])
+    t1.inputs["Color"].default_value = (0.6, 0.2, 0.15, 1.0)
+    generated = _node(nt, "ShaderNodeVectorMath", [coords.outputs["Generated"], (0.5, 0.5, 0.5)],
+                      operation='SUBTRACT')
+    t2 = _node(nt, "ShaderNodeGroup", node_tree=tint_group)
+    nt.links.new(generated.outputs[0], t2.inputs["Vector"])
+    t2.inputs["Color"].default_value = (0.2, 0.5, 0.3, 1.0)
+    facing = _node(nt, "ShaderNodeLayerWeight", {"Blend": 0.35})
+    mix = _node(nt, "ShaderNodeMixRGB", [facing.outputs["Facing"], t1.outputs["Color"], t2.outputs["Color"]])
+    gamma = _node(nt, "ShaderNodeGamma", {"Color": mix.outputs[0], "Gamma": 1.3})
+    curves = _node(nt, "ShaderNodeRGBCurve", {"Color": gamma.outputs[0]})
+    curves.mapping.curves[3].points.new(0.4, 0.55)
+    curves.mapping.update()
+    inverted = _node(nt, "ShaderNodeInvert", {"Fac": 0.15, "Color": curves.outputs[0]})
+    clamp = _node(nt, "ShaderNodeClamp", {"Value": t2.outputs["Fac"], "Min": 0.1, "Max": 0.9})
+    fresnel = _node(nt, "ShaderNodeFresnel", {"IOR": 1.6})
+    rough = _node(nt, "ShaderNodeMath", [clamp.outputs[0], fresnel.outputs[0], 0.2], operation='MULTIPLY_ADD')
+    rough_range = _node(nt, "ShaderNodeMapRange", {"Value": rough.outputs[0], "To Min": 0.15, "To Max": 0.8},
+                        interpolation_type='SMOOTHSTEP')
+    metal = _node(nt, "ShaderNodeMath", [t1.outputs["Fac"], 0.8], operation='GREATER_THAN')
+    metal_scaled = _node(nt, "ShaderNodeMath", [metal.outputs[0], 0.7], operation='MULTIPLY')
+    bsdf = _node(nt, "ShaderNodeBsdfPrincipled", {"Base Color": inverted.outputs[0],
+                                                  "Roughness": rough_range.outputs["Result"],
+                                                  "Metallic": metal_scaled.outputs[0]})
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def count_nodes(tree):
+    """Nodes in a tree, counting each group's inside once per group node that uses it."""
+    return sum(1 + (count_nodes(n.node_tree) if n.type == 'GROUP' and n.node_tree else 0) for n in tree.nodes)
+
+
+def build_layered_material(scene):
+    """Issue 13's 50+ node material with nested groups (layered_material) on two spheres and a
+    ground, under a sun and a sky."""
+    set_world(scene, (0.3, 0.45, 0.7), 1.0)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 40.0))
+    assign(ground, principled("Ground", (0.5, 0.5, 0.5), 0.8))
+    mat = layered_material("Layered")
+    for i, (x, r) in enumerate(((-0.6, 0.55), (0.7, 0.45))):
+        assign(add_object(scene, "Sphere%d" % i, mesh_sphere("Sphere%d" % i, r), (x, 0.0, r)), mat)
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(50, 0, 30), angle=math.radians(2.0))
+    add_camera(scene, (0, -4.0, 1.2), (0, 0, 0.45), lens=40.0)
+
+
 def build_metal_box(scene):
     """A closed 4 x 4 x 3 m box of rough (0.2) copper-coloured Principled metal with the camera and
     a small point light inside, 8 bounces of every kind (issue 18: rough metal after several
@@ -1045,6 +1164,7 @@ SCENES = {
     "instanced": (build_instanced, (96, 96), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
+    "layered_material": (build_layered_material, (96, 64), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
     "door_bounce": (build_door_bounce, (96, 96), 1280),

@@ -89,6 +89,19 @@ def test_principled_diffuse_retro_reflects_as_cycles(scene_factory, outdir):
     assert report == "", report
 
 
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_layered_node_material_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Issue 13: "a material of 50+ nodes with nested groups" (scenes: layered_material; groups
+    inside groups, object and generated coordinates, Layer Weight, Fresnel, ramps, curves) on two
+    spheres under a sun and a sky: per tile and in the image mean as above."""
+    import bpy
+    both = lantern_and_cycles(scene_factory, "layered_material", integrator)
+    assert build_scenes.count_nodes(bpy.data.materials["Layered"].node_tree) >= 50
+    report, _ = ru.agreement_report("layered_material_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir,
+                                    TILE, ROUNDING)
+    assert report == "", report
+
+
 def test_rough_metal_after_several_bounces_agrees_with_cycles(scene_factory, outdir):
     """Issue 18: "rough metal seems to reflect more than Cycles after several bounces (+25 % after
     8 bounces at roughness 0.2)". metal_box (closed, copper Principled metal at roughness 0.2, 8
