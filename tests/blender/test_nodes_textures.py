@@ -279,20 +279,3 @@ def test_white_noise_unlinked_vector_is_its_value(dims, outdir):
         n.inputs["Vector"].default_value = (0.3, -1.7, 2.2)
         return n.outputs["Color"]
     compare(build, "white_constant_%s" % dims, outdir, flat=True)
-
-
-def test_opcodes_match_textures_h():
-    """opcodes.py's texture numbers are textures.h's enum (kOpTexNoise = kFamilyTexturesBegin = 192,
-    then one by one)."""
-    import re
-
-    from lantern.export.nodes import opcodes
-    here = os.path.dirname(os.path.abspath(__file__))
-    header = open(os.path.join(here, "..", "..", "native", "src", "shading", "textures.h")).read()
-    enum = header[header.index("enum TextureOp"):]
-    enum = enum[:enum.index("};")]
-    names = re.findall(r"^\s*kOpTex(?!turesEnd)(\w+)", enum, re.M)
-    assert names[0] == "Noise" and len(names) == 9
-    for i, name in enumerate(names):
-        py = re.sub(r"(?<!^)(?=[A-Z])", "_", name).upper()
-        assert getattr(opcodes, "TEX_" + py) == 192 + i, name

@@ -61,13 +61,13 @@ int input_floats(uint32_t op) {
 
 TEST(Textures, SignaturesCoverTheFamily) {
   EXPECT_EQ(textures_family_signature(kFamilyTexturesBegin - 1), nullptr);
-  EXPECT_EQ(textures_family_signature(kOpTexturesEnd), nullptr);
-  for (uint32_t op = kFamilyTexturesBegin; op < kOpTexturesEnd; op++) {
+  EXPECT_EQ(textures_family_signature(kTexturesFamilyEnd), nullptr);
+  for (uint32_t op = kFamilyTexturesBegin; op < kTexturesFamilyEnd; op++) {
     const OpSignature* s = textures_family_signature(op);
     ASSERT_NE(s, nullptr) << op;
     EXPECT_TRUE(s->pure);
   }
-  EXPECT_LE((uint32_t)kOpTexturesEnd, 320u);
+  EXPECT_LE((uint32_t)kTexturesFamilyEnd, 320u);
 }
 
 // The hash itself is held to Cycles by the White Noise rows of MatchCyclesRenders (White Noise is
@@ -175,7 +175,7 @@ TEST(Textures, WhiteNoiseInUnitRange) {
 TEST(Textures, UnknownModesDoNotCrash) {
   float in[24] = {0.3f, 0.2f, 0.1f, 0.5f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f,
                   1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
-  for (uint32_t op = kFamilyTexturesBegin; op < kOpTexturesEnd; op++) {
+  for (uint32_t op = kFamilyTexturesBegin; op < kTexturesFamilyEnd; op++) {
     std::vector<uint32_t> params(std::strlen(textures_family_signature(op)->params), 7u);
     ASSERT_LE(input_floats(op), 24);
     for (float v : run(op, params, in)) EXPECT_FALSE(std::isnan(v)) << op;

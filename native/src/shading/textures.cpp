@@ -849,13 +849,13 @@ const OpSignature kSignatures[] = {
     {"v", "vf", "i", true},              // gradient
     {"vf", "fv", "i", true},             // white noise
 };
-static_assert(sizeof(kSignatures) / sizeof(kSignatures[0]) == kOpTexturesEnd - kFamilyTexturesBegin,
+static_assert(sizeof(kSignatures) / sizeof(kSignatures[0]) == kTexturesFamilyEnd - kFamilyTexturesBegin,
               "one signature per texture opcode");
 
 }  // namespace
 
 const OpSignature* textures_family_signature(uint32_t op) {
-  if (op < kFamilyTexturesBegin || op >= kOpTexturesEnd) return nullptr;
+  if (op < kFamilyTexturesBegin || op >= kTexturesFamilyEnd) return nullptr;
   return &kSignatures[op - kFamilyTexturesBegin];
 }
 

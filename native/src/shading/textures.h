@@ -43,7 +43,7 @@ enum TextureOp : uint32_t {
   kOpTexGradient,
   // White Noise. in: vector v, w f; out: value f, color v; params: dimensions (1-4).
   kOpTexWhiteNoise,
-  kOpTexturesEnd,
+  kTexturesFamilyEnd,
 };
 
 // Cycles' NodeVoronoiFeature / NodeVoronoiDistanceMetric / NodeMusgraveType / NodeGradientType order.
