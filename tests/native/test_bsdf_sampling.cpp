@@ -9,7 +9,7 @@
 
 #include "chi2.h"
 #include "cycles_ggx_reference.h"
-#include "scene/bsdf.h"
+#include "shading/bsdf.h"
 
 namespace lt {
 namespace {

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "core/film.h"
-#include "scene/image.h"
+#include "shading/image.h"
 #include "scene_builders.h"
 
 extern char** environ;
