@@ -27,8 +27,9 @@ extern "C" {
  * are arrays of components with emission; lt_scene_stats counts emissive triangles;
  * lt_scene_add_volume_grid takes a step; 5: lt_render_settings.passes and caller_bytes;
  * lt_render_wait reports a failed render; lt_scene_begin/end_image; image memory in lt_scene_stats;
- * lt_render_status.unestimated_pixels; 6: lt_abi_layout; default samples 64 (the add-on's). */
-#define LT_ABI_VERSION 6
+ * lt_render_status.unestimated_pixels; 6: lt_abi_layout; default samples 64 (the add-on's);
+ * 7: materials are shader programs; meshes carry their texture space. */
+#define LT_ABI_VERSION 7
 
 enum lt_status {
   LT_OK = 0,
@@ -90,42 +91,20 @@ LT_API int lt_scene_add_image(lt_scene* scene, const lt_image_desc* desc, int* o
 LT_API int lt_scene_begin_image(lt_scene* scene, const lt_image_desc* desc, float** out_pixels);
 LT_API int lt_scene_end_image(lt_scene* scene, int* out_id);
 
-/* Materials are small shader trees flattened into an array of nodes; children refer to indices in
- * the same array. A texture-able input is a constant value or an image looked up at the UV. */
-typedef struct lt_input {
-  float value[3]; /* colour, or value[0] for scalars */
-  int image;      /* -1: constant; else image id. Scalars read the image's first channel */
-} lt_input;
+/* Materials are shader programs: a material's node tree compiled by the add-on
+ * (addon/lantern/export/nodes/) for the core's register machine (native/src/shading/program.h
+ * documents the encoding and the opcodes). code: instruction words; constants: the constant pool;
+ * registers: how many float registers the program writes. Programs are validated (operands in
+ * range, registers written before they are read, image ids that exist) and refused otherwise. */
+typedef struct lt_shader_program {
+  const uint32_t* code;
+  int code_words;
+  const float* constants;
+  int constant_count;
+  int registers;
+} lt_shader_program;
 
-enum lt_node_type {
-  LT_NODE_DIFFUSE = 0,     /* color, roughness (Oren-Nayar above 0) */
-  LT_NODE_GLOSSY = 1,      /* color, roughness (GGX, alpha = roughness^2) */
-  LT_NODE_GLASS = 2,       /* color, roughness, ior */
-  LT_NODE_EMISSION = 3,    /* color, strength */
-  LT_NODE_MIX = 4,         /* fac, child[0], child[1] */
-  LT_NODE_ADD = 5,         /* child[0], child[1] */
-  LT_NODE_PRINCIPLED = 6,  /* color (base), metallic, roughness, specular, transmission, ior,
-                              emission (colour), strength (emission strength) */
-  LT_NODE_TRANSPARENT = 7, /* color */
-  LT_NODE_COUNT = 8
-};
-
-typedef struct lt_shader_node {
-  int type; /* lt_node_type */
-  lt_input color;
-  lt_input roughness;
-  lt_input fac;
-  lt_input metallic;
-  lt_input specular;
-  lt_input transmission;
-  lt_input emission;
-  lt_input strength;
-  float ior;
-  int child[2];
-} lt_shader_node;
-
-/* root: index of the node that feeds the Surface output. */
-LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_node* nodes, int node_count, int root, int* out_id);
+LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_program* program, int* out_id);
 
 /* A mesh of triangles. corner_normals (9 floats per triangle) and corner_uvs (6 per triangle) may
  * be NULL; material_slots (one per triangle, index into the instance's material list) may be NULL. */
@@ -137,6 +116,10 @@ typedef struct lt_mesh_desc {
   const float* corner_normals;
   const float* corner_uvs;
   const int* material_slots;
+  /* Blender's texture space (Mesh.texspace_location, texspace_size), for Generated coordinates;
+   * a size of (0, 0, 0) stands for Blender's automatic one: the mesh's bounds. */
+  float texspace_location[3];
+  float texspace_size[3];
 } lt_mesh_desc;
 LT_API int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* desc, int* out_id);
 
@@ -278,9 +261,9 @@ LT_API int lt_scene_commit(lt_scene* scene);
  *                                              camera when they start).
  * Meshes' BVHs are never rebuilt: a changed mesh needs a new scene. */
 LT_API int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float transform[12]);
-/* Replaces material `material`'s surface (same node encoding as lt_scene_add_material); its volume
+/* Replaces material `material`'s surface program (as lt_scene_add_material); its volume
  * (lt_scene_set_material_volume) is kept. */
-LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_node* nodes, int node_count, int root);
+LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program* program);
 /* Removes every light added with lt_scene_add_light (to add the edited set again). */
 LT_API int lt_scene_clear_lights(lt_scene* scene);
 

@@ -70,18 +70,6 @@ lt::Transform to_transform(const float* m, const char* what) {
   return t;
 }
 
-lt::Input to_input(const lt_input& in, size_t image_count, const char* what, int node) {
-  if (!finite_array(in.value, 3))
-    throw InvalidArgument("material node " + std::to_string(node) + ": " + what + " is not finite");
-  if (in.image < -1 || in.image >= int(image_count))
-    throw InvalidArgument("material node " + std::to_string(node) + ": " + what + " refers to image " +
-                          std::to_string(in.image) + ", which does not exist");
-  lt::Input r;
-  r.value = lt::Vec3(in.value[0], in.value[1], in.value[2]);
-  r.image = in.image;
-  return r;
-}
-
 lt::VolumeCoefficients to_volume(const lt_volume_desc* d) {
   require(d != nullptr, "volume description is NULL");
   require(d->node >= LT_VOLUME_PRINCIPLED && d->node <= LT_VOLUME_EMISSION,
@@ -133,7 +121,7 @@ void begin_edit(lt_scene* scene, bool needs_commit = true) {
   if (needs_commit) scene->scene.mark_edited();
 }
 
-lt::Material to_material(const lt_scene* scene, const lt_shader_node* nodes, int node_count, int root);
+lt::Material to_material(const lt_scene* scene, const lt_shader_program* p);
 
 constexpr int kMaxDimension = 65536;
 
@@ -152,32 +140,16 @@ lt::Interpolation interpolation(const lt_image_desc& d) {
   return d.interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest : lt::Interpolation::Linear;
 }  // 268 M pixels: beyond this a render is a mistake
 
-lt::Material to_material(const lt_scene* scene, const lt_shader_node* nodes, int node_count, int root) {
-  require(node_count > 0 && node_count <= 4096,
-          "material node count " + std::to_string(node_count) + " is out of range");
-  const size_t images = scene->scene.images.size();
-  std::vector<lt::ShaderNode> v(node_count);
-  for (int i = 0; i < node_count; ++i) {
-    const lt_shader_node& n = nodes[i];
-    if (n.type < 0 || n.type >= LT_NODE_COUNT)
-      throw InvalidArgument("material node " + std::to_string(i) + " has unknown type " + std::to_string(n.type) +
-                            "; valid types are DIFFUSE, GLOSSY, GLASS, EMISSION, MIX, ADD, PRINCIPLED, TRANSPARENT");
-    lt::ShaderNode& s = v[i];
-    s.type = lt::NodeType(n.type);
-    s.color = to_input(n.color, images, "color", i);
-    s.roughness = to_input(n.roughness, images, "roughness", i);
-    s.fac = to_input(n.fac, images, "fac", i);
-    s.metallic = to_input(n.metallic, images, "metallic", i);
-    s.specular = to_input(n.specular, images, "specular", i);
-    s.transmission = to_input(n.transmission, images, "transmission", i);
-    s.emission = to_input(n.emission, images, "emission", i);
-    s.strength = to_input(n.strength, images, "strength", i);
-    require(std::isfinite(n.ior), "material node " + std::to_string(i) + ": ior is not finite");
-    s.ior = n.ior;
-    s.child[0] = n.child[0];
-    s.child[1] = n.child[1];
-  }
-  return lt::Material(std::move(v), root, images);
+lt::Material to_material(const lt_scene* scene, const lt_shader_program* p) {
+  require(p->code_words >= 0 && p->code_words <= lt::kMaxProgramWords,
+          "shader program length " + std::to_string(p->code_words) + " is out of range");
+  require(p->constant_count >= 0 && p->constant_count <= lt::kMaxProgramWords,
+          "shader program constant count " + std::to_string(p->constant_count) + " is out of range");
+  require(p->code_words == 0 || p->code, "shader program code is NULL");
+  require(p->constant_count == 0 || p->constants, "shader program constants are NULL");
+  return lt::Material(lt::Program(std::vector<uint32_t>(p->code, p->code + p->code_words),
+                                  std::vector<float>(p->constants, p->constants + p->constant_count), p->registers,
+                                  scene->scene.images.size()));
 }
 
 }  // namespace
@@ -247,21 +219,21 @@ int lt_scene_end_image(lt_scene* scene, int* out_id) {
   });
 }
 
-int lt_scene_add_material(lt_scene* scene, const lt_shader_node* nodes, int node_count, int root, int* out_id) {
+int lt_scene_add_material(lt_scene* scene, const lt_shader_program* program, int* out_id) {
   return guarded([&] {
-    require(scene && nodes && out_id, "lt_scene_add_material: NULL argument");
+    require(scene && program && out_id, "lt_scene_add_material: NULL argument");
     scene->scene.require_editable();
-    scene->scene.materials.push_back(to_material(scene, nodes, node_count, root));
+    scene->scene.materials.push_back(to_material(scene, program));
     *out_id = int(scene->scene.materials.size()) - 1;
   });
 }
 
-int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_node* nodes, int node_count, int root) {
+int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program* program) {
   return guarded([&] {
-    require(scene && nodes, "lt_scene_set_material: NULL argument");
+    require(scene && program, "lt_scene_set_material: NULL argument");
     require(material >= 0 && material < int(scene->scene.materials.size()),
             "material " + std::to_string(material) + " does not exist");
-    lt::Material m = to_material(scene, nodes, node_count, root);  // validated before anything changes
+    lt::Material m = to_material(scene, program);  // validated before anything changes
     begin_edit(scene);
     scene->scene.materials[material] = std::move(m);
   });
@@ -304,6 +276,24 @@ int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* d, int* out_id) {
     if (d->material_slots && d->triangle_count) {
       m.slots.assign(d->material_slots, d->material_slots + d->triangle_count);
       for (int& s : m.slots) s = s < 0 ? 0 : s;  // Blender's indices are never negative; be safe
+    }
+    const lt::Vec3 loc(d->texspace_location[0], d->texspace_location[1], d->texspace_location[2]);
+    const lt::Vec3 size(d->texspace_size[0], d->texspace_size[1], d->texspace_size[2]);
+    if (lt::is_finite(loc) && lt::is_finite(size) && size.x > 0 && size.y > 0 && size.z > 0) {
+      m.texspace_location = loc;
+      m.texspace_size = size;
+    } else {
+      // Blender's automatic texture space (BKE_mesh_texspace_calc): the bounds, flat axes of size 1.
+      lt::Bounds b;
+      for (const lt::Vec3& v : m.positions) b.extend(v);
+      if (!b.empty()) {
+        m.texspace_location = (b.lo + b.hi) * 0.5f;
+        m.texspace_size = (b.hi - b.lo) * 0.5f;
+        for (int k = 0; k < 3; ++k) {
+          float& s = m.texspace_size[k];
+          s = s == 0 ? 1.0f : std::max(s, 1e-5f);
+        }
+      }
     }
     *out_id = scene->scene.geometry.add_mesh(std::move(m), scene->scene.warnings);
   });

@@ -315,7 +315,11 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
   const Vec3& p2 = m.positions[m.indices[3 * t + 2]];
   const float b1 = hit.u, b2 = hit.v, b0 = 1 - b1 - b2;
   // Interpolate in object space, transform once.
-  sp.p = inst.xf.point(p0 * b0 + p1 * b1 + p2 * b2);
+  sp.po = p0 * b0 + p1 * b1 + p2 * b2;
+  sp.p = inst.xf.point(sp.po);
+  sp.bary = {b1, b2};
+  const Vec3 g = (sp.po - m.texspace_location) / (2.0f * m.texspace_size);
+  sp.generated = Vec3(g.x + 0.5f, g.y + 0.5f, g.z + 0.5f);
   sp.ng = normalize(inst.normal_to_world(cross(p1 - p0, p2 - p0)));
   if (!m.corner_normals.empty()) {
     Vec3 ns = m.corner_normals[3 * t] * b0 + m.corner_normals[3 * t + 1] * b1 + m.corner_normals[3 * t + 2] * b2;

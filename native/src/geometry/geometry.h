@@ -19,6 +19,8 @@ struct Mesh {
   std::vector<Vec3> corner_normals;  // 3 per triangle, or empty (flat)
   std::vector<Vec2> corner_uvs;      // 3 per triangle, or empty
   std::vector<int> slots;            // per triangle, or empty
+  // Texture space (Blender's texspace_location and texspace_size): Generated = (p - loc) / (2 size) + 0.5.
+  Vec3 texspace_location{0.0f}, texspace_size{1.0f};
   RTCScene rtc = nullptr;
   size_t triangle_count() const { return indices.size() / 3; }
 };
@@ -32,6 +34,12 @@ struct Instance {
   Vec3 normal_rows[3];   // inverse transpose of the linear part (up to scale), for normals
   Vec3 normal_to_world(const Vec3& n) const {
     return {dot(normal_rows[0], n), dot(normal_rows[1], n), dot(normal_rows[2], n)};
+  }
+  // The inverse of normal_to_world up to scale: the linear part's transpose.
+  Vec3 normal_to_object(const Vec3& n) const {
+    const float* m = xf.m;
+    return {m[0] * n.x + m[4] * n.y + m[8] * n.z, m[1] * n.x + m[5] * n.y + m[9] * n.z,
+            m[2] * n.x + m[6] * n.y + m[10] * n.z};
   }
   int material_for(int slot) const { return slot >= 0 && slot < int(materials.size()) ? materials[slot] : -1; }
 };

@@ -23,6 +23,9 @@ struct SurfacePoint {
   Vec3 ng;  // geometric normal (unit), as wound by the mesh
   Vec3 ns;  // shading normal (unit), on ng's side
   Vec2 uv;
+  Vec2 bary;       // barycentrics of the triangle's second and third vertices
+  Vec3 po;         // object-space position
+  Vec3 generated;  // po in the mesh's texture space (Cycles' Generated coordinates)
   int material = -1;
   int instance = -1, primitive = -1;
 };

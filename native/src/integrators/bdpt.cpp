@@ -321,7 +321,12 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.sp = sp;
       v.p = sp.p;
       v.n = backface ? -sp.ng : sp.ng;
-      v.frame = Frame(backface ? -sp.ns : sp.ns);
+      ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, hit.t * length(ray.d));
+      ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
+      ctx.ray_depth = bounces;
+      Vec3 ns = ctx.N;
+      le = scene_.material(sp.material).evaluate(ctx, scene_.images, &v.bsdf, &ns);
+      v.frame = Frame(facing_normal(ns, v.n));
       v.wo = v.frame.to_local(-ray.d);
     }
     v.pdf_fwd = density_of(count, v);
@@ -338,7 +343,6 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.light = -1;
       v.kind = BounceKind::Volume;
     } else {
-      le = scene_.material(sp.material).evaluate(scene_.images, sp.uv, backface, &v.bsdf);
       v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
       v.kind = kind_of(v.bsdf);
     }

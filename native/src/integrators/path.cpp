@@ -143,10 +143,13 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
         t_prev += hit.t * length(ray.d);
         continue;
       }
-      const bool backface = dot(ray.d, sp.ng) > 0;
-      const Vec3 ng = backface ? -sp.ng : sp.ng, ns = backface ? -sp.ns : sp.ns;
+      ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, hit.t * length(ray.d));
+      describe_ray(b, visibility, &ctx);
+      const Vec3 ng = ctx.Ng;
+      Vec3 ns = ctx.N;
       const Material& material = scene.material(sp.material);
-      Spectrum emitted = material.evaluate(scene.images, sp.uv, backface, &bsdf);
+      Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &ns);
+      ns = facing_normal(ns, ng);
       if (b.from_camera()) {
         out.alpha = 1;
         out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth

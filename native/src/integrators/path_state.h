@@ -8,6 +8,7 @@
 #include "core/sampling.h"
 #include "integrators/integrator.h"
 #include "shading/bsdf.h"
+#include "shading/program.h"
 
 namespace lt {
 
@@ -81,6 +82,20 @@ struct Bounces {
            transmission > s.transmission_bounces || transparent > s.transparent_bounces;
   }
 };
+
+// What the Light Path node reports for a ray of kind `visibility` after bounces b.
+inline void describe_ray(const Bounces& b, unsigned visibility, ShadingContext* c) {
+  c->camera_ray = b.from_camera();
+  c->diffuse_ray = !c->camera_ray && (visibility & kVisDiffuse);
+  c->glossy_ray = !c->camera_ray && (visibility & kVisGlossy);
+  c->transmission_ray = !c->camera_ray && (visibility & kVisTransmission);
+  c->reflection_ray = c->diffuse_ray || c->glossy_ray;
+  c->ray_depth = b.total;
+  c->diffuse_depth = b.diffuse;
+  c->glossy_depth = b.glossy;
+  c->transparent_depth = b.transparent;
+  c->transmission_depth = b.transmission;
+}
 
 // Russian roulette once the path has had a chance to gather light (unbiased: divide by q), on the
 // throughput relative to the path's start (`start`: the largest component of its initial beta),

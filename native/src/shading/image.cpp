@@ -147,9 +147,4 @@ Vec3 Image::lookup(Vec2 uv) const {
   return srgb_ ? Vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) : c;
 }
 
-float Image::lookup_value(Vec2 uv) const {
-  float v = filtered<float>(uv, [&](int x, int y) { return fetch_first(size_t(y) * width_ + x); });
-  return srgb_ ? srgb_to_linear(v) : v;
-}
-
 }  // namespace lt

@@ -1,55 +1,50 @@
-// Materials: a flattened shader tree (from Blender's node tree) evaluated at a surface point into
-// BSDF lobes and emitted radiance.
+// Materials: a surface shader program (program.h) evaluated at a surface point into BSDF lobes
+// and emitted radiance.
 #pragma once
 
 #include <memory>
 #include <vector>
 
-#include "core/math.h"
+#include "geometry/geometry.h"
+#include "geometry/hit.h"
 #include "shading/bsdf.h"
 #include "shading/image.h"
+#include "shading/program.h"
 
 namespace lt {
 
-enum class NodeType : int { Diffuse, Glossy, Glass, Emission, Mix, Add, Principled, Transparent, Count };
-
-struct Input {
-  Vec3 value{0.0f};
-  int image = -1;
-};
-
-struct ShaderNode {
-  NodeType type = NodeType::Diffuse;
-  Input color, roughness, fac, metallic, specular, transmission, emission, strength;
-  float ior = 1.45f;
-  int child[2] = {-1, -1};
-};
-
 class Material {
  public:
-  // Validates the tree (node types, child indices, no cycles, image ids) and throws
-  // InvalidArgument with the offending node's index otherwise.
-  Material(std::vector<ShaderNode> nodes, int root, size_t image_count);
+  explicit Material(Program program);
   // Lantern's (and Cycles') default surface: diffuse grey 0.8.
   static Material default_surface();
 
   // Fills bsdf with the lobes at a point and returns the emitted radiance there (both sides).
-  // backface: the ray arrives from behind the geometric normal (glass uses 1/ior then).
-  Spectrum evaluate(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface, Bsdf* bsdf) const;
+  // shading_normal: set when the program brings its own (a Normal input linked), else untouched.
+  Spectrum evaluate(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
+                    Vec3* shading_normal) const {
+    return program_.run(ctx, images, bsdf, shading_normal);
+  }
   // Emitted radiance only (for light sampling, without building lobes).
-  Spectrum emission(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv) const;
+  Spectrum emission(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images) const {
+    return emissive_ ? program_.run(ctx, images, nullptr, nullptr) : Spectrum(0.0f);
+  }
   bool emissive() const { return emissive_; }
   // A rough scalar for how bright the emission is, for picking lights by power.
   float emission_power_estimate() const { return emission_estimate_; }
+  const Program& program() const { return program_; }
 
  private:
-  Material() = default;
-  template <bool kLobes>
-  Spectrum walk(const std::vector<std::unique_ptr<Image>>& images, Vec2 uv, bool backface, Bsdf* bsdf) const;
-  std::vector<ShaderNode> nodes_;
-  int root_ = 0;
+  Program program_;
   bool emissive_ = false;
   float emission_estimate_ = 0;
 };
+
+// A program's shading normal as the integrators use it: on the geometric normal's side (ng faces
+// the incoming ray), else the geometric normal.
+inline Vec3 facing_normal(const Vec3& n, const Vec3& ng) { return dot(n, ng) > 0 ? n : ng; }
+
+// The shading point as the nodes see it, for a ray of direction ray_d that met sp at distance t.
+ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ray_d, float t);
 
 }  // namespace lt

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "core/sampling.h"
 
 namespace lt {
 
@@ -37,17 +38,18 @@ struct ShadingContext {
   Vec3 N;             // smooth shading normal, facing the incoming ray (Cycles' sd->N)
   Vec3 Ng;            // geometric normal, facing the incoming ray
   Vec3 I;             // toward the viewer: the incoming ray's reversed direction
+  Vec3 tangent;       // Cycles' Geometry Tangent: around the generated Z axis, normal to N
   Vec2 uv;            // the active render UV map
-  Vec3 generated;     // object-space position normalised to the mesh's bounds (Cycles' Generated)
+  Vec2 bary;          // barycentrics of the triangle's second and third vertices
+  Vec3 generated;     // object-space position in the mesh's texture space (Cycles' Generated)
   Vec3 object_P;      // object-space position
+  Vec3 object_N;      // object-space N
   bool backfacing = false;
+  // Light Path: the ray that reached this point and the bounces before it.
+  bool camera_ray = true, shadow_ray = false, diffuse_ray = false, glossy_ray = false, singular_ray = false;
+  bool reflection_ray = false, transmission_ray = false;
   float ray_length = 0;
-  int ray_depth = 0;
-  bool camera_ray = true;  // Light Path outputs: what kind of ray reached this point
-  bool shadow_ray = false;
-  bool diffuse_ray = false;
-  bool glossy_ray = false;
-  bool transmission_ray = false;
+  int ray_depth = 0, diffuse_depth = 0, glossy_depth = 0, transparent_depth = 0, transmission_depth = 0;
 };
 
 // The machine an instruction runs on: read inputs, write outputs.
@@ -84,39 +86,40 @@ struct Instr {
   const uint32_t* param;
 };
 
-// Opcode ranges, one per node family (each family's file executes its range):
-//   0-63     program.cpp: values, closures, inputs that read the context, images
-//   64-191   nodes_math.cpp: Math, Vector Math, Mix, colour, converters
-//   192-319  textures.cpp: procedural textures
-enum Op : uint32_t {
-  kOpNop = 0,
-  // closures (impure): inputs start with the closure weight (vec3) and the normal (vec3)
-  kOpEmission = 1,       // in: weight, color, strength
-  kOpDiffuse = 2,        // in: weight, normal, color, roughness
-  kOpGlossy = 3,         // in: weight, normal, color, roughness; param: distribution
-  kOpGlass = 4,          // in: weight, normal, color, roughness, ior; param: distribution
-  kOpTransparent = 5,    // in: weight, color
-  kOpPrincipled = 6,     // in: weight, normal, base, metallic, roughness, specular, transmission, ior, emission, strength, alpha
-  kOpMixWeights = 7,     // in: weight (vec3), fac -> out: w * (1 - fac), w * fac (pure)
-  // context inputs (impure: read the shading point)
-  kOpTexCoord = 16,      // out: generated, normal, uv, object, camera?, window?, reflection
-  kOpGeometry = 17,      // out: position, normal, tangent, true normal, incoming, parametric, backfacing
-  kOpImage = 18,         // in: vector; out: color, alpha; param: image id
-  kOpNormalMap = 19,
-  kOpLightPath = 20,
-  kOpFresnel = 21,       // in: ior, normal -> out: fac
-  kOpLayerWeight = 22,   // in: blend, normal -> out: fresnel, facing
-  kFamilyMathBegin = 64,
-  kFamilyTexturesBegin = 192,
-  kOpEnd = 320,
+// Opcode ranges, one per node family (each family's file executes its range and declares its
+// opcodes, with each instruction's operands in emission order):
+//   0-31     shaders.h: closures (Shader nodes) and closure weights
+//   32-63    inputs.h: nodes that read the shading point (Texture Coordinate, Geometry...), images
+//   64-191   nodes_math.h: Math, Vector Math, Mix, colour, converters
+//   192-319  textures.h: procedural textures
+constexpr uint32_t kFamilyShadersBegin = 0;
+constexpr uint32_t kFamilyInputsBegin = 32;
+constexpr uint32_t kFamilyMathBegin = 64;
+constexpr uint32_t kFamilyTexturesBegin = 192;
+constexpr uint32_t kOpEnd = 320;
+
+// An opcode's operands, checked when a program is loaded so that executors read them blindly.
+// in / out: one character per operand, 'f' (1 float) or 'v' (3 floats). params: one character
+// per word: 'i' a mode (the executor treats unknown values as documented), 'g' an image id,
+// 't' a table in the pool (its offset; pool[offset] holds the table's float count n, the n floats
+// follow). pure: reads nothing but its operands (folded when they are all constant).
+struct OpSignature {
+  const char* in;
+  const char* out;
+  const char* params;
+  bool pure;
 };
 
-// Family executors: run one instruction of their range; false when the opcode is unknown.
-// `pure` reports whether an opcode reads nothing but its inputs (then it may be folded).
-bool exec_math_family(const Instr& in, Machine& m);
-bool math_family_pure(uint32_t op);
-bool exec_textures_family(const Instr& in, Machine& m);
-bool textures_family_pure(uint32_t op);
+// Family executors: the signature of an opcode of their range (null when unknown), and running one
+// instruction (validated against the signature).
+const OpSignature* shaders_family_signature(uint32_t op);
+void exec_shaders_family(const Instr& in, Machine& m);
+const OpSignature* inputs_family_signature(uint32_t op);
+void exec_inputs_family(const Instr& in, Machine& m);
+const OpSignature* math_family_signature(uint32_t op);
+void exec_math_family(const Instr& in, Machine& m);
+const OpSignature* textures_family_signature(uint32_t op);
+void exec_textures_family(const Instr& in, Machine& m);
 
 class Program {
  public:
@@ -129,6 +132,9 @@ class Program {
   Spectrum run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
                Vec3* shading_normal) const;
   size_t instruction_count() const { return count_; }
+  // Whether the program may emit, and a rough scalar for how bright (for picking lights by power):
+  // exact for constant emission, 1 where a texture or a node decides it.
+  bool emission_estimate(float* estimate) const;
 
  private:
   std::vector<uint32_t> code_;

@@ -37,8 +37,9 @@ inline SurfacePoint triangle_light_surface(const Scene& scene, const Light& l, V
   h.v = b.y;
   return scene.geometry.surface(h);
 }
-inline Spectrum triangle_light_radiance(const Scene& scene, const SurfacePoint& sp) {
-  return scene.material(sp.material).emission(scene.images, sp.uv);
+// dir: the direction the light leaves in (toward the receiver).
+inline Spectrum triangle_light_radiance(const Scene& scene, const SurfacePoint& sp, const Vec3& dir) {
+  return scene.material(sp.material).emission(shading_context(scene.geometry, sp, -dir, 0.0f), scene.images);
 }
 
 inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3& p, Vec2 u, LightSample* s) {
@@ -53,7 +54,7 @@ inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3
   s->pdf = d2 / (l.area * cos_l);
   s->n = ng;
   s->on_surface = true;
-  s->radiance = triangle_light_radiance(scene, triangle_light_surface(scene, l, b));
+  s->radiance = triangle_light_radiance(scene, triangle_light_surface(scene, l, b), -s->wi);
   s->delta = false;
   return !is_black(s->radiance);
 }
@@ -80,7 +81,7 @@ inline bool triangle_light_sample_emission(const Scene& scene, const Light& l, V
   e->n = n;
   e->pdf_pos = 1 / l.area;
   e->pdf_dir = 0.5f * cosine_hemisphere_pdf(local.z);
-  e->radiance = triangle_light_radiance(scene, sp);
+  e->radiance = triangle_light_radiance(scene, sp, e->ray.d);
   return e->pdf_dir > 0 && !is_black(e->radiance);
 }
 

@@ -1,0 +1,153 @@
+#include "shading/inputs.h"
+
+#include <memory>
+#include <vector>
+
+#include "shading/bsdf.h"
+#include "shading/image.h"
+
+namespace lt {
+
+namespace {
+
+const OpSignature kSignatures[] = {
+    {"", "vvvvvvv", "tt", false},                 // texture coordinate
+    {"", "vvvvvvfff", "", false},                 // geometry
+    {"v", "vf", "g", false},                      // image
+    {"fv", "f", "", false},                       // fresnel
+    {"fv", "ff", "", false},                      // layer weight
+    {"", "ffffffffffffff", "", false},            // light path
+    {"v", "f", "i", true},                        // to float
+    {"f", "v", "", true},                         // to vector
+};
+
+Vec3 normal_or_default(const Machine& m, uint32_t operand) {
+  Vec3 n = m.v(operand);
+  return dot(n, n) > 0 ? n : m.ctx->N;
+}
+
+// A table's matrix rows applied to a point (12 floats: 3 rows of 4).
+Vec3 affine(const float* t, const Vec3& p) {
+  return {t[0] * p.x + t[1] * p.y + t[2] * p.z + t[3], t[4] * p.x + t[5] * p.y + t[6] * p.z + t[7],
+          t[8] * p.x + t[9] * p.y + t[10] * p.z + t[11]};
+}
+
+// Cycles' fresnel_dielectric_cos: unpolarised Fresnel reflectance, 1 beyond the critical angle.
+float fresnel_cos(float cosi, float eta) {
+  const float c = std::abs(cosi);
+  float g = eta * eta - 1 + c * c;
+  if (!(g > 0)) return 1.0f;
+  g = std::sqrt(g);
+  const float a = (g - c) / (g + c), b = (c * (g + c) - 1) / (c * (g - c) + 1);
+  return 0.5f * a * a * (1 + b * b);
+}
+
+void tex_coord(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  m.set(in.out[0], c.generated);
+  m.set(in.out[1], c.object_N);
+  m.set(in.out[2], Vec3(c.uv.x, c.uv.y, 0.0f));
+  const float* object = m.k + in.param[0];
+  m.set(in.out[3], object[0] == 12 ? affine(object + 1, c.P) : c.object_P);
+  const float* camera = m.k + in.param[1];
+  if (camera[0] == 28) {
+    m.set(in.out[4], affine(camera + 1, c.P));
+    // Cycles' Window output: the NDC position (x, y in [0, 1] across the frame), z 0.
+    const float* p = camera + 13;
+    const float x = p[0] * c.P.x + p[1] * c.P.y + p[2] * c.P.z + p[3];
+    const float y = p[4] * c.P.x + p[5] * c.P.y + p[6] * c.P.z + p[7];
+    const float w = p[12] * c.P.x + p[13] * c.P.y + p[14] * c.P.z + p[15];
+    m.set(in.out[5], w != 0 ? Vec3(x / w, y / w, 0.0f) : Vec3(0.0f));
+  } else {
+    m.set(in.out[4], Vec3(0.0f));
+    m.set(in.out[5], Vec3(0.0f));
+  }
+  m.set(in.out[6], 2.0f * dot(c.N, c.I) * c.N - c.I);
+}
+
+}  // namespace
+
+const OpSignature* inputs_family_signature(uint32_t op) {
+  if (op < kOpTexCoord || op > kOpToVector) return nullptr;
+  return &kSignatures[op - kOpTexCoord];
+}
+
+void exec_inputs_family(const Instr& in, Machine& m) {
+  if (in.op == kOpToFloat) {
+    const Vec3 v = m.v(in.in[0]);
+    m.set(in.out[0], in.param[0] == 1 ? (v.x + v.y + v.z) * (1.0f / 3.0f)
+                                      : 0.2126f * v.x + 0.7152f * v.y + 0.0722f * v.z);
+    return;
+  }
+  if (in.op == kOpToVector) {
+    m.set(in.out[0], Vec3(m.f(in.in[0])));
+    return;
+  }
+  const ShadingContext& c = *m.ctx;
+  switch (in.op) {
+    case kOpTexCoord:
+      tex_coord(in, m);
+      break;
+    case kOpGeometry:
+      m.set(in.out[0], c.P);
+      m.set(in.out[1], c.N);
+      m.set(in.out[2], c.tangent);
+      m.set(in.out[3], c.Ng);
+      m.set(in.out[4], c.I);
+      m.set(in.out[5], Vec3(1 - c.bary.x - c.bary.y, c.bary.x, 0.0f));
+      m.set(in.out[6], c.backfacing ? 1.0f : 0.0f);
+      m.set(in.out[7], 0.5f);  // pointiness is not computed: Cycles' value on a flat mesh
+      m.set(in.out[8], 0.0f);
+      break;
+    case kOpImage: {
+      const Image& image = *(*m.images)[in.param[0]];
+      const Vec3 p = m.v(in.in[0]);
+      m.set(in.out[0], image.lookup(Vec2{p.x, p.y}));
+      m.set(in.out[1], image.lookup_alpha(Vec2{p.x, p.y}));
+      break;
+    }
+    case kOpFresnel: {
+      float eta = std::max(m.f(in.in[0]), 1e-5f);
+      eta = c.backfacing ? 1 / eta : eta;
+      m.set(in.out[0], fresnel_cos(dot(c.I, normal_or_default(m, in.in[1])), eta));
+      break;
+    }
+    case kOpLayerWeight: {
+      float blend = m.f(in.in[0]);
+      const Vec3 n = normal_or_default(m, in.in[1]);
+      float eta = std::max(1 - blend, 1e-5f);
+      eta = c.backfacing ? eta : 1 / eta;
+      m.set(in.out[0], fresnel_cos(dot(c.I, n), eta));
+      float f = std::abs(dot(c.I, n));
+      if (blend != 0.5f) {
+        blend = clamp(blend, 0.0f, 1 - 1e-5f);
+        blend = blend < 0.5f ? 2 * blend : 0.5f / (1 - blend);
+        f = std::pow(f, blend);
+      }
+      m.set(in.out[1], 1 - f);
+      break;
+    }
+    case kOpLightPath: {
+      const float v[14] = {float(c.camera_ray),
+                           float(c.shadow_ray),
+                           float(c.diffuse_ray),
+                           float(c.glossy_ray),
+                           float(c.singular_ray),
+                           float(c.reflection_ray),
+                           float(c.transmission_ray),
+                           0.0f,
+                           c.ray_length,
+                           float(c.ray_depth),
+                           float(c.diffuse_depth),
+                           float(c.glossy_depth),
+                           float(c.transparent_depth),
+                           float(c.transmission_depth)};
+      for (int k = 0; k < 14; ++k) m.set(in.out[k], v[k]);
+      break;
+    }
+    default:
+      break;
+  }
+}
+
+}  // namespace lt

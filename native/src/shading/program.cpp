@@ -1,0 +1,195 @@
+#include "shading/program.h"
+
+#include <cstring>
+#include <string>
+
+#include "core/error.h"
+#include "shading/bsdf.h"
+#include "shading/shaders.h"
+
+namespace lt {
+
+namespace {
+
+const OpSignature* signature_of(uint32_t op) {
+  if (op < kFamilyInputsBegin) return shaders_family_signature(op);
+  if (op < kFamilyMathBegin) return inputs_family_signature(op);
+  if (op < kFamilyTexturesBegin) return math_family_signature(op);
+  if (op < kOpEnd) return textures_family_signature(op);
+  return nullptr;
+}
+
+void execute(const Instr& in, Machine& m) {
+  if (in.op < kFamilyInputsBegin)
+    exec_shaders_family(in, m);
+  else if (in.op < kFamilyMathBegin)
+    exec_inputs_family(in, m);
+  else if (in.op < kFamilyTexturesBegin)
+    exec_math_family(in, m);
+  else
+    exec_textures_family(in, m);
+}
+
+Instr decode(const uint32_t* w) {
+  Instr in;
+  in.op = w[0];
+  in.n_in = int(w[1] & 0xff);
+  in.n_out = int((w[1] >> 8) & 0xff);
+  in.n_param = int((w[1] >> 16) & 0xff);
+  in.in = w + 2;
+  in.out = in.in + in.n_in;
+  in.param = in.out + in.n_out;
+  return in;
+}
+
+size_t words_of(const Instr& in) { return 2 + size_t(in.n_in + in.n_out + in.n_param); }
+
+uint32_t size_of(char c) { return c == 'v' ? 3u : 1u; }
+
+}  // namespace
+
+Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int registers, size_t image_count) {
+  if (code.size() > size_t(kMaxProgramWords))
+    throw InvalidArgument("shader program of " + std::to_string(code.size()) + " words is longer than " +
+                          std::to_string(kMaxProgramWords));
+  if (registers < 0 || registers > kMaxRegisters)
+    throw InvalidArgument("shader program needs " + std::to_string(registers) + " registers; at most " +
+                          std::to_string(kMaxRegisters) + " are allowed");
+  if (constants.size() > kIndexMask) throw InvalidArgument("shader program has too many constants");
+  for (size_t i = 0; i < constants.size(); ++i)
+    if (!std::isfinite(constants[i]))
+      throw InvalidArgument("shader program constant " + std::to_string(i) + " is not finite");
+
+  // Each register written once, read only as the whole output that wrote it (its start and size):
+  // then folding rewrites a read by one pool offset.
+  std::vector<uint8_t> written(size_t(registers), 0);  // 0: not yet; else the output's size at its start
+  std::vector<int32_t> folded(size_t(registers), -1);  // pool offset of a folded output
+  std::vector<uint32_t> out_code;
+  out_code.reserve(code.size());
+  std::vector<float> scratch(size_t(registers), 0.0f);
+
+  size_t pos = 0, index = 0;
+  while (pos < code.size()) {
+    const std::string where = "shader program instruction " + std::to_string(index) + " (word " + std::to_string(pos) + ")";
+    if (code.size() - pos < 2) throw InvalidArgument(where + " is cut short");
+    Instr in = decode(code.data() + pos);
+    if (words_of(in) > code.size() - pos) throw InvalidArgument(where + " is cut short");
+    const OpSignature* sig = signature_of(in.op);
+    if (!sig) throw InvalidArgument(where + " has an unknown opcode " + std::to_string(in.op));
+    if (size_t(in.n_in) != std::strlen(sig->in) || size_t(in.n_out) != std::strlen(sig->out) ||
+        size_t(in.n_param) != std::strlen(sig->params))
+      throw InvalidArgument(where + " (opcode " + std::to_string(in.op) + ") has the wrong operand count");
+    std::vector<uint32_t> words(code.begin() + long(pos), code.begin() + long(pos + words_of(in)));
+    uint32_t* ins = words.data() + 2;
+    bool all_constant = true;
+    for (int k = 0; k < in.n_in; ++k) {
+      uint32_t w = ins[k];
+      const uint32_t size = operand_size(w), at = operand_index(w);
+      if (size != size_of(sig->in[k]) || (w & 0x70000000u))
+        throw InvalidArgument(where + " input " + std::to_string(k) + " has the wrong size");
+      if (w & kConstBit) {
+        if (size_t(at) + size > constants.size())
+          throw InvalidArgument(where + " input " + std::to_string(k) + " reads past the constants");
+        continue;
+      }
+      if (at >= size_t(registers) || written[at] != size)
+        throw InvalidArgument(where + " input " + std::to_string(k) + " reads register " + std::to_string(at) +
+                              " before an instruction writes it");
+      if (folded[at] >= 0)
+        ins[k] = kConstBit | (size << 24) | uint32_t(folded[at]);
+      else
+        all_constant = false;
+    }
+    uint32_t* outs = ins + in.n_in;
+    for (int k = 0; k < in.n_out; ++k) {
+      uint32_t w = outs[k];
+      const uint32_t size = operand_size(w), at = operand_index(w);
+      if ((w & kConstBit) || size != size_of(sig->out[k]) || size_t(at) + size > size_t(registers))
+        throw InvalidArgument(where + " output " + std::to_string(k) + " is not a register range");
+      for (uint32_t j = 0; j < size; ++j)
+        if (written[at + j]) throw InvalidArgument(where + " writes register " + std::to_string(at + j) + " twice");
+      written[at] = uint8_t(size);
+      for (uint32_t j = 1; j < size; ++j) written[at + j] = 0xff;  // inside a vector: not readable alone
+    }
+    const uint32_t* params = outs + in.n_out;
+    for (int k = 0; k < in.n_param; ++k) {
+      const char kind = sig->params[k];
+      if (kind == 'g' && params[k] >= image_count)
+        throw InvalidArgument(where + " refers to image " + std::to_string(params[k]) + " which does not exist");
+      if (kind == 't') {
+        const size_t at = params[k];
+        if (at >= constants.size() || !(constants[at] >= 0) ||
+            size_t(constants[at]) > constants.size() - at - 1)
+          throw InvalidArgument(where + " refers to a table past the constants");
+      }
+    }
+    if (sig->pure && all_constant && in.n_out > 0) {
+      // Fold: run once and move the outputs into the pool.
+      Machine m{scratch.data(), constants.data(), nullptr, nullptr, nullptr};
+      execute(decode(words.data()), m);
+      for (int k = 0; k < in.n_out; ++k) {
+        const uint32_t at = operand_index(outs[k]);
+        folded[at] = int32_t(constants.size());
+        for (uint32_t j = 0; j < operand_size(outs[k]); ++j)
+          constants.push_back(std::isfinite(scratch[at + j]) ? scratch[at + j] : 0.0f);
+      }
+    } else {
+      out_code.insert(out_code.end(), words.begin(), words.end());
+      ++count_;
+    }
+    pos += words_of(in);
+    ++index;
+  }
+  code_ = std::move(out_code);
+  constants_ = std::move(constants);
+  registers_ = registers;
+}
+
+Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
+                      Vec3* shading_normal) const {
+  float regs[kMaxRegisters];  // left uninitialised: validation guarantees every read follows a write
+  Machine m{regs, constants_.data(), &ctx, &images, bsdf};
+  m.emitted = Spectrum(0.0f);
+  if (bsdf) bsdf->clear();
+  const uint32_t* w = code_.data();
+  const uint32_t* end = w + code_.size();
+  while (w < end) {
+    Instr in = decode(w);
+    execute(in, m);
+    w += words_of(in);
+  }
+  if (shading_normal && m.has_shading_normal) *shading_normal = m.shading_normal;
+  return m.emitted;
+}
+
+bool Program::emission_estimate(float* estimate) const {
+  bool emits = false;
+  float best = 0;
+  for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
+    Instr in = decode(w);
+    w += words_of(in);
+    if (in.op != kOpEmission && in.op != kOpPrincipled) continue;
+    const uint32_t weight = in.in[0], color = in.in[in.op == kOpEmission ? 1 : 21],
+                   strength = in.in[in.op == kOpEmission ? 2 : 22];
+    float e = 1;
+    if ((weight & color & strength) & kConstBit) {
+      const float* wk = constants_.data() + operand_index(weight);
+      const float* ck = constants_.data() + operand_index(color);
+      float c = 0, wm = 0;
+      for (int j = 0; j < 3; ++j) {
+        c = std::max(c, ck[j]);
+        wm = std::max(wm, wk[j]);
+      }
+      // Negative strength is negative light (as Cycles renders it): the estimate is its magnitude.
+      e = wm * c * std::abs(constants_[operand_index(strength)]);
+    }
+    if (std::isfinite(e) && e > 0) {
+      emits = true;
+      best = std::max(best, e);
+    }
+  }
+  *estimate = best;
+  return emits;
+}
+
+}  // namespace lt

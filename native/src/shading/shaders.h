@@ -1,0 +1,35 @@
+// The shaders family of the shader machine: closures (Cycles' Shader nodes) and the weights Mix
+// Shader hands its inputs. A closure's first input is its weight (Mix Shader factors folded in);
+// a Normal input of (0, 0, 0) stands for the unlinked socket: the shading point's normal.
+#pragma once
+
+#include "shading/program.h"
+
+namespace lt {
+
+enum ShaderOp : uint32_t {
+  kOpEmission = kFamilyShadersBegin + 1,  // in: weight v, color v, strength f
+  kOpDiffuse,                             // in: weight v, normal v, color v, roughness f
+  kOpGlossy,                              // in: weight v, normal v, color v, roughness f; param: distribution
+  kOpGlass,                               // in: weight v, normal v, color v, roughness f, ior f; param: distribution
+  kOpTransparent,                         // in: weight v, color v
+  // in: weight v, normal v, base color v, subsurface f, subsurface radius v, subsurface color v,
+  // subsurface ior f, subsurface anisotropy f, metallic f, specular f, specular tint f,
+  // roughness f, anisotropic f, anisotropic rotation f, sheen f, sheen tint f, clearcoat f,
+  // clearcoat roughness f, ior f, transmission f, transmission roughness f, emission v,
+  // emission strength f, alpha f, clearcoat normal v, tangent v; params: distribution, subsurface method
+  kOpPrincipled,
+  kOpMixWeights,  // in: weight v, fac f; out: weight * (1 - fac) v, weight * fac v (fac clamped to [0, 1])
+  kOpHoldout,     // in: weight v (Holdout: rendered as Transparent until holdout passes exist)
+};
+
+// Glossy, Glass and Principled distributions (the param), as the node's enum.
+enum Distribution : uint32_t {
+  kDistSharp = 0,
+  kDistGGX = 1,
+  kDistBeckmann = 2,
+  kDistAshikhminShirley = 3,
+  kDistMultiGGX = 4,
+};
+
+}  // namespace lt
