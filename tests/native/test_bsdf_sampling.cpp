@@ -608,6 +608,32 @@ TEST(DeltaLobes, MirrorsAndPassThrough) {
   }
 }
 
+// The new lobes' delta limits: Beckmann and Ashikhmin-Shirley mirrors of weight 1 (Cycles' 1e6 / 1e6),
+// the clearcoat mirror weighted by the Fresnel of IOR 1.5, smooth Beckmann glass split by Fresnel.
+TEST(DeltaLobes, NewLobesSmoothLimits) {
+  const Vec3 wo = from_angles(50, 30);
+  const Spectrum w(0.2f, 0.5f, 1.0f);
+  BsdfSample s;
+  for (const Lobe& l : {beckmann(0, w), aniso(beckmann(1e-5f, w), 1e-4f), ashikhmin(1e-4f, w), ashikhmin(0, w)}) {
+    ASSERT_TRUE(lobe_sample(l, wo, Vec2{0.3f, 0.7f}, 0.5f, &s)) << int(l.type);
+    EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeReflection));
+    EXPECT_NEAR(length(s.wi - mirror(wo)), 0, 1e-6f);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.f[c] * s.wi.z / s.pdf, w[c], 1e-5f);
+  }
+  ASSERT_TRUE(lobe_sample(clearcoat(0, w), wo, Vec2{0.3f, 0.7f}, 0.5f, &s));
+  EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeReflection));
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.f[c] * s.wi.z / s.pdf, w[c] * fresnel_dielectric(wo.z, 1.5f), 1e-5f);
+  const float fr = fresnel_dielectric(wo.z, 1.5f);
+  ASSERT_TRUE(lobe_sample(beckmann_glass(0, 1.5f), wo, Vec2{0.3f, 0.7f}, 0.5f * fr, &s));
+  EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeReflection));
+  EXPECT_NEAR(s.pdf, fr, 1e-6f);
+  ASSERT_TRUE(lobe_sample(beckmann_glass(0, 1.5f), wo, Vec2{0.3f, 0.7f}, 0.5f + 0.5f * fr, &s));
+  EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeTransmission));
+  EXPECT_EQ(s.eta, 1.5f);
+  EXPECT_TRUE(lobe_is_glass(LobeType::DielectricBeckmann));
+  EXPECT_FALSE(lobe_is_glass(LobeType::Translucent));
+}
+
 // Through the mixture a delta lobe is picked with its selection probability and reports
 // pdf = selection probability x branch probability.
 TEST(DeltaLobes, MixtureSelection) {

@@ -56,7 +56,7 @@ inline float lobe_alpha_y(const Lobe& l) { return l.alpha_y >= 0 ? std::min(l.al
 inline float lobe_eta(const Lobe& l) { return (l.eta > 0 && std::isfinite(l.eta)) ? l.eta : 1.0f; }
 inline float lobe_sigma(const Lobe& l) { return l.roughness > 0 ? std::min(l.roughness, 1.0f) : 0.0f; }
 
-inline bool is_glass(const Lobe& l) { return l.type == LobeType::Dielectric || l.type == LobeType::DielectricBeckmann; }
+inline bool is_glass(const Lobe& l) { return lobe_is_glass(l.type); }
 
 // The lobe as seen from below (-Z): the frame is mirrored, and glass's relative IOR inverts, since
 // eta is the IOR of the -Z side over the +Z side. This is what a reverse evaluation needs (BDPT's

@@ -27,7 +27,8 @@ enum LobeFlags : uint32_t {
 
 // Each type with the Cycles 3.4 node (svm_node_closure_bsdf) and parameters that make it. The caller
 // builds the local frame: +Z the closure's normal, +X the tangent for anisotropic lobes (Cycles' T,
-// already rotated by the node's Rotation). "weight" is the closure weight (colour x mix factor).
+// already rotated by the node's Rotation, projected onto the tangent plane), +Y = normal x tangent
+// (Cycles' make_orthonormals_tangent). "weight" is the closure weight (colour x mix factor).
 enum class LobeType : uint8_t {
   // Diffuse BSDF: roughness = Roughness (Lambert at 0, Oren-Nayar sigma above).
   Diffuse,
@@ -72,6 +73,10 @@ enum class LobeType : uint8_t {
   GlossyToon,
 };
 constexpr int kLobeTypeCount = int(LobeType::GlossyToon) + 1;
+// The glass lobes, which reflect or refract with the relative IOR eta (integrators count their
+// bounces by the branch sampled). Translucent transmits without crossing an IOR; Cycles counts it
+// as a transmission bounce with diffuse ray visibility (integrator/path_state.h).
+inline bool lobe_is_glass(LobeType t) { return t == LobeType::Dielectric || t == LobeType::DielectricBeckmann; }
 
 // Glossy / Anisotropic BSDF roughness (svm_node_closure_bsdf): alpha = Roughness^2 when isotropic;
 // with Anisotropy a (clamped to [-0.99, 0.99]) alpha = alpha0 / (1 + a), alpha_y = alpha0 (1 + a)
