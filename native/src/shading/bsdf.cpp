@@ -23,6 +23,11 @@
 //   DiffuseToon, GlossyToon  bsdf_toon: a uniform cone of half angle min(size + smooth, pi/2) (x pi/2)
 //                about the normal or the mirror direction, intensity 1 to size, a ramp to
 //                size + smooth
+//   MultiGGX     bsdf_microfacet_multi_ggx (glossy, no Fresnel): f is mf_eval's estimate (analytic
+//                single scattering + one random walk seeded by the direction pair); sampled from a
+//                known mixture, as Cycles' own walk has no pdf. Cycles' sample weight is the walk's
+//                escape probability (1 for white), its eval's mean lower at high roughness (0.85 at
+//                alpha 1, normal incidence): Lantern follows eval's mean for both strategies.
 // Cycles' closures return f cos(wi); here f excludes it. Where Cycles' sample() disagrees with its
 // eval() (clearcoat sampled from GGX, anisotropic Beckmann sampled isotropically, toon's ramp read
 // at a random angle), f is eval()'s and the sampling is exact for the pdf reported.
@@ -36,6 +41,8 @@
 // microfacet closures below the shading normal; mirroring keeps every routine finite and BDPT's
 // reverse pdfs consistent with sampling from the other side.
 #include "shading/bsdf.h"
+
+#include <cstring>
 
 namespace lt {
 
@@ -80,6 +87,17 @@ bool microfacet_smooth(const Lobe& l) {
 inline float as_alpha(float a) { return clamp(a, 1e-4f, 1.0f); }
 bool as_smooth(const Lobe& l) { return !(std::max(as_alpha(lobe_alpha(l)), as_alpha(lobe_alpha_y(l))) > 1e-4f); }
 
+// Multiscatter GGX's alphas as bsdf_microfacet_multi_ggx_common_setup clamps them.
+inline float ms_alpha(float a) { return clamp(a, 1e-4f, 1.0f); }
+struct MsAlpha {
+  float x, y;
+};
+MsAlpha ms_alphas(const Lobe& l) { return {ms_alpha(lobe_alpha(l)), ms_alpha(lobe_alpha_y(l))}; }
+bool ms_smooth(const Lobe& l) {
+  const MsAlpha a = ms_alphas(l);
+  return a.x * a.y < 1e-7f;
+}
+
 // Toon: the half angles of full intensity and of the ramp's end, and of the sampled cone.
 struct Toon {
   float max_angle, smooth, cone, cos_cone, one_minus_cos_cone;
@@ -119,6 +137,8 @@ bool lobe_is_delta(const Lobe& l) {
       return microfacet_smooth(l);
     case LobeType::AshikhminShirley:
       return as_smooth(l);
+    case LobeType::MultiGGX:
+      return ms_smooth(l);
     case LobeType::Dielectric:
     case LobeType::DielectricBeckmann: {
       float eta = lobe_eta(l);  // symmetric in eta and 1/eta, so both sides agree
@@ -445,6 +465,187 @@ bool toon_sample(const Lobe& l, const Vec3& axis, Vec2 u, Vec3* i) {
 }
 inline Vec3 mirror_dir(const Vec3& o) { return {-o.x, -o.y, o.z}; }
 
+// ---- Multiscatter GGX (Cycles 3.4's bsdf_microfacet_multi.h, glossy, no Fresnel) -------------
+// Heitz et al. 2016: the microsurface as a random medium of heights (uniform height distribution,
+// C1(h) = (h + 1) / 2) and GGX normals; a walk from wo bounces on sampled microfacets and each
+// bounce past the first adds its next-event estimate towards wi. The helpers keep Cycles'
+// thresholds so that the estimate is Cycles' own.
+
+// Cycles' D_ggx / D_ggx_aniso with their floor on the denominator.
+float ms_D(const Vec3& m, const MsAlpha& a) {
+  if (a.x == a.y) {
+    const float z2 = m.z * m.z, a2 = a.x * a.x;
+    const float t = (1 - z2) + a2 * z2;
+    return a2 / std::max(kPi * t * t, 1e-7f);
+  }
+  const float sx = -m.x / a.x, sy = -m.y / a.y;
+  const float t = m.z * m.z + sx * sx + sy * sy;
+  return 1 / std::max(kPi * t * t * a.x * a.y, 1e-7f);
+}
+// Smith Lambda, negative for downward directions (mf_lambda).
+float ms_lambda(const Vec3& w, const MsAlpha& a) {
+  if (w.z > 0.9999f) return 0;
+  if (w.z < -0.9999f) return -0.9999f;
+  const float inv_z2 = 1 / std::max(w.z * w.z, 1e-7f);
+  const float wx = w.x * a.x, wy = w.y * a.y;
+  float v = std::sqrt(1 + (wx * wx + wy * wy) * inv_z2);
+  if (w.z <= 0) v = -v;
+  return 0.5f * (v - 1);
+}
+inline float ms_C1(float h) { return clamp(0.5f * (h + 1), 0.0f, 1.0f); }
+inline float ms_invC1(float c) { return 2 * clamp(c, 0.0f, 1.0f) - 1; }
+inline float ms_G1(const Vec3& w, float c1, float lambda) {
+  if (w.z > 0.9999f) return 1;
+  if (w.z < 1e-5f) return 0;
+  return std::pow(c1, lambda);
+}
+// The next height along w, or false if the walk leaves the surface (mf_sample_height).
+bool ms_sample_height(const Vec3& w, float* h, float* c1, float* g1, float* lambda, float u) {
+  if (w.z > 0.9999f) return false;
+  if (w.z < -0.9999f) {
+    *c1 *= u;
+    *h = ms_invC1(*c1);
+    *g1 = ms_G1(w, *c1, *lambda);
+  } else if (std::abs(w.z) >= 0.0001f) {
+    if (u > 1 - *g1) return false;
+    *c1 = *lambda >= 0 ? 1.0f : *c1 * std::pow(1 - u, -1 / *lambda);
+    *h = ms_invC1(*c1);
+    *g1 = ms_G1(w, *c1, *lambda);
+  }
+  return true;
+}
+// Heitz and d'Eon 2014's visible slopes of unit-roughness GGX with its rational fit for y
+// (mf_sampleP22_11), and the stretched normal (mf_sample_vndf).
+Vec2 ms_sample_p22(float cos_i, float ux, float uy) {
+  if (cos_i > 0.9999f || std::abs(cos_i) < 1e-6f) {
+    const float r = std::sqrt(ux / std::max(1 - ux, 1e-7f)), phi = 2 * kPi * uy;
+    return {r * std::cos(phi), r * std::sin(phi)};
+  }
+  const float sin_i = safe_sqrt(1 - cos_i * cos_i), tan_i = sin_i / cos_i;
+  const float proj = 0.5f * (cos_i + 1);
+  if (proj < 0.0001f) return {0, 0};
+  const float a = 2 * ux * proj / cos_i - 1;
+  float t = a * a - 1;
+  if (std::abs(t) < 1e-7f) return {0, 0};
+  t = 1 / t;
+  const float d = safe_sqrt(tan_i * tan_i * t * t - (a * a - tan_i * tan_i) * t);
+  const float x2 = tan_i * t + d;
+  const float x = (a < 0 || x2 > 1 / tan_i) ? tan_i * t - d : x2;
+  const float u2 = uy >= 0.5f ? 2 * (uy - 0.5f) : 2 * (0.5f - uy);
+  const float z =
+      (u2 * (u2 * (u2 * 0.27385f - 0.73369f) + 0.46341f)) / (u2 * (u2 * (u2 * 0.093073f + 0.309420f) - 1) + 0.597999f);
+  const float y = z * std::sqrt(1 + x * x);
+  return {x, uy >= 0.5f ? y : -y};
+}
+Vec3 ms_sample_vndf(const Vec3& w, const MsAlpha& a, float ux, float uy) {
+  const Vec3 w11 = normalize(Vec3(a.x * w.x, a.y * w.y, w.z));
+  const Vec2 s = ms_sample_p22(w11.z, ux, uy);
+  const float pl = std::sqrt(w11.x * w11.x + w11.y * w11.y);
+  const float cp = pl > 0 ? w11.x / pl : 0, sp = pl > 0 ? w11.y / pl : 0;  // Cycles' safe_normalize
+  const float sx = a.x * (cp * s.x - sp * s.y), sy = a.y * (sp * s.x + cp * s.y);
+  return normalize(Vec3(-sx, -sy, 1));
+}
+// The glossy phase function of a walk direction w (pointing into the surface) towards wi.
+float ms_phase_glossy(const Vec3& w, float lambda, const Vec3& wi, const MsAlpha& a) {
+  if (w.z > 0.9999f) return 0;
+  const Vec3 wh = normalize(wi - w);
+  if (wh.z < 0) return 0;
+  const float area = w.z < -0.9999f ? 1.0f : lambda * w.z;
+  const float c = dot(-w, wh);
+  if (c < 0) return 0;
+  return std::max(0.0f, c) * 0.25f / std::max(area * c, 1e-7f) * ms_D(wh, a);
+}
+
+// A small LCG seeded from the direction pair, so that eval() of one pair is one fixed estimate.
+struct MsRng {
+  uint32_t state;
+  float next() {
+    state = 1103515245u * state + 12345u;
+    return float(state) * (1.0f / 4294967296.0f);
+  }
+};
+uint32_t ms_seed(const Vec3& o, const Vec3& i) {
+  uint32_t b[6];
+  std::memcpy(b, &o.x, 4);
+  std::memcpy(b + 1, &o.y, 4);
+  std::memcpy(b + 2, &o.z, 4);
+  std::memcpy(b + 3, &i.x, 4);
+  std::memcpy(b + 4, &i.y, 4);
+  std::memcpy(b + 5, &i.z, 4);
+  uint32_t h = 0x9e3779b9u;
+  for (uint32_t v : b) h = hash_u32(h ^ v);
+  return h;
+}
+
+// mf_eval (glossy, no Fresnel): f cos_i for view o and light i, both above. As in Cycles 3.4 the
+// walk's bounce colour enters its estimate twice (phase x throughput x throughput).
+Spectrum ms_eval_cos(const Lobe& l, Vec3 o, Vec3 i) {
+  const MsAlpha a = ms_alphas(l);
+  const Spectrum color = vmin(vmax(l.ms_color, Spectrum(0.0f)), Spectrum(1.0f));
+  bool swapped = false;
+  if (i.z < o.z) {  // walk from the shallower direction (less noise; the BSDF is reciprocal)
+    std::swap(o, i);
+    swapped = true;
+  }
+  MsRng rng{ms_seed(o, i)};  // after the swap: f(o, i) and f(i, o) are the same estimate
+  if (o.z < 1e-5f || i.z < 1e-5f) return Spectrum(0.0f);
+  float lambda_r = ms_lambda(-o, a);
+  const float shadowing_lambda = ms_lambda(i, a);
+  const Vec3 wh = normalize(o + i);
+  const float g2 = 1 / (1 - (lambda_r + 1) + shadowing_lambda);
+  Spectrum eval(g2 * 0.25f / o.z * ms_D(wh, a));
+  Spectrum throughput(1.0f);
+  Vec3 wr = -o;
+  float hr = 1, c1_r = 1, g1_r = 0;
+  for (int order = 0; order < 10; ++order) {
+    if (!ms_sample_height(wr, &hr, &c1_r, &g1_r, &lambda_r, rng.next())) break;
+    const float uy = rng.next(), ux = rng.next();
+    const Vec3 wm = ms_sample_vndf(-wr, a, ux, uy);
+    if (order > 0) {
+      const Spectrum phase = throughput * ms_phase_glossy(wr, lambda_r, i, a);
+      eval += throughput * phase * ms_G1(i, ms_C1(hr), shadowing_lambda);
+    }
+    if (order + 1 < 10) {
+      wr = wr - wm * (2 * dot(wr, wm));
+      lambda_r = ms_lambda(wr, a);
+      throughput *= color;
+      c1_r = ms_C1(hr);
+      g1_r = ms_G1(wr, c1_r, lambda_r);
+    }
+  }
+  if (swapped) eval *= std::abs(o.z / i.z);
+  return eval;
+}
+
+// Sampling (not Cycles' walk, whose density is unknown): the single-scattering visible normals
+// with probability A (Cycles' mf_ggx_albedo of the mean alpha), else the cosine hemisphere; the
+// pdf is that mixture's exactly.
+float ms_single_albedo(const MsAlpha& a) {
+  const float r = std::sqrt(a.x * a.y);
+  float v = 0.806495f * std::exp(-1.98712f * r * r) + 0.199531f;
+  v -= ((((((1.76741f * r - 8.43891f) * r + 15.784f) * r - 14.398f) * r + 6.45221f) * r - 1.19722f) * r + 0.027803f) *
+           r +
+       0.00568739f;
+  return clamp(v, 0.05f, 0.95f);  // keep both strategies alive
+}
+Spectrum ms_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
+  *pdf = 0;
+  if (!(o.z > 0 && i.z > 0)) return Spectrum(0.0f);
+  const MsAlpha a = ms_alphas(l);
+  const float p_single = ms_single_albedo(a);
+  const Micro mf{false, a.x, a.y};
+  float p_vndf = 0;
+  micro_reflect(o, i, mf, &p_vndf, nullptr);
+  *pdf = p_single * p_vndf + (1 - p_single) * i.z * kInvPi;
+  return l.weight * ms_eval_cos(l, o, i) / i.z;
+}
+bool ms_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* i) {
+  const MsAlpha a = ms_alphas(l);
+  if (u_extra < ms_single_albedo(a)) return micro_sample_reflect(o, Micro{false, a.x, a.y}, u, i);
+  *i = sample_cosine_hemisphere(u);
+  return i->z > 0;
+}
+
 // ---- per-lobe evaluation in the frame where o.z > 0 -------------------------------------------
 Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
   *pdf = 0;
@@ -479,6 +680,8 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
     }
     case LobeType::AshikhminShirley:
       return l.weight * as_eval(l, o, i, pdf);
+    case LobeType::MultiGGX:
+      return ms_eval(l, o, i, pdf);
     case LobeType::Clearcoat:
       return l.weight * clearcoat_eval(l, o, i, pdf);
     case LobeType::Sheen:
@@ -683,6 +886,7 @@ uint32_t lobe_flags(const Lobe& l) {
     case LobeType::GlossyBeckmann:
     case LobeType::AshikhminShirley:
     case LobeType::Clearcoat:
+    case LobeType::MultiGGX:
       return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection;
     case LobeType::Dielectric:
     case LobeType::DielectricBeckmann:
@@ -734,6 +938,7 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
       case LobeType::GlossyGGX:
       case LobeType::GlossyBeckmann:
       case LobeType::AshikhminShirley:
+      case LobeType::MultiGGX:
         s.wi = mirror;
         s.pdf = 1;
         s.f = l.weight / o.z;
@@ -810,6 +1015,9 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         break;
       case LobeType::AshikhminShirley:
         if (!as_sample(l, o, u, &s.wi)) return false;
+        break;
+      case LobeType::MultiGGX:
+        if (!ms_sample(l, o, u, u_extra, &s.wi)) return false;
         break;
       case LobeType::Clearcoat:
         if (!clearcoat_sample(l, o, u, &s.wi)) return false;

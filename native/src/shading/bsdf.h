@@ -71,8 +71,14 @@ enum class LobeType : uint8_t {
   // Toon BSDF, component Glossy: toon_size = Size, toon_smooth = Smooth, a cone about the mirror
   // direction.
   GlossyToon,
+  // Glossy / Anisotropic BSDF with distribution Multiscatter GGX (bsdf_microfacet_multi_ggx, Heitz
+  // et al. 2016's random walk, up to 10 bounces, no Fresnel): alpha, alpha_y as for GlossyGGX
+  // (clamped to [1e-4, 1]; delta at alpha x alpha_y < 1e-7); weight = closure weight, ms_color =
+  // the node's Color (saturated), the extra factor of every bounce after the first. f is Cycles'
+  // estimate: exact single scattering plus one random walk seeded from the direction pair.
+  MultiGGX,
 };
-constexpr int kLobeTypeCount = int(LobeType::GlossyToon) + 1;
+constexpr int kLobeTypeCount = int(LobeType::MultiGGX) + 1;
 // The glass lobes, which reflect or refract with the relative IOR eta (integrators count their
 // bounces by the branch sampled). Translucent transmits without crossing an IOR; Cycles counts it
 // as a transmission bounce with diffuse ray visibility (integrator/path_state.h).
@@ -84,17 +90,18 @@ inline bool lobe_is_glass(LobeType t) { return t == LobeType::Dielectric || t ==
 
 struct Lobe {
   LobeType type = LobeType::Diffuse;
-  Spectrum weight{1.0f};  // colour x mix weight
-  float roughness = 0;    // Diffuse: Oren-Nayar sigma; PrincipledDiffuse: the Principled roughness;
-                          // Velvet: sigma; microfacet: unused (see alpha)
-  float alpha = 0;        // microfacet alpha along the tangent (+X), = roughness^2; below
-                          // kSmoothAlpha (for alpha x alpha_y: kSmoothAlpha^2) the lobe is delta
-  float alpha_y = -1;     // alpha along the bitangent (+Y); negative: equal to alpha (isotropic)
-  float eta = 1.5f;       // Dielectric: relative IOR across the surface from wo's side;
-                          // SpecularGGX: the IOR whose dielectric Fresnel shapes the blend to 1
-  Spectrum f0{0.04f};     // SpecularGGX: reflectance at normal incidence (Cycles' cspec0)
-  float toon_size = 0;    // DiffuseToon, GlossyToon: Size
-  float toon_smooth = 0;  // DiffuseToon, GlossyToon: Smooth
+  Spectrum weight{1.0f};    // colour x mix weight
+  float roughness = 0;      // Diffuse: Oren-Nayar sigma; PrincipledDiffuse: the Principled roughness;
+                            // Velvet: sigma; microfacet: unused (see alpha)
+  float alpha = 0;          // microfacet alpha along the tangent (+X), = roughness^2; below
+                            // kSmoothAlpha (for alpha x alpha_y: kSmoothAlpha^2) the lobe is delta
+  float alpha_y = -1;       // alpha along the bitangent (+Y); negative: equal to alpha (isotropic)
+  float eta = 1.5f;         // Dielectric: relative IOR across the surface from wo's side;
+                            // SpecularGGX: the IOR whose dielectric Fresnel shapes the blend to 1
+  Spectrum f0{0.04f};       // SpecularGGX: reflectance at normal incidence (Cycles' cspec0)
+  float toon_size = 0;      // DiffuseToon, GlossyToon: Size
+  float toon_smooth = 0;    // DiffuseToon, GlossyToon: Smooth
+  Spectrum ms_color{1.0f};  // MultiGGX: the colour of each bounce after the first
 };
 
 struct BsdfSample {
