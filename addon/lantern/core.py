@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 6
+ABI_VERSION = 7
 
 # lt_status
 OK = 0
@@ -33,15 +33,6 @@ INTERP_LINEAR, INTERP_CLOSEST = 0, 1
 EXTENSION_REPEAT, EXTENSION_EXTEND, EXTENSION_CLIP = 0, 1, 2
 
 # lt_node_type
-NODE_DIFFUSE = 0
-NODE_GLOSSY = 1
-NODE_GLASS = 2
-NODE_EMISSION = 3
-NODE_MIX = 4
-NODE_ADD = 5
-NODE_PRINCIPLED = 6
-NODE_TRANSPARENT = 7
-
 # lt_visibility
 VISIBLE_CAMERA = 1
 VISIBLE_DIFFUSE = 2
@@ -109,45 +100,25 @@ class ImageDesc(ctypes.Structure):
     ]
 
 
-class Input(ctypes.Structure):
-    _c_name_ = "lt_input"
-    _fields_ = [("value", ctypes.c_float * 3), ("image", ctypes.c_int)]
-
-    def __init__(self, value=(0.0, 0.0, 0.0), image=-1):
-        super().__init__((ctypes.c_float * 3)(*value), image)
-
-
-_INPUT_FIELDS = ("color", "roughness", "fac", "metallic", "specular", "transmission", "emission",
-                 "strength")
-
-
-class ShaderNode(ctypes.Structure):
-    _c_name_ = "lt_shader_node"
+class ShaderProgram(ctypes.Structure):
+    _c_name_ = "lt_shader_program"
     _fields_ = [
-        ("type", ctypes.c_int),
-        ("color", Input),
-        ("roughness", Input),
-        ("fac", Input),
-        ("metallic", Input),
-        ("specular", Input),
-        ("transmission", Input),
-        ("emission", Input),
-        ("strength", Input),
-        ("ior", ctypes.c_float),
-        ("child", ctypes.c_int * 2),
+        ("code", ctypes.POINTER(ctypes.c_uint32)),
+        ("code_words", ctypes.c_int),
+        ("constants", _f_p),
+        ("constant_count", ctypes.c_int),
+        ("registers", ctypes.c_int),
     ]
 
-    def __init__(self, type=NODE_DIFFUSE, ior=1.5, child=(-1, -1), **inputs):
-        """Inputs not given are constant 0 (image -1, not the zero-filled image 0)."""
-        super().__init__()
-        self.type = type
-        self.ior = ior
-        self.child[0], self.child[1] = child
-        for name in _INPUT_FIELDS:
-            setattr(self, name, inputs.pop(name, None) or Input())
-        if inputs:
-            raise TypeError("unknown shader node inputs: %s (valid: %s)"
-                            % (", ".join(inputs), ", ".join(_INPUT_FIELDS)))
+
+def _program(program):
+    """An lt_shader_program over (code, constants, registers), and the arrays it points into."""
+    code, constants, registers = program
+    c = np.ascontiguousarray(np.asarray(code, dtype=np.uint32).reshape(-1))
+    k = np.ascontiguousarray(np.asarray(constants, dtype=np.float32).reshape(-1))
+    d = ShaderProgram(c.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)), c.size, _fptr(k) if k.size else None,
+                      k.size, int(registers))
+    return d, (c, k)
 
 
 class MeshDesc(ctypes.Structure):
@@ -160,6 +131,8 @@ class MeshDesc(ctypes.Structure):
         ("corner_normals", _f_p),
         ("corner_uvs", _f_p),
         ("material_slots", _i_p),
+        ("texspace_location", ctypes.c_float * 3),
+        ("texspace_size", ctypes.c_float * 3),
     ]
 
 
@@ -314,7 +287,7 @@ class AbiEntry(ctypes.Structure):
     ]
 
 
-STRUCTS = (AbiEntry, ImageDesc, Input, ShaderNode, MeshDesc, InstanceDesc, LightDesc, CameraDesc, WorldDesc,
+STRUCTS = (AbiEntry, ImageDesc, ShaderProgram, MeshDesc, InstanceDesc, LightDesc, CameraDesc, WorldDesc,
            VolumeDesc, SceneStats, RenderSettings, RenderStatus)
 
 
@@ -348,7 +321,7 @@ def _declare(lib, layout=True):
         "lt_scene_add_image": ([scene_p, P(ImageDesc), P(c_int)], c_int),
         "lt_scene_begin_image": ([scene_p, P(ImageDesc), P(P(ctypes.c_float))], c_int),
         "lt_scene_end_image": ([scene_p, P(c_int)], c_int),
-        "lt_scene_add_material": ([scene_p, P(ShaderNode), c_int, c_int, P(c_int)], c_int),
+        "lt_scene_add_material": ([scene_p, P(ShaderProgram), P(c_int)], c_int),
         "lt_scene_add_mesh": ([scene_p, P(MeshDesc), P(c_int)], c_int),
         "lt_scene_add_instance": ([scene_p, P(InstanceDesc), P(c_int)], c_int),
         "lt_scene_add_light": ([scene_p, P(LightDesc)], c_int),
@@ -360,7 +333,7 @@ def _declare(lib, layout=True):
                                       c_int, P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
         "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
-        "lt_scene_set_material": ([scene_p, c_int, P(ShaderNode), c_int, c_int], c_int),
+        "lt_scene_set_material": ([scene_p, c_int, P(ShaderProgram)], c_int),
         "lt_scene_clear_lights": ([scene_p], c_int),
         "lt_scene_get_stats": ([scene_p, P(SceneStats)], c_int),
         "lt_render_settings_default": ([P(RenderSettings)], None),
@@ -561,14 +534,6 @@ def _transform(m):
     return (ctypes.c_float * 12)(*a.reshape(-1).tolist())
 
 
-def make_input(value=(0.0, 0.0, 0.0), image=-1):
-    """An lt_input: a colour (3 floats) or scalar (value[0]) constant, or an image id."""
-    if np.ndim(value) == 0:
-        value = (float(value), 0.0, 0.0)
-    v = [float(x) for x in list(value)[:3]]
-    return Input(v + [0.0] * (3 - len(v)), int(image))
-
-
 # ---- scene --------------------------------------------------------------------------------------
 
 class Scene:
@@ -615,17 +580,16 @@ class Scene:
         _check(self._lib.lt_scene_end_image(self.handle, ctypes.byref(out)), "lt_scene_end_image")
         return out.value
 
-    def add_material(self, nodes, root=0):
-        """nodes: a sequence of ShaderNode; root: the index feeding the Surface output."""
-        n = len(nodes)
-        arr = (ShaderNode * max(n, 1))(*nodes)
+    def add_material(self, program):
+        """program: (code words, constants, registers), as export/nodes compiles a material."""
+        d, _keep = _program(program)
         out = ctypes.c_int(-1)
-        _check(self._lib.lt_scene_add_material(self.handle, arr, n, int(root), ctypes.byref(out)),
+        _check(self._lib.lt_scene_add_material(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_material")
         return out.value
 
     def add_mesh(self, positions, triangles, corner_normals=None, corner_uvs=None,
-                 material_slots=None):
+                 material_slots=None, texspace_location=(0.0, 0.0, 0.0), texspace_size=(0.0, 0.0, 0.0)):
         pos = _f32(positions, "positions", 3)
         tri = _i32(triangles, "triangles")
         if tri.size % 3:
@@ -638,7 +602,8 @@ class Scene:
                              (mat, 1, "material slots")):
             if a is not None and a.size != per * ntri:
                 raise ValueError("%s: %d values for %d triangles" % (what, a.size, ntri))
-        d = MeshDesc(_fptr(pos), pos.size // 3, _iptr(tri), ntri, _fptr(nrm), _fptr(uvs), _iptr(mat))
+        d = MeshDesc(_fptr(pos), pos.size // 3, _iptr(tri), ntri, _fptr(nrm), _fptr(uvs), _iptr(mat),
+                     (ctypes.c_float * 3)(*texspace_location), (ctypes.c_float * 3)(*texspace_size))
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_mesh(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_mesh")
@@ -742,10 +707,9 @@ class Scene:
         _check(self._lib.lt_scene_set_instance_transform(self.handle, int(instance), _transform(transform)),
                "lt_scene_set_instance_transform")
 
-    def set_material(self, material, nodes, root=0):
-        n = len(nodes)
-        arr = (ShaderNode * max(n, 1))(*nodes)
-        _check(self._lib.lt_scene_set_material(self.handle, int(material), arr, n, int(root)),
+    def set_material(self, material, program):
+        d, _keep = _program(program)
+        _check(self._lib.lt_scene_set_material(self.handle, int(material), ctypes.byref(d)),
                "lt_scene_set_material")
 
     def clear_lights(self):

@@ -36,7 +36,7 @@ enum Op : uint8_t {
 // Bounds that keep one input fast (a few milliseconds): every count the stream gives is reduced
 // modulo these.
 constexpr int kMaxImageSide = 8;
-constexpr int kMaxNodes = 6;
+constexpr int kMaxConstants = 128;
 constexpr int kMaxVertices = 32;
 constexpr int kMaxTriangles = 32;
 constexpr int kMaxSlots = 4;
@@ -51,6 +51,11 @@ class Reader {
   bool done() const { return p_ >= end_; }
   uint8_t u8() { return p_ < end_ ? *p_++ : 0; }
   int8_t i8() { return int8_t(u8()); }
+  uint32_t u32() {
+    uint32_t v = 0;
+    for (int k = 0; k < 4; ++k) v |= uint32_t(u8()) << (8 * k);
+    return v;
+  }
   float f32() {
     const uint8_t b = u8();
     if (b < 0xF0) return (int(b) - 120) / 8.0f;
@@ -74,6 +79,9 @@ class Writer {
   std::vector<uint8_t> bytes;
   void u8(uint8_t v) { bytes.push_back(v); }
   void i8(int v) { bytes.push_back(uint8_t(int8_t(v))); }
+  void u32(uint32_t v) {
+    for (int k = 0; k < 4; ++k) bytes.push_back(uint8_t(v >> (8 * k)));
+  }
   void op(Op o) { u8(uint8_t(o)); }
   void f32(float v) {
     const float b = v * 8.0f + 120.0f;

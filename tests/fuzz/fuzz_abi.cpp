@@ -25,31 +25,21 @@ void check(int status) {
   }
 }
 
-lt_input input(Reader& r) {
-  lt_input in;
-  r.floats(in.value, 3);
-  in.image = r.i8();
-  return in;
-}
-
-std::vector<lt_shader_node> nodes(Reader& r, int& root) {
-  std::vector<lt_shader_node> v(size_t(1 + small(r, lt_fuzz::kMaxNodes)));
-  for (lt_shader_node& n : v) {
-    n.type = r.i8();
-    n.color = input(r);
-    n.roughness = input(r);
-    n.fac = input(r);
-    n.metallic = input(r);
-    n.specular = input(r);
-    n.transmission = input(r);
-    n.emission = input(r);
-    n.strength = input(r);
-    n.ior = r.f32();
-    n.child[0] = r.i8();
-    n.child[1] = r.i8();
-  }
-  root = r.i8();
-  return v;
+// A shader program: words, constants and a register count, as they come (the core validates).
+struct ProgramData {
+  std::vector<uint32_t> code;
+  std::vector<float> constants;
+  lt_shader_program desc;
+};
+ProgramData program(Reader& r) {
+  ProgramData p;
+  p.code.resize(r.u8());  // up to 255 words
+  for (uint32_t& w : p.code) w = r.u32();
+  p.constants.resize(size_t(small(r, lt_fuzz::kMaxConstants + 1)));
+  r.floats(p.constants.data(), int(p.constants.size()));
+  const int registers = int(r.u8()) * 4;
+  p.desc = {p.code.data(), int(p.code.size()), p.constants.data(), int(p.constants.size()), registers};
+  return p;
 }
 
 std::vector<lt_volume_desc> volume(Reader& r) {
@@ -160,10 +150,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       case lt_fuzz::kAddMaterial:
       case lt_fuzz::kSetMaterial: {
         const int material = op == lt_fuzz::kSetMaterial ? r.i8() : 0;
-        int root = 0;
-        std::vector<lt_shader_node> v = nodes(r, root);
-        check(op == lt_fuzz::kSetMaterial ? lt_scene_set_material(scene, material, v.data(), int(v.size()), root)
-                                          : lt_scene_add_material(scene, v.data(), int(v.size()), root, &id));
+        ProgramData p = program(r);
+        check(op == lt_fuzz::kSetMaterial ? lt_scene_set_material(scene, material, &p.desc)
+                                          : lt_scene_add_material(scene, &p.desc, &id));
         break;
       }
       case lt_fuzz::kAddMesh: {

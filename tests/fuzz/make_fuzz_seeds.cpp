@@ -15,8 +15,10 @@
 #include <string>
 #include <vector>
 
+#include "../native/program_builder.h"
 #include "abi_stream.h"
 #include "lantern/lantern.h"
+#include "shading/inputs.h"
 
 namespace fs = std::filesystem;
 using lt_fuzz::Op;
@@ -48,61 +50,36 @@ void translation(Writer& w, float x, float y, float z) {
   w.floats(m, 12);
 }
 
-// One node; inputs other than the given ones are zero constants.
-struct Node {
-  int type;
-  float color[3] = {0, 0, 0};
-  int color_image = -1;
-  float roughness = 0, fac = 0, metallic = 0, specular = 0, transmission = 0, strength = 0;
-  float emission[3] = {0, 0, 0};
-  float ior = 1.5f;
-  int child[2] = {-1, -1};
-};
-
-void input(Writer& w, const float* v3, int image = -1) {
-  w.floats(v3, 3);
-  w.i8(image);
-}
-void input(Writer& w, float v) {
-  const float v3[3] = {v, 0, 0};
-  input(w, v3);
+// A shader program as fuzz_abi.cpp reads it.
+void program(Writer& w, const ShaderCode& p) {
+  w.u8(uint8_t(p.code.size()));
+  for (uint32_t word : p.code) w.u32(word);
+  w.u8(uint8_t(p.k.size()));
+  w.floats(p.k.data(), int(p.k.size()));
+  w.u8(uint8_t((p.registers + 3) / 4));
 }
 
-void nodes(Writer& w, const std::vector<Node>& v, int root) {
-  w.u8(uint8_t(v.size() - 1));
-  for (const Node& n : v) {
-    w.i8(n.type);
-    input(w, n.color, n.color_image);
-    input(w, n.roughness);
-    input(w, n.fac);
-    input(w, n.metallic);
-    input(w, n.specular);
-    input(w, n.transmission);
-    input(w, n.emission);
-    input(w, n.strength);
-    w.f32(n.ior);
-    w.i8(n.child[0]);
-    w.i8(n.child[1]);
-  }
-  w.i8(root);
-}
-
-void material(Writer& w, const std::vector<Node>& v, int root = 0) {
+void material(Writer& w, const ShaderCode& p) {
   w.op(lt_fuzz::kAddMaterial);
-  nodes(w, v, root);
+  program(w, p);
 }
 
-Node diffuse(float r, float g, float b) {
-  Node n{LT_NODE_DIFFUSE};
-  n.color[0] = r, n.color[1] = g, n.color[2] = b;
-  return n;
+ShaderCode diffuse(float r, float g, float b) {
+  ShaderCode p;
+  p.diffuse(p.one(), {r, g, b});
+  return p;
 }
 
-Node emission(float strength) {
-  Node n{LT_NODE_EMISSION};
-  n.color[0] = n.color[1] = n.color[2] = 1;
-  n.strength = strength;
-  return n;
+ShaderCode emission(float strength) {
+  ShaderCode p;
+  p.emission(p.one(), {1, 1, 1}, strength);
+  return p;
+}
+
+ShaderCode transparent() {
+  ShaderCode p;
+  p.transparent(p.one(), {1, 1, 1});
+  return p;
 }
 
 // A box [-s, s]^3 around (cx, cy, cz): 8 vertices, 12 triangles, outward winding; parts as the
@@ -121,10 +98,11 @@ void box(Writer& w, float s, uint8_t parts = 0) {
   }
   for (const auto& t : kTris)
     for (int k : t) w.i8(k);
+  // Per corner: 12 triangles x 3 corners, 3 floats for a normal, 2 for a UV (fuzz_abi.cpp's reads).
   if (parts & 1)
-    for (int c = 0; c < 36; ++c) w.f32(c % 3 == 2 ? 1.0f : 0.0f);
+    for (int c = 0; c < 108; ++c) w.f32(c % 3 == 2 ? 1.0f : 0.0f);
   if (parts & 2)
-    for (int c = 0; c < 36; ++c) w.f32(float((c / 2) % 3 == 1) * 0.5f + float(c % 2) * 0.25f);
+    for (int c = 0; c < 72; ++c) w.f32(float((c / 2) % 3 == 1) * 0.5f + float(c % 2) * 0.25f);
   if (parts & 4)
     for (int t = 0; t < 12; ++t) w.i8(t % 2);
 }
@@ -249,8 +227,8 @@ void render(Writer& w, const Render& r) {
 // Diffuse box on a floor under a point light, rendered by every integrator.
 std::vector<uint8_t> seed_basic() {
   Writer w;
-  material(w, {diffuse(0.75f, 0.5f, 0.25f)});
-  material(w, {emission(4)});
+  material(w, diffuse(0.75f, 0.5f, 0.25f));
+  material(w, emission(4));
   box(w, 1);
   quad(w, 4);
   instance(w, 0, {0});
@@ -274,8 +252,8 @@ std::vector<uint8_t> seed_basic() {
 // A glowing box of smoke in a thin world volume, by VOLPATH, BDPT and the debug view.
 std::vector<uint8_t> seed_volume() {
   Writer w;
-  material(w, {Node{LT_NODE_TRANSPARENT}});
-  material(w, {diffuse(0.5f, 0.5f, 0.5f)});
+  material(w, transparent());
+  material(w, diffuse(0.5f, 0.5f, 0.5f));
   w.op(lt_fuzz::kSetMaterialVolume);
   w.i8(0);
   w.u8(1);  // null surface
@@ -310,24 +288,26 @@ std::vector<uint8_t> seed_textures_edits() {
   w.u8(1);  // sRGB
   w.i8(LT_INTERP_LINEAR);
   w.i8(LT_EXTENSION_REPEAT);
-  Node tex = diffuse(1, 1, 1);
-  tex.color_image = 0;
-  Node glossy{LT_NODE_GLOSSY};
-  glossy.color[0] = glossy.color[1] = glossy.color[2] = 0.75f;
-  glossy.roughness = 0.25f;
-  Node glass{LT_NODE_GLASS};
-  glass.color[0] = glass.color[1] = glass.color[2] = 1;
-  glass.ior = 1.5f;
-  Node mix{LT_NODE_MIX};
-  mix.fac = 0.5f;
-  mix.child[0] = 1, mix.child[1] = 2;
-  material(w, {mix, glossy, glass}, 0);
-  material(w, {tex});
-  Node principled{LT_NODE_PRINCIPLED};
-  principled.color[0] = 0.5f, principled.color[1] = 0.25f, principled.color[2] = 0.125f;
-  principled.metallic = 0.5f, principled.roughness = 0.5f, principled.specular = 0.5f;
-  principled.emission[0] = 1, principled.strength = 0.5f;
-  material(w, {principled});
+  {  // Mix Shader(0.5, Glossy, Glass)
+    ShaderCode p;
+    auto [a, b] = p.mix(p.one(), 0.5f);
+    p.glossy(a, {0.75f, 0.75f, 0.75f}, 0.25f);
+    p.glass(b, {1, 1, 1}, 0, 1.5f);
+    material(w, p);
+  }
+  {  // an image texture at the UV (with a folded Math node on its way) into a Diffuse
+    ShaderCode p;
+    auto uv = p.emit(lt::kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {uint32_t(p.k.size()), uint32_t(p.k.size())});
+    p.k.push_back(0);  // the two empty tables
+    auto tex = p.emit(lt::kOpImage, {uv[2]}, {3, 1}, {0});
+    p.emit(lt::kOpDiffuse, {p.one(), p.c3({0, 0, 0}), tex[0], p.c1(0)}, {});
+    material(w, p);
+  }
+  {
+    ShaderCode p;
+    p.principled(p.one(), {0.5f, 0.25f, 0.125f}, 0.5f, 0.5f, 0.5f);
+    material(w, p);
+  }
   box(w, 1, 7);
   quad(w, 4);
   instance(w, 0, {0, 2});
@@ -345,7 +325,7 @@ std::vector<uint8_t> seed_textures_edits() {
   translation(w, 0.5f, 0, 0);
   w.op(lt_fuzz::kSetMaterial);
   w.i8(1);
-  nodes(w, {emission(2)}, 0);
+  program(w, emission(2));
   w.op(lt_fuzz::kClearLights);
   light(w, LT_LIGHT_POINT, 20, 1, 1, 3);
   w.op(lt_fuzz::kCommit);
@@ -375,15 +355,9 @@ std::vector<uint8_t> render_part(const fs::path& path, int integrator, int offse
   lt_mesh_desc mesh = {pos, 4, tris, 2, nullptr, nullptr, nullptr};
   int mesh_id = 0, mat = 0;
   ok(lt_scene_add_mesh(scene, &mesh, &mesh_id), "mesh");
-  lt_shader_node n = {};
-  n.type = LT_NODE_DIFFUSE;
-  n.color.value[0] = n.color.value[1] = n.color.value[2] = 0.8f;
-  for (lt_input* in :
-       {&n.color, &n.roughness, &n.fac, &n.metallic, &n.specular, &n.transmission, &n.emission, &n.strength})
-    in->image = -1;
-  n.child[0] = n.child[1] = -1;
-  n.ior = 1.45f;
-  ok(lt_scene_add_material(scene, &n, 1, 0, &mat), "material");
+  const ShaderCode grey = diffuse(0.8f, 0.8f, 0.8f);
+  const lt_shader_program grey_desc = grey.desc();
+  ok(lt_scene_add_material(scene, &grey_desc, &mat), "material");
   lt_instance_desc inst = {mesh_id, {}, &mat, 1, LT_VISIBLE_ALL};
   std::copy(kIdentity, kIdentity + 12, inst.transform);
   int inst_id = 0;

@@ -21,19 +21,11 @@ V3 normalize(V3 a) { return mul(a, 1.0f / std::sqrt(dot(a, a))); }
 
 }  // namespace
 
-lt_input constant(float v) {
-  lt_input in;
-  in.value[0] = in.value[1] = in.value[2] = v;
-  in.image = -1;
-  return in;
-}
-lt_input constant(V3 c) {
-  lt_input in;
-  in.value[0] = c.x;
-  in.value[1] = c.y;
-  in.value[2] = c.z;
-  in.image = -1;
-  return in;
+int add_material(lt_scene* s, const ShaderCode& p) {
+  lt_shader_program d = p.desc();
+  int id = -1;
+  check(lt_scene_add_material(s, &d, &id), "lt_scene_add_material");
+  return id;
 }
 
 // ---- transforms ------------------------------------------------------------------------------
@@ -234,37 +226,28 @@ ScenePtr new_scene() {
   return ScenePtr(s);
 }
 
-lt_shader_node node(int type) {
-  lt_shader_node n;
-  n.type = type;
-  n.color = n.roughness = n.fac = n.metallic = n.specular = n.transmission = n.emission = n.strength = constant(0.0f);
-  n.ior = 1.45f;
-  n.child[0] = n.child[1] = -1;
-  return n;
-}
-
-namespace {
-// A material of one node with a colour and one scalar input.
-int add_one_node(lt_scene* s, int type, V3 color, lt_input lt_shader_node::*scalar, float value) {
-  lt_shader_node n = node(type);
-  n.color = constant(color);
-  n.*scalar = constant(value);
-  int id = -1;
-  check(lt_scene_add_material(s, &n, 1, 0, &id), "lt_scene_add_material");
-  return id;
-}
-}  // namespace
-
 int add_diffuse(lt_scene* s, V3 color, float roughness) {
-  return add_one_node(s, LT_NODE_DIFFUSE, color, &lt_shader_node::roughness, roughness);
+  ShaderCode p;
+  p.diffuse(p.one(), {color.x, color.y, color.z}, roughness);
+  return add_material(s, p);
 }
 
 int add_glossy(lt_scene* s, V3 color, float roughness) {
-  return add_one_node(s, LT_NODE_GLOSSY, color, &lt_shader_node::roughness, roughness);
+  ShaderCode p;
+  p.glossy(p.one(), {color.x, color.y, color.z}, roughness);
+  return add_material(s, p);
 }
 
 int add_emission(lt_scene* s, V3 color, float strength) {
-  return add_one_node(s, LT_NODE_EMISSION, color, &lt_shader_node::strength, strength);
+  ShaderCode p;
+  p.emission(p.one(), {color.x, color.y, color.z}, strength);
+  return add_material(s, p);
+}
+
+int add_glass(lt_scene* s, V3 color, float roughness, float ior) {
+  ShaderCode p;
+  p.glass(p.one(), {color.x, color.y, color.z}, roughness, ior);
+  return add_material(s, p);
 }
 
 int add_mesh(lt_scene* s, const MeshData& m) {
@@ -357,10 +340,9 @@ lt_volume_desc volume(int node, float density, float color, float g) {
 }
 
 int add_volume_material(lt_scene* s, const lt_volume_desc& d) {
-  lt_shader_node n = node(LT_NODE_TRANSPARENT);
-  n.color.value[0] = n.color.value[1] = n.color.value[2] = 1;
-  int id;
-  check(lt_scene_add_material(s, &n, 1, 0, &id), "add_material");
+  ShaderCode p;
+  p.transparent(p.one(), {1, 1, 1});
+  int id = add_material(s, p);
   check(lt_scene_set_material_volume(s, id, &d, 1, 1), "set_material_volume");
   return id;
 }
@@ -508,11 +490,7 @@ ScenePtr varied_scene(bool fog) {
     add_object(s, box({-0.5f, -0.8f, 0.01f}, {1.1f, 0.8f, 1.2f}),
                add_volume_material(s, volume(LT_VOLUME_PRINCIPLED, 1.5f, 0.8f, 0.3f)));
 
-  lt_shader_node glass = node(LT_NODE_GLASS);
-  glass.color.value[0] = glass.color.value[1] = glass.color.value[2] = 1;
-  glass.ior = 1.5f;
-  int glass_id = -1;
-  check(lt_scene_add_material(s, &glass, 1, 0, &glass_id), "glass");
+  const int glass_id = add_glass(s, {1, 1, 1}, 0, 1.5f);
   add_object(s, uv_sphere(0.4f, 24, 12, true), glass_id, translate({1.3f, -0.3f, 0.4f}));
 
   add_object(s, plane(0.5f, 0.5f), add_emission(s, {1, 0.8f, 0.6f}, 5),

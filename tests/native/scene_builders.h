@@ -8,11 +8,14 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lantern/lantern.h"
+#include "program_builder.h"
 
 namespace lt_test {
 
@@ -68,12 +71,9 @@ ScenePtr new_scene();
 // Throws std::runtime_error("<what>: <lt_last_error()>") unless status == LT_OK.
 void check(int status, const char* what);
 
-// A material input that is the constant v (grey) or c, without an image.
-lt_input constant(float v);
-lt_input constant(V3 c);
-// Material node with every input constant 0, no image, no children, ior 1.45.
-lt_shader_node node(int type);
+int add_material(lt_scene* s, const ShaderCode& p);
 int add_diffuse(lt_scene* s, V3 color, float roughness = 0);
+int add_glass(lt_scene* s, V3 color, float roughness, float ior);
 int add_emission(lt_scene* s, V3 color, float strength);
 int add_glossy(lt_scene* s, V3 color, float roughness);  // GGX
 int add_mesh(lt_scene* s, const MeshData& m);

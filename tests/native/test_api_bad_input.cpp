@@ -12,6 +12,9 @@
 #include <thread>
 
 #include "scene_builders.h"
+#include "shading/inputs.h"
+#include "shading/program.h"
+#include "shading/shaders.h"
 
 using namespace lt_test;
 
@@ -126,10 +129,12 @@ TEST(ApiBadInput, NullPointersEverywhere) {
   img.pixels = nullptr;
   EXPECT_INVALID(lt_scene_add_image(s, &img, &id));
 
-  lt_shader_node n = node(LT_NODE_DIFFUSE);
-  EXPECT_INVALID(lt_scene_add_material(nullptr, &n, 1, 0, &id));
-  EXPECT_INVALID(lt_scene_add_material(s, nullptr, 1, 0, &id));
-  EXPECT_INVALID(lt_scene_add_material(s, &n, 1, 0, nullptr));
+  ShaderCode prog;
+  prog.diffuse(prog.one(), {0.5f, 0.5f, 0.5f});
+  const lt_shader_program pd = prog.desc();
+  EXPECT_INVALID(lt_scene_add_material(nullptr, &pd, &id));
+  EXPECT_INVALID(lt_scene_add_material(s, nullptr, &id));
+  EXPECT_INVALID(lt_scene_add_material(s, &pd, nullptr));
 
   MeshData tri;
   tri.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
@@ -399,22 +404,6 @@ TEST(ApiBadInput, OutOfRangeIndicesNameTheIndex) {
   inst.material_count = -1;
   EXPECT_INVALID(lt_scene_add_instance(s, &inst, &id));
 
-  lt_shader_node nodes[2] = {node(LT_NODE_MIX), node(LT_NODE_DIFFUSE)};
-  nodes[0].child[0] = 1;
-  nodes[0].child[1] = 7;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 0, &id)), "7");
-  nodes[0].child[1] = -1;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 0, &id)), "-1");
-  nodes[0].child[1] = 1;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 5, &id)), "5");
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, -3, &id)), "-3");
-  EXPECT_INVALID(lt_scene_add_material(s, nodes, 0, 0, &id));
-  EXPECT_INVALID(lt_scene_add_material(s, nodes, -4, 0, &id));
-  nodes[1].color.image = 3;  // no images in the scene
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 0, &id)), "3");
-  nodes[1].color.image = -5;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, nodes, 2, 0, &id)), "-5");
-
   lt_world_desc w = world({1, 1, 1}, 1);
   w.image = 4;
   EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_set_world(s, &w)), "4");
@@ -445,12 +434,6 @@ TEST(ApiBadInput, UnknownEnumValuesListTheValidNames) {
     l.type = type;
     std::string msg = EXPECT_INVALID(lt_scene_add_light(s, &l));
     for (const char* name : {"POINT", "SPOT", "AREA", "SUN"}) EXPECT_CONTAINS(msg, name);
-  }
-  for (int type : {-1, int(LT_NODE_COUNT), 1000}) {
-    lt_shader_node n = node(type);
-    std::string msg = EXPECT_INVALID(lt_scene_add_material(s, &n, 1, 0, &id));
-    for (const char* name : {"DIFFUSE", "GLOSSY", "GLASS", "EMISSION", "MIX", "ADD", "PRINCIPLED", "TRANSPARENT"})
-      EXPECT_CONTAINS(msg, name);
   }
   for (int type : {-1, 2, 1000}) {
     lt_camera_desc c = perspective_camera(identity());
@@ -526,12 +509,14 @@ TEST(ApiBadInput, NonFiniteParametersAreRefused) {
   w = world({kNaN, 1, 1}, 1);
   EXPECT_INVALID(lt_scene_set_world(s, &w));
 
-  lt_shader_node n = node(LT_NODE_DIFFUSE);
-  n.color.value[2] = kNaN;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, &n, 1, 0, &id)), "color");
-  n = node(LT_NODE_GLASS);
-  n.ior = kInf;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, &n, 1, 0, &id)), "ior");
+  ShaderCode nan_colour;
+  nan_colour.diffuse(nan_colour.one(), {0.5f, 0.5f, kNaN});
+  lt_shader_program d = nan_colour.desc();
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, &d, &id)), "constant");
+  ShaderCode inf_ior;
+  inf_ior.glass(inf_ior.one(), {1, 1, 1}, 0, kInf);
+  d = inf_ior.desc();
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, &d, &id)), "constant");
 
   float px[3] = {kNaN, 1, kInf};
   lt_image_desc img{1, 1, 3, px, 0, LT_INTERP_LINEAR, LT_EXTENSION_REPEAT};
@@ -547,39 +532,72 @@ TEST(ApiBadInput, NonFiniteParametersAreRefused) {
   EXPECT_EQ(p.status.nan_samples, 0u);
 }
 
-TEST(ApiBadInput, CyclicMaterialsAreRefused) {
+TEST(ApiBadInput, MalformedShaderProgramsAreRefused) {
   ScenePtr sp = basic_scene();
   lt_scene* s = sp.get();
   int id = -1;
-  // A node that is its own child.
-  lt_shader_node self[2] = {node(LT_NODE_MIX), node(LT_NODE_DIFFUSE)};
-  self[0].child[0] = 1;
-  self[0].child[1] = 0;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, self, 2, 0, &id)), "cycle");
-  // A three-node loop below the root.
-  lt_shader_node loop[4] = {node(LT_NODE_ADD), node(LT_NODE_MIX), node(LT_NODE_ADD), node(LT_NODE_DIFFUSE)};
-  loop[0].child[0] = 3;
-  loop[0].child[1] = 1;
-  loop[1].child[0] = 3;
-  loop[1].child[1] = 2;
-  loop[2].child[0] = 1;
-  loop[2].child[1] = 3;
-  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, loop, 4, 0, &id)), "cycle");
-  // A shared child (a DAG, not a cycle) is fine.
-  lt_shader_node dag[3] = {node(LT_NODE_ADD), node(LT_NODE_MIX), node(LT_NODE_DIFFUSE)};
-  dag[0].child[0] = 1;
-  dag[0].child[1] = 2;
-  dag[1].child[0] = 2;
-  dag[1].child[1] = 2;
-  dag[2].color.value[0] = dag[2].color.value[1] = dag[2].color.value[2] = 0.3f;
-  EXPECT_EQ(lt_scene_add_material(s, dag, 3, 0, &id), LT_OK) << lt_last_error();
-  // Too deep a tree is refused rather than overflowing the evaluator's stack.
-  std::vector<lt_shader_node> chain(200, node(LT_NODE_MIX));
-  for (int i = 0; i + 1 < 200; ++i) chain[i].child[0] = chain[i].child[1] = i + 1;
-  chain[199] = node(LT_NODE_DIFFUSE);
-  EXPECT_INVALID(lt_scene_add_material(s, chain.data(), 200, 0, &id));
+  auto refused = [&](const ShaderCode& p, const char* says) {
+    const lt_shader_program d = p.desc();
+    EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, &d, &id)), says);
+  };
+  {  // an opcode no family knows
+    ShaderCode p;
+    p.emit(7777, {p.one()}, {});
+    refused(p, "7777");
+  }
+  {  // a register read before an instruction writes it
+    ShaderCode p;
+    p.emission(3u << 24 | 5u, {1, 1, 1}, 1);
+    refused(p, "register 5");
+  }
+  {  // a constant past the pool
+    ShaderCode p;
+    p.emission(lt::kConstBit | 3u << 24 | 99u, {1, 1, 1}, 1);
+    refused(p, "past the constants");
+  }
+  {  // a vector where a float belongs
+    ShaderCode p;
+    p.emit(lt::kOpEmission, {p.one(), p.c3({1, 1, 1}), p.c3({1, 1, 1})}, {});
+    refused(p, "size");
+  }
+  {  // an operand missing
+    ShaderCode p;
+    p.emit(lt::kOpEmission, {p.one(), p.c3({1, 1, 1})}, {});
+    refused(p, "operand count");
+  }
+  {  // cut short
+    ShaderCode p;
+    p.emission(p.one(), {1, 1, 1}, 1);
+    p.code.pop_back();
+    refused(p, "cut short");
+  }
+  {  // a register written twice
+    ShaderCode p;
+    auto w = p.mix(p.one(), 0.5f);
+    p.code.insert(p.code.end(), p.code.begin(), p.code.end());
+    p.diffuse(w.first, {1, 1, 1});
+    refused(p, "twice");
+  }
+  {  // an image that does not exist (the scene has none)
+    ShaderCode p;
+    p.emit(lt::kOpImage, {p.c3({0, 0, 0})}, {3, 1}, {3});
+    refused(p, "image 3");
+  }
+  {  // too many registers
+    ShaderCode p;
+    p.diffuse(p.one(), {1, 1, 1});
+    p.registers = 1 << 20;
+    refused(p, "registers");
+  }
+  // A valid program still goes in after all that.
+  ShaderCode ok;
+  auto [a, b] = ok.mix(ok.one(), 0.25f);
+  ok.diffuse(a, {0.3f, 0.3f, 0.3f});
+  ok.glossy(b, {0.8f, 0.8f, 0.8f}, 0.4f);
+  const lt_shader_program d = ok.desc();
+  ASSERT_EQ(lt_scene_add_material(s, &d, &id), LT_OK) << lt_last_error();
   add_object(s, icosphere(0.5f, 2), id, translate({0, 0, 0.5f}));
-  commit_and_render(s);
+  EXPECT_EQ(commit_and_render(s).status.nan_samples, 0u);
 }
 
 TEST(ApiBadInput, AbsurdRenderSettingsAreRefused) {
@@ -662,8 +680,10 @@ TEST(ApiBadInput, RenderBeforeCommitAndEditsAfterCommitAreStateErrors) {
   float px[3] = {1, 1, 1};
   lt_image_desc img{1, 1, 3, px, 0, LT_INTERP_LINEAR, LT_EXTENSION_REPEAT};
   EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_image(s, &img, &id));
-  lt_shader_node n = node(LT_NODE_DIFFUSE);
-  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_material(s, &n, 1, 0, &id));
+  ShaderCode prog;
+  prog.diffuse(prog.one(), {0.5f, 0.5f, 0.5f});
+  const lt_shader_program pd = prog.desc();
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_add_material(s, &pd, &id));
   MeshData tri;
   tri.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   tri.triangles = {0, 1, 2};
@@ -790,62 +810,23 @@ TEST(ApiBadInput, DestroyWhileRunning) {
   EXPECT_EQ(q.first_non_finite(), "");
 }
 
-TEST(ApiBadInput, SharedNodesDoNotExplodeEvaluation) {
-  // A node graph may share a node between inputs (a DAG). Shared nodes must not make shading cost
-  // grow as 2^depth: 40 levels of Add nodes whose two inputs are the same node.
+TEST(ApiBadInput, LongProgramsRunAndHugeOnesAreRefused) {
+  // 40 nested Mix Shaders (a chain of weights) shade as one diffuse closure at the end: programs
+  // are linear, so their cost grows with their length, never with sharing.
   ScenePtr sp = basic_scene();
   lt_scene* s = sp.get();
-  const int depth = 40;
-  std::vector<lt_shader_node> nodes(depth + 1, node(LT_NODE_ADD));
-  for (int i = 0; i < depth; ++i) nodes[i].child[0] = nodes[i].child[1] = i + 1;
-  nodes[depth] = node(LT_NODE_DIFFUSE);
-  nodes[depth].color.value[0] = nodes[depth].color.value[1] = nodes[depth].color.value[2] = 1e-12f;
+  ShaderCode p;
+  uint32_t w = p.one();
+  for (int i = 0; i < 40; ++i) w = p.mix(w, 0.0f).first;
+  p.diffuse(w, {0.5f, 0.5f, 0.5f});
   int id = -1;
-  const int status = lt_scene_add_material(s, nodes.data(), depth + 1, 0, &id);
-  if (status != LT_OK) {
-    // Refusing the graph is acceptable, with a message.
-    EXPECT_EQ(status, LT_ERROR_INVALID_ARGUMENT);
-    EXPECT_GT(std::string(lt_last_error()).size(), 0u);
-    return;
-  }
+  lt_shader_program d = p.desc();
+  ASSERT_EQ(lt_scene_add_material(s, &d, &id), LT_OK) << lt_last_error();
+  // Longer than the core takes: refused with a message, not allocated.
+  d.code_words = lt::kMaxProgramWords + 1;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_add_material(s, &d, &id)), "length");
   add_object(s, icosphere(0.5f, 1), id, translate({0, 0, 0.5f}));
-  const auto t0 = std::chrono::steady_clock::now();
-  commit_and_render(s, 1);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
-}
-
-TEST(ApiBadInput, SharedNodesCannotHideTreeDepth) {
-  // The root's second input X (a chain of 60 nodes) is validated first at depth 1; its first input
-  // is another chain of 60 nodes that ends at X again, so X's subtree really sits 60 levels deeper
-  // than where it was first seen: 121 levels in all, beyond what the evaluator's stack holds (64).
-  ScenePtr sp = basic_scene();
-  lt_scene* s = sp.get();
-  const int chain = 60;
-  // 0: root; 1..chain: first chain; chain+1 .. 2 chain: X's chain; 2 chain + 1: the shared leaf.
-  const int x = chain + 1, leaf = 2 * chain + 1;
-  std::vector<lt_shader_node> nodes(leaf + 1, node(LT_NODE_ADD));
-  nodes[0].child[0] = 1;
-  nodes[0].child[1] = x;
-  for (int i = 1; i <= chain; ++i) {
-    nodes[i].child[0] = leaf;
-    nodes[i].child[1] = i < chain ? i + 1 : x;  // the first chain ends at X
-  }
-  for (int i = x; i < leaf; ++i) {
-    nodes[i].child[0] = leaf;
-    nodes[i].child[1] = i + 1;
-  }
-  nodes[leaf] = node(LT_NODE_DIFFUSE);
-  nodes[leaf].color.value[0] = nodes[leaf].color.value[1] = nodes[leaf].color.value[2] = 1e-3f;
-  int id = -1;
-  const int status = lt_scene_add_material(s, nodes.data(), leaf + 1, 0, &id);
-  if (status != LT_OK) {
-    EXPECT_EQ(status, LT_ERROR_INVALID_ARGUMENT);
-    EXPECT_GT(std::string(lt_last_error()).size(), 0u);
-    return;
-  }
-  add_object(s, icosphere(0.5f, 1), id, translate({0, 0, 0.5f}));
-  commit_and_render(s, 1);
-  ADD_FAILURE() << "a material 121 levels deep was accepted (the evaluator holds 64)";
+  EXPECT_EQ(commit_and_render(s, 1).status.nan_samples, 0u);
 }
 
 TEST(ApiBadInput, GlassIorBelowOneReflectsTotallyAsCycles) {
@@ -858,11 +839,7 @@ TEST(ApiBadInput, GlassIorBelowOneReflectsTotallyAsCycles) {
   for (float ior : {0.75f, 0.0f}) {
     ScenePtr sp = new_scene();
     lt_scene* s = sp.get();
-    lt_shader_node glass = node(LT_NODE_GLASS);
-    glass.color = constant(V3{1, 1, 1});
-    glass.ior = ior;
-    int material = -1;
-    check(lt_scene_add_material(s, &glass, 1, 0, &material), "lt_scene_add_material");
+    const int material = add_glass(s, {1, 1, 1}, 0, ior);
     add_object(s, box({-20, -0.2f, -20}, {20, 0.2f, 20}), material);
     add_object(s, plane(60, 60), add_emission(s, {1, 1, 1}, 1),
                compose(translate({0, 2, 0}), rotate({1, 0, 0}, 1.5707964f)));

@@ -140,14 +140,10 @@ TEST(ApiFurnace, ClosedMirrorBoxRunsToTheBounceLimitUnamplified) {
   const float le = 0.5f;
   const int bounces = 256;
   ScenePtr s = new_scene();
-  lt_shader_node nodes[3] = {node(LT_NODE_ADD), node(LT_NODE_EMISSION), node(LT_NODE_GLOSSY)};
-  nodes[0].child[0] = 1;
-  nodes[0].child[1] = 2;
-  nodes[1].color = nodes[2].color = constant(V3{1, 1, 1});
-  nodes[1].strength = constant(le);
-  nodes[2].roughness = constant(0.0f);
-  int mirror = -1;
-  check(lt_scene_add_material(s.get(), nodes, 3, 0, &mirror), "lt_scene_add_material");
+  ShaderCode p;  // Add Shader(Emission, Glossy)
+  p.emission(p.one(), {1, 1, 1}, le);
+  p.glossy(p.one(), {1, 1, 1}, 0.0f);
+  const int mirror = add_material(s.get(), p);
   add_object(s.get(), box({-1, -1, -1}, {1, 1, 1}), mirror);
   camera_towards(s.get(), {0.1f, -0.7f, 0.05f}, {0.3f, 1, 0.2f}, 30);
   ASSERT_EQ(lt_scene_commit(s.get()), LT_OK) << lt_last_error();
@@ -231,18 +227,13 @@ TEST(ApiFurnace, RoughMetalSphereReflectsAsCyclesPerBounce) {
   };
   for (const Case& k : cases) {
     ScenePtr s = new_scene();
-    lt_shader_node nodes[3] = {node(LT_NODE_ADD), node(LT_NODE_EMISSION),
-                               node(k.principled ? LT_NODE_PRINCIPLED : LT_NODE_GLOSSY)};
-    nodes[0].child[0] = 1;
-    nodes[0].child[1] = 2;
-    nodes[1].color = constant(V3{1, 1, 1});
-    nodes[1].strength = constant(le);
-    nodes[2].color = constant(V3{k.base, k.base, k.base});
-    nodes[2].roughness = constant(0.2f);
-    nodes[2].metallic = constant(1.0f);
-    nodes[2].specular = constant(0.5f);
-    int metal = -1;
-    check(lt_scene_add_material(s.get(), nodes, 3, 0, &metal), "lt_scene_add_material");
+    ShaderCode p;  // Add Shader(Emission, Principled or Glossy)
+    p.emission(p.one(), {1, 1, 1}, le);
+    if (k.principled)
+      p.principled(p.one(), {k.base, k.base, k.base}, 1.0f, 0.2f, 0.5f);
+    else
+      p.glossy(p.one(), {k.base, k.base, k.base}, 0.2f);
+    const int metal = add_material(s.get(), p);
     add_object(s.get(), icosphere(1.0f, 5), metal);
     camera_towards(s.get(), {0, 0, 0}, {0.3f, 1, 0.2f}, 50);
     ASSERT_EQ(lt_scene_commit(s.get()), LT_OK) << lt_last_error();

@@ -22,18 +22,17 @@ struct Params {
   bool panel_emits = true;
 };
 
-lt_shader_node diffuse_node(V3 c) {
-  lt_shader_node n = node(LT_NODE_DIFFUSE);
-  n.color.value[0] = c.x, n.color.value[1] = c.y, n.color.value[2] = c.z;
-  return n;
+ShaderCode diffuse_program(V3 c) {
+  ShaderCode p;
+  p.diffuse(p.one(), {c.x, c.y, c.z});
+  return p;
 }
 
-lt_shader_node panel_node(bool emits) {
-  if (!emits) return diffuse_node({0.5f, 0.5f, 0.5f});
-  lt_shader_node n = node(LT_NODE_EMISSION);
-  n.color.value[0] = n.color.value[1] = n.color.value[2] = 1;
-  n.strength.value[0] = 5;
-  return n;
+ShaderCode panel_program(bool emits) {
+  if (!emits) return diffuse_program({0.5f, 0.5f, 0.5f});
+  ShaderCode p;
+  p.emission(p.one(), {1, 1, 1}, 5);
+  return p;
 }
 
 struct Ids {
@@ -53,11 +52,9 @@ ScenePtr build(const Params& p, Ids* ids) {
   ScenePtr sp = new_scene();
   lt_scene* s = sp.get();
   add_object(s, plane(20, 20), add_diffuse(s, {0.7f, 0.6f, 0.5f}));
-  lt_shader_node box_mat = diffuse_node(p.box_color);
-  check(lt_scene_add_material(s, &box_mat, 1, 0, &ids->box_material), "box material");
+  ids->box_material = add_material(s, diffuse_program(p.box_color));
   ids->box_instance = add_object(s, box({-0.5f, -0.5f, 0}, {0.5f, 0.5f, 1}), ids->box_material, translate(p.box_at));
-  lt_shader_node panel = panel_node(p.panel_emits);
-  check(lt_scene_add_material(s, &panel, 1, 0, &ids->panel_material), "panel material");
+  ids->panel_material = add_material(s, panel_program(p.panel_emits));
   ids->panel_instance = add_object(s, plane(0.6f, 0.6f), ids->panel_material, panel_xf(p.panel_at));
   add_light(s, lamp(p.lamp_watts));
   set_camera(s, perspective_camera(look_at(p.eye, {0, 0, 0.5f}), 35));
@@ -122,12 +119,14 @@ TEST(ApiIncremental, MaterialAndLightEditsDoNotRebuildTheBvh) {
   const lt_scene_stats before = stats(s);
 
   p.box_color = {0.9f, 0.1f, 0.1f};
-  lt_shader_node red = diffuse_node(p.box_color);
-  check(lt_scene_set_material(s, ids.box_material, &red, 1, 0), "material");
+  const ShaderCode red = diffuse_program(p.box_color);
+  const lt_shader_program red_desc = red.desc();
+  check(lt_scene_set_material(s, ids.box_material, &red_desc), "material");
   // The panel stops emitting: its triangles must leave the light sampler.
   p.panel_emits = false;
-  lt_shader_node panel = panel_node(false);
-  check(lt_scene_set_material(s, ids.panel_material, &panel, 1, 0), "panel");
+  const ShaderCode panel = panel_program(false);
+  const lt_shader_program panel_desc = panel.desc();
+  check(lt_scene_set_material(s, ids.panel_material, &panel_desc), "panel");
   p.lamp_watts = 800;
   check(lt_scene_clear_lights(s), "clear lights");
   add_light(s, lamp(p.lamp_watts));

@@ -64,12 +64,7 @@ ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1
   const int glossy_id = add_glossy(sc, {0.8f, 0.8f, 0.8f}, 0.3f);
   add_object(sc, icosphere(0.3f, 3), glossy_id, translate({0.45f, 0.3f, 0.3f}));
   {
-    lt_shader_node glass = node(LT_NODE_GLASS);
-    glass.color.value[0] = glass.color.value[1] = glass.color.value[2] = 1.0f;
-    glass.roughness.value[0] = glass_roughness;
-    glass.ior = 1.5f;
-    int glass_id;
-    check(lt_scene_add_material(sc, &glass, 1, 0, &glass_id), "glass");
+    const int glass_id = add_glass(sc, {1, 1, 1}, glass_roughness, 1.5f);
     if (media) {
       lt_volume_desc inside = volume(LT_VOLUME_PRINCIPLED, 3.0f, 0.9f, -0.3f);
       check(lt_scene_set_material_volume(sc, glass_id, &inside, 1, 0), "glass medium");
@@ -530,13 +525,11 @@ static ScenePtr door_slabs() {
   lt_scene* sc = s.get();
   int wall = -1;
   {
-    lt_shader_node n[3] = {node(LT_NODE_MIX), node(LT_NODE_DIFFUSE), node(LT_NODE_GLOSSY)};
-    n[0].fac.value[0] = 0.3f;
-    n[0].child[0] = 1;
-    n[0].child[1] = 2;
-    for (int c = 0; c < 3; ++c) n[1].color.value[c] = n[2].color.value[c] = 0.75f;
-    n[2].roughness.value[0] = 0.5f;
-    check(lt_scene_add_material(sc, n, 3, 0, &wall), "wall");
+    ShaderCode p;  // Mix Shader(0.3, Diffuse, Glossy)
+    auto [a, b] = p.mix(p.one(), 0.3f);
+    p.diffuse(a, {0.75f, 0.75f, 0.75f});
+    p.glossy(b, {0.75f, 0.75f, 0.75f}, 0.5f);
+    wall = add_material(sc, p);
   }
   const int wood = add_diffuse(sc, {0.6f, 0.45f, 0.3f});
   const float w = 2.0f, d = 1.5f, h = 2.5f, t = 0.2f;                  // half width, half depth, height; slab thickness

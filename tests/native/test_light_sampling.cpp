@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "chi2.h"
+#include "program_builder.h"
 #include "scene/scene.h"
 
 namespace lt {
@@ -147,11 +148,9 @@ std::vector<LightCase> make_cases() {
     LightCase c;
     c.name = "triangle";
     c.scene = std::make_unique<Scene>();
-    ShaderNode e;
-    e.type = NodeType::Emission;
-    e.color.value = Vec3(1.0f);
-    e.strength.value = Vec3(5.0f);
-    c.scene->materials.push_back(Material({e}, 0, 0));
+    ShaderCode e;
+    e.emission(e.one(), {1, 1, 1}, 5);
+    c.scene->materials.push_back(Material(Program(e.code, e.k, e.registers, 0)));
     Mesh m;
     m.positions = {Vec3(-0.5f, -0.3f, 1.2f), Vec3(0.8f, 0.1f, 1.0f), Vec3(0.1f, 0.9f, 1.6f)};
     m.indices = {0, 1, 2};

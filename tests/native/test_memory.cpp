@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "core/film.h"
-#include "shading/image.h"
 #include "scene_builders.h"
+#include "shading/image.h"
 
 extern char** environ;
 

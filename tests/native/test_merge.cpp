@@ -28,10 +28,9 @@ ScenePtr merge_scene(bool media) {
   const int gm = add_glossy(s.get(), {0.8f, 0.8f, 0.8f}, 0.3f);
   add_object(s.get(), box({0.2f, -0.3f, 0}, {0.9f, 0.4f, 0.7f}), gm);
   if (media) {
-    lt_shader_node n = node(LT_NODE_TRANSPARENT);
-    n.color.value[0] = n.color.value[1] = n.color.value[2] = 1;
-    int vm;
-    check(lt_scene_add_material(s.get(), &n, 1, 0, &vm), "add_material");
+    ShaderCode p;
+    p.transparent(p.one(), {1, 1, 1});
+    const int vm = add_material(s.get(), p);
     lt_volume_desc d{};
     d.node = LT_VOLUME_SCATTER;
     d.color[0] = d.color[1] = d.color[2] = 0.9f;

@@ -3,7 +3,7 @@
 import numpy as np
 
 from .. import core
-from .camera import export_camera
+from .camera import camera_table, export_camera
 from .light import export_light
 from .material import ImageExporter, MaterialExporter
 from .mesh import CONVERTIBLE_TYPES, MeshExporter
@@ -57,6 +57,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
 
     images = ImageExporter(core_scene, report)
     materials = MaterialExporter(core_scene, report, images)
+    if state is None or camera_object is not None:
+        materials.camera = camera_table(depsgraph, camera_object)
     meshes = MeshExporter(depsgraph, core_scene, report, materials)
     try:
         summary["world"] = export_world(depsgraph, core_scene, report, images)

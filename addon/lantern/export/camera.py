@@ -57,3 +57,25 @@ def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None
     )
     core_scene.set_camera(**kw)
     return obj.name
+
+
+def camera_table(depsgraph, camera_object=None):
+    """What Texture Coordinate's Camera and Window outputs need (28 floats: world to Cycles'
+    camera space (+Z forward) as 3 rows of 4, then world to NDC as 4 rows of 4), or None without
+    a camera object."""
+    scene = depsgraph.scene
+    obj = camera_object or scene.camera
+    if obj is None or obj.type != 'CAMERA':
+        return None
+    import mathutils
+    obj = obj.evaluated_get(depsgraph)
+    view = obj.matrix_world.inverted()
+    to_camera = mathutils.Matrix.Scale(-1.0, 4, (0.0, 0.0, 1.0)) @ view
+    rd = scene.render
+    x = rd.resolution_x * rd.pixel_aspect_x
+    y = rd.resolution_y * rd.pixel_aspect_y
+    projection = obj.calc_matrix_camera(depsgraph, x=max(1, int(x)), y=max(1, int(y)))
+    ndc = mathutils.Matrix(((0.5, 0, 0, 0.5), (0, 0.5, 0, 0.5), (0, 0, 1, 0), (0, 0, 0, 1)))
+    window = ndc @ projection @ view
+    return [to_camera[r][k] for r in range(3) for k in range(4)] + \
+        [window[r][k] for r in range(4) for k in range(4)]

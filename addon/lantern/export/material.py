@@ -1,30 +1,12 @@
-"""Material export: a material's surface node tree, flattened into lt_shader_node records.
-
-Supported: Diffuse, Glossy, Glass, Emission, Principled (3.4 sockets), Mix, Add and Transparent
-shaders; inputs from constants, RGB and Value nodes, or UV-mapped Image Textures; reroutes and
-muted nodes are followed. Anything else is reported, and replaced as documented: an unsupported
-shader node by mid-grey diffuse (0.5), an unsupported node feeding an input by that input's
-default value.
-"""
-
+"""Material export: a material's surface node tree compiled into a shader program (nodes/), its
+Volume output into homogeneous medium components, and the images textures use."""
 
 from .. import core
+from . import nodes
 from .names import core_call, is_finite
-
-FALLBACK_GREY = 0.5
 
 # Rec. 709 luma, as Blender converts a colour into a float socket.
 _LUMA = (0.2126, 0.7152, 0.0722)
-
-# Principled sockets renamed in Blender 4.0: the 3.4 name first.
-_SOCKET_ALIASES = {
-    "Specular": ("Specular", "Specular IOR Level"),
-    "Transmission": ("Transmission", "Transmission Weight"),
-    "Emission": ("Emission", "Emission Color"),
-    "Subsurface": ("Subsurface", "Subsurface Weight"),
-    "Clearcoat": ("Clearcoat", "Coat Weight"),
-    "Sheen": ("Sheen", "Sheen Weight"),
-}
 
 _INTERPOLATION = {'Linear': core.INTERP_LINEAR, 'Closest': core.INTERP_CLOSEST}
 _EXTENSION = {'REPEAT': core.EXTENSION_REPEAT, 'EXTEND': core.EXTENSION_EXTEND,
@@ -53,8 +35,8 @@ class ImageExporter:
         width, height = image.size[:]  # loads the image if needed
         channels = image.channels
         if width <= 0 or height <= 0 or channels not in (1, 3, 4):
-            self.report({'WARNING'}, "%s: image '%s' has no pixels (missing file?), its input "
-                                     "uses the socket value" % (where, image.name))
+            self.report({'WARNING'}, "%s: image '%s' has no pixels (missing file?); it renders "
+                                     "magenta (as Cycles)" % (where, image.name))
             self.ids[key] = None
             return None
         # Byte images give their stored values: sRGB-encoded when the colour space is sRGB.
@@ -217,6 +199,7 @@ class MaterialExporter:
     """Translates each material once; `export(material)` returns its core id."""
 
     def __init__(self, core_scene, report, images):
+        self.camera = None  # Texture Coordinate's camera table (camera.camera_table)
         self.core_scene = core_scene
         self.report = report
         self.images = images
@@ -234,7 +217,7 @@ class MaterialExporter:
         key = material.original.as_pointer()
         if key in self.ids:
             return self.ids[key]
-        nodes, root, volume, null_surface = self._translate(material)
+        program, volume, null_surface = self._translate(material)
         subject = "Material '%s'" % material.name
         mat_id = -1
         if self._bad:
@@ -242,8 +225,8 @@ class MaterialExporter:
             # surface, as an empty material slot.
             self.report({'WARNING'}, "%s left out: %s not finite; objects using it render with the default "
                         "surface (grey diffuse, as an empty material slot)" % (subject, ", ".join(self._bad)))
-        else:
-            mat_id = core_call(self.core_scene, self.report, subject, "add_material", nodes, root)
+        elif program is not None:
+            mat_id = core_call(self.core_scene, self.report, subject, "add_material", program)
             mat_id = -1 if mat_id is None else mat_id
         if mat_id < 0:
             volume, null_surface = None, False
@@ -276,35 +259,42 @@ class MaterialExporter:
         key = material.original.as_pointer()
         if key not in self.ids:
             return False
-        nodes, root, volume, null_surface = self._translate(material)
-        if self._bad or self.ids[key] < 0 or self.volumes.get(key) != (volume, null_surface):
+        program, volume, null_surface = self._translate(material)
+        if self._bad or program is None or self.ids[key] < 0 or self.volumes.get(key) != (volume, null_surface):
             return False  # a new scene, whose export reports the bad values
-        self.core_scene.set_material(self.ids[key], nodes, root)
+        self.core_scene.set_material(self.ids[key], program)
         return True
 
     def _translate(self, material):
-        """(nodes, root, volume keywords or None, null surface) of a material."""
+        """(program or None, volume keywords or None, null surface) of a material."""
         self._material = material
-        self._nodes = []
-        self._memo = {}
         self._bad = []  # the inputs whose values are not finite ("'Strength' of 'Emission'")
         volume, null_surface = None, False
-        if material.use_nodes and material.node_tree is not None:
-            volume = self.volume(material)
-            output = material.node_tree.get_output_node('CYCLES')
-            if volume is not None and follow(output.inputs["Surface"]) is None:
-                # Volume only: Cycles' invisible boundary (Transparent for the surface integrators),
-                # also when nothing in the volume can be used (volume == [], reported).
-                if not volume:
-                    self._warn("no usable volume shader; the volume is left out and its boundary "
-                               "stays invisible")
-                root = self._add(core.NODE_TRANSPARENT, color=core.make_input((1.0, 1.0, 1.0)))
-                null_surface = True
+        c = nodes.Compiler(material.name, self.images, self._warn, camera=self.camera)
+        try:
+            if material.use_nodes and material.node_tree is not None:
+                volume = self.volume(material)
+                output = material.node_tree.get_output_node('CYCLES')
+                if volume is not None and (output is None or not c.linked(output.inputs["Surface"])):
+                    # Volume only: Cycles' invisible boundary (Transparent for the surface
+                    # integrators), also when nothing in the volume can be used (reported).
+                    if not volume:
+                        self._warn("no usable volume shader; the volume is left out and its boundary "
+                                   "stays invisible")
+                    c.closure(nodes.ops.TRANSPARENT, [c.const((1.0, 1.0, 1.0)), c.const((1.0, 1.0, 1.0))])
+                    null_surface = True
+                elif output is None:
+                    self._warn("no active Material Output node, rendered black")
+                else:
+                    c.compile_surface(output)
             else:
-                root = self._surface_root(material)
-        else:
-            root = self._add(core.NODE_DIFFUSE, color=core.make_input(material.diffuse_color[:3]))
-        return self._nodes, root, volume, null_surface
+                c.closure(nodes.ops.DIFFUSE, [c.const((1.0, 1.0, 1.0)), c.const((0.0, 0.0, 0.0)),
+                                              c.const(tuple(material.diffuse_color[:3])), c.const(0.0)])
+        except nodes.Unsupported as e:
+            self._warn("%s; the material is left out (default surface)" % e)
+            return None, None, False
+        self._bad = c.bad
+        return c.program(), volume, null_surface
 
     def volume(self, material):
         """The material's Volume output as set_material_volume's components, [] (unusable) or None."""
@@ -318,185 +308,8 @@ class MaterialExporter:
             return []
         return components
 
-    # -- tree walk -----------------------------------------------------------------------------
-
     def _warn(self, message):
         self.report({'WARNING'}, "Material '%s': %s" % (self._material.name, message))
-
-    def _add(self, node_type, **fields):
-        self._nodes.append(core.ShaderNode(node_type, **fields))
-        return len(self._nodes) - 1
-
-    def _black(self):
-        # What an unlinked shader socket contributes in Cycles: no closure, i.e. absorbs.
-        return self._add(core.NODE_DIFFUSE, color=core.make_input((0.0, 0.0, 0.0)))
-
-    def _grey(self):
-        return self._add(core.NODE_DIFFUSE, color=core.make_input((FALLBACK_GREY,) * 3))
-
-    def _surface_root(self, material):
-        tree = material.node_tree
-        output = tree.get_output_node('CYCLES')
-        if output is None:
-            self._warn("no active Material Output node, rendered black")
-            return self._black()
-        return self._shader(output.inputs["Surface"])
-
-    def _shader(self, socket):
-        """Index of the node tree feeding a shader input socket."""
-        out = follow(socket)
-        if out is None:
-            return self._black()
-        key = out.as_pointer()
-        if key not in self._memo:
-            self._memo[key] = self._shader_node(out.node)
-        return self._memo[key]
-
-    def _shader_node(self, node):
-        t = node.type
-        inp = node.inputs
-        if t == 'BSDF_DIFFUSE':
-            return self._add(core.NODE_DIFFUSE, color=self._color(node, "Color"),
-                             roughness=self._scalar(node, "Roughness"))
-        if t == 'BSDF_GLOSSY':
-            if node.distribution not in {'GGX', 'SHARP'} and _is_rough(node):
-                self._warn("Glossy BSDF '%s' distribution %s treated as GGX"
-                           % (node.name, node.distribution))
-            rough = core.make_input(0.0) if node.distribution == 'SHARP' else \
-                self._scalar(node, "Roughness")
-            return self._add(core.NODE_GLOSSY, color=self._color(node, "Color"), roughness=rough)
-        if t == 'BSDF_GLASS':
-            if node.distribution not in {'GGX', 'SHARP'} and _is_rough(node):
-                self._warn("Glass BSDF '%s' distribution %s treated as GGX"
-                           % (node.name, node.distribution))
-            rough = core.make_input(0.0) if node.distribution == 'SHARP' else \
-                self._scalar(node, "Roughness")
-            return self._add(core.NODE_GLASS, color=self._color(node, "Color"), roughness=rough,
-                             ior=self._ior(node))
-        if t == 'EMISSION':
-            return self._add(core.NODE_EMISSION, color=self._color(node, "Color"),
-                             strength=self._scalar(node, "Strength"))
-        if t == 'BSDF_TRANSPARENT':
-            return self._add(core.NODE_TRANSPARENT, color=self._color(node, "Color"))
-        if t == 'MIX_SHADER':
-            fac = self._scalar(node, 0)
-            a, b = self._shader(inp[1]), self._shader(inp[2])
-            return self._add(core.NODE_MIX, fac=fac, child=(a, b))
-        if t == 'ADD_SHADER':
-            a, b = self._shader(inp[0]), self._shader(inp[1])
-            return self._add(core.NODE_ADD, child=(a, b))
-        if t == 'BSDF_PRINCIPLED':
-            return self._principled(node)
-        self._warn("node '%s' (%s) is not supported, replaced by grey diffuse"
-                   % (node.name, node.bl_idname))
-        return self._grey()
-
-    def _principled(self, node):
-        inp = node.inputs
-        if node.distribution != 'GGX' and _is_rough(node):
-            self._warn("Principled BSDF '%s' distribution %s treated as GGX"
-                       % (node.name, node.distribution))
-        ignored = []
-        for name, default in (("Subsurface", 0.0), ("Specular Tint", 0.0), ("Anisotropic", 0.0),
-                              ("Sheen", 0.0), ("Clearcoat", 0.0), ("Transmission Roughness", 0.0),
-                              ("Alpha", 1.0)):
-            s = next((inp.get(a) for a in _SOCKET_ALIASES.get(name, (name,)) if inp.get(a)), None)
-            if s is not None and (s.is_linked or _differs(s.default_value, default)):
-                ignored.append(name)
-        for name in ("Normal", "Clearcoat Normal", "Tangent"):
-            s = inp.get(name)
-            if s is not None and follow(s) is not None:
-                ignored.append(name)
-        if ignored:
-            self._warn("Principled BSDF '%s': %s not supported, ignored"
-                       % (node.name, ", ".join(ignored)))
-        return self._add(
-            core.NODE_PRINCIPLED,
-            color=self._color(node, "Base Color"),
-            metallic=self._scalar(node, "Metallic"),
-            roughness=self._scalar(node, "Roughness"),
-            specular=self._scalar(node, "Specular"),
-            transmission=self._scalar(node, "Transmission"),
-            ior=self._ior(node),
-            emission=self._color(node, "Emission"),
-            strength=self._scalar(node, "Emission Strength"),
-        )
-
-    # -- inputs --------------------------------------------------------------------------------
-
-    def _socket(self, node, name):
-        for alias in _SOCKET_ALIASES.get(name, (name,)):
-            s = node.inputs.get(alias) if isinstance(alias, str) else node.inputs[alias]
-            if s is not None:
-                return s
-        raise KeyError("node '%s' has no input '%s'" % (node.name, name))
-
-    def _constant(self, node, name):
-        """A float that the ABI takes as a constant (IOR): linked inputs use the socket value."""
-        s = self._socket(node, name)
-        value = float(s.default_value)
-        if follow(s) is not None:
-            src = follow(s).node
-            if src.type == 'VALUE':
-                value = float(src.outputs[0].default_value)
-            else:
-                self._warn("'%s' of '%s' must be a constant, its link from '%s' is ignored"
-                           % (s.name, node.name, src.name))
-        return self._finite(value, s, node)
-
-    def _finite(self, value, socket, node):
-        """Records a non-finite input value (the material is then left out)."""
-        if not is_finite(value):
-            self._bad.append("'%s' of '%s' (%s)" % (socket.name, node.name, value))
-        return value
-
-    def _ior(self, node):
-        """IOR below 1 renders as Cycles renders it (an optically thinner inside); 0 or less is
-        1e-5 there, as in Cycles: a near-perfect mirror, worth a word."""
-        ior = self._constant(node, "IOR")
-        if not ior > 0:
-            self._warn("'%s' has IOR %g; rendered as IOR 0.00001 (as Cycles): a near-perfect mirror"
-                       % (node.name, ior))
-        return ior
-
-    def _color(self, node, name):
-        return self._input(node, name, colour=True)
-
-    def _scalar(self, node, name):
-        return self._input(node, name, colour=False)
-
-    def _input(self, node, name, colour):
-        s = self._socket(node, name)
-        default = _socket_value(s, colour)
-        out = follow(s)
-        if out is None:
-            return core.make_input(self._finite(default, s, node))
-        src = out.node
-        if src.type in {'RGB', 'VALUE'}:
-            return core.make_input(self._finite(_convert(out.default_value, colour), s, node))
-        if src.type == 'TEX_IMAGE':
-            image_id = self._image_texture(src, out, s, node)
-            if image_id is not None:
-                return core.make_input((1.0, 1.0, 1.0), image=image_id)
-            return core.make_input(default)
-        self._warn("node '%s' (%s) feeding '%s' of '%s' is not supported, using the socket's "
-                   "value" % (src.name, src.bl_idname, s.name, node.name))
-        return core.make_input(default)
-
-    def _image_texture(self, tex, out, socket, node):
-        where = "Material '%s', image texture '%s'" % (self._material.name, tex.name)
-        if out.name != "Color":
-            self._warn("the %s output of image texture '%s' is not supported, using the socket's "
-                       "value for '%s' of '%s'" % (out.name, tex.name, socket.name, node.name))
-            return None
-        if tex.projection != 'FLAT':
-            self._warn("image texture '%s': %s projection treated as Flat (UV)"
-                       % (tex.name, tex.projection))
-        vec = follow(tex.inputs["Vector"])
-        if vec is not None and not _is_uv_source(vec):
-            self._warn("image texture '%s': vector input from '%s' is not supported, the active "
-                       "render UV map is used" % (tex.name, vec.node.name))
-        return self.images.export(tex.image, tex.interpolation, tex.extension, where)
 
 
 def _numbers(component):
@@ -507,33 +320,6 @@ def _numbers(component):
             continue
         out.extend(v if isinstance(v, (tuple, list)) else (v,))
     return out
-
-
-def _differs(value, default):
-    values = tuple(value)[:3] if hasattr(value, "__len__") else (value,)
-    return any(abs(v - default) > 1e-6 for v in values)
-
-
-def _is_rough(node):
-    """Whether the microfacet distribution matters: roughness linked or above zero."""
-    s = node.inputs["Roughness"]
-    return follow(s) is not None or s.default_value > 0.0
-
-
-def _is_uv_source(out):
-    node = out.node
-    if node.type == 'TEX_COORD':
-        return out.name == "UV"
-    if node.type == 'UVMAP':
-        return True
-    return False
-
-
-def _socket_value(socket, colour):
-    v = socket.default_value
-    if isinstance(v, float) or isinstance(v, int):
-        return _convert(float(v), colour)
-    return _convert(tuple(v), colour)
 
 
 def _convert(v, colour):

@@ -64,8 +64,11 @@ def mesh_arrays(mesh):
         layer.data.foreach_get("uv", uvs)
         corner_uvs = uvs.reshape(-1, 2)[corner_loops].reshape(-1)
 
+    # Generated coordinates live in the mesh's texture space (automatic: its bounds).
+    texspace = dict(texspace_location=tuple(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0))),
+                    texspace_size=tuple(getattr(mesh, "texspace_size", (0.0, 0.0, 0.0))))
     return dict(positions=positions, triangles=triangles, corner_normals=corner_normals,
-                corner_uvs=corner_uvs, material_slots=material_slots)
+                corner_uvs=corner_uvs, material_slots=material_slots, **texspace)
 
 
 def open_edge_count(triangles):

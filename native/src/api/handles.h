@@ -7,8 +7,8 @@
 
 #include "lantern/lantern.h"
 #include "render/render.h"
-#include "shading/image.h"
 #include "scene/scene.h"
+#include "shading/image.h"
 
 struct lt_scene {
   lt::Scene scene;

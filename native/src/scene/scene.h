@@ -9,8 +9,8 @@
 #include "geometry/geometry.h"
 #include "media/medium.h"
 #include "scene/camera.h"
-#include "shading/image.h"
 #include "scene/lights/light_set.h"
+#include "shading/image.h"
 #include "shading/material.h"
 
 namespace lt {

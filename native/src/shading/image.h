@@ -46,10 +46,10 @@ class Image {
   Image(int width, int height, int channels, FloatBuffer pixels, bool srgb, Interpolation interp, Extension ext);
   int width() const { return width_; }
   int height() const { return height_; }
-  Vec3 lookup(Vec2 uv) const;         // RGB
+  Vec3 lookup(Vec2 uv) const;  // RGB
   // Images keep no alpha channel yet (lt_scene_add_image drops it): fully opaque.
   float lookup_alpha(Vec2) const { return 1.0f; }
-  Vec3 texel(int x, int y) const;     // linear
+  Vec3 texel(int x, int y) const;  // linear
   size_t bytes() const { return bytes_.size() + floats_.size() * sizeof(float); }
   bool is_byte() const { return !bytes_.empty(); }
 

@@ -11,14 +11,14 @@ namespace lt {
 namespace {
 
 const OpSignature kSignatures[] = {
-    {"", "vvvvvvv", "tt", false},                 // texture coordinate
-    {"", "vvvvvvfff", "", false},                 // geometry
-    {"v", "vf", "g", false},                      // image
-    {"fv", "f", "", false},                       // fresnel
-    {"fv", "ff", "", false},                      // layer weight
-    {"", "ffffffffffffff", "", false},            // light path
-    {"v", "f", "i", true},                        // to float
-    {"f", "v", "", true},                         // to vector
+    {"", "vvvvvvv", "tt", false},       // texture coordinate
+    {"", "vvvvvvfff", "", false},       // geometry
+    {"v", "vf", "g", false},            // image
+    {"fv", "f", "", false},             // fresnel
+    {"fv", "ff", "", false},            // layer weight
+    {"", "ffffffffffffff", "", false},  // light path
+    {"v", "f", "i", true},              // to float
+    {"f", "v", "", true},               // to vector
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -75,8 +75,8 @@ const OpSignature* inputs_family_signature(uint32_t op) {
 void exec_inputs_family(const Instr& in, Machine& m) {
   if (in.op == kOpToFloat) {
     const Vec3 v = m.v(in.in[0]);
-    m.set(in.out[0], in.param[0] == 1 ? (v.x + v.y + v.z) * (1.0f / 3.0f)
-                                      : 0.2126f * v.x + 0.7152f * v.y + 0.0722f * v.z);
+    m.set(in.out[0],
+          in.param[0] == 1 ? (v.x + v.y + v.z) * (1.0f / 3.0f) : 0.2126f * v.x + 0.7152f * v.y + 0.0722f * v.z);
     return;
   }
   if (in.op == kOpToVector) {

@@ -70,7 +70,8 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
 
   size_t pos = 0, index = 0;
   while (pos < code.size()) {
-    const std::string where = "shader program instruction " + std::to_string(index) + " (word " + std::to_string(pos) + ")";
+    const std::string where =
+        "shader program instruction " + std::to_string(index) + " (word " + std::to_string(pos) + ")";
     if (code.size() - pos < 2) throw InvalidArgument(where + " is cut short");
     Instr in = decode(code.data() + pos);
     if (words_of(in) > code.size() - pos) throw InvalidArgument(where + " is cut short");
@@ -118,8 +119,7 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
         throw InvalidArgument(where + " refers to image " + std::to_string(params[k]) + " which does not exist");
       if (kind == 't') {
         const size_t at = params[k];
-        if (at >= constants.size() || !(constants[at] >= 0) ||
-            size_t(constants[at]) > constants.size() - at - 1)
+        if (at >= constants.size() || !(constants[at] >= 0) || size_t(constants[at]) > constants.size() - at - 1)
           throw InvalidArgument(where + " refers to a table past the constants");
       }
     }
@@ -177,7 +177,7 @@ bool Program::emission_estimate(float* estimate) const {
       const float* ck = constants_.data() + operand_index(color);
       float c = 0, wm = 0;
       for (int j = 0; j < 3; ++j) {
-        c = std::max(c, ck[j]);
+        c = std::max(c, std::abs(ck[j]));
         wm = std::max(wm, wk[j]);
       }
       // Negative strength is negative light (as Cycles renders it): the estimate is its magnitude.

@@ -34,16 +34,16 @@ inline uint32_t operand_index(uint32_t w) { return w & kIndexMask; }
 
 // What the nodes see at a shading point (Cycles' ShaderData). World space unless named otherwise.
 struct ShadingContext {
-  Vec3 P;             // position
-  Vec3 N;             // smooth shading normal, facing the incoming ray (Cycles' sd->N)
-  Vec3 Ng;            // geometric normal, facing the incoming ray
-  Vec3 I;             // toward the viewer: the incoming ray's reversed direction
-  Vec3 tangent;       // Cycles' Geometry Tangent: around the generated Z axis, normal to N
-  Vec2 uv;            // the active render UV map
-  Vec2 bary;          // barycentrics of the triangle's second and third vertices
-  Vec3 generated;     // object-space position in the mesh's texture space (Cycles' Generated)
-  Vec3 object_P;      // object-space position
-  Vec3 object_N;      // object-space N
+  Vec3 P;          // position
+  Vec3 N;          // smooth shading normal, facing the incoming ray (Cycles' sd->N)
+  Vec3 Ng;         // geometric normal, facing the incoming ray
+  Vec3 I;          // toward the viewer: the incoming ray's reversed direction
+  Vec3 tangent;    // Cycles' Geometry Tangent: around the generated Z axis, normal to N
+  Vec2 uv;         // the active render UV map
+  Vec2 bary;       // barycentrics of the triangle's second and third vertices
+  Vec3 generated;  // object-space position in the mesh's texture space (Cycles' Generated)
+  Vec3 object_P;   // object-space position
+  Vec3 object_N;   // object-space N
   bool backfacing = false;
   // Light Path: the ray that reached this point and the bounces before it.
   bool camera_ray = true, shadow_ray = false, diffuse_ray = false, glossy_ray = false, singular_ray = false;
@@ -54,11 +54,11 @@ struct ShadingContext {
 
 // The machine an instruction runs on: read inputs, write outputs.
 struct Machine {
-  float* r;         // registers
-  const float* k;   // constant pool
+  float* r;        // registers
+  const float* k;  // constant pool
   const ShadingContext* ctx;
   const std::vector<std::unique_ptr<Image>>* images;
-  Bsdf* bsdf;       // null: emission only (light sampling)
+  Bsdf* bsdf;  // null: emission only (light sampling)
   Spectrum emitted;
   Vec3 shading_normal;  // set by closures with a Normal input (one normal per shading point)
   bool has_shading_normal = false;

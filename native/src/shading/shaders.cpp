@@ -7,6 +7,10 @@ namespace lt {
 namespace {
 
 float unit(float x) { return std::isfinite(x) ? clamp(x, 0.0f, 1.0f) : 0.0f; }
+Vec3 finite(Vec3 c) {
+  for (int k = 0; k < 3; ++k) c[k] = std::isfinite(c[k]) ? c[k] : 0.0f;
+  return c;
+}
 Vec3 non_negative(Vec3 c) {
   for (int k = 0; k < 3; ++k) c[k] = std::isfinite(c[k]) ? std::max(0.0f, c[k]) : 0.0f;
   return c;
@@ -103,12 +107,13 @@ void exec_shaders_family(const Instr& in, Machine& m) {
   const Vec3 weight = m.v(in.in[0]);
   if (is_black(weight)) return;
   if (in.op == kOpEmission) {
-    m.emitted += weight * non_negative(m.v(in.in[1])) * m.f(in.in[2]);
+    // Emission keeps its sign, as Cycles' (a negative colour or strength is negative light).
+    m.emitted += weight * finite(m.v(in.in[1])) * m.f(in.in[2]);
     return;
   }
   if (in.op == kOpPrincipled) {
     // Emission first: light sampling runs without lobes.
-    const Vec3 e = non_negative(m.v(in.in[21]));
+    const Vec3 e = finite(m.v(in.in[21]));
     if (!is_black(e)) m.emitted += weight * e * m.f(in.in[22]);
     if (m.bsdf) principled(in, m, weight);
     return;

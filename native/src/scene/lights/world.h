@@ -3,8 +3,8 @@
 #pragma once
 
 #include "core/distribution.h"
-#include "shading/image.h"
 #include "scene/lights/light.h"
+#include "shading/image.h"
 
 namespace lt {
 

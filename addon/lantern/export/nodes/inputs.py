@@ -1,0 +1,86 @@
+"""Nodes that read the shading point, constants and image textures (inputs.h in the core)."""
+
+from . import TEX_COORD_OUTPUTS, ops, register
+
+MAGENTA = (1.0, 0.0, 1.0)  # a missing image, as Cycles renders it
+
+
+@register('VALUE')
+def value(c, node, want):
+    return {node.outputs[0].name: c.const(float(node.outputs[0].default_value))}
+
+
+@register('RGB')
+def rgb(c, node, want):
+    return {node.outputs[0].name: c.const(tuple(node.outputs[0].default_value)[:3])}
+
+
+@register('TEX_COORD')
+def tex_coord(c, node, want):
+    if node.object is not None and want.name == "Object":
+        # Another object's space: its world-to-object matrix as a table.
+        m = node.object.matrix_world.inverted()
+        table = [m[r][k] for r in range(3) for k in range(4)]
+        outs = c.emit(ops.TEX_COORD, [], [(n, 3) for n in TEX_COORD_OUTPUTS],
+                      params=[c.table(table), c.table(c.camera or [])])
+        return outs
+    if want.name in ("Camera", "Window") and c.camera is None:
+        c.warn("Texture Coordinate '%s': %s output needs the scene camera; 0 is used" % (node.name, want.name))
+    return {n: c.texcoord(n) for n in TEX_COORD_OUTPUTS}
+
+
+@register('UVMAP')
+def uv_map(c, node, want):
+    if node.uv_map:
+        c.warn("UV Map '%s': the map '%s' is read as the active render UV map (named maps are not "
+               "exported yet)" % (node.name, node.uv_map))
+    return {"UV": c.texcoord("UV")}
+
+
+@register('NEW_GEOMETRY')
+def geometry(c, node, want):
+    if want.name in ("Pointiness", "Random Per Island"):
+        c.warn("Geometry '%s': %s is not computed (0.5 and 0 are used)" % (node.name, want.name))
+    return c.emit(ops.GEOMETRY, [], [("Position", 3), ("Normal", 3), ("Tangent", 3), ("True Normal", 3),
+                                     ("Incoming", 3), ("Parametric", 3), ("Backfacing", 1),
+                                     ("Pointiness", 1), ("Random Per Island", 1)])
+
+
+@register('FRESNEL')
+def fresnel(c, node, want):
+    return c.emit(ops.FRESNEL, [c.float(node.inputs["IOR"]), c.normal(node.inputs["Normal"])], [("Fac", 1)])
+
+
+@register('LAYER_WEIGHT')
+def layer_weight(c, node, want):
+    return c.emit(ops.LAYER_WEIGHT, [c.float(node.inputs["Blend"]), c.normal(node.inputs["Normal"])],
+                  [("Fresnel", 1), ("Facing", 1)])
+
+
+_LIGHT_PATH = ("Is Camera Ray", "Is Shadow Ray", "Is Diffuse Ray", "Is Glossy Ray", "Is Singular Ray",
+               "Is Reflection Ray", "Is Transmission Ray", "Is Volume Scatter Ray", "Ray Length",
+               "Ray Depth", "Diffuse Depth", "Glossy Depth", "Transparent Depth", "Transmission Depth")
+
+
+@register('LIGHT_PATH')
+def light_path(c, node, want):
+    if want.name in ("Is Shadow Ray", "Is Singular Ray", "Is Volume Scatter Ray"):
+        c.warn("Light Path '%s': %s is always 0 in Lantern" % (node.name, want.name))
+    return c.emit(ops.LIGHT_PATH, [], [(n, 1) for n in _LIGHT_PATH])
+
+
+@register('TEX_IMAGE')
+def image_texture(c, node, want):
+    where = "Material '%s', image texture '%s'" % (c.material_name, node.name)
+    if node.projection != 'FLAT':
+        c.warn("image texture '%s': %s projection treated as Flat" % (node.name, node.projection))
+    if want.name == "Alpha":
+        c.warn("image texture '%s': the Alpha output is 1 (image alpha is not kept yet)" % node.name)
+    image_id = c.images.export(node.image, node.interpolation, node.extension, where) \
+        if node.image is not None else None
+    if image_id is None:
+        if node.image is None:
+            c.warn("image texture '%s' has no image; it renders magenta (as Cycles)" % node.name)
+        return {"Color": c.const(MAGENTA), "Alpha": c.const(1.0)}
+    vec = c.vector(node.inputs["Vector"], default=c.texcoord("UV"))
+    return c.emit(ops.IMAGE, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id])

@@ -1,0 +1,57 @@
+"""Opcode numbers of the core's shader machine, as native/src/shading/*.h declare them (a test
+holds the two to each other)."""
+
+# shaders.h
+EMISSION = 1
+DIFFUSE = 2
+GLOSSY = 3
+GLASS = 4
+TRANSPARENT = 5
+PRINCIPLED = 6
+MIX_WEIGHTS = 7
+HOLDOUT = 8
+
+# inputs.h
+TEX_COORD = 32
+GEOMETRY = 33
+IMAGE = 34
+FRESNEL = 35
+LAYER_WEIGHT = 36
+LIGHT_PATH = 37
+TO_FLOAT = 38
+TO_VECTOR = 39
+
+# Distribution params (shaders.h)
+DIST_SHARP = 0
+DIST_GGX = 1
+DIST_BECKMANN = 2
+DIST_ASHIKHMIN_SHIRLEY = 3
+DIST_MULTI_GGX = 4
+
+# nodes_math.h (the mode params' orders are in converters.py)
+MATH = 64
+VECTOR_MATH = 65
+MIX_COLOR = 66
+MIX_FLOAT = 67
+MIX_VECTOR = 68
+MIX_VECTOR_NON_UNIFORM = 69
+INVERT = 70
+HUE_SAT_VAL = 71
+BRIGHT_CONTRAST = 72
+GAMMA = 73
+CURVES = 74
+FLOAT_CURVE = 75
+COLOR_RAMP = 76
+MAP_RANGE = 77
+MAP_RANGE_VECTOR = 78
+CLAMP = 79
+SEPARATE_COLOR = 80
+COMBINE_COLOR = 81
+SEPARATE_XYZ = 82
+COMBINE_XYZ = 83
+RGB_TO_BW = 84
+WAVELENGTH = 85
+BLACKBODY = 86
+MAPPING = 87
+VECTOR_ROTATE = 88
+NORMAL = 89

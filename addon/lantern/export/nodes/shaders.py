@@ -1,0 +1,116 @@
+"""Shader nodes: closures with the weight Mix Shader hands them (shaders.h in the core)."""
+
+from . import ops, register_shader
+
+_DISTRIBUTIONS = {'SHARP': ops.DIST_SHARP, 'GGX': ops.DIST_GGX, 'BECKMANN': ops.DIST_BECKMANN,
+                  'ASHIKHMIN_SHIRLEY': ops.DIST_ASHIKHMIN_SHIRLEY,
+                  'MULTI_GGX': ops.DIST_MULTI_GGX}
+# Distributions the core renders as GGX for now (README: departures).
+_AS_GGX = {'BECKMANN', 'ASHIKHMIN_SHIRLEY', 'MULTI_GGX'}
+
+
+def _distribution(c, node):
+    d = getattr(node, "distribution", 'GGX')
+    rough = node.inputs.get("Roughness")
+    if d in _AS_GGX and rough is not None and (c.linked(rough) or rough.default_value > 0):
+        c.warn("%s '%s': distribution %s is rendered as GGX" % (node.bl_label, node.name, d))
+    return _DISTRIBUTIONS.get(d, ops.DIST_GGX)
+
+
+@register_shader('MIX_SHADER')
+def mix_shader(c, node, weight):
+    w = c.emit(ops.MIX_WEIGHTS, [weight, c.float(node.inputs[0])], [("a", 3), ("b", 3)])
+    c.shader(node.inputs[1], w["a"])
+    c.shader(node.inputs[2], w["b"])
+
+
+@register_shader('ADD_SHADER')
+def add_shader(c, node, weight):
+    c.shader(node.inputs[0], weight)
+    c.shader(node.inputs[1], weight)
+
+
+@register_shader('EMISSION')
+def emission(c, node, weight):
+    c.closure(ops.EMISSION, [weight, c.color(node.inputs["Color"]), c.float(node.inputs["Strength"])])
+
+
+@register_shader('BSDF_DIFFUSE')
+def diffuse(c, node, weight):
+    c.closure(ops.DIFFUSE, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
+                            c.float(node.inputs["Roughness"])])
+
+
+@register_shader('BSDF_GLOSSY')
+def glossy(c, node, weight):
+    c.closure(ops.GLOSSY, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
+                           c.float(node.inputs["Roughness"])], params=[_distribution(c, node)])
+
+
+@register_shader('BSDF_GLASS')
+def glass(c, node, weight):
+    _ior_warning(c, node)
+    c.closure(ops.GLASS, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
+                          c.float(node.inputs["Roughness"]), c.float(node.inputs["IOR"])],
+              params=[_distribution(c, node)])
+
+
+@register_shader('BSDF_TRANSPARENT')
+def transparent(c, node, weight):
+    c.closure(ops.TRANSPARENT, [weight, c.color(node.inputs["Color"])])
+
+
+@register_shader('HOLDOUT')
+def holdout(c, node, weight):
+    c.warn("Holdout '%s' is rendered as Transparent (holdout passes are not written yet)" % node.name)
+    c.closure(ops.HOLDOUT, [weight])
+
+
+def _ior_warning(c, node):
+    s = node.inputs["IOR"]
+    if not c.linked(s) and not s.default_value > 0:
+        c.warn("'%s' has IOR %g; rendered as IOR 0.00001 (as Cycles): a near-perfect mirror"
+               % (node.name, s.default_value))
+
+
+# Principled BSDF inputs in the core's order (shaders.h); Blender 4 names second.
+_PRINCIPLED = (
+    ("Base Color", 3), ("Subsurface", 1), ("Subsurface Radius", 3), ("Subsurface Color", 3),
+    ("Subsurface IOR", 1), ("Subsurface Anisotropy", 1), ("Metallic", 1), ("Specular", 1),
+    ("Specular Tint", 1), ("Roughness", 1), ("Anisotropic", 1), ("Anisotropic Rotation", 1),
+    ("Sheen", 1), ("Sheen Tint", 1), ("Clearcoat", 1), ("Clearcoat Roughness", 1), ("IOR", 1),
+    ("Transmission", 1), ("Transmission Roughness", 1), ("Emission", 3), ("Emission Strength", 1),
+    ("Alpha", 1),
+)
+_ALIASES = {"Specular": "Specular IOR Level", "Transmission": "Transmission Weight",
+            "Emission": "Emission Color", "Subsurface": "Subsurface Weight",
+            "Clearcoat": "Coat Weight", "Sheen": "Sheen Weight"}
+# Inputs the core does not render yet, and the value at which they change nothing.
+_IGNORED = {"Subsurface": 0.0, "Specular Tint": 0.0, "Anisotropic": 0.0, "Sheen": 0.0,
+            "Clearcoat": 0.0, "Transmission Roughness": 0.0}
+
+
+@register_shader('BSDF_PRINCIPLED')
+def principled(c, node, weight):
+    inp = node.inputs
+
+    def socket(name):
+        return inp.get(name) or inp.get(_ALIASES.get(name, name))
+
+    if node.distribution != 'GGX' and (c.linked(inp["Roughness"]) or inp["Roughness"].default_value > 0):
+        c.warn("Principled BSDF '%s': distribution %s is rendered as GGX" % (node.name, node.distribution))
+    ignored = [name for name, neutral in _IGNORED.items()
+               if socket(name) is not None and (c.linked(socket(name)) or
+                                                abs(float(socket(name).default_value) - neutral) > 1e-6)]
+    if c.linked(inp.get("Clearcoat Normal")) or c.linked(inp.get("Tangent")):
+        ignored += [n for n in ("Clearcoat Normal", "Tangent") if c.linked(inp.get(n))]
+    if ignored:
+        c.warn("Principled BSDF '%s': %s not supported, ignored" % (node.name, ", ".join(ignored)))
+    _ior_warning(c, node)
+    operands = [weight, c.normal(inp.get("Normal"))]
+    for name, size in _PRINCIPLED:
+        s = socket(name)
+        operands.append(c._value(s, size) if s is not None else c.const(0.0 if size == 1 else (0.0,) * 3))
+    operands.append(c.normal(inp.get("Clearcoat Normal")))
+    operands.append(c.normal(inp.get("Tangent")))
+    c.closure(ops.PRINCIPLED, operands, params=[_distribution(c, node), 0])

@@ -1,0 +1,99 @@
+// Shader programs as the add-on compiles them (native/src/shading/program.h), for the native tests
+// and the fuzz seeds: constants, closures with their weights (one(): weight 1), Mix Shader weights.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "lantern/lantern.h"
+#include "shading/program.h"
+#include "shading/shaders.h"
+
+struct Rgb {
+  float x, y, z;
+};
+
+struct ShaderCode {
+  std::vector<uint32_t> code;
+  std::vector<float> k;
+  int registers = 0;
+
+  uint32_t c1(float v) {
+    k.push_back(v);
+    return lt::kConstBit | (1u << 24) | uint32_t(k.size() - 1);
+  }
+  uint32_t c3(Rgb v) {
+    k.insert(k.end(), {v.x, v.y, v.z});
+    return lt::kConstBit | (3u << 24) | uint32_t(k.size() - 3);
+  }
+  // Appends an instruction; returns its output operands.
+  std::vector<uint32_t> emit(uint32_t op, const std::vector<uint32_t>& in, const std::vector<int>& out_sizes,
+                             const std::vector<uint32_t>& params = {}) {
+    std::vector<uint32_t> outs;
+    for (int size : out_sizes) {
+      outs.push_back(uint32_t(size) << 24 | uint32_t(registers));
+      registers += size;
+    }
+    code.push_back(op);
+    code.push_back(uint32_t(in.size()) | uint32_t(outs.size()) << 8 | uint32_t(params.size()) << 16);
+    code.insert(code.end(), in.begin(), in.end());
+    code.insert(code.end(), outs.begin(), outs.end());
+    code.insert(code.end(), params.begin(), params.end());
+    return outs;
+  }
+  lt_shader_program desc() const { return {code.data(), int(code.size()), k.data(), int(k.size()), registers}; }
+  uint32_t one() { return c3({1, 1, 1}); }
+  void diffuse(uint32_t weight, Rgb color, float roughness = 0) {
+    emit(lt::kOpDiffuse, {weight, c3({0, 0, 0}), c3(color), c1(roughness)}, {});
+  }
+  void glossy(uint32_t weight, Rgb color, float roughness) {
+    emit(lt::kOpGlossy, {weight, c3({0, 0, 0}), c3(color), c1(roughness)}, {}, {lt::kDistGGX});
+  }
+  void glass(uint32_t weight, Rgb color, float roughness, float ior) {
+    emit(lt::kOpGlass, {weight, c3({0, 0, 0}), c3(color), c1(roughness), c1(ior)}, {}, {lt::kDistGGX});
+  }
+  void emission(uint32_t weight, Rgb color, float strength) {
+    emit(lt::kOpEmission, {weight, c3(color), c1(strength)}, {});
+  }
+  void transparent(uint32_t weight, Rgb color) { emit(lt::kOpTransparent, {weight, c3(color)}, {}); }
+  // Principled BSDF with these inputs and Blender's defaults for the others.
+  void principled(uint32_t weight, Rgb base, float metallic, float roughness, float specular = 0.5f,
+                  float transmission = 0, float ior = 1.45f) {
+    const uint32_t z3 = c3({0, 0, 0}), z = c1(0);
+    // Operand order of kOpPrincipled (shading/shaders.h).
+    emit(lt::kOpPrincipled,
+         {weight,
+          z3,
+          c3(base),
+          z,
+          c3({1, 0.2f, 0.1f}),
+          c3(base),
+          c1(1.4f),
+          z,
+          c1(metallic),
+          c1(specular),
+          z,
+          c1(roughness),
+          z,
+          z,
+          z,
+          c1(0.5f),
+          z,
+          c1(0.03f),
+          c1(ior),
+          c1(transmission),
+          z,
+          z3,
+          c1(1),
+          c1(1),
+          z3,
+          z3},
+         {}, {lt::kDistGGX, 0});
+  }
+  // The weights Mix Shader hands its two inputs.
+  std::pair<uint32_t, uint32_t> mix(uint32_t weight, float fac) {
+    auto w = emit(lt::kOpMixWeights, {weight, c1(fac)}, {3, 3});
+    return {w[0], w[1]};
+  }
+};
