@@ -4,7 +4,6 @@ import os
 import re
 
 import bpy
-import pytest
 
 import build_scenes as bs
 from lantern import core
