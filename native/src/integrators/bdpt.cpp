@@ -30,7 +30,7 @@ BounceKind kind_of(const Bsdf& bsdf) {
   BounceKind kind = BounceKind::None;
   for (int k = 0; k < bsdf.count(); ++k) {
     const Lobe& l = bsdf.lobe(k);
-    if (l.type == LobeType::Dielectric) return BounceKind::Mixed;  // reflection or refraction
+    if (lobe_is_glass(l.type)) return BounceKind::Mixed;  // reflection or refraction
     BounceKind lk = bounce_kind(l, false);
     if (k > 0 && lk != kind) return BounceKind::Mixed;
     kind = lk;
@@ -293,7 +293,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
 
     SurfacePoint sp;
     Spectrum le(0.0f);
-    Vec3 ns;
+    ShadingFrame sf;
     if (medium < 0) {
       if (!found) break;
       sp = scene_.geometry.surface(hit);
@@ -305,9 +305,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, hit.t * length(ray.d));
       ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
       ctx.ray_depth = bounces;
-      ns = ctx.N;
+      sf.n = ctx.N;
       const Material& material = scene_.material(sp.material);
-      le = material.evaluate(ctx, scene_.images, &v.bsdf, &ns);
+      le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
       // A transparent pass makes no vertex (connections see the surface through
       // shadow_transmittance); an emitting surface stays a vertex.
       if (is_black(le) && material.may_be_transparent() && v.bsdf.pass_transparent(sampler_.next_1d(), &beta)) {
@@ -334,7 +334,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.sp = sp;
       v.p = sp.p;
       v.n = backface ? -sp.ng : sp.ng;
-      v.frame = Frame(facing_normal(ns, v.n));
+      v.frame = local_frame(sf, v.n);
       v.wo = v.frame.to_local(-ray.d);
     }
     v.pdf_fwd = density_of(count, v);

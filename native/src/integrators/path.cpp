@@ -145,10 +145,11 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, hit.t * length(ray.d));
       describe_ray(b, visibility, &ctx);
       const Vec3 ng = ctx.Ng;
-      Vec3 ns = ctx.N;
+      ShadingFrame sf{ctx.N};
       const Material& material = scene.material(sp.material);
-      Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &ns);
-      ns = facing_normal(ns, ng);
+      Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
+      const Frame frame = local_frame(sf, ng);
+      const Vec3 ns = frame.n;
       if (b.from_camera()) {
         out.alpha = 1;
         out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
@@ -172,7 +173,6 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       if (bsdf.count() == 0) break;
       if (b.exceeded(s) || (kMedia && volume > s.volume_bounces)) break;
 
-      const Frame frame(ns);
       const Vec3 wo = frame.to_local(-ray.d);
       if (bsdf.has_non_delta() && !lights.empty())
         next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf) {

@@ -146,7 +146,7 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
 }
 
 Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
-                      Vec3* shading_normal) const {
+                      ShadingFrame* frame) const {
   float regs[kMaxRegisters];  // left uninitialised: validation guarantees every read follows a write
   Machine m{regs, constants_.data(), &ctx, &images, bsdf};
   m.emitted = Spectrum(0.0f);
@@ -158,7 +158,10 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
     execute(in, m);
     w += words_of(in);
   }
-  if (shading_normal && m.has_shading_normal) *shading_normal = m.shading_normal;
+  if (frame) {
+    if (m.has_shading_normal) frame->n = m.shading_normal;
+    frame->tangent = m.shading_tangent;
+  }
   return m.emitted;
 }
 
