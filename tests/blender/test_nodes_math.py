@@ -10,146 +10,12 @@ parts are compared: Lantern's emission keeps no negative radiance while Cycles' 
 both signs of every node's output either way.
 Bound: |Lantern - Cycles| <= 1e-3 |Cycles| + 1e-5 (float rounding near zero).
 """
-import math
-import os
-
-import bpy
-import numpy as np
 import pytest
 
-import build_scenes
 import render_utils
-
-TILE = 32  # pixels per case (one plane)
-CELLS = 4  # input cells per axis within a tile
-COLUMNS = 8
-RTOL, ATOL = 1e-3, 1e-5
+from node_cases import compare_grid
 
 pytestmark = pytest.mark.skipif(not render_utils.engine_registered(), reason="Lantern add-on not registered")
-
-
-class Setup:
-    """Node-building helpers for one case's material."""
-
-    def __init__(self, nt):
-        self.nt = nt
-
-    def node(self, idname, **props):
-        n = self.nt.nodes.new(idname)
-        for k, v in props.items():
-            setattr(n, k, v)
-        return n
-
-    def link(self, out, inp):
-        self.nt.links.new(out, inp)
-
-    def value(self, x):
-        n = self.node("ShaderNodeValue")
-        n.outputs[0].default_value = x
-        return n.outputs[0]
-
-    def math(self, op, a, b=0.0):
-        n = self.node("ShaderNodeMath", operation=op)
-        for sock, v in ((n.inputs[0], a), (n.inputs[1], b)):
-            if isinstance(v, (int, float)):
-                sock.default_value = v
-            else:
-                self.link(v, sock)
-        return n.outputs[0]
-
-    def cell_input(self, axis, lo, hi):
-        """lo..hi in CELLS steps along the plane's U (axis 0) or V (axis 1)."""
-        tc = self.node("ShaderNodeTexCoord")
-        sep = self.node("ShaderNodeSeparateXYZ")
-        self.link(tc.outputs["UV"], sep.inputs[0])
-        k = self.math("FLOOR", self.math("MULTIPLY", sep.outputs[axis], float(CELLS)))
-        return self.math("ADD", self.math("MULTIPLY", k, (hi - lo) / (CELLS - 1)), lo)
-
-    def vec(self, x, y, z):
-        n = self.node("ShaderNodeCombineXYZ")
-        for i, v in enumerate((x, y, z)):
-            if isinstance(v, (int, float)):
-                n.inputs[i].default_value = v
-            else:
-                self.link(v, n.inputs[i])
-        return n.outputs[0]
-
-    def feed(self, socket, v):
-        if isinstance(v, (int, float)):
-            socket.default_value = v
-        elif isinstance(v, tuple):
-            socket.default_value = v if len(socket.default_value) == len(v) else v + (1.0,)
-        else:
-            self.link(v, socket)
-
-
-def _scene(name, n_cases):
-    build_scenes.reset_file()
-    rows = (n_cases + COLUMNS - 1) // COLUMNS
-    cols = min(n_cases, COLUMNS)
-    scene = build_scenes.new_scene(name, resolution=(cols * TILE, rows * TILE), samples=4)
-    cam = bpy.data.cameras.new(name)
-    cam.type = "ORTHO"
-    cam.ortho_scale = float(max(cols, rows))
-    cam.sensor_fit = "AUTO"
-    obj = bpy.data.objects.new(name, cam)
-    obj.location = (0.0, 0.0, 10.0)
-    scene.collection.objects.link(obj)
-    scene.camera = obj
-    return scene, rows, cols
-
-
-def compare_cases(name, cases, outdir):
-    """cases: [(label, fn(setup) -> output socket)]. Renders all with both engines and returns
-    [(label, worst relative excess)] of failing cases."""
-    tiles = [(label, fn, sign) for label, fn in cases for sign in (1.0, -1.0)]
-    scene, rows, cols = _scene(name, len(tiles))
-    for i, (label, fn, sign) in enumerate(tiles):
-        row, col = divmod(i, COLUMNS)
-        mat = bpy.data.materials.new("%s_%d" % (name, i))
-        mat.use_nodes = True
-        nt = mat.node_tree
-        nt.nodes.clear()
-        s = Setup(nt)
-        out = s.node("ShaderNodeOutputMaterial")
-        em = s.node("ShaderNodeEmission")
-        em.inputs["Strength"].default_value = 1.0
-        value = fn(s)
-        if sign < 0:
-            neg = s.node("ShaderNodeMath", operation="MULTIPLY") if value.type == "VALUE" else s.node(
-                "ShaderNodeVectorMath", operation="MULTIPLY")
-            s.link(value, neg.inputs[0])
-            neg.inputs[1].default_value = -1.0 if value.type == "VALUE" else (-1.0, -1.0, -1.0)
-            value = neg.outputs[0]
-        s.link(value, em.inputs["Color"])
-        s.link(em.outputs[0], out.inputs["Surface"])
-        me = build_scenes.mesh_plane("plane_%d" % i, 1.0)
-        ob = build_scenes.add_object(scene, "plane_%d" % i, me,
-                                     location=(col + 0.5 - cols / 2.0, rows / 2.0 - row - 0.5, 0.0))
-        build_scenes.assign(ob, mat)
-    lt = render_utils.render(scene, render_utils.LANTERN, samples=4, outdir=outdir, tag=name + "_lantern").combined
-    cy = render_utils.render(scene, render_utils.CYCLES, samples=4, outdir=outdir, tag=name + "_cycles").combined
-    inner = (np.arange(TILE) % (TILE // CELLS) >= 2) & (np.arange(TILE) % (TILE // CELLS) < TILE // CELLS - 2)
-    mask = inner[:, None] & inner[None, :]
-    bad = []
-    overall = 0.0
-    for i, (label, _fn, sign) in enumerate(tiles):
-        row, col = divmod(i, COLUMNS)
-        tl = np.maximum(lt[row * TILE:(row + 1) * TILE, col * TILE:(col + 1) * TILE, :3][mask], 0.0)
-        tc = np.maximum(cy[row * TILE:(row + 1) * TILE, col * TILE:(col + 1) * TILE, :3][mask], 0.0)
-        label = label if sign > 0 else "-(%s)" % label
-        excess = np.abs(tl - tc) / (RTOL * np.abs(tc) + ATOL)
-        worst = float(np.nanmax(excess)) if np.all(np.isfinite(tl)) else math.inf
-        overall = max(overall, worst)
-        if not worst <= 1.0:
-            k = int(np.nanargmax(excess)) if np.isfinite(worst) else 0
-            bad.append((label, round(worst, 2), tl.flat[k], tc.flat[k]))
-    print("%s: %d cases, worst |L-C| / bound %.3g" % (name, len(cases), overall))
-    if bad:
-        render_utils.write_png(os.path.join(outdir, name + "_lantern.png"), lt)
-        render_utils.write_png(os.path.join(outdir, name + "_cycles.png"), cy)
-    return bad
-
 
 # -- cases ---------------------------------------------------------------------------------------
 
@@ -384,7 +250,7 @@ def _normal_case(output):
 
 
 def _check(name, cases, outdir):
-    bad = compare_cases(name, cases, outdir)
+    bad = compare_grid(name, cases, outdir)
     assert not bad, "%s: cases outside the bound (label, worst |L-C|/bound, Lantern, Cycles): %s (images in %s)" % (
         name, bad, outdir)
 

@@ -7,119 +7,13 @@ the texture at nearly the same point in both; the few pixels whose centre lies w
 a discontinuity (Voronoi cell borders, checker and brick edges, saw waves) may differ, and at most
 OUTLIERS of them are allowed.
 """
-import os
-
-import numpy as np
 import pytest
-from mathutils import Matrix
 
-import build_scenes as bs
 import render_utils as ru
+from node_cases import compare_view as compare
+from node_cases import node
 
 pytestmark = pytest.mark.skipif(not ru.engine_registered(), reason="Lantern add-on not registered")
-
-RES = int(os.environ.get("TEX_RES", 128))
-SAMPLES = int(os.environ.get("TEX_SAMPLES", 1))
-REL = 1e-3  # |Lantern - Cycles| <= REL |Cycles| + ABS per channel
-ABS = 1e-4
-OUTLIERS = 0.005  # fraction of pixels allowed beyond the bound (discontinuities under the jitter)
-# The view's width in scene units. The engines' sample positions differ by a few thousandths of a
-# pixel, so a texture must vary slowly per pixel for 1e-3 to hold: about four features per image.
-VIEW = float(os.environ.get("TEX_VIEW", 0.6))
-
-
-def texture_scene(build, negate=False):
-    """A 4 x 4 plane filling an orthographic view; `build(nt, coords)` returns the socket shown.
-    The mesh is tilted inside its object (and the object tilted back), so Object coordinates vary
-    along all three axes over the image."""
-    bs.reset_file()
-    scene = bs.new_scene("textures", resolution=(RES, RES), samples=1)
-    c = scene.cycles
-    c.pixel_filter_type = "GAUSSIAN"
-    c.filter_width = 0.01
-    c.max_bounces = 0
-    c.film_exposure = 1.0
-    cam = bs.add_camera(scene, (0, 0, 5), (0, 0, 0))
-    cam.data.type = "ORTHO"
-    cam.data.ortho_scale = VIEW
-    tilt = 0.6
-    me = bs.mesh_plane("plane", 4.0, matrix=Matrix.Rotation(tilt, 4, "X"))
-    obj = bs.add_object(scene, "plane", me, rotation=(-tilt, 0, 0))
-    mat = bpy_material("texture")
-    nt = mat.node_tree
-    nt.nodes.clear()
-    coords = nt.nodes.new("ShaderNodeTexCoord").outputs["Object"]
-    shown = build(nt, coords)
-    if negate:  # an exact negation after the node
-        if shown.type == "VALUE":
-            neg = node(nt, "ShaderNodeMath", {"operation": "MULTIPLY"})
-            neg.inputs[1].default_value = -1.0
-        else:
-            neg = node(nt, "ShaderNodeVectorMath", {"operation": "SCALE"})
-            neg.inputs["Scale"].default_value = -1.0
-        nt.links.new(shown, neg.inputs[0])
-        shown = neg.outputs[0]
-    em = nt.nodes.new("ShaderNodeEmission")
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    nt.links.new(shown, em.inputs["Color"])
-    nt.links.new(em.outputs[0], out.inputs["Surface"])
-    bs.assign(obj, mat)
-    return scene
-
-
-def bpy_material(name):
-    import bpy
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    return mat
-
-
-def beyond(lantern, cycles):
-    """Pixels beyond the bound (a mask), and the worst ratio to the bound."""
-    diff = np.abs(lantern - cycles)
-    bound = REL * np.abs(cycles) + ABS
-    return np.any(diff > bound, axis=-1), float((diff / bound).max())
-
-
-def render_pair(build, label, outdir, negate=False):
-    scene = texture_scene(build, negate)
-    tag = label + ("_neg" if negate else "")
-    lantern = ru.render(scene, ru.LANTERN, samples=SAMPLES, outdir=outdir, tag=tag + "_lantern").combined[..., :3]
-    cycles = ru.render(scene, ru.CYCLES, samples=SAMPLES, outdir=outdir, tag=tag + "_cycles").combined[..., :3]
-    return lantern, cycles
-
-
-def compare(build, label, outdir, flat=False):
-    """Renders the set-up `build` makes in both engines and compares them pixel by pixel. Should
-    Lantern's emission keep no negative radiance where Cycles' does, the set-up is rendered again
-    negated (an exact negation after the node) and the positive parts of both renders are compared,
-    so both signs of the output are still checked."""
-    lantern, cycles = render_pair(build, label, outdir)
-    # The image must show a pattern, or the comparison proves little.
-    assert flat or float(cycles.std()) > 1e-3, "%s: Cycles renders a flat image" % label
-    bad, worst = beyond(lantern, cycles)
-    if bad.mean() > OUTLIERS and (cycles < 0).any() and (lantern >= 0).all():
-        lantern_neg, _ = render_pair(build, label, outdir, negate=True)
-        bad, worst = beyond(lantern, np.maximum(cycles, 0.0))
-        bad_neg, worst_neg = beyond(lantern_neg, np.maximum(-cycles, 0.0))
-        bad, worst = bad | bad_neg, max(worst, worst_neg)
-    frac = float(bad.mean())
-    if frac > OUTLIERS:
-        ru.write_png("%s/%s_lantern.png" % (outdir, label), lantern)
-        ru.write_png("%s/%s_cycles.png" % (outdir, label), cycles)
-    assert frac <= OUTLIERS, "%s: %.2f%% of pixels beyond %g relative (worst %.3g x the bound)" % (
-        label, 100 * frac, REL, worst)
-
-
-def node(nt, idname, props=None, **inputs):
-    n = nt.nodes.new(idname)
-    for k, v in (props or {}).items():
-        setattr(n, k, v)
-    for k, v in inputs.items():
-        sock = n.inputs[k.replace("_", " ")]
-        sock.default_value = (*v, 1.0) if isinstance(v, tuple) and len(v) == 3 and sock.type == "RGBA" else v
-    return n
-
 
 DIMS = ("1D", "2D", "3D", "4D")
 

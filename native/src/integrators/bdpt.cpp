@@ -302,7 +302,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
         if (!pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
         continue;
       }
-      ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, hit.t * length(ray.d));
+      ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
       ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
       ctx.ray_depth = bounces;
       sf.n = ctx.N;

@@ -142,7 +142,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
         t_prev += hit.t * length(ray.d);
         continue;
       }
-      ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, hit.t * length(ray.d));
+      ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
       describe_ray(b, visibility, &ctx);
       const Vec3 ng = ctx.Ng;
       ShadingFrame sf{ctx.N};

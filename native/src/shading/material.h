@@ -51,7 +51,8 @@ inline Frame local_frame(const ShadingFrame& f, const Vec3& ng) {
   return is_black(f.tangent) ? Frame(n) : Frame(n, f.tangent);
 }
 
-// The shading point as the nodes see it, for a ray of direction ray_d that met sp at distance t.
+// The shading point as the nodes see it, for a ray of direction ray_d that met sp at distance t
+// from its start (a camera ray starts at the near clip, as Cycles').
 ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ray_d, float t);
 
 }  // namespace lt

@@ -1,0 +1,91 @@
+"""Nodes that read the shading point, against Cycles pixel by pixel (issue 13's check, node_cases):
+Texture Coordinate, Geometry, Fresnel, Layer Weight, Light Path and the implicit socket
+conversions, on a sphere under a perspective camera (normals, incoming directions and angles vary)
+and on a tilted plane under an orthographic one."""
+import pytest
+
+import render_utils as ru
+from node_cases import compare_view, node
+
+pytestmark = pytest.mark.skipif(not ru.engine_registered(), reason="Lantern add-on not registered")
+
+
+def _output(idname, output, props=None, **inputs):
+    def build(nt, coords):
+        return node(nt, idname, props, **inputs).outputs[output]
+    return build
+
+
+@pytest.mark.parametrize("output", ["Generated", "Normal", "UV", "Object", "Camera", "Window", "Reflection"])
+@pytest.mark.parametrize("shape", ["sphere", "plane"])
+def test_texture_coordinate(output, shape, outdir):
+    # Constant over a plane under an orthographic camera; the sphere has no UV map.
+    flat = (shape == "plane" and output in ("Normal", "Reflection")) or (shape == "sphere" and output == "UV")
+    compare_view(_output("ShaderNodeTexCoord", output), "texcoord_%s_%s" % (output, shape), outdir, flat=flat,
+                 shape=shape)
+
+
+@pytest.mark.parametrize("output", ["Position", "Normal", "Tangent", "True Normal", "Incoming", "Backfacing"])
+def test_geometry(output, outdir):
+    compare_view(_output("ShaderNodeNewGeometry", output), "geometry_" + output.replace(" ", "_"), outdir,
+                 flat=output == "Backfacing", shape="sphere")
+
+
+@pytest.mark.parametrize("ior", [1.45, 0.6, 3.0])
+def test_fresnel(ior, outdir):
+    compare_view(_output("ShaderNodeFresnel", "Fac", IOR=ior), "fresnel_%g" % ior, outdir, shape="sphere")
+
+
+@pytest.mark.parametrize("output", ["Fresnel", "Facing"])
+@pytest.mark.parametrize("blend", [0.1, 0.5, 0.8])
+def test_layer_weight(output, blend, outdir):
+    compare_view(_output("ShaderNodeLayerWeight", output, Blend=blend), "layer_weight_%s_%g" % (output, blend),
+                 outdir, shape="sphere")
+
+
+@pytest.mark.parametrize("output", ["Is Camera Ray", "Ray Length", "Ray Depth"])
+def test_light_path_on_camera_rays(output, outdir):
+    compare_view(_output("ShaderNodeLightPath", output), "light_path_" + output.replace(" ", "_"), outdir,
+                 flat=output != "Ray Length", shape="sphere")
+
+
+def test_linked_normal_drives_fresnel(outdir):
+    """A Normal input linked from another node (Geometry's Incoming): no default stand-in."""
+    def build(nt, coords):
+        geo = node(nt, "ShaderNodeNewGeometry")
+        mix = node(nt, "ShaderNodeVectorMath", {"operation": "ADD"})
+        nt.links.new(geo.outputs["Normal"], mix.inputs[0])
+        nt.links.new(geo.outputs["Incoming"], mix.inputs[1])
+        norm = node(nt, "ShaderNodeVectorMath", {"operation": "NORMALIZE"})
+        nt.links.new(mix.outputs[0], norm.inputs[0])
+        f = node(nt, "ShaderNodeFresnel", IOR=1.8)
+        nt.links.new(norm.outputs[0], f.inputs["Normal"])
+        return f.outputs["Fac"]
+    compare_view(build, "fresnel_linked_normal", outdir, shape="sphere")
+
+
+@pytest.mark.parametrize("pair", [("RGB", "Float"), ("Vector", "Float"), ("Float", "Color")])
+def test_implicit_conversions(pair, outdir):
+    """A colour into a float socket is its Rec. 709 luma, a vector the average of its components,
+    a float into a colour grey (Blender's and Cycles' conversions)."""
+    src, dst = pair
+
+    def build(nt, coords):
+        if src == "RGB":
+            value = node(nt, "ShaderNodeCombineRGB")
+            sep = node(nt, "ShaderNodeSeparateXYZ")
+            nt.links.new(coords, sep.inputs[0])
+            for k, axis in enumerate("XYZ"):
+                nt.links.new(sep.outputs[axis], value.inputs[k])
+            out = value.outputs[0]
+        elif src == "Vector":
+            out = coords
+        else:
+            sep = node(nt, "ShaderNodeSeparateXYZ")
+            nt.links.new(coords, sep.inputs[0])
+            out = sep.outputs["Y"]
+        target = node(nt, "ShaderNodeMath", {"operation": "ADD"}) if dst == "Float" else node(nt, "ShaderNodeInvert",
+                                                                                               Fac=1.0)
+        nt.links.new(out, target.inputs[0] if dst == "Float" else target.inputs["Color"])
+        return target.outputs[0]
+    compare_view(build, "convert_%s_to_%s" % pair, outdir)
