@@ -326,6 +326,49 @@ def packed_image(name, pixels, colorspace):
     return img
 
 
+def leaf_pixels(size=64):
+    """A leaf card's RGBA (straight alpha): an ellipse of alpha 1 fading to 0 over its rim, greens
+    varying across it, and the colour outside it kept (as painted textures keep it)."""
+    y, x = (np.mgrid[0:size, 0:size] + 0.5) / size * 2 - 1
+    r = np.hypot(x / 0.55, y / 0.9)
+    alpha = np.clip((1.0 - r) / 0.2, 0.0, 1.0)
+    rgba = np.empty((size, size, 4))
+    rgba[..., 0] = 0.15 + 0.25 * (x + 1) / 2
+    rgba[..., 1] = 0.45 + 0.4 * (y + 1) / 2
+    rgba[..., 2] = 0.1
+    rgba[..., 3] = alpha
+    return rgba
+
+
+def leaf_card(name, image):
+    """Principled BSDF with Base Color and Alpha from an image texture, as a leaf card is built."""
+    mat, nt, out = _material(name)
+    tex = nt.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    nt.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    nt.links.new(tex.outputs["Alpha"], bsdf.inputs["Alpha"])
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    mat.blend_method = "HASHED"
+    return mat
+
+
+def build_leaf_cards(scene):
+    """Issue 13's alpha-mapped leaf card: three cards of an RGBA image (Principled Alpha from the
+    image's alpha) standing on a ground under a low sun and a sky; their shadows fall through the
+    transparent parts."""
+    set_world(scene, (0.3, 0.45, 0.7), 0.6)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 20.0))
+    assign(ground, principled("Ground", (0.6, 0.55, 0.45), 0.9))
+    mat = leaf_card("Leaf", packed_image("LeafImage", leaf_pixels(), "sRGB"))
+    for i, (x, rot) in enumerate(((-0.7, 20), (0.0, -10), (0.7, 35))):
+        card = add_object(scene, "Leaf%d" % i, mesh_plane("Leaf%d" % i, 0.9), (x, 0.2 * i, 0.55),
+                          (90, 0, rot))
+        assign(card, mat)
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(60, 0, -30), angle=math.radians(1.0))
+    add_camera(scene, (0.4, -3.5, 1.3), (0, 0.2, 0.4), lens=40.0)
+
+
 def checker_pixels(size=64, squares=8):
     """sRGB-encoded colour checker: warm/cool squares, brightness ramping along U."""
     y, x = np.mgrid[0:size, 0:size]
@@ -1165,6 +1208,7 @@ SCENES = {
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),
+    "leaf_cards": (build_leaf_cards, (96, 64), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
     "door_bounce": (build_door_bounce, (96, 96), 1280),

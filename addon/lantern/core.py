@@ -31,6 +31,7 @@ _STATUS_NAMES = {
 # lt_interpolation, lt_extension
 INTERP_LINEAR, INTERP_CLOSEST = 0, 1
 EXTENSION_REPEAT, EXTENSION_EXTEND, EXTENSION_CLIP = 0, 1, 2
+ALPHA_IGNORE, ALPHA_STRAIGHT, ALPHA_PREMULTIPLIED, ALPHA_CHANNEL_PACKED = 0, 1, 2, 3
 
 # lt_node_type
 # lt_visibility
@@ -97,6 +98,7 @@ class ImageDesc(ctypes.Structure):
         ("srgb", ctypes.c_int),
         ("interpolation", ctypes.c_int),
         ("extension", ctypes.c_int),
+        ("alpha", ctypes.c_int),
     ]
 
 
@@ -553,23 +555,23 @@ class Scene:
         return self._h
 
     def add_image(self, pixels, width, height, channels, srgb=False,
-                  interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT):
+                  interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT, alpha=ALPHA_IGNORE):
         px = _f32(pixels, "image pixels")
         if px.size != width * height * channels:
             raise ValueError("image: %d floats for %dx%dx%d" % (px.size, width, height, channels))
         d = ImageDesc(int(width), int(height), int(channels), _fptr(px), int(bool(srgb)),
-                      int(interpolation), int(extension))
+                      int(interpolation), int(extension), int(alpha))
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_image(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_image")
         return out.value
 
     def add_image_filled(self, fill, width, height, channels, srgb=False,
-                         interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT):
+                         interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT, alpha=ALPHA_IGNORE):
         """Adds an image whose pixels `fill(array)` writes into the core's own buffer (a float32
         array of width*height*channels): the pixels are copied once. Returns the image id."""
         d = ImageDesc(int(width), int(height), int(channels), None, int(bool(srgb)),
-                      int(interpolation), int(extension))
+                      int(interpolation), int(extension), int(alpha))
         ptr = ctypes.POINTER(ctypes.c_float)()
         _check(self._lib.lt_scene_begin_image(self.handle, ctypes.byref(d), ctypes.byref(ptr)),
                "lt_scene_begin_image")

@@ -102,6 +102,17 @@ def test_layered_node_material_agrees_with_cycles(integrator, scene_factory, out
     assert report == "", report
 
 
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_alpha_mapped_leaf_cards_agree_with_cycles(integrator, scene_factory, outdir):
+    """Issue 13's "alpha-mapped leaf card" (leaf_cards: an RGBA image's alpha into Principled
+    Alpha): the cards, their soft rims and the shadows they cast through their transparent parts
+    (Cycles' transparent shadows), per tile and in the image mean as above."""
+    both = lantern_and_cycles(scene_factory, "leaf_cards", integrator)
+    report, _ = ru.agreement_report("leaf_cards_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
 def test_rough_metal_after_several_bounces_agrees_with_cycles(scene_factory, outdir):
     """Issue 18: "rough metal seems to reflect more than Cycles after several bounces (+25 % after
     8 bounces at roughness 0.2)". metal_box (closed, copper Principled metal at roughness 0.2, 8

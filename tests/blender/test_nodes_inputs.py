@@ -89,3 +89,50 @@ def test_implicit_conversions(pair, outdir):
         nt.links.new(out, target.inputs[0] if dst == "Float" else target.inputs["Color"])
         return target.outputs[0]
     compare_view(build, "convert_%s_to_%s" % pair, outdir)
+
+
+@pytest.mark.parametrize("kind", ["byte_straight", "byte_premultiplied", "float", "non_color", "closest"])
+@pytest.mark.parametrize("output", ["Color", "Color with Alpha used", "Alpha"])
+def test_image_texture_alpha(kind, output, outdir):
+    """An RGBA image (a leaf: alpha fading to 0 over its rim) as Cycles reads it: straight byte
+    colours associated with alpha, so the Color output is premultiplied unless the Alpha output is
+    used (then divided back); float images premultiplied; Non-Color keeps colours apart from alpha."""
+    import bpy
+    import numpy as np
+
+    import build_scenes as bs
+
+    def build(nt, coords):
+        pixels = bs.leaf_pixels(48)
+        if kind == "float":
+            # Float colours divided by an alpha near 0 (a bilinear alpha at the rim) change faster
+            # than the engines' sample jitter allows for: keep alpha at least 0.05 there.
+            pixels[..., 3] = np.maximum(pixels[..., 3], 0.05)
+            img = bpy.data.images.new("leaf", 48, 48, alpha=True, float_buffer=True)
+            img.pixels.foreach_set(np.ascontiguousarray(pixels, np.float32).ravel())
+        else:
+            img = bs.packed_image("leaf", pixels, "Non-Color" if kind == "non_color" else "sRGB")
+            img.alpha_mode = "PREMUL" if kind == "byte_premultiplied" else "STRAIGHT"
+        tex = node(nt, "ShaderNodeTexImage")
+        tex.image = img
+        tex.interpolation = "Closest" if kind == "closest" else "Linear"
+        scale = node(nt, "ShaderNodeVectorMath", {"operation": "MULTIPLY_ADD"})
+        nt.links.new(coords, scale.inputs[0])
+        scale.inputs[1].default_value = (1.6, 1.6, 1.6)
+        scale.inputs[2].default_value = (0.5, 0.5, 0.5)
+        nt.links.new(scale.outputs[0], tex.inputs["Vector"])
+        if output == "Color with Alpha used":
+            # Colour x max(Alpha, 2) / 2: the colour, with Alpha reaching the output (Cycles leaves
+            # out nodes that reach nothing, and only then unassociates).
+            two = node(nt, "ShaderNodeMath", {"operation": "MAXIMUM"})
+            nt.links.new(tex.outputs["Alpha"], two.inputs[0])
+            two.inputs[1].default_value = 2.0
+            scale = node(nt, "ShaderNodeVectorMath", {"operation": "SCALE"})
+            nt.links.new(tex.outputs["Color"], scale.inputs[0])
+            half = node(nt, "ShaderNodeMath", {"operation": "MULTIPLY"})
+            nt.links.new(two.outputs[0], half.inputs[0])
+            half.inputs[1].default_value = 0.5
+            nt.links.new(half.outputs[0], scale.inputs["Scale"])
+            return scale.outputs[0]
+        return tex.outputs["Alpha" if output == "Alpha" else "Color"]
+    compare_view(build, "image_%s_%s" % (kind, output.replace(" ", "_")), outdir)

@@ -580,7 +580,7 @@ TEST(ApiBadInput, MalformedShaderProgramsAreRefused) {
   }
   {  // an image that does not exist (the scene has none)
     ShaderCode p;
-    p.emit(lt::kOpImage, {p.c3({0, 0, 0})}, {3, 1}, {3});
+    p.emit(lt::kOpImage, {p.c3({0, 0, 0})}, {3, 1}, {3, 0});
     refused(p, "image 3");
   }
   {  // too many registers

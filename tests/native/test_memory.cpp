@@ -313,3 +313,37 @@ TEST(Memory, ImagesAreStoredOnceAtTheirPrecision) {
   EXPECT_EQ(st.byte_images, 1u);
   EXPECT_EQ(st.image_bytes, uint64_t(w) * h * (3 + 12));
 }
+
+TEST(Memory, ImageAlphaIsKeptAsCyclesReadsIt) {
+  // 2 x 1 RGBA byte image: an opaque texel and a half-transparent one.
+  const float b = 1.0f / 255.0f;
+  const float px[8] = {200 * b, 100 * b, 50 * b, 1.0f, 200 * b, 100 * b, 50 * b, 128 * b};
+  auto make = [&](lt::ImageAlpha a) {
+    return lt::Image(2, 1, 4, px, false, lt::Interpolation::Closest, lt::Extension::Extend, a);
+  };
+  const lt::Vec2 opaque{0.25f, 0.5f}, half{0.75f, 0.5f};
+  // Ignored: as before, no alpha plane, opaque.
+  lt::Image ignored = make(lt::ImageAlpha::Ignore);
+  EXPECT_FALSE(ignored.has_alpha());
+  EXPECT_EQ(ignored.lookup_alpha(half), 1.0f);
+  EXPECT_EQ(ignored.bytes(), 6u);
+  // Straight bytes are associated in integers as Cycles does: 200 * 128 / 255 = 100 (truncated).
+  lt::Image straight = make(lt::ImageAlpha::Straight);
+  EXPECT_TRUE(straight.associated());
+  EXPECT_EQ(straight.bytes(), 8u);
+  EXPECT_EQ(straight.lookup_alpha(half), 128 * b);
+  EXPECT_EQ(straight.lookup(half).x, 100 * b);
+  EXPECT_EQ(straight.lookup(opaque).x, 200 * b);
+  // Unassociated on request (the Alpha output is used): divided back, before any sRGB decoding.
+  EXPECT_FLOAT_EQ(straight.lookup(half, true).x, 100 * b / (128 * b));
+  // Channel-packed colours are never multiplied or divided.
+  lt::Image packed = make(lt::ImageAlpha::ChannelPacked);
+  EXPECT_FALSE(packed.associated());
+  EXPECT_EQ(packed.lookup(half, true).x, 200 * b);
+  EXPECT_EQ(packed.lookup_alpha(half), 128 * b);
+  // An alpha of 1 everywhere keeps no plane.
+  const float solid[8] = {0.5f, 0.5f, 0.5f, 1, 0.25f, 0.25f, 0.25f, 1};
+  EXPECT_FALSE(
+      lt::Image(2, 1, 4, solid, false, lt::Interpolation::Linear, lt::Extension::Repeat, lt::ImageAlpha::Straight)
+          .has_alpha());
+}

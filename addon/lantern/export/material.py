@@ -21,12 +21,13 @@ class ImageExporter:
         self.report = report
         self.ids = {}
 
-    def export(self, image, interpolation='Linear', extension='REPEAT', where=""):
-        """Core image id, or None (reported) when the image cannot be used."""
+    def export(self, image, interpolation='Linear', extension='REPEAT', where="", alpha=False):
+        """Core image id, or None (reported) when the image cannot be used. alpha: keep the image's
+        alpha as Cycles reads it (image textures), else drop it."""
         if image is None:
             self.report({'WARNING'}, "%s: image texture without an image" % where)
             return None
-        key = (image.original.as_pointer(), interpolation, extension)
+        key = (image.original.as_pointer(), interpolation, extension, alpha)
         if key in self.ids:
             return self.ids[key]
         if image.source == 'TILED':
@@ -57,12 +58,25 @@ class ImageExporter:
                                      % (where, extension))
             ext = core.EXTENSION_REPEAT
         # Blender's pixels go straight into the core's buffer (one copy); the core keeps byte
-        # images at 8 bits (their values are exactly b / 255) and drops the unused alpha.
+        # images at 8 bits (their values are exactly b / 255), and alpha where it is not 1.
         image_id = self.core_scene.add_image_filled(image.pixels.foreach_get, width, height,
                                                     channels, srgb=srgb, interpolation=interp,
-                                                    extension=ext)
+                                                    extension=ext, alpha=_alpha_mode(image) if alpha else
+                                                    core.ALPHA_IGNORE)
         self.ids[key] = image_id
         return image_id
+
+
+def _alpha_mode(image):
+    """How Cycles 3.4 reads an image's alpha from Blender (measured against it, tests/blender/
+    test_nodes_inputs.py): byte images are straight whatever their alpha mode (Blender keeps byte
+    buffers straight) and Cycles associates them; float images are kept premultiplied (Blender's
+    float buffers are); data (Non-Color) and channel-packed images keep colours apart from alpha."""
+    if image.alpha_mode == 'NONE':
+        return core.ALPHA_IGNORE
+    if image.alpha_mode == 'CHANNEL_PACKED' or image.colorspace_settings.is_data:
+        return core.ALPHA_CHANNEL_PACKED
+    return core.ALPHA_PREMULTIPLIED if image.is_float else core.ALPHA_STRAIGHT
 
 
 def follow(socket):

@@ -28,7 +28,7 @@ extern "C" {
  * lt_scene_add_volume_grid takes a step; 5: lt_render_settings.passes and caller_bytes;
  * lt_render_wait reports a failed render; lt_scene_begin/end_image; image memory in lt_scene_stats;
  * lt_render_status.unestimated_pixels; 6: lt_abi_layout; default samples 64 (the add-on's);
- * 7: materials are shader programs; meshes carry their texture space. */
+ * 7: materials are shader programs; meshes carry their texture space; images their alpha. */
 #define LT_ABI_VERSION 7
 
 enum lt_status {
@@ -74,12 +74,18 @@ LT_API const char* lt_scene_warning(const lt_scene* scene, int index);
  * to linear when loaded. */
 enum lt_interpolation { LT_INTERP_LINEAR = 0, LT_INTERP_CLOSEST = 1 };
 enum lt_extension { LT_EXTENSION_REPEAT = 0, LT_EXTENSION_EXTEND = 1, LT_EXTENSION_CLIP = 2 };
+/* What a 4-channel image's alpha means (Cycles' image alpha types): IGNORE drops it (opaque);
+ * STRAIGHT colours are premultiplied when stored, as Cycles associates them (bytes: (c a) / 255 in
+ * integers); PREMULTIPLIED are kept; CHANNEL_PACKED keeps alpha apart from colours that are never
+ * multiplied or divided by it. */
+enum lt_image_alpha { LT_ALPHA_IGNORE = 0, LT_ALPHA_STRAIGHT = 1, LT_ALPHA_PREMULTIPLIED = 2, LT_ALPHA_CHANNEL_PACKED = 3 };
 typedef struct lt_image_desc {
   int width, height, channels;
   const float* pixels;
   int srgb;
   int interpolation; /* lt_interpolation */
   int extension;     /* lt_extension */
+  int alpha;         /* lt_image_alpha */
 } lt_image_desc;
 LT_API int lt_scene_add_image(lt_scene* scene, const lt_image_desc* desc, int* out_id);
 /* The same without a caller's copy of the pixels: lt_scene_begin_image allocates the image's

@@ -43,6 +43,11 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_image_desc, srgb),
     LT_FIELD(lt_image_desc, interpolation),
     LT_FIELD(lt_image_desc, extension),
+    LT_FIELD(lt_image_desc, alpha),
+    LT_CONST(lt_image_alpha, LT_ALPHA_IGNORE),
+    LT_CONST(lt_image_alpha, LT_ALPHA_STRAIGHT),
+    LT_CONST(lt_image_alpha, LT_ALPHA_PREMULTIPLIED),
+    LT_CONST(lt_image_alpha, LT_ALPHA_CHANNEL_PACKED),
 
     LT_STRUCT(lt_shader_program),
     LT_FIELD(lt_shader_program, code),

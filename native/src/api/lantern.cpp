@@ -134,6 +134,8 @@ void check_image(const lt_image_desc& d) {
           "image has " + std::to_string(d.channels) + " channels; 1, 3 or 4 are supported");
   require(d.interpolation == LT_INTERP_LINEAR || d.interpolation == LT_INTERP_CLOSEST, "unknown image interpolation");
   require(d.extension >= LT_EXTENSION_REPEAT && d.extension <= LT_EXTENSION_CLIP, "unknown image extension");
+  require(d.alpha >= LT_ALPHA_IGNORE && d.alpha <= LT_ALPHA_CHANNEL_PACKED,
+          "unknown image alpha " + std::to_string(d.alpha) + "; valid: IGNORE, STRAIGHT, PREMULTIPLIED, CHANNEL_PACKED");
 }
 
 lt::Interpolation interpolation(const lt_image_desc& d) {
@@ -184,7 +186,7 @@ int lt_scene_add_image(lt_scene* scene, const lt_image_desc* d, int* out_id) {
     require(d->pixels != nullptr, "image pixels are NULL");
     auto& images = scene->scene.images;
     images.push_back(std::make_unique<lt::Image>(d->width, d->height, d->channels, d->pixels, d->srgb != 0,
-                                                 interpolation(*d), lt::Extension(d->extension)));
+                                                 interpolation(*d), lt::Extension(d->extension), lt::ImageAlpha(d->alpha)));
     *out_id = int(images.size()) - 1;
   });
 }
@@ -214,7 +216,7 @@ int lt_scene_end_image(lt_scene* scene, int* out_id) {
     const lt_image_desc& d = p->desc;
     auto& images = scene->scene.images;
     images.push_back(std::make_unique<lt::Image>(d.width, d.height, d.channels, std::move(p->pixels), d.srgb != 0,
-                                                 interpolation(d), lt::Extension(d.extension)));
+                                                 interpolation(d), lt::Extension(d.extension), lt::ImageAlpha(d.alpha)));
     *out_id = int(images.size()) - 1;
   });
 }

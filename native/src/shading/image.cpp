@@ -46,16 +46,18 @@ namespace {
 inline float byte_value(uint8_t b) { return float(b) * (1.0f / 255.0f); }
 }  // namespace
 
-Image::Image(int width, int height, int channels, const float* pixels, bool srgb, Interpolation interp, Extension ext)
-    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb) {
+Image::Image(int width, int height, int channels, const float* pixels, bool srgb, Interpolation interp, Extension ext,
+             ImageAlpha alpha)
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb), alpha_mode_(alpha) {
   const size_t n = size_t(width) * height * channels;
   FloatBuffer copy(n);
   std::copy(pixels, pixels + n, copy.data());
   store(channels, std::move(copy));
 }
 
-Image::Image(int width, int height, int channels, FloatBuffer pixels, bool srgb, Interpolation interp, Extension ext)
-    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb) {
+Image::Image(int width, int height, int channels, FloatBuffer pixels, bool srgb, Interpolation interp, Extension ext,
+             ImageAlpha alpha)
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb), alpha_mode_(alpha) {
   store(channels, std::move(pixels));
 }
 
@@ -63,6 +65,16 @@ void Image::store(int channels, FloatBuffer pixels) {
   const size_t n = size_t(width_) * height_;
   channels_ = channels >= 3 ? 3 : 1;
   float* p = pixels.data();
+  // The alpha plane, before the colours are packed over it: kept when used and not all 1.
+  std::vector<float> alpha;
+  if (channels == 4 && alpha_mode_ != ImageAlpha::Ignore) {
+    bool opaque = true;
+    for (size_t i = 0; i < n && opaque; ++i) opaque = p[4 * i + 3] == 1.0f;
+    if (!opaque) {
+      alpha.resize(n);
+      for (size_t i = 0; i < n; ++i) alpha[i] = std::isfinite(p[4 * i + 3]) ? clamp(p[4 * i + 3], 0.0f, 1.0f) : 0.0f;
+    }
+  }
   // In place: RGB(A) to RGB (the write index never passes the read index), non-finite values to 0
   // (never let a bad texel poison the image), and whether every value is an exact byte value.
   bool bytes = true;
@@ -76,13 +88,34 @@ void Image::store(int channels, FloatBuffer pixels) {
         bytes = b >= 0.0f && b <= 255.0f && byte_value(uint8_t(b)) == v;
       }
     }
+  for (size_t i = 0; bytes && i < alpha.size(); ++i) bytes = byte_value(uint8_t(std::nearbyint(alpha[i] * 255.0f))) == alpha[i];
+  const bool associate = !alpha.empty() && alpha_mode_ == ImageAlpha::Straight;
   if (bytes) {
     bytes_.resize(n * channels_);
     for (size_t i = 0; i < bytes_.size(); ++i) bytes_[i] = uint8_t(std::nearbyint(p[i] * 255.0f));
+    if (!alpha.empty()) {
+      alpha_bytes_.resize(n);
+      for (size_t i = 0; i < n; ++i) alpha_bytes_[i] = uint8_t(std::nearbyint(alpha[i] * 255.0f));
+    }
+    // Cycles associates straight byte images in integers, before any decoding: c a / 255.
+    if (associate)
+      for (size_t i = 0; i < bytes_.size(); ++i)
+        bytes_[i] = uint8_t(unsigned(bytes_[i]) * alpha_bytes_[i / channels_] / 255u);
     return;  // `pixels` is freed here
   }
+  if (associate)
+    for (size_t i = 0; i < n * channels_; ++i) p[i] *= alpha[i / channels_];
   pixels.shrink(n * channels_);
   floats_ = std::move(pixels);
+  alpha_floats_ = std::move(alpha);
+}
+
+float Image::lookup_alpha(Vec2 uv) const {
+  if (!alpha_bytes_.empty())
+    return filtered<float>(uv, [&](int x, int y) { return byte_value(alpha_bytes_[size_t(y) * width_ + x]); });
+  if (!alpha_floats_.empty())
+    return filtered<float>(uv, [&](int x, int y) { return alpha_floats_[size_t(y) * width_ + x]; });
+  return 1.0f;
 }
 
 Vec3 Image::fetch(size_t i) const {
@@ -94,11 +127,6 @@ Vec3 Image::fetch(size_t i) const {
   const float* f = floats_.data();
   if (channels_ == 1) return Vec3(f[i]);
   return Vec3(f[3 * i], f[3 * i + 1], f[3 * i + 2]);
-}
-
-float Image::fetch_first(size_t i) const {
-  if (!bytes_.empty()) return byte_value(bytes_[i * channels_]);
-  return floats_.data()[i * channels_];
 }
 
 template <class T, class F>
@@ -142,8 +170,12 @@ Vec3 Image::texel(int x, int y) const {
   return srgb_ ? Vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) : c;
 }
 
-Vec3 Image::lookup(Vec2 uv) const {
+Vec3 Image::lookup(Vec2 uv, bool unassociate) const {
   Vec3 c = filtered<Vec3>(uv, [&](int x, int y) { return fetch(size_t(y) * width_ + x); });
+  if (unassociate && associated()) {
+    const float a = lookup_alpha(uv);
+    if (a != 0 && a != 1) c *= 1 / a;
+  }
   return srgb_ ? Vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) : c;
 }
 

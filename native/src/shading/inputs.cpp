@@ -13,7 +13,7 @@ namespace {
 const OpSignature kSignatures[] = {
     {"", "vvvvvvv", "tt", false},       // texture coordinate
     {"", "vvvvvvfff", "", false},       // geometry
-    {"v", "vf", "g", false},            // image
+    {"v", "vf", "gi", false},           // image
     {"fv", "f", "", false},             // fresnel
     {"fv", "ff", "", false},            // layer weight
     {"", "ffffffffffffff", "", false},  // light path
@@ -102,7 +102,7 @@ void exec_inputs_family(const Instr& in, Machine& m) {
     case kOpImage: {
       const Image& image = *(*m.images)[in.param[0]];
       const Vec3 p = m.v(in.in[0]);
-      m.set(in.out[0], image.lookup(Vec2{p.x, p.y}));
+      m.set(in.out[0], image.lookup(Vec2{p.x, p.y}, in.param[1] != 0));
       m.set(in.out[1], image.lookup_alpha(Vec2{p.x, p.y}));
       break;
     }

@@ -17,7 +17,9 @@ enum InputOp : uint32_t {
   // out: position, normal, tangent, true normal, incoming, parametric (all v), backfacing,
   //      pointiness, random per island (f)
   kOpGeometry,
-  kOpImage,        // in: vector v; out: color v, alpha f; param: image id
+  // in: vector v; out: color v, alpha f; params: image id, unassociate (the Alpha output is used:
+  // colours divided by alpha, as Cycles)
+  kOpImage,
   kOpFresnel,      // in: ior f, normal v; out: fac f
   kOpLayerWeight,  // in: blend f, normal v; out: fresnel f, facing f
   // out: is camera, shadow, diffuse, glossy, singular, reflection, transmission, volume scatter

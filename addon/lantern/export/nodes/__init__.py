@@ -70,6 +70,7 @@ class Compiler:
         self._scope = ()
         self._active = set()  # nodes being compiled: a link back to one is a cycle
         self._closures = 0
+        self._flags = {}  # output operand -> code word set to 1 when the output is read
         self._warned = set()
         self.bad = []  # non-finite socket values ("'Strength' of 'Emission' (inf)")
 
@@ -119,6 +120,11 @@ class Compiler:
         self.code.extend(out_words)
         self.code.extend(int(p) & 0xFFFFFFFF for p in params)
         return result
+
+    def on_read(self, operand, word):
+        """Sets code[word] to 1 once `operand` is read by another node (flags like Cycles'
+        NODE_IMAGE_ALPHA_UNASSOCIATE, which depend on whether an output is used)."""
+        self._flags[operand] = word
 
     def texcoord(self, name):
         """An output of the (one) Texture Coordinate instruction: 'Generated', 'UV', ..."""
@@ -259,10 +265,11 @@ class Compiler:
             finally:
                 self._active.discard(key)
         outputs = self._memo[key]
-        if out.name in outputs:
-            return outputs[out.name]
-        if out.identifier in outputs:
-            return outputs[out.identifier]
+        operand = outputs.get(out.name, outputs.get(out.identifier))
+        if operand is not None:
+            if operand in self._flags:
+                self.code[self._flags.pop(operand)] = 1
+            return operand
         self.warn("output '%s' of '%s' (%s) is not supported; 0 is used" % (out.name, node.name, node.bl_idname))
         return self.const(0.0 if out.type == 'VALUE' else (0.0, 0.0, 0.0))
 

@@ -74,13 +74,15 @@ def image_texture(c, node, want):
     where = "Material '%s', image texture '%s'" % (c.material_name, node.name)
     if node.projection != 'FLAT':
         c.warn("image texture '%s': %s projection treated as Flat" % (node.name, node.projection))
-    if want.name == "Alpha":
-        c.warn("image texture '%s': the Alpha output is 1 (image alpha is not kept yet)" % node.name)
-    image_id = c.images.export(node.image, node.interpolation, node.extension, where) \
+    image_id = c.images.export(node.image, node.interpolation, node.extension, where, alpha=True) \
         if node.image is not None else None
     if image_id is None:
         if node.image is None:
             c.warn("image texture '%s' has no image; it renders magenta (as Cycles)" % node.name)
         return {"Color": c.const(MAGENTA), "Alpha": c.const(1.0)}
     vec = c.vector(node.inputs["Vector"], default=c.texcoord("UV"))
-    return c.emit(ops.IMAGE, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id])
+    # Cycles divides colours by alpha where the Alpha output reaches the shader output
+    # (NODE_IMAGE_ALPHA_UNASSOCIATE): the param is set when something reads Alpha (Compiler.read).
+    outputs = c.emit(ops.IMAGE, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id, 0])
+    c.on_read(outputs["Alpha"], len(c.code) - 1)
+    return outputs
