@@ -102,6 +102,16 @@ def test_layered_node_material_agrees_with_cycles(integrator, scene_factory, out
     assert report == "", report
 
 
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_normal_mapped_scene_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Tangent-space normal maps from an image (scenes: normal_mapped; MikkTSpace tangents of the
+    active UV map, Normal Map into Principled) under a sun: per tile and in the image mean."""
+    both = lantern_and_cycles(scene_factory, "normal_mapped", integrator)
+    report, _ = ru.agreement_report("normal_mapped_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir,
+                                    TILE, ROUNDING)
+    assert report == "", report
+
+
 def test_rough_metal_after_several_bounces_agrees_with_cycles(scene_factory, outdir):
     """Issue 18: "rough metal seems to reflect more than Cycles after several bounces (+25 % after
     8 bounces at roughness 0.2)". metal_box (closed, copper Principled metal at roughness 0.2, 8
