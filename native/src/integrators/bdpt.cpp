@@ -327,6 +327,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       Vec3 ns = ctx.N;
       le = scene_.material(sp.material).evaluate(ctx, scene_.images, &v.bsdf, &ns);
       v.frame = Frame(facing_normal(ns, v.n));
+      if (length_squared(v.frame.n - facing_normal(ctx.N, v.n)) > 0)
+        v.bsdf.set_bump(v.frame.to_local(ctx.N), mode == Mode::Importance);
       v.wo = v.frame.to_local(-ray.d);
     }
     v.pdf_fwd = density_of(count, v);

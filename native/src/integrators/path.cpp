@@ -167,6 +167,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       if (b.exceeded(s) || (kMedia && volume > s.volume_bounces)) break;
 
       const Frame frame(ns);
+      if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
       const Vec3 wo = frame.to_local(-ray.d);
       if (bsdf.has_non_delta() && !lights.empty())
         next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf) {
