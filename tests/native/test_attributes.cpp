@@ -11,6 +11,7 @@
 #include "geometry/geometry.h"
 #include "lantern/lantern.h"
 #include "scene_builders.h"
+#include "shading/bsdf.h"
 #include "shading/inputs.h"
 
 namespace lt {
@@ -167,6 +168,56 @@ TEST(Attributes, NormalMapInTangentSpace) {
   // Blender world space flips Y and Z.
   o = r.exec(kOpNormalMap, {{1.0f}, {0.5f, 0.5f, 0.0f}}, {4, 0});
   EXPECT_NEAR(o[2], 1.0f, 1e-6f);
+}
+
+TEST(Attributes, TangentNode) {
+  Mesh m = one_triangle();
+  m.attributes.push_back(attr(2, 4, {1, 0, 0.5f, 1, 1, 0, 0.5f, 1, 1, 0, 0.5f, 1}));
+  Instance inst;
+  inst.normal_rows[0] = Vec3(1, 0, 0);
+  inst.normal_rows[1] = Vec3(0, 1, 0);
+  inst.normal_rows[2] = Vec3(0, 0, 1);
+  Bench r;
+  r.ctx.mesh = &m;
+  r.ctx.instance = &inst;
+  r.ctx.primitive = 0;
+  r.ctx.N = Vec3(0, 0, 1);
+  // UV map: the stored tangent made normal to N.
+  auto o = r.exec(kOpTangent, {}, {1, 2, 2});
+  EXPECT_NEAR(o[0], 1.0f, 1e-6f);
+  EXPECT_NEAR(o[2], 0.0f, 1e-6f);
+  EXPECT_EQ(r.exec(kOpTangent, {}, {1, 2, 5}), (std::vector<float>{0, 0, 0}));  // no such map
+  // Radial around Z at Generated (1, 0.5, 0.5): (-(y - 0.5), x - 0.5, 0) = +Y.
+  r.ctx.generated = Vec3(1.0f, 0.5f, 0.5f);
+  o = r.exec(kOpTangent, {}, {0, 2, 0});
+  EXPECT_NEAR(o[1], 1.0f, 1e-6f);
+  // Radial around X at Generated (0.5, 0.5, 1): (0, -(z - 0.5), y - 0.5) = -Y.
+  r.ctx.generated = Vec3(0.5f, 0.5f, 1.0f);
+  o = r.exec(kOpTangent, {}, {0, 0, 0});
+  EXPECT_NEAR(o[1], -1.0f, 1e-6f);
+}
+
+// Cycles' bump_shadowing_term on diffuse lobes of a bumped normal: light grazing the smooth
+// surface is darkened, glossy lobes and unbumped points are untouched.
+TEST(Attributes, BumpShadowingTerm) {
+  Bsdf b;
+  Lobe d;
+  d.type = LobeType::Diffuse;
+  b.add(d);
+  const Vec3 wo(0, 0, 1), wi = normalize(Vec3(-0.6f, 0, 0.8f));
+  const float lambert = b.eval(wo, wi, nullptr).x;
+  EXPECT_NEAR(lambert, 1 / kPi, 1e-6f);
+  const Vec3 smooth(0.5f, 0, std::sqrt(0.75f));
+  b.set_bump(smooth, false);
+  const double g = dot(smooth, wi) / (wi.z * smooth.z);
+  EXPECT_NEAR(b.eval(wo, wi, nullptr).x, lambert * (-g * g * g + g * g + g), 1e-6);
+  // Light on the smooth side: full brightness; light transport reads the light along wo.
+  EXPECT_NEAR(b.eval(wo, Vec3(0.6f, 0, 0.8f), nullptr).x, lambert, 1e-6f);
+  b.set_bump(smooth, true);
+  EXPECT_NEAR(b.eval(wi, wo, nullptr).x, lambert * (-g * g * g + g * g + g), 1e-6);
+  b.clear();
+  b.add(d);
+  EXPECT_NEAR(b.eval(wo, wi, nullptr).x, lambert, 1e-6f);
 }
 
 TEST(Attributes, ObjectInfo) {
