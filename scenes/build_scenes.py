@@ -814,20 +814,20 @@ def build_caustic(scene):
 
 
 def build_unsupported_node(scene):
-    """Noise Texture → Diffuse colour (material "NoiseMaterial") and a Toon BSDF ("ToonMaterial")."""
+    """Nodes Lantern does not render: Wireframe → Diffuse colour (material "WireframeMaterial") and a
+    Refraction BSDF ("RefractionMaterial")."""
     set_world(scene, (0.1, 0.1, 0.1), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
     assign(floor, diffuse("FloorGrey", (0.6, 0.6, 0.6)))
-    mat, nt, out = _material("NoiseMaterial")
-    noise = nt.nodes.new("ShaderNodeTexNoise")
-    noise.name = noise.label = "Noise Texture"
-    noise.inputs["Scale"].default_value = 8.0
+    mat, nt, out = _material("WireframeMaterial")
+    wire = nt.nodes.new("ShaderNodeWireframe")
+    wire.name = wire.label = "Wireframe"
     bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    nt.links.new(noise.outputs["Color"], bsdf.inputs["Color"])
+    nt.links.new(wire.outputs["Fac"], bsdf.inputs["Color"])
     nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
-    assign(add_object(scene, "NoiseSphere", mesh_sphere("NoiseSphere", 0.5), (-0.6, 0, 0.5)), mat)
-    toon = _bsdf_material("ToonMaterial", "ShaderNodeBsdfToon", (0.8, 0.3, 0.3))
-    assign(add_object(scene, "ToonSphere", mesh_sphere("ToonSphere", 0.5), (0.6, 0, 0.5)), toon)
+    assign(add_object(scene, "WireSphere", mesh_sphere("WireSphere", 0.5), (-0.6, 0, 0.5)), mat)
+    refraction = _bsdf_material("RefractionMaterial", "ShaderNodeBsdfRefraction", (0.8, 0.3, 0.3))
+    assign(add_object(scene, "RefractionSphere", mesh_sphere("RefractionSphere", 0.5), (0.6, 0, 0.5)), refraction)
     add_light(scene, "AreaLight", "AREA", 100.0, (0, -1.0, 3.0), shape="SQUARE", size=1.0)
     add_camera(scene, (0, -4.0, 1.8), (0, 0, 0.4), lens=40.0)
 

@@ -4,10 +4,8 @@ import os
 import re
 
 import bpy
-import pytest
 
 import build_scenes as bs
-import render_utils as ru
 from lantern import core
 from lantern.export import nodes
 from lantern.export.nodes import opcodes
@@ -158,3 +156,19 @@ def test_unsupported_node_passes_its_input_through_and_names_itself():
     nt.links.new(odd.outputs[0], em.inputs["Color"])
     c, warnings = _compile(mat)
     assert any("ShaderNodeVectorDisplacement" in w and "Vector Displacement" in w for w in warnings), warnings
+
+
+def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
+    """scripts/node_coverage.py on the unsupported_node scene: it names the Wireframe and the
+    Refraction BSDF and nothing Lantern renders."""
+    import importlib.util
+    scene_factory("unsupported_node")
+    spec = importlib.util.spec_from_file_location("node_coverage", os.path.join(ROOT, "scripts", "node_coverage.py"))
+    coverage = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(coverage)
+    coverage.main()
+    out = capsys.readouterr().out
+    missing = [line for line in out.splitlines() if "NOT SUPPORTED" in line]
+    assert any("ShaderNodeWireframe" in line for line in missing), out
+    assert any("ShaderNodeBsdfRefraction" in line for line in missing), out
+    assert len(missing) == 2, out

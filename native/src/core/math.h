@@ -102,6 +102,15 @@ struct Frame {
     s = Vec3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
     t = Vec3(b, sign + n.y * n.y * a, -n.y);
   }
+  // +X along the tangent's part normal to the normal (Cycles' make_orthonormals_tangent); without
+  // one (a tangent along the normal) the frame above.
+  Frame(const Vec3& normal, const Vec3& tangent) : Frame(normal) {
+    Vec3 b = cross(normal, tangent);
+    const float len = length(b);
+    if (!(len > 1e-7f) || !std::isfinite(len)) return;
+    t = b / len;
+    s = cross(t, n);
+  }
   Vec3 to_local(const Vec3& v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
   Vec3 to_world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
 };

@@ -30,7 +30,7 @@ BounceKind kind_of(const Bsdf& bsdf) {
   BounceKind kind = BounceKind::None;
   for (int k = 0; k < bsdf.count(); ++k) {
     const Lobe& l = bsdf.lobe(k);
-    if (l.type == LobeType::Dielectric) return BounceKind::Mixed;  // reflection or refraction
+    if (lobe_is_glass(l.type)) return BounceKind::Mixed;  // reflection or refraction
     BounceKind lk = bounce_kind(l, false);
     if (k > 0 && lk != kind) return BounceKind::Mixed;
     kind = lk;
@@ -230,7 +230,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       path[count - 2].pdf_rev = path[count - 1].delta ? 0.0f : pdf(path[count - 1], &v, path[count - 2], pixel_center_);
   };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
-  int count = 1, bounces = 0, nulls = 0;
+  int count = 1, bounces = 0, nulls = 0, transparent = 0;
   const float beta_start = max_abs_component(beta);
   // Bounce kinds counted so far towards Cycles' per-kind limits (see kind_limit_factor): a walk
   // stops where every strategy using its further vertices would fail them, so no work is spent
@@ -292,6 +292,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     if (!is_finite(beta) || is_black(beta)) break;
 
     SurfacePoint sp;
+    Spectrum le(0.0f);
+    ShadingFrame sf;
+    Vec3 smooth_n(0.0f);  // the interpolated normal, for Cycles' bump shadowing term
     if (medium < 0) {
       if (!found) break;
       sp = scene_.geometry.surface(hit);
@@ -300,11 +303,22 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
         if (!pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
         continue;
       }
+      ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, hit.t * length(ray.d));
+      ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
+      ctx.ray_depth = bounces;
+      sf.n = smooth_n = ctx.N;
+      const Material& material = scene_.material(sp.material);
+      le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
+      // A transparent pass makes no vertex (connections see the surface through
+      // shadow_transmittance); an emitting surface stays a vertex.
+      if (is_black(le) && material.may_be_transparent() && v.bsdf.pass_transparent(sampler_.next_1d(), &beta)) {
+        if (++transparent > s_.transparent_bounces || !pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
+        continue;
+      }
     }
     // The vertex: a medium vertex at a real collision (beta holds sigma_s T / pdf, medium.h), else
     // a surface vertex.
     const bool backface = medium < 0 && dot(ray.d, sp.ng) > 0;
-    Spectrum le(0.0f);
     v.delta = false;
     v.infinite = false;
     v.stack = stack;
@@ -321,14 +335,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.sp = sp;
       v.p = sp.p;
       v.n = backface ? -sp.ng : sp.ng;
-      ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, hit.t * length(ray.d));
-      ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
-      ctx.ray_depth = bounces;
-      Vec3 ns = ctx.N;
-      le = scene_.material(sp.material).evaluate(ctx, scene_.images, &v.bsdf, &ns);
-      v.frame = Frame(facing_normal(ns, v.n));
-      if (length_squared(v.frame.n - facing_normal(ctx.N, v.n)) > 0)
-        v.bsdf.set_bump(v.frame.to_local(ctx.N), mode == Mode::Importance);
+      v.frame = local_frame(sf, v.n);
+      if (length_squared(v.frame.n - facing_normal(smooth_n, v.n)) > 0)
+        v.bsdf.set_bump(v.frame.to_local(smooth_n), mode == Mode::Importance);
       v.wo = v.frame.to_local(-ray.d);
     }
     v.pdf_fwd = density_of(count, v);

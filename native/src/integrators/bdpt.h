@@ -146,10 +146,11 @@ class Bdpt {
     if (media_) {
       VolumeStack stack = a.stack;
       if (a.type == VertexType::Surface) leave_surface(scene_, a.sp, a.n, r.d, &stack);
-      return shadow_transmittance(scene_, stack, r, sampler_, s_.volume_estimator, s_.volume_step, stats_);
+      return shadow_transmittance(scene_, stack, r, sampler_, s_.volume_estimator, s_.volume_step, stats_,
+                                  s_.transparent_bounces);
     }
-    ++stats_.rays;
-    return scene_.geometry.occluded(r) ? Spectrum(0.0f) : Spectrum(1.0f);
+    return shadow_transmittance(scene_, VolumeStack{}, r, sampler_, s_.volume_estimator, s_.volume_step, stats_,
+                                s_.transparent_bounces);
   }
   static bool scatters(const PathVertex& v) {
     return v.type == VertexType::Medium || (v.type == VertexType::Surface && v.bsdf.has_non_delta());

@@ -145,17 +145,31 @@ int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, f
 }
 
 Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sampler& sampler, VolumeEstimator est,
-                              float step, SampleStats& stats) {
+                              float step, SampleStats& stats, int max_transparent) {
+  if (!scene.has_media() && !scene.has_transparent_shadows()) {
+    ++stats.rays;
+    return scene.geometry.occluded(ray) ? Spectrum(0.0f) : Spectrum(1.0f);
+  }
   Spectrum T(1.0f);
-  for (int crossings = 0;;) {
+  Bsdf bsdf;
+  for (int crossings = 0, transparent = 0;;) {
     Hit hit;
     ++stats.rays;
     bool found = scene.geometry.intersect(ray, kVisShadow, &hit);
     T *= media_transmittance(scene, stack, ray, ray.tmin, found ? hit.t : ray.tmax, sampler, est, step);
     if (!found || is_black(T)) return T;
     SurfacePoint sp = scene.geometry.surface(hit);
-    if (!scene.null_surface(sp.material) || !pass_boundary(scene, sp, hit.t, &ray, &stack, &crossings))
-      return Spectrum(0.0f);
+    if (!scene.null_surface(sp.material)) {
+      const Material& material = scene.material(sp.material);
+      if (!material.may_be_transparent() || ++transparent > max_transparent) return Spectrum(0.0f);
+      ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, hit.t);
+      ctx.camera_ray = false;
+      ctx.shadow_ray = true;
+      material.evaluate(ctx, scene.images, &bsdf, nullptr);
+      T *= bsdf.transparency();
+      if (is_black(T)) return T;
+    }
+    if (!pass_boundary(scene, sp, hit.t, &ray, &stack, &crossings)) return Spectrum(0.0f);
   }
 }
 

@@ -54,8 +54,11 @@ Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray&
                         Sampler& sampler, VolumeEstimator est, float step);
 
 // Transmittance of a shadow ray (ray.tmax: distance to the light) through invisible boundaries
-// (updating a copy of the stack) and media; 0 if an opaque surface is in the way.
+// (updating a copy of the stack), media and transparent surfaces (the weights of their Transparent
+// lobes, Cycles' transparent shadows; more than max_transparent of them block, as Cycles'
+// transparent bounce limit); 0 if an opaque surface is in the way. A scene with neither media nor
+// transparent materials asks Embree for any hit.
 Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sampler& sampler, VolumeEstimator est,
-                              float step, SampleStats& stats);
+                              float step, SampleStats& stats, int max_transparent);
 
 }  // namespace lt

@@ -57,12 +57,11 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;
       if (sp) leave_surface(scene, *sp, side, ls.wi, &shadow_stack);
-      T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats);
-      if (is_black(T)) return;
+      T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats, s.transparent_bounces);
     } else {
-      ++stats.rays;
-      if (scene.geometry.occluded(shadow)) return;
+      T = shadow_transmittance(scene, VolumeStack{}, shadow, sampler, est, step, stats, s.transparent_bounces);
     }
+    if (is_black(T)) return;
     float light_pdf = pmf * ls.pdf;
     float w = ls.delta ? 1.0f : power_heuristic(light_pdf, scatter_pdf);
     add(beta * fv * T * ls.radiance * (w / light_pdf));
@@ -146,10 +145,12 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, hit.t * length(ray.d));
       describe_ray(b, visibility, &ctx);
       const Vec3 ng = ctx.Ng;
-      Vec3 ns = ctx.N;
+      ShadingFrame sf{ctx.N};
       const Material& material = scene.material(sp.material);
-      Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &ns);
-      ns = facing_normal(ns, ng);
+      Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
+      const Frame frame = local_frame(sf, ng);
+      const Vec3 ns = frame.n;
+      if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
       if (b.from_camera()) {
         out.alpha = 1;
         out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
@@ -157,7 +158,14 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       if (!is_black(emitted)) {
         int li = lights.triangle_light(sp.instance, sp.primitive);
         add(beta * emitted *
-            (li >= 0 ? mis_emitter(li, ray.d, kMedia ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
+            (li >= 0 ? mis_emitter(li, ray.d, kMedia || t_prev > 0 ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
+      }
+      // A transparent pass continues the line as an invisible boundary does: the MIS state stays
+      // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.
+      if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta)) {
+        if (++b.transparent > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
+        t_prev += hit.t * length(ray.d);
+        continue;
       }
       if (b.from_camera()) {
         out.normal = ns;
@@ -166,8 +174,6 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       if (bsdf.count() == 0) break;
       if (b.exceeded(s) || (kMedia && volume > s.volume_bounces)) break;
 
-      const Frame frame(ns);
-      if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
       const Vec3 wo = frame.to_local(-ray.d);
       if (bsdf.has_non_delta() && !lights.empty())
         next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf) {

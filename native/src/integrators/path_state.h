@@ -43,15 +43,16 @@ inline bool is_transparent(uint32_t lobe_flags, float eta) {
 // The kind of a scattering by a lobe of these flags (BsdfSample::flags) across relative IOR eta.
 inline BounceKind bounce_kind(uint32_t lobe_flags, float eta) {
   if (is_transparent(lobe_flags, eta)) return BounceKind::None;
-  if (lobe_flags & kLobeDiffuse) return BounceKind::Diffuse;
+  // Cycles counts any transmission as a transmission bounce, Translucent's diffuse one too.
   if (lobe_flags & kLobeTransmission) return BounceKind::Transmission;
+  if (lobe_flags & kLobeDiffuse) return BounceKind::Diffuse;
   return BounceKind::Glossy;
 }
 // The same for lobe l reflecting or transmitting (a Transparent lobe only transmits).
 inline BounceKind bounce_kind(const Lobe& l, bool transmit) {
   if (l.type == LobeType::Transparent) transmit = true;
   const uint32_t flags = lobe_flags(l) & ~(transmit ? kLobeReflection : kLobeTransmission);
-  return bounce_kind(flags, transmit && l.type == LobeType::Dielectric ? l.eta : 1.0f);
+  return bounce_kind(flags, transmit && lobe_is_glass(l.type) ? l.eta : 1.0f);
 }
 
 // Cycles' bounce bookkeeping: transparent pass-throughs are counted apart from the bounces.

@@ -23,7 +23,8 @@ SampleValue trace_panel(const Scene& scene, const IntegratorSettings& s, const R
   VolumeStack stack;
   if (scene.has_boundaries()) init_volume_stack(scene, camera_ray, &stack, stats);
   if (panel < 2) {
-    out.radiance = shadow_transmittance(scene, stack, camera_ray, sampler, est, s.volume_step, stats);
+    out.radiance =
+        shadow_transmittance(scene, stack, camera_ray, sampler, est, s.volume_step, stats, s.transparent_bounces);
     return out;
   }
   // Distance to the first collision along the camera ray, through invisible boundaries.

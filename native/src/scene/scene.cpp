@@ -14,6 +14,9 @@ void Scene::require_editable() const {
 void Scene::commit() {
   if (committed_ && !edited_) return;
   geometry.commit();
+  has_transparent_shadows_ = false;
+  for (size_t m = 0; m < materials.size(); ++m)
+    has_transparent_shadows_ |= !null_surface(int(m)) && materials[m].may_be_transparent();
   std::vector<Light> all = lamp_lights;
   emissive_triangles_ = emissive_instances_ = 0;
   // Every triangle of an emissive material becomes a light (Cycles' mesh lights).

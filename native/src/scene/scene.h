@@ -50,6 +50,9 @@ class Scene {
   bool has_emissive_media() const { return has_emissive_media_; }
   // A World volume: escaping rays cross it to infinity, so no light arrives from the world or suns.
   bool has_world_volume() const { return has_world_volume_; }
+  // Some material may be transparent to shadow rays (Material::may_be_transparent): shadow rays then
+  // find surfaces one by one instead of asking Embree for any hit.
+  bool has_transparent_shadows() const { return has_transparent_shadows_; }
 
   // First call: builds the BVHs and the light sampler. After edits that are allowed on a committed
   // scene (mark_edited: instance transforms, materials, lamps, world, camera), a later call
@@ -72,6 +75,7 @@ class Scene {
   uint64_t light_builds_ = 0;
   uint64_t emissive_triangles_ = 0, emissive_instances_ = 0;
   bool has_media_ = false, has_boundaries_ = false, has_world_volume_ = false, has_emissive_media_ = false;
+  bool has_transparent_shadows_ = false;
 };
 
 }  // namespace lt

@@ -1,7 +1,8 @@
 // BSDF lobes and their mixture (see bsdf.h). Formulas follow Cycles 3.4's closures so that the same
 // material renders to the same mean image:
 //   Diffuse      bsdf_diffuse (Lambert) / bsdf_oren_nayar (Fujii's improved Oren-Nayar, as Cycles)
-//   GlossyGGX    bsdf_microfacet_ggx, no Fresnel, separable Smith G = G1(wo) G1(wi)
+//   GlossyGGX    bsdf_microfacet_ggx, no Fresnel, separable Smith G = G1(wo) G1(wi); anisotropic
+//                D and G1 (Heitz 2014) with alpha_x along +X
 //   Dielectric   Cycles' Glass BSDF node: a GGX reflection closure weighted by F(wo.n) and a GGX
 //                refraction closure (Walter et al. 2007) weighted by 1 - F(wo.n), F the exact
 //                dielectric Fresnel at the macro normal; no 1/eta^2 radiance scaling
@@ -10,6 +11,26 @@
 //                FH = (F(wi.m, eta) - F(1, eta)) / (1 - F(1, eta)), F the dielectric Fresnel
 //   Transparent  bsdf_transparent
 //   PrincipledDiffuse  bsdf_principled_diffuse with PRINCIPLED_DIFFUSE_FULL (Burley 2012)
+//   GlossyBeckmann, DielectricBeckmann  bsdf_microfacet_beckmann: Beckmann D, f with Cycles'
+//                rational G1 (bsdf_beckmann_G1); sampled from the exact visible normals, so the pdf
+//                carries the exact (erf) G1
+//   AshikhminShirley  bsdf_ashikhmin_shirley (half-vector sampling of cos^n, Cycles' "pump")
+//   Clearcoat    bsdf_microfacet_ggx with CLEARCOAT_ID: D_GTR1(alpha), G1 of GGX at alpha 0.25,
+//                interpolate_fresnel_color at IOR 1.5, cspec0 0.04; sampled from GTR1 D cos
+//   Sheen        bsdf_principled_sheen: f = schlick_fresnel(wi.h) (Cycles' eval is that times cos)
+//   Velvet       bsdf_ashikhmin_velvet, sampled uniformly over the hemisphere as Cycles does
+//   Translucent  bsdf_translucent
+//   DiffuseToon, GlossyToon  bsdf_toon: a uniform cone of half angle min(size + smooth, pi/2) (x pi/2)
+//                about the normal or the mirror direction, intensity 1 to size, a ramp to
+//                size + smooth
+//   MultiGGX     bsdf_microfacet_multi_ggx (glossy, no Fresnel): f is mf_eval's estimate (analytic
+//                single scattering + one random walk seeded by the direction pair); sampled from a
+//                known mixture, as Cycles' own walk has no pdf. Cycles' sample weight is the walk's
+//                escape probability (1 for white), its eval's mean lower at high roughness (0.85 at
+//                alpha 1, normal incidence): Lantern follows eval's mean for both strategies.
+// Cycles' closures return f cos(wi); here f excludes it. Where Cycles' sample() disagrees with its
+// eval() (clearcoat sampled from GGX, anisotropic Beckmann sampled isotropically, toon's ramp read
+// at a random angle), f is eval()'s and the sampling is exact for the pdf reported.
 // Microfacet normals are sampled from the distribution of visible normals (Heitz 2018, "Sampling
 // the GGX Distribution of Visible Normals"), so the sampling weight is G1(wi) (times Fresnel).
 //
@@ -21,6 +42,8 @@
 // reverse pdfs consistent with sampling from the other side.
 #include "shading/bsdf.h"
 
+#include <cstring>
+
 namespace lt {
 
 namespace {
@@ -28,35 +51,98 @@ namespace {
 // Below |eta - 1| the refraction lobe is narrower than anything the float maths can resolve; the
 // interface is then treated as smooth (Cycles uses 1e-4 the same way).
 constexpr float kEtaDeltaEpsilon = 1e-3f;
+// The narrow axis of an anisotropic lobe is kept at least this wide, so D stays finite in float.
+constexpr float kMinAxisAlpha = 1e-6f;
+constexpr float kInvSqrtPi = 0.56418958354775628f;
 
 inline Vec3 flip_z(const Vec3& v) { return {v.x, v.y, -v.z}; }
 
-inline float lobe_alpha(const Lobe& l) { return l.alpha >= 0 ? std::min(l.alpha, 1.0f) : 0.0f; }  // NaN -> 0
+inline float clamp_alpha(float a) { return a >= 0 ? std::min(a, 1.0f) : 0.0f; }  // NaN -> 0
+inline float lobe_alpha(const Lobe& l) { return clamp_alpha(l.alpha); }
+inline float lobe_alpha_y(const Lobe& l) { return l.alpha_y >= 0 ? std::min(l.alpha_y, 1.0f) : lobe_alpha(l); }
 inline float lobe_eta(const Lobe& l) { return (l.eta > 0 && std::isfinite(l.eta)) ? l.eta : 1.0f; }
 inline float lobe_sigma(const Lobe& l) { return l.roughness > 0 ? std::min(l.roughness, 1.0f) : 0.0f; }
+
+inline bool is_glass(const Lobe& l) { return lobe_is_glass(l.type); }
 
 // The lobe as seen from below (-Z): the frame is mirrored, and glass's relative IOR inverts, since
 // eta is the IOR of the -Z side over the +Z side. This is what a reverse evaluation needs (BDPT's
 // pdf of the opposite direction through glass), and it keeps bent shading normals finite.
 const Lobe& lobe_from_below(const Lobe& l, Lobe* tmp) {
-  if (l.type != LobeType::Dielectric) return l;
+  if (!is_glass(l)) return l;
   *tmp = l;
   tmp->eta = 1 / lobe_eta(l);
   return *tmp;
 }
 
+// Microfacet alphas below which the lobe is a mirror: the isotropic threshold kSmoothAlpha, and
+// for anisotropic lobes the same area alpha_x alpha_y (Cycles tests alpha_x alpha_y <= 1e-7).
+bool microfacet_smooth(const Lobe& l) {
+  const float ax = lobe_alpha(l), ay = lobe_alpha_y(l);
+  if (ax == ay) return !(ax >= kSmoothAlpha);
+  return !(ax * ay >= kSmoothAlpha * kSmoothAlpha);
+}
+
+// Ashikhmin-Shirley's alphas as bsdf_ashikhmin_shirley_setup clamps them.
+inline float as_alpha(float a) { return clamp(a, 1e-4f, 1.0f); }
+bool as_smooth(const Lobe& l) { return !(std::max(as_alpha(lobe_alpha(l)), as_alpha(lobe_alpha_y(l))) > 1e-4f); }
+
+// Multiscatter GGX's alphas as bsdf_microfacet_multi_ggx_common_setup clamps them.
+inline float ms_alpha(float a) { return clamp(a, 1e-4f, 1.0f); }
+struct MsAlpha {
+  float x, y;
+};
+MsAlpha ms_alphas(const Lobe& l) { return {ms_alpha(lobe_alpha(l)), ms_alpha(lobe_alpha_y(l))}; }
+bool ms_smooth(const Lobe& l) {
+  const MsAlpha a = ms_alphas(l);
+  return a.x * a.y < 1e-7f;
+}
+
+// Toon: the half angles of full intensity and of the ramp's end, and of the sampled cone.
+struct Toon {
+  float max_angle, smooth, cone, cos_cone, one_minus_cos_cone;
+};
+Toon toon_params(const Lobe& l) {
+  Toon t;
+  t.max_angle = (l.toon_size > 0 ? std::min(l.toon_size, 1.0f) : 0.0f) * (kPi / 2);
+  t.smooth = (l.toon_smooth > 0 ? std::min(l.toon_smooth, 1.0f) : 0.0f) * (kPi / 2);
+  t.cone = std::min(t.max_angle + t.smooth, kPi / 2);
+  t.cos_cone = std::cos(t.cone);
+  const float h = std::sin(t.cone / 2);
+  t.one_minus_cos_cone = 2 * h * h;  // accurate for narrow cones
+  return t;
+}
+// bsdf_toon_get_intensity.
+float toon_intensity(const Toon& t, float angle) {
+  if (angle < t.max_angle) return 1;
+  if (angle < t.max_angle + t.smooth && t.smooth != 0) return 1 - (angle - t.max_angle) / t.smooth;
+  return 0;
+}
+inline bool toon_black(const Lobe& l) { return !(toon_params(l).cone > 0); }
+
 bool lobe_is_delta(const Lobe& l) {
   switch (l.type) {
     case LobeType::Diffuse:
     case LobeType::PrincipledDiffuse:
+    case LobeType::Sheen:
+    case LobeType::Velvet:
+    case LobeType::Translucent:
+    case LobeType::DiffuseToon:
+    case LobeType::GlossyToon:
       return false;
     case LobeType::GlossyGGX:
     case LobeType::SpecularGGX:
-      return !(lobe_alpha(l) >= kSmoothAlpha);
-    case LobeType::Dielectric: {
+    case LobeType::GlossyBeckmann:
+    case LobeType::Clearcoat:
+      return microfacet_smooth(l);
+    case LobeType::AshikhminShirley:
+      return as_smooth(l);
+    case LobeType::MultiGGX:
+      return ms_smooth(l);
+    case LobeType::Dielectric:
+    case LobeType::DielectricBeckmann: {
       float eta = lobe_eta(l);  // symmetric in eta and 1/eta, so both sides agree
-      return !(lobe_alpha(l) >= kSmoothAlpha) || std::abs(eta - 1) < kEtaDeltaEpsilon ||
-             std::abs(1 / eta - 1) < kEtaDeltaEpsilon;
+      return microfacet_smooth(l) || std::abs(eta - 1) < kEtaDeltaEpsilon || std::abs(1 / eta - 1) < kEtaDeltaEpsilon;
     }
     case LobeType::Transparent:
       return true;
@@ -64,12 +150,101 @@ bool lobe_is_delta(const Lobe& l) {
   return true;
 }
 
-// G1(w) / |w.z| for GGX, finite down to w.z = 0 (then 2 / (alpha sin)).
+// ---- microfacet distributions ------------------------------------------------------------------
+
+// GGX's G1(w) / |w.z|, finite down to w.z = 0 (then 2 / (alpha_w sin)).
 inline float ggx_G1_over_cos(const Vec3& w, float alpha) {
   float c = std::abs(w.z);
   float s2 = w.x * w.x + w.y * w.y;
   float d = c + std::sqrt(alpha * alpha * s2 + c * c);
   return d > 0 ? 2 / d : 0;
+}
+inline float ggx_G1_over_cos(const Vec3& w, float ax, float ay) {
+  if (ax == ay) return ggx_G1_over_cos(w, ax);
+  float c = std::abs(w.z);
+  float r2 = sqr(ax * w.x) + sqr(ay * w.y);
+  float d = c + std::sqrt(r2 + c * c);
+  return d > 0 ? 2 / d : 0;
+}
+
+// Beckmann's exact G1(w) / |w.z| = 1 / ((1 + Lambda) c), with (1 + Lambda) c = c (1 + erf mu) / 2
+// + r exp(-mu^2) / (2 sqrt(pi)), r = alpha_w sin, mu = c / r: finite at grazing angles.
+inline float beckmann_G1_over_cos(const Vec3& w, float ax, float ay) {
+  float c = std::abs(w.z);
+  float r = std::sqrt(sqr(ax * w.x) + sqr(ay * w.y));
+  if (!(r > 0)) return c > 0 ? 1 / c : 0;
+  float mu = c / r;
+  float d = 0.5f * c * (1 + std::erf(mu)) + 0.5f * kInvSqrtPi * r * std::exp(-mu * mu);
+  return d > 0 ? 1 / d : 0;
+}
+// Cycles 3.4's bsdf_beckmann_G1 / bsdf_beckmann_aniso_G1 (Walter et al. 2007, eq. 27) over |w.z|:
+// 1 for a = c / r >= 1.6, else (3.535 a + 2.181 a^2) / (1 + 2.276 a + 2.577 a^2).
+inline float beckmann_G1_cycles_over_cos(const Vec3& w, float ax, float ay) {
+  float c = std::abs(w.z);
+  float r = std::sqrt(sqr(ax * w.x) + sqr(ay * w.y));
+  if (r < 0.625f * c) return 1 / c;
+  if (!(r > 0)) return 0;
+  float a = c / r;
+  return (2.181f * a + 3.535f) / (r * ((2.577f * a + 2.276f) * a + 1));
+}
+
+struct Micro {
+  bool beckmann;
+  float ax, ay;
+};
+Micro lobe_micro(const Lobe& l) {
+  Micro mf{l.type == LobeType::GlossyBeckmann || l.type == LobeType::DielectricBeckmann, lobe_alpha(l),
+           lobe_alpha_y(l)};
+  if (mf.ax != mf.ay) {
+    mf.ax = std::max(mf.ax, kMinAxisAlpha);
+    mf.ay = std::max(mf.ay, kMinAxisAlpha);
+  }
+  return mf;
+}
+inline float micro_D(const Micro& mf, const Vec3& m) {
+  if (mf.beckmann) return beckmann_D(m, mf.ax, mf.ay);
+  return mf.ax == mf.ay ? ggx_D(m, mf.ax) : ggx_D(m, mf.ax, mf.ay);
+}
+// G1 / cos of the sampling routine (exact Smith), which the pdf needs.
+inline float micro_g1_pdf(const Micro& mf, const Vec3& w) {
+  return mf.beckmann ? beckmann_G1_over_cos(w, mf.ax, mf.ay) : ggx_G1_over_cos(w, mf.ax, mf.ay);
+}
+// G1 / cos of Cycles' f (the same for GGX; Cycles' rational fit for Beckmann).
+inline float micro_g1_f(const Micro& mf, const Vec3& w) {
+  return mf.beckmann ? beckmann_G1_cycles_over_cos(w, mf.ax, mf.ay) : ggx_G1_over_cos(w, mf.ax, mf.ay);
+}
+inline Vec3 micro_sample(const Micro& mf, const Vec3& o, Vec2 u) {
+  return mf.beckmann ? beckmann_sample_visible_normal(o, mf.ax, mf.ay, u)
+                     : ggx_sample_visible_normal(o, mf.ax, mf.ay, u);
+}
+
+// The inverse of the visible-slope CDF of the unit-roughness Beckmann distribution seen from
+// (sin s, 0, cos c): the density of the slope x is (c - s x) exp(-x^2) on x < c / s, whose CDF
+// is c sqrt(pi) (1 + erf x) / 2 + s exp(-x^2) / 2. (c, s) = (1, 0) gives erf^-1 (2u - 1) scaled
+// for exp(-x^2). Safeguarded Newton in double precision.
+double beckmann_slope(double c, double s, double u) {
+  constexpr double kHalfSqrtPi = 0.88622692545275801;
+  constexpr double kBound = 6;  // exp(-36): no mass beyond
+  auto cdf = [&](double x) { return c * kHalfSqrtPi * (1 + std::erf(x)) + 0.5 * s * std::exp(-x * x); };
+  double lo = -kBound, hi = s > 0 ? std::min(c / s, kBound) : kBound;
+  const double target = u * cdf(hi);
+  double x = std::min(0.0, 0.5 * hi);
+  for (int k = 0; k < 100 && hi - lo > 1e-12; ++k) {
+    const double f = cdf(x) - target;
+    if (f > 0)
+      hi = x;
+    else
+      lo = x;
+    const double d = (c - s * x) * std::exp(-x * x);
+    double next = x - f / d;
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (std::abs(next - x) < 1e-13) {
+      x = next;
+      break;
+    }
+    x = next;
+  }
+  return x;
 }
 
 // ---- Diffuse ---------------------------------------------------------------------------------
@@ -87,6 +262,12 @@ Spectrum diffuse_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
   return l.weight * std::max(0.0f, a + b * s);
 }
 
+// Schlick's weight (1 - c)^5 with c clamped to [0, 1] (Cycles' schlick_fresnel).
+inline float schlick_weight(float c) {
+  const float m = clamp(1 - c, 0.0f, 1.0f);
+  return (m * m) * (m * m) * m;
+}
+
 // Burley 2012 ("Physically Based Shading at Disney", eq. 4 with its retro-reflection), as Cycles
 // 3.4's bsdf_principled_diffuse with PRINCIPLED_DIFFUSE_FULL: f = (1/pi) [(1 - FV/2)(1 - FL/2)
 // + RR (FL + FV + FL FV (RR - 1))], FL = (1 - cos_i)^5, FV = (1 - cos_o)^5, RR = roughness (1 + i.o)
@@ -95,47 +276,42 @@ Spectrum diffuse_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
 Spectrum principled_diffuse_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
   if (i.z <= 0) return Spectrum(0.0f);
   const float r = lobe_sigma(l);  // the roughness, clamped to [0, 1] as Cycles' node does
-  auto schlick = [](float c) {
-    const float m = clamp(1 - c, 0.0f, 1.0f);
-    return (m * m) * (m * m) * m;
-  };
-  const float fl = schlick(i.z), fv = schlick(o.z);
+  const float fl = schlick_weight(i.z), fv = schlick_weight(o.z);
   const float rr = r * (1 + dot(i, o));
   const float f = (1 - 0.5f * fv) * (1 - 0.5f * fl) + rr * (fl + fv + fl * fv * (rr - 1));
   return l.weight * (kInvPi * f);
 }
 
-// ---- GGX reflection (GlossyGGX, SpecularGGX, Dielectric's reflection) -------------------------
+// ---- microfacet reflection (GGX / Beckmann glossy, SpecularGGX, glass's reflection) ------------
 // f = D G1(o) G1(i) / (4 cos_o cos_i) (Cycles' separable Smith G), pdf = D_o(m) / (4 o.m)
 // = G1(o) D / (4 cos_o). Both from the half vector of (o, i) so sample() and pdf() agree.
-float ggx_reflect(const Vec3& o, const Vec3& i, float alpha, float* pdf, float* cos_oh) {
+float micro_reflect(const Vec3& o, const Vec3& i, const Micro& mf, float* pdf, float* cos_oh) {
   *pdf = 0;
   if (i.z <= 0 || o.z <= 0) return 0;
   Vec3 h = o + i;
   float len = length(h);
   if (!(len > 0)) return 0;
   Vec3 m = h / len;
-  float d = ggx_D(m, alpha);
-  float g1o = ggx_G1_over_cos(o, alpha);
-  *pdf = 0.25f * g1o * d;
+  float d = micro_D(mf, m);
+  *pdf = 0.25f * micro_g1_pdf(mf, o) * d;
   if (cos_oh) *cos_oh = clamp(dot(o, m), 0.0f, 1.0f);
-  return 0.25f * d * g1o * ggx_G1_over_cos(i, alpha);
+  return 0.25f * d * micro_g1_f(mf, o) * micro_g1_f(mf, i);
 }
 
-bool ggx_sample_reflect(const Vec3& o, float alpha, Vec2 u, Vec3* i) {
-  Vec3 m = ggx_sample_visible_normal(o, alpha, u);
+bool micro_sample_reflect(const Vec3& o, const Micro& mf, Vec2 u, Vec3* i) {
+  Vec3 m = micro_sample(mf, o, u);
   float c = dot(o, m);
   if (!(c > 0)) return false;
   *i = normalize(m * (2 * c) - o);
   return i->z > 0 && is_finite(*i);
 }
 
-// ---- GGX refraction (Walter et al. 2007, eq. 21 without Fresnel and without 1/eta^2) ----------
+// ---- microfacet refraction (Walter et al. 2007, eq. 21 without Fresnel and without 1/eta^2) ---
 // o.z > 0 on the side of relative IOR 1, i.z < 0 inside (relative IOR eta). The generalised half
 // vector is m = +-normalize(o + eta i), oriented to m.z > 0; the pair is valid only if o.m > 0 and
 // i.m < 0. f = D G1(o) G1(i) eta^2 |o.m| |i.m| / (cos_o cos_i (o.m + eta i.m)^2),
 // pdf = D_o(m) eta^2 |i.m| / (o.m + eta i.m)^2 (the Jacobian of the refraction map).
-float ggx_refract(const Vec3& o, const Vec3& i, float alpha, float eta, float* pdf) {
+float micro_refract(const Vec3& o, const Vec3& i, const Micro& mf, float eta, float* pdf) {
   *pdf = 0;
   if (i.z >= 0 || o.z <= 0) return 0;
   Vec3 ht = o + i * eta;
@@ -145,15 +321,14 @@ float ggx_refract(const Vec3& o, const Vec3& i, float alpha, float eta, float* p
   if (m.z < 0) m = -m;
   float om = dot(o, m), im = dot(i, m);
   if (!(om > 0) || !(im < 0)) return 0;
-  float d = ggx_D(m, alpha);
-  float g1o = ggx_G1_over_cos(o, alpha);
+  float d = micro_D(mf, m);
   float jac = eta * eta * -im / len2;
-  *pdf = g1o * om * d * jac;
-  return d * g1o * ggx_G1_over_cos(i, alpha) * om * jac;
+  *pdf = micro_g1_pdf(mf, o) * om * d * jac;
+  return d * micro_g1_f(mf, o) * micro_g1_f(mf, i) * om * jac;
 }
 
-bool ggx_sample_refract(const Vec3& o, float alpha, float eta, Vec2 u, Vec3* i) {
-  Vec3 m = ggx_sample_visible_normal(o, alpha, u);
+bool micro_sample_refract(const Vec3& o, const Micro& mf, float eta, Vec2 u, Vec3* i) {
+  Vec3 m = micro_sample(mf, o, u);
   float c = dot(o, m);
   if (!(c > 0)) return false;
   float sin2_t = (1 - c * c) / (eta * eta);
@@ -161,6 +336,314 @@ bool ggx_sample_refract(const Vec3& o, float alpha, float eta, Vec2 u, Vec3* i) 
   float cos_t = std::sqrt(1 - sin2_t);
   *i = normalize(-o / eta + m * (c / eta - cos_t));
   return i->z < 0 && is_finite(*i);
+}
+
+// ---- Ashikhmin-Shirley (bsdf_ashikhmin_shirley) ------------------------------------------------
+// Half vectors from p_h = sqrt((nx + 1)(ny + 1)) / (2 pi) cos^e, e = nx cos^2 phi + ny sin^2 phi,
+// n = 2 / alpha^2 - 2; f = p_h / (4 h.o max(cos_i, cos_o)) (the paper's "pump"), pdf =
+// p_h / (4 h.o), with Cycles' clamps.
+struct AsExp {
+  float nx, ny;
+};
+AsExp as_exponents(const Lobe& l) {
+  const float ax = as_alpha(lobe_alpha(l)), ay = as_alpha(lobe_alpha_y(l));
+  return {2 / (ax * ax) - 2, 2 / (ay * ay) - 2};
+}
+float as_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
+  *pdf = 0;
+  if (!(o.z > 0 && i.z > 0)) return 0;
+  const AsExp n = as_exponents(l);
+  const float ci = std::max(i.z, 1e-6f), co = std::max(o.z, 1e-6f);
+  const Vec3 h = normalize(o + i);
+  const float hdoto = std::max(std::abs(dot(h, o)), 1e-6f);
+  const float hn = std::max(h.z, 1e-6f);
+  const float pump = 1 / std::max(1e-6f, hdoto * std::max(ci, co));
+  float lobe, norm;
+  if (n.nx == n.ny) {
+    lobe = std::pow(hn, n.nx);
+    norm = (n.nx + 1) / (8 * kPi);
+  } else {
+    const float s2 = h.x * h.x + h.y * h.y;  // = 1 - hn^2, without its cancellation
+    lobe = s2 > 0 ? std::pow(hn, (n.nx * h.x * h.x + n.ny * h.y * h.y) / s2) : 1.0f;
+    norm = std::sqrt((n.nx + 1) * (n.ny + 1)) / (8 * kPi);
+  }
+  *pdf = norm * lobe / hdoto;
+  return norm * lobe * pump;
+}
+// Ashikhmin and Shirley 2000, eq. 9 in the first quadrant, mirrored into the others as Cycles.
+bool as_sample(const Lobe& l, const Vec3& o, Vec2 u, Vec3* i) {
+  const AsExp n = as_exponents(l);
+  float phi, cos_theta;
+  if (n.nx == n.ny) {
+    phi = 2 * kPi * u.x;
+    cos_theta = std::pow(u.y, 1 / (n.nx + 1));
+  } else {
+    const int quadrant = std::min(3, int(u.x * 4));
+    float v = u.x * 4 - float(quadrant);
+    if (quadrant & 1) v = 1 - v;  // keeps the map continuous across quadrants
+    float p = std::atan(std::sqrt((n.nx + 1) / (n.ny + 1)) * std::tan(0.5f * kPi * v));
+    const float cp = std::cos(p), sp = std::sin(p);
+    cos_theta = std::pow(u.y, 1 / (n.nx * cp * cp + n.ny * sp * sp + 1));
+    phi = quadrant == 0 ? p : quadrant == 1 ? kPi - p : quadrant == 2 ? kPi + p : 2 * kPi - p;
+  }
+  const float sin_theta = safe_sqrt(1 - cos_theta * cos_theta);
+  const Vec3 h(sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta);
+  const float c = dot(h, o);
+  if (!(c > 0)) return false;
+  *i = normalize(h * (2 * c) - o);
+  return i->z > 0 && is_finite(*i);
+}
+
+// ---- Clearcoat (Cycles 3.4's CLOSURE_BSDF_MICROFACET_GGX_CLEARCOAT_ID) -------------------------
+// f = D_GTR1(h.z, alpha) G1(o; 0.25) G1(i; 0.25) F(i.h) / (4 cos_o cos_i); sampled from
+// D_GTR1(m) m.z (Burley 2012, appendix B), pdf = D m.z / (4 o.m).
+constexpr float kClearcoatGAlpha = 0.25f;
+const Spectrum kClearcoatF0{0.04f};
+constexpr float kClearcoatIor = 1.5f;
+
+float clearcoat_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
+  *pdf = 0;
+  if (i.z <= 0 || o.z <= 0) return 0;
+  Vec3 h = o + i;
+  float len = length(h);
+  if (!(len > 0)) return 0;
+  h = h / len;
+  const float d = gtr1_D(h.z, lobe_alpha(l));
+  const float oh = dot(o, h);
+  if (!(oh > 0)) return 0;
+  *pdf = d * h.z / (4 * oh);
+  const float f = fresnel_principled(kClearcoatF0, kClearcoatIor, dot(i, h)).x;
+  return 0.25f * d * ggx_G1_over_cos(o, kClearcoatGAlpha) * ggx_G1_over_cos(i, kClearcoatGAlpha) * f;
+}
+bool clearcoat_sample(const Lobe& l, const Vec3& o, Vec2 u, Vec3* i) {
+  const float a = lobe_alpha(l), a2 = a * a;
+  const float cos2 = a < 1 ? (1 - std::pow(a2, 1 - u.x)) / (1 - a2) : 1 - u.x;
+  const float cos_t = safe_sqrt(cos2), sin_t = safe_sqrt(1 - cos2), phi = 2 * kPi * u.y;
+  const Vec3 m(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t);
+  const float c = dot(o, m);
+  if (!(c > 0)) return false;
+  *i = normalize(m * (2 * c) - o);
+  return i->z > 0 && is_finite(*i);
+}
+
+// ---- Velvet (bsdf_ashikhmin_velvet) -------------------------------------------------------------
+// f = D G / (4 cos_o cos_i), D = exp(-cot^2 / sigma^2) / (pi sigma^2 sin^4) of the half vector,
+// G = min(1, 2 (n.h / o.h) cos_o, 2 (n.h / o.h) cos_i), with Cycles' guards.
+float velvet_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
+  if (!(o.z > 0 && i.z > 0)) return 0;
+  const float sigma = std::max(lobe_sigma(l), 0.01f), inv_s2 = 1 / (sigma * sigma);
+  const Vec3 h = normalize(o + i);
+  const float cnh = h.z, cho = std::abs(dot(o, h));
+  if (!(std::abs(cnh) < 1 - 1e-5f && cho > 1e-5f)) return 0;
+  const float r = std::max(cnh / cho, 1e-5f);
+  const float g = std::min(1.0f, std::min(2 * r * o.z, 2 * r * i.z));
+  const float sin2 = 1 - cnh * cnh, cot2 = cnh * cnh / sin2;
+  const float d = std::exp(-cot2 * inv_s2) * inv_s2 * kInvPi / (sin2 * sin2);
+  return 0.25f * d * g / (o.z * i.z);
+}
+
+// ---- Toon (bsdf_toon) ----------------------------------------------------------------------------
+// f cos_i = cone pdf x intensity(angle to the axis); pdf the uniform cone about the axis.
+float toon_eval(const Lobe& l, const Vec3& axis, const Vec3& i, float* pdf) {
+  *pdf = 0;
+  if (!(i.z > 0)) return 0;
+  const Toon t = toon_params(l);
+  if (!(t.cone > 0)) return 0;
+  const float c = dot(axis, i);
+  const float pc = 1 / (2 * kPi * t.one_minus_cos_cone);
+  if (c >= t.cos_cone) *pdf = pc;
+  const float intensity = toon_intensity(t, std::acos(clamp(c, 0.0f, 1.0f)));
+  return intensity > 0 ? pc * intensity / i.z : 0.0f;
+}
+bool toon_sample(const Lobe& l, const Vec3& axis, Vec2 u, Vec3* i) {
+  const Toon t = toon_params(l);
+  if (!(t.cone > 0)) return false;
+  const float cos_t = 1 - u.x * t.one_minus_cos_cone;
+  const float sin_t = safe_sqrt(1 - cos_t * cos_t), phi = 2 * kPi * u.y;
+  *i = normalize(Frame(axis).to_world(Vec3(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t)));
+  return i->z > 0 && is_finite(*i);
+}
+inline Vec3 mirror_dir(const Vec3& o) { return {-o.x, -o.y, o.z}; }
+
+// ---- Multiscatter GGX (Cycles 3.4's bsdf_microfacet_multi.h, glossy, no Fresnel) -------------
+// Heitz et al. 2016: the microsurface as a random medium of heights (uniform height distribution,
+// C1(h) = (h + 1) / 2) and GGX normals; a walk from wo bounces on sampled microfacets and each
+// bounce past the first adds its next-event estimate towards wi. The helpers keep Cycles'
+// thresholds so that the estimate is Cycles' own.
+
+// Cycles' D_ggx / D_ggx_aniso with their floor on the denominator.
+float ms_D(const Vec3& m, const MsAlpha& a) {
+  if (a.x == a.y) {
+    const float z2 = m.z * m.z, a2 = a.x * a.x;
+    const float t = (1 - z2) + a2 * z2;
+    return a2 / std::max(kPi * t * t, 1e-7f);
+  }
+  const float sx = -m.x / a.x, sy = -m.y / a.y;
+  const float t = m.z * m.z + sx * sx + sy * sy;
+  return 1 / std::max(kPi * t * t * a.x * a.y, 1e-7f);
+}
+// Smith Lambda, negative for downward directions (mf_lambda).
+float ms_lambda(const Vec3& w, const MsAlpha& a) {
+  if (w.z > 0.9999f) return 0;
+  if (w.z < -0.9999f) return -0.9999f;
+  const float inv_z2 = 1 / std::max(w.z * w.z, 1e-7f);
+  const float wx = w.x * a.x, wy = w.y * a.y;
+  float v = std::sqrt(1 + (wx * wx + wy * wy) * inv_z2);
+  if (w.z <= 0) v = -v;
+  return 0.5f * (v - 1);
+}
+inline float ms_C1(float h) { return clamp(0.5f * (h + 1), 0.0f, 1.0f); }
+inline float ms_invC1(float c) { return 2 * clamp(c, 0.0f, 1.0f) - 1; }
+inline float ms_G1(const Vec3& w, float c1, float lambda) {
+  if (w.z > 0.9999f) return 1;
+  if (w.z < 1e-5f) return 0;
+  return std::pow(c1, lambda);
+}
+// The next height along w, or false if the walk leaves the surface (mf_sample_height).
+bool ms_sample_height(const Vec3& w, float* h, float* c1, float* g1, float* lambda, float u) {
+  if (w.z > 0.9999f) return false;
+  if (w.z < -0.9999f) {
+    *c1 *= u;
+    *h = ms_invC1(*c1);
+    *g1 = ms_G1(w, *c1, *lambda);
+  } else if (std::abs(w.z) >= 0.0001f) {
+    if (u > 1 - *g1) return false;
+    *c1 = *lambda >= 0 ? 1.0f : *c1 * std::pow(1 - u, -1 / *lambda);
+    *h = ms_invC1(*c1);
+    *g1 = ms_G1(w, *c1, *lambda);
+  }
+  return true;
+}
+// Heitz and d'Eon 2014's visible slopes of unit-roughness GGX with its rational fit for y
+// (mf_sampleP22_11), and the stretched normal (mf_sample_vndf).
+Vec2 ms_sample_p22(float cos_i, float ux, float uy) {
+  if (cos_i > 0.9999f || std::abs(cos_i) < 1e-6f) {
+    const float r = std::sqrt(ux / std::max(1 - ux, 1e-7f)), phi = 2 * kPi * uy;
+    return {r * std::cos(phi), r * std::sin(phi)};
+  }
+  const float sin_i = safe_sqrt(1 - cos_i * cos_i), tan_i = sin_i / cos_i;
+  const float proj = 0.5f * (cos_i + 1);
+  if (proj < 0.0001f) return {0, 0};
+  const float a = 2 * ux * proj / cos_i - 1;
+  float t = a * a - 1;
+  if (std::abs(t) < 1e-7f) return {0, 0};
+  t = 1 / t;
+  const float d = safe_sqrt(tan_i * tan_i * t * t - (a * a - tan_i * tan_i) * t);
+  const float x2 = tan_i * t + d;
+  const float x = (a < 0 || x2 > 1 / tan_i) ? tan_i * t - d : x2;
+  const float u2 = uy >= 0.5f ? 2 * (uy - 0.5f) : 2 * (0.5f - uy);
+  const float z =
+      (u2 * (u2 * (u2 * 0.27385f - 0.73369f) + 0.46341f)) / (u2 * (u2 * (u2 * 0.093073f + 0.309420f) - 1) + 0.597999f);
+  const float y = z * std::sqrt(1 + x * x);
+  return {x, uy >= 0.5f ? y : -y};
+}
+Vec3 ms_sample_vndf(const Vec3& w, const MsAlpha& a, float ux, float uy) {
+  const Vec3 w11 = normalize(Vec3(a.x * w.x, a.y * w.y, w.z));
+  const Vec2 s = ms_sample_p22(w11.z, ux, uy);
+  const float pl = std::sqrt(w11.x * w11.x + w11.y * w11.y);
+  const float cp = pl > 0 ? w11.x / pl : 0, sp = pl > 0 ? w11.y / pl : 0;  // Cycles' safe_normalize
+  const float sx = a.x * (cp * s.x - sp * s.y), sy = a.y * (sp * s.x + cp * s.y);
+  return normalize(Vec3(-sx, -sy, 1));
+}
+// The glossy phase function of a walk direction w (pointing into the surface) towards wi.
+float ms_phase_glossy(const Vec3& w, float lambda, const Vec3& wi, const MsAlpha& a) {
+  if (w.z > 0.9999f) return 0;
+  const Vec3 wh = normalize(wi - w);
+  if (wh.z < 0) return 0;
+  const float area = w.z < -0.9999f ? 1.0f : lambda * w.z;
+  const float c = dot(-w, wh);
+  if (c < 0) return 0;
+  return std::max(0.0f, c) * 0.25f / std::max(area * c, 1e-7f) * ms_D(wh, a);
+}
+
+// A small LCG seeded from the direction pair, so that eval() of one pair is one fixed estimate.
+struct MsRng {
+  uint32_t state;
+  float next() {
+    state = 1103515245u * state + 12345u;
+    return float(state) * (1.0f / 4294967296.0f);
+  }
+};
+uint32_t ms_seed(const Vec3& o, const Vec3& i) {
+  uint32_t b[6];
+  std::memcpy(b, &o.x, 4);
+  std::memcpy(b + 1, &o.y, 4);
+  std::memcpy(b + 2, &o.z, 4);
+  std::memcpy(b + 3, &i.x, 4);
+  std::memcpy(b + 4, &i.y, 4);
+  std::memcpy(b + 5, &i.z, 4);
+  uint32_t h = 0x9e3779b9u;
+  for (uint32_t v : b) h = hash_u32(h ^ v);
+  return h;
+}
+
+// mf_eval (glossy, no Fresnel): f cos_i for view o and light i, both above. As in Cycles 3.4 the
+// walk's bounce colour enters its estimate twice (phase x throughput x throughput).
+Spectrum ms_eval_cos(const Lobe& l, Vec3 o, Vec3 i) {
+  const MsAlpha a = ms_alphas(l);
+  const Spectrum color = vmin(vmax(l.ms_color, Spectrum(0.0f)), Spectrum(1.0f));
+  bool swapped = false;
+  if (i.z < o.z) {  // walk from the shallower direction (less noise; the BSDF is reciprocal)
+    std::swap(o, i);
+    swapped = true;
+  }
+  MsRng rng{ms_seed(o, i)};  // after the swap: f(o, i) and f(i, o) are the same estimate
+  if (o.z < 1e-5f || i.z < 1e-5f) return Spectrum(0.0f);
+  float lambda_r = ms_lambda(-o, a);
+  const float shadowing_lambda = ms_lambda(i, a);
+  const Vec3 wh = normalize(o + i);
+  const float g2 = 1 / (1 - (lambda_r + 1) + shadowing_lambda);
+  Spectrum eval(g2 * 0.25f / o.z * ms_D(wh, a));
+  Spectrum throughput(1.0f);
+  Vec3 wr = -o;
+  float hr = 1, c1_r = 1, g1_r = 0;
+  for (int order = 0; order < 10; ++order) {
+    if (!ms_sample_height(wr, &hr, &c1_r, &g1_r, &lambda_r, rng.next())) break;
+    const float uy = rng.next(), ux = rng.next();
+    const Vec3 wm = ms_sample_vndf(-wr, a, ux, uy);
+    if (order > 0) {
+      const Spectrum phase = throughput * ms_phase_glossy(wr, lambda_r, i, a);
+      eval += throughput * phase * ms_G1(i, ms_C1(hr), shadowing_lambda);
+    }
+    if (order + 1 < 10) {
+      wr = wr - wm * (2 * dot(wr, wm));
+      lambda_r = ms_lambda(wr, a);
+      throughput *= color;
+      c1_r = ms_C1(hr);
+      g1_r = ms_G1(wr, c1_r, lambda_r);
+    }
+  }
+  if (swapped) eval *= std::abs(o.z / i.z);
+  return eval;
+}
+
+// Sampling (not Cycles' walk, whose density is unknown): the single-scattering visible normals
+// with probability A (Cycles' mf_ggx_albedo of the mean alpha), else the cosine hemisphere; the
+// pdf is that mixture's exactly.
+float ms_single_albedo(const MsAlpha& a) {
+  const float r = std::sqrt(a.x * a.y);
+  float v = 0.806495f * std::exp(-1.98712f * r * r) + 0.199531f;
+  v -= ((((((1.76741f * r - 8.43891f) * r + 15.784f) * r - 14.398f) * r + 6.45221f) * r - 1.19722f) * r + 0.027803f) *
+           r +
+       0.00568739f;
+  return clamp(v, 0.05f, 0.95f);  // keep both strategies alive
+}
+Spectrum ms_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
+  *pdf = 0;
+  if (!(o.z > 0 && i.z > 0)) return Spectrum(0.0f);
+  const MsAlpha a = ms_alphas(l);
+  const float p_single = ms_single_albedo(a);
+  const Micro mf{false, a.x, a.y};
+  float p_vndf = 0;
+  micro_reflect(o, i, mf, &p_vndf, nullptr);
+  *pdf = p_single * p_vndf + (1 - p_single) * i.z * kInvPi;
+  return l.weight * ms_eval_cos(l, o, i) / i.z;
+}
+bool ms_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* i) {
+  const MsAlpha a = ms_alphas(l);
+  if (u_extra < ms_single_albedo(a)) return micro_sample_reflect(o, Micro{false, a.x, a.y}, u, i);
+  *i = sample_cosine_hemisphere(u);
+  return i->z > 0;
 }
 
 // ---- per-lobe evaluation in the frame where o.z > 0 -------------------------------------------
@@ -173,25 +656,50 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
       *pdf = i.z * kInvPi;
       return l.type == LobeType::Diffuse ? diffuse_eval(l, o, i) : principled_diffuse_eval(l, o, i);
     case LobeType::GlossyGGX:
-      return l.weight * ggx_reflect(o, i, lobe_alpha(l), pdf, nullptr);
+    case LobeType::GlossyBeckmann:
+      return l.weight * micro_reflect(o, i, lobe_micro(l), pdf, nullptr);
     case LobeType::SpecularGGX: {
       float cos_oh = 0;
-      float v = ggx_reflect(o, i, lobe_alpha(l), pdf, &cos_oh);
+      float v = micro_reflect(o, i, lobe_micro(l), pdf, &cos_oh);
       return v > 0 ? l.weight * fresnel_principled(l.f0, l.eta, cos_oh) * v : Spectrum(0.0f);
     }
-    case LobeType::Dielectric: {
-      float alpha = lobe_alpha(l), eta = lobe_eta(l);
+    case LobeType::Dielectric:
+    case LobeType::DielectricBeckmann: {
+      const Micro mf = lobe_micro(l);
+      float eta = lobe_eta(l);
       float fr = fresnel_dielectric(o.z, eta);
       float p = 0, v;
       if (i.z > 0) {
-        v = fr * ggx_reflect(o, i, alpha, &p, nullptr);
+        v = fr * micro_reflect(o, i, mf, &p, nullptr);
         *pdf = fr * p;
       } else {
-        v = (1 - fr) * ggx_refract(o, i, alpha, eta, &p);
+        v = (1 - fr) * micro_refract(o, i, mf, eta, &p);
         *pdf = (1 - fr) * p;
       }
       return l.weight * v;
     }
+    case LobeType::AshikhminShirley:
+      return l.weight * as_eval(l, o, i, pdf);
+    case LobeType::MultiGGX:
+      return ms_eval(l, o, i, pdf);
+    case LobeType::Clearcoat:
+      return l.weight * clearcoat_eval(l, o, i, pdf);
+    case LobeType::Sheen:
+      if (i.z <= 0) return Spectrum(0.0f);
+      *pdf = i.z * kInvPi;
+      return l.weight * schlick_weight(dot(i, normalize(o + i)));
+    case LobeType::Velvet:
+      if (i.z <= 0) return Spectrum(0.0f);
+      *pdf = 0.5f * kInvPi;
+      return l.weight * velvet_eval(l, o, i);
+    case LobeType::Translucent:
+      if (i.z >= 0) return Spectrum(0.0f);
+      *pdf = -i.z * kInvPi;
+      return l.weight * kInvPi;
+    case LobeType::DiffuseToon:
+      return l.weight * toon_eval(l, Vec3(0, 0, 1), i, pdf);
+    case LobeType::GlossyToon:
+      return l.weight * toon_eval(l, mirror_dir(o), i, pdf);
     case LobeType::Transparent:
       break;
   }
@@ -204,14 +712,22 @@ bool sanitize(BsdfSample* s) {
   return true;
 }
 
-// Lobe selection estimate: the average of the weight, times the specular layer's Fresnel at wo
-// (Cycles' sample_weight), but never below its value at 60 degrees, so that a layer black at
-// normal incidence (f0 = 0) that reflects at other angles is still sampled. Glass needs no
-// factor: its Fresnel split is internal.
+// Lobe selection estimate: the average of the weight, times the Fresnel-weighted layers' Fresnel
+// at wo (Cycles' sample_weight), but never below its value at 60 degrees, so that a layer black at
+// normal incidence (f0 = 0) that reflects at other angles is still sampled; the sheen likewise
+// with Cycles' avg_value (1 - cos)^5 cos. Glass needs no factor: its Fresnel split is internal.
 float selection_estimate(const Lobe& l, const Vec3& wo) {
   Spectrum w = vmax(l.weight, Spectrum(0.0f));
+  const float c = std::abs(wo.z);
   if (l.type == LobeType::SpecularGGX)
-    w *= vmax(fresnel_principled(l.f0, l.eta, std::abs(wo.z)), fresnel_principled(l.f0, l.eta, 0.5f));
+    w *= vmax(fresnel_principled(l.f0, l.eta, c), fresnel_principled(l.f0, l.eta, 0.5f));
+  else if (l.type == LobeType::Clearcoat)
+    w *= std::max(fresnel_principled(kClearcoatF0, kClearcoatIor, c).x,
+                  fresnel_principled(kClearcoatF0, kClearcoatIor, 0.5f).x);
+  else if (l.type == LobeType::Sheen)
+    w *= std::max(schlick_weight(c) * c, schlick_weight(0.5f) * 0.5f);
+  else if ((l.type == LobeType::DiffuseToon || l.type == LobeType::GlossyToon) && toon_black(l))
+    return 0;
   float e = average(w);
   return std::isfinite(e) && e > 0 ? e : 0.0f;
 }
@@ -227,7 +743,7 @@ bool selection_probabilities(const Bsdf& b, const Vec3& wo, float* p) {
 
 }  // namespace
 
-// ---- GGX and Fresnel ----------------------------------------------------------------------------
+// ---- distributions and Fresnel ------------------------------------------------------------------
 
 // D(m) = alpha^2 / (pi cos^4 (alpha^2 + tan^2)^2) written as alpha^2 / (pi (sin^2 + alpha^2 cos^2)^2)
 // for unit m, which stays accurate as m approaches the normal for small alpha.
@@ -238,13 +754,25 @@ float ggx_D(const Vec3& m, float alpha) {
   return d > 0 ? a2 / (kPi * d * d) : 0;
 }
 
+// Anisotropic: 1 / (pi ax ay (x^2/ax^2 + y^2/ay^2 + z^2)^2).
+float ggx_D(const Vec3& m, float ax, float ay) {
+  if (m.z <= 0 || !(ax > 0) || !(ay > 0)) return 0;
+  float d = sqr(m.x / ax) + sqr(m.y / ay) + m.z * m.z;
+  return d > 0 ? 1 / (kPi * ax * ay * d * d) : 0;
+}
+
 // Smith masking 2 / (1 + sqrt(1 + alpha^2 tan^2)) (Walter et al. 2007, eq. 34).
 float ggx_G1(const Vec3& w, float alpha) { return std::abs(w.z) * ggx_G1_over_cos(w, alpha); }
+float ggx_G1(const Vec3& w, float ax, float ay) { return std::abs(w.z) * ggx_G1_over_cos(w, ax, ay); }
+
+Vec3 ggx_sample_visible_normal(const Vec3& wo, float alpha, Vec2 u) {
+  return ggx_sample_visible_normal(wo, alpha, alpha, u);
+}
 
 // Heitz 2018: stretch wo to the unit-roughness configuration, sample the projected hemisphere
 // seen from it, unstretch. Works for wo on either side (mirrored into z >= 0); returns m.z >= 0.
-Vec3 ggx_sample_visible_normal(const Vec3& wo, float alpha, Vec2 u) {
-  Vec3 vh(alpha * wo.x, alpha * wo.y, std::abs(wo.z));
+Vec3 ggx_sample_visible_normal(const Vec3& wo, float ax, float ay, Vec2 u) {
+  Vec3 vh(ax * wo.x, ay * wo.y, std::abs(wo.z));
   float vlen = length(vh);
   if (!(vlen > 0)) return {0, 0, 1};
   vh = vh / vlen;
@@ -256,9 +784,51 @@ Vec3 ggx_sample_visible_normal(const Vec3& wo, float alpha, Vec2 u) {
   float s = 0.5f * (1 + vh.z);
   p2 = (1 - s) * safe_sqrt(1 - p1 * p1) + s * p2;
   Vec3 nh = t1 * p1 + t2 * p2 + vh * safe_sqrt(1 - p1 * p1 - p2 * p2);
-  Vec3 ne(alpha * nh.x, alpha * nh.y, std::max(0.0f, nh.z));
+  Vec3 ne(ax * nh.x, ay * nh.y, std::max(0.0f, nh.z));
   float nlen = length(ne);
   return nlen > 0 ? ne / nlen : Vec3(0, 0, 1);
+}
+
+// exp(-(x^2/ax^2 + y^2/ay^2) / z^2) / (pi ax ay z^4) (Walter et al. 2007, eq. 25, anisotropic).
+float beckmann_D(const Vec3& m, float ax, float ay) {
+  if (m.z <= 0 || !(ax > 0) || !(ay > 0)) return 0;
+  const float z2 = m.z * m.z;
+  const float e = (sqr(m.x / ax) + sqr(m.y / ay)) / z2;
+  if (!(e < 80)) return 0;
+  return std::exp(-e) / (kPi * ax * ay * z2 * z2);
+}
+
+float beckmann_G1(const Vec3& w, float ax, float ay) { return std::abs(w.z) * beckmann_G1_over_cos(w, ax, ay); }
+float beckmann_G1_cycles(const Vec3& w, float ax, float ay) {
+  return std::abs(w.z) * beckmann_G1_cycles_over_cos(w, ax, ay);
+}
+
+// Heitz and d'Eon 2014: stretch wo, sample the unit-roughness visible slopes (x by inverting its
+// CDF, y independent as exp(-y^2)), rotate to wo's azimuth, unstretch, m = normalize(-x, -y, 1).
+// Works for wo on either side (mirrored into z >= 0).
+Vec3 beckmann_sample_visible_normal(const Vec3& wo, float ax, float ay, Vec2 u) {
+  double sx = double(ax) * wo.x, sy = double(ay) * wo.y, sz = std::abs(double(wo.z));
+  const double len = std::sqrt(sx * sx + sy * sy + sz * sz);
+  if (!(len > 0)) return {0, 0, 1};
+  sx /= len;
+  sy /= len;
+  sz /= len;
+  const double sin_t = std::sqrt(sx * sx + sy * sy);
+  const double cos_p = sin_t > 0 ? sx / sin_t : 1, sin_p = sin_t > 0 ? sy / sin_t : 0;
+  const double x = beckmann_slope(sz, sin_t, u.x), y = beckmann_slope(1, 0, u.y);
+  const double rx = cos_p * x - sin_p * y, ry = sin_p * x + cos_p * y;
+  const Vec3 m(float(-rx * ax), float(-ry * ay), 1.0f);
+  return normalize(m);
+}
+
+// Cycles' D_GTR1: (alpha^2 - 1) / (pi ln(alpha^2) (1 + (alpha^2 - 1) cos^2)), 1/pi from alpha 1.
+float gtr1_D(float cos_m, float alpha) {
+  if (!(cos_m > 0)) return 0;
+  if (alpha >= 1) return kInvPi;
+  if (!(alpha > 0)) return 0;
+  const float a2 = alpha * alpha;
+  const float t = 1 + (a2 - 1) * cos_m * cos_m;
+  return (a2 - 1) / (kPi * std::log(a2) * t);
 }
 
 // Exact unpolarised Fresnel reflectance of a dielectric interface; eta = n_inside / n_outside,
@@ -278,7 +848,6 @@ float fresnel_dielectric(float cos_i, float eta) {
   float f = 0.5f * (rs * rs + rp * rp);
   return std::isfinite(f) ? clamp(f, 0.0f, 1.0f) : 1.0f;
 }
-
 Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i) {
   const Spectrum c0 = vmin(vmax(f0, Spectrum(0.0f)), Spectrum(1.0f));  // saturate(cspec0), as Cycles
   if (!(eta > 1)) return c0;                                           // IOR 1 (Specular 0): F(1) = F(cos) = 0
@@ -304,11 +873,23 @@ uint32_t lobe_flags(const Lobe& l) {
   switch (l.type) {
     case LobeType::Diffuse:
     case LobeType::PrincipledDiffuse:
+    case LobeType::Sheen:
+    case LobeType::Velvet:
+    case LobeType::DiffuseToon:
       return kLobeDiffuse | kLobeReflection;
+    case LobeType::Translucent:
+      return kLobeDiffuse | kLobeTransmission;
+    case LobeType::GlossyToon:
+      return kLobeGlossy | kLobeReflection;
     case LobeType::GlossyGGX:
     case LobeType::SpecularGGX:
+    case LobeType::GlossyBeckmann:
+    case LobeType::AshikhminShirley:
+    case LobeType::Clearcoat:
+    case LobeType::MultiGGX:
       return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection;
     case LobeType::Dielectric:
+    case LobeType::DielectricBeckmann:
       return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection | kLobeTransmission;
     case LobeType::Transparent:
       return kLobeSpecular | kLobeTransmission;
@@ -355,6 +936,9 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
     const Vec3 mirror(-o.x, -o.y, o.z);
     switch (l.type) {
       case LobeType::GlossyGGX:
+      case LobeType::GlossyBeckmann:
+      case LobeType::AshikhminShirley:
+      case LobeType::MultiGGX:
         s.wi = mirror;
         s.pdf = 1;
         s.f = l.weight / o.z;
@@ -366,7 +950,14 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         s.f = l.weight * fresnel_principled(l.f0, l.eta, o.z) / o.z;
         s.flags = kLobeSpecular | kLobeReflection;
         break;
-      case LobeType::Dielectric: {
+      case LobeType::Clearcoat:
+        s.wi = mirror;
+        s.pdf = 1;
+        s.f = l.weight * fresnel_principled(kClearcoatF0, kClearcoatIor, o.z) / o.z;
+        s.flags = kLobeSpecular | kLobeReflection;
+        break;
+      case LobeType::Dielectric:
+      case LobeType::DielectricBeckmann: {
         float eta = lobe_eta(l);
         float fr = fresnel_dielectric(o.z, eta);
         if (u_extra < fr) {
@@ -392,32 +983,60 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         s.f = l.weight / o.z;
         s.flags = kLobeSpecular | kLobeTransmission;
         break;
-      case LobeType::Diffuse:
-      case LobeType::PrincipledDiffuse:
+      default:
         return false;
     }
   } else {
-    const float alpha = lobe_alpha(l);
+    s.flags = lobe_flags(l);
     switch (l.type) {
       case LobeType::Diffuse:
       case LobeType::PrincipledDiffuse:
+      case LobeType::Sheen:
         s.wi = sample_cosine_hemisphere(u);
         if (!(s.wi.z > 0)) return false;
-        s.flags = kLobeDiffuse | kLobeReflection;
+        break;
+      case LobeType::Translucent:
+        s.wi = sample_cosine_hemisphere(u);
+        if (!(s.wi.z > 0)) return false;
+        s.wi.z = -s.wi.z;
+        break;
+      case LobeType::Velvet: {
+        // Uniform over the hemisphere, as Cycles' bsdf_ashikhmin_velvet_sample.
+        const float z = u.x, r = safe_sqrt(1 - z * z), phi = 2 * kPi * u.y;
+        s.wi = Vec3(r * std::cos(phi), r * std::sin(phi), z);
+        if (!(s.wi.z > 0)) return false;
+        break;
+      }
+      case LobeType::DiffuseToon:
+        if (!toon_sample(l, Vec3(0, 0, 1), u, &s.wi)) return false;
+        break;
+      case LobeType::GlossyToon:
+        if (!toon_sample(l, mirror_dir(o), u, &s.wi)) return false;
+        break;
+      case LobeType::AshikhminShirley:
+        if (!as_sample(l, o, u, &s.wi)) return false;
+        break;
+      case LobeType::MultiGGX:
+        if (!ms_sample(l, o, u, u_extra, &s.wi)) return false;
+        break;
+      case LobeType::Clearcoat:
+        if (!clearcoat_sample(l, o, u, &s.wi)) return false;
         break;
       case LobeType::GlossyGGX:
       case LobeType::SpecularGGX:
-        if (!ggx_sample_reflect(o, alpha, u, &s.wi)) return false;
-        s.flags = kLobeGlossy | kLobeReflection;
+      case LobeType::GlossyBeckmann:
+        if (!micro_sample_reflect(o, lobe_micro(l), u, &s.wi)) return false;
         break;
-      case LobeType::Dielectric: {
+      case LobeType::Dielectric:
+      case LobeType::DielectricBeckmann: {
+        const Micro mf = lobe_micro(l);
         float eta = lobe_eta(l);
         float fr = fresnel_dielectric(o.z, eta);
         if (u_extra < fr) {
-          if (!ggx_sample_reflect(o, alpha, u, &s.wi)) return false;
+          if (!micro_sample_reflect(o, mf, u, &s.wi)) return false;
           s.flags = kLobeGlossy | kLobeReflection;
         } else {
-          if (!ggx_sample_refract(o, alpha, eta, u, &s.wi)) return false;
+          if (!micro_sample_refract(o, mf, eta, u, &s.wi)) return false;
           s.flags = kLobeGlossy | kLobeTransmission;
           s.eta = eta;
         }
@@ -460,8 +1079,13 @@ float Bsdf::lobe_pdfs(const Vec3& wo, const Vec3& wi, float* part) const {
 
 // Cycles 3.4's bump_shadowing_term (Chiang, Li and Burley, "Taming the Shadow Terminator"): with
 // the shading normal +Z, g = cos(smooth, light) / (cos(shading, light) cos(smooth, shading)).
+// Cycles' diffuse reflection closures take it (CLOSURE_IS_BSDF_DIFFUSE); Translucent and Velvet
+// do not here.
 float Bsdf::bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const {
-  if (!bumped_ || (lobe.type != LobeType::Diffuse && lobe.type != LobeType::PrincipledDiffuse)) return 1.0f;
+  const LobeType t = lobe.type;
+  if (!bumped_ || (t != LobeType::Diffuse && t != LobeType::PrincipledDiffuse && t != LobeType::Sheen &&
+                   t != LobeType::DiffuseToon))
+    return 1.0f;
   const Vec3& l = light_is_wo_ ? wo : wi;
   const float den = l.z * smooth_.z;
   const float g = den != 0 ? dot(smooth_, l) / den : 0.0f;
@@ -537,15 +1161,44 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
   return true;
 }
 
+Spectrum Bsdf::transparency() const {
+  Spectrum t(0.0f);
+  for (int i = 0; i < count_; ++i)
+    if (lobes_[i].type == LobeType::Transparent) t += lobes_[i].weight;
+  return t;
+}
+
+bool Bsdf::pass_transparent(float u, Spectrum* beta) {
+  float through = 0, rest = 0;
+  for (int i = 0; i < count_; ++i)
+    (lobes_[i].type == LobeType::Transparent ? through : rest) += average(lobes_[i].weight);
+  if (!(through > 0)) return false;
+  const float p = rest > 0 ? through / (through + rest) : 1.0f;
+  if (u < p) {
+    *beta *= transparency() * (1 / p);
+    return true;
+  }
+  int kept = 0;
+  for (int i = 0; i < count_; ++i)
+    if (lobes_[i].type != LobeType::Transparent) lobes_[kept++] = lobes_[i];
+  count_ = kept;
+  *beta *= 1 / (1 - p);
+  return false;
+}
+
 // The lobes' weights summed and clamped to [0, 1] (Cycles' denoising albedo likewise sums closure
-// weights); the specular layer counts its Fresnel at the hemispherical average f0 + (1 - f0)/21.
+// weights); the Fresnel layers (specular, clearcoat) count their Fresnel at the hemispherical
+// average f0 + (1 - f0)/21, the sheen Cycles' avg_value (1 - c)^5 c averaged likewise: 1/21.
 Spectrum Bsdf::albedo() const {
   Spectrum a(0.0f);
   for (int k = 0; k < count_; ++k) {
     Spectrum w = vmax(lobes_[k].weight, Spectrum(0.0f));
-    if (lobes_[k].type == LobeType::SpecularGGX) {
-      Spectrum f0 = vmin(vmax(lobes_[k].f0, Spectrum(0.0f)), Spectrum(1.0f));
+    const LobeType t = lobes_[k].type;
+    if (t == LobeType::SpecularGGX || t == LobeType::Clearcoat) {
+      Spectrum f0 = t == LobeType::Clearcoat ? kClearcoatF0 : vmin(vmax(lobes_[k].f0, Spectrum(0.0f)), Spectrum(1.0f));
       w *= f0 + (Spectrum(1.0f) - f0) * (1.0f / 21.0f);
+    } else if (t == LobeType::Sheen) {
+      w *= 1.0f / 21.0f;
     }
     a += w;
   }

@@ -25,24 +25,83 @@ enum LobeFlags : uint32_t {
   kLobeSpecular = 16,  // delta distribution: eval() and pdf() are zero; only sample() reaches it
 };
 
+// Each type with the Cycles 3.4 node (svm_node_closure_bsdf) and parameters that make it. The caller
+// builds the local frame: +Z the closure's normal, +X the tangent for anisotropic lobes (Cycles' T,
+// already rotated by the node's Rotation, projected onto the tangent plane), +Y = normal x tangent
+// (Cycles' make_orthonormals_tangent). "weight" is the closure weight (colour x mix factor).
 enum class LobeType : uint8_t {
-  Diffuse,            // Lambert (roughness 0) or Oren-Nayar as Cycles' Diffuse BSDF
-  GlossyGGX,          // GGX reflection, colour as constant reflectance (Cycles' Glossy BSDF, no Fresnel)
-  Dielectric,         // Fresnel-weighted GGX reflection + refraction (Cycles' Glass BSDF); delta at alpha 0
-  SpecularGGX,        // GGX reflection with Cycles' Principled v1 Fresnel from f0 to 1 (its specular layer)
-  Transparent,        // straight pass-through (delta transmission)
-  PrincipledDiffuse,  // Burley's diffuse with retro-reflection (Cycles' Principled diffuse closure)
+  // Diffuse BSDF: roughness = Roughness (Lambert at 0, Oren-Nayar sigma above).
+  Diffuse,
+  // Glossy / Anisotropic BSDF with distribution GGX (and Sharp: alpha 0): alpha, alpha_y as below.
+  // Colour as constant reflectance, no Fresnel.
+  GlossyGGX,
+  // Glass BSDF (GGX, Sharp): Fresnel-weighted GGX reflection + refraction; eta = IOR (1/IOR on back
+  // faces), alpha = Roughness^2; delta at alpha 0.
+  Dielectric,
+  // Principled BSDF's specular layer: alpha = r^2 / aspect, alpha_y = r^2 aspect with aspect =
+  // sqrt(1 - 0.9 Anisotropic), f0 = cspec0, eta = principled_specular_ior(Specular).
+  SpecularGGX,
+  // Transparent BSDF (delta pass-through).
+  Transparent,
+  // Principled BSDF's diffuse: roughness = Roughness.
+  PrincipledDiffuse,
+  // Glossy / Anisotropic BSDF with distribution Beckmann: alpha, alpha_y as for GlossyGGX. Cycles'
+  // rational approximation of the Smith G1 in f; the exact visible-normal sampling.
+  GlossyBeckmann,
+  // Glass BSDF with distribution Beckmann: as Dielectric (alpha = Roughness^2, eta = IOR).
+  DielectricBeckmann,
+  // Glossy / Anisotropic BSDF with distribution Ashikhmin-Shirley: alpha, alpha_y as for GlossyGGX
+  // (exponent 2 / alpha^2 - 2, alphas clamped to [1e-4, 1]; delta at max(alpha, alpha_y) <= 1e-4).
+  AshikhminShirley,
+  // Principled BSDF's clearcoat (bsdf_microfacet_ggx_clearcoat in Cycles 3.4): alpha =
+  // Clearcoat Roughness^2 for Burley's GTR1 distribution, Smith G of GGX at a fixed alpha 0.25,
+  // Fresnel of IOR 1.5 (cspec0 0.04); weight = closure weight x 0.25 x Clearcoat (the caller folds
+  // the factor in, Cycles puts it in fresnel_color). Frame: the Clearcoat Normal.
+  Clearcoat,
+  // Principled BSDF's sheen (bsdf_principled_sheen): f = (1 - wi.h)^5; weight = closure weight x
+  // Sheen x sheen colour (mix(1, base colour / luminance, Sheen Tint), computed by the caller) x
+  // the diffuse weight (1 - Metallic)(1 - Transmission).
+  Sheen,
+  // Velvet BSDF (bsdf_ashikhmin_velvet): roughness = Sigma (clamped to [0.01, 1]).
+  Velvet,
+  // Translucent BSDF: Lambert on the side opposite to wo.
+  Translucent,
+  // Toon BSDF, component Diffuse: toon_size = Size, toon_smooth = Smooth (both clamped to [0, 1]).
+  DiffuseToon,
+  // Toon BSDF, component Glossy: toon_size = Size, toon_smooth = Smooth, a cone about the mirror
+  // direction.
+  GlossyToon,
+  // Glossy / Anisotropic BSDF with distribution Multiscatter GGX (bsdf_microfacet_multi_ggx, Heitz
+  // et al. 2016's random walk, up to 10 bounces, no Fresnel): alpha, alpha_y as for GlossyGGX
+  // (clamped to [1e-4, 1]; delta at alpha x alpha_y < 1e-7); weight = closure weight, ms_color =
+  // the node's Color (saturated), the extra factor of every bounce after the first. f is Cycles'
+  // estimate: exact single scattering plus one random walk seeded from the direction pair.
+  MultiGGX,
 };
+constexpr int kLobeTypeCount = int(LobeType::MultiGGX) + 1;
+// The glass lobes, which reflect or refract with the relative IOR eta (integrators count their
+// bounces by the branch sampled). Translucent transmits without crossing an IOR; Cycles counts it
+// as a transmission bounce with diffuse ray visibility (integrator/path_state.h).
+inline bool lobe_is_glass(LobeType t) { return t == LobeType::Dielectric || t == LobeType::DielectricBeckmann; }
+
+// Glossy / Anisotropic BSDF roughness (svm_node_closure_bsdf): alpha = Roughness^2 when isotropic;
+// with Anisotropy a (clamped to [-0.99, 0.99]) alpha = alpha0 / (1 + a), alpha_y = alpha0 (1 + a)
+// for a < 0, and alpha = alpha0 (1 - a), alpha_y = alpha0 / (1 - a) otherwise; each clamped to 1.
 
 struct Lobe {
   LobeType type = LobeType::Diffuse;
-  Spectrum weight{1.0f};  // colour x mix weight
-  float roughness = 0;    // Diffuse: Oren-Nayar sigma; PrincipledDiffuse: the Principled roughness;
-                          // microfacet: unused (see alpha)
-  float alpha = 0;        // GGX alpha = roughness^2; below kSmoothAlpha the lobe is delta
-  float eta = 1.5f;       // Dielectric: relative IOR across the surface from wo's side;
-                          // SpecularGGX: the IOR whose dielectric Fresnel shapes the blend to 1
-  Spectrum f0{0.04f};     // SpecularGGX: reflectance at normal incidence (Cycles' cspec0)
+  Spectrum weight{1.0f};    // colour x mix weight
+  float roughness = 0;      // Diffuse: Oren-Nayar sigma; PrincipledDiffuse: the Principled roughness;
+                            // Velvet: sigma; microfacet: unused (see alpha)
+  float alpha = 0;          // microfacet alpha along the tangent (+X), = roughness^2; below
+                            // kSmoothAlpha (for alpha x alpha_y: kSmoothAlpha^2) the lobe is delta
+  float alpha_y = -1;       // alpha along the bitangent (+Y); negative: equal to alpha (isotropic)
+  float eta = 1.5f;         // Dielectric: relative IOR across the surface from wo's side;
+                            // SpecularGGX: the IOR whose dielectric Fresnel shapes the blend to 1
+  Spectrum f0{0.04f};       // SpecularGGX: reflectance at normal incidence (Cycles' cspec0)
+  float toon_size = 0;      // DiffuseToon, GlossyToon: Size
+  float toon_smooth = 0;    // DiffuseToon, GlossyToon: Smooth
+  Spectrum ms_color{1.0f};  // MultiGGX: the colour of each bounce after the first
 };
 
 struct BsdfSample {
@@ -90,6 +149,13 @@ class Bsdf {
   bool sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const;
   // Directional albedo estimate of the lobes' weights (for the Albedo pass and Russian roulette).
   Spectrum albedo() const;
+  // The summed weights of the Transparent lobes: what a shadow ray passes (Cycles'
+  // shader_bsdf_transparency).
+  Spectrum transparency() const;
+  // Transparency as a choice (the Transparent lobes' share p of the lobes' average weights): with
+  // probability p the ray passes straight on and beta is scaled by transparency() / p (returns
+  // true); else the Transparent lobes are removed and beta is scaled by 1 / (1 - p).
+  bool pass_transparent(float u, Spectrum* beta);
   uint32_t flags() const;  // union of lobe flags
   bool has_non_delta() const;
   // The probabilities with which sample() picks each lobe for this wo; false if none can be.
@@ -114,10 +180,22 @@ float lobe_pdf(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
 bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out);
 uint32_t lobe_flags(const Lobe& lobe);
 
-// GGX (Trowbridge-Reitz) microfacet distribution with visible-normal sampling (Heitz 2018).
+// GGX (Trowbridge-Reitz) microfacet distribution with visible-normal sampling (Heitz 2018);
+// anisotropic forms with alpha_x along +X and alpha_y along +Y.
 float ggx_D(const Vec3& m, float alpha);
+float ggx_D(const Vec3& m, float alpha_x, float alpha_y);
 float ggx_G1(const Vec3& w, float alpha);
+float ggx_G1(const Vec3& w, float alpha_x, float alpha_y);
 Vec3 ggx_sample_visible_normal(const Vec3& wo, float alpha, Vec2 u);
+Vec3 ggx_sample_visible_normal(const Vec3& wo, float alpha_x, float alpha_y, Vec2 u);
+// Beckmann distribution: D, the exact Smith G1 (erf form), Cycles 3.4's rational approximation of
+// it (bsdf_beckmann_G1, used in f), and exact visible-normal sampling (Heitz and d'Eon 2014).
+float beckmann_D(const Vec3& m, float alpha_x, float alpha_y);
+float beckmann_G1(const Vec3& w, float alpha_x, float alpha_y);
+float beckmann_G1_cycles(const Vec3& w, float alpha_x, float alpha_y);
+Vec3 beckmann_sample_visible_normal(const Vec3& wo, float alpha_x, float alpha_y, Vec2 u);
+// Burley's GTR1 (generalised Trowbridge-Reitz, gamma 1), Cycles' D_GTR1 for the clearcoat.
+float gtr1_D(float cos_m, float alpha);
 float fresnel_dielectric(float cos_i, float eta);
 // Cycles 3.4's Principled v1 specular Fresnel (interpolate_fresnel_color): f0 blended to 1 by the
 // dielectric Fresnel of IOR eta at cos_i, renormalised to [0, 1]; f0 (cspec0) clamped to [0, 1].

@@ -20,16 +20,18 @@ class Material {
   static Material default_surface();
 
   // Fills bsdf with the lobes at a point and returns the emitted radiance there (both sides).
-  // shading_normal: set when the program brings its own (a Normal input linked), else untouched.
+  // frame: the normal set when the program brings its own (a Normal input linked), else untouched,
+  // and the anisotropic tangent.
   Spectrum evaluate(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
-                    Vec3* shading_normal) const {
-    return program_.run(ctx, images, bsdf, shading_normal);
+                    ShadingFrame* frame) const {
+    return program_.run(ctx, images, bsdf, frame);
   }
   // Emitted radiance only (for light sampling, without building lobes).
   Spectrum emission(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images) const {
     return emissive_ ? program_.run(ctx, images, nullptr, nullptr) : Spectrum(0.0f);
   }
   bool emissive() const { return emissive_; }
+  bool may_be_transparent() const { return program_.may_be_transparent(); }
   // A rough scalar for how bright the emission is, for picking lights by power.
   float emission_power_estimate() const { return emission_estimate_; }
   const Program& program() const { return program_; }
@@ -43,6 +45,11 @@ class Material {
 // A program's shading normal as the integrators use it: on the geometric normal's side (ng faces
 // the incoming ray), else the geometric normal.
 inline Vec3 facing_normal(const Vec3& n, const Vec3& ng) { return dot(n, ng) > 0 ? n : ng; }
+// The local frame lobes are evaluated in.
+inline Frame local_frame(const ShadingFrame& f, const Vec3& ng) {
+  const Vec3 n = facing_normal(f.n, ng);
+  return is_black(f.tangent) ? Frame(n) : Frame(n, f.tangent);
+}
 
 // The shading point as the nodes see it, for a ray of direction ray_d that met sp at distance t.
 ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ray_d, float t);

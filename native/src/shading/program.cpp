@@ -146,7 +146,7 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
 }
 
 Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
-                      Vec3* shading_normal) const {
+                      ShadingFrame* frame) const {
   float regs[kMaxRegisters];  // left uninitialised: validation guarantees every read follows a write
   Machine m{regs, constants_.data(), &ctx, &images, bsdf};
   m.emitted = Spectrum(0.0f);
@@ -158,8 +158,30 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
     execute(in, m);
     w += words_of(in);
   }
-  if (shading_normal && m.has_shading_normal) *shading_normal = m.shading_normal;
+  if (frame) {
+    if (m.has_shading_normal) frame->n = m.shading_normal;
+    frame->tangent = m.shading_tangent;
+  }
   return m.emitted;
+}
+
+bool Program::may_be_transparent() const {
+  auto zero = [&](uint32_t w) {
+    if (!(w & kConstBit)) return false;
+    for (uint32_t j = 0; j < operand_size(w); ++j)
+      if (constants_[operand_index(w) + j] != 0) return false;
+    return true;
+  };
+  for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
+    Instr in = decode(w);
+    w += words_of(in);
+    if (in.op == kOpHoldout && !zero(in.in[0])) return true;
+    if (in.op == kOpTransparent && !zero(in.in[0]) && !zero(in.in[1])) return true;
+    if (in.op == kOpPrincipled && !zero(in.in[0]) &&
+        (!(in.in[23] & kConstBit) || constants_[operand_index(in.in[23])] < 1))
+      return true;
+  }
+  return false;
 }
 
 bool Program::emission_estimate(float* estimate) const {

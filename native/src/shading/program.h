@@ -68,6 +68,7 @@ struct Machine {
   Spectrum emitted;
   Vec3 shading_normal;  // set by closures with a Normal input (one normal per shading point)
   bool has_shading_normal = false;
+  Vec3 shading_tangent{0.0f};  // set by anisotropic closures: the frame's +X
 
   float f(uint32_t w) const { return w & kConstBit ? k[w & kIndexMask] : r[w & kIndexMask]; }
   Vec3 v(uint32_t w) const {
@@ -127,6 +128,13 @@ void exec_math_family(const Instr& in, Machine& m);
 const OpSignature* textures_family_signature(uint32_t op);
 void exec_textures_family(const Instr& in, Machine& m);
 
+// The frame a program shades in: the normal (the shading point's unless a closure brings its own)
+// and, for anisotropic lobes, the tangent (zero: none).
+struct ShadingFrame {
+  Vec3 n;
+  Vec3 tangent{0.0f};
+};
+
 class Program {
  public:
   // Validates (every operand in range, registers written before read and once, known opcodes,
@@ -135,12 +143,16 @@ class Program {
   Program(std::vector<uint32_t> code, std::vector<float> constants, int registers, size_t image_count);
 
   // Runs the program: lobes into bsdf (cleared first; null: emission only), returns emitted radiance.
+  // frame (may be null): the normal set by a closure's Normal input, the anisotropic tangent.
   Spectrum run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
-               Vec3* shading_normal) const;
+               ShadingFrame* frame) const;
   size_t instruction_count() const { return count_; }
   // Whether the program may emit, and a rough scalar for how bright (for picking lights by power):
   // exact for constant emission, 1 where a texture or a node decides it.
   bool emission_estimate(float* estimate) const;
+  // Whether the program may give a Transparent lobe (Transparent, Holdout, Principled Alpha): then
+  // shadow rays look at it (Cycles' transparent shadows).
+  bool may_be_transparent() const;
 
  private:
   std::vector<uint32_t> code_;

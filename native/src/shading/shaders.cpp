@@ -71,9 +71,45 @@ void take_normal(Machine& m, const Vec3& n, const Vec3& weight) {
 
 bool backfacing(const Machine& m) { return m.ctx && m.ctx->backfacing; }
 
+// A tangent for anisotropic lobes (a zero Tangent input stands for the shading point's), turned
+// about the normal n by `rotation` turns (Cycles' rotate_around_axis(T, N, rotation * 2 pi)).
+void take_tangent(Machine& m, Vec3 t, const Vec3& n, float rotation) {
+  if (!(dot(t, t) > 0) || !is_finite(t)) t = m.ctx ? m.ctx->tangent : Vec3(0.0f);
+  if (rotation != 0 && std::isfinite(rotation)) {
+    const float a = rotation * 2 * kPi, c = std::cos(a), s = std::sin(a);
+    t = t * c + cross(n, t) * s + n * (dot(n, t) * (1 - c));  // Rodrigues
+  }
+  if (is_black(m.shading_tangent)) m.shading_tangent = t;
+}
+
+// Glossy / Anisotropic roughness (bsdf.h): alpha along the tangent and the bitangent.
+void anisotropic_alphas(float roughness, float anisotropy, Lobe* l) {
+  const float a0 = roughness * roughness;
+  const float a = clamp(std::isfinite(anisotropy) ? anisotropy : 0.0f, -0.99f, 0.99f);
+  if (a == 0) {
+    l->alpha = a0;
+    return;
+  }
+  l->alpha = std::min(1.0f, a < 0 ? a0 / (1 + a) : a0 * (1 - a));
+  l->alpha_y = std::min(1.0f, a < 0 ? a0 * (1 + a) : a0 / (1 - a));
+}
+
+LobeType glossy_type(uint32_t distribution) {
+  switch (distribution) {
+    case kDistBeckmann:
+      return LobeType::GlossyBeckmann;
+    case kDistAshikhminShirley:
+      return LobeType::AshikhminShirley;
+    case kDistMultiGGX:
+      return LobeType::MultiGGX;
+    default:
+      return LobeType::GlossyGGX;
+  }
+}
+
 void principled(const Instr& in, Machine& m, Vec3 weight) {
-  // Cycles 3.4 svm_node_closure_bsdf (PRINCIPLED): alpha below 1 makes the rest of the closure
-  // partly transparent.
+  // Cycles 3.4 svm_node_closure_principled. Alpha below 1 makes the rest of the closure partly
+  // transparent.
   const float alpha = unit(m.f(in.in[23]));
   if (alpha < 1) {
     Lobe t;
@@ -82,29 +118,51 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
     m.bsdf->add(t);
     weight *= alpha;
   }
-  take_normal(m, m.v(in.in[1]), weight);
-  // Cycles 3.x Principled v1, reduced to its main lobes (README: departures): Burley's diffuse with
-  // retro-reflection, a GGX specular layer as Cycles' (its Fresnel blends cspec0 = mix(0.08
-  // specular, base, metallic), saturated, to 1 along the dielectric Fresnel of the IOR Specular
-  // stands for), and a GGX glass lobe.
+  const Vec3 normal = m.v(in.in[1]);
+  take_normal(m, normal, weight);
   const Vec3 base = non_negative(m.v(in.in[2]));
+  const float subsurface = unit(m.f(in.in[3]));
   const float metallic = unit(m.f(in.in[8]));
   const float transmission = unit(m.f(in.in[19])) * (1 - metallic);
   const float r = unit(m.f(in.in[11]));
   // 12.5 is where 0.08 specular reaches 1 (an infinite IOR); NaN becomes 0.
   const float spec = std::min(std::max(0.0f, m.f(in.in[9])), 12.5f);
+  const float diffuse_weight = (1 - metallic) * (1 - transmission);
+  // The base colour normalised by its luminance: the tint of sheen and specular.
+  const float lum = 0.2126f * base.x + 0.7152f * base.y + 0.0722f * base.z;
+  const Vec3 tint = lum > 0 ? base / lum : Vec3(1.0f);
+  // Subsurface scattering is rendered in its radius-0 limit (README: departures): the diffuse
+  // takes the colour Cycles gives its BSSRDF, mix(base, Subsurface Color, Subsurface).
+  const Vec3 diffuse_color = lerp(subsurface, base, non_negative(m.v(in.in[5])));
   Lobe d;
   d.type = LobeType::PrincipledDiffuse;
   d.roughness = r;
-  d.weight = weight * base * ((1 - metallic) * (1 - transmission));
+  d.weight = weight * diffuse_color * diffuse_weight;
   m.bsdf->add(d);
+  const float sheen = std::max(0.0f, m.f(in.in[14]));
+  if (sheen > kClosureCutoff && diffuse_weight > kClosureCutoff) {
+    Lobe s;
+    s.type = LobeType::Sheen;
+    s.weight = weight * lerp(unit(m.f(in.in[15])), Vec3(1.0f), tint) * (sheen * diffuse_weight);
+    m.bsdf->add(s);
+  }
   // Cycles leaves the layer out when Specular and Metallic are both below its closure cutoff.
   if (spec > kClosureCutoff || metallic > kClosureCutoff) {
     Lobe g;
     g.type = LobeType::SpecularGGX;
     g.weight = weight * (1 - transmission);
-    g.alpha = r * r;
-    g.f0 = lerp(metallic, Vec3(0.08f * spec), base);  // fresnel_principled saturates it
+    const float anisotropic = unit(m.f(in.in[12]));
+    if (anisotropic > 0) {
+      // bsdf.h: alpha = r^2 / aspect, alpha_y = r^2 aspect, along the (rotated) tangent.
+      const float aspect = std::sqrt(1 - 0.9f * anisotropic);
+      g.alpha = r * r / aspect;
+      g.alpha_y = r * r * aspect;
+      take_tangent(m, m.v(in.in[25]), m.has_shading_normal ? m.shading_normal : m.ctx->N, m.f(in.in[13]));
+    } else {
+      g.alpha = r * r;
+    }
+    const Vec3 tinted = lerp(unit(m.f(in.in[10])), Vec3(1.0f), tint);
+    g.f0 = lerp(metallic, tinted * (0.08f * spec), base);  // fresnel_principled saturates it
     g.eta = principled_specular_ior(spec);
     m.bsdf->add(g);
   }
@@ -117,6 +175,15 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
     t.eta = backfacing(m) ? 1 / ior : ior;
     m.bsdf->add(t);
   }
+  const float clearcoat = std::max(0.0f, m.f(in.in[16]));
+  if (clearcoat > kClosureCutoff) {
+    Lobe c;
+    c.type = LobeType::Clearcoat;
+    c.weight = weight * (0.25f * clearcoat);
+    const float cr = unit(m.f(in.in[17]));
+    c.alpha = cr * cr;
+    m.bsdf->add(c);
+  }
 }
 
 const OpSignature kSignatures[] = {
@@ -128,12 +195,16 @@ const OpSignature kSignatures[] = {
     {"vvvfvvfffffffffffffffvffvv", "", "ii", false},  // principled
     {"vf", "vv", "", true},                           // mix weights
     {"v", "", "", false},                             // holdout
+    {"vvvfffv", "", "i", false},                      // anisotropic
+    {"vvvf", "", "", false},                          // velvet
+    {"vvv", "", "", false},                           // translucent
+    {"vvvff", "", "i", false},                        // toon
 };
 
 }  // namespace
 
 const OpSignature* shaders_family_signature(uint32_t op) {
-  if (op < kOpEmission || op > kOpHoldout) return nullptr;
+  if (op < kOpEmission || op > kOpToon) return nullptr;
   return &kSignatures[op - kOpEmission];
 }
 
@@ -168,18 +239,46 @@ void exec_shaders_family(const Instr& in, Machine& m) {
       l.weight = weight * non_negative(m.v(in.in[2]));
       l.roughness = unit(m.f(in.in[3]));
       break;
-    case kOpGlossy: {
-      take_normal(m, m.v(in.in[1]), weight);
+    case kOpGlossy:
+    case kOpAnisotropic: {
+      const Vec3 n = m.v(in.in[1]);
+      take_normal(m, n, weight);
       const float r = in.param[0] == kDistSharp ? 0.0f : unit(m.f(in.in[3]));
-      l.type = LobeType::GlossyGGX;
+      l.type = in.param[0] == kDistSharp ? LobeType::GlossyGGX : glossy_type(in.param[0]);
       l.weight = weight * non_negative(m.v(in.in[2]));
-      l.alpha = r * r;
+      if (in.op == kOpAnisotropic && r > 0) {
+        anisotropic_alphas(r, m.f(in.in[4]), &l);
+        if (l.alpha_y >= 0)
+          take_tangent(m, m.v(in.in[6]), m.has_shading_normal ? m.shading_normal : m.ctx->N, m.f(in.in[5]));
+      } else {
+        l.alpha = r * r;
+      }
+      // Multiscatter GGX: the colour again for every bounce after the first (Cycles' extra->color).
+      if (l.type == LobeType::MultiGGX) l.ms_color = vmin(non_negative(m.v(in.in[2])), Vec3(1.0f));
       break;
     }
+    case kOpVelvet:
+      take_normal(m, m.v(in.in[1]), weight);
+      l.type = LobeType::Velvet;
+      l.weight = weight * non_negative(m.v(in.in[2]));
+      l.roughness = m.f(in.in[3]);
+      break;
+    case kOpTranslucent:
+      take_normal(m, m.v(in.in[1]), weight);
+      l.type = LobeType::Translucent;
+      l.weight = weight * non_negative(m.v(in.in[2]));
+      break;
+    case kOpToon:
+      take_normal(m, m.v(in.in[1]), weight);
+      l.type = in.param[0] == 1 ? LobeType::GlossyToon : LobeType::DiffuseToon;
+      l.weight = weight * non_negative(m.v(in.in[2]));
+      l.toon_size = unit(m.f(in.in[3]));
+      l.toon_smooth = unit(m.f(in.in[4]));
+      break;
     case kOpGlass: {
       take_normal(m, m.v(in.in[1]), weight);
       const float r = in.param[0] == kDistSharp ? 0.0f : unit(m.f(in.in[3]));
-      l.type = LobeType::Dielectric;
+      l.type = in.param[0] == kDistBeckmann ? LobeType::DielectricBeckmann : LobeType::Dielectric;
       l.weight = weight * non_negative(m.v(in.in[2]));
       l.alpha = r * r;
       const float ior = glass_ior(m.f(in.in[4]));

@@ -21,6 +21,11 @@ enum ShaderOp : uint32_t {
   kOpPrincipled,
   kOpMixWeights,  // in: weight v, fac f; out: weight * (1 - fac) v, weight * fac v (fac clamped to [0, 1])
   kOpHoldout,     // in: weight v (Holdout: rendered as Transparent until holdout passes exist)
+  // in: weight v, normal v, color v, roughness f, anisotropy f, rotation f, tangent v; param: distribution
+  kOpAnisotropic,
+  kOpVelvet,       // in: weight v, normal v, color v, sigma f
+  kOpTranslucent,  // in: weight v, normal v, color v
+  kOpToon,         // in: weight v, normal v, color v, size f, smooth f; param: component (0 diffuse, 1 glossy)
 };
 
 // Glossy, Glass and Principled distributions (the param), as the node's enum.

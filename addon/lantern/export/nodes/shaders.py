@@ -5,15 +5,16 @@ from . import ops, register_shader
 _DISTRIBUTIONS = {'SHARP': ops.DIST_SHARP, 'GGX': ops.DIST_GGX, 'BECKMANN': ops.DIST_BECKMANN,
                   'ASHIKHMIN_SHIRLEY': ops.DIST_ASHIKHMIN_SHIRLEY,
                   'MULTI_GGX': ops.DIST_MULTI_GGX}
-# Distributions the core renders as GGX for now (README: departures).
-_AS_GGX = {'BECKMANN', 'ASHIKHMIN_SHIRLEY', 'MULTI_GGX'}
+# Distributions the core renders as GGX for now, by node type (README: departures).
+_AS_GGX = {'BSDF_GLASS': {'MULTI_GGX'}, 'BSDF_PRINCIPLED': {'MULTI_GGX'}}
 
 
 def _distribution(c, node):
     d = getattr(node, "distribution", 'GGX')
     rough = node.inputs.get("Roughness")
-    if d in _AS_GGX and rough is not None and (c.linked(rough) or rough.default_value > 0):
+    if d in _AS_GGX.get(node.type, ()) and rough is not None and (c.linked(rough) or rough.default_value > 0):
         c.warn("%s '%s': distribution %s is rendered as GGX" % (node.bl_label, node.name, d))
+        return ops.DIST_GGX
     return _DISTRIBUTIONS.get(d, ops.DIST_GGX)
 
 
@@ -55,6 +56,32 @@ def glass(c, node, weight):
               params=[_distribution(c, node)])
 
 
+@register_shader('BSDF_ANISOTROPIC')
+def anisotropic(c, node, weight):
+    c.closure(ops.ANISOTROPIC, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
+                                c.float(node.inputs["Roughness"]), c.float(node.inputs["Anisotropy"]),
+                                c.float(node.inputs["Rotation"]), c.normal(node.inputs.get("Tangent"))],
+              params=[_distribution(c, node)])
+
+
+@register_shader('BSDF_VELVET')
+def velvet(c, node, weight):
+    c.closure(ops.VELVET, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
+                           c.float(node.inputs["Sigma"])])
+
+
+@register_shader('BSDF_TRANSLUCENT')
+def translucent(c, node, weight):
+    c.closure(ops.TRANSLUCENT, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"])])
+
+
+@register_shader('BSDF_TOON')
+def toon(c, node, weight):
+    c.closure(ops.TOON, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
+                         c.float(node.inputs["Size"]), c.float(node.inputs["Smooth"])],
+              params=[1 if node.component == 'GLOSSY' else 0])
+
+
 @register_shader('BSDF_TRANSPARENT')
 def transparent(c, node, weight):
     c.closure(ops.TRANSPARENT, [weight, c.color(node.inputs["Color"])])
@@ -86,8 +113,7 @@ _ALIASES = {"Specular": "Specular IOR Level", "Transmission": "Transmission Weig
             "Emission": "Emission Color", "Subsurface": "Subsurface Weight",
             "Clearcoat": "Coat Weight", "Sheen": "Sheen Weight"}
 # Inputs the core does not render yet, and the value at which they change nothing.
-_IGNORED = {"Subsurface": 0.0, "Specular Tint": 0.0, "Anisotropic": 0.0, "Sheen": 0.0,
-            "Clearcoat": 0.0, "Transmission Roughness": 0.0}
+_IGNORED = {"Transmission Roughness": 0.0}
 
 
 @register_shader('BSDF_PRINCIPLED')
@@ -102,10 +128,14 @@ def principled(c, node, weight):
     ignored = [name for name, neutral in _IGNORED.items()
                if socket(name) is not None and (c.linked(socket(name)) or
                                                 abs(float(socket(name).default_value) - neutral) > 1e-6)]
-    if c.linked(inp.get("Clearcoat Normal")) or c.linked(inp.get("Tangent")):
-        ignored += [n for n in ("Clearcoat Normal", "Tangent") if c.linked(inp.get(n))]
+    if c.linked(inp.get("Clearcoat Normal")):
+        ignored.append("Clearcoat Normal (the clearcoat uses the Normal input)")
     if ignored:
         c.warn("Principled BSDF '%s': %s not supported, ignored" % (node.name, ", ".join(ignored)))
+    sss = socket("Subsurface")
+    if sss is not None and (c.linked(sss) or sss.default_value > 0):
+        c.warn("Principled BSDF '%s': subsurface scattering is rendered in its radius-0 limit (a diffuse "
+               "of the subsurface colour)" % node.name)
     _ior_warning(c, node)
     operands = [weight, c.normal(inp.get("Normal"))]
     for name, size in _PRINCIPLED:
