@@ -5,6 +5,7 @@ different colours and indices, Tangent and Normal Map. Each case may prepare its
 and object) before the render: compare_cases' assign is wrapped to call it.
 """
 import bpy
+import numpy as np
 import pytest
 
 import build_scenes
@@ -214,3 +215,49 @@ def test_tangent_and_normal_map(outdir, monkeypatch):
     ]
     bad = run_cases("attr_tangent", cases, outdir, monkeypatch)
     assert not bad, bad
+
+
+def test_object_info_random_of_collection_instances(outdir):
+    """Object Info's Random and Location on instances of a collection (DepsgraphObjectInstance
+    .random_id, hashed as Cycles does) and on a plain object (Cycles' hash of its name)."""
+    scene, _rows, _cols = harness._scene("attr_instances", 4)
+    mat = bpy.data.materials.new("attr_instances_random")
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    s = harness.Setup(nt)
+    out = s.node("ShaderNodeOutputMaterial")
+    em = s.node("ShaderNodeEmission")
+    info = s.node("ShaderNodeObjectInfo")
+    comb = s.node("ShaderNodeCombineXYZ")
+    s.link(info.outputs["Random"], comb.inputs[0])
+    sep = s.node("ShaderNodeSeparateXYZ")
+    s.link(info.outputs["Location"], sep.inputs[0])
+    s.link(s.math("MULTIPLY", s.math("ADD", sep.outputs[0], 2.0), 0.2), comb.inputs[2])
+    s.link(comb.outputs[0], em.inputs["Color"])
+    s.link(em.outputs[0], out.inputs["Surface"])
+    group = bpy.data.collections.new("attr_instances_group")
+    me = build_scenes.mesh_plane("attr_instances_plane", 0.8)
+    me.materials.append(mat)
+    member = bpy.data.objects.new("attr_instances_member", me)
+    group.objects.link(member)
+    for i in range(3):
+        empty = bpy.data.objects.new("attr_instancer_%d" % i, None)
+        empty.instance_type = 'COLLECTION'
+        empty.instance_collection = group
+        empty.location = (i - 1.5, 0.0, 0.0)
+        scene.collection.objects.link(empty)
+    plain = build_scenes.add_object(scene, "attr_instances_plain", me.copy(), location=(1.5, 0.0, 0.0))
+    plain.data.materials[0] = mat
+    lt = render_utils.render(scene, render_utils.LANTERN, samples=4, outdir=outdir, tag="attr_instances_lantern")
+    cy = render_utils.render(scene, render_utils.CYCLES, samples=4, outdir=outdir, tag="attr_instances_cycles")
+    lt, cy = lt.combined[..., :3], cy.combined[..., :3]
+    tile = harness.TILE
+    values = []
+    for i in range(4):  # the centre of each object's tile
+        c = slice(tile // 2 - 6, tile // 2 + 6)
+        a = lt[c, i * tile:(i + 1) * tile][:, c]
+        b = cy[c, i * tile:(i + 1) * tile][:, c]
+        assert np.all(np.abs(a - b) <= harness.RTOL * np.abs(b) + harness.ATOL), (i, a.mean((0, 1)), b.mean((0, 1)))
+        values.append(float(b[..., 0].mean()))
+    assert len(set(round(v, 4) for v in values)) == 4, values  # four different random numbers
