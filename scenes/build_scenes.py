@@ -387,6 +387,37 @@ def roughness_pixels(size=64, bands=4):
     return np.stack([v, v, v, np.ones_like(v)], axis=-1)
 
 
+def normal_map_pixels(size=64, bumps=4):
+    """A tangent-space normal map (8-bit, non-colour) of round bumps: the normals of the height
+    field h = sin(pi x) sin(pi y) per bump, encoded 0.5 + 0.5 n."""
+    y, x = (np.mgrid[0:size, 0:size] + 0.5) * (bumps / size)
+    k = 0.5 * np.pi
+    dx = k * np.cos(np.pi * x) * np.sin(np.pi * y)
+    dy = k * np.sin(np.pi * x) * np.cos(np.pi * y)
+    n = np.stack([-dx, -dy, np.ones_like(dx)], axis=-1)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.concatenate([0.5 + 0.5 * n, np.ones((size, size, 1))], axis=-1)
+
+
+def normal_mapped_material(name, image, color, roughness, metallic=0.0):
+    """Image Texture (Non-Color) -> Normal Map (tangent space, active UV map) -> Principled's Normal,
+    as Node Wrangler's Principled set-up and the glTF importer build it."""
+    mat, nt, out = _material(name)
+    tex = nt.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    tex.interpolation = "Linear"
+    nmap = nt.nodes.new("ShaderNodeNormalMap")
+    nmap.space = "TANGENT"
+    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Base Color"].default_value = (*color, 1.0)
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Metallic"].default_value = metallic
+    nt.links.new(tex.outputs["Color"], nmap.inputs["Color"])
+    nt.links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    return mat
+
+
 # ----------------------------------------------------------------------------------------------
 # Scenes
 # ----------------------------------------------------------------------------------------------
@@ -648,6 +679,26 @@ def build_textured(scene):
     add_light(scene, "AreaLight", "AREA", 100.0, (-0.5, -1.5, 3.0), rotation=(25, 0, 0),
               shape="SQUARE", size=1.0)
     add_camera(scene, (0.3, -4.2, 2.2), (0, 0.2, 0.4), lens=40.0)
+
+
+def build_normal_mapped(scene):
+    """Tangent-space normal maps (an 8-bit Non-Color image through a Normal Map node into the
+    Principled Normal, as Node Wrangler and glTF build it) on a diffuse ground, a rotated panel, a
+    smooth sphere and a rotated metal box, under a low sun and a sky: steep bumps seen and lit at
+    grazing angles, where Cycles tilts normals (ensure_valid_reflection) and darkens bumped diffuse
+    closures (bump_shadowing_term)."""
+    set_world(scene, (0.2, 0.25, 0.35), 1.0)
+    img = packed_image("BumpNormals", normal_map_pixels(), "Non-Color")
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 6.0))
+    assign(ground, normal_mapped_material("BumpyGround", img, (0.6, 0.55, 0.5), 0.6))
+    panel = add_object(scene, "Panel", mesh_plane("Panel", 1.0), (1.0, 0.6, 0.9), (60, 0, 20))
+    assign(panel, normal_mapped_material("BumpyPanel", img, (0.8, 0.3, 0.15), 0.4))
+    sphere = add_object(scene, "Sphere", mesh_sphere("Sphere", 0.45), (0.1, -0.2, 0.45))
+    assign(sphere, normal_mapped_material("BumpySphere", img, (0.3, 0.7, 0.35), 0.5))
+    box = add_object(scene, "Box", mesh_box("Box", (0.8, 0.8, 0.8)), (-1.0, 0.4, 0), (0, 0, 30))
+    assign(box, normal_mapped_material("BumpyBox", img, (0.5, 0.6, 0.9), 0.45, metallic=1.0))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(55, 0, 40), angle=math.radians(1.0))
+    add_camera(scene, (0, -4.0, 1.8), (0, 0.2, 0.4), lens=40.0)
 
 
 def build_instanced(scene):
@@ -1205,6 +1256,7 @@ SCENES = {
     "sun_world": (build_sun_world, (96, 96), 128),
     "textured": (build_textured, (96, 96), 128),
     "instanced": (build_instanced, (96, 96), 128),
+    "normal_mapped": (build_normal_mapped, (96, 96), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),

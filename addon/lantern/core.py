@@ -123,6 +123,16 @@ def _program(program):
     return d, (c, k)
 
 
+class MeshAttribute(ctypes.Structure):
+    _c_name_ = "lt_mesh_attribute"
+    _fields_ = [
+        ("id", ctypes.c_int),
+        ("components", ctypes.c_int),
+        ("values", _f_p),
+        ("value_count", ctypes.c_int),
+    ]
+
+
 class MeshDesc(ctypes.Structure):
     _c_name_ = "lt_mesh_desc"
     _fields_ = [
@@ -135,6 +145,8 @@ class MeshDesc(ctypes.Structure):
         ("material_slots", _i_p),
         ("texspace_location", ctypes.c_float * 3),
         ("texspace_size", ctypes.c_float * 3),
+        ("attributes", ctypes.POINTER(MeshAttribute)),
+        ("attribute_count", ctypes.c_int),
     ]
 
 
@@ -146,6 +158,12 @@ class InstanceDesc(ctypes.Structure):
         ("materials", _i_p),
         ("material_count", ctypes.c_int),
         ("visibility", ctypes.c_uint),
+        ("color", ctypes.c_float * 4),
+        ("pass_index", ctypes.c_int),
+        ("random_id", ctypes.c_uint32),
+        ("attribute_ids", _i_p),
+        ("attribute_values", _f_p),
+        ("attribute_count", ctypes.c_int),
     ]
 
 
@@ -289,7 +307,7 @@ class AbiEntry(ctypes.Structure):
     ]
 
 
-STRUCTS = (AbiEntry, ImageDesc, ShaderProgram, MeshDesc, InstanceDesc, LightDesc, CameraDesc, WorldDesc,
+STRUCTS = (AbiEntry, ImageDesc, ShaderProgram, MeshAttribute, MeshDesc, InstanceDesc, LightDesc, CameraDesc, WorldDesc,
            VolumeDesc, SceneStats, RenderSettings, RenderStatus)
 
 
@@ -591,7 +609,9 @@ class Scene:
         return out.value
 
     def add_mesh(self, positions, triangles, corner_normals=None, corner_uvs=None,
-                 material_slots=None, texspace_location=(0.0, 0.0, 0.0), texspace_size=(0.0, 0.0, 0.0)):
+                 material_slots=None, texspace_location=(0.0, 0.0, 0.0), texspace_size=(0.0, 0.0, 0.0),
+                 attributes=()):
+        """attributes: (id, components, per-corner values) for the mesh's named attributes."""
         pos = _f32(positions, "positions", 3)
         tri = _i32(triangles, "triangles")
         if tri.size % 3:
@@ -606,15 +626,30 @@ class Scene:
                 raise ValueError("%s: %d values for %d triangles" % (what, a.size, ntri))
         d = MeshDesc(_fptr(pos), pos.size // 3, _iptr(tri), ntri, _fptr(nrm), _fptr(uvs), _iptr(mat),
                      (ctypes.c_float * 3)(*texspace_location), (ctypes.c_float * 3)(*texspace_size))
+        attrs = [(int(i), int(n), _f32(v, "attribute %d" % int(i))) for i, n, v in attributes]
+        if attrs:
+            table = (MeshAttribute * len(attrs))(*[MeshAttribute(i, n, _fptr(v), v.size) for i, n, v in attrs])
+            d.attributes = table
+            d.attribute_count = len(attrs)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_mesh(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_mesh")
         return out.value
 
-    def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL):
+    def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL, color=(1.0, 1.0, 1.0, 1.0),
+                     pass_index=0, random_id=0, attributes=()):
+        """color: Object.color; random_id: the uint32 Cycles hashes into Object Info's Random;
+        attributes: (id, 4 floats) of the object's attributes."""
         mats = _i32(list(materials), "materials") if len(materials) else None
         d = InstanceDesc(int(mesh), _transform(transform), _iptr(mats),
                          0 if mats is None else mats.size, int(visibility))
+        d.color[:] = [float(c) for c in (tuple(color) + (1.0,) * 4)[:4]]
+        d.pass_index = int(pass_index)
+        d.random_id = int(random_id) & 0xFFFFFFFF
+        if attributes:
+            ids = _i32([int(i) for i, _ in attributes], "attribute ids")
+            values = _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values")
+            d.attribute_ids, d.attribute_values, d.attribute_count = _iptr(ids), _fptr(values), len(attributes)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_instance(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_instance")

@@ -113,6 +113,24 @@ def test_alpha_mapped_leaf_cards_agree_with_cycles(integrator, scene_factory, ou
     assert report == "", report
 
 
+# Open: BDPT's light subpaths shade bumped normals against the light's direction. Cycles tilts a
+# closure's normal for the viewing direction (ensure_valid_reflection), which a light vertex does
+# not know until it is connected: BDPT's strategies then see different BSDFs at one vertex (image
+# mean 0.978 of Cycles' with steep bumps; 0.999 with the same scene unbumped).
+BDPT_NORMAL_MAPS = pytest.mark.xfail(strict=True, reason="open: BDPT light vertices tilt bumped normals for "
+                                     "the light's direction, not the viewer's")
+
+
+@pytest.mark.parametrize("integrator", ["PATH", pytest.param("BIDIRECTIONAL", marks=BDPT_NORMAL_MAPS)])
+def test_normal_mapped_scene_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Tangent-space normal maps from an image (scenes: normal_mapped; MikkTSpace tangents of the
+    active UV map, Normal Map into Principled) under a low sun: per tile and in the image mean."""
+    both = lantern_and_cycles(scene_factory, "normal_mapped", integrator)
+    report, _ = ru.agreement_report("normal_mapped_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir,
+                                    TILE, ROUNDING)
+    assert report == "", report
+
+
 def test_rough_metal_after_several_bounces_agrees_with_cycles(scene_factory, outdir):
     """Issue 18: "rough metal seems to reflect more than Cycles after several bounces (+25 % after
     8 bounces at roughness 0.2)". metal_box (closed, copper Principled metal at roughness 0.2, 8

@@ -185,7 +185,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         break;
       }
       case lt_fuzz::kAddInstance: {
-        lt_instance_desc d;
+        lt_instance_desc d{};  // fields the input does not set (colour, attributes) stay zero
         d.mesh = r.i8();
         r.floats(d.transform, 12);
         std::vector<int> materials(size_t(small(r, lt_fuzz::kMaxSlots + 1)));

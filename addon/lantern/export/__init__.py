@@ -92,11 +92,12 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
         if t == 'MESH':
             if inst.is_instance and inst.parent is not None and inst.parent.type in CONVERTIBLE_TYPES:
                 has_mesh_instance.add(inst.parent.original.as_pointer())
-            instances[instance_key(inst)] = (meshes.export_instance(obj, matrix), matrix)
+            random_id = inst.random_id if inst.is_instance else None
+            instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, random_id=random_id), matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
-                instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False),
-                                                  matrix)
+                instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False,
+                                                                        random_id=inst.random_id), matrix)
             else:
                 deferred.append((obj, matrix, instance_key(inst)))
         elif t == 'LIGHT':

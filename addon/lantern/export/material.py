@@ -4,6 +4,7 @@ Volume output into homogeneous medium components, and the images textures use.""
 from .. import core
 from . import nodes
 from .names import core_call, is_finite
+from .nodes.attributes import AttributeRegistry
 
 # Rec. 709 luma, as Blender converts a colour into a float socket.
 _LUMA = (0.2126, 0.7152, 0.0722)
@@ -222,6 +223,7 @@ class MaterialExporter:
         self.volume_names = {}  # core id -> name, of the materials with a medium
         self.media = 0  # materials with a Volume output
         self.emissive_media = 0  # of those, volumes that emit
+        self.attributes = AttributeRegistry()  # names the programs read (export/mesh.py exports them)
 
     # -- public --------------------------------------------------------------------------------
 
@@ -285,6 +287,8 @@ class MaterialExporter:
         self._bad = []  # the inputs whose values are not finite ("'Strength' of 'Emission'")
         volume, null_surface = None, False
         c = nodes.Compiler(material.name, self.images, self._warn, camera=self.camera)
+        c.attributes = self.attributes  # one numbering of attribute names per scene
+        c.material_pass_index = material.pass_index
         try:
             if material.use_nodes and material.node_tree is not None:
                 volume = self.volume(material)

@@ -4,12 +4,135 @@ import numpy as np
 
 from .light import visibility_bits
 from .names import core_call, transform_problem
+from .nodes.attributes import object_random_id
 
 # Object types Blender can turn into a mesh with to_mesh().
 CONVERTIBLE_TYPES = {'CURVE', 'SURFACE', 'FONT', 'META'}
 
 
-def mesh_arrays(mesh):
+# Mesh.attributes data types: (property, components, numpy type).
+_ATTRIBUTE_TYPES = {
+    'FLOAT': ("value", 1, np.float32), 'INT': ("value", 1, np.int32), 'BOOLEAN': ("value", 1, bool),
+    'FLOAT2': ("vector", 2, np.float32), 'FLOAT_VECTOR': ("vector", 3, np.float32),
+    'FLOAT_COLOR': ("color", 4, np.float32), 'BYTE_COLOR': ("color", 4, np.float32),
+}
+
+
+def _loop_values(mesh, attr):
+    """(components, per-loop values (n_loops, components)) of a Mesh.attributes entry, or None."""
+    kind = _ATTRIBUTE_TYPES.get(attr.data_type)
+    if kind is None or attr.domain not in ('POINT', 'CORNER', 'FACE'):
+        return None
+    prop, n, dtype = kind
+    values = np.empty(len(attr.data) * n, dtype=dtype)
+    # 'color' is scene linear for byte and float colours alike (Cycles reads them linear).
+    attr.data.foreach_get(prop, values)
+    values = values.astype(np.float32).reshape(-1, n)
+    if attr.domain == 'CORNER':
+        return n, values
+    if attr.domain == 'POINT':
+        loop_vertex = np.empty(len(mesh.loops), dtype=np.int32)
+        mesh.loops.foreach_get("vertex_index", loop_vertex)
+        return n, values[loop_vertex]
+    starts = np.empty(len(mesh.polygons), dtype=np.int32)
+    totals = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_start", starts)
+    mesh.polygons.foreach_get("loop_total", totals)
+    loop_poly = np.zeros(len(mesh.loops), dtype=np.int64)
+    loop_poly[starts[totals > 0]] = 1
+    loop_poly = np.cumsum(loop_poly) - 1
+    return n, values[loop_poly]
+
+
+def _render_uv(mesh, name):
+    if name:
+        return mesh.uv_layers.get(name)
+    return next((l for l in mesh.uv_layers if l.active_render), None) or mesh.uv_layers.active
+
+
+def _requested(mesh, key, warn):
+    """(components, per-loop values) of an attribute request (AttributeRegistry key), or None when
+    the mesh lacks it (the core then gives Cycles' values for a missing attribute)."""
+    kind, name = key
+    nl = len(mesh.loops)
+    if kind == 'tangent':
+        layer = _render_uv(mesh, name)
+        if layer is None:
+            return None
+        try:
+            mesh.calc_tangents(uvmap=layer.name)
+        except RuntimeError as e:
+            warn("tangents of UV map '%s' cannot be computed (%s); normal maps there are left flat"
+                 % (layer.name, str(e).strip()))
+            return None
+        values = np.empty((nl, 4), dtype=np.float32)
+        t = np.empty(nl * 3, dtype=np.float32)
+        sign = np.empty(nl, dtype=np.float32)
+        mesh.loops.foreach_get("tangent", t)
+        mesh.loops.foreach_get("bitangent_sign", sign)
+        values[:, :3] = t.reshape(-1, 3)
+        values[:, 3] = sign
+        return 4, values
+    if kind == 'color':
+        attrs = getattr(mesh, "color_attributes", None)
+        if attrs is None or not len(attrs):
+            return None
+        index = getattr(attrs, "render_color_index", -1)
+        attr = attrs[index] if 0 <= index < len(attrs) else attrs.active_color
+        return _loop_values(mesh, attr) if attr is not None else None
+    layer = mesh.uv_layers.get(name)
+    if layer is not None:
+        uvs = np.empty(nl * 2, dtype=np.float32)
+        layer.data.foreach_get("uv", uvs)
+        return 2, uvs.reshape(-1, 2)
+    attr = mesh.attributes.get(name)
+    return _loop_values(mesh, attr) if attr is not None else None
+
+
+def mesh_attributes(mesh, requests, corner_loops, warn=lambda _t: None):
+    """The core's (id, components, per-corner values) for the requested attributes the mesh has."""
+    out = []
+    for key, attr_id in requests:
+        got = _requested(mesh, key, warn)
+        if got is None:
+            continue
+        n, per_loop = got
+        values = np.nan_to_num(per_loop[corner_loops], nan=0.0, posinf=0.0, neginf=0.0)
+        out.append((attr_id, n, np.ascontiguousarray(values, dtype=np.float32).reshape(-1)))
+    return out
+
+
+def object_values(obj, names):
+    """(id, 4 floats) of object attributes (Attribute node, Object type) found on the object or
+    its data: an RNA path ('color') or a custom property; floats become (f, f, f, 1)."""
+    out = []
+    for name, attr_id in names:
+        value = None
+        for owner in (obj, getattr(obj, "data", None)):
+            if owner is None or not name:
+                continue
+            try:
+                value = owner.path_resolve(name)
+            except (ValueError, TypeError):
+                try:
+                    value = owner[name]
+                except (KeyError, TypeError):
+                    value = None
+            if value is not None:
+                break
+        try:
+            v = [float(x) for x in value] if hasattr(value, "__len__") else [float(value)] * 3
+        except (TypeError, ValueError):
+            continue
+        if not v or len(v) > 4:
+            continue
+        v = (v + [0.0] * 3)[:3] + [1.0] if len(v) < 4 else v
+        if all(x == x and abs(x) != float('inf') for x in v):
+            out.append((attr_id, v))
+    return out
+
+
+def mesh_arrays(mesh, requests=(), warn=lambda _t: None):
     """Triangle arrays of a Blender mesh, or None when it has no faces.
 
     Corner normals come from Blender's split normals (smooth, flat, auto smooth and custom
@@ -64,11 +187,14 @@ def mesh_arrays(mesh):
         layer.data.foreach_get("uv", uvs)
         corner_uvs = uvs.reshape(-1, 2)[corner_loops].reshape(-1)
 
+    # After the normals: computing tangents recomputes the loop normals.
+    attributes = mesh_attributes(mesh, requests, corner_loops, warn) if requests else []
+
     # Generated coordinates live in the mesh's texture space (automatic: its bounds).
     texspace = dict(texspace_location=tuple(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0))),
                     texspace_size=tuple(getattr(mesh, "texspace_size", (0.0, 0.0, 0.0))))
     return dict(positions=positions, triangles=triangles, corner_normals=corner_normals,
-                corner_uvs=corner_uvs, material_slots=material_slots, **texspace)
+                corner_uvs=corner_uvs, material_slots=material_slots, attributes=attributes, **texspace)
 
 
 def open_edge_count(triangles):
@@ -110,7 +236,9 @@ class MeshExporter:
                 mesh = obj.data
             else:
                 mesh, temporary = obj.to_mesh(), True
-            arrays = mesh_arrays(mesh) if mesh is not None else None
+            warn = lambda t: self.report({'WARNING'}, "Object '%s': %s" % (obj.name, t))  # noqa: E731
+            requests = self.materials.attributes.mesh_keys()
+            arrays = mesh_arrays(mesh, requests, warn) if mesh is not None else None
             if arrays is None:
                 if warn_empty:
                     self.report({'WARNING'}, "Object '%s' has no faces, skipped" % obj.name)
@@ -134,23 +262,29 @@ class MeshExporter:
             mats = list(getattr(data, "materials", [])) if data is not None else []
         return [self.materials.export(m) for m in mats]
 
-    def export_instance(self, obj, matrix_world, warn_empty=True):
-        """obj: an evaluated object of a mesh or convertible type. Returns the core instance id,
-        or None when the object has no geometry."""
+    def export_instance(self, obj, matrix_world, warn_empty=True, random_id=None):
+        """obj: an evaluated object of a mesh or convertible type; random_id: the depsgraph
+        instance's (None for an object that is no instance). Returns the core instance id, or None
+        when the object has no geometry."""
         problem = transform_problem(matrix_world)
         if problem is not None:
             self.report({'WARNING'}, "Object '%s' left out: %s" % (obj.name, problem))
             return None
+        # Materials first: the mesh exports the attributes their programs read.
+        material_ids = self._material_ids(obj)
         mesh_id = self._mesh_id(obj, warn_empty)
         if mesh_id is None:
             return None
-        material_ids = self._material_ids(obj)
         if np.linalg.det(np.asarray(matrix_world, dtype=np.float64)[:3, :3]) == 0:
             self.report({'WARNING'}, "Object '%s' has zero scale on an axis: rendered as the flat shape it "
                         "becomes (Cycles 3.4 renders such objects black)" % obj.name)
         self._check_closed(obj, material_ids)
+        if random_id is None:
+            random_id = object_random_id(obj.name)
         instance = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_instance",
-                             mesh_id, matrix_world, material_ids, visibility_bits(obj))
+                             mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
+                             pass_index=obj.pass_index, random_id=random_id,
+                             attributes=object_values(obj, self.materials.attributes.object_keys()))
         if instance is not None:
             self.instance_count += 1
         return instance

@@ -28,7 +28,8 @@ extern "C" {
  * lt_scene_add_volume_grid takes a step; 5: lt_render_settings.passes and caller_bytes;
  * lt_render_wait reports a failed render; lt_scene_begin/end_image; image memory in lt_scene_stats;
  * lt_render_status.unestimated_pixels; 6: lt_abi_layout; default samples 64 (the add-on's);
- * 7: materials are shader programs; meshes carry their texture space; images their alpha. */
+ * 7: materials are shader programs; meshes carry their texture space and attributes
+ * (lt_mesh_attribute), instances their Object Info values and attributes, images their alpha. */
 #define LT_ABI_VERSION 7
 
 enum lt_status {
@@ -78,7 +79,12 @@ enum lt_extension { LT_EXTENSION_REPEAT = 0, LT_EXTENSION_EXTEND = 1, LT_EXTENSI
  * STRAIGHT colours are premultiplied when stored, as Cycles associates them (bytes: (c a) / 255 in
  * integers); PREMULTIPLIED are kept; CHANNEL_PACKED keeps alpha apart from colours that are never
  * multiplied or divided by it. */
-enum lt_image_alpha { LT_ALPHA_IGNORE = 0, LT_ALPHA_STRAIGHT = 1, LT_ALPHA_PREMULTIPLIED = 2, LT_ALPHA_CHANNEL_PACKED = 3 };
+enum lt_image_alpha {
+  LT_ALPHA_IGNORE = 0,
+  LT_ALPHA_STRAIGHT = 1,
+  LT_ALPHA_PREMULTIPLIED = 2,
+  LT_ALPHA_CHANNEL_PACKED = 3
+};
 typedef struct lt_image_desc {
   int width, height, channels;
   const float* pixels;
@@ -112,6 +118,18 @@ typedef struct lt_shader_program {
 
 LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_program* program, int* out_id);
 
+/* A named per-corner attribute of a mesh, read by the Attribute, UV Map, Color Attribute, Tangent
+ * and Normal Map nodes (kOpAttribute... in native/src/shading/inputs.h): the add-on gives each
+ * name a small id per scene (0 <= id < 65536, each id at most once per mesh). components 1 to 4
+ * (UV maps 2, colours 4 (linear RGBA), tangents 4: the tangent then its sign); value_count must
+ * be components x 3 x triangle_count and every value finite. */
+typedef struct lt_mesh_attribute {
+  int id;
+  int components;
+  const float* values;
+  int value_count;
+} lt_mesh_attribute;
+
 /* A mesh of triangles. corner_normals (9 floats per triangle) and corner_uvs (6 per triangle) may
  * be NULL; material_slots (one per triangle, index into the instance's material list) may be NULL. */
 typedef struct lt_mesh_desc {
@@ -126,6 +144,8 @@ typedef struct lt_mesh_desc {
    * a size of (0, 0, 0) stands for Blender's automatic one: the mesh's bounds. */
   float texspace_location[3];
   float texspace_size[3];
+  const lt_mesh_attribute* attributes; /* may be NULL when attribute_count is 0 */
+  int attribute_count;
 } lt_mesh_desc;
 LT_API int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* desc, int* out_id);
 
@@ -145,6 +165,17 @@ typedef struct lt_instance_desc {
   const int* materials; /* material id per slot; -1 or slot past the end: default material */
   int material_count;
   unsigned visibility; /* lt_visibility bits */
+  /* Object Info: Object.color (RGBA, linear), pass_index, and the random id Cycles hashes into
+   * its Random output (random_id / 0xFFFFFFFF): DepsgraphObjectInstance.random_id for instances,
+   * hash_uint2(hash_string(name), 0) for objects. A zeroed desc gives colour and alpha 0. */
+  float color[4];
+  int pass_index;
+  uint32_t random_id;
+  /* Attributes of the object (Attribute node, Object and Instancer types): attribute_count ids
+   * (0 <= id < 65536) and 4 finite floats each. */
+  const int* attribute_ids;
+  const float* attribute_values;
+  int attribute_count;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 

@@ -134,8 +134,9 @@ void check_image(const lt_image_desc& d) {
           "image has " + std::to_string(d.channels) + " channels; 1, 3 or 4 are supported");
   require(d.interpolation == LT_INTERP_LINEAR || d.interpolation == LT_INTERP_CLOSEST, "unknown image interpolation");
   require(d.extension >= LT_EXTENSION_REPEAT && d.extension <= LT_EXTENSION_CLIP, "unknown image extension");
-  require(d.alpha >= LT_ALPHA_IGNORE && d.alpha <= LT_ALPHA_CHANNEL_PACKED,
-          "unknown image alpha " + std::to_string(d.alpha) + "; valid: IGNORE, STRAIGHT, PREMULTIPLIED, CHANNEL_PACKED");
+  require(
+      d.alpha >= LT_ALPHA_IGNORE && d.alpha <= LT_ALPHA_CHANNEL_PACKED,
+      "unknown image alpha " + std::to_string(d.alpha) + "; valid: IGNORE, STRAIGHT, PREMULTIPLIED, CHANNEL_PACKED");
 }
 
 lt::Interpolation interpolation(const lt_image_desc& d) {
@@ -186,7 +187,8 @@ int lt_scene_add_image(lt_scene* scene, const lt_image_desc* d, int* out_id) {
     require(d->pixels != nullptr, "image pixels are NULL");
     auto& images = scene->scene.images;
     images.push_back(std::make_unique<lt::Image>(d->width, d->height, d->channels, d->pixels, d->srgb != 0,
-                                                 interpolation(*d), lt::Extension(d->extension), lt::ImageAlpha(d->alpha)));
+                                                 interpolation(*d), lt::Extension(d->extension),
+                                                 lt::ImageAlpha(d->alpha)));
     *out_id = int(images.size()) - 1;
   });
 }
@@ -216,7 +218,8 @@ int lt_scene_end_image(lt_scene* scene, int* out_id) {
     const lt_image_desc& d = p->desc;
     auto& images = scene->scene.images;
     images.push_back(std::make_unique<lt::Image>(d.width, d.height, d.channels, std::move(p->pixels), d.srgb != 0,
-                                                 interpolation(d), lt::Extension(d.extension), lt::ImageAlpha(d.alpha)));
+                                                 interpolation(d), lt::Extension(d.extension),
+                                                 lt::ImageAlpha(d.alpha)));
     *out_id = int(images.size()) - 1;
   });
 }
@@ -279,6 +282,27 @@ int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* d, int* out_id) {
       m.slots.assign(d->material_slots, d->material_slots + d->triangle_count);
       for (int& s : m.slots) s = s < 0 ? 0 : s;  // Blender's indices are never negative; be safe
     }
+    require(d->attribute_count >= 0 && (d->attribute_count == 0 || d->attributes),
+            "mesh attributes are NULL or their count negative");
+    for (int i = 0; i < d->attribute_count; ++i) {
+      const lt_mesh_attribute& a = d->attributes[i];
+      const std::string name = "mesh attribute " + std::to_string(i);
+      require(a.id >= 0 && a.id < lt::kMaxAttributeId,
+              name + ": id " + std::to_string(a.id) + " out of range [0, " + std::to_string(lt::kMaxAttributeId) + ")");
+      require(m.attribute(a.id) == nullptr, name + ": id " + std::to_string(a.id) + " given twice");
+      require(a.components >= 1 && a.components <= 4, name + ": components must be 1 to 4");
+      const size_t n = corners * size_t(a.components);
+      require(a.value_count >= 0 && size_t(a.value_count) == n, name + ": " + std::to_string(a.value_count) +
+                                                                    " values, expected " + std::to_string(n) + " (" +
+                                                                    std::to_string(a.components) + " per corner)");
+      require(n == 0 || a.values, name + ": values are NULL");
+      require(finite_array(a.values, n), name + ": values must be finite");
+      lt::MeshAttribute attr;
+      attr.id = a.id;
+      attr.components = a.components;
+      attr.values.assign(a.values, a.values + n);
+      m.attributes.push_back(std::move(attr));
+    }
     const lt::Vec3 loc(d->texspace_location[0], d->texspace_location[1], d->texspace_location[2]);
     const lt::Vec3 size(d->texspace_size[0], d->texspace_size[1], d->texspace_size[2]);
     if (lt::is_finite(loc) && lt::is_finite(size) && size.x > 0 && size.y > 0 && size.z > 0) {
@@ -322,6 +346,23 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
       inst.materials.push_back(m);
     }
     inst.visibility = d->visibility & LT_VISIBLE_ALL;
+    require(finite_array(d->color, 4), "instance colour must be finite");
+    std::copy(d->color, d->color + 4, inst.color);
+    inst.pass_index = float(d->pass_index);
+    // Cycles' object random number (scene/object.cpp): the id over 0xFFFFFFFF, in floats.
+    inst.random = float(d->random_id) * (1.0f / float(0xFFFFFFFFu));
+    require(d->attribute_count >= 0 && (d->attribute_count == 0 || (d->attribute_ids && d->attribute_values)),
+            "instance attributes are NULL or their count negative");
+    require(finite_array(d->attribute_values, 4 * size_t(d->attribute_count)),
+            "instance attribute values must be finite");
+    for (int i = 0; i < d->attribute_count; ++i) {
+      lt::InstanceAttribute a;
+      a.id = d->attribute_ids[i];
+      require(a.id >= 0 && a.id < lt::kMaxAttributeId,
+              "instance attribute id " + std::to_string(a.id) + " out of range");
+      std::copy(d->attribute_values + 4 * i, d->attribute_values + 4 * i + 4, a.value);
+      inst.attributes.push_back(a);
+    }
     *out_id = scene->scene.geometry.add_instance(std::move(inst));
     if (!finite)
       scene->scene.warnings.push_back("instance " + std::to_string(*out_id) + " has a non-finite transform; left out");

@@ -1,5 +1,6 @@
 #include "geometry/geometry.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "core/error.h"
@@ -85,6 +86,8 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
         mesh.indices[3 * kept + c] = mesh.indices[3 * t + c];
         if (!mesh.corner_normals.empty()) mesh.corner_normals[3 * kept + c] = mesh.corner_normals[3 * t + c];
         if (!mesh.corner_uvs.empty()) mesh.corner_uvs[3 * kept + c] = mesh.corner_uvs[3 * t + c];
+        for (MeshAttribute& a : mesh.attributes)
+          std::copy_n(&a.values[(3 * t + c) * a.components], a.components, &a.values[(3 * kept + c) * a.components]);
       }
       if (!mesh.slots.empty()) mesh.slots[kept] = mesh.slots[t];
     }
@@ -96,6 +99,7 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
     mesh.indices.resize(3 * kept);
     if (!mesh.corner_normals.empty()) mesh.corner_normals.resize(3 * kept);
     if (!mesh.corner_uvs.empty()) mesh.corner_uvs.resize(3 * kept);
+    for (MeshAttribute& a : mesh.attributes) a.values.resize(3 * kept * a.components);
     if (!mesh.slots.empty()) mesh.slots.resize(kept);
   }
   // Non-finite corner normals would poison shading: fall back to flat shading for the mesh.
@@ -303,6 +307,22 @@ void Geometry::triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2) co
   *p0 = inst.xf.point(m.positions[m.indices[3 * prim]]);
   *p1 = inst.xf.point(m.positions[m.indices[3 * prim + 1]]);
   *p2 = inst.xf.point(m.positions[m.indices[3 * prim + 2]]);
+}
+
+bool Mesh::interpolate(int id, int t, float b1, float b2, float out[4], int* components) const {
+  out[0] = out[1] = out[2] = 0;
+  out[3] = 1;
+  const MeshAttribute* a = attribute(id);
+  if (components) *components = a ? a->components : 0;
+  if (!a) {
+    out[3] = 0;
+    return false;
+  }
+  const int n = a->components;
+  const float* v = &a->values[size_t(3 * t) * n];
+  const float b0 = 1 - b1 - b2;
+  for (int k = 0; k < n; ++k) out[k] = v[k] * b0 + v[n + k] * b1 + v[2 * n + k] * b2;
+  return true;
 }
 
 SurfacePoint Geometry::surface(const Hit& hit) const {

@@ -13,6 +13,15 @@
 
 namespace lt {
 
+// A named per-corner attribute (UV map, colour, generic values, tangent with its sign); the
+// add-on turns names into ids per scene. components 1-4, 3 corners per triangle.
+struct MeshAttribute {
+  int id = -1;
+  int components = 0;
+  std::vector<float> values;  // components per corner
+};
+constexpr int kMaxAttributeId = 1 << 16;
+
 struct Mesh {
   std::vector<Vec3> positions;
   std::vector<uint32_t> indices;     // 3 per triangle
@@ -21,8 +30,23 @@ struct Mesh {
   std::vector<int> slots;            // per triangle, or empty
   // Texture space (Blender's texspace_location and texspace_size): Generated = (p - loc) / (2 size) + 0.5.
   Vec3 texspace_location{0.0f}, texspace_size{1.0f};
+  std::vector<MeshAttribute> attributes;
   RTCScene rtc = nullptr;
   size_t triangle_count() const { return indices.size() / 3; }
+  const MeshAttribute* attribute(int id) const {
+    for (const MeshAttribute& a : attributes)
+      if (a.id == id) return &a;
+    return nullptr;
+  }
+  // An attribute interpolated over triangle t at barycentrics (b1, b2) into out[0..3] (unused
+  // components 0, alpha 1); false (out zero) when the mesh lacks it.
+  bool interpolate(int id, int t, float b1, float b2, float out[4], int* components = nullptr) const;
+};
+
+// Values an object carries for the Object Info and Attribute (object type) nodes.
+struct InstanceAttribute {
+  int id = -1;
+  float value[4] = {0, 0, 0, 0};
 };
 
 struct Instance {
@@ -31,7 +55,16 @@ struct Instance {
   std::vector<int> materials;  // material id per slot
   unsigned visibility = 31;
   bool flipped = false;  // negative determinant: winding flips the geometric normal
-  Vec3 normal_rows[3];   // inverse transpose of the linear part (up to scale), for normals
+  // Object Info: Object.color, pass_index, and Cycles' random number of the instance.
+  float color[4] = {1, 1, 1, 1};
+  float pass_index = 0, random = 0;
+  std::vector<InstanceAttribute> attributes;
+  const InstanceAttribute* attribute(int id) const {
+    for (const InstanceAttribute& a : attributes)
+      if (a.id == id) return &a;
+    return nullptr;
+  }
+  Vec3 normal_rows[3];  // inverse transpose of the linear part (up to scale), for normals
   Vec3 normal_to_world(const Vec3& n) const {
     return {dot(normal_rows[0], n), dot(normal_rows[1], n), dot(normal_rows[2], n)};
   }

@@ -294,6 +294,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     SurfacePoint sp;
     Spectrum le(0.0f);
     ShadingFrame sf;
+    Vec3 smooth_n(0.0f);  // the interpolated normal, for Cycles' bump shadowing term
     if (medium < 0) {
       if (!found) break;
       sp = scene_.geometry.surface(hit);
@@ -305,7 +306,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
       ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
       ctx.ray_depth = bounces;
-      sf.n = ctx.N;
+      sf.n = smooth_n = ctx.N;
       const Material& material = scene_.material(sp.material);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
       // A transparent pass makes no vertex (connections see the surface through
@@ -335,6 +336,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.p = sp.p;
       v.n = backface ? -sp.ng : sp.ng;
       v.frame = local_frame(sf, v.n);
+      if (length_squared(v.frame.n - facing_normal(smooth_n, v.n)) > 0)
+        v.bsdf.set_bump(v.frame.to_local(smooth_n), mode == Mode::Importance);
       v.wo = v.frame.to_local(-ray.d);
     }
     v.pdf_fwd = density_of(count, v);

@@ -150,6 +150,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
       const Frame frame = local_frame(sf, ng);
       const Vec3 ns = frame.n;
+      if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
       if (b.from_camera()) {
         out.alpha = 1;
         out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth

@@ -1077,21 +1077,39 @@ float Bsdf::lobe_pdfs(const Vec3& wo, const Vec3& wi, float* part) const {
   return std::isfinite(total) ? total : 0.0f;
 }
 
+// Cycles 3.4's bump_shadowing_term (Chiang, Li and Burley, "Taming the Shadow Terminator"): with
+// the shading normal +Z, g = cos(smooth, light) / (cos(shading, light) cos(smooth, shading)).
+// Cycles' diffuse reflection closures take it (CLOSURE_IS_BSDF_DIFFUSE); Translucent and Velvet
+// do not here.
+float Bsdf::bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const {
+  const LobeType t = lobe.type;
+  if (!bumped_ || (t != LobeType::Diffuse && t != LobeType::PrincipledDiffuse && t != LobeType::Sheen &&
+                   t != LobeType::DiffuseToon))
+    return 1.0f;
+  const Vec3& l = light_is_wo_ ? wo : wi;
+  const float den = l.z * smooth_.z;
+  const float g = den != 0 ? dot(smooth_, l) / den : 0.0f;
+  if (g >= 1) return 1.0f;
+  if (!(g >= 0)) return 0.0f;
+  return -g * g * g + g * g + g;
+}
+
 Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf) const {
   Spectrum f(0.0f);
   float p_total = 0;
   float p[kMaxLobes];
   if (!pdf) {
-    for (int k = 0; k < count_; ++k) f += lobe_eval(lobes_[k], wo, wi);  // zero for delta lobes
+    for (int k = 0; k < count_; ++k)
+      f += lobe_eval(lobes_[k], wo, wi) * bump_term(lobes_[k], wo, wi);  // zero for delta lobes
   } else if (selection_probabilities(*this, wo, p)) {
     for (int k = 0; k < count_; ++k) {
       if (lobe_is_delta(lobes_[k])) continue;
       float pk;
-      f += lobe_eval_pdf(lobes_[k], wo, wi, &pk);
+      f += lobe_eval_pdf(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
       p_total += p[k] * pk;
     }
   } else {
-    for (int k = 0; k < count_; ++k) f += lobe_eval(lobes_[k], wo, wi);
+    for (int k = 0; k < count_; ++k) f += lobe_eval(lobes_[k], wo, wi) * bump_term(lobes_[k], wo, wi);
   }
   if (!is_finite(f)) f = Spectrum(0.0f);
   if (pdf) *pdf = std::isfinite(p_total) ? p_total : 0.0f;
@@ -1129,10 +1147,11 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
     // Mixture pdf of the direction (one-sample MIS over the lobes' strategies) and the sum of
     // every non-delta lobe's value, so that MIS against light sampling sees one consistent pdf.
     float pdf = p[chosen] * s.pdf;
+    s.f *= bump_term(lobes_[chosen], wo, s.wi);
     for (int k = 0; k < count_; ++k) {
       if (k == chosen || lobe_is_delta(lobes_[k])) continue;
       float pk;
-      s.f += lobe_eval_pdf(lobes_[k], wo, s.wi, &pk);
+      s.f += lobe_eval_pdf(lobes_[k], wo, s.wi, &pk) * bump_term(lobes_[k], wo, s.wi);
       pdf += p[k] * pk;
     }
     s.pdf = pdf;

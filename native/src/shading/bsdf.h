@@ -120,6 +120,16 @@ class Bsdf {
   void clear() {
     count_ = 0;
     overflowed_ = false;
+    bumped_ = false;
+  }
+  // The interpolated normal (local frame) when a Normal input bent the shading normal: Cycles 3.4
+  // then scales its diffuse closures by bump_shadowing_term (kernel/closure/bsdf.h), which darkens
+  // light grazing the smooth surface. light_is_wo: light transport (BDPT's light subpaths), where
+  // the light arrives along wo rather than wi.
+  void set_bump(const Vec3& smooth_local, bool light_is_wo) {
+    bumped_ = true;
+    smooth_ = smooth_local;
+    light_is_wo_ = light_is_wo;
   }
   // Adds a lobe; lobes whose weight is zero are dropped, lobes past kMaxLobes merge into nothing
   // and are reported through overflowed().
@@ -159,6 +169,9 @@ class Bsdf {
   Lobe lobes_[kMaxLobes];
   int count_ = 0;
   bool overflowed_ = false;
+  bool bumped_ = false, light_is_wo_ = false;
+  Vec3 smooth_{0.0f, 0.0f, 1.0f};
+  float bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const;
 };
 
 // ---- single-lobe routines, exposed for the chi-square tests ----------------------------------

@@ -88,7 +88,8 @@ void Image::store(int channels, FloatBuffer pixels) {
         bytes = b >= 0.0f && b <= 255.0f && byte_value(uint8_t(b)) == v;
       }
     }
-  for (size_t i = 0; bytes && i < alpha.size(); ++i) bytes = byte_value(uint8_t(std::nearbyint(alpha[i] * 255.0f))) == alpha[i];
+  for (size_t i = 0; bytes && i < alpha.size(); ++i)
+    bytes = byte_value(uint8_t(std::nearbyint(alpha[i] * 255.0f))) == alpha[i];
   const bool associate = !alpha.empty() && alpha_mode_ == ImageAlpha::Straight;
   if (bytes) {
     bytes_.resize(n * channels_);

@@ -1,8 +1,11 @@
 #include "shading/inputs.h"
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <vector>
 
+#include "geometry/geometry.h"
 #include "shading/bsdf.h"
 #include "shading/image.h"
 
@@ -19,6 +22,10 @@ const OpSignature kSignatures[] = {
     {"", "ffffffffffffff", "", false},  // light path
     {"v", "f", "i", true},              // to float
     {"f", "v", "", true},               // to vector
+    {"", "vff", "ii", false},           // attribute
+    {"", "v", "iii", false},            // tangent
+    {"fv", "v", "ii", false},           // normal map
+    {"", "vvfff", "", false},           // object info
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -65,10 +72,134 @@ void tex_coord(const Instr& in, Machine& m) {
   m.set(in.out[6], 2.0f * dot(c.N, c.I) * c.N - c.I);
 }
 
+// An attribute at the shading point: 4 floats (unused ones 0, alpha 1) and its component count
+// (0: missing).
+int fetch_attribute(const ShadingContext& c, int domain, int id, float v[4]) {
+  v[0] = v[1] = v[2] = 0;
+  v[3] = 1;
+  if (domain == 1) {
+    const InstanceAttribute* a = c.instance ? c.instance->attribute(id) : nullptr;
+    if (!a) return 0;
+    std::copy(a->value, a->value + 4, v);
+    return 4;
+  }
+  int n = 0;
+  if (c.mesh) c.mesh->interpolate(id, c.primitive, c.bary.x, c.bary.y, v, &n);
+  v[3] = n == 4 ? v[3] : 1.0f;
+  return n;
+}
+
+// Cycles' svm_node_attr (and svm_node_vertex_color for domain 2: a missing one has alpha 0).
+void attribute(const Instr& in, Machine& m) {
+  const int domain = int(in.param[1]);
+  float v[4];
+  const int n = fetch_attribute(*m.ctx, domain == 1 ? 1 : 0, int(in.param[0]), v);
+  Vec3 vec(v[0], v[1], v[2]);
+  float fac = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
+  if (n == 1) {
+    vec = Vec3(v[0]);
+    fac = v[0];
+  } else if (n == 2) {
+    fac = v[0];
+  } else if (n == 0) {
+    fac = 0;
+    v[3] = domain == 2 ? 0.0f : 1.0f;
+  }
+  m.set(in.out[0], vec);
+  m.set(in.out[1], fac);
+  m.set(in.out[2], v[3]);
+}
+
+Vec3 normalized_or_zero(const Vec3& v) {
+  const float l = length(v);
+  return l > 0 && std::isfinite(l) ? v / l : Vec3(0.0f);
+}
+
+// Cycles' svm_node_tangent: a UV map's tangent or one around an axis of Generated, made normal to N.
+void tangent(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  Vec3 t;
+  if (in.param[0] == 1) {
+    float v[4];
+    if (fetch_attribute(c, 0, int(in.param[2]), v) == 0 || !c.instance) {
+      m.set(in.out[0], Vec3(0.0f));
+      return;
+    }
+    t = Vec3(v[0], v[1], v[2]);
+  } else {
+    const Vec3 g = c.generated - Vec3(0.5f);
+    t = in.param[1] == 0 ? Vec3(0.0f, -g.z, g.y) : in.param[1] == 1 ? Vec3(-g.z, 0.0f, g.x) : Vec3(-g.y, g.x, 0.0f);
+  }
+  if (c.instance) t = normalized_or_zero(c.instance->normal_to_world(t));
+  const Vec3 r = cross(c.N, normalize(cross(t, c.N)));
+  m.set(in.out[0], is_finite(r) ? r : Vec3(0.0f));
+}
+
+// Cycles' svm_node_normal_map (kernel/svm/tex_coord.h).
+void normal_map(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  const Vec3 rgb = m.v(in.in[1]);
+  Vec3 color = 2.0f * (rgb - Vec3(0.5f));
+  const uint32_t space = in.param[0];
+  Vec3 N;
+  if (space == 0) {
+    float t[4];
+    if (!c.mesh || !c.instance || fetch_attribute(c, 0, int(in.param[1]), t) != 4) {
+      m.set(in.out[0], c.N);  // no tangents: the unperturbed normal
+      return;
+    }
+    const Vec3 tangent(t[0], t[1], t[2]);
+    const float sign = t[3];
+    // Object space, not normalised; a flat face's geometric normal before facing the ray.
+    Vec3 normal;
+    const Mesh& mesh = *c.mesh;
+    if (!mesh.corner_normals.empty()) {
+      const Vec3* cn = &mesh.corner_normals[3 * size_t(c.primitive)];
+      normal = cn[0] * (1 - c.bary.x - c.bary.y) + cn[1] * c.bary.x + cn[2] * c.bary.y;
+    } else {
+      normal = normalized_or_zero(c.instance->normal_to_object(c.backfacing ? -c.Ng : c.Ng));
+    }
+    const Vec3 B = sign * cross(normal, tangent);
+    N = normalized_or_zero(color.x * tangent + color.y * B + color.z * normal);
+    N = normalized_or_zero(c.instance->normal_to_world(N));
+  } else {
+    if (space == 3 || space == 4) {  // Blender's convention: Y and Z flipped
+      color.y = -color.y;
+      color.z = -color.z;
+    }
+    N = (space == 1 || space == 3) && c.instance ? normalized_or_zero(c.instance->normal_to_world(color))
+                                                 : normalized_or_zero(color);
+  }
+  if (c.backfacing) N = -N;
+  float strength = m.f(in.in[0]);
+  if (strength != 1.0f) {
+    strength = std::max(strength, 0.0f);
+    N = normalized_or_zero(c.N + (N - c.N) * strength);
+  }
+  if (!(dot(N, N) > 0)) N = c.N;
+  m.set(in.out[0], N);
+}
+
+// Cycles' svm_node_object_info.
+void object_info(const Instr& in, Machine& m) {
+  const Instance* inst = m.ctx->instance;
+  if (!inst) {
+    m.set(in.out[0], Vec3(0.0f));
+    m.set(in.out[1], Vec3(0.0f));
+    for (int k = 2; k < 5; ++k) m.set(in.out[k], 0.0f);
+    return;
+  }
+  m.set(in.out[0], Vec3(inst->xf.m[3], inst->xf.m[7], inst->xf.m[11]));
+  m.set(in.out[1], Vec3(inst->color[0], inst->color[1], inst->color[2]));
+  m.set(in.out[2], inst->color[3]);
+  m.set(in.out[3], inst->pass_index);
+  m.set(in.out[4], inst->random);
+}
+
 }  // namespace
 
 const OpSignature* inputs_family_signature(uint32_t op) {
-  if (op < kOpTexCoord || op > kOpToVector) return nullptr;
+  if (op < kOpTexCoord || op > kOpObjectInfo) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
@@ -127,6 +258,18 @@ void exec_inputs_family(const Instr& in, Machine& m) {
       m.set(in.out[1], 1 - f);
       break;
     }
+    case kOpAttribute:
+      attribute(in, m);
+      break;
+    case kOpTangent:
+      tangent(in, m);
+      break;
+    case kOpNormalMap:
+      normal_map(in, m);
+      break;
+    case kOpObjectInfo:
+      object_info(in, m);
+      break;
     case kOpLightPath: {
       const float v[14] = {float(c.camera_ray),
                            float(c.shadow_ray),

@@ -29,6 +29,19 @@ enum InputOp : uint32_t {
   // Implicit conversions between linked sockets of different types (Cycles' svm_node_convert):
   kOpToFloat,   // in: v; out: f; param: 0 colour to float (Rec. 709 luma), 1 vector to float (average)
   kOpToVector,  // in: f; out: v (x, x, x)
+  // Named attributes (Cycles' svm_node_attr): out: vector/colour v, fac f, alpha f; params: the
+  // attribute id, the domain (0 the mesh's corners, 1 the instance's values). By components: 1
+  // (f, f, f) f 1; 2 (x, y, 0) x 1; 3 xyz average 1; 4 rgb average(rgb) w; missing: 0 0 1.
+  kOpAttribute,
+  // Tangent node (Cycles' svm_node_tangent): out: tangent v; params: direction (0 radial, 1 UV
+  // map), axis (0 X, 1 Y, 2 Z), the UV map's tangent attribute id (4 components: tangent, sign).
+  kOpTangent,
+  // Normal Map (Cycles' svm_node_normal_map): in: strength f, colour v; out: normal v; params:
+  // space (0 tangent, 1 object, 2 world, 3 Blender object, 4 Blender world), tangent attribute id.
+  kOpNormalMap,
+  // Object Info (Cycles' svm_node_object_info): out: location v, colour v, alpha f, object index
+  // f, random f (Material Index is a constant of the material).
+  kOpObjectInfo,
 };
 
 }  // namespace lt

@@ -35,6 +35,9 @@ ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp,
   const Vec3 tangent = cross(c.N, normalize(cross(around, c.N)));
   c.tangent = is_finite(tangent) ? tangent : Vec3(0.0f);
   c.ray_length = t;
+  c.mesh = &geometry.mesh(inst.mesh);
+  c.instance = &inst;
+  c.primitive = sp.primitive;
   return c;
 }
 

@@ -23,6 +23,8 @@ namespace lt {
 
 class Image;
 class Bsdf;
+struct Mesh;
+struct Instance;
 
 constexpr uint32_t kConstBit = 0x80000000u;
 constexpr uint32_t kIndexMask = 0x00ffffffu;
@@ -45,6 +47,10 @@ struct ShadingContext {
   Vec3 object_P;   // object-space position
   Vec3 object_N;   // object-space N
   bool backfacing = false;
+  // The shaded triangle, for attributes (null for lamps and the background).
+  const Mesh* mesh = nullptr;
+  const Instance* instance = nullptr;
+  int primitive = -1;
   // Light Path: the ray that reached this point and the bounces before it.
   bool camera_ray = true, shadow_ray = false, diffuse_ray = false, glossy_ray = false, singular_ray = false;
   bool reflection_ray = false, transmission_ray = false;

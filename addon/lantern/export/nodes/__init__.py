@@ -351,4 +351,4 @@ def constant_program(op, inputs_fn):
 
 # The families register their nodes on import.
 from . import converters as _converters, inputs as _inputs, shaders as _shaders  # noqa: E402,F401
-from . import textures as _textures  # noqa: E402,F401
+from . import attributes as _attributes, textures as _textures  # noqa: E402,F401

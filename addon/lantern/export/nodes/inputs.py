@@ -29,14 +29,6 @@ def tex_coord(c, node, want):
     return {n: c.texcoord(n) for n in TEX_COORD_OUTPUTS}
 
 
-@register('UVMAP')
-def uv_map(c, node, want):
-    if node.uv_map:
-        c.warn("UV Map '%s': the map '%s' is read as the active render UV map (named maps are not "
-               "exported yet)" % (node.name, node.uv_map))
-    return {"UV": c.texcoord("UV")}
-
-
 @register('NEW_GEOMETRY')
 def geometry(c, node, want):
     if want.name in ("Pointiness", "Random Per Island"):

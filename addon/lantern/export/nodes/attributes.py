@@ -1,0 +1,144 @@
+"""Nodes that read named attributes and object values (kOpAttribute... in the core's inputs.h):
+UV Map, Color Attribute, Attribute, Tangent, Normal Map, Object Info.
+
+Names become small ids, one numbering per scene (AttributeRegistry, shared by every material the
+scene compiles); the mesh exporter then exports, for each mesh, only the attributes some compiled
+program asked for (export/mesh.py: mesh_attributes)."""
+
+from . import ops, register
+
+DOMAIN_MESH, DOMAIN_OBJECT, DOMAIN_COLOR = 0, 1, 2
+
+
+class AttributeRegistry:
+    """Keys: ('attr', name) a mesh attribute by name (UV maps first, then Mesh.attributes);
+    ('color', '') the default colour attribute; ('tangent', uv map name or '' for the active
+    render map) a MikkTSpace tangent and its sign; ('object', name) a value of the object."""
+
+    def __init__(self):
+        self.ids = {}
+
+    def id(self, kind, name):
+        key = (kind, name or "")
+        if key not in self.ids:
+            self.ids[key] = len(self.ids)
+        return self.ids[key]
+
+    def mesh_keys(self):
+        return [(k, i) for k, i in self.ids.items() if k[0] != 'object']
+
+    def object_keys(self):
+        return [(k[1], i) for k, i in self.ids.items() if k[0] == 'object']
+
+
+def registry(c):
+    """The compiler's registry (a private one when the caller gave none: tests)."""
+    reg = getattr(c, "attributes", None)
+    if reg is None:
+        reg = c.attributes = AttributeRegistry()
+    return reg
+
+
+def _attribute(c, kind, name, domain):
+    return c.emit(ops.ATTRIBUTE, [], [("Vector", 3), ("Fac", 1), ("Alpha", 1)],
+                  params=[registry(c).id(kind, name), domain])
+
+
+@register('UVMAP')
+def uv_map(c, node, want):
+    if not node.uv_map:
+        return {"UV": c.texcoord("UV")}
+    return {"UV": _attribute(c, 'attr', node.uv_map, DOMAIN_MESH)["Vector"]}
+
+
+@register('VERTEX_COLOR')
+def color_attribute(c, node, want):
+    name = node.layer_name
+    outs = _attribute(c, 'attr' if name else 'color', name, DOMAIN_COLOR)
+    return {"Color": outs["Vector"], "Alpha": outs["Alpha"]}
+
+
+@register('ATTRIBUTE')
+def attribute(c, node, want):
+    kind, domain = ('attr', DOMAIN_MESH)
+    if node.attribute_type in ('OBJECT', 'INSTANCER'):
+        kind, domain = 'object', DOMAIN_OBJECT
+        if node.attribute_type == 'INSTANCER':
+            c.warn("Attribute '%s': Instancer attributes are read from the object itself" % node.name)
+    elif node.attribute_type == 'VIEW_LAYER':
+        c.warn("Attribute '%s': View Layer attributes are not exported; 0 is used" % node.name)
+        return {"Color": c.const((0.0, 0.0, 0.0)), "Vector": c.const((0.0, 0.0, 0.0)), "Fac": c.const(0.0),
+                "Alpha": c.const(0.0)}
+    outs = _attribute(c, kind, node.attribute_name, domain)
+    return {"Color": outs["Vector"], "Vector": outs["Vector"], "Fac": outs["Fac"], "Alpha": outs["Alpha"]}
+
+
+_AXES = {'X': 0, 'Y': 1, 'Z': 2}
+
+
+@register('TANGENT')
+def tangent(c, node, want):
+    uv = node.direction_type == 'UV_MAP'
+    tid = registry(c).id('tangent', node.uv_map) if uv else 0
+    return c.emit(ops.TANGENT, [], [("Tangent", 3)], params=[1 if uv else 0, _AXES.get(node.axis, 2), tid])
+
+
+_SPACES = {'TANGENT': 0, 'OBJECT': 1, 'WORLD': 2, 'BLENDER_OBJECT': 3, 'BLENDER_WORLD': 4}
+
+
+@register('NORMAL_MAP')
+def normal_map(c, node, want):
+    space = _SPACES.get(node.space, 0)
+    tid = registry(c).id('tangent', node.uv_map) if space == 0 else 0
+    return c.emit(ops.NORMAL_MAP, [c.float(node.inputs["Strength"]), c.color(node.inputs["Color"])],
+                  [("Normal", 3)], params=[space, tid])
+
+
+@register('OBJECT_INFO')
+def object_info(c, node, want):
+    outs = c.emit(ops.OBJECT_INFO, [], [("Location", 3), ("Color", 3), ("Alpha", 1), ("Object Index", 1),
+                                        ("Random", 1)])
+    outs["Material Index"] = c.const(float(getattr(c, "material_pass_index", 0)))
+    return outs
+
+
+# Cycles' hashes (util/hash.h), for Object Info's Random of objects that are not instances.
+
+def _rot(x, k):
+    return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
+
+
+def hash_uint2(kx, ky):
+    """Bob Jenkins' lookup3 final mix of two words, as Cycles' hash_uint2."""
+    a = b = c = (0xdeadbeef + (2 << 2) + 13) & 0xFFFFFFFF
+    b = (b + ky) & 0xFFFFFFFF
+    a = (a + kx) & 0xFFFFFFFF
+    c ^= b
+    c = (c - _rot(b, 14)) & 0xFFFFFFFF
+    a ^= c
+    a = (a - _rot(c, 11)) & 0xFFFFFFFF
+    b ^= a
+    b = (b - _rot(a, 25)) & 0xFFFFFFFF
+    c ^= b
+    c = (c - _rot(b, 16)) & 0xFFFFFFFF
+    a ^= c
+    a = (a - _rot(c, 4)) & 0xFFFFFFFF
+    b ^= a
+    b = (b - _rot(a, 14)) & 0xFFFFFFFF
+    c ^= b
+    c = (c - _rot(b, 24)) & 0xFFFFFFFF
+    return c
+
+
+def hash_string(s):
+    """Cycles' hash_string: i = i * 37 + c over the UTF-8 bytes (chars are signed)."""
+    i = 0
+    for byte in s.encode("utf-8"):
+        ch = byte - 256 if byte >= 128 else byte
+        i = (i * 37 + ch) & 0xFFFFFFFF
+    return i
+
+
+def object_random_id(name):
+    """Cycles' random id of an object that is not an instance (blender/object.cpp)."""
+    return hash_uint2(hash_string(name), 0)

@@ -1,0 +1,263 @@
+"""Attribute nodes against Cycles, pixel by pixel (the compare_cases harness: each case an Emission
+of the node's output on a camera-facing plane): named UV maps, colour attributes of both domains in
+byte and float colours, the Attribute node (geometry and object types), Object Info on objects of
+different colours and indices, Tangent and Normal Map. Each case may prepare its plane (its mesh
+and object) before the render: compare_cases' assign is wrapped to call it.
+"""
+import bpy
+import numpy as np
+import pytest
+
+import build_scenes
+import render_utils
+
+try:  # the lead moves the harness to a shared module
+    import node_cases as harness
+except ImportError:
+    import test_nodes_math as harness
+
+pytestmark = pytest.mark.skipif(not render_utils.engine_registered(), reason="Lantern add-on not registered")
+
+
+def run_cases(name, cases, outdir, monkeypatch):
+    """cases: [(label, fn(setup) -> socket, prepare(object) or None)]."""
+    prepares = [c[2] if len(c) > 2 else None for c in cases]
+    original = build_scenes.assign
+
+    def assign(ob, *materials):
+        original(ob, *materials)
+        if ob.name.startswith("plane_"):
+            prep = prepares[int(ob.name.split("_")[1]) // 2]  # each case renders as V and -V
+            if prep is not None:
+                prep(ob)
+
+    monkeypatch.setattr(harness.build_scenes, "assign", assign)
+    return harness.compare_cases(name, [(c[0], c[1]) for c in cases], outdir)
+
+
+# -- mesh preparation ----------------------------------------------------------------------------
+# The harness compares pixels well inside cells of 4 x 4 per plane, so values must be constant over
+# a cell (a gradient would differ by the pixel filter's samples): cells() rebuilds the plane as 16
+# separate quads (no shared vertices) and the attributes are constant on each (interpolation within
+# a triangle is checked by the native tests).
+
+CELLS = 4
+
+
+def cells(ob):
+    """Replaces the plane by 4 x 4 separate quads; UVMap (the active render map) is each cell's
+    centre and a second map 'Second' a different constant per cell."""
+    verts, faces = [], []
+    for j in range(CELLS):
+        for i in range(CELLS):
+            x0, y0 = i / CELLS - 0.5, j / CELLS - 0.5
+            k = len(verts)
+            verts += [(x0, y0, 0), (x0 + 0.25, y0, 0), (x0 + 0.25, y0 + 0.25, 0), (x0, y0 + 0.25, 0)]
+            faces.append((k, k + 1, k + 2, k + 3))
+    me = bpy.data.meshes.new(ob.name + "_cells")
+    me.from_pydata(verts, [], faces)
+    for mat in ob.data.materials:
+        me.materials.append(mat)
+    ob.data = me
+    uv = me.uv_layers.new(name="UVMap")
+    second = me.uv_layers.new(name="Second")
+    for li in range(len(me.loops)):
+        f = li // 4
+        i, j = f % CELLS, f // CELLS
+        uv.data[li].uv = ((i + 0.5) / CELLS, (j + 0.5) / CELLS)
+        second.data[li].uv = (0.15 + 0.2 * j, 0.95 - 0.21 * i)
+    uv.active_render = True
+
+
+def second_uv(ob):
+    """A second UV map 'Second' on the plane: the first rotated and scaled (tangents constant)."""
+    me = ob.data
+    first = me.uv_layers[0]
+    layer = me.uv_layers.new(name="Second")
+    for i, d in enumerate(layer.data):
+        u, v = first.data[i].uv
+        d.uv = (0.2 + 0.6 * v, 0.9 - 0.7 * u)
+    first.active_render = True
+
+
+PALETTE = [(0.9, 0.1, 0.3, 0.25), (0.2, 0.8, 0.4, 1.0), (0.1, 0.3, 0.95, 0.5), (0.7, 0.6, 0.05, 0.75),
+           (0.45, 0.35, 0.6, 0.1)]
+
+
+def colours(ob):
+    cells(ob)
+    me = ob.data
+    for n, (name, dtype, domain) in enumerate((("pf", 'FLOAT_COLOR', 'POINT'), ("pb", 'BYTE_COLOR', 'POINT'),
+                                               ("cf", 'FLOAT_COLOR', 'CORNER'), ("cb", 'BYTE_COLOR', 'CORNER'))):
+        a = me.color_attributes.new(name, dtype, domain)
+        for i, d in enumerate(a.data):
+            d.color = PALETTE[(i // 4 + n) % len(PALETTE)]  # 4 vertices or corners per cell
+    me.color_attributes.render_color_index = me.color_attributes.find("cb")
+    me.color_attributes.active_color_index = me.color_attributes.find("pf")
+
+
+def generic(ob):
+    cells(ob)
+    me = ob.data
+    h = me.attributes.new("height", 'FLOAT', 'POINT')
+    for i, d in enumerate(h.data):
+        d.value = 0.2 + 0.05 * (i // 4)
+    v = me.attributes.new("cvec", 'FLOAT_VECTOR', 'CORNER')
+    for i, d in enumerate(v.data):
+        d.vector = (0.05 * (i // 4), 1.0 - 0.04 * (i // 4), 0.5)
+    f = me.attributes.new("face", 'FLOAT', 'FACE')
+    for i, d in enumerate(f.data):
+        d.value = 0.625 - 0.03 * i
+
+
+def object_values(index):
+    def prep(ob):
+        ob.color = (0.1 + 0.1 * index, 0.9 - 0.15 * index, 0.3 + 0.05 * index, 0.2 + 0.1 * index)
+        ob.pass_index = index + 1
+        ob["myprop"] = 0.25 * index + 0.5
+        if ob.active_material is not None:
+            ob.active_material.pass_index = 2 * index + 1
+    return prep
+
+
+# -- cases ---------------------------------------------------------------------------------------
+
+def node_out(idname, output, **props):
+    def fn(s):
+        return s.node(idname, **props).outputs[output]
+    return fn
+
+
+def scaled(fn, k):
+    def g(s):
+        return s.math("MULTIPLY", fn(s), k)
+    return g
+
+
+def test_uv_maps_and_attribute_node(outdir, monkeypatch):
+    cases = [
+        ("UV Map Second", node_out("ShaderNodeUVMap", "UV", uv_map="Second"), cells),
+        ("UV Map active", node_out("ShaderNodeUVMap", "UV", uv_map=""), cells),
+        ("UV Map missing", node_out("ShaderNodeUVMap", "UV", uv_map="Nope"), cells),
+        ("Attribute Second Vector", node_out("ShaderNodeAttribute", "Vector", attribute_name="Second"), cells),
+        ("Attribute Second Fac", node_out("ShaderNodeAttribute", "Fac", attribute_name="Second"), cells),
+        ("Attribute height Color", node_out("ShaderNodeAttribute", "Color", attribute_name="height"), generic),
+        ("Attribute height Fac", node_out("ShaderNodeAttribute", "Fac", attribute_name="height"), generic),
+        ("Attribute cvec Vector", node_out("ShaderNodeAttribute", "Vector", attribute_name="cvec"), generic),
+        ("Attribute cvec Fac", node_out("ShaderNodeAttribute", "Fac", attribute_name="cvec"), generic),
+        ("Attribute face Fac", node_out("ShaderNodeAttribute", "Fac", attribute_name="face"), generic),
+        ("Attribute missing Alpha", node_out("ShaderNodeAttribute", "Alpha", attribute_name="nope"), generic),
+        ("Attribute missing Color", node_out("ShaderNodeAttribute", "Color", attribute_name="nope"), generic),
+    ]
+    bad = run_cases("attr_uv", cases, outdir, monkeypatch)
+    assert not bad, bad
+
+
+def test_colour_attributes(outdir, monkeypatch):
+    cases = []
+    for name in ("pf", "pb", "cf", "cb", ""):
+        for out in ("Color", "Alpha"):
+            cases.append(("Color Attribute '%s' %s" % (name, out),
+                          node_out("ShaderNodeVertexColor", out, layer_name=name), colours))
+    cases.append(("Color Attribute missing Alpha", node_out("ShaderNodeVertexColor", "Alpha", layer_name="nope"),
+                  colours))
+    for name in ("pb", "cf"):
+        for out in ("Color", "Fac", "Alpha"):
+            cases.append(("Attribute '%s' %s" % (name, out),
+                          node_out("ShaderNodeAttribute", out, attribute_name=name), colours))
+    bad = run_cases("attr_colour", cases, outdir, monkeypatch)
+    assert not bad, bad
+
+
+def test_object_info_and_object_attributes(outdir, monkeypatch):
+    cases = []
+    for i in range(3):
+        prep = object_values(i)
+        cases += [
+            ("Object Info Color %d" % i, node_out("ShaderNodeObjectInfo", "Color"), prep),
+            ("Object Info Alpha %d" % i, node_out("ShaderNodeObjectInfo", "Alpha"), prep),
+            ("Object Info Index %d" % i, scaled(node_out("ShaderNodeObjectInfo", "Object Index"), 0.1), prep),
+            ("Object Info Material Index %d" % i,
+             scaled(node_out("ShaderNodeObjectInfo", "Material Index"), 0.1), prep),
+            ("Object Info Random %d" % i, node_out("ShaderNodeObjectInfo", "Random"), prep),
+            ("Object Info Location %d" % i, scaled(node_out("ShaderNodeObjectInfo", "Location"), 0.2), prep),
+            ("Attribute object color %d" % i,
+             node_out("ShaderNodeAttribute", "Color", attribute_type='OBJECT', attribute_name="color"), prep),
+            ("Attribute object myprop %d" % i,
+             node_out("ShaderNodeAttribute", "Fac", attribute_type='OBJECT', attribute_name="myprop"), prep),
+        ]
+    bad = run_cases("attr_object", cases, outdir, monkeypatch)
+    assert not bad, bad
+
+
+def _normal_map(space, color, strength=1.0, uv_map=""):
+    def fn(s):
+        n = s.node("ShaderNodeNormalMap", space=space, uv_map=uv_map)
+        n.inputs["Strength"].default_value = strength
+        n.inputs["Color"].default_value = color + (1.0,)
+        return n.outputs["Normal"]
+    return fn
+
+
+def test_tangent_and_normal_map(outdir, monkeypatch):
+    prep = second_uv
+    cases = [
+        ("Tangent UV active", node_out("ShaderNodeTangent", "Tangent", direction_type='UV_MAP'), prep),
+        ("Tangent UV Second", node_out("ShaderNodeTangent", "Tangent", direction_type='UV_MAP', uv_map="Second"),
+         prep),
+        ("Normal Map tangent", _normal_map('TANGENT', (0.7, 0.35, 0.9)), prep),
+        ("Normal Map tangent Second", _normal_map('TANGENT', (0.7, 0.35, 0.9), uv_map="Second"), prep),
+        ("Normal Map tangent strength", _normal_map('TANGENT', (0.2, 0.8, 0.7), strength=0.4), prep),
+        ("Normal Map object", _normal_map('OBJECT', (0.6, 0.3, 0.8)), prep),
+        ("Normal Map world", _normal_map('WORLD', (0.4, 0.55, 0.9)), prep),
+        ("Normal Map Blender object", _normal_map('BLENDER_OBJECT', (0.6, 0.3, 0.1)), prep),
+        ("Normal Map Blender world", _normal_map('BLENDER_WORLD', (0.4, 0.55, 0.2), strength=2.0), prep),
+    ]
+    bad = run_cases("attr_tangent", cases, outdir, monkeypatch)
+    assert not bad, bad
+
+
+def test_object_info_random_of_collection_instances(outdir):
+    """Object Info's Random and Location on instances of a collection (DepsgraphObjectInstance
+    .random_id, hashed as Cycles does) and on a plain object (Cycles' hash of its name)."""
+    scene, _rows, _cols = harness._scene("attr_instances", 4)
+    mat = bpy.data.materials.new("attr_instances_random")
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    s = harness.Setup(nt)
+    out = s.node("ShaderNodeOutputMaterial")
+    em = s.node("ShaderNodeEmission")
+    info = s.node("ShaderNodeObjectInfo")
+    comb = s.node("ShaderNodeCombineXYZ")
+    s.link(info.outputs["Random"], comb.inputs[0])
+    sep = s.node("ShaderNodeSeparateXYZ")
+    s.link(info.outputs["Location"], sep.inputs[0])
+    s.link(s.math("MULTIPLY", s.math("ADD", sep.outputs[0], 2.0), 0.2), comb.inputs[2])
+    s.link(comb.outputs[0], em.inputs["Color"])
+    s.link(em.outputs[0], out.inputs["Surface"])
+    group = bpy.data.collections.new("attr_instances_group")
+    me = build_scenes.mesh_plane("attr_instances_plane", 0.8)
+    me.materials.append(mat)
+    member = bpy.data.objects.new("attr_instances_member", me)
+    group.objects.link(member)
+    for i in range(3):
+        empty = bpy.data.objects.new("attr_instancer_%d" % i, None)
+        empty.instance_type = 'COLLECTION'
+        empty.instance_collection = group
+        empty.location = (i - 1.5, 0.0, 0.0)
+        scene.collection.objects.link(empty)
+    plain = build_scenes.add_object(scene, "attr_instances_plain", me.copy(), location=(1.5, 0.0, 0.0))
+    plain.data.materials[0] = mat
+    lt = render_utils.render(scene, render_utils.LANTERN, samples=4, outdir=outdir, tag="attr_instances_lantern")
+    cy = render_utils.render(scene, render_utils.CYCLES, samples=4, outdir=outdir, tag="attr_instances_cycles")
+    lt, cy = lt.combined[..., :3], cy.combined[..., :3]
+    tile = harness.TILE
+    values = []
+    for i in range(4):  # the centre of each object's tile
+        c = slice(tile // 2 - 6, tile // 2 + 6)
+        a = lt[c, i * tile:(i + 1) * tile][:, c]
+        b = cy[c, i * tile:(i + 1) * tile][:, c]
+        assert np.all(np.abs(a - b) <= harness.RTOL * np.abs(b) + harness.ATOL), (i, a.mean((0, 1)), b.mean((0, 1)))
+        values.append(float(b[..., 0].mean()))
+    assert len(set(round(v, 4) for v in values)) == 4, values  # four different random numbers
