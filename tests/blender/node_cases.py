@@ -103,11 +103,12 @@ def _scene(name, n_cases):
 
 
 def compare_grid(name, cases, outdir):
-    """cases: [(label, fn(setup) -> output socket)]. Renders all with both engines and returns
-    [(label, worst relative excess)] of failing cases."""
-    tiles = [(label, fn, sign) for label, fn in cases for sign in (1.0, -1.0)]
+    """cases: [(label, fn(setup) -> output socket[, prepare(plane object)])]: prepare, when given,
+    adds what the case's set-up reads to its plane (attributes, object values). Renders all with
+    both engines and returns [(label, worst relative excess)] of failing cases."""
+    tiles = [(case[0], case[1], case[2] if len(case) > 2 else None, sign) for case in cases for sign in (1.0, -1.0)]
     scene, rows, cols = _scene(name, len(tiles))
-    for i, (label, fn, sign) in enumerate(tiles):
+    for i, (label, fn, prepare, sign) in enumerate(tiles):
         row, col = divmod(i, COLUMNS)
         mat = bpy.data.materials.new("%s_%d" % (name, i))
         mat.use_nodes = True
@@ -130,13 +131,15 @@ def compare_grid(name, cases, outdir):
         ob = build_scenes.add_object(scene, "plane_%d" % i, me,
                                      location=(col + 0.5 - cols / 2.0, rows / 2.0 - row - 0.5, 0.0))
         build_scenes.assign(ob, mat)
+        if prepare is not None:
+            prepare(ob)
     lt = render_utils.render(scene, render_utils.LANTERN, samples=4, outdir=outdir, tag=name + "_lantern").combined
     cy = render_utils.render(scene, render_utils.CYCLES, samples=4, outdir=outdir, tag=name + "_cycles").combined
     inner = (np.arange(TILE) % (TILE // CELLS) >= 2) & (np.arange(TILE) % (TILE // CELLS) < TILE // CELLS - 2)
     mask = inner[:, None] & inner[None, :]
     bad = []
     overall = 0.0
-    for i, (label, _fn, sign) in enumerate(tiles):
+    for i, (label, _fn, _prepare, sign) in enumerate(tiles):
         row, col = divmod(i, COLUMNS)
         tl = np.maximum(lt[row * TILE:(row + 1) * TILE, col * TILE:(col + 1) * TILE, :3][mask], 0.0)
         tc = np.maximum(cy[row * TILE:(row + 1) * TILE, col * TILE:(col + 1) * TILE, :3][mask], 0.0)

@@ -1,4 +1,4 @@
-"""Attribute nodes against Cycles, pixel by pixel (the compare_cases harness: each case an Emission
+"""Attribute nodes against Cycles, pixel by pixel (the compare_grid harness of node_cases: each case an Emission
 of the node's output on a camera-facing plane): named UV maps, colour attributes of both domains in
 byte and float colours, the Attribute node (geometry and object types), Object Info on objects of
 different colours and indices, Tangent and Normal Map. Each case may prepare its plane (its mesh
@@ -11,28 +11,10 @@ import pytest
 import build_scenes
 import render_utils
 
-try:  # the lead moves the harness to a shared module
-    import node_cases as harness
-except ImportError:
-    import test_nodes_math as harness
+import node_cases as harness
+from node_cases import compare_grid
 
 pytestmark = pytest.mark.skipif(not render_utils.engine_registered(), reason="Lantern add-on not registered")
-
-
-def run_cases(name, cases, outdir, monkeypatch):
-    """cases: [(label, fn(setup) -> socket, prepare(object) or None)]."""
-    prepares = [c[2] if len(c) > 2 else None for c in cases]
-    original = build_scenes.assign
-
-    def assign(ob, *materials):
-        original(ob, *materials)
-        if ob.name.startswith("plane_"):
-            prep = prepares[int(ob.name.split("_")[1]) // 2]  # each case renders as V and -V
-            if prep is not None:
-                prep(ob)
-
-    monkeypatch.setattr(harness.build_scenes, "assign", assign)
-    return harness.compare_cases(name, [(c[0], c[1]) for c in cases], outdir)
 
 
 # -- mesh preparation ----------------------------------------------------------------------------
@@ -134,7 +116,7 @@ def scaled(fn, k):
     return g
 
 
-def test_uv_maps_and_attribute_node(outdir, monkeypatch):
+def test_uv_maps_and_attribute_node(outdir):
     cases = [
         ("UV Map Second", node_out("ShaderNodeUVMap", "UV", uv_map="Second"), cells),
         ("UV Map active", node_out("ShaderNodeUVMap", "UV", uv_map=""), cells),
@@ -149,11 +131,11 @@ def test_uv_maps_and_attribute_node(outdir, monkeypatch):
         ("Attribute missing Alpha", node_out("ShaderNodeAttribute", "Alpha", attribute_name="nope"), generic),
         ("Attribute missing Color", node_out("ShaderNodeAttribute", "Color", attribute_name="nope"), generic),
     ]
-    bad = run_cases("attr_uv", cases, outdir, monkeypatch)
+    bad = compare_grid("attr_uv", cases, outdir)
     assert not bad, bad
 
 
-def test_colour_attributes(outdir, monkeypatch):
+def test_colour_attributes(outdir):
     cases = []
     for name in ("pf", "pb", "cf", "cb", ""):
         for out in ("Color", "Alpha"):
@@ -165,11 +147,11 @@ def test_colour_attributes(outdir, monkeypatch):
         for out in ("Color", "Fac", "Alpha"):
             cases.append(("Attribute '%s' %s" % (name, out),
                           node_out("ShaderNodeAttribute", out, attribute_name=name), colours))
-    bad = run_cases("attr_colour", cases, outdir, monkeypatch)
+    bad = compare_grid("attr_colour", cases, outdir)
     assert not bad, bad
 
 
-def test_object_info_and_object_attributes(outdir, monkeypatch):
+def test_object_info_and_object_attributes(outdir):
     cases = []
     for i in range(3):
         prep = object_values(i)
@@ -186,7 +168,7 @@ def test_object_info_and_object_attributes(outdir, monkeypatch):
             ("Attribute object myprop %d" % i,
              node_out("ShaderNodeAttribute", "Fac", attribute_type='OBJECT', attribute_name="myprop"), prep),
         ]
-    bad = run_cases("attr_object", cases, outdir, monkeypatch)
+    bad = compare_grid("attr_object", cases, outdir)
     assert not bad, bad
 
 
@@ -199,7 +181,7 @@ def _normal_map(space, color, strength=1.0, uv_map=""):
     return fn
 
 
-def test_tangent_and_normal_map(outdir, monkeypatch):
+def test_tangent_and_normal_map(outdir):
     prep = second_uv
     cases = [
         ("Tangent UV active", node_out("ShaderNodeTangent", "Tangent", direction_type='UV_MAP'), prep),
@@ -213,7 +195,7 @@ def test_tangent_and_normal_map(outdir, monkeypatch):
         ("Normal Map Blender object", _normal_map('BLENDER_OBJECT', (0.6, 0.3, 0.1)), prep),
         ("Normal Map Blender world", _normal_map('BLENDER_WORLD', (0.4, 0.55, 0.2), strength=2.0), prep),
     ]
-    bad = run_cases("attr_tangent", cases, outdir, monkeypatch)
+    bad = compare_grid("attr_tangent", cases, outdir)
     assert not bad, bad
 
 
