@@ -2,7 +2,7 @@
 of the node's output on a camera-facing plane): named UV maps, colour attributes of both domains in
 byte and float colours, the Attribute node (geometry and object types), Object Info on objects of
 different colours and indices, Tangent and Normal Map. Each case may prepare its plane (its mesh
-and object) before the render: compare_cases' assign is wrapped to call it.
+and object) before the render (compare_grid's prepare).
 """
 import bpy
 import numpy as np
