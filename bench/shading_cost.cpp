@@ -66,7 +66,7 @@ ShaderCode textured_material(int extra_math) {
   ShaderCode p;
   const uint32_t table = uint32_t(p.k.size());
   p.k.push_back(0);  // empty tables: Texture Coordinate of the shaded object, no camera
-  auto tc = p.emit(lt::kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {table, table});
+  auto tc = p.emit(lt::kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {table, table, 0});
   auto mapped = p.emit(lt::kOpVectorMath, {tc[3], p.c3({2, 2, 2}), p.c3({0.1f, 0.2f, 0}), p.c1(1)}, {3, 1}, {4})[0];
   auto noise = p.emit(lt::kOpTexNoise, {mapped, p.c1(0), p.c1(5), p.c1(2), p.c1(0.5f), p.c1(0)}, {1, 3}, {3});
   uint32_t mask = math(p, lt::MathType::Multiply, noise[0], p.c1(1.5f));

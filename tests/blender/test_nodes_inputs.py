@@ -136,3 +136,36 @@ def test_image_texture_alpha(kind, output, outdir):
             return scale.outputs[0]
         return tex.outputs["Alpha" if output == "Alpha" else "Color"]
     compare_view(build, "image_%s_%s" % (kind, output.replace(" ", "_")), outdir)
+
+
+@pytest.mark.parametrize("source", ["noise_object", "wave_uv", "checker_generated"])
+@pytest.mark.parametrize("invert", [False, True])
+def test_bump(source, invert, outdir):
+    """Bump's normal (Cycles' finite differences over the ray footprint: the Height input at the
+    point and moved along the footprint's two differentials) from heights that vary slowly per
+    pixel: the normal is a difference over the footprint of each sample, so where it turns fast
+    across a pixel the engines' sample jitter shows (a Noise of scale 2 differs at 3 % of pixels;
+    the footprint scaled by 2 or 0.5 differs everywhere, median 0.013 and 0.007)."""
+    def build(nt, coords):
+        if source == "noise_object":
+            tex = node(nt, "ShaderNodeTexNoise", Scale=0.8, Detail=0.0)
+            nt.links.new(coords, tex.inputs["Vector"])
+            height = tex.outputs["Fac"]
+        elif source == "wave_uv":
+            tc = node(nt, "ShaderNodeTexCoord")
+            tex = node(nt, "ShaderNodeTexWave", Scale=3.0)
+            nt.links.new(tc.outputs["UV"], tex.inputs["Vector"])
+            height = tex.outputs["Fac"]
+        else:
+            tc = node(nt, "ShaderNodeTexCoord")
+            sep = node(nt, "ShaderNodeSeparateXYZ")
+            nt.links.new(tc.outputs["Generated"], sep.inputs[0])
+            height = node(nt, "ShaderNodeMath", {"operation": "SINE"}).outputs[0]
+            scaled = node(nt, "ShaderNodeMath", {"operation": "MULTIPLY"})
+            scaled.inputs[1].default_value = 4.0
+            nt.links.new(sep.outputs["Z"], scaled.inputs[0])
+            nt.links.new(scaled.outputs[0], height.node.inputs[0])
+        b = node(nt, "ShaderNodeBump", {"invert": invert}, Strength=0.8, Distance=0.3)
+        nt.links.new(height, b.inputs["Height"])
+        return b.outputs["Normal"]
+    compare_view(build, "bump_%s_%s" % (source, invert), outdir, shape="sphere")

@@ -297,7 +297,7 @@ std::vector<uint8_t> seed_textures_edits() {
   }
   {  // an image texture at the UV (with a folded Math node on its way) into a Diffuse
     ShaderCode p;
-    auto uv = p.emit(lt::kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {uint32_t(p.k.size()), uint32_t(p.k.size())});
+    auto uv = p.emit(lt::kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {uint32_t(p.k.size()), uint32_t(p.k.size()), 0});
     p.k.push_back(0);  // the two empty tables
     auto tex = p.emit(lt::kOpImage, {uv[2]}, {3, 1}, {0, 0});
     p.emit(lt::kOpDiffuse, {p.one(), p.c3({0, 0, 0}), tex[0], p.c1(0)}, {});

@@ -104,29 +104,29 @@ TEST(Attributes, AttributeNodeOutputsByComponentCount) {
   r.ctx.instance = &inst;
   r.ctx.primitive = 0;
   r.ctx.bary = {0.5f, 0.25f};  // corner weights 0.25, 0.5, 0.25
-  auto o = r.exec(kOpAttribute, {}, {1, 0});
+  auto o = r.exec(kOpAttribute, {}, {1, 0, 0});
   EXPECT_FLOAT_EQ(o[0], 2.0f);
   EXPECT_FLOAT_EQ(o[2], 2.0f);
   EXPECT_FLOAT_EQ(o[3], 2.0f);
   EXPECT_FLOAT_EQ(o[4], 1.0f);
-  o = r.exec(kOpAttribute, {}, {2, 0});
+  o = r.exec(kOpAttribute, {}, {2, 0, 0});
   EXPECT_FLOAT_EQ(o[1], 0.25f);
   EXPECT_FLOAT_EQ(o[2], 0.0f);
   EXPECT_FLOAT_EQ(o[3], 0.5f);  // Fac of a UV map: u
-  o = r.exec(kOpAttribute, {}, {3, 0});
+  o = r.exec(kOpAttribute, {}, {3, 0, 0});
   EXPECT_NEAR(o[3], 0.3f, 1e-6f);  // average
   EXPECT_FLOAT_EQ(o[4], 1.0f);
-  o = r.exec(kOpAttribute, {}, {4, 2});
+  o = r.exec(kOpAttribute, {}, {4, 2, 0});
   EXPECT_NEAR(o[3], 0.6f, 1e-6f);
   EXPECT_FLOAT_EQ(o[4], 0.5f);  // alpha
   // Missing: 0, alpha 1 for the Attribute node, 0 for Color Attribute (svm_node_vertex_color).
-  o = r.exec(kOpAttribute, {}, {7, 0});
+  o = r.exec(kOpAttribute, {}, {7, 0, 0});
   EXPECT_EQ(o, (std::vector<float>{0, 0, 0, 0, 1}));
-  o = r.exec(kOpAttribute, {}, {7, 2});
+  o = r.exec(kOpAttribute, {}, {7, 2, 0});
   EXPECT_EQ(o, (std::vector<float>{0, 0, 0, 0, 0}));
   // Object values.
   inst.attributes.push_back({5, {0.2f, 0.4f, 0.6f, 0.8f}});
-  o = r.exec(kOpAttribute, {}, {5, 1});
+  o = r.exec(kOpAttribute, {}, {5, 1, 0});
   EXPECT_FLOAT_EQ(o[1], 0.4f);
   EXPECT_FLOAT_EQ(o[4], 0.8f);
 }

@@ -225,7 +225,7 @@ TEST(Textures, CyclesRowsThroughTheProgramLoader) {
 TEST(Textures, RunsOnRegisterInputs) {
   ShaderCode p;
   p.k.push_back(0);  // an empty table (the shaded object; no camera), at offset 0
-  std::vector<uint32_t> tc = p.emit(kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {0, 0});
+  std::vector<uint32_t> tc = p.emit(kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {0, 0, 0});
   std::vector<uint32_t> noise =
       p.emit(kOpTexNoise, {tc[0], p.c1(0), p.c1(3.0f), p.c1(2.0f), p.c1(0.5f), p.c1(0)}, {1, 3}, {3});
   p.emit(kOpEmission, {p.one(), noise[1], p.c1(1.0f)}, {});

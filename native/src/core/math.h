@@ -92,6 +92,14 @@ inline float sqr(float x) { return x * x; }
 inline float safe_sqrt(float x) { return std::sqrt(std::max(0.0f, x)); }
 
 // Orthonormal basis around n (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
+// Cycles' make_orthonormals (util/math_float3.h): a fixed pair of unit vectors normal to n and each
+// other (the footprint's differentials lie along them).
+inline void orthonormals(const Vec3& n, Vec3* a, Vec3* b) {
+  *a = n.x != n.y || n.x != n.z ? Vec3(n.z - n.y, n.x - n.z, n.y - n.x) : Vec3(n.z - n.y, n.x + n.z, -n.y - n.x);
+  *a = normalize(*a);
+  *b = cross(n, *a);
+}
+
 struct Frame {
   Vec3 s, t, n;
   Frame() : s(1, 0, 0), t(0, 1, 0), n(0, 0, 1) {}

@@ -231,6 +231,10 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   };
   unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
   int count = 1, bounces = 0, nulls = 0, transparent = 0;
+  // Bump's ray footprint: along camera subpaths Cycles' compact differential (the camera's dP, then
+  // its dD per unit of path length); a light subpath's vertex takes the one a camera ray reaching
+  // it straight from the camera's centre would have (Cycles has no light paths).
+  float footprint = mode == Mode::Radiance ? cs_.dP : 0.0f;
   const float beta_start = max_abs_component(beta);
   // Bounce kinds counted so far towards Cycles' per-kind limits (see kind_limit_factor): a walk
   // stops where every strategy using its further vertices would fail them, so no work is spent
@@ -308,11 +312,14 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       ctx.ray_depth = bounces;
       sf.n = smooth_n = ctx.N;
       const Material& material = scene_.material(sp.material);
+      const float footprint_here = mode == Mode::Radiance ? footprint + ctx.ray_length * cs_.dD : light_footprint(sp.p);
+      if (material.uses_bump()) add_differentials(scene_.geometry, sp, footprint_here, &ctx);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
       // A transparent pass makes no vertex (connections see the surface through
       // shadow_transmittance); an emitting surface stays a vertex.
       if (is_black(le) && material.may_be_transparent() && v.bsdf.pass_transparent(sampler_.next_1d(), &beta)) {
         if (++transparent > s_.transparent_bounces || !pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
+        footprint = footprint_here;
         continue;
       }
     }
@@ -386,6 +393,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (!is_finite(beta) || is_black(beta)) break;
       if (!is_transparent(bs.flags, bs.eta)) visibility = visibility_of(bs.flags);
       if (media_ && !reflect_geo) cross_boundary(scene_, sp, wi, &stack);  // into / out of a medium
+      footprint += (hit.t - ray.tmin) * length(ray.d) * cs_.dD;
       ray.o = spawn_origin(sp, wi);
     }
     ray.d = wi;

@@ -152,6 +152,13 @@ class Bdpt {
     return shadow_transmittance(scene_, VolumeStack{}, r, sampler_, s_.volume_estimator, s_.volume_step, stats_,
                                 s_.transparent_bounces);
   }
+  // Cycles' compact footprint of a camera ray from the camera's centre to p (bump on light
+  // subpaths).
+  float light_footprint(const Vec3& p) const {
+    float dP, dD;
+    ctx_.camera.differentials(0.5f * ctx_.camera.width(), 0.5f * ctx_.camera.height(), &dP, &dD);
+    return dP + dD * length(p - ctx_.camera.position());
+  }
   static bool scatters(const PathVertex& v) {
     return v.type == VertexType::Medium || (v.type == VertexType::Surface && v.bsdf.has_non_delta());
   }

@@ -48,6 +48,7 @@ struct CameraSample {
   Ray ray;
   Vec2 film;
   Vec2 pixel_center;
+  float dP = 0, dD = 0;  // the ray's compact differentials (Camera::differentials), for bump
 };
 
 // A light-tracing contribution to a pixel of the render region (BDPT's t = 1), and its cell in

@@ -13,8 +13,9 @@ namespace lt {
 namespace {
 
 template <bool kMedia>
-SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& camera_ray, Sampler& sampler,
+SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraSample& cs, Sampler& sampler,
                   SampleStats& stats) {
+  const Ray& camera_ray = cs.ray;
   SampleValue out;
   const LightSet& lights = scene.lights;
   const VolumeEstimator est = s.volume_estimator;
@@ -29,6 +30,8 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
   bool prev_delta = true;
   Vec3 prev_p = ray.o;
   float t_prev = 0;  // distance from prev_p to ray.o (the ray crossed invisible boundaries)
+  // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
+  float footprint = cs.dP;
   VolumeStack stack;
   if (kMedia && scene.has_boundaries()) init_volume_stack(scene, camera_ray, &stack, stats);
   Bsdf bsdf;
@@ -144,9 +147,11 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       }
       ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
       describe_ray(b, visibility, &ctx);
+      const float footprint_here = footprint + ctx.ray_length * cs.dD;
       const Vec3 ng = ctx.Ng;
       ShadingFrame sf{ctx.N};
       const Material& material = scene.material(sp.material);
+      if (material.uses_bump()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
       Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
       const Frame frame = local_frame(sf, ng);
       const Vec3 ns = frame.n;
@@ -165,6 +170,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta)) {
         if (++b.transparent > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
         t_prev += hit.t * length(ray.d);
+        footprint = footprint_here;
         continue;
       }
       if (b.from_camera()) {
@@ -201,6 +207,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const Ray& ca
       prev_delta = (bs.flags & kLobeSpecular) != 0;
       prev_p = sp.p;
       t_prev = 0;
+      footprint = footprint_here;
       ray.o = spawn_origin(sp, wi);
       ray.d = wi;
       ray.tmin = 0;
@@ -218,7 +225,7 @@ class PathIntegrator final : public Integrator {
  public:
   using Integrator::Integrator;
   SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) const override {
-    return lt::trace<kMedia>(ctx_.scene, ctx_.settings, cs.ray, sampler, stats);
+    return lt::trace<kMedia>(ctx_.scene, ctx_.settings, cs, sampler, stats);
   }
 };
 

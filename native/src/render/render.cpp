@@ -129,6 +129,7 @@ void RenderJob::render_pass(int sample_index) {
             cs.pixel_center = {fx + 0.5f, fy + 0.5f};
             cs.film = {fx + 0.5f + ox, fy + 0.5f + oy};
             cs.ray = camera_.generate(cs.film.x, cs.film.y);
+            camera_.differentials(cs.film.x, cs.film.y, &cs.dP, &cs.dD);
             size_t splat_mark = splats.size();
             SampleValue v = integrator_->trace(cs, sampler, stats, splats);
             if (!is_finite(v.radiance) || !std::isfinite(v.alpha) || !is_finite(v.albedo) || !is_finite(v.normal)) {

@@ -45,6 +45,19 @@ bool Camera::project(const Vec3& p, float margin, Vec2* film, Vec3* dir, float* 
   return true;
 }
 
+void Camera::differentials(float x, float y, float* dP, float* dD) const {
+  const float sx = (x1_ - x0_) / width_, sy = (y1_ - y0_) / height_;  // a pixel on the view plane
+  if (d_.orthographic) {
+    *dP = 0.5f * (length(right_ * sx) + length(up_ * sy));
+    *dD = 0;
+    return;
+  }
+  const float px = x0_ + (x1_ - x0_) * (x / width_), py = y0_ + (y1_ - y0_) * (y / height_);
+  const Vec3 d = right_ * px + up_ * py - forward_neg_, n = normalize(d);
+  *dP = 0;
+  *dD = 0.5f * (length(normalize(d + right_ * sx) - n) + length(normalize(d + up_ * sy) - n));
+}
+
 Ray Camera::generate(float x, float y) const {
   float px = x0_ + (x1_ - x0_) * (x / width_);
   float py = y0_ + (y1_ - y0_) * (y / height_);

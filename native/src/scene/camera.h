@@ -24,6 +24,10 @@ class Camera {
   Camera(const CameraDesc& desc, int width, int height);
   // Ray through the film position (x, y) in pixels of the full frame, y up from the bottom.
   Ray generate(float x, float y) const;
+  // Cycles' compact ray differentials there (camera_sample_perspective / _orthographic): the
+  // footprint's size at the camera (dP: a pixel for orthographic, 0 for a pinhole) and its growth
+  // per unit distance (dD: the angle between neighbouring pixels' rays).
+  void differentials(float x, float y, float* dP, float* dD) const;
   // Distance along the camera's viewing axis (Blender's Z depth) of a world point.
   float depth(const Vec3& p) const { return -dot(p - origin_, forward_neg_); }
   Vec3 position() const { return origin_; }

@@ -833,6 +833,39 @@ float gtr1_D(float cos_m, float alpha) {
 
 // Exact unpolarised Fresnel reflectance of a dielectric interface; eta = n_inside / n_outside,
 // cos_i < 0 means arriving from inside. Returns 1 under total internal reflection.
+Vec3 ensure_valid_reflection(const Vec3& Ng, const Vec3& I, const Vec3& N) {
+  const float threshold = std::min(0.9f * dot(Ng, I), 0.01f);
+  if (dot(Ng, 2 * dot(N, I) * N - I) >= threshold) return N;
+  // Frame: Ng as Z, N in the X-Z plane; solve for N'.z so that the reflection's z is the threshold.
+  const Vec3 X = normalize(N - dot(N, Ng) * Ng);
+  const float ix = dot(I, X), iz = dot(I, Ng);
+  const float a = ix * ix + iz * iz;
+  const float b = std::sqrt(std::max(ix * ix * (a - threshold * threshold), 0.0f));
+  const float c = iz * threshold + a;
+  const float fac = 0.5f / a;
+  const float z1 = fac * (b + c), z2 = fac * (c - b);
+  bool ok1 = z1 > 1e-5f && z1 <= 1 + 1e-5f, ok2 = z2 > 1e-5f && z2 <= 1 + 1e-5f;
+  auto root = [](float x) { return std::sqrt(std::max(x, 0.0f)); };
+  float nx, nz;
+  if (ok1 && ok2) {
+    const float x1 = root(1 - z1), y1 = root(z1), x2 = root(1 - z2), y2 = root(z2);
+    const float r1 = 2 * (x1 * ix + y1 * iz) * y1 - iz, r2 = 2 * (x2 * ix + y2 * iz) * y2 - iz;
+    ok1 = r1 >= 1e-5f;
+    ok2 = r2 >= 1e-5f;
+    // Both valid: the shallower reflection (closest to N); else the one reflecting upwards.
+    const bool first = ok1 && ok2 ? r1 < r2 : r1 > r2;
+    nx = first ? x1 : x2;
+    nz = first ? y1 : y2;
+  } else if (ok1 || ok2) {
+    const float z = ok1 ? z1 : z2;
+    nx = root(1 - z);
+    nz = root(z);
+  } else {
+    return Ng;
+  }
+  return nx * X + nz * Ng;
+}
+
 float fresnel_dielectric(float cos_i, float eta) {
   if (!(eta > 0)) return 0;
   if (cos_i < 0) {

@@ -197,6 +197,10 @@ Vec3 beckmann_sample_visible_normal(const Vec3& wo, float alpha_x, float alpha_y
 // Burley's GTR1 (generalised Trowbridge-Reitz, gamma 1), Cycles' D_GTR1 for the clearcoat.
 float gtr1_D(float cos_m, float alpha);
 float fresnel_dielectric(float cos_i, float eta);
+// Cycles' ensure_valid_reflection (kernel/closure/bsdf_util.h), applied by its closure nodes to
+// their normal: tilts N towards Ng just enough that the mirror reflection of I stays above the
+// surface (normal maps seen at grazing angles otherwise shade from below).
+Vec3 ensure_valid_reflection(const Vec3& Ng, const Vec3& I, const Vec3& N);
 // Cycles 3.4's Principled v1 specular Fresnel (interpolate_fresnel_color): f0 blended to 1 by the
 // dielectric Fresnel of IOR eta at cos_i, renormalised to [0, 1]; f0 (cspec0) clamped to [0, 1].
 Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i);

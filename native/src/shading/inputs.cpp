@@ -14,18 +14,19 @@ namespace lt {
 namespace {
 
 const OpSignature kSignatures[] = {
-    {"", "vvvvvvv", "tt", false},       // texture coordinate
-    {"", "vvvvvvfff", "", false},       // geometry
+    {"", "vvvvvvv", "tti", false},      // texture coordinate
+    {"", "vvvvvvfff", "i", false},      // geometry
     {"v", "vf", "gi", false},           // image
     {"fv", "f", "", false},             // fresnel
     {"fv", "ff", "", false},            // layer weight
     {"", "ffffffffffffff", "", false},  // light path
     {"v", "f", "i", true},              // to float
     {"f", "v", "", true},               // to vector
-    {"", "vff", "ii", false},           // attribute
+    {"", "vff", "iii", false},          // attribute
     {"", "v", "iii", false},            // tangent
     {"fv", "v", "ii", false},           // normal map
     {"", "vvfff", "", false},           // object info
+    {"fffffv", "v", "i", false},        // bump
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -50,7 +51,7 @@ float fresnel_cos(float cosi, float eta) {
 }
 
 void tex_coord(const Instr& in, Machine& m) {
-  const ShadingContext& c = *m.ctx;
+  const ShadingContext& c = m.at(in.param[2]);
   m.set(in.out[0], c.generated);
   m.set(in.out[1], c.object_N);
   m.set(in.out[2], Vec3(c.uv.x, c.uv.y, 0.0f));
@@ -93,7 +94,7 @@ int fetch_attribute(const ShadingContext& c, int domain, int id, float v[4]) {
 void attribute(const Instr& in, Machine& m) {
   const int domain = int(in.param[1]);
   float v[4];
-  const int n = fetch_attribute(*m.ctx, domain == 1 ? 1 : 0, int(in.param[0]), v);
+  const int n = fetch_attribute(m.at(in.param[2]), domain == 1 ? 1 : 0, int(in.param[0]), v);
   Vec3 vec(v[0], v[1], v[2]);
   float fac = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
   if (n == 1) {
@@ -196,10 +197,31 @@ void object_info(const Instr& in, Machine& m) {
   m.set(in.out[4], inst->random);
 }
 
+// Cycles 3.4's svm_node_set_bump (Mikkelsen's bump mapping from finite differences): the heights at
+// the point and moved by the footprint's two differentials in the surface, scaled by Distance.
+void bump(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  const Vec3 n_in = normal_or_default(m, in.in[5]);
+  Vec3 dx, dy;
+  orthonormals(c.Ng, &dx, &dy);
+  dx *= c.footprint;
+  dy *= c.footprint;
+  const Vec3 rx = cross(dy, n_in), ry = cross(n_in, dx);
+  const float hc = m.f(in.in[2]), hx = m.f(in.in[3]), hy = m.f(in.in[4]);
+  const float det = dot(dx, rx);
+  const Vec3 surfgrad = (hx - hc) * rx + (hy - hc) * ry;
+  const float scale = in.param[0] ? -m.f(in.in[1]) : m.f(in.in[1]);
+  const float strength = std::max(m.f(in.in[0]), 0.0f);
+  Vec3 out = std::abs(det) * n_in - scale * (det < 0 ? -1.0f : (det > 0 ? 1.0f : 0.0f)) * surfgrad;
+  const float len = length(out);
+  out = len > 0 && std::isfinite(len) ? normalize(strength * (out / len) + (1 - strength) * n_in) : n_in;
+  m.set(in.out[0], ensure_valid_reflection(c.Ng, c.I, out));
+}
+
 }  // namespace
 
 const OpSignature* inputs_family_signature(uint32_t op) {
-  if (op < kOpTexCoord || op > kOpObjectInfo) return nullptr;
+  if (op < kOpTexCoord || op > kOpBump) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
@@ -220,7 +242,7 @@ void exec_inputs_family(const Instr& in, Machine& m) {
       tex_coord(in, m);
       break;
     case kOpGeometry:
-      m.set(in.out[0], c.P);
+      m.set(in.out[0], m.at(in.param[0]).P);
       m.set(in.out[1], c.N);
       m.set(in.out[2], c.tangent);
       m.set(in.out[3], c.Ng);
@@ -269,6 +291,9 @@ void exec_inputs_family(const Instr& in, Machine& m) {
       break;
     case kOpObjectInfo:
       object_info(in, m);
+      break;
+    case kOpBump:
+      bump(in, m);
       break;
     case kOpLightPath: {
       const float v[14] = {float(c.camera_ray),

@@ -12,10 +12,10 @@ enum InputOp : uint32_t {
   // out: generated, normal, uv, object, camera, window, reflection (all v);
   // params: object table (0 floats: the shaded object; 12: a world-to-object matrix, rows),
   //         camera table (0 floats, or 12 world-to-camera (Cycles' camera space, +Z forward) then
-  //         16 world-to-NDC, rows)
+  //         16 world-to-NDC, rows), bump (0 the point, 1 and 2 moved by its differentials: Bump)
   kOpTexCoord = kFamilyInputsBegin,
   // out: position, normal, tangent, true normal, incoming, parametric (all v), backfacing,
-  //      pointiness, random per island (f)
+  //      pointiness, random per island (f); param: bump (Position moved as Texture Coordinate's)
   kOpGeometry,
   // in: vector v; out: color v, alpha f; params: image id, unassociate (the Alpha output is used:
   // colours divided by alpha, as Cycles)
@@ -30,7 +30,8 @@ enum InputOp : uint32_t {
   kOpToFloat,   // in: v; out: f; param: 0 colour to float (Rec. 709 luma), 1 vector to float (average)
   kOpToVector,  // in: f; out: v (x, x, x)
   // Named attributes (Cycles' svm_node_attr): out: vector/colour v, fac f, alpha f; params: the
-  // attribute id, the domain (0 the mesh's corners, 1 the instance's values). By components: 1
+  // attribute id, the domain (0 the mesh's corners, 1 the instance's values), bump (as Texture
+  // Coordinate's: the attribute where the moved point lies). By components: 1
   // (f, f, f) f 1; 2 (x, y, 0) x 1; 3 xyz average 1; 4 rgb average(rgb) w; missing: 0 0 1.
   kOpAttribute,
   // Tangent node (Cycles' svm_node_tangent): out: tangent v; params: direction (0 radial, 1 UV
@@ -42,6 +43,10 @@ enum InputOp : uint32_t {
   // Object Info (Cycles' svm_node_object_info): out: location v, colour v, alpha f, object index
   // f, random f (Material Index is a constant of the material).
   kOpObjectInfo,
+  // Bump (Cycles' svm_node_set_bump): in: strength f, distance f, height f, height at the dx
+  // offset f, at the dy offset f, normal v; out: normal v; param: invert. The add-on compiles the
+  // Height input three times, the copies' position-reading ops with bump params 1 and 2.
+  kOpBump,
 };
 
 }  // namespace lt

@@ -41,4 +41,36 @@ ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp,
   return c;
 }
 
+void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float footprint, ShadingContext* ctx) {
+  ctx->footprint = footprint;
+  const Instance& inst = geometry.instance(sp.instance);
+  const Mesh& mesh = geometry.mesh(inst.mesh);
+  const uint32_t* tri = &mesh.indices[3 * size_t(sp.primitive)];
+  // The triangle's edges in world space: a move dP in its plane changes the barycentrics of
+  // vertices 1 and 2 by the solution of dP = e1 db1 + e2 db2 (least squares, exact in the plane).
+  const Vec3 p0 = inst.xf.point(mesh.positions[tri[0]]);
+  const Vec3 e1 = inst.xf.point(mesh.positions[tri[1]]) - p0, e2 = inst.xf.point(mesh.positions[tri[2]]) - p0;
+  const float a11 = dot(e1, e1), a12 = dot(e1, e2), a22 = dot(e2, e2), det = a11 * a22 - a12 * a12;
+  Vec3 dirs[2];
+  orthonormals(ctx->Ng, &dirs[0], &dirs[1]);
+  const Vec3 size = mesh.texspace_size * 2.0f;
+  for (int k = 0; k < 2; ++k) {
+    ShadingContext::Offset& o = ctx->offset[k];
+    o.P = dirs[k] * footprint;
+    const float r1 = dot(o.P, e1), r2 = dot(o.P, e2);
+    o.bary = det != 0 ? Vec2{(a22 * r1 - a12 * r2) / det, (a11 * r2 - a12 * r1) / det} : Vec2{0, 0};
+    // Object space: the same move through the inverse transform, i.e. barycentrics in object space.
+    const Vec3 q0 = mesh.positions[tri[0]];
+    o.object_P = (mesh.positions[tri[1]] - q0) * o.bary.x + (mesh.positions[tri[2]] - q0) * o.bary.y;
+    o.generated = o.object_P / size;
+    if (!mesh.corner_uvs.empty()) {
+      const Vec2* uv = &mesh.corner_uvs[3 * size_t(sp.primitive)];
+      o.uv = {(uv[1].x - uv[0].x) * o.bary.x + (uv[2].x - uv[0].x) * o.bary.y,
+              (uv[1].y - uv[0].y) * o.bary.x + (uv[2].y - uv[0].y) * o.bary.y};
+    } else {
+      o.uv = {0, 0};
+    }
+  }
+}
+
 }  // namespace lt

@@ -32,6 +32,7 @@ class Material {
   }
   bool emissive() const { return emissive_; }
   bool may_be_transparent() const { return program_.may_be_transparent(); }
+  bool uses_bump() const { return program_.uses_bump(); }
   // A rough scalar for how bright the emission is, for picking lights by power.
   float emission_power_estimate() const { return emission_estimate_; }
   const Program& program() const { return program_; }
@@ -54,5 +55,9 @@ inline Frame local_frame(const ShadingFrame& f, const Vec3& ng) {
 // The shading point as the nodes see it, for a ray of direction ray_d that met sp at distance t
 // from its start (a camera ray starts at the near clip, as Cycles').
 ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ray_d, float t);
+// What Bump needs (ShadingContext::footprint, offset): the ray footprint at the point (Cycles'
+// compact dP: the camera's dP plus its dD times the path's length) and the shading point moved by
+// it along the surface.
+void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float footprint, ShadingContext* ctx);
 
 }  // namespace lt

@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "shading/bsdf.h"
+#include "shading/inputs.h"
 #include "shading/shaders.h"
 
 namespace lt {
@@ -136,6 +137,7 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
     } else {
       out_code.insert(out_code.end(), words.begin(), words.end());
       ++count_;
+      uses_bump_ |= in.op == kOpBump;
     }
     pos += words_of(in);
     ++index;
@@ -149,6 +151,19 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
                       ShadingFrame* frame) const {
   float regs[kMaxRegisters];  // left uninitialised: validation guarantees every read follows a write
   Machine m{regs, constants_.data(), &ctx, &images, bsdf};
+  ShadingContext moved[2];
+  if (uses_bump_) {
+    for (int k = 0; k < 2; ++k) {
+      moved[k] = ctx;
+      const ShadingContext::Offset& d = ctx.offset[k];
+      moved[k].P += d.P;
+      moved[k].object_P += d.object_P;
+      moved[k].generated += d.generated;
+      moved[k].uv = {ctx.uv.x + d.uv.x, ctx.uv.y + d.uv.y};
+      moved[k].bary = {ctx.bary.x + d.bary.x, ctx.bary.y + d.bary.y};
+      m.bumped[k] = &moved[k];
+    }
+  }
   m.emitted = Spectrum(0.0f);
   if (bsdf) bsdf->clear();
   const uint32_t* w = code_.data();

@@ -47,7 +47,14 @@ struct ShadingContext {
   Vec3 object_P;   // object-space position
   Vec3 object_N;   // object-space N
   bool backfacing = false;
-  // The shaded triangle, for attributes (null for lamps and the background).
+  // Bump (add_differentials): the ray footprint (Cycles' compact sd->dP) and what the shading point
+  // changes by when moved along the footprint's two differentials in the surface (Cycles'
+  // differential_from_compact(Ng, dP)): [0] dx, [1] dy.
+  float footprint = 0;
+  struct Offset {
+    Vec3 P, object_P, generated;
+    Vec2 uv, bary;
+  } offset[2];
   const Mesh* mesh = nullptr;
   const Instance* instance = nullptr;
   int primitive = -1;
@@ -69,6 +76,13 @@ struct Machine {
   Vec3 shading_normal;  // set by closures with a Normal input (one normal per shading point)
   bool has_shading_normal = false;
   Vec3 shading_tangent{0.0f};  // set by anisotropic closures: the frame's +X
+
+  // The context moved by each bump differential (set when the program has a Bump node): ops that
+  // read the position take a bump param, 0 (ctx), 1 (dx) or 2 (dy).
+  const ShadingContext* bumped[2] = {nullptr, nullptr};
+  const ShadingContext& at(uint32_t bump) const {
+    return bump == 0 || bump > 2 || !bumped[bump - 1] ? *ctx : *bumped[bump - 1];
+  }
 
   float f(uint32_t w) const { return w & kConstBit ? k[w & kIndexMask] : r[w & kIndexMask]; }
   Vec3 v(uint32_t w) const {
@@ -150,6 +164,8 @@ class Program {
   // Whether the program may emit, and a rough scalar for how bright (for picking lights by power):
   // exact for constant emission, 1 where a texture or a node decides it.
   bool emission_estimate(float* estimate) const;
+  // The program has a Bump node: the shading point's differentials are needed (add_differentials).
+  bool uses_bump() const { return uses_bump_; }
   // Whether the program may give a Transparent lobe (Transparent, Holdout, Principled Alpha): then
   // shadow rays look at it (Cycles' transparent shadows).
   bool may_be_transparent() const;
@@ -159,6 +175,7 @@ class Program {
   std::vector<float> constants_;
   int registers_ = 0;
   size_t count_ = 0;
+  bool uses_bump_ = false;
 };
 
 }  // namespace lt

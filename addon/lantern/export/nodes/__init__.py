@@ -71,6 +71,9 @@ class Compiler:
         self._active = set()  # nodes being compiled: a link back to one is a cycle
         self._closures = 0
         self._flags = {}  # output operand -> code word set to 1 when the output is read
+        # 0: the shading point; 1, 2: moved by its differentials (Bump's copies of its Height
+        # input, as Cycles' SHADER_BUMP_DX / DY): position-reading ops take it as a param.
+        self.bump = 0
         self._warned = set()
         self.bad = []  # non-finite socket values ("'Strength' of 'Emission' (inf)")
 
@@ -126,14 +129,34 @@ class Compiler:
         NODE_IMAGE_ALPHA_UNASSOCIATE, which depend on whether an output is used)."""
         self._flags[operand] = word
 
-    def texcoord(self, name):
-        """An output of the (one) Texture Coordinate instruction: 'Generated', 'UV', ..."""
-        key = ('texcoord',)
+    def texcoord(self, name, object_table=()):
+        """An output of Texture Coordinate ('Generated', 'UV', ...); object_table: another object's
+        world-to-object matrix (12 floats) for its Object output."""
+        key = ('texcoord', tuple(object_table), self.bump)
         if key not in self._memo:
             self._memo[key] = self.emit(
                 ops.TEX_COORD, [], [(n, 3) for n in TEX_COORD_OUTPUTS],
-                params=[self.table([]), self.table(self.camera or [])])
+                params=[self.table(list(object_table)), self.table(self.camera or []), self.bump])
         return self._memo[key][name]
+
+    def geometry(self):
+        """The Geometry instruction's outputs {name: operand}."""
+        key = ('geometry', self.bump)
+        if key not in self._memo:
+            self._memo[key] = self.emit(ops.GEOMETRY, [], GEOMETRY_OUTPUTS, params=[self.bump])
+        return self._memo[key]
+
+    def heights(self, socket):
+        """A float input at the shading point and moved by each of its differentials (Bump)."""
+        saved = self.bump
+        try:
+            out = []
+            for k in (0, 1, 2):
+                self.bump = k
+                out.append(self.float(socket))
+            return out
+        finally:
+            self.bump = saved
 
     # -- sockets --------------------------------------------------------------------------------
 
@@ -255,7 +278,7 @@ class Compiler:
 
     def _output(self, out):
         node = out.node
-        key = (tuple(n.as_pointer() for n in self._scope), node.as_pointer())
+        key = (tuple(n.as_pointer() for n in self._scope), node.as_pointer(), self.bump)
         if key in self._active:
             raise Unsupported("the node tree has a cycle through '%s'" % node.name)
         if key not in self._memo:
@@ -328,6 +351,8 @@ class Compiler:
 
 
 TEX_COORD_OUTPUTS = ("Generated", "Normal", "UV", "Object", "Camera", "Window", "Reflection")
+GEOMETRY_OUTPUTS = [("Position", 3), ("Normal", 3), ("Tangent", 3), ("True Normal", 3), ("Incoming", 3),
+                    ("Parametric", 3), ("Backfacing", 1), ("Pointiness", 1), ("Random Per Island", 1)]
 
 
 def _finite(v):

@@ -41,7 +41,7 @@ def registry(c):
 
 def _attribute(c, kind, name, domain):
     return c.emit(ops.ATTRIBUTE, [], [("Vector", 3), ("Fac", 1), ("Alpha", 1)],
-                  params=[registry(c).id(kind, name), domain])
+                  params=[registry(c).id(kind, name), domain, c.bump])
 
 
 @register('UVMAP')

@@ -255,7 +255,5 @@ def normal(c, node, want):
     if c.linked(node.inputs["Normal"]):
         n = c.vector(node.inputs["Normal"])
     else:
-        n = c.emit(ops.GEOMETRY, [], [("Position", 3), ("Normal", 3), ("Tangent", 3), ("True Normal", 3),
-                                      ("Incoming", 3), ("Parametric", 3), ("Backfacing", 1),
-                                      ("Pointiness", 1), ("Random Per Island", 1)])["Normal"]
+        n = c.geometry()["Normal"]
     return c.emit(ops.NORMAL, [direction, n], [("Normal", 3), ("Dot", 1)])

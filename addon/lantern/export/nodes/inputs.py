@@ -17,25 +17,30 @@ def rgb(c, node, want):
 
 @register('TEX_COORD')
 def tex_coord(c, node, want):
+    if want.name in ("Camera", "Window") and c.camera is None:
+        c.warn("Texture Coordinate '%s': %s output needs the scene camera; 0 is used" % (node.name, want.name))
+    table = ()
     if node.object is not None and want.name == "Object":
         # Another object's space: its world-to-object matrix as a table.
         m = node.object.matrix_world.inverted()
         table = [m[r][k] for r in range(3) for k in range(4)]
-        outs = c.emit(ops.TEX_COORD, [], [(n, 3) for n in TEX_COORD_OUTPUTS],
-                      params=[c.table(table), c.table(c.camera or [])])
-        return outs
-    if want.name in ("Camera", "Window") and c.camera is None:
-        c.warn("Texture Coordinate '%s': %s output needs the scene camera; 0 is used" % (node.name, want.name))
-    return {n: c.texcoord(n) for n in TEX_COORD_OUTPUTS}
+    return {n: c.texcoord(n, table) for n in TEX_COORD_OUTPUTS}
 
 
 @register('NEW_GEOMETRY')
 def geometry(c, node, want):
     if want.name in ("Pointiness", "Random Per Island"):
         c.warn("Geometry '%s': %s is not computed (0.5 and 0 are used)" % (node.name, want.name))
-    return c.emit(ops.GEOMETRY, [], [("Position", 3), ("Normal", 3), ("Tangent", 3), ("True Normal", 3),
-                                     ("Incoming", 3), ("Parametric", 3), ("Backfacing", 1),
-                                     ("Pointiness", 1), ("Random Per Island", 1)])
+    return c.geometry()
+
+
+@register('BUMP')
+def bump(c, node, want):
+    """Cycles' bump: the Height input at the point and moved by the ray footprint's two
+    differentials in the surface (the input's nodes compiled three times)."""
+    heights = c.heights(node.inputs["Height"])
+    return c.emit(ops.BUMP, [c.float(node.inputs["Strength"]), c.float(node.inputs["Distance"])] + heights +
+                  [c.normal(node.inputs["Normal"])], [("Normal", 3)], params=[int(node.invert)])
 
 
 @register('FRESNEL')

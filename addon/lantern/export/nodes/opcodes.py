@@ -28,6 +28,7 @@ ATTRIBUTE = 40
 TANGENT = 41
 NORMAL_MAP = 42
 OBJECT_INFO = 43
+BUMP = 44
 
 # Distribution params (shaders.h)
 DIST_SHARP = 0
