@@ -637,6 +637,67 @@ def build_layered_material(scene):
     add_camera(scene, (0, -4.0, 1.2), (0, 0, 0.45), lens=40.0)
 
 
+def bsdf_zoo_materials():
+    """One material per shader node and distribution issue 13 adds, as users set them up."""
+    def principled_layers(name):
+        mat, nt, out = _material(name)
+        p = nt.nodes.new("ShaderNodeBsdfPrincipled")
+        p.inputs["Base Color"].default_value = (0.7, 0.25, 0.1, 1.0)
+        for key, value in (("Sheen", 1.0), ("Sheen Tint", 0.7), ("Clearcoat", 0.8), ("Clearcoat Roughness", 0.15),
+                           ("Specular Tint", 0.6), ("Anisotropic", 0.6), ("Anisotropic Rotation", 0.2),
+                           ("Roughness", 0.45)):
+            p.inputs[key].default_value = value
+        nt.links.new(p.outputs[0], out.inputs["Surface"])
+        return mat
+
+    def toon(name, component, color):
+        mat = _bsdf_material(name, "ShaderNodeBsdfToon", color, Size=0.6, Smooth=0.2)
+        mat.node_tree.nodes["Toon BSDF"].component = component
+        return mat
+
+    return [
+        _bsdf_material("Velvet", "ShaderNodeBsdfVelvet", (0.8, 0.3, 0.5), Sigma=0.6),
+        _bsdf_material("Translucent", "ShaderNodeBsdfTranslucent", (0.5, 0.8, 0.4)),
+        toon("ToonDiffuse", "DIFFUSE", (0.3, 0.5, 0.9)),
+        toon("ToonGlossy", "GLOSSY", (0.9, 0.8, 0.5)),
+        _bsdf_material("AnisoGGX", "ShaderNodeBsdfAnisotropic", (0.9, 0.7, 0.5), distribution="GGX",
+                       Roughness=0.4, Anisotropy=0.7, Rotation=0.1),
+        _bsdf_material("Beckmann", "ShaderNodeBsdfGlossy", (0.6, 0.8, 0.9), distribution="BECKMANN",
+                       Roughness=0.35),
+        _bsdf_material("Ashikhmin", "ShaderNodeBsdfAnisotropic", (0.8, 0.8, 0.8), distribution="ASHIKHMIN_SHIRLEY",
+                       Roughness=0.3, Anisotropy=-0.5),
+        _bsdf_material("MultiGGX", "ShaderNodeBsdfGlossy", (0.95, 0.75, 0.4), distribution="MULTI_GGX",
+                       Roughness=0.5),
+        _bsdf_material("GlassBeckmann", "ShaderNodeBsdfGlass", (1.0, 1.0, 1.0), distribution="BECKMANN",
+                       Roughness=0.2, IOR=1.45),
+        principled_layers("PrincipledLayers"),
+    ]
+
+
+# The shader nodes whose lit renders depart from Cycles' (README: departures; sphere means under a
+# sun and a sky, 512 samples, Lantern / Cycles: diffuse Toon 0.95-0.97, glossy Toon 0.98-0.99,
+# Anisotropic GGX 1.012-1.015, Beckmann 1.008-1.010, Ashikhmin-Shirley 1.006-1.007, the Principled
+# BSDF with clearcoat 1.005-1.016).
+ZOO_DEPARTURES = ("ToonDiffuse", "ToonGlossy", "AnisoGGX", "Beckmann", "Ashikhmin", "PrincipledLayers")
+
+
+def build_bsdf_zoo(scene, departures=False):
+    """Issue 13's lit agreement of the new shader nodes: spheres of Velvet, Translucent,
+    Multiscatter GGX and Beckmann glass (departures: the ZOO_DEPARTURES nodes instead) on a ground
+    under a sun and a sky."""
+    set_world(scene, (0.35, 0.45, 0.6), 0.8)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 30.0))
+    assign(ground, principled("Ground", (0.5, 0.5, 0.5), 0.7))
+    mats = [m for m in bsdf_zoo_materials() if (m.name in ZOO_DEPARTURES) == departures]
+    for i, mat in enumerate(mats):
+        row, col = divmod(i, 4)
+        sphere = add_object(scene, "Sphere_" + mat.name, mesh_sphere("Sphere_" + mat.name, 0.4),
+                            ((col - 1.5) * 0.95, row * 1.1, 0.4))
+        assign(sphere, mat)
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(40, 0, 25), angle=math.radians(3.0))
+    add_camera(scene, (0, -5.2, 2.6), (0, 0.55, 0.35), lens=38.0)
+
+
 def build_metal_box(scene):
     """A closed 4 x 4 x 3 m box of rough (0.2) copper-coloured Principled metal with the camera and
     a small point light inside, 8 bounces of every kind (issue 18: rough metal after several
@@ -1261,6 +1322,8 @@ SCENES = {
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
+    "bsdf_zoo": (build_bsdf_zoo, (128, 80), 128),
+    "bsdf_zoo_departures": (lambda scene: build_bsdf_zoo(scene, departures=True), (128, 80), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
     "door_bounce": (build_door_bounce, (96, 96), 1280),
