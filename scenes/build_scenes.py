@@ -698,6 +698,84 @@ def build_bsdf_zoo(scene, departures=False):
     add_camera(scene, (0, -5.2, 2.6), (0, 0.55, 0.35), lens=38.0)
 
 
+def gltf_pbr_file(directory, scene):
+    """A glTF 2.0 file as other tools write them: a UV sphere whose PBR material has a base colour
+    texture times a factor, a metallic-roughness texture (G roughness, B metallic) with factors and
+    a tangent-space normal map; written by Blender's exporter from the empty `scene` (left empty
+    again), factors added to the JSON."""
+    import json
+    n = 32
+    y, x = (np.mgrid[0:n, 0:n] + 0.5) / n
+    one = np.ones_like(x)
+    textures = {
+        "Base": (np.dstack([0.3 + 0.6 * x, 0.4 + 0.3 * y, 0.5 + 0.4 * (1 - x), one]), "sRGB"),
+        "MetalRough": (np.dstack([0 * x, 0.2 + 0.6 * y, (x > 0.5) * 1.0, one]), "Non-Color"),
+        "NormalMap": (np.dstack([0.5 + 0.3 * np.sin(6 * x), 0.5 + 0.3 * np.cos(6 * y), 0.85 * one, one]), "Non-Color"),
+    }
+    images = {k: packed_image(k, px, space) for k, (px, space) in textures.items()}
+    mat, nt, out = _material("PBR")
+    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+
+    def tex(name):
+        t = nt.nodes.new("ShaderNodeTexImage")
+        t.image = images[name]
+        return t
+    nt.links.new(tex("Base").outputs["Color"], bsdf.inputs["Base Color"])
+    sep = nt.nodes.new("ShaderNodeSeparateRGB")
+    nt.links.new(tex("MetalRough").outputs["Color"], sep.inputs[0])
+    nt.links.new(sep.outputs["G"], bsdf.inputs["Roughness"])
+    nt.links.new(sep.outputs["B"], bsdf.inputs["Metallic"])
+    nmap = nt.nodes.new("ShaderNodeNormalMap")
+    nt.links.new(tex("NormalMap").outputs["Color"], nmap.inputs["Color"])
+    nt.links.new(nmap.outputs[0], bsdf.inputs["Normal"])
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    ball = add_object(scene, "Ball", mesh_sphere("Ball", 0.6), (0, 0, 0.6))
+    assign(ball, mat)
+    path = os.path.join(directory, "ball.gltf")
+    with bpy.context.temp_override(scene=scene, view_layer=scene.view_layers[0]):
+        bpy.ops.export_scene.gltf(filepath=path, export_format='GLTF_SEPARATE', export_cameras=False,
+                                  export_lights=False)
+    bpy.data.objects.remove(ball)
+    mat.name = "PBR source"  # the imported material takes the glTF's name, "PBR"
+    with open(path) as f:
+        doc = json.load(f)
+    pbr = doc["materials"][0]["pbrMetallicRoughness"]
+    pbr.update(baseColorFactor=[0.9, 0.75, 0.6, 1.0], roughnessFactor=0.8, metallicFactor=0.9)
+    doc["materials"][0]["normalTexture"]["scale"] = 0.7
+    with open(path, "w") as f:
+        json.dump(doc, f)
+    return path
+
+
+def build_gltf_pbr(scene):
+    """Issue 13's "glTF-imported PBR material": gltf_pbr_file imported by Blender's glTF importer
+    (Separate Color for metallic and roughness, Normal Map, base colour times its factor, as the
+    importer builds them) on a ground under a sun and a sky."""
+    import tempfile
+    import numpy
+    path = gltf_pbr_file(tempfile.mkdtemp(prefix="lantern_gltf_"), scene)
+    if not hasattr(numpy, "bool"):
+        numpy.bool = bool  # Blender 3.4's glTF importer uses the alias NumPy 1.24 removed
+    with bpy.context.temp_override(scene=scene, view_layer=scene.view_layers[0]):
+        bpy.ops.import_scene.gltf(filepath=path)
+    set_world(scene, (0.35, 0.45, 0.6), 0.8)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 20.0))
+    assign(ground, principled("Ground", (0.5, 0.5, 0.5), 0.7))
+    # A wide sun: the metal half of the ball mirrors it, and a small one would take many samples.
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(45, 0, 30), angle=math.radians(10.0))
+    add_camera(scene, (0, -2.6, 1.2), (0, 0, 0.55), lens=45.0)
+
+
+def build_wide_sun(scene):
+    """A 20-degree sun alone over a rough ground and a diffuse sphere: Cycles' sun radiance grows
+    as 1 / cos^3 across its disk (a constant one, as Lantern had, is 2.3 % darker here)."""
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 20.0))
+    assign(ground, principled("Ground", (0.6, 0.6, 0.6), 0.8))
+    assign(add_object(scene, "Sphere", mesh_sphere("Sphere", 0.5), (0, 0, 0.5)), diffuse("Grey", (0.7, 0.7, 0.7)))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(35, 0, 20), angle=math.radians(20.0))
+    add_camera(scene, (0, -3.5, 1.6), (0, 0, 0.4), lens=40.0)
+
+
 def build_metal_box(scene):
     """A closed 4 x 4 x 3 m box of rough (0.2) copper-coloured Principled metal with the camera and
     a small point light inside, 8 bounces of every kind (issue 18: rough metal after several
@@ -1322,6 +1400,8 @@ SCENES = {
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
+    "gltf_pbr": (build_gltf_pbr, (80, 80), 256),
+    "wide_sun": (build_wide_sun, (64, 48), 128),
     "bsdf_zoo": (build_bsdf_zoo, (128, 80), 128),
     "bsdf_zoo_departures": (lambda scene: build_bsdf_zoo(scene, departures=True), (128, 80), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),

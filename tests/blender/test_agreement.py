@@ -153,6 +153,25 @@ def test_shader_nodes_that_depart_from_cycles_when_lit(scene_factory, outdir):
     assert report == "", report
 
 
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_gltf_imported_pbr_material_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Issue 13's "glTF-imported PBR material" (gltf_pbr: Blender's glTF importer builds Separate
+    Color for metallic and roughness, Math nodes for their factors, Mix for the base colour factor
+    and a Normal Map): per tile and in the image mean as above."""
+    both = lantern_and_cycles(scene_factory, "gltf_pbr", integrator)
+    report, _ = ru.agreement_report("gltf_pbr_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
+def test_wide_sun_agrees_with_cycles(scene_factory, outdir):
+    """A 20-degree sun (wide_sun): Cycles weighs every sample of its disk by the sampling pdf, so its
+    radiance grows as 1 / cos^3 across the disk; per tile and in the image mean as above."""
+    both = lantern_and_cycles(scene_factory, "wide_sun", "PATH")
+    report, _ = ru.agreement_report("wide_sun", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
 def test_rough_metal_after_several_bounces_agrees_with_cycles(scene_factory, outdir):
     """Issue 18: "rough metal seems to reflect more than Cycles after several bounces (+25 % after
     8 bounces at roughness 0.2)". metal_box (closed, copper Principled metal at roughness 0.2, 8

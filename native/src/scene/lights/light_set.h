@@ -58,7 +58,7 @@ class LightSet {
   void escaped_suns(const Vec3& d, unsigned visibility, F visit) const {
     for (int i : suns_) {
       const Light& l = lights_[i];
-      if ((l.visibility & visibility) && sun_intersect(l, d)) visit(i, sun_radiance(l));
+      if ((l.visibility & visibility) && sun_intersect(l, d)) visit(i, sun_radiance(l, d));
     }
   }
   bool has_hittable() const { return !hittable_.empty() || !suns_.empty(); }
