@@ -12,9 +12,13 @@ import sys
 
 import bpy
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "addon"))
-for name in [m for m in sys.modules if m == "lantern" or m.startswith("lantern.")]:
-    del sys.modules[name]
+ADDON = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "addon")
+sys.path.insert(0, ADDON)
+_loaded = sys.modules.get("lantern")
+if _loaded is not None and not os.path.abspath(_loaded.__file__).startswith(ADDON + os.sep):
+    # An installed copy was imported first (Blender's add-on folder): read this checkout's.
+    for name in [m for m in sys.modules if m == "lantern" or m.startswith("lantern.")]:
+        del sys.modules[name]
 
 from lantern.export import nodes  # noqa: E402
 
