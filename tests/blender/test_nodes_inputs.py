@@ -169,3 +169,23 @@ def test_bump(source, invert, outdir):
         nt.links.new(height, b.inputs["Height"])
         return b.outputs["Normal"]
     compare_view(build, "bump_%s_%s" % (source, invert), outdir, shape="sphere")
+
+
+@pytest.mark.parametrize("output", ["View Vector", "View Z Depth", "View Distance"])
+def test_camera_data(output, outdir):
+    compare_view(_output("ShaderNodeCameraData", output), "camera_data_" + output.replace(" ", "_"), outdir,
+                 shape="sphere")
+
+
+@pytest.mark.parametrize("output", ["Quadratic", "Linear", "Constant"])
+@pytest.mark.parametrize("smooth", [0.0, 2.0])
+def test_light_falloff(output, smooth, outdir):
+    """On camera rays: the strength times 1, the ray length or its square (Cycles' ray length from
+    the near clip), smoothed."""
+    def build(nt, coords):
+        f = node(nt, "ShaderNodeLightFalloff", Smooth=smooth)
+        sep = node(nt, "ShaderNodeSeparateXYZ")
+        nt.links.new(coords, sep.inputs[0])
+        nt.links.new(sep.outputs["Z"], f.inputs["Strength"])
+        return f.outputs[output]
+    compare_view(build, "light_falloff_%s_%g" % (output, smooth), outdir, shape="sphere")

@@ -27,6 +27,8 @@ const OpSignature kSignatures[] = {
     {"fv", "v", "ii", false},           // normal map
     {"", "vvfff", "", false},           // object info
     {"fffffv", "v", "i", false},        // bump
+    {"", "vff", "t", false},            // camera data
+    {"ff", "fff", "", false},           // light falloff
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -221,7 +223,7 @@ void bump(const Instr& in, Machine& m) {
 }  // namespace
 
 const OpSignature* inputs_family_signature(uint32_t op) {
-  if (op < kOpTexCoord || op > kOpBump) return nullptr;
+  if (op < kOpTexCoord || op > kOpLightFalloff) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
@@ -295,6 +297,24 @@ void exec_inputs_family(const Instr& in, Machine& m) {
     case kOpBump:
       bump(in, m);
       break;
+    case kOpCameraData: {
+      const float* camera = m.k + in.param[0];
+      const Vec3 v = camera[0] == 28 ? affine(camera + 1, c.P) : Vec3(0.0f);
+      const float d = length(v);
+      m.set(in.out[0], d > 0 ? v / d : Vec3(0.0f));
+      m.set(in.out[1], v.z);
+      m.set(in.out[2], d);
+      break;
+    }
+    case kOpLightFalloff: {
+      float strength = m.f(in.in[0]);
+      const float smooth = m.f(in.in[1]), squared = c.ray_length * c.ray_length;
+      if (smooth > 0 && std::isfinite(squared)) strength *= squared / (smooth + squared);
+      m.set(in.out[0], strength);
+      m.set(in.out[1], strength * c.ray_length);
+      m.set(in.out[2], strength * squared);
+      break;
+    }
     case kOpLightPath: {
       const float v[14] = {float(c.camera_ray),
                            float(c.shadow_ray),

@@ -47,6 +47,12 @@ enum InputOp : uint32_t {
   // offset f, at the dy offset f, normal v; out: normal v; param: invert. The add-on compiles the
   // Height input three times, the copies' position-reading ops with bump params 1 and 2.
   kOpBump,
+  // Camera Data (Cycles' svm_node_camera): out: view vector v, view Z depth f, view distance f;
+  // param: camera table (as Texture Coordinate's; 0 floats: zeros).
+  kOpCameraData,
+  // Light Falloff (Cycles' svm_node_light_falloff): in: strength f, smooth f; out: quadratic f,
+  // linear f, constant f (strength times 1, the ray length, its square; smoothed).
+  kOpLightFalloff,
 };
 
 }  // namespace lt

@@ -43,6 +43,20 @@ def bump(c, node, want):
                   [c.normal(node.inputs["Normal"])], [("Normal", 3)], params=[int(node.invert)])
 
 
+@register('CAMERA')
+def camera_data(c, node, want):
+    if c.camera is None:
+        c.warn("Camera Data '%s' needs the scene camera; 0 is used" % node.name)
+    return c.emit(ops.CAMERA_DATA, [], [("View Vector", 3), ("View Z Depth", 1), ("View Distance", 1)],
+                  params=[c.table(c.camera or [])])
+
+
+@register('LIGHT_FALLOFF')
+def light_falloff(c, node, want):
+    return c.emit(ops.LIGHT_FALLOFF, [c.float(node.inputs["Strength"]), c.float(node.inputs["Smooth"])],
+                  [("Quadratic", 1), ("Linear", 1), ("Constant", 1)])
+
+
 @register('FRESNEL')
 def fresnel(c, node, want):
     return c.emit(ops.FRESNEL, [c.float(node.inputs["IOR"]), c.normal(node.inputs["Normal"])], [("Fac", 1)])

@@ -29,6 +29,8 @@ TANGENT = 41
 NORMAL_MAP = 42
 OBJECT_INFO = 43
 BUMP = 44
+CAMERA_DATA = 45
+LIGHT_FALLOFF = 46
 
 # Distribution params (shaders.h)
 DIST_SHARP = 0
