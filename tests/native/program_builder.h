@@ -24,7 +24,9 @@ struct ShaderCode {
     return lt::kConstBit | (1u << 24) | uint32_t(k.size() - 1);
   }
   uint32_t c3(Rgb v) {
-    k.insert(k.end(), {v.x, v.y, v.z});
+    k.push_back(v.x);  // three push_backs: GCC 12 warns falsely on inserting an initializer list
+    k.push_back(v.y);
+    k.push_back(v.z);
     return lt::kConstBit | (3u << 24) | uint32_t(k.size() - 3);
   }
   // Appends an instruction; returns its output operands.

@@ -126,7 +126,9 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
     }
     if (sig->pure && all_constant && in.n_out > 0) {
       // Fold: run once and move the outputs into the pool.
-      Machine m{scratch.data(), constants.data(), nullptr, nullptr, nullptr};
+      Machine m;
+      m.r = scratch.data();
+      m.k = constants.data();
       execute(decode(words.data()), m);
       for (int k = 0; k < in.n_out; ++k) {
         const uint32_t at = operand_index(outs[k]);
@@ -150,7 +152,12 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
 Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
                       ShadingFrame* frame) const {
   float regs[kMaxRegisters];  // left uninitialised: validation guarantees every read follows a write
-  Machine m{regs, constants_.data(), &ctx, &images, bsdf};
+  Machine m;
+  m.r = regs;
+  m.k = constants_.data();
+  m.ctx = &ctx;
+  m.images = &images;
+  m.bsdf = bsdf;
   ShadingContext moved[2];
   if (uses_bump_) {
     for (int k = 0; k < 2; ++k) {

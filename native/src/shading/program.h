@@ -67,11 +67,11 @@ struct ShadingContext {
 
 // The machine an instruction runs on: read inputs, write outputs.
 struct Machine {
-  float* r;        // registers
-  const float* k;  // constant pool
-  const ShadingContext* ctx;
-  const std::vector<std::unique_ptr<Image>>* images;
-  Bsdf* bsdf;  // null: emission only (light sampling)
+  float* r = nullptr;        // registers
+  const float* k = nullptr;  // constant pool
+  const ShadingContext* ctx = nullptr;
+  const std::vector<std::unique_ptr<Image>>* images = nullptr;
+  Bsdf* bsdf = nullptr;  // null: emission only (light sampling)
   Spectrum emitted;
   Vec3 shading_normal;  // set by closures with a Normal input (one normal per shading point)
   bool has_shading_normal = false;
