@@ -10,6 +10,14 @@ namespace lt {
 
 namespace {
 
+// floor(x) as an int, clamped to int's range (NaN: 0): Cycles casts directly, which C++ leaves
+// undefined beyond the range (a fuzzed or infinite coordinate).
+int floor_int(float x) {
+  const float f = std::floor(x);
+  if (!(f == f)) return 0;
+  return f >= 2147483520.0f ? 2147483520 : (f <= -2147483520.0f ? -2147483520 : int(f));
+}
+
 constexpr float kTwoPi = 6.2831853071795864f;
 constexpr float kHalfPi = 1.5707963267948966f;
 
@@ -751,9 +759,9 @@ float checker(Vec3 p) {
   p.x = (p.x + 0.000001f) * 0.999999f;
   p.y = (p.y + 0.000001f) * 0.999999f;
   p.z = (p.z + 0.000001f) * 0.999999f;
-  int xi = std::abs((int)std::floor(p.x));
-  int yi = std::abs((int)std::floor(p.y));
-  int zi = std::abs((int)std::floor(p.z));
+  int xi = std::abs(floor_int(p.x));
+  int yi = std::abs(floor_int(p.y));
+  int zi = std::abs(floor_int(p.z));
   return ((int)(xi % 2 == yi % 2) == (zi % 2)) ? 1.0f : 0.0f;
 }
 
@@ -770,12 +778,12 @@ void brick(Vec3 p, float mortar_size, float mortar_smooth, float bias, float bri
            float offset_amount, int offset_frequency, float squash_amount, int squash_frequency, float* tint,
            float* mortar) {
   float offset = 0.0f;
-  int rownum = (int)std::floor(p.y / row_height);
+  int rownum = floor_int(p.y / row_height);
   if (offset_frequency && squash_frequency) {
     brick_width *= (rownum % squash_frequency) ? 1.0f : squash_amount;
     offset = (rownum % offset_frequency) ? 0.0f : (brick_width * offset_amount);
   }
-  int bricknum = (int)std::floor((p.x + offset) / brick_width);
+  int bricknum = floor_int((p.x + offset) / brick_width);
   float x = (p.x + offset) - brick_width * bricknum;
   float y = p.y - row_height * rownum;
   *tint = saturate(brick_noise(((uint32_t)rownum << 16) + (uint32_t)(bricknum & 0xFFFF)) + bias);
