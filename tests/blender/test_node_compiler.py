@@ -58,11 +58,7 @@ def _compile(material):
 
 
 def _emission_material(name):
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    nt = mat.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    mat, nt, out = bs._material(name)
     em = nt.nodes.new("ShaderNodeEmission")
     nt.links.new(em.outputs[0], out.inputs["Surface"])
     return mat, nt, em
