@@ -173,11 +173,12 @@ JITTER = 0.01
 VIEW = float(os.environ.get("TEX_VIEW", 0.6))
 
 
-def view_scene(build, negate=False, shape="plane"):
+def view_scene(build, negate=False, shape="plane", displacement=None):
     """shape "plane": a 4 x 4 plane filling an orthographic view; the mesh is tilted inside its
     object (and the object tilted back), so Object coordinates vary along all three axes over the
     image. "sphere": a smooth UV sphere of radius 1 filling most of a perspective view. `build(nt,
-    coords)` returns the socket shown (coords: Texture Coordinate's Object output)."""
+    coords)` returns the socket shown (coords: Texture Coordinate's Object output); `displacement`,
+    when given, the same way the socket linked into the Material Output's Displacement."""
     bs.reset_file()
     scene = bs.new_scene("view", resolution=(RES, RES), samples=1)
     c = scene.cycles
@@ -214,6 +215,8 @@ def view_scene(build, negate=False, shape="plane"):
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     nt.links.new(shown, em.inputs["Color"])
     nt.links.new(em.outputs[0], out.inputs["Surface"])
+    if displacement is not None:
+        nt.links.new(displacement(nt, coords), out.inputs["Displacement"])
     bs.assign(obj, mat)
     return scene
 
@@ -245,8 +248,8 @@ def slope_of(img):
     return s
 
 
-def render_pair(build, label, outdir, negate=False, shape="plane"):
-    scene = view_scene(build, negate, shape)
+def render_pair(build, label, outdir, negate=False, shape="plane", displacement=None):
+    scene = view_scene(build, negate, shape, displacement)
     tag = label + ("_neg" if negate else "")
     lantern = ru.render(scene, ru.LANTERN, samples=SAMPLES, outdir=outdir, tag=tag + "_lantern").combined
     cycles = ru.render(scene, ru.CYCLES, samples=SAMPLES, outdir=outdir, tag=tag + "_cycles").combined
@@ -263,18 +266,18 @@ def render_pair(build, label, outdir, negate=False, shape="plane"):
     return lantern[..., :3][inner], cycles[..., :3][inner], (lantern, cycles, slope)
 
 
-def compare_view(build, label, outdir, flat=False, shape="plane"):
+def compare_view(build, label, outdir, flat=False, shape="plane", displacement=None):
     """Renders the set-up `build` makes in both engines and compares them pixel by pixel. Should
     Lantern's emission keep no negative radiance where Cycles' does, the set-up is rendered again
     negated (an exact negation after the node) and the positive parts of both renders are compared,
     so both signs of the output are still checked."""
-    lantern, cycles, images = render_pair(build, label, outdir, shape=shape)
+    lantern, cycles, images = render_pair(build, label, outdir, shape=shape, displacement=displacement)
     # The image must show a pattern, or the comparison proves little.
     assert flat or float(cycles.std()) > 1e-3, "%s: Cycles renders a flat image" % label
     slope = images[2]
     bad, worst = beyond(lantern, cycles, slope)
     if bad.mean() > OUTLIERS and (cycles < 0).any() and (lantern >= 0).all():
-        lantern_neg, _, _ = render_pair(build, label, outdir, negate=True, shape=shape)
+        lantern_neg, _, _ = render_pair(build, label, outdir, negate=True, shape=shape, displacement=displacement)
         bad, worst = beyond(lantern, np.maximum(cycles, 0.0), slope)
         bad_neg, worst_neg = beyond(lantern_neg, np.maximum(-cycles, 0.0), slope)
         bad, worst = bad | bad_neg, max(worst, worst_neg)

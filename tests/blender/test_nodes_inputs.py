@@ -189,3 +189,114 @@ def test_light_falloff(output, smooth, outdir):
         nt.links.new(sep.outputs["Z"], f.inputs["Strength"])
         return f.outputs[output]
     compare_view(build, "light_falloff_%s_%g" % (output, smooth), outdir, shape="sphere")
+
+
+def _smooth_image(name, size=16, colorspace="sRGB"):
+    """A byte image of slow periodic colours (seamless when repeated): every pixel's value varies
+    slowly enough under the views for the engines' sample jitter."""
+    import numpy as np
+
+    import build_scenes as bs
+    y, x = (np.mgrid[0:size, 0:size] + 0.5) / size
+    rgba = np.stack([0.5 + 0.45 * np.sin(2 * np.pi * x), 0.5 + 0.45 * np.sin(2 * np.pi * y + 1.0),
+                     0.5 + 0.45 * np.sin(2 * np.pi * (x + y)), np.ones_like(x)], axis=-1)
+    return bs.packed_image(name, rgba, colorspace)
+
+
+def _image_node(nt, image, **props):
+    tex = node(nt, "ShaderNodeTexImage", props)
+    tex.image = image
+    return tex
+
+
+@pytest.mark.parametrize("blend", [0.0, 0.25, 0.6])
+@pytest.mark.parametrize("shape", ["sphere", "plane"])
+def test_image_box_projection(blend, shape, outdir):
+    """Box projection (Cycles' svm_node_tex_image_box): three planar lookups along the object
+    axes weighted by the object-space normal, blended over `blend`, on a rotated sphere (every
+    normal direction) and on a tilted plane. Blend 0 has hard seams: they are the few outliers."""
+    def build(nt, coords):
+        tex = _image_node(nt, _smooth_image("box"), projection="BOX", projection_blend=blend)
+        nt.links.new(coords, tex.inputs["Vector"])
+        return tex.outputs["Color"]
+    compare_view(build, "image_box_%g_%s" % (blend, shape), outdir, shape=shape)
+
+
+@pytest.mark.parametrize("interpolation", ["Cubic", "Smart", "Linear", "Closest"])
+@pytest.mark.parametrize("extension", ["REPEAT", "EXTEND", "CLIP"])
+def test_image_interpolation_and_extension(interpolation, extension, outdir):
+    """A 6 x 6 image of random texels magnified (7 pixels a texel) through a Mapping of scale 3, so
+    the view crosses its edges three times: Cycles' CPU cubic B-spline (Smart is Cubic on the CPU)
+    and each extension (Blender 3.4 has no Mirror extension: it came with 3.5)."""
+    import numpy as np
+
+    import build_scenes as bs
+
+    def build(nt, coords):
+        rng = np.random.default_rng(7)
+        rgba = np.concatenate([rng.random((6, 6, 3)), np.ones((6, 6, 1))], axis=-1)
+        tex = _image_node(nt, bs.packed_image("texels", rgba, "sRGB"), interpolation=interpolation,
+                          extension=extension)
+        shift = node(nt, "ShaderNodeVectorMath", {"operation": "MULTIPLY_ADD"})
+        nt.links.new(coords, shift.inputs[0])
+        shift.inputs[1].default_value = (1.6, 1.6, 1.6)
+        shift.inputs[2].default_value = (0.5, 0.5, 0.5)
+        mapping = node(nt, "ShaderNodeMapping", {"vector_type": "POINT"})
+        mapping.inputs["Scale"].default_value = (3.0, 3.0, 3.0)
+        nt.links.new(shift.outputs[0], mapping.inputs["Vector"])
+        nt.links.new(mapping.outputs[0], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+    compare_view(build, "image_%s_%s" % (interpolation, extension), outdir)
+
+
+@pytest.mark.parametrize("vector_type", ["POINT", "VECTOR", "NORMAL"])
+@pytest.mark.parametrize("convert_from", ["WORLD", "OBJECT", "CAMERA"])
+@pytest.mark.parametrize("convert_to", ["WORLD", "OBJECT", "CAMERA"])
+def test_vector_transform(vector_type, convert_from, convert_to, outdir):
+    """Cycles' svm_node_vector_transform: points, directions and normals (transformed as
+    directions, then normalised) between world, object and camera space, on a rotated sphere."""
+    def build(nt, coords):
+        vt = node(nt, "ShaderNodeVectorTransform", {"vector_type": vector_type, "convert_from": convert_from,
+                                                    "convert_to": convert_to})
+        nt.links.new(coords, vt.inputs["Vector"])
+        return vt.outputs["Vector"]
+    compare_view(build, "vector_transform_%s_%s_%s" % (vector_type, convert_from, convert_to), outdir,
+                 shape="sphere")
+
+
+def _height_image(nt, coords):
+    """A smooth height image (Non-Color, cubic: its slope is continuous) at Object coordinates."""
+    tex = _image_node(nt, _smooth_image("height", 16, "Non-Color"), interpolation="Cubic")
+    nt.links.new(coords, tex.inputs["Vector"])
+    return tex
+
+
+@pytest.mark.parametrize("source", ["height_object", "height_world", "vector_object", "vector_world",
+                                    "vector_tangent"])
+@pytest.mark.parametrize("shown", ["Normal", "Fresnel"])
+def test_displacement_as_bump(source, shown, outdir):
+    """The Material Output's Displacement (method Bump, Cycles 3.4's default): Cycles turns the
+    displacement into a height along the normal (its dot with Geometry's Normal), bumps the normal
+    from it with finite differences over the ray footprint (Distance 1) and sets that normal as the
+    shading point's (SetNormal): Geometry's Normal and every default Normal input see it. Heights
+    from an image through Displacement (object or world space) or Vector Displacement (tangent,
+    object, world)."""
+    def displacement(nt, coords):
+        tex = _height_image(nt, coords)
+        if source.startswith("height"):
+            d = node(nt, "ShaderNodeDisplacement", {"space": source.split("_")[1].upper()}, Midlevel=0.5,
+                     Scale=0.15)
+            nt.links.new(tex.outputs["Color"], d.inputs["Height"])
+        else:
+            d = node(nt, "ShaderNodeVectorDisplacement", {"space": source.split("_")[1].upper()}, Midlevel=0.5,
+                     Scale=0.15)
+            nt.links.new(tex.outputs["Color"], d.inputs["Vector"])
+        return d.outputs["Displacement"]
+
+    def build(nt, coords):
+        if shown == "Normal":
+            return node(nt, "ShaderNodeNewGeometry").outputs["Normal"]
+        return node(nt, "ShaderNodeFresnel", IOR=1.5).outputs["Fac"]
+    # The tangent space needs a UV map: the plane has one, the sphere none.
+    compare_view(build, "displacement_%s_%s" % (source, shown), outdir,
+                 shape="plane" if source == "vector_tangent" else "sphere", displacement=displacement)

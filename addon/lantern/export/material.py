@@ -9,7 +9,9 @@ from .nodes.attributes import AttributeRegistry
 # Rec. 709 luma, as Blender converts a colour into a float socket.
 _LUMA = (0.2126, 0.7152, 0.0722)
 
-_INTERPOLATION = {'Linear': core.INTERP_LINEAR, 'Closest': core.INTERP_CLOSEST}
+# Smart is Cubic on the CPU (Cycles' kernel/device/cpu/image.h).
+_INTERPOLATION = {'Linear': core.INTERP_LINEAR, 'Closest': core.INTERP_CLOSEST, 'Cubic': core.INTERP_CUBIC,
+                  'Smart': core.INTERP_CUBIC}
 _EXTENSION = {'REPEAT': core.EXTENSION_REPEAT, 'EXTEND': core.EXTENSION_EXTEND,
               'CLIP': core.EXTENSION_CLIP}
 
@@ -304,7 +306,8 @@ class MaterialExporter:
                 elif output is None:
                     self._warn("no active Material Output node, rendered black")
                 else:
-                    c.compile_surface(output)
+                    cycles = getattr(material, "cycles", None)
+                    c.compile_surface(output, getattr(cycles, "displacement_method", 'BUMP'))
             else:
                 c.closure(nodes.ops.DIFFUSE, [c.const((1.0, 1.0, 1.0)), c.const((0.0, 0.0, 0.0)),
                                               c.const(tuple(material.diffuse_color[:3])), c.const(0.0)])

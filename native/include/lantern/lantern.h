@@ -73,7 +73,8 @@ LT_API const char* lt_scene_warning(const lt_scene* scene, int index);
 /* Images (textures, environment maps). pixels: width*height*channels floats, rows bottom to top
  * as Blender stores them. channels 1, 3 or 4. srgb != 0: values are sRGB-encoded and are decoded
  * to linear when loaded. */
-enum lt_interpolation { LT_INTERP_LINEAR = 0, LT_INTERP_CLOSEST = 1 };
+/* Cubic: Cycles' CPU bicubic B-spline (Blender's Cubic, and Smart on the CPU). */
+enum lt_interpolation { LT_INTERP_LINEAR = 0, LT_INTERP_CLOSEST = 1, LT_INTERP_CUBIC = 2 };
 enum lt_extension { LT_EXTENSION_REPEAT = 0, LT_EXTENSION_EXTEND = 1, LT_EXTENSION_CLIP = 2 };
 /* What a 4-channel image's alpha means (Cycles' image alpha types): IGNORE drops it (opaque);
  * STRAIGHT colours are premultiplied when stored, as Cycles associates them (bytes: (c a) / 255 in

@@ -32,6 +32,7 @@ const lt_abi_entry kLayout[] = {
 
     LT_CONST(lt_interpolation, LT_INTERP_LINEAR),
     LT_CONST(lt_interpolation, LT_INTERP_CLOSEST),
+    LT_CONST(lt_interpolation, LT_INTERP_CUBIC),
     LT_CONST(lt_extension, LT_EXTENSION_REPEAT),
     LT_CONST(lt_extension, LT_EXTENSION_EXTEND),
     LT_CONST(lt_extension, LT_EXTENSION_CLIP),

@@ -132,7 +132,9 @@ void check_image(const lt_image_desc& d) {
           "image size " + std::to_string(d.width) + "x" + std::to_string(d.height) + " is out of range");
   require(d.channels == 1 || d.channels == 3 || d.channels == 4,
           "image has " + std::to_string(d.channels) + " channels; 1, 3 or 4 are supported");
-  require(d.interpolation == LT_INTERP_LINEAR || d.interpolation == LT_INTERP_CLOSEST, "unknown image interpolation");
+  require(
+      d.interpolation == LT_INTERP_LINEAR || d.interpolation == LT_INTERP_CLOSEST || d.interpolation == LT_INTERP_CUBIC,
+      "unknown image interpolation");
   require(d.extension >= LT_EXTENSION_REPEAT && d.extension <= LT_EXTENSION_CLIP, "unknown image extension");
   require(
       d.alpha >= LT_ALPHA_IGNORE && d.alpha <= LT_ALPHA_CHANNEL_PACKED,
@@ -140,7 +142,9 @@ void check_image(const lt_image_desc& d) {
 }
 
 lt::Interpolation interpolation(const lt_image_desc& d) {
-  return d.interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest : lt::Interpolation::Linear;
+  return d.interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest
+         : d.interpolation == LT_INTERP_CUBIC ? lt::Interpolation::Cubic
+                                              : lt::Interpolation::Linear;
 }  // 268 M pixels: beyond this a render is a mistake
 
 lt::Material to_material(const lt_scene* scene, const lt_shader_program* p) {

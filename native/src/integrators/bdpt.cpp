@@ -315,6 +315,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       const float footprint_here = mode == Mode::Radiance ? footprint + ctx.ray_length * cs_.dD : light_footprint(sp.p);
       if (material.uses_bump()) add_differentials(scene_.geometry, sp, footprint_here, &ctx);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
+      if (!is_black(sf.smooth)) smooth_n = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
       // A transparent pass makes no vertex (connections see the surface through
       // shadow_transmittance); an emitting surface stays a vertex.
       if (is_black(le) && material.may_be_transparent() && v.bsdf.pass_transparent(sampler_.next_1d(), &beta)) {

@@ -153,6 +153,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
       const Material& material = scene.material(sp.material);
       if (material.uses_bump()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
       Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
+      if (!is_black(sf.smooth)) ctx.N = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
       const Frame frame = local_frame(sf, ng);
       const Vec3 ns = frame.n;
       if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);

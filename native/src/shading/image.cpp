@@ -157,6 +157,29 @@ T Image::filtered(Vec2 uv, F get) const {
   float tx = x - fx, ty = y - fy;
   int x0 = int(fx), y0 = int(fy);
   T sum(0.0f);
+  if (interp_ == Interpolation::Cubic) {
+    // Cycles' CPU interp_cubic: uniform cubic B-spline weights over the 4 x 4 texels around
+    // (x0 - 1 .. x0 + 2); texels outside a Clip image are 0.
+    float u[4], v[4];
+    auto weights = [](float t, float* w) {
+      w[0] = (((-1.0f / 6.0f) * t + 0.5f) * t - 0.5f) * t + (1.0f / 6.0f);
+      w[1] = ((0.5f * t - 1.0f) * t) * t + (2.0f / 3.0f);
+      w[2] = ((-0.5f * t + 0.5f) * t + 0.5f) * t + (1.0f / 6.0f);
+      w[3] = (1.0f / 6.0f) * t * t * t;
+    };
+    weights(tx, u);
+    weights(ty, v);
+    for (int j = 0; j < 4; ++j) {
+      T row(0.0f);
+      for (int i = 0; i < 4; ++i) {
+        bool inside = true;
+        const int ix = wrap(x0 - 1 + i, width_, &inside), iy = wrap(y0 - 1 + j, height_, &inside);
+        if (inside) row = row + get(ix, iy) * u[i];
+      }
+      sum = sum + row * v[j];
+    }
+    return sum;
+  }
   const float w[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
   for (int k = 0; k < 4; ++k) {
     bool inside = true;

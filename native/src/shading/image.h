@@ -14,7 +14,8 @@
 
 namespace lt {
 
-enum class Interpolation { Linear, Closest };
+// Cubic: Cycles' CPU bicubic B-spline (kernel/device/cpu/image.h, interp_cubic).
+enum class Interpolation { Linear, Closest, Cubic };
 enum class Extension { Repeat, Extend, Clip };
 // lt_image_alpha: what a 4-channel image's alpha means.
 enum class ImageAlpha { Ignore, Straight, Premultiplied, ChannelPacked };

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <vector>
 
 #include "geometry/geometry.h"
 #include "shading/bsdf.h"
 #include "shading/image.h"
+#include "shading/material.h"
 
 namespace lt {
 
@@ -29,6 +31,11 @@ const OpSignature kSignatures[] = {
     {"fffffv", "v", "i", false},        // bump
     {"", "vff", "t", false},            // camera data
     {"ff", "fff", "", false},           // light falloff
+    {"v", "vf", "gii", false},          // image, box projection
+    {"v", "v", "iiit", false},          // vector transform
+    {"v", "", "", false},               // set normal
+    {"fffv", "v", "i", false},          // displacement
+    {"vff", "v", "ii", false},          // vector displacement
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -220,10 +227,155 @@ void bump(const Instr& in, Machine& m) {
   m.set(in.out[0], ensure_valid_reflection(c.Ng, c.I, out));
 }
 
+// Cycles' svm_node_tex_image_box: the object-space normal's components pick (and near the edges of
+// the cube's faces, blend) three planar lookups, mapped so that no face is mirrored.
+void image_box(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  const Image& image = *(*m.images)[in.param[0]];
+  const bool unassociate = in.param[1] != 0;
+  float blend;
+  std::memcpy(&blend, &in.param[2], 4);
+  const Vec3 signed_N = c.instance ? normalized_or_zero(c.instance->normal_to_object(c.N)) : c.N;
+  Vec3 N(std::abs(signed_N.x), std::abs(signed_N.y), std::abs(signed_N.z));
+  const float sum = N.x + N.y + N.z;
+  N = sum > 0 ? N / sum : Vec3(1.0f, 0.0f, 0.0f);
+  Vec3 w(0.0f);
+  const float limit = 0.5f * (1.0f + blend);
+  if (N.x > limit * (N.x + N.y) && N.x > limit * (N.x + N.z)) {
+    w.x = 1;
+  } else if (N.y > limit * (N.x + N.y) && N.y > limit * (N.y + N.z)) {
+    w.y = 1;
+  } else if (N.z > limit * (N.x + N.z) && N.z > limit * (N.y + N.z)) {
+    w.z = 1;
+  } else if (blend > 0) {
+    if (N.z < (1 - limit) * (N.y + N.x)) {  // between two faces
+      w.x = clamp((N.x / (N.x + N.y) - 0.5f * (1 - blend)) / blend, 0.0f, 1.0f);
+      w.y = 1 - w.x;
+    } else if (N.x < (1 - limit) * (N.y + N.z)) {
+      w.y = clamp((N.y / (N.y + N.z) - 0.5f * (1 - blend)) / blend, 0.0f, 1.0f);
+      w.z = 1 - w.y;
+    } else if (N.y < (1 - limit) * (N.x + N.z)) {
+      w.x = clamp((N.x / (N.x + N.z) - 0.5f * (1 - blend)) / blend, 0.0f, 1.0f);
+      w.z = 1 - w.x;
+    } else {  // all three
+      w = ((2 - limit) * N + Vec3(limit - 1)) / (2 * limit - 1);
+    }
+  } else {
+    w.x = 1;  // Cycles' fallback where no face wins
+  }
+  const Vec3 co = m.v(in.in[0]);
+  Vec3 color(0.0f);
+  float alpha = 0;
+  auto add = [&](float weight, float u, float v) {
+    if (!(weight > 0)) return;
+    color += weight * image.lookup(Vec2{u, v}, unassociate);
+    alpha += weight * image.lookup_alpha(Vec2{u, v});
+  };
+  add(w.x, signed_N.x < 0 ? 1 - co.y : co.y, co.z);
+  add(w.y, signed_N.y > 0 ? 1 - co.x : co.x, co.z);
+  add(w.z, signed_N.z > 0 ? 1 - co.y : co.y, co.x);
+  m.set(in.out[0], color);
+  m.set(in.out[1], alpha);
+}
+
+// The inverse of an instance's linear part applied to v (rows of the inverse: the columns' cross
+// products over the determinant); v itself when singular.
+Vec3 inverse_linear(const Transform& t, const Vec3& v) {
+  const Vec3 c0 = t.column(0), c1 = t.column(1), c2 = t.column(2);
+  const float det = t.determinant();
+  if (!(std::abs(det) > 0)) return v;
+  return Vec3(dot(cross(c1, c2), v), dot(cross(c2, c0), v), dot(cross(c0, c1), v)) / det;
+}
+
+// Cycles' svm_node_vector_transform (normals are transformed as directions, then normalised).
+void vector_transform(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  const bool direction = in.param[0] != 0;
+  const uint32_t from = in.param[1], to = in.param[2];
+  const float* camera = m.k + in.param[3];
+  const bool has_camera = camera[0] == 24;
+  const Instance* inst = c.instance;
+  Vec3 v = m.v(in.in[0]);
+  auto by_table = [&](const float* t) {
+    return direction ? Vec3(t[0] * v.x + t[1] * v.y + t[2] * v.z, t[4] * v.x + t[5] * v.y + t[6] * v.z,
+                            t[8] * v.x + t[9] * v.y + t[10] * v.z)
+                     : affine(t, v);
+  };
+  auto to_object = [&] {
+    if (inst) v = direction ? inverse_linear(inst->xf, v) : inverse_linear(inst->xf, v - inst->xf.column(3));
+  };
+  if (from == 0) {  // world
+    if (to == 2 && has_camera) v = by_table(camera + 1);
+    if (to == 1) to_object();
+  } else if (from == 2) {  // camera
+    if ((to == 0 || to == 1) && has_camera) v = by_table(camera + 13);
+    if (to == 1) to_object();
+  } else if (from == 1) {  // object
+    if ((to == 0 || to == 2) && inst) v = direction ? inst->xf.vector(v) : inst->xf.point(v);
+    if (to == 2 && has_camera) v = by_table(camera + 1);
+  }
+  if (in.param[0] == 2) v = normalize(v);  // Cycles' normalize: NaN for a zero vector
+  m.set(in.out[0], v);
+}
+
+// Cycles' SetNormal (the normal its bump from displacement made becomes sd->N): the point and its
+// bump-moved copies shade with the new normal from here on.
+void set_normal(const Instr& in, Machine& m) {
+  const Vec3 n = m.v(in.in[0]);
+  if (!m.scratch || !(dot(n, n) > 0) || !is_finite(n)) return;
+  const Vec3 N = normalize(n);
+  for (int k = 0; k < 3; ++k) {
+    const ShadingContext* from = k == 0 ? m.ctx : m.bumped[k - 1];
+    if (!from) continue;
+    m.scratch[k] = *from;
+    set_shading_normal(&m.scratch[k], N);
+    if (k > 0) m.bumped[k - 1] = &m.scratch[k];
+  }
+  m.ctx = &m.scratch[0];
+}
+
+// Cycles' svm_node_displacement: height along the normal, in object or world units.
+void displacement(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  const float h = (m.f(in.in[0]) - m.f(in.in[1])) * m.f(in.in[2]);
+  const Vec3 n = normal_or_default(m, in.in[3]);
+  Vec3 d = n * h;
+  if (in.param[0] == 0 && c.instance)
+    d = c.instance->xf.vector(normalized_or_zero(c.instance->normal_to_object(n)) * h);
+  m.set(in.out[0], d);
+}
+
+// Cycles' svm_node_vector_displacement: (vector - midlevel) scale in tangent (the active UV map's
+// tangent, the object-space normal and their bitangent), object or world space.
+void vector_displacement(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  const float mid = m.f(in.in[1]);
+  Vec3 d = (m.v(in.in[0]) - Vec3(mid)) * m.f(in.in[2]);
+  const uint32_t space = in.param[0];
+  if (space == 0) {
+    const Vec3 normal = c.instance ? normalized_or_zero(c.instance->normal_to_object(c.N)) : c.N;
+    float t[4];
+    Vec3 tangent;
+    float sign = 1;
+    if (fetch_attribute(c, 0, int(in.param[1]), t) == 4) {
+      tangent = Vec3(t[0], t[1], t[2]);
+      sign = t[3];
+    } else if (c.mesh) {  // no UV map: Cycles' normalize(dPdu), the triangle's first edge
+      const uint32_t* tri = &c.mesh->indices[3 * size_t(c.primitive)];
+      tangent = normalized_or_zero(c.mesh->positions[tri[1]] - c.mesh->positions[tri[0]]);
+      if (c.backfacing) tangent = -tangent;
+    }
+    const Vec3 bitangent = normalized_or_zero(cross(normal, tangent)) * sign;
+    d = tangent * d.x + normal * d.y + bitangent * d.z;
+  }
+  if (space != 2 && c.instance) d = c.instance->xf.vector(d);
+  m.set(in.out[0], d);
+}
+
 }  // namespace
 
 const OpSignature* inputs_family_signature(uint32_t op) {
-  if (op < kOpTexCoord || op > kOpLightFalloff) return nullptr;
+  if (op < kOpTexCoord || op > kOpVectorDisplacement) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
@@ -306,6 +458,21 @@ void exec_inputs_family(const Instr& in, Machine& m) {
       m.set(in.out[2], d);
       break;
     }
+    case kOpImageBox:
+      image_box(in, m);
+      break;
+    case kOpVectorTransform:
+      vector_transform(in, m);
+      break;
+    case kOpSetNormal:
+      set_normal(in, m);
+      break;
+    case kOpDisplacement:
+      displacement(in, m);
+      break;
+    case kOpVectorDisplacement:
+      vector_displacement(in, m);
+      break;
     case kOpLightFalloff: {
       float strength = m.f(in.in[0]);
       const float smooth = m.f(in.in[1]), squared = c.ray_length * c.ray_length;

@@ -53,6 +53,26 @@ enum InputOp : uint32_t {
   // Light Falloff (Cycles' svm_node_light_falloff): in: strength f, smooth f; out: quadratic f,
   // linear f, constant f (strength times 1, the ray length, its square; smoothed).
   kOpLightFalloff,
+  // Image Texture's Box projection (Cycles' svm_node_tex_image_box): in: vector v; out: color v,
+  // alpha f; params: image id, unassociate (as kOpImage's), blend (float bits). Three lookups along
+  // the object axes weighted by the object-space shading normal.
+  kOpImageBox,
+  // Vector Transform (Cycles' svm_node_vector_transform): in: vector v; out: vector v; params:
+  // type (0 point, 1 vector, 2 normal: as a vector, then normalised), from, to (0 world, 1 object,
+  // 2 camera), camera table (0 floats: camera space is world space; 24: world to Cycles' camera
+  // space then camera to world, 3 rows of 4 each).
+  kOpVectorTransform,
+  // The Material Output's Displacement as bump (Cycles' SetNormal after its bump from
+  // displacement): in: normal v. Replaces the shading point's normal (ShadingContext::N and what
+  // depends on it) for every instruction after it.
+  kOpSetNormal,
+  // Displacement node (Cycles' svm_node_displacement): in: height f, midlevel f, scale f, normal v;
+  // out: displacement v; param: space (0 object, 1 world).
+  kOpDisplacement,
+  // Vector Displacement node (Cycles' svm_node_vector_displacement): in: vector v, midlevel f,
+  // scale f; out: displacement v; params: space (0 tangent, 1 object, 2 world), the active UV
+  // map's tangent attribute id.
+  kOpVectorDisplacement,
 };
 
 }  // namespace lt

@@ -29,16 +29,22 @@ ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp,
   c.object_P = sp.po;
   c.generated = sp.generated;
   const Instance& inst = geometry.instance(sp.instance);
-  c.object_N = normalize(inst.normal_to_object(c.N));
-  // Cycles' primitive_tangent: a tangent around the generated Z axis, made normal to N.
-  const Vec3 around = inst.normal_to_world(Vec3(-(c.generated.y - 0.5f), c.generated.x - 0.5f, 0.0f));
-  const Vec3 tangent = cross(c.N, normalize(cross(around, c.N)));
-  c.tangent = is_finite(tangent) ? tangent : Vec3(0.0f);
   c.ray_length = t;
   c.mesh = &geometry.mesh(inst.mesh);
   c.instance = &inst;
+  set_shading_normal(&c, c.N);
   c.primitive = sp.primitive;
   return c;
+}
+
+void set_shading_normal(ShadingContext* c, const Vec3& n) {
+  c->N = n;
+  const Instance& inst = *c->instance;
+  c->object_N = normalize(inst.normal_to_object(n));
+  // Cycles' primitive_tangent: a tangent around the generated Z axis, made normal to N.
+  const Vec3 around = inst.normal_to_world(Vec3(-(c->generated.y - 0.5f), c->generated.x - 0.5f, 0.0f));
+  const Vec3 tangent = cross(n, normalize(cross(around, n)));
+  c->tangent = is_finite(tangent) ? tangent : Vec3(0.0f);
 }
 
 void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float footprint, ShadingContext* ctx) {

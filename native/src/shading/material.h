@@ -55,6 +55,9 @@ inline Frame local_frame(const ShadingFrame& f, const Vec3& ng) {
 // The shading point as the nodes see it, for a ray of direction ray_d that met sp at distance t
 // from its start (a camera ray starts at the near clip, as Cycles').
 ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ray_d, float t);
+// Gives the shading point the normal n (unit, facing the ray) and what depends on it: object_N and
+// Geometry's Tangent (shading_context; Cycles' SetNormal replaces sd->N the same way).
+void set_shading_normal(ShadingContext* ctx, const Vec3& n);
 // What Bump needs (ShadingContext::footprint, offset): the ray footprint at the point (Cycles'
 // compact dP: the camera's dP plus its dD times the path's length) and the shading point moved by
 // it along the surface.

@@ -140,6 +140,7 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
       out_code.insert(out_code.end(), words.begin(), words.end());
       ++count_;
       uses_bump_ |= in.op == kOpBump;
+      sets_normal_ |= in.op == kOpSetNormal;
     }
     pos += words_of(in);
     ++index;
@@ -171,6 +172,8 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
       m.bumped[k] = &moved[k];
     }
   }
+  ShadingContext displaced[3];
+  if (sets_normal_) m.scratch = displaced;
   m.emitted = Spectrum(0.0f);
   if (bsdf) bsdf->clear();
   const uint32_t* w = code_.data();
@@ -181,6 +184,10 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
     w += words_of(in);
   }
   if (frame) {
+    if (m.ctx != &ctx) {
+      frame->smooth = m.ctx->N;
+      if (!m.has_shading_normal) frame->n = m.ctx->N;
+    }
     if (m.has_shading_normal) frame->n = m.shading_normal;
     frame->tangent = m.shading_tangent;
   }

@@ -80,6 +80,9 @@ struct Machine {
   // The context moved by each bump differential (set when the program has a Bump node): ops that
   // read the position take a bump param, 0 (ctx), 1 (dx) or 2 (dy).
   const ShadingContext* bumped[2] = {nullptr, nullptr};
+  // Room for the point and its moved copies with the normal a displacement's bump sets (SetNormal);
+  // null while folding constants.
+  ShadingContext* scratch = nullptr;
   const ShadingContext& at(uint32_t bump) const {
     return bump == 0 || bump > 2 || !bumped[bump - 1] ? *ctx : *bumped[bump - 1];
   }
@@ -147,6 +150,9 @@ void exec_textures_family(const Instr& in, Machine& m);
 struct ShadingFrame {
   Vec3 n;
   Vec3 tangent{0.0f};
+  // The shading point's normal as the material's displacement bumped it (Cycles' SetNormal: the
+  // sd->N closures and the bump shadowing term compare with); zero without one.
+  Vec3 smooth{0.0f};
 };
 
 class Program {
@@ -166,6 +172,8 @@ class Program {
   bool emission_estimate(float* estimate) const;
   // The program has a Bump node: the shading point's differentials are needed (add_differentials).
   bool uses_bump() const { return uses_bump_; }
+  // The program sets the shading normal (a displacement's bump): Program::run keeps room for it.
+  bool sets_normal() const { return sets_normal_; }
   // Whether the program may give a Transparent lobe (Transparent, Holdout, Principled Alpha): then
   // shadow rays look at it (Cycles' transparent shadows).
   bool may_be_transparent() const;
@@ -176,6 +184,7 @@ class Program {
   int registers_ = 0;
   size_t count_ = 0;
   bool uses_bump_ = false;
+  bool sets_normal_ = false;
 };
 
 }  // namespace lt

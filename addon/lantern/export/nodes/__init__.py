@@ -146,14 +146,15 @@ class Compiler:
             self._memo[key] = self.emit(ops.GEOMETRY, [], GEOMETRY_OUTPUTS, params=[self.bump])
         return self._memo[key]
 
-    def heights(self, socket):
-        """A float input at the shading point and moved by each of its differentials (Bump)."""
+    def heights(self, socket, read=None):
+        """A float input at the shading point and moved by each of its differentials (Bump);
+        read(socket) -> operand replaces self.float (the Displacement output's height)."""
         saved = self.bump
         try:
             out = []
             for k in (0, 1, 2):
                 self.bump = k
-                out.append(self.float(socket))
+                out.append((read or self.float)(socket))
             return out
         finally:
             self.bump = saved
@@ -341,10 +342,38 @@ class Compiler:
                               "for each Mix or Add Shader input they feed)" % MAX_CLOSURES)
         self.emit(op, inputs, params=params)
 
-    def compile_surface(self, output_node):
-        """The program for a Material Output's Surface input."""
+    def compile_surface(self, output_node, displacement_method='BUMP'):
+        """The program for a Material Output's Surface input, after its Displacement as bump."""
+        disp = output_node.inputs.get("Displacement")
+        if disp is not None and self.linked(disp):
+            self.displacement_bump(disp, displacement_method)
         self.shader(output_node.inputs["Surface"], self.const((1.0, 1.0, 1.0)))
         return self.program()
+
+    def displacement_bump(self, socket, method):
+        """Cycles 3.4's bump from displacement (scene/shader_graph.cpp bump_from_displacement): the
+        displacement's component along the normal (its dot with Geometry's Normal) at the point and
+        moved by each differential, into a Bump of Distance 1 and Strength 1 whose normal becomes
+        the shading point's (SetNormal) for everything the surface compiles after it."""
+        if method != 'BUMP':
+            self.warn("displacement method '%s': true displacement is not supported; the "
+                      "displacement is rendered as bump" % method)
+        from .converters import VECTOR_MATH_OPS
+        normal = self.geometry()["Normal"]
+
+        def height(s):
+            dot = self.emit(ops.VECTOR_MATH, [self.vector(s), normal, self.const((0.0, 0.0, 0.0)),
+                                              self.const(1.0)], [("Vector", 3), ("Value", 1)],
+                            params=[VECTOR_MATH_OPS.index('DOT_PRODUCT')])
+            return dot["Value"]
+        heights = self.heights(socket, height)
+        one = self.const(1.0)
+        bumped = self.emit(ops.BUMP, [one, one] + heights + [self.const((0.0, 0.0, 0.0))], [("Normal", 3)],
+                           params=[0])
+        self.emit(ops.SET_NORMAL, [bumped["Normal"]])
+        # Nodes the surface shares with the displacement see the new normal: compile them anew
+        # (Cycles copies the displacement's nodes for its bump).
+        self._memo = {}
 
     def program(self):
         return self.code, self.constants, self.registers

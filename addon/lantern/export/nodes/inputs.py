@@ -1,6 +1,9 @@
 """Nodes that read the shading point, constants and image textures (inputs.h in the core)."""
 
+import struct
+
 from . import TEX_COORD_OUTPUTS, ops, register
+from .attributes import registry
 
 MAGENTA = (1.0, 0.0, 1.0)  # a missing image, as Cycles renders it
 
@@ -83,7 +86,7 @@ def light_path(c, node, want):
 @register('TEX_IMAGE')
 def image_texture(c, node, want):
     where = "Material '%s', image texture '%s'" % (c.material_name, node.name)
-    if node.projection != 'FLAT':
+    if node.projection not in ('FLAT', 'BOX'):
         c.warn("image texture '%s': %s projection treated as Flat" % (node.name, node.projection))
     image_id = c.images.export(node.image, node.interpolation, node.extension, where, alpha=True) \
         if node.image is not None else None
@@ -94,6 +97,46 @@ def image_texture(c, node, want):
     vec = c.vector(node.inputs["Vector"], default=c.texcoord("UV"))
     # Cycles divides colours by alpha where the Alpha output reaches the shader output
     # (NODE_IMAGE_ALPHA_UNASSOCIATE): the param is set when something reads Alpha (Compiler.read).
+    if node.projection == 'BOX':
+        blend = struct.unpack('<I', struct.pack('<f', max(0.0, min(1.0, node.projection_blend))))[0]
+        outputs = c.emit(ops.IMAGE_BOX, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id, 0, blend])
+        c.on_read(outputs["Alpha"], len(c.code) - 2)
+        return outputs
     outputs = c.emit(ops.IMAGE, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id, 0])
     c.on_read(outputs["Alpha"], len(c.code) - 1)
     return outputs
+
+
+_SPACES = {'WORLD': 0, 'OBJECT': 1, 'CAMERA': 2}
+_VECTOR_TYPES = {'POINT': 0, 'VECTOR': 1, 'NORMAL': 2}
+
+
+@register('VECT_TRANSFORM')
+def vector_transform(c, node, want):
+    table = []
+    if c.camera is not None:
+        import mathutils
+        rows = [c.camera[4 * r:4 * r + 4] for r in range(3)]
+        to_camera = mathutils.Matrix(rows + [(0.0, 0.0, 0.0, 1.0)])
+        to_world = to_camera.inverted_safe()
+        table = [v for r in rows for v in r] + [to_world[r][k] for r in range(3) for k in range(4)]
+    elif 'CAMERA' in (node.convert_from, node.convert_to) and node.convert_from != node.convert_to:
+        c.warn("Vector Transform '%s': camera space needs the scene camera; world space is used" % node.name)
+    return c.emit(ops.VECTOR_TRANSFORM, [c.vector(node.inputs["Vector"])], [("Vector", 3)],
+                  params=[_VECTOR_TYPES[node.vector_type], _SPACES[node.convert_from], _SPACES[node.convert_to],
+                          c.table(table)])
+
+
+@register('DISPLACEMENT')
+def displacement(c, node, want):
+    ins = [c.float(node.inputs[n]) for n in ("Height", "Midlevel", "Scale")] + [c.normal(node.inputs["Normal"])]
+    return c.emit(ops.DISPLACEMENT, ins, [("Displacement", 3)], params=[int(node.space == 'WORLD')])
+
+
+@register('VECTOR_DISPLACEMENT')
+def vector_displacement(c, node, want):
+    space = {'TANGENT': 0, 'OBJECT': 1, 'WORLD': 2}[node.space]
+    # Cycles reads the active render UV map's tangent in tangent space.
+    tid = registry(c).id('tangent', '') if space == 0 else 0
+    ins = [c.vector(node.inputs["Vector"]), c.float(node.inputs["Midlevel"]), c.float(node.inputs["Scale"])]
+    return c.emit(ops.VECTOR_DISPLACEMENT, ins, [("Displacement", 3)], params=[space, tid])
