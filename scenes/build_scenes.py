@@ -387,6 +387,38 @@ def roughness_pixels(size=64, bands=4):
     return np.stack([v, v, v, np.ones_like(v)], axis=-1)
 
 
+def height_pixels(size=64, bumps=4):
+    """A height map (8-bit, non-colour) of round bumps, h = 0.5 + 0.5 sin(pi x) sin(pi y) per bump
+    in bands of alternating sign."""
+    y, x = (np.mgrid[0:size, 0:size] + 0.5) / size * bumps
+    h = 0.5 + 0.5 * np.sin(np.pi * x) * np.sin(np.pi * y)
+    return np.stack([h, h, h, np.ones_like(h)], axis=-1)
+
+
+def displaced_material(name, image, color, roughness, scale, coords="UV"):
+    """Image Texture (Non-Color, Linear) -> Displacement (Height; Midlevel 0.5) -> the Material
+    Output's Displacement beside a Principled BSDF, as Node Wrangler's Principled set-up and Poly
+    Haven's materials build it; Cycles 3.4's default method Bump."""
+    mat, nt, out = _material(name)
+    assert mat.cycles.displacement_method == "BUMP"
+    tex = nt.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    tex.interpolation = "Linear"
+    if coords != "UV":
+        tc = nt.nodes.new("ShaderNodeTexCoord")
+        nt.links.new(tc.outputs[coords], tex.inputs["Vector"])
+    disp = nt.nodes.new("ShaderNodeDisplacement")
+    disp.inputs["Midlevel"].default_value = 0.5
+    disp.inputs["Scale"].default_value = scale
+    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Base Color"].default_value = (*color, 1.0)
+    bsdf.inputs["Roughness"].default_value = roughness
+    nt.links.new(tex.outputs["Color"], disp.inputs["Height"])
+    nt.links.new(disp.outputs["Displacement"], out.inputs["Displacement"])
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    return mat
+
+
 def normal_map_pixels(size=64, bumps=4):
     """A tangent-space normal map (8-bit, non-colour) of round bumps: the normals of the height
     field h = sin(pi x) sin(pi y) per bump, encoded 0.5 + 0.5 n."""
@@ -837,6 +869,20 @@ def build_normal_mapped(scene):
     box = add_object(scene, "Box", mesh_box("Box", (0.8, 0.8, 0.8)), (-1.0, 0.4, 0), (0, 0, 30))
     assign(box, normal_mapped_material("BumpyBox", img, (0.5, 0.6, 0.9), 0.45, metallic=1.0))
     add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(55, 0, 40), angle=math.radians(1.0))
+    add_camera(scene, (0, -4.0, 1.8), (0, 0.2, 0.4), lens=40.0)
+
+
+def build_displaced(scene):
+    """The Material Output's Displacement as bump (Cycles 3.4's default method): a height image
+    through a Displacement node on a rough ground (UV) and a smooth sphere (Object coordinates),
+    under a low sun and a sky: the bumps' lit and shadowed sides."""
+    set_world(scene, (0.2, 0.25, 0.35), 1.0)
+    img = packed_image("Heights", height_pixels(), "Non-Color")
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 6.0))
+    assign(ground, displaced_material("DisplacedGround", img, (0.6, 0.55, 0.5), 0.7, 0.08))
+    sphere = add_object(scene, "Sphere", mesh_sphere("Sphere", 0.6), (0.2, 0.0, 0.6), (20, 10, 30))
+    assign(sphere, displaced_material("DisplacedSphere", img, (0.3, 0.6, 0.8), 0.4, 0.02, coords="Object"))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(60, 0, 40), angle=math.radians(1.0))
     add_camera(scene, (0, -4.0, 1.8), (0, 0.2, 0.4), lens=40.0)
 
 
@@ -1396,6 +1442,7 @@ SCENES = {
     "textured": (build_textured, (96, 96), 128),
     "instanced": (build_instanced, (96, 96), 128),
     "normal_mapped": (build_normal_mapped, (96, 96), 128),
+    "displaced": (build_displaced, (96, 96), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),

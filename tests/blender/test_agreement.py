@@ -131,6 +131,15 @@ def test_normal_mapped_scene_agrees_with_cycles(integrator, scene_factory, outdi
     assert report == "", report
 
 
+def test_displaced_scene_agrees_with_cycles(scene_factory, outdir):
+    """The Material Output's Displacement as bump (scenes: displaced; a height image through a
+    Displacement node, Cycles 3.4's default method Bump) under a low sun: per tile and in the
+    image mean."""
+    both = lantern_and_cycles(scene_factory, "displaced", "PATH")
+    report, _ = ru.agreement_report("displaced_PATH", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
 @pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
 def test_every_new_shader_node_agrees_with_cycles_when_lit(integrator, scene_factory, outdir):
     """Issue 13: "agreement with Cycles in lit scenes for PATH and BIDIRECTIONAL" of each BSDF
