@@ -176,7 +176,9 @@ VIEW = float(os.environ.get("TEX_VIEW", 0.6))
 def view_scene(build, negate=False, shape="plane", displacement=None):
     """shape "plane": a 4 x 4 plane filling an orthographic view; the mesh is tilted inside its
     object (and the object tilted back), so Object coordinates vary along all three axes over the
-    image. "sphere": a smooth UV sphere of radius 1 filling most of a perspective view. `build(nt,
+    image. "sphere": a smooth UV sphere of radius 1 filling most of a perspective view;
+    "ellipsoid": that sphere scaled unevenly, "scaled": scaled by 0.8 (object and world lengths
+    differ). `build(nt,
     coords)` returns the socket shown (coords: Texture Coordinate's Object output); `displacement`,
     when given, the same way the socket linked into the Material Output's Displacement."""
     bs.reset_file()
@@ -187,9 +189,10 @@ def view_scene(build, negate=False, shape="plane", displacement=None):
     c.max_bounces = 0
     c.film_exposure = 1.0
     scene.render.film_transparent = True  # alpha marks what the object covers
-    if shape == "sphere":
+    if shape in ("sphere", "ellipsoid", "scaled"):
         bs.add_camera(scene, (0.3, -3.2, 1.1), (0, 0, 0), lens=50.0)
-        obj = bs.add_object(scene, "sphere", bs.mesh_sphere("sphere", 1.0), rotation=(0.3, 0.2, 0.5))
+        obj = bs.add_object(scene, "sphere", bs.mesh_sphere("sphere", 1.0), rotation=(0.3, 0.2, 0.5),
+                            scale={"ellipsoid": (1.0, 0.7, 1.25), "scaled": (0.8, 0.8, 0.8)}.get(shape, (1, 1, 1)))
     else:
         cam = bs.add_camera(scene, (0, 0, 5), (0, 0, 0))
         cam.data.type = "ORTHO"
