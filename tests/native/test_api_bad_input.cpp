@@ -448,7 +448,7 @@ TEST(ApiBadInput, UnknownEnumValuesListTheValidNames) {
   lt_light_desc area = area_light(9, 1, 1, identity(), 10);
   EXPECT_INVALID(lt_scene_add_light(s, &area));
   float px[3] = {1, 1, 1};
-  lt_image_desc img{1, 1, 3, px, 0, 2, LT_EXTENSION_REPEAT};
+  lt_image_desc img{1, 1, 3, px, 0, 3, LT_EXTENSION_REPEAT};
   EXPECT_INVALID(lt_scene_add_image(s, &img, &id));
   img.interpolation = LT_INTERP_LINEAR;
   img.extension = 3;
