@@ -222,6 +222,20 @@ def test_image_box_projection(blend, shape, outdir):
     compare_view(build, "image_box_%g_%s" % (blend, shape), outdir, shape=shape)
 
 
+@pytest.mark.parametrize("projection", ["SPHERE", "TUBE"])
+@pytest.mark.parametrize("shape", ["sphere", "plane"])
+def test_image_sphere_and_tube_projection(projection, shape, outdir):
+    """Sphere and Tube projections (Cycles' map_to_sphere and map_to_tube of the vector remapped
+    from [0, 1] to [-1, 1]) of Generated coordinates; the seam where the angle wraps is among the
+    outliers."""
+    def build(nt, coords):
+        tex = _image_node(nt, _smooth_image("wrapped"), projection=projection)
+        tc = node(nt, "ShaderNodeTexCoord")
+        nt.links.new(tc.outputs["Generated"], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+    compare_view(build, "image_%s_%s" % (projection.lower(), shape), outdir, shape=shape)
+
+
 @pytest.mark.parametrize("interpolation", ["Cubic", "Smart", "Linear", "Closest"])
 @pytest.mark.parametrize("extension", ["REPEAT", "EXTEND", "CLIP"])
 def test_image_interpolation_and_extension(interpolation, extension, outdir):

@@ -31,7 +31,7 @@ const OpSignature kSignatures[] = {
     {"fffffv", "v", "i", false},        // bump
     {"", "vff", "t", false},            // camera data
     {"ff", "fff", "", false},           // light falloff
-    {"v", "vf", "gii", false},          // image, box projection
+    {"v", "vf", "giii", false},         // image, other projections
     {"v", "v", "iiit", false},          // vector transform
     {"v", "", "", false},               // set normal
     {"fffv", "v", "i", false},          // displacement
@@ -234,7 +234,7 @@ void image_box(const Instr& in, Machine& m) {
   const Image& image = *(*m.images)[in.param[0]];
   const bool unassociate = in.param[1] != 0;
   float blend;
-  std::memcpy(&blend, &in.param[2], 4);
+  std::memcpy(&blend, &in.param[3], 4);
   const Vec3 signed_N = c.instance ? normalized_or_zero(c.instance->normal_to_object(c.N)) : c.N;
   Vec3 N(std::abs(signed_N.x), std::abs(signed_N.y), std::abs(signed_N.z));
   const float sum = N.x + N.y + N.z;
@@ -276,6 +276,26 @@ void image_box(const Instr& in, Machine& m) {
   add(w.z, signed_N.z > 0 ? 1 - co.y : co.y, co.x);
   m.set(in.out[0], color);
   m.set(in.out[1], alpha);
+}
+
+// Cycles' map_to_sphere and map_to_tube (util/math) of a vector remapped from [0, 1] to [-1, 1]
+// (svm_node_tex_image's texco_remap_square).
+void image_sphere_tube(const Instr& in, Machine& m) {
+  const Image& image = *(*m.images)[in.param[0]];
+  const Vec3 co = (m.v(in.in[0]) - Vec3(0.5f)) * 2.0f;
+  Vec2 uv{0, 0};
+  if (in.param[2] == 1) {
+    const float l = length(co);
+    if (l > 0) {
+      uv.x = co.x == 0 && co.y == 0 ? 0.0f : (1 - std::atan2(co.x, co.y) / kPi) / 2;
+      uv.y = 1 - std::acos(clamp(co.z / l, -1.0f, 1.0f)) / kPi;
+    }
+  } else {
+    const float l = std::sqrt(co.x * co.x + co.y * co.y);
+    if (l > 0) uv = {(1 - std::atan2(co.x / l, co.y / l) / kPi) * 0.5f, (co.z + 1) * 0.5f};
+  }
+  m.set(in.out[0], image.lookup(uv, in.param[1] != 0));
+  m.set(in.out[1], image.lookup_alpha(uv));
 }
 
 // The inverse of an instance's linear part applied to v (rows of the inverse: the columns' cross
@@ -458,8 +478,11 @@ void exec_inputs_family(const Instr& in, Machine& m) {
       m.set(in.out[2], d);
       break;
     }
-    case kOpImageBox:
-      image_box(in, m);
+    case kOpImageProjected:
+      if (in.param[2] == 0)
+        image_box(in, m);
+      else
+        image_sphere_tube(in, m);
       break;
     case kOpVectorTransform:
       vector_transform(in, m);

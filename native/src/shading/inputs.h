@@ -53,10 +53,12 @@ enum InputOp : uint32_t {
   // Light Falloff (Cycles' svm_node_light_falloff): in: strength f, smooth f; out: quadratic f,
   // linear f, constant f (strength times 1, the ray length, its square; smoothed).
   kOpLightFalloff,
-  // Image Texture's Box projection (Cycles' svm_node_tex_image_box): in: vector v; out: color v,
-  // alpha f; params: image id, unassociate (as kOpImage's), blend (float bits). Three lookups along
-  // the object axes weighted by the object-space shading normal.
-  kOpImageBox,
+  // Image Texture's other projections: in: vector v; out: color v, alpha f; params: image id,
+  // unassociate (as kOpImage's), projection (0 box: Cycles' svm_node_tex_image_box, three lookups
+  // along the object axes weighted by the object-space shading normal; 1 sphere, 2 tube: Cycles'
+  // map_to_sphere and map_to_tube of the vector remapped from [0, 1] to [-1, 1]), blend (box; float
+  // bits).
+  kOpImageProjected,
   // Vector Transform (Cycles' svm_node_vector_transform): in: vector v; out: vector v; params:
   // type (0 point, 1 vector, 2 normal: as a vector, then normalised), from, to (0 world, 1 object,
   // 2 camera), camera table (0 floats: camera space is world space; 24: world to Cycles' camera

@@ -83,11 +83,12 @@ def light_path(c, node, want):
     return c.emit(ops.LIGHT_PATH, [], [(n, 1) for n in _LIGHT_PATH])
 
 
+_PROJECTIONS = {'BOX': 0, 'SPHERE': 1, 'TUBE': 2}  # Flat: kOpImage
+
+
 @register('TEX_IMAGE')
 def image_texture(c, node, want):
     where = "Material '%s', image texture '%s'" % (c.material_name, node.name)
-    if node.projection not in ('FLAT', 'BOX'):
-        c.warn("image texture '%s': %s projection treated as Flat" % (node.name, node.projection))
     image_id = c.images.export(node.image, node.interpolation, node.extension, where, alpha=True) \
         if node.image is not None else None
     if image_id is None:
@@ -97,10 +98,11 @@ def image_texture(c, node, want):
     vec = c.vector(node.inputs["Vector"], default=c.texcoord("UV"))
     # Cycles divides colours by alpha where the Alpha output reaches the shader output
     # (NODE_IMAGE_ALPHA_UNASSOCIATE): the param is set when something reads Alpha (Compiler.read).
-    if node.projection == 'BOX':
+    if node.projection in _PROJECTIONS:
         blend = struct.unpack('<I', struct.pack('<f', max(0.0, min(1.0, node.projection_blend))))[0]
-        outputs = c.emit(ops.IMAGE_BOX, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id, 0, blend])
-        c.on_read(outputs["Alpha"], len(c.code) - 2)
+        outputs = c.emit(ops.IMAGE_PROJECTED, [vec], [("Color", 3), ("Alpha", 1)],
+                         params=[image_id, 0, _PROJECTIONS[node.projection], blend])
+        c.on_read(outputs["Alpha"], len(c.code) - 3)
         return outputs
     outputs = c.emit(ops.IMAGE, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id, 0])
     c.on_read(outputs["Alpha"], len(c.code) - 1)
