@@ -317,3 +317,22 @@ def test_displacement_as_bump(source, shown, outdir):
     # interpolated normal itself differs from Cycles', README).
     shape = "plane" if source == "vector_tangent" else "scaled" if "object" in source else "sphere"
     compare_view(build, "displacement_%s_%s" % (source, shown), outdir, shape=shape, displacement=displacement)
+
+
+@pytest.mark.parametrize("idname", ["ShaderNodeVectorDisplacement", "ShaderNodeNormalMap"])
+def test_tangent_space_without_uv_map_warns(idname):
+    """Tangent space on a mesh without a UV map: Cycles derives MikkTSpace tangents from sphere-mapped
+    Generated coordinates, which Lantern does not; the export names the object and says what it
+    does instead."""
+    import build_scenes as bs
+    from node_cases import view_scene
+
+    def displacement(nt, coords):
+        n = node(nt, idname, {"space": "TANGENT"})
+        if idname == "ShaderNodeNormalMap":
+            return n.outputs["Normal"]
+        return n.outputs["Displacement"]
+    scene = view_scene(lambda nt, coords: coords, shape="sphere", displacement=displacement)
+    reports = ru.export(scene)[1]
+    assert any("'sphere'" in r and "no UV map" in r and "Vector Displacement" in r for r in reports), reports
+    bs.reset_file()

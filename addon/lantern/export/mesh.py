@@ -58,6 +58,10 @@ def _requested(mesh, key, warn):
     if kind == 'tangent':
         layer = _render_uv(mesh, name)
         if layer is None:
+            # Cycles derives MikkTSpace tangents from sphere-mapped Generated coordinates there.
+            warn("no UV map%s for tangent space: Normal Maps are left flat and Vector Displacement "
+                 "uses each triangle's first edge as tangent (Cycles derives tangents from the "
+                 "Generated coordinates)" % (" '%s'" % name if name else ""))
             return None
         try:
             mesh.calc_tangents(uvmap=layer.name)

@@ -380,9 +380,11 @@ void vector_displacement(const Instr& in, Machine& m) {
     if (fetch_attribute(c, 0, int(in.param[1]), t) == 4) {
       tangent = Vec3(t[0], t[1], t[2]);
       sign = t[3];
-    } else if (c.mesh) {  // no UV map: Cycles' normalize(dPdu), the triangle's first edge
+    } else if (c.mesh && c.instance) {
+      // No UV map: Cycles' normalize(sd->dPdu), the triangle's first edge in world space (Cycles
+      // mixes it with the object-space normal as is), reversed on a back face.
       const uint32_t* tri = &c.mesh->indices[3 * size_t(c.primitive)];
-      tangent = normalized_or_zero(c.mesh->positions[tri[1]] - c.mesh->positions[tri[0]]);
+      tangent = normalized_or_zero(c.instance->xf.vector(c.mesh->positions[tri[1]] - c.mesh->positions[tri[0]]));
       if (c.backfacing) tangent = -tangent;
     }
     const Vec3 bitangent = normalized_or_zero(cross(normal, tangent)) * sign;
