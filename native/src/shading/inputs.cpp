@@ -342,16 +342,13 @@ void vector_transform(const Instr& in, Machine& m) {
 // bump-moved copies shade with the new normal from here on.
 void set_normal(const Instr& in, Machine& m) {
   const Vec3 n = m.v(in.in[0]);
-  if (!m.scratch || !(dot(n, n) > 0) || !is_finite(n)) return;
+  if (!m.displaced || !(dot(n, n) > 0) || !is_finite(n)) return;
   const Vec3 N = normalize(n);
-  for (int k = 0; k < 3; ++k) {
-    const ShadingContext* from = k == 0 ? m.ctx : m.bumped[k - 1];
-    if (!from) continue;
-    m.scratch[k] = *from;
-    set_shading_normal(&m.scratch[k], N);
-    if (k > 0) m.bumped[k - 1] = &m.scratch[k];
-  }
-  m.ctx = &m.scratch[0];
+  m.displaced->emplace(*m.ctx);
+  set_shading_normal(&**m.displaced, N);
+  m.ctx = &**m.displaced;
+  if (m.moved)
+    for (int k = 0; k < 2; ++k) set_shading_normal(&m.moved[k], N);
 }
 
 // Cycles' svm_node_displacement: height along the normal, in object or world units.

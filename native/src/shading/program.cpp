@@ -171,9 +171,10 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
       moved[k].bary = {ctx.bary.x + d.bary.x, ctx.bary.y + d.bary.y};
       m.bumped[k] = &moved[k];
     }
+    m.moved = moved;
   }
-  ShadingContext displaced[3];
-  if (sets_normal_) m.scratch = displaced;
+  std::optional<ShadingContext> displaced;  // constructed by a SetNormal only
+  if (sets_normal_) m.displaced = &displaced;
   m.emitted = Spectrum(0.0f);
   if (bsdf) bsdf->clear();
   const uint32_t* w = code_.data();

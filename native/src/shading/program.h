@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -80,9 +81,10 @@ struct Machine {
   // The context moved by each bump differential (set when the program has a Bump node): ops that
   // read the position take a bump param, 0 (ctx), 1 (dx) or 2 (dy).
   const ShadingContext* bumped[2] = {nullptr, nullptr};
-  // Room for the point and its moved copies with the normal a displacement's bump sets (SetNormal);
-  // null while folding constants.
-  ShadingContext* scratch = nullptr;
+  // Room for the point with the normal a displacement's bump sets (SetNormal), and the moved copies
+  // (bumped) it updates too; null while folding constants.
+  std::optional<ShadingContext>* displaced = nullptr;
+  ShadingContext* moved = nullptr;
   const ShadingContext& at(uint32_t bump) const {
     return bump == 0 || bump > 2 || !bumped[bump - 1] ? *ctx : *bumped[bump - 1];
   }
