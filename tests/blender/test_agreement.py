@@ -131,12 +131,14 @@ def test_normal_mapped_scene_agrees_with_cycles(integrator, scene_factory, outdi
     assert report == "", report
 
 
-def test_displaced_scene_agrees_with_cycles(scene_factory, outdir):
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_displaced_scene_agrees_with_cycles(integrator, scene_factory, outdir):
     """The Material Output's Displacement as bump (scenes: displaced; a height image through a
     Displacement node, Cycles 3.4's default method Bump) under a low sun: per tile and in the
     image mean."""
-    both = lantern_and_cycles(scene_factory, "displaced", "PATH")
-    report, _ = ru.agreement_report("displaced_PATH", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    both = lantern_and_cycles(scene_factory, "displaced", integrator)
+    report, _ = ru.agreement_report("displaced_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
     assert report == "", report
 
 
