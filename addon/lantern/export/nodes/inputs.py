@@ -1,9 +1,8 @@
 """Nodes that read the shading point, constants and image textures (inputs.h in the core)."""
 
-import struct
-
 from . import TEX_COORD_OUTPUTS, ops, register
 from .attributes import registry
+from .textures import float_bits
 
 MAGENTA = (1.0, 0.0, 1.0)  # a missing image, as Cycles renders it
 
@@ -99,7 +98,7 @@ def image_texture(c, node, want):
     # Cycles divides colours by alpha where the Alpha output reaches the shader output
     # (NODE_IMAGE_ALPHA_UNASSOCIATE): the param is set when something reads Alpha (Compiler.read).
     if node.projection in _PROJECTIONS:
-        blend = struct.unpack('<I', struct.pack('<f', max(0.0, min(1.0, node.projection_blend))))[0]
+        blend = float_bits(max(0.0, min(1.0, node.projection_blend)))
         outputs = c.emit(ops.IMAGE_PROJECTED, [vec], [("Color", 3), ("Alpha", 1)],
                          params=[image_id, 0, _PROJECTIONS[node.projection], blend])
         c.on_read(outputs["Alpha"], len(c.code) - 3)

@@ -19,7 +19,7 @@ GRADIENT_TYPE = {'LINEAR': 0, 'QUADRATIC': 1, 'EASING': 2, 'DIAGONAL': 3, 'RADIA
 
 
 def float_bits(x):
-    """A float param word (Brick's offset and squash amounts)."""
+    """A float param word (Brick's offset and squash amounts, Box projection's blend)."""
     return struct.unpack('<I', struct.pack('<f', float(x)))[0]
 
 
