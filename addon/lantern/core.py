@@ -363,6 +363,7 @@ def _declare(lib, layout=True):
         "lt_render_wait": ([render_p], c_int),
         "lt_pass_channels": ([c_int], c_int),
         "lt_render_read_pass": ([render_p, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_pass_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid": ([render_p, _f_p, ctypes.c_size_t, ctypes.POINTER(c_int),
                                           ctypes.POINTER(c_int)], c_int),
         "lt_render_destroy": ([render_p], None),
@@ -884,6 +885,16 @@ class Render:
             raise ValueError("read_pass needs a contiguous float32 array of %d floats" % n)
         _check(self._lib.lt_render_read_pass(self.handle, int(pass_id), _fptr(out), out.size),
                "lt_render_read_pass")
+        return out
+
+    def read_pass_rows(self, pass_id, y0, rows, out):
+        """Fills `out` (float32 contiguous, width*rows*channels) with rows [y0, y0 + rows) of the
+        region (row 0 at the bottom) and returns it."""
+        n = self.region_size[0] * rows * pass_channels(pass_id)
+        if out.dtype != np.float32 or not out.flags["C_CONTIGUOUS"] or out.size != n:
+            raise ValueError("read_pass_rows needs a contiguous float32 array of %d floats" % n)
+        _check(self._lib.lt_render_read_pass_rows(self.handle, int(pass_id), int(y0), int(rows), _fptr(out),
+                                                  out.size), "lt_render_read_pass_rows")
         return out
 
     def read_strategy_grid(self):

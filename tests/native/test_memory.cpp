@@ -129,6 +129,34 @@ TEST(Memory, FilmKeepsOnlyThePassesAskedFor) {
   EXPECT_NE(std::string(lt_last_error()).find("Normal"), std::string::npos) << lt_last_error();
 }
 
+TEST(Memory, PassesReadInRowBandsAreTheFullPassesRows) {
+  // The add-on hands Blender its passes through a band-sized buffer (lt_render_read_pass_rows):
+  // every band must be exactly those rows of the full read, labels included.
+  ScenePtr s = lit_scene();
+  lt_render_settings rs = render_settings(24, 16, 4, 7);
+  lt_render* r = nullptr;
+  ASSERT_EQ(lt_render_start(s.get(), &rs, &r), LT_OK) << lt_last_error();
+  RenderPtr rp(r);
+  ASSERT_EQ(lt_render_wait(r), LT_OK) << lt_last_error();
+  for (int pass = 0; pass < LT_PASS_COUNT; ++pass) {
+    const size_t c = size_t(lt_pass_channels(pass)), row = 24 * c;
+    std::vector<float> full(16 * row), band;
+    ASSERT_EQ(lt_render_read_pass(r, pass, full.data(), full.size()), LT_OK) << lt_last_error();
+    for (int y0 = 0; y0 < 16; y0 += 5) {
+      const int rows = std::min(5, 16 - y0);
+      band.assign(rows * row, -1.0f);
+      ASSERT_EQ(lt_render_read_pass_rows(r, pass, y0, rows, band.data(), band.size()), LT_OK) << lt_last_error();
+      EXPECT_EQ(std::memcmp(band.data(), full.data() + y0 * row, band.size() * sizeof(float)), 0)
+          << "pass " << pass << " rows " << y0;
+    }
+  }
+  std::vector<float> buf(24 * 4 * 4);
+  EXPECT_EQ(lt_render_read_pass_rows(r, LT_PASS_COMBINED, 13, 4, buf.data(), buf.size()), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_render_read_pass_rows(r, LT_PASS_COMBINED, -1, 4, buf.data(), buf.size()), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_render_read_pass_rows(r, LT_PASS_COMBINED, 0, 3, buf.data(), buf.size()), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_render_read_pass_rows(r, LT_PASS_COMBINED, 0, -4, buf.data(), buf.size()), LT_ERROR_INVALID_ARGUMENT);
+}
+
 TEST(Memory, ConstantPixelsKeepTheirValueAndZeroVariance) {
   // Float accumulators as running means: n equal samples give exactly that value and variance 0
   // (float sums would give n * v rounded, and a sum of squares a spurious variance).

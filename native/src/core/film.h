@@ -143,7 +143,10 @@ class Film {
   // is the published image (zeros before the first publish) and the other passes are read between
   // two passes (waiting for the one being rendered); only the passes the film keeps (StateError).
   // `labels` false: Combined without the labels (tests).
-  void read(Pass pass, float* out, bool labels = true) const;
+  void read(Pass pass, float* out, bool labels = true) const { read_rows(pass, 0, height_, out, labels); }
+  // The same for rows [y0, y0 + rows) only (rows bottom to top): width*rows*channels floats, so
+  // that a reader copies a frame through a band-sized buffer.
+  void read_rows(Pass pass, int y0, int rows, float* out, bool labels = true) const;
   // The light-tracing (t = 1 splat) part of Combined, RGB per pixel; false when the render traced
   // no light paths (not bidirectional). Between passes, as read().
   bool read_light_tracing(float* out) const;
