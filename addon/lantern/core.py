@@ -102,6 +102,18 @@ class ImageDesc(ctypes.Structure):
     ]
 
 
+class ImageFileDesc(ctypes.Structure):
+    _c_name_ = "lt_image_file_desc"
+    _fields_ = [
+        ("path", ctypes.c_char_p),
+        ("color_space", ctypes.c_int),
+        ("alpha_mode", ctypes.c_int),
+        ("use_alpha", ctypes.c_int),
+        ("interpolation", ctypes.c_int),
+        ("extension", ctypes.c_int),
+    ]
+
+
 class ShaderProgram(ctypes.Structure):
     _c_name_ = "lt_shader_program"
     _fields_ = [
@@ -307,7 +319,8 @@ class AbiEntry(ctypes.Structure):
     ]
 
 
-STRUCTS = (AbiEntry, ImageDesc, ShaderProgram, MeshAttribute, MeshDesc, InstanceDesc, LightDesc, CameraDesc, WorldDesc,
+STRUCTS = (AbiEntry, ImageDesc, ImageFileDesc, ShaderProgram, MeshAttribute, MeshDesc, InstanceDesc, LightDesc,
+           CameraDesc, WorldDesc,
            VolumeDesc, SceneStats, RenderSettings, RenderStatus)
 
 
@@ -340,6 +353,7 @@ def _declare(lib, layout=True):
         "lt_scene_warning": ([scene_p, c_int], c_char_p),
         "lt_scene_add_image": ([scene_p, P(ImageDesc), P(c_int)], c_int),
         "lt_scene_begin_image": ([scene_p, P(ImageDesc), P(P(ctypes.c_float))], c_int),
+        "lt_scene_add_image_file": ([scene_p, P(ImageFileDesc), P(c_int)], c_int),
         "lt_scene_end_image": ([scene_p, P(c_int)], c_int),
         "lt_scene_add_material": ([scene_p, P(ShaderProgram), P(c_int)], c_int),
         "lt_scene_add_mesh": ([scene_p, P(MeshDesc), P(c_int)], c_int),
@@ -599,6 +613,20 @@ class Scene:
         fill(np.ctypeslib.as_array(ptr, shape=(n,)).view(np.float32))
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_end_image(self.handle, ctypes.byref(out)), "lt_scene_end_image")
+        return out.value
+
+    def add_image_file(self, path, color_space, alpha_mode, use_alpha=False,
+                       interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT):
+        """Adds an image the core reads from its file (lt_scene_add_image_file): color_space and
+        alpha_mode are lt_color_space / lt_alpha_mode names ("SRGB", "STRAIGHT", ...). Returns the
+        image id; raises LanternError (status ERROR_INVALID_ARGUMENT: a file the core leaves to
+        Blender, ERROR_IO: unreadable)."""
+        d = ImageFileDesc(os.fsencode(path), enum_value("lt_color_space", color_space),
+                          enum_value("lt_alpha_mode", alpha_mode), int(bool(use_alpha)),
+                          int(interpolation), int(extension))
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_add_image_file(self.handle, ctypes.byref(d), ctypes.byref(out)),
+               "lt_scene_add_image_file")
         return out.value
 
     def add_material(self, program):

@@ -201,9 +201,11 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
                                          % (summary["emissive_objects"], summary["emissive_triangles"]))))
     lines.append("lights: %s; world: %s" % (lights or "none", summary.get("world") or "none"))
     if summary.get("image_texels"):
-        lines.append("texture memory: %.1f MiB for %d image(s), %d of them 8-bit (%.2f bytes per texel)"
+        lines.append("texture memory: %.1f MiB for %d image(s), %d of them 8-bit, %d read from their files "
+                     "(%.2f bytes per texel)"
                      % (summary["image_bytes"] / 2.0 ** 20, summary.get("images", 0),
-                        summary.get("byte_images", 0), summary["image_bytes"] / summary["image_texels"]))
+                        summary.get("byte_images", 0), summary.get("image_files", 0),
+                        summary["image_bytes"] / summary["image_texels"]))
     homogeneous = summary.get("material_media", 0) + summary.get("world_media", 0)
     grids = summary.get("volumes", 0)
     if homogeneous or grids:
@@ -278,7 +280,7 @@ class _PassWriter:
     result by end_result, so that what the add-on adds to the film and Blender's result is a band's
     worth of memory, not a frame's (the values are the same: each pixel is copied as it is)."""
 
-    BAND_PIXELS = 1 << 18  # 4 MiB of RGBA floats a band
+    BAND_PIXELS = 1 << 16  # 1 MiB of RGBA floats a band
 
     def __init__(self, engine, render, layer, view, passes):
         self.engine, self.render, self.layer, self.view = engine, render, layer, view

@@ -44,4 +44,5 @@ def test_byte_images_are_kept_at_8_bits_and_reported(scene_factory):
     scene = scene_factory("textured")
     ru.render(scene, ru.LANTERN, 1, seed=0)
     line = [l for l in engine.LAST_RENDER["report"].splitlines() if l.startswith("texture memory:")]
-    assert line == ["texture memory: 0.0 MiB for 2 image(s), 2 of them 8-bit (3.00 bytes per texel)"], line
+    assert line == ["texture memory: 0.0 MiB for 2 image(s), 2 of them 8-bit, 0 read from their files "
+                    "(3.00 bytes per texel)"], line

@@ -11,36 +11,6 @@ float srgb_to_linear(float c) {
   return std::pow((c + 0.055f) * (1.0f / 1.055f), 2.4f);
 }
 
-FloatBuffer::FloatBuffer(size_t n)
-    : p_(static_cast<float*>(std::malloc(std::max<size_t>(n, 1) * sizeof(float)))), n_(n) {
-  if (!p_) throw std::bad_alloc();
-}
-
-FloatBuffer& FloatBuffer::operator=(FloatBuffer&& o) noexcept {
-  if (this != &o) {
-    reset();
-    p_ = o.p_;
-    n_ = o.n_;
-    o.p_ = nullptr;
-    o.n_ = 0;
-  }
-  return *this;
-}
-
-FloatBuffer::~FloatBuffer() { reset(); }
-
-void FloatBuffer::reset() {
-  std::free(p_);
-  p_ = nullptr;
-  n_ = 0;
-}
-
-void FloatBuffer::shrink(size_t n) {
-  if (n >= n_) return;
-  if (void* q = std::realloc(p_, std::max<size_t>(n, 1) * sizeof(float))) p_ = static_cast<float*>(q);
-  n_ = n;  // a failed shrink keeps the larger block, which is still valid
-}
-
 namespace {
 // The value Blender gives for byte b of a byte image (Image.pixels: b * (1.0f / 255.0f)).
 inline float byte_value(uint8_t b) { return float(b) * (1.0f / 255.0f); }
@@ -59,6 +29,37 @@ Image::Image(int width, int height, int channels, FloatBuffer pixels, bool srgb,
              ImageAlpha alpha)
     : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb), alpha_mode_(alpha) {
   store(channels, std::move(pixels));
+}
+
+Image::Image(int width, int height, int channels, ByteBuffer pixels, bool srgb, Interpolation interp, Extension ext,
+             ImageAlpha alpha)
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb), alpha_mode_(alpha) {
+  store(channels, std::move(pixels));
+}
+
+void Image::store(int channels, ByteBuffer pixels) {
+  const size_t n = size_t(width_) * height_;
+  const bool has_alpha = channels == 2 || channels == 4;
+  channels_ = channels >= 3 ? 3 : 1;
+  uint8_t* p = pixels.data();
+  // The alpha plane, kept when used and not all 255 (as store(FloatBuffer) keeps it).
+  if (has_alpha && alpha_mode_ != ImageAlpha::Ignore) {
+    bool opaque = true;
+    for (size_t i = 0; i < n && opaque; ++i) opaque = p[i * channels + channels - 1] == 255;
+    if (!opaque) {
+      alpha_bytes_.resize(n);
+      for (size_t i = 0; i < n; ++i) alpha_bytes_[i] = p[i * channels + channels - 1];
+    }
+  }
+  // In place: the write index never passes the read index.
+  if (channels != channels_)
+    for (size_t i = 0; i < n; ++i)
+      for (int k = 0; k < channels_; ++k) p[i * channels_ + k] = p[i * channels + k];
+  // Cycles associates straight byte images in integers, before any decoding: c a / 255.
+  if (!alpha_bytes_.empty() && alpha_mode_ == ImageAlpha::Straight)
+    for (size_t i = 0; i < n * channels_; ++i) p[i] = uint8_t(unsigned(p[i]) * alpha_bytes_[i / channels_] / 255u);
+  pixels.shrink(n * channels_);
+  bytes_ = std::move(pixels);
 }
 
 void Image::store(int channels, FloatBuffer pixels) {
@@ -92,7 +93,7 @@ void Image::store(int channels, FloatBuffer pixels) {
     bytes = byte_value(uint8_t(std::nearbyint(alpha[i] * 255.0f))) == alpha[i];
   const bool associate = !alpha.empty() && alpha_mode_ == ImageAlpha::Straight;
   if (bytes) {
-    bytes_.resize(n * channels_);
+    bytes_ = ByteBuffer(n * channels_);
     for (size_t i = 0; i < bytes_.size(); ++i) bytes_[i] = uint8_t(std::nearbyint(p[i] * 255.0f));
     if (!alpha.empty()) {
       alpha_bytes_.resize(n);
