@@ -192,23 +192,10 @@ def test_light_falloff(output, smooth, outdir):
 
 
 def _write_png(path, pixels, bits):
-    """A PNG of `pixels` (h, w, channels in 0..1, rows bottom first as Blender's): grey, grey and
-    alpha, RGB or RGBA at 8 or 16 bits, written here so that every kind is covered."""
-    import struct
-    import zlib
-
+    """A PNG of `pixels` (h, w, channels in 0..1, rows bottom first as Blender's) at 8 or 16 bits."""
     import numpy as np
-    h, w, c = pixels.shape
-    top_first = np.ascontiguousarray(pixels[::-1])
-    q = np.round(np.clip(top_first, 0, 1) * (2 ** bits - 1)).astype(">u2" if bits == 16 else np.uint8)
-    raw = b"".join(b"\0" + q[y].tobytes() for y in range(h))
-
-    def chunk(kind, data):
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
-    color_type = {1: 0, 2: 4, 3: 2, 4: 6}[c]
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, bits, color_type, 0, 0, 0))
-                + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+    q = np.round(np.clip(pixels[::-1], 0, 1) * (2 ** bits - 1)).astype(np.uint16 if bits == 16 else np.uint8)
+    ru.write_png_values(path, q)
 
 
 def _write_exr(path, pixels, half):
