@@ -378,6 +378,7 @@ def _declare(lib, layout=True):
         "lt_pass_channels": ([c_int], c_int),
         "lt_render_read_pass": ([render_p, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_pass_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_strategy_grid_rows": ([render_p, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid": ([render_p, _f_p, ctypes.c_size_t, ctypes.POINTER(c_int),
                                           ctypes.POINTER(c_int)], c_int),
         "lt_render_destroy": ([render_p], None),
@@ -925,16 +926,28 @@ class Render:
                                                   out.size), "lt_render_read_pass_rows")
         return out
 
-    def read_strategy_grid(self):
-        """The BDPT strategy view of a stopped render: float32 array (height, width, 3), rows
-        bottom to top; rows are path depths (0 at the top), columns s = 0, 1, ..."""
+    def strategy_grid_size(self):
+        """(width, height) of the BDPT strategy view (read_strategy_grid)."""
         w, h = ctypes.c_int(), ctypes.c_int()
         _check(self._lib.lt_render_read_strategy_grid(self.handle, None, 0, ctypes.byref(w), ctypes.byref(h)),
                "lt_render_read_strategy_grid")
-        out = np.empty(w.value * h.value * 3, dtype=np.float32)
-        _check(self._lib.lt_render_read_strategy_grid(self.handle, _fptr(out), out.size, ctypes.byref(w),
-                                                      ctypes.byref(h)), "lt_render_read_strategy_grid")
-        return out.reshape(h.value, w.value, 3)
+        return w.value, h.value
+
+    def read_strategy_grid(self, band_pixels=1 << 16):
+        """The BDPT strategy view of a stopped render: float32 RGBA array (height, width, 4), alpha
+        1, rows bottom to top; rows are path depths (0 at the top), columns s = 0, 1, ... Read a
+        band of rows at a time, straight into the array the caller keeps."""
+        w, h = self.strategy_grid_size()
+        rgba = np.ones((h, w, 4), dtype=np.float32)
+        rows = max(1, min(h, band_pixels // max(w, 1)))
+        band = np.empty(w * rows * 3, dtype=np.float32)
+        for y0 in range(0, h, rows):
+            n = min(rows, h - y0)
+            buf = band[:w * n * 3]
+            _check(self._lib.lt_render_read_strategy_grid_rows(self.handle, y0, n, _fptr(buf), buf.size),
+                   "lt_render_read_strategy_grid_rows")
+            rgba[y0:y0 + n, :, :3] = buf.reshape(n, w, 3)
+        return rgba
 
     def write_exr(self, path, attributes=None):
         """Writes every pass to a 32-bit float EXR; `attributes`: extra header strings (dict)."""

@@ -108,9 +108,7 @@ def _show_strategies():
         if image is not None:
             bpy.data.images.remove(image)
         image = bpy.data.images.new(STRATEGY_IMAGE, w, h, alpha=True, float_buffer=True)
-    rgba = np.ones((h, w, 4), dtype=np.float32)
-    rgba[..., :3] = grid
-    image.pixels.foreach_set(rgba.ravel())
+    image.pixels.foreach_set(grid.ravel())  # RGBA as the core's read gives it: no other copy
     image.update()
     return None
 

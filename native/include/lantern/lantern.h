@@ -486,6 +486,9 @@ LT_API int lt_render_read_pass_rows(lt_render* render, int pass, int y0, int row
  * the region's size, (depth + 2) columns (s = 0, 1, ...) by `depth` rows (path depth s + t - 2,
  * 0 at the top), rows bottom to top. With out == NULL only the grid's size is returned. */
 LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_count, int* width, int* height);
+/* The same for grid rows [y0, y0 + rows) only (width*rows*3 floats; the size from the call above
+ * with out == NULL), read through a few rows' buffer. Added without an ABI version bump (still 7). */
+LT_API int lt_render_read_strategy_grid_rows(lt_render* render, int y0, int rows, float* out, size_t float_count);
 
 LT_API void lt_render_destroy(lt_render* render);
 

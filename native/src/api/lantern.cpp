@@ -816,6 +816,27 @@ void read_pass_rows(lt_render* render, int pass, int y0, int rows, float* out, s
           "pass buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) + " are needed");
   film.read_rows(lt::Pass(pass), y0, rows, out);
 }
+
+// Rows [y0, y0 + rows) of the strategy grid (rows < 0: all); out NULL: only the grid's size.
+void read_strategy_rows(lt_render* render, int y0, int rows, float* out, size_t float_count, int* width, int* height) {
+  require(render != nullptr, "lt_render_read_strategy_grid: NULL argument");
+  const lt::RenderJob& job = *render->job;
+  const int depth = job.settings().integrator_settings.strategy_depth;
+  if (depth <= 0) throw lt::StateError("this render has no strategy view (bidirectional with strategy_view_depth > 0)");
+  const int columns = lt::strategy_columns(depth);
+  *width = columns * job.region_width();
+  *height = depth * job.region_height();
+  if (!out) return;
+  if (rows < 0) rows = *height;
+  require(y0 >= 0 && y0 <= *height - rows, "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                                               " are not within the strategy grid's " + std::to_string(*height));
+  if (job.status().state == lt::RenderState::Running)
+    throw lt::StateError("the strategy view can be read once the render has stopped");
+  size_t need = size_t(*width) * rows * 3;
+  require(float_count == need, "strategy grid buffer holds " + std::to_string(float_count) + " floats; " +
+                                   std::to_string(need) + " are needed");
+  job.film().read_strategy_grid(columns, depth, out, y0, rows);
+}
 }  // namespace
 
 int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count) {
@@ -831,21 +852,17 @@ int lt_render_read_pass_rows(lt_render* render, int pass, int y0, int rows, floa
 
 int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_count, int* width, int* height) {
   return guarded([&] {
-    require(render && width && height, "lt_render_read_strategy_grid: NULL argument");
-    const lt::RenderJob& job = *render->job;
-    const int depth = job.settings().integrator_settings.strategy_depth;
-    if (depth <= 0)
-      throw lt::StateError("this render has no strategy view (bidirectional with strategy_view_depth > 0)");
-    const int columns = lt::strategy_columns(depth);
-    *width = columns * job.region_width();
-    *height = depth * job.region_height();
-    if (!out) return;
-    if (job.status().state == lt::RenderState::Running)
-      throw lt::StateError("the strategy view can be read once the render has stopped");
-    size_t need = size_t(*width) * *height * 3;
-    require(float_count == need, "strategy grid buffer holds " + std::to_string(float_count) + " floats; " +
-                                     std::to_string(need) + " are needed");
-    job.film().read_strategy_grid(columns, depth, out);
+    require(width && height, "lt_render_read_strategy_grid: NULL argument");
+    read_strategy_rows(render, 0, -1, out, float_count, width, height);
+  });
+}
+
+int lt_render_read_strategy_grid_rows(lt_render* render, int y0, int rows, float* out, size_t float_count) {
+  return guarded([&] {
+    require(out != nullptr, "lt_render_read_strategy_grid_rows: NULL argument");
+    require(rows >= 0, "lt_render_read_strategy_grid_rows: negative row count");
+    int width = 0, height = 0;
+    read_strategy_rows(render, y0, rows, out, float_count, &width, &height);
   });
 }
 

@@ -403,26 +403,28 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
 
 namespace lt {
 
-void Film::read_strategy_grid(int columns, int rows, float* out) const {
+void Film::read_strategy_grid(int columns, int rows, float* out, int y0, int count) const {
   const int gw = columns * width_;
+  if (count < 0) count = rows * height_ - y0;
   const double splat_scale = light_paths_ ? 1.0 / double(light_paths_) : 0.0;
-  for (int d = 0; d < rows; ++d)
+  for (int gy = y0; gy < y0 + count; ++gy) {
+    // Grid row gy: cell row d (depth 0 at the top: the last rows), pixel row y of each cell.
+    const int d = rows - 1 - gy / height_, y = gy % height_;
     for (int s = 0; s < columns; ++s) {
       const int cell = d * columns + s;
-      const int oy = (rows - 1 - d) * height_, ox = s * width_;
-      for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x) {
-          const size_t i = size_t(y) * width_ + x;
-          const uint32_t n = count_[i];
-          float* o = out + (size_t(oy + y) * gw + ox + x) * 3;
-          for (int k = 0; k < 3; ++k) {
-            const size_t at = (i * layout_.strategy_cells + cell) * 3 + k;
-            double v = strategy_splats_[at] * splat_scale;
-            if (n) v += strategies_[at] / double(n);
-            o[k] = float(v);
-          }
+      for (int x = 0; x < width_; ++x) {
+        const size_t i = size_t(y) * width_ + x;
+        const uint32_t n = count_[i];
+        float* o = out + (size_t(gy - y0) * gw + size_t(s) * width_ + x) * 3;
+        for (int k = 0; k < 3; ++k) {
+          const size_t at = (i * layout_.strategy_cells + cell) * 3 + k;
+          double v = strategy_splats_[at] * splat_scale;
+          if (n) v += strategies_[at] / double(n);
+          o[k] = float(v);
         }
+      }
     }
+  }
 }
 
 }  // namespace lt

@@ -126,7 +126,8 @@ class Film {
   }
   // The grid of strategy images: `columns` x `rows` cells of the region's size, RGB, rows bottom
   // to top with depth 0 at the top. Only valid once rendering has stopped.
-  void read_strategy_grid(int columns, int rows, float* out) const;
+  // y0, count: only grid rows [y0, y0 + count) (count < 0: to the last), written from out on.
+  void read_strategy_grid(int columns, int rows, float* out, int y0 = 0, int count = -1) const;
   // Resolves Combined into the published image readers see while rendering (the rendering
   // thread, between passes). Allocates nothing.
   void publish();
