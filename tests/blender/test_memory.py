@@ -25,8 +25,8 @@ def _child(width, height, limit_mib):
 
 
 def test_render_too_large_for_the_address_space_is_refused_with_a_message():
-    # 8000 x 8000 with the default passes needs about 5.5 GiB (film, Blender's RenderResult and
-    # the add-on's buffer); the child may allocate 1 GiB more than it holds.
+    # 8000 x 8000 with the default passes needs about 4 GiB (film and Blender's RenderResult; the
+    # add-on's buffers are a band of rows); the child may allocate 1 GiB more than it holds.
     errors, r = _child(8000, 8000, 1024)
     assert errors, r
     assert "8000x8000 render needs about" in errors[0] and "is available" in errors[0], errors
