@@ -103,9 +103,6 @@ class _CancellingEngine:
             return True
         return False
 
-    def update_result(self, result):
-        pass
-
     def update_stats(self, a, b):
         pass
 
@@ -132,7 +129,7 @@ def test_cancel_stops_quickly_and_keeps_a_partial_image(scene_factory):
         try:
             render.start()
             stub = _CancellingEngine(after=0.5)
-            cancelled = engine.LanternRenderEngine._poll_loop(stub, render, None, _NullWriter())
+            cancelled = engine.LanternRenderEngine._poll_loop(stub, render, _NullWriter())
             render.wait()
             stopped = time.monotonic() - stub.cancelled_at
             assert cancelled
