@@ -207,10 +207,12 @@ def _write_exr(path, pixels, half):
     rgba = np.ones((h, w, 4), np.float32)
     rgba[..., :c] = pixels
     img.pixels.foreach_set(rgba.ravel())
-    img.filepath_raw = path
-    img.file_format = "OPEN_EXR"
-    img.use_half_precision = half
-    img.save()
+    # The scene's output settings choose the depth (EXR is written linear, as the pixels are).
+    settings = bpy.context.scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "16" if half else "32"
+    settings.color_mode = "RGBA" if c == 4 else "RGB"
+    img.save_render(path, scene=bpy.context.scene)
     bpy.data.images.remove(img)
 
 
@@ -235,8 +237,14 @@ IMAGE_FILES = {
     "exr32_rgba_straight": ("exr", 4, 32, "Linear", "STRAIGHT", True),
     "exr32_rgb": ("exr", 3, 32, "Linear", "PREMUL", True),
     "exr16_rgba": ("exr", 4, 16, "Linear", "PREMUL", True),
+    "exr16_rgba_straight": ("exr", 4, 16, "Linear", "STRAIGHT", True),
+    "exr16_rgb": ("exr", 3, 16, "Linear", "PREMUL", True),
     "exr32_non_color": ("exr", 4, 32, "Non-Color", "STRAIGHT", True),
 }
+
+
+# What the core keeps of some of them, bytes per texel (the file's precision, no alpha plane).
+IMAGE_FILE_BYTES = {"png8_srgb_rgb": 3, "png8_grey": 1, "png16_linear_grey": 4, "exr32_rgb": 12, "exr16_rgb": 6}
 
 
 @pytest.mark.parametrize("output", ["Color", "Color with Alpha used", "Alpha"])
@@ -300,6 +308,8 @@ def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_pa
     from_file, line = render(packed=False)
     expect = "1 read from their files" if by_core else "0 read from their files"
     assert line and expect in line[0], (case, line)
+    if case in IMAGE_FILE_BYTES:
+        assert "(%.2f bytes per texel)" % IMAGE_FILE_BYTES[case] in line[0], (case, line)
     # Blender never loaded the pixels of an image the core read.
     assert loaded[-1].has_data != by_core, (case, loaded[-1].has_data)
     through_blender, line = render(packed=True)

@@ -103,7 +103,8 @@ LT_API int lt_scene_add_image(lt_scene* scene, const lt_image_desc* desc, int* o
 LT_API int lt_scene_begin_image(lt_scene* scene, const lt_image_desc* desc, float** out_pixels);
 LT_API int lt_scene_end_image(lt_scene* scene, int* out_id);
 /* An image the core reads from its file itself (OpenImageIO), as Cycles does, so that the caller
- * never loads the pixels: they are held once, at the file's precision (8-bit files as bytes).
+ * never loads the pixels: they are held once, at the file's precision (8-bit files as bytes, half
+ * OpenEXR files as half floats unless the alpha mode is Straight, others as float).
  * The texels are those Blender 3.4 gives in Image.pixels for an image datablock of this colour
  * space and alpha mode, given to lt_scene_add_image with that datablock's srgb and alpha
  * (native/src/io/image_file.h). PNG (8 and 16 bits) and single-part RGB(A) OpenEXR. Refused with

@@ -90,6 +90,14 @@ std::unique_ptr<Image> read_image_file(const ImageFileRequest& r) {
     bool rgba = c == 3 || c == 4;
     for (int k = 0; k < c && rgba; ++k) rgba = spec.channelnames[k] == kNames[k];
     if (!rgba) throw unsupported("OpenEXR channels other than R, G, B(, A)");
+    // Half files stay half (their texels are the same floats), unless Blender would premultiply
+    // them in float (Straight alpha mode).
+    const bool premultiply = c == 4 && !data && mode == FileAlphaMode::Straight;
+    if (spec.format == OIIO::TypeDesc::HALF && spec.channelformats.empty() && !premultiply) {
+      HalfBuffer halfs(n * c);
+      read_rows(*in, r.path, OIIO::TypeDesc::HALF, c, halfs.data());
+      return std::make_unique<Image>(w, h, c, std::move(halfs), r.interp, r.ext, core_alpha(r, true));
+    }
     px = FloatBuffer(n * c);
     read_rows(*in, r.path, OIIO::TypeDesc::FLOAT, c, px.data());
   } else {

@@ -1,5 +1,6 @@
 // Image files read by the core itself (OpenImageIO), as Cycles reads them, so that Blender never
-// loads the pixels and they are held once, at the file's precision. The texels are exactly those
+// loads the pixels and they are held once, at the file's precision (8-bit files as bytes, half
+// OpenEXR files as half floats unless Blender would premultiply them, others as float). The texels are exactly those
 // the add-on would get from Blender 3.4's Image.pixels for the same image datablock: what Blender's
 // loader does to them (imbuf's png.c / openexr_api.cpp and imb_handle_alpha) is done here, and
 // files for which that would need Blender's colour management (a float file in a colour space

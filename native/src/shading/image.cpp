@@ -1,5 +1,7 @@
 #include "shading/image.h"
 
+#include <Imath/half.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <new>
@@ -35,6 +37,42 @@ Image::Image(int width, int height, int channels, ByteBuffer pixels, bool srgb, 
              ImageAlpha alpha)
     : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb), alpha_mode_(alpha) {
   store(channels, std::move(pixels));
+}
+
+Image::Image(int width, int height, int channels, HalfBuffer pixels, Interpolation interp, Extension ext,
+             ImageAlpha alpha)
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(false), alpha_mode_(alpha) {
+  store(channels, std::move(pixels));
+}
+
+namespace {
+inline float half_value(uint16_t h) { return imath_half_to_float(h); }
+}  // namespace
+
+void Image::store(int channels, HalfBuffer pixels) {
+  // As store(FloatBuffer) does with the same values (its byte-value test aside: a half image that
+  // holds only byte values is kept as halves, the same texels).
+  const size_t n = size_t(width_) * height_;
+  channels_ = channels >= 3 ? 3 : 1;
+  uint16_t* p = pixels.data();
+  if (channels == 4 && alpha_mode_ != ImageAlpha::Ignore) {
+    bool opaque = true;
+    for (size_t i = 0; i < n && opaque; ++i) opaque = half_value(p[4 * i + 3]) == 1.0f;
+    if (!opaque) {
+      alpha_floats_.resize(n);
+      for (size_t i = 0; i < n; ++i) {
+        const float a = half_value(p[4 * i + 3]);
+        alpha_floats_[i] = std::isfinite(a) ? clamp(a, 0.0f, 1.0f) : 0.0f;
+      }
+    }
+  }
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < channels_; ++k) {
+      const uint16_t v = p[i * channels + k];
+      p[i * channels_ + k] = std::isfinite(half_value(v)) ? v : uint16_t(0);  // never a bad texel
+    }
+  pixels.shrink(n * channels_);
+  halfs_ = std::move(pixels);
 }
 
 void Image::store(int channels, ByteBuffer pixels) {
@@ -125,6 +163,11 @@ Vec3 Image::fetch(size_t i) const {
     if (channels_ == 1) return Vec3(byte_value(bytes_[i]));
     const uint8_t* b = &bytes_[3 * i];
     return Vec3(byte_value(b[0]), byte_value(b[1]), byte_value(b[2]));
+  }
+  if (!halfs_.empty()) {
+    if (channels_ == 1) return Vec3(half_value(halfs_[i]));
+    const uint16_t* h = &halfs_[3 * i];
+    return Vec3(half_value(h[0]), half_value(h[1]), half_value(h[2]));
   }
   const float* f = floats_.data();
   if (channels_ == 1) return Vec3(f[i]);

@@ -70,6 +70,7 @@ class MallocBuffer {
 };
 using FloatBuffer = MallocBuffer<float>;
 using ByteBuffer = MallocBuffer<uint8_t>;
+using HalfBuffer = MallocBuffer<uint16_t>;  // IEEE half floats (OpenEXR's)
 
 class Image {
  public:
@@ -84,6 +85,11 @@ class Image {
   // values b * (1/255) of a byte image's 4 channels (grey as 1 channel: the same texels).
   Image(int width, int height, int channels, ByteBuffer pixels, bool srgb, Interpolation interp, Extension ext,
         ImageAlpha alpha = ImageAlpha::Ignore);
+  // Half floats as a file stores them (channels 1, 3 or 4, alpha associated or apart as `alpha`
+  // says; never Straight): taken and kept as half floats, converted in place like the float
+  // constructor's (the texels are the same floats).
+  Image(int width, int height, int channels, HalfBuffer pixels, Interpolation interp, Extension ext,
+        ImageAlpha alpha = ImageAlpha::Ignore);
   int width() const { return width_; }
   int height() const { return height_; }
   // RGB; unassociate: divide associated colours by alpha before decoding sRGB, as Cycles'
@@ -96,7 +102,8 @@ class Image {
   bool has_alpha() const { return !alpha_bytes_.empty() || !alpha_floats_.empty(); }
   Vec3 texel(int x, int y) const;  // linear
   size_t bytes() const {
-    return bytes_.size() + floats_.size() * sizeof(float) + alpha_bytes_.size() + alpha_floats_.size() * sizeof(float);
+    return bytes_.size() + floats_.size() * sizeof(float) + halfs_.size() * sizeof(uint16_t) + alpha_bytes_.size() +
+           alpha_floats_.size() * sizeof(float);
   }
   bool is_byte() const { return !bytes_.empty(); }
 
@@ -109,12 +116,14 @@ class Image {
   bool srgb_ = false;
   int channels_ = 3;    // stored: 1 or 3
   ByteBuffer bytes_;    // 8-bit storage, or
-  FloatBuffer floats_;  // float storage
+  FloatBuffer floats_;  // float storage, or
+  HalfBuffer halfs_;    // half-float storage (half OpenEXR files)
   ImageAlpha alpha_mode_ = ImageAlpha::Ignore;
   std::vector<uint8_t> alpha_bytes_;  // the alpha plane at the colours' precision, or empty
   std::vector<float> alpha_floats_;
   void store(int channels, FloatBuffer pixels);
   void store(int channels, ByteBuffer pixels);
+  void store(int channels, HalfBuffer pixels);
   Vec3 fetch(size_t i) const;
   template <class T, class F>
   T filtered(Vec2 uv, F fetch) const;
