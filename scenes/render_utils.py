@@ -165,16 +165,27 @@ def to_srgb8(img, exposure=0.0):
 
 def write_png(path, img, exposure=0.0):
     """Writes a linear (h, w, >=3) image (rows top first) as an 8-bit sRGB PNG."""
-    rgb = to_srgb8(img, exposure)
-    h, w, _ = rgb.shape
-    raw = b"".join(b"\0" + rgb[y].tobytes() for y in range(h))
+    write_png_values(path, to_srgb8(img, exposure))
+
+
+def write_png_values(path, values, level=6):
+    """Writes uint8 or uint16 values (h, w, channels 1 to 4: grey, grey and alpha, RGB, RGBA;
+    rows top first) as a PNG of that depth."""
+    values = np.asarray(values)
+    bits = 16 if values.dtype == np.uint16 else 8
+    if values.ndim == 2:
+        values = values[..., None]
+    h, w, c = values.shape
+    rows = values.astype(">u2" if bits == 16 else np.uint8)
+    raw = b"".join(b"\0" + rows[y].tobytes() for y in range(h))
 
     def chunk(tag, payload):
         c = struct.pack(">I", len(payload)) + tag + payload
         return c + struct.pack(">I", zlib.crc32(tag + payload) & 0xFFFFFFFF)
 
-    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
-    png += chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b"")
+    color_type = {1: 0, 2: 4, 3: 2, 4: 6}[c]
+    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, bits, color_type, 0, 0, 0))
+    png += chunk(b"IDAT", zlib.compress(raw, level)) + chunk(b"IEND", b"")
     with open(path, "wb") as f:
         f.write(png)
 

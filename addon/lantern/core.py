@@ -102,6 +102,18 @@ class ImageDesc(ctypes.Structure):
     ]
 
 
+class ImageFileDesc(ctypes.Structure):
+    _c_name_ = "lt_image_file_desc"
+    _fields_ = [
+        ("path", ctypes.c_char_p),
+        ("color_space", ctypes.c_int),
+        ("alpha_mode", ctypes.c_int),
+        ("use_alpha", ctypes.c_int),
+        ("interpolation", ctypes.c_int),
+        ("extension", ctypes.c_int),
+    ]
+
+
 class ShaderProgram(ctypes.Structure):
     _c_name_ = "lt_shader_program"
     _fields_ = [
@@ -307,7 +319,8 @@ class AbiEntry(ctypes.Structure):
     ]
 
 
-STRUCTS = (AbiEntry, ImageDesc, ShaderProgram, MeshAttribute, MeshDesc, InstanceDesc, LightDesc, CameraDesc, WorldDesc,
+STRUCTS = (AbiEntry, ImageDesc, ImageFileDesc, ShaderProgram, MeshAttribute, MeshDesc, InstanceDesc, LightDesc,
+           CameraDesc, WorldDesc,
            VolumeDesc, SceneStats, RenderSettings, RenderStatus)
 
 
@@ -340,6 +353,7 @@ def _declare(lib, layout=True):
         "lt_scene_warning": ([scene_p, c_int], c_char_p),
         "lt_scene_add_image": ([scene_p, P(ImageDesc), P(c_int)], c_int),
         "lt_scene_begin_image": ([scene_p, P(ImageDesc), P(P(ctypes.c_float))], c_int),
+        "lt_scene_add_image_file": ([scene_p, P(ImageFileDesc), P(c_int)], c_int),
         "lt_scene_end_image": ([scene_p, P(c_int)], c_int),
         "lt_scene_add_material": ([scene_p, P(ShaderProgram), P(c_int)], c_int),
         "lt_scene_add_mesh": ([scene_p, P(MeshDesc), P(c_int)], c_int),
@@ -363,6 +377,8 @@ def _declare(lib, layout=True):
         "lt_render_wait": ([render_p], c_int),
         "lt_pass_channels": ([c_int], c_int),
         "lt_render_read_pass": ([render_p, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_pass_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_strategy_grid_rows": ([render_p, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid": ([render_p, _f_p, ctypes.c_size_t, ctypes.POINTER(c_int),
                                           ctypes.POINTER(c_int)], c_int),
         "lt_render_destroy": ([render_p], None),
@@ -598,6 +614,20 @@ class Scene:
         fill(np.ctypeslib.as_array(ptr, shape=(n,)).view(np.float32))
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_end_image(self.handle, ctypes.byref(out)), "lt_scene_end_image")
+        return out.value
+
+    def add_image_file(self, path, color_space, alpha_mode, use_alpha=False,
+                       interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT):
+        """Adds an image the core reads from its file (lt_scene_add_image_file): color_space and
+        alpha_mode are lt_color_space / lt_alpha_mode names ("SRGB", "STRAIGHT", ...). Returns the
+        image id; raises LanternError (status ERROR_INVALID_ARGUMENT: a file the core leaves to
+        Blender, ERROR_IO: unreadable)."""
+        d = ImageFileDesc(os.fsencode(path), enum_value("lt_color_space", color_space),
+                          enum_value("lt_alpha_mode", alpha_mode), int(bool(use_alpha)),
+                          int(interpolation), int(extension))
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_add_image_file(self.handle, ctypes.byref(d), ctypes.byref(out)),
+               "lt_scene_add_image_file")
         return out.value
 
     def add_material(self, program):
@@ -886,16 +916,38 @@ class Render:
                "lt_render_read_pass")
         return out
 
-    def read_strategy_grid(self):
-        """The BDPT strategy view of a stopped render: float32 array (height, width, 3), rows
-        bottom to top; rows are path depths (0 at the top), columns s = 0, 1, ..."""
+    def read_pass_rows(self, pass_id, y0, rows, out):
+        """Fills `out` (float32 contiguous, width*rows*channels) with rows [y0, y0 + rows) of the
+        region (row 0 at the bottom) and returns it."""
+        n = self.region_size[0] * rows * pass_channels(pass_id)
+        if out.dtype != np.float32 or not out.flags["C_CONTIGUOUS"] or out.size != n:
+            raise ValueError("read_pass_rows needs a contiguous float32 array of %d floats" % n)
+        _check(self._lib.lt_render_read_pass_rows(self.handle, int(pass_id), int(y0), int(rows), _fptr(out),
+                                                  out.size), "lt_render_read_pass_rows")
+        return out
+
+    def strategy_grid_size(self):
+        """(width, height) of the BDPT strategy view (read_strategy_grid)."""
         w, h = ctypes.c_int(), ctypes.c_int()
         _check(self._lib.lt_render_read_strategy_grid(self.handle, None, 0, ctypes.byref(w), ctypes.byref(h)),
                "lt_render_read_strategy_grid")
-        out = np.empty(w.value * h.value * 3, dtype=np.float32)
-        _check(self._lib.lt_render_read_strategy_grid(self.handle, _fptr(out), out.size, ctypes.byref(w),
-                                                      ctypes.byref(h)), "lt_render_read_strategy_grid")
-        return out.reshape(h.value, w.value, 3)
+        return w.value, h.value
+
+    def read_strategy_grid(self, band_pixels=1 << 16):
+        """The BDPT strategy view of a stopped render: float32 RGBA array (height, width, 4), alpha
+        1, rows bottom to top; rows are path depths (0 at the top), columns s = 0, 1, ... Read a
+        band of rows at a time, straight into the array the caller keeps."""
+        w, h = self.strategy_grid_size()
+        rgba = np.ones((h, w, 4), dtype=np.float32)
+        rows = max(1, min(h, band_pixels // max(w, 1)))
+        band = np.empty(w * rows * 3, dtype=np.float32)
+        for y0 in range(0, h, rows):
+            n = min(rows, h - y0)
+            buf = band[:w * n * 3]
+            _check(self._lib.lt_render_read_strategy_grid_rows(self.handle, y0, n, _fptr(buf), buf.size),
+                   "lt_render_read_strategy_grid_rows")
+            rgba[y0:y0 + n, :, :3] = buf.reshape(n, w, 3)
+        return rgba
 
     def write_exr(self, path, attributes=None):
         """Writes every pass to a 32-bit float EXR; `attributes`: extra header strings (dict)."""

@@ -35,13 +35,12 @@ def enabled_passes(view_layer):
 
 def pass_settings(passes, pixels):
     """The render settings for these passes: the core keeps only them (lt_render_settings.passes),
-    and counts what the add-on and Blender hold besides (caller_bytes) in its memory check: the
-    RenderResult's passes and the one buffer _PassWriter reads through."""
+    and counts what Blender holds besides (caller_bytes) in its memory check: the render result's
+    passes (_PassWriter's band buffers and band results are a few MiB)."""
     mask = 0
     for p in passes:
         mask |= 1 << p[1]
-    floats = sum(p[2] for p in passes) + max(core.pass_channels(p[1]) for p in passes)
-    return dict(passes=mask, caller_bytes=pixels * floats * 4)
+    return dict(passes=mask, caller_bytes=pixels * sum(p[2] for p in passes) * 4)
 
 
 def frame_size(rd):
@@ -109,9 +108,7 @@ def _show_strategies():
         if image is not None:
             bpy.data.images.remove(image)
         image = bpy.data.images.new(STRATEGY_IMAGE, w, h, alpha=True, float_buffer=True)
-    rgba = np.ones((h, w, 4), dtype=np.float32)
-    rgba[..., :3] = grid
-    image.pixels.foreach_set(rgba.ravel())
+    image.pixels.foreach_set(grid.ravel())  # RGBA as the core's read gives it: no other copy
     image.update()
     return None
 
@@ -202,9 +199,11 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
                                          % (summary["emissive_objects"], summary["emissive_triangles"]))))
     lines.append("lights: %s; world: %s" % (lights or "none", summary.get("world") or "none"))
     if summary.get("image_texels"):
-        lines.append("texture memory: %.1f MiB for %d image(s), %d of them 8-bit (%.2f bytes per texel)"
+        lines.append("texture memory: %.1f MiB for %d image(s), %d of them 8-bit, %d read from their files "
+                     "(%.2f bytes per texel)"
                      % (summary["image_bytes"] / 2.0 ** 20, summary.get("images", 0),
-                        summary.get("byte_images", 0), summary["image_bytes"] / summary["image_texels"]))
+                        summary.get("byte_images", 0), summary.get("image_files", 0),
+                        summary["image_bytes"] / summary["image_texels"]))
     homogeneous = summary.get("material_media", 0) + summary.get("world_media", 0)
     grids = summary.get("volumes", 0)
     if homogeneous or grids:
@@ -274,39 +273,50 @@ def write_sidecar(scene, metadata):
 
 
 class _PassWriter:
-    """Copies core passes into a RenderResult layer's passes (padding channels if needed)."""
+    """Hands the core's passes to Blender in bands of rows: each band is a RenderResult of its own
+    (RenderEngine.begin_result), filled from one band-sized buffer and merged into the render's
+    result by end_result, so that what the add-on adds to the film and Blender's result is a band's
+    worth of memory, not a frame's (the values are the same: each pixel is copied as it is)."""
 
-    def __init__(self, render, layer, view, passes):
-        self.render = render
-        self.targets = []
-        size = 0
-        for name, pass_id, channels, _, _, _ in passes:
-            bpass = layer.passes.find_by_name(name, view)
-            if bpass is None:
-                continue
-            core_channels = core.pass_channels(pass_id)
-            size = max(size, render.pass_size(pass_id))
-            pad = None
-            if core_channels != channels:
-                pad = np.zeros(render.pass_size(pass_id) // core_channels * channels, dtype=np.float32)
-            self.targets.append((name, pass_id, bpass, pad, core_channels, channels))
-        # One buffer for every pass (Blender copies out of it): a pass's worth of memory, not all.
-        self.buffer = np.empty(size, dtype=np.float32)
+    BAND_PIXELS = 1 << 16  # 1 MiB of RGBA floats a band
+
+    def __init__(self, engine, render, layer, view, passes):
+        self.engine, self.render, self.layer, self.view = engine, render, layer, view
+        self.passes = [(name, pass_id, channels) for name, pass_id, channels, _, _, _ in passes]
+        width, height = render.region_size
+        self.rows = max(1, min(height, self.BAND_PIXELS // max(width, 1)))
+        # One buffer for every pass (Blender copies out of it), and one for padding channels.
+        core_floats = max(core.pass_channels(p) for _, p, _ in self.passes)
+        self.buffer = np.empty(width * self.rows * core_floats, dtype=np.float32)
+        self.pad = np.zeros(width * self.rows * max(c for _, _, c in self.passes), dtype=np.float32)
 
     def write(self, only=None):
-        for name, pass_id, bpass, pad, cc, bc in self.targets:
-            if only is not None and name not in only:
-                continue
-            buf = self.buffer[:self.render.pass_size(pass_id)]
-            self.render.read_pass(pass_id, buf)
-            if pad is not None:
-                n = min(cc, bc)
-                pad.reshape(-1, bc)[:, :n] = buf.reshape(-1, cc)[:, :n]
-                out = pad
-            else:
-                out = buf
-            # rect is (pixels, channels): Blender 3.4 takes a 2-D array here, not a flat one.
-            bpass.rect.foreach_set(out.reshape(-1, bc))
+        width, height = self.render.region_size
+        for y0 in range(0, height, self.rows):
+            rows = min(self.rows, height - y0)
+            result = self.engine.begin_result(0, y0, width, rows, layer=self.layer, view=self.view)
+            try:
+                layer = result.layers[0]
+                for name, pass_id, bc in self.passes:
+                    if only is not None and name not in only:
+                        continue
+                    bpass = layer.passes.find_by_name(name, self.view)
+                    if bpass is None:
+                        continue
+                    cc = core.pass_channels(pass_id)
+                    buf = self.render.read_pass_rows(pass_id, y0, rows, self.buffer[:width * rows * cc])
+                    if cc != bc:
+                        n = min(cc, bc)
+                        out = self.pad[:width * rows * bc].reshape(-1, bc)
+                        out[:, :n] = buf.reshape(-1, cc)[:, :n]
+                        out[:, n:] = 0.0
+                    else:
+                        out = buf.reshape(-1, bc)
+                    # rect is (pixels, channels): Blender 3.4 takes a 2-D array here, not a flat one.
+                    bpass.rect.foreach_set(out)
+            finally:
+                # Never cancel=True: that would drop the (partial) image.
+                self.engine.end_result(result)
 
 
 class LanternRenderEngine(bpy.types.RenderEngine):
@@ -431,75 +441,68 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             render.start()
             return render
         try:
-            st = self._progress(view_render, view_layer, border, (settings["width"], settings["height"]))
+            st = self._progress(view_render, view_layer, border)
         except BaseException:
             for r in renders:
                 r.close()
             raise
         return renders[-1], st
 
-    def _progress(self, renders, view_layer, border, size=None):
+    def _progress(self, renders, view_layer, border):
         """Polls the render of each view into its passes. renders: [the started core.Render] for
         one view (mono), or view_render(index, view name) -> a started render, called for every
         view of the render result (multiview)."""
         passes = enabled_passes(view_layer)
         first = renders[0] if isinstance(renders, list) else None
-        settings = first.settings if first is not None else None
-        # Blender clamps the requested size to its render rectangle (the border when there is
-        # one): asking for the full frame gives that rectangle's true size to check against.
-        fw, fh = (settings.width, settings.height) if first is not None else size
-        result = self.begin_result(0, 0, fw, fh, layer=view_layer.name)
-        try:
-            views = [self.active_view_get()] if first is not None else [v.name for v in result.views]
-            for index, view in enumerate(views):
-                render = first if first is not None else renders(index, view)
-                rw, rh = render.region_size
-                if (result.resolution_x, result.resolution_y) != (rw, rh):
-                    raise core.LanternError(
-                        "Render result is %dx%d but Lantern renders %dx%d (border %s)"
-                        % (result.resolution_x, result.resolution_y, rw, rh, border))
-                writer = _PassWriter(render, result.layers[0], view, passes)
-                cancelled = self._poll_loop(render, result, writer)
-                try:
-                    render.wait()
-                    failed = False
-                except core.LanternError as e:
-                    self.report({'ERROR'}, str(e))
-                    failed = True
-                st = render.poll()
-                if st.state == core.STATE_FAILED and not failed:
-                    self.report({'ERROR'}, "Lantern render failed")
-                writer.write()  # all passes, whatever was rendered (cancelled: partial image)
-                if cancelled or st.state == core.STATE_FAILED:
-                    break
-            metadata = render_metadata(st, render.settings)
-            # Stamp data goes on the final result (get_result), not on the tile being written.
-            final = self.get_result()
-            for key, value in metadata.items():
-                final.stamp_data_add_field(key, value)
-            LAST_RENDER.clear()
-            LAST_RENDER.update(stats=st, settings=render.settings, metadata=metadata,
-                               preview=self.is_preview)
-            if render.settings.strategy_view_depth > 0:
-                # bpy.data must not be touched from the render thread: the image is made on the
-                # main thread by a timer.
-                LAST_RENDER["strategies"] = render.read_strategy_grid()
-                bpy.app.timers.register(_show_strategies, first_interval=0.0)
-            self.update_stats("", format_stats(st, rw * rh))
-            self.update_progress(1.0 if st.samples_total <= 0 else
-                                 st.samples_done / st.samples_total)
-            if st.nan_samples:
-                self.report({'WARNING'}, "%d samples were not finite and were discarded"
-                            % st.nan_samples)
-            if st.unestimated_pixels:
-                self.report({'WARNING'}, "%d pixel(s) had fewer than 2 finite samples and are left "
-                            "out of the noise estimate" % st.unestimated_pixels)
-        finally:
-            # Never cancel=True: that would drop the (partial) image.
-            self.end_result(result)
+        # The render's result (its size is the render rectangle: the border when there is one);
+        # passes are handed over in bands (_PassWriter), never through a full-frame copy.
+        result = self.get_result()
+        views = [self.active_view_get()] if first is not None else [v.name for v in result.views]
+        for index, view in enumerate(views):
+            render = first if first is not None else renders(index, view)
+            rw, rh = render.region_size
+            if (result.resolution_x, result.resolution_y) != (rw, rh):
+                raise core.LanternError(
+                    "Render result is %dx%d but Lantern renders %dx%d (border %s)"
+                    % (result.resolution_x, result.resolution_y, rw, rh, border))
+            writer = _PassWriter(self, render, view_layer.name, view, passes)
+            cancelled = self._poll_loop(render, writer)
+            try:
+                render.wait()
+                failed = False
+            except core.LanternError as e:
+                self.report({'ERROR'}, str(e))
+                failed = True
+            st = render.poll()
+            if st.state == core.STATE_FAILED and not failed:
+                self.report({'ERROR'}, "Lantern render failed")
+            writer.write()  # all passes, whatever was rendered (cancelled: partial image)
+            if cancelled or st.state == core.STATE_FAILED:
+                break
+        metadata = render_metadata(st, render.settings)
+        # Stamp data goes on the render's result, not on a band.
+        for key, value in metadata.items():
+            result.stamp_data_add_field(key, value)
+        LAST_RENDER.clear()
+        LAST_RENDER.update(stats=st, settings=render.settings, metadata=metadata,
+                           preview=self.is_preview)
+        if render.settings.strategy_view_depth > 0:
+            # bpy.data must not be touched from the render thread: the image is made on the
+            # main thread by a timer.
+            LAST_RENDER["strategies"] = render.read_strategy_grid()
+            bpy.app.timers.register(_show_strategies, first_interval=0.0)
+        self.update_stats("", format_stats(st, rw * rh))
+        self.update_progress(1.0 if st.samples_total <= 0 else
+                             st.samples_done / st.samples_total)
+        if st.nan_samples:
+            self.report({'WARNING'}, "%d samples were not finite and were discarded"
+                        % st.nan_samples)
+        if st.unestimated_pixels:
+            self.report({'WARNING'}, "%d pixel(s) had fewer than 2 finite samples and are left "
+                        "out of the noise estimate" % st.unestimated_pixels)
         return st
 
-    def _poll_loop(self, render, result, writer):
+    def _poll_loop(self, render, writer):
         """Polls until the render ends; returns True if the user cancelled it."""
         rw, rh = render.region_size
         pixels = rw * rh
@@ -515,7 +518,6 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             now = time.monotonic()
             if now >= next_update:
                 writer.write(only=("Combined",))
-                self.update_result(result)
                 self.update_stats("", format_stats(st, pixels))
                 if st.samples_total > 0:
                     self.update_progress(st.samples_done / st.samples_total)

@@ -103,9 +103,6 @@ class _CancellingEngine:
             return True
         return False
 
-    def update_result(self, result):
-        pass
-
     def update_stats(self, a, b):
         pass
 
@@ -132,7 +129,7 @@ def test_cancel_stops_quickly_and_keeps_a_partial_image(scene_factory):
         try:
             render.start()
             stub = _CancellingEngine(after=0.5)
-            cancelled = engine.LanternRenderEngine._poll_loop(stub, render, None, _NullWriter())
+            cancelled = engine.LanternRenderEngine._poll_loop(stub, render, _NullWriter())
             render.wait()
             stopped = time.monotonic() - stub.cancelled_at
             assert cancelled
@@ -202,3 +199,43 @@ def test_layout_mismatch_is_refused():
             ((), {"PASS_STENCIL": 9}, "LT_PASS_STENCIL is not in the library")):
         with pytest.raises(core.LanternError, match=re.escape(expect)):
             core.check_layout(entries, "liblantern.so", structs, constants)
+
+
+@pytest.mark.parametrize("border", [False, True])
+def test_passes_reach_blender_in_bands_unchanged(scene_factory, monkeypatch, border):
+    """The engine hands Blender its passes a band of rows at a time (no full-frame copy): with
+    bands of 5 rows (the last one shorter) every pass is the same as in one band, border or not."""
+    scene = scene_factory("cornell_area", resolution=(53, 37))
+    layer = scene.view_layers[0]
+    layer.use_pass_z = layer.use_pass_normal = layer.lantern_extra_passes = True
+    if border:
+        r = scene.render
+        r.use_border, r.use_crop_to_border = True, True
+        r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.1, 0.8, 0.25, 0.9
+    monkeypatch.setattr(engine._PassWriter, "BAND_PIXELS", 1 << 20)
+    whole = ru.render(scene, ru.LANTERN, 4, seed=5)
+    width = whole["Combined"].shape[1]
+    monkeypatch.setattr(engine._PassWriter, "BAND_PIXELS", width * 5 + 2)
+    banded = ru.render(scene, ru.LANTERN, 4, seed=5)
+    assert sorted(whole) == sorted(banded)
+    for name in whole:
+        assert np.array_equal(whole[name], banded[name]), name
+    assert whole["Combined"][..., :3].mean() > 0.01
+
+
+def test_bdpt_strategy_view_is_the_core_grid_with_alpha(scene_factory):
+    """The strategy view, read a band of rows at a time into the RGBA array the image is filled
+    from (tests/native/test_bdpt.cpp checks the bands against the whole grid): the image is that
+    array, alpha 1, of the grid's size."""
+    scene = scene_factory("cornell_area", resolution=(24, 16))
+    scene.lantern.strategy_view_depth = 2
+    ru.render(scene, ru.LANTERN, 4, seed=1, integrator="BIDIRECTIONAL")
+    engine._show_strategies()
+    image = bpy.data.images[engine.STRATEGY_IMAGE]
+    w, h = image.size
+    assert (w, h) == (4 * 24, 2 * 16)
+    px = np.empty(w * h * 4, np.float32)
+    image.pixels.foreach_get(px)
+    grid = px.reshape(h, w, 4)
+    assert np.array_equal(grid, engine.LAST_RENDER["strategies"]) and (grid[..., 3] == 1).all()
+    assert np.isfinite(grid).all() and grid[..., :3].mean() > 1e-3

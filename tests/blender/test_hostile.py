@@ -282,3 +282,28 @@ def test_emitter_beyond_float_range_does_not_block_the_noise_target():
     assert st.samples_done < 4096
     assert st.unestimated_pixels > 0 and st.nan_samples > 0
     assert "without finite samples" in engine.format_stats(st, out.combined.shape[0] * out.combined.shape[1])
+
+
+# ---- image files: missing or unreadable, magenta as Cycles, named ------------------------------
+
+@pytest.mark.parametrize("broken", ["missing", "corrupt"])
+def test_missing_or_unreadable_image_file_renders_magenta_by_name(broken, tmp_path):
+    """The core reads image files itself; a file that is not there or cannot be read leaves the
+    texture magenta (as Cycles), with a warning naming the image and the material."""
+    scene = small_scene()
+    path = str(tmp_path / "bark.png")
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + b"not a PNG at all" * 8)
+    img = bpy.data.images.load(path, check_existing=False)
+    img.name = "BarkTexture"
+    if broken == "missing":
+        os.remove(path)
+    floor = scene.objects["Floor"]
+    floor.data.materials.clear()
+    floor.data.materials.append(bs.image_material("BarkMaterial", img, shader="ShaderNodeEmission"))
+    one_naming(reports_of(scene), "BarkTexture", "BarkMaterial", "magenta")
+    out = render_checked(scene, samples=1)
+    # The floor (an emitter of the texture's colour) is magenta: red and blue, no green.
+    rgb = out.combined[..., :3]
+    magenta = (rgb[..., 0] > 0.5) & (rgb[..., 2] > 0.5) & (rgb[..., 1] < 1e-3)
+    assert magenta.mean() > 0.2, magenta.mean()

@@ -336,3 +336,131 @@ def test_tangent_space_without_uv_map_warns(idname):
     reports = ru.export(scene)[1]
     assert any("'sphere'" in r and "no UV map" in r and "Vector Displacement" in r for r in reports), reports
     bs.reset_file()
+
+
+def _write_png(path, pixels, bits):
+    """A PNG of `pixels` (h, w, channels in 0..1, rows bottom first as Blender's) at 8 or 16 bits."""
+    import numpy as np
+    q = np.round(np.clip(pixels[::-1], 0, 1) * (2 ** bits - 1)).astype(np.uint16 if bits == 16 else np.uint8)
+    ru.write_png_values(path, q)
+
+
+def _write_exr(path, pixels, half):
+    """An OpenEXR file of float RGB(A) `pixels`, written by Blender."""
+    import bpy
+    import numpy as np
+    h, w, c = pixels.shape
+    img = bpy.data.images.new("exr_writer", w, h, alpha=c == 4, float_buffer=True)
+    rgba = np.ones((h, w, 4), np.float32)
+    rgba[..., :c] = pixels
+    img.pixels.foreach_set(rgba.ravel())
+    # The scene's output settings choose the depth (EXR is written linear, as the pixels are).
+    settings = bpy.context.scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "16" if half else "32"
+    settings.color_mode = "RGBA" if c == 4 else "RGB"
+    img.save_render(path, scene=bpy.context.scene)
+    bpy.data.images.remove(img)
+
+
+# name: (file, channels, bits, colour space, alpha mode, whether the core reads the file itself)
+IMAGE_FILES = {
+    "png8_srgb_rgb": ("png", 3, 8, "sRGB", "STRAIGHT", True),
+    "png8_srgb_rgba": ("png", 4, 8, "sRGB", "STRAIGHT", True),
+    "png8_grey": ("png", 1, 8, "sRGB", "STRAIGHT", True),
+    "png8_grey_alpha": ("png", 2, 8, "sRGB", "STRAIGHT", True),
+    "png8_non_color_rgba": ("png", 4, 8, "Non-Color", "STRAIGHT", True),
+    "png8_linear_rgba": ("png", 4, 8, "Linear", "STRAIGHT", True),
+    "png8_channel_packed": ("png", 4, 8, "sRGB", "CHANNEL_PACKED", True),
+    "png8_alpha_none": ("png", 4, 8, "sRGB", "NONE", True),
+    # Blender unpremultiplies 8-bit buffers in Premultiplied mode: left to Blender.
+    "png8_premultiplied": ("png", 4, 8, "sRGB", "PREMUL", False),
+    "png16_linear_rgba": ("png", 4, 16, "Linear", "STRAIGHT", True),
+    "png16_non_color_rgba": ("png", 4, 16, "Non-Color", "STRAIGHT", True),
+    "png16_linear_grey": ("png", 1, 16, "Linear", "STRAIGHT", True),
+    # Blender converts float buffers from sRGB with its OpenColorIO configuration: left to Blender.
+    "png16_srgb_rgba": ("png", 4, 16, "sRGB", "STRAIGHT", False),
+    "exr32_rgba": ("exr", 4, 32, "Linear", "PREMUL", True),
+    "exr32_rgba_straight": ("exr", 4, 32, "Linear", "STRAIGHT", True),
+    "exr32_rgb": ("exr", 3, 32, "Linear", "PREMUL", True),
+    "exr16_rgba": ("exr", 4, 16, "Linear", "PREMUL", True),
+    "exr16_rgba_straight": ("exr", 4, 16, "Linear", "STRAIGHT", True),
+    "exr16_rgb": ("exr", 3, 16, "Linear", "PREMUL", True),
+    "exr32_non_color": ("exr", 4, 32, "Non-Color", "STRAIGHT", True),
+}
+
+
+# What the core keeps of some of them, bytes per texel (the file's precision, no alpha plane).
+IMAGE_FILE_BYTES = {"png8_srgb_rgb": 3, "png8_grey": 1, "png16_linear_grey": 4, "exr32_rgb": 12, "exr16_rgb": 6}
+
+
+@pytest.mark.parametrize("output", ["Color", "Color with Alpha used", "Alpha"])
+@pytest.mark.parametrize("case", sorted(IMAGE_FILES))
+def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_path):
+    """Images read by the core from their files (so that Blender never loads them) give exactly
+    the texels Blender's Image.pixels gives: the same view rendered with the image from its file
+    and with a packed copy of the same file (which goes through Image.pixels) is the same image,
+    pixel for pixel (each render pixel a bilinear mix of texels, so that every texel counts)."""
+    import bpy
+    import numpy as np
+
+    import build_scenes as bs
+    from node_cases import view_scene
+    from lantern import engine
+    kind, channels, bits, space, alpha_mode, by_core = IMAGE_FILES[case]
+    rng = np.random.default_rng(7)
+    pixels = rng.random((24, 32, channels))
+    if channels in (2, 4):
+        pixels[..., -1] = np.where(rng.random((24, 32)) < 0.2, rng.choice([0.0, 1.0], (24, 32)), pixels[..., -1])
+    if kind == "exr":
+        pixels[..., :3] *= 4.0  # beyond 1
+    path = str(tmp_path / ("%s.%s" % (case, kind)))
+    if kind == "png":
+        _write_png(path, pixels, bits)
+    else:
+        _write_exr(path, pixels.astype(np.float32), bits == 16)
+
+    loaded = []
+
+    def render(packed):
+        def build(nt, coords):
+            img = bpy.data.images.load(path)
+            loaded.append(img)
+            img.colorspace_settings.name = space
+            img.alpha_mode = alpha_mode
+            if packed:
+                img.pack()
+            tex = node(nt, "ShaderNodeTexImage")
+            tex.image = img
+            uv = node(nt, "ShaderNodeTexCoord")
+            nt.links.new(uv.outputs["UV"], tex.inputs["Vector"])
+            if output == "Color with Alpha used":
+                mix = node(nt, "ShaderNodeMixRGB", {"blend_type": "ADD"})
+                nt.links.new(tex.outputs["Alpha"], mix.inputs["Fac"])
+                nt.links.new(tex.outputs["Color"], mix.inputs["Color1"])
+                mix.inputs["Color2"].default_value = (0, 0, 0, 1)
+                return mix.outputs[0]
+            return tex.outputs["Alpha" if output == "Alpha" else "Color"]
+        scene = view_scene(build)
+        scene.render.resolution_x = scene.render.resolution_y = 100
+        obj = scene.objects["plane"]
+        obj.rotation_euler = (0, 0, 0)
+        flat = bs.mesh_plane("flat", 0.55)  # the image fills the view
+        flat.materials.append(obj.data.materials[0])
+        obj.data = flat
+        img = ru.render(scene, ru.LANTERN, samples=1, seed=3).combined
+        line = [l for l in engine.LAST_RENDER["report"].splitlines() if l.startswith("texture memory:")]
+        return img, line
+
+    from_file, line = render(packed=False)
+    expect = "1 read from their files" if by_core else "0 read from their files"
+    assert line and expect in line[0], (case, line)
+    if case in IMAGE_FILE_BYTES:
+        assert "(%.2f bytes per texel)" % IMAGE_FILE_BYTES[case] in line[0], (case, line)
+    # Blender never loaded the pixels of an image the core read.
+    assert loaded[-1].has_data != by_core, (case, loaded[-1].has_data)
+    through_blender, line = render(packed=True)
+    assert line and "0 read from their files" in line[0], (case, line)
+    assert float(np.ptp(from_file[..., :3])) > 1e-3, "%s: the view shows no pattern" % case
+    diff = float(np.abs(from_file - through_blender).max())
+    assert diff <= 1e-6, "%s %s: the core's texels differ from Blender's by up to %g" % (case, output, diff)

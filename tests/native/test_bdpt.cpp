@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <new>
 
@@ -491,6 +492,15 @@ TEST(Bdpt, StrategyViewSumsToImage) {
   ASSERT_EQ(gh, depth * size);
   std::vector<float> grid(size_t(gw) * gh * 3);
   check(lt_render_read_strategy_grid(render, grid.data(), grid.size(), &gw, &gh), "grid");
+  // In bands of rows (the add-on's way): exactly the full grid's rows.
+  for (int y0 = 0; y0 < gh; y0 += 7) {
+    const int rows = std::min(7, gh - y0);
+    std::vector<float> band(size_t(gw) * rows * 3, -1.0f);
+    check(lt_render_read_strategy_grid_rows(render, y0, rows, band.data(), band.size()), "grid rows");
+    EXPECT_EQ(std::memcmp(band.data(), grid.data() + size_t(y0) * gw * 3, band.size() * sizeof(float)), 0) << y0;
+  }
+  std::vector<float> one(size_t(gw) * 3);
+  EXPECT_EQ(lt_render_read_strategy_grid_rows(render, gh, 1, one.data(), one.size()), LT_ERROR_INVALID_ARGUMENT);
   Passes p = read_passes(render, size, size);
   double worst = 0, total = 0;
   for (int y = 0; y < size; ++y)

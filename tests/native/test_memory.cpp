@@ -1,6 +1,7 @@
 // Bounded memory (issue 18): the film keeps only the passes a render asks for, a render that would
 // not fit is refused before it allocates, an allocation failure on the render thread ends the render
 // as Failed without aborting the process, and images are stored once at the source's precision.
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <malloc.h>
 #include <spawn.h>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include "core/film.h"
+#include "io/image_file.h"
 #include "scene_builders.h"
 #include "shading/image.h"
 
@@ -127,6 +129,34 @@ TEST(Memory, FilmKeepsOnlyThePassesAskedFor) {
   EXPECT_EQ(std::memcmp(combined.data(), full.combined.data(), combined.size() * sizeof(float)), 0);
   EXPECT_EQ(lt_render_read_pass(r, LT_PASS_NORMAL, normal.data(), normal.size()), LT_ERROR_STATE);
   EXPECT_NE(std::string(lt_last_error()).find("Normal"), std::string::npos) << lt_last_error();
+}
+
+TEST(Memory, PassesReadInRowBandsAreTheFullPassesRows) {
+  // The add-on hands Blender its passes through a band-sized buffer (lt_render_read_pass_rows):
+  // every band must be exactly those rows of the full read, labels included.
+  ScenePtr s = lit_scene();
+  lt_render_settings rs = render_settings(24, 16, 4, 7);
+  lt_render* r = nullptr;
+  ASSERT_EQ(lt_render_start(s.get(), &rs, &r), LT_OK) << lt_last_error();
+  RenderPtr rp(r);
+  ASSERT_EQ(lt_render_wait(r), LT_OK) << lt_last_error();
+  for (int pass = 0; pass < LT_PASS_COUNT; ++pass) {
+    const size_t c = size_t(lt_pass_channels(pass)), row = 24 * c;
+    std::vector<float> full(16 * row), band;
+    ASSERT_EQ(lt_render_read_pass(r, pass, full.data(), full.size()), LT_OK) << lt_last_error();
+    for (int y0 = 0; y0 < 16; y0 += 5) {
+      const int rows = std::min(5, 16 - y0);
+      band.assign(rows * row, -1.0f);
+      ASSERT_EQ(lt_render_read_pass_rows(r, pass, y0, rows, band.data(), band.size()), LT_OK) << lt_last_error();
+      EXPECT_EQ(std::memcmp(band.data(), full.data() + y0 * row, band.size() * sizeof(float)), 0)
+          << "pass " << pass << " rows " << y0;
+    }
+  }
+  std::vector<float> buf(24 * 4 * 4);
+  EXPECT_EQ(lt_render_read_pass_rows(r, LT_PASS_COMBINED, 13, 4, buf.data(), buf.size()), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_render_read_pass_rows(r, LT_PASS_COMBINED, -1, 4, buf.data(), buf.size()), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_render_read_pass_rows(r, LT_PASS_COMBINED, 0, 3, buf.data(), buf.size()), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_render_read_pass_rows(r, LT_PASS_COMBINED, 0, -4, buf.data(), buf.size()), LT_ERROR_INVALID_ARGUMENT);
 }
 
 TEST(Memory, ConstantPixelsKeepTheirValueAndZeroVariance) {
@@ -346,4 +376,64 @@ TEST(Memory, ImageAlphaIsKeptAsCyclesReadsIt) {
   EXPECT_FALSE(
       lt::Image(2, 1, 4, solid, false, lt::Interpolation::Linear, lt::Extension::Repeat, lt::ImageAlpha::Straight)
           .has_alpha());
+}
+
+TEST(Memory, ImageFilesAreReadAsBlenderGivesThemAndKeptOnce) {
+  // An 8-bit RGBA PNG (rows top first in the file) read by the core: the same texels and alpha as
+  // the image Blender's Image.pixels gives (b / 255, rows bottom first) added as floats, 4 bytes a
+  // texel (RGB and the alpha plane) with no float copy.
+  const int w = 5, h = 3;
+  std::vector<uint8_t> file(size_t(w) * h * 4);
+  for (size_t i = 0; i < file.size(); ++i) file[i] = uint8_t((i * 53 + 7) % 256);
+  const std::string path = ::testing::TempDir() + "lantern_image_file.png";
+  {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, 4, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // these bytes as they are (PNG's straight alpha)
+    ASSERT_TRUE(out->open(path, spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, file.data()));
+    out->close();
+  }
+  std::vector<float> blender(file.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < 4 * w; ++x)
+      blender[size_t(h - 1 - y) * w * 4 + x] = file[size_t(y) * w * 4 + x] * (1.0f / 255.0f);
+  lt::ImageFileRequest r;
+  r.path = path;
+  r.use_alpha = true;
+  std::unique_ptr<lt::Image> read = lt::read_image_file(r);
+  lt::Image ref(w, h, 4, blender.data(), true, lt::Interpolation::Linear, lt::Extension::Repeat,
+                lt::ImageAlpha::Straight);
+  EXPECT_TRUE(read->is_byte());
+  EXPECT_EQ(read->bytes(), size_t(w) * h * 4);
+  EXPECT_EQ(read->bytes(), ref.bytes());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const lt::Vec2 uv{(x + 0.5f) / w, (y + 0.5f) / h};
+      const lt::Vec3 a = read->texel(x, y), b = ref.texel(x, y);
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(a[k], b[k]) << x << "," << y;
+      EXPECT_EQ(read->lookup_alpha(uv), ref.lookup_alpha(uv)) << x << "," << y;
+    }
+  // Through the ABI: what Blender would convert is left to it, a missing file is an I/O error.
+  ScenePtr s = new_scene();
+  lt_image_file_desc d{};
+  d.path = path.c_str();
+  d.color_space = LT_COLOR_SPACE_SRGB;
+  d.alpha_mode = LT_ALPHA_MODE_STRAIGHT;
+  int id = -1;
+  EXPECT_EQ(lt_scene_add_image_file(s.get(), &d, &id), LT_OK) << lt_last_error();
+  EXPECT_EQ(id, 0);
+  d.alpha_mode = LT_ALPHA_MODE_PREMULTIPLIED;  // Blender unpremultiplies such byte buffers
+  EXPECT_EQ(lt_scene_add_image_file(s.get(), &d, &id), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(lt_last_error()).find("Premultiplied"), std::string::npos) << lt_last_error();
+  d.alpha_mode = 7;
+  EXPECT_EQ(lt_scene_add_image_file(s.get(), &d, &id), LT_ERROR_INVALID_ARGUMENT);
+  d.alpha_mode = LT_ALPHA_MODE_STRAIGHT;
+  const std::string missing = path + ".missing.png";
+  d.path = missing.c_str();
+  EXPECT_EQ(lt_scene_add_image_file(s.get(), &d, &id), LT_ERROR_IO);
+  EXPECT_NE(std::string(lt_last_error()).find(missing), std::string::npos) << lt_last_error();
+  EXPECT_EQ(lt_scene_add_image_file(s.get(), nullptr, &id), LT_ERROR_INVALID_ARGUMENT);
+  std::remove(path.c_str());
 }

@@ -120,6 +120,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
     summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()
                                                             if v is not None),
+                   image_files=images.from_files,
                    lights=lights, light_kinds=light_kinds, volumes=volumes,
                    material_media=materials.media, world_media=world_media,
                    emissive_media=materials.emissive_media,

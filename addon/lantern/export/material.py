@@ -1,6 +1,10 @@
 """Material export: a material's surface node tree compiled into a shader program (nodes/), its
 Volume output into homogeneous medium components, and the images textures use."""
 
+import os
+
+import bpy
+
 from .. import core
 from . import nodes
 from .names import core_call, is_finite
@@ -17,12 +21,19 @@ _EXTENSION = {'REPEAT': core.EXTENSION_REPEAT, 'EXTEND': core.EXTENSION_EXTEND,
 
 
 class ImageExporter:
-    """Exports each (image, colour space, interpolation, extension) once; returns core ids."""
+    """Exports each (image, colour space, interpolation, extension) once; returns core ids.
+
+    Images whose file the core can read itself (image_file below) are read by the core from that
+    file, as Cycles reads them: Blender never loads their pixels and the core holds them once, at
+    the file's precision. Every other image (packed, generated, edited in memory, movies,
+    sequences, UDIMs, formats or colour spaces the core leaves to Blender) goes through
+    Image.pixels into the core's own buffer. Both give the same texels."""
 
     def __init__(self, core_scene, report):
         self.core_scene = core_scene
         self.report = report
         self.ids = {}
+        self.from_files = 0  # images the core read from their files
 
     def export(self, image, interpolation='Linear', extension='REPEAT', where="", alpha=False):
         """Core image id, or None (reported) when the image cannot be used. alpha: keep the image's
@@ -33,6 +44,35 @@ class ImageExporter:
         key = (image.original.as_pointer(), interpolation, extension, alpha)
         if key in self.ids:
             return self.ids[key]
+        interp = _INTERPOLATION.get(interpolation)
+        if interp is None:
+            self.report({'WARNING'}, "%s: %s interpolation is not supported, treated as Linear"
+                                     % (where, interpolation))
+            interp = core.INTERP_LINEAR
+        ext = _EXTENSION.get(extension)
+        if ext is None:
+            self.report({'WARNING'}, "%s: %s extension is not supported, treated as Repeat"
+                                     % (where, extension))
+            ext = core.EXTENSION_REPEAT
+        space = image.colorspace_settings.name
+        unsupported_space = ("%s: image '%s' colour space '%s' is not supported, its values are "
+                             "used as linear" % (where, image.name, space))
+        path = image_file(image)
+        if path is not None:
+            try:
+                image_id = self.core_scene.add_image_file(
+                    path, _color_space(image), _ALPHA_MODES.get(image.alpha_mode, "STRAIGHT"),
+                    use_alpha=alpha, interpolation=interp, extension=ext)
+            except core.LanternError as e:  # left to Blender (the reason is printed)
+                print("Lantern: image '%s' is loaded through Blender: %s" % (image.name, e.detail))
+            else:
+                # The core takes a float file only in Linear or a data space: another colour
+                # space here was an 8-bit file, whose values are used as they are.
+                if space not in _SPACES_USED:
+                    self.report({'WARNING'}, unsupported_space)
+                self.ids[key] = image_id
+                self.from_files += 1
+                return image_id
         if image.source == 'TILED':
             self.report({'WARNING'}, "%s: image '%s' is a UDIM (tiled) image, only its first tile "
                                      "is used" % (where, image.name))
@@ -45,21 +85,9 @@ class ImageExporter:
             return None
         # Byte images give their stored values: sRGB-encoded when the colour space is sRGB.
         # Float images are already linear; Non-Color data is raw.
-        space = image.colorspace_settings.name
         srgb = (not image.is_float) and space == 'sRGB'
-        if space not in {'sRGB', 'Non-Color', 'Linear', 'Raw', 'Linear ACES'} and not image.is_float:
-            self.report({'WARNING'}, "%s: image '%s' colour space '%s' is not supported, its "
-                                     "values are used as linear" % (where, image.name, space))
-        interp = _INTERPOLATION.get(interpolation)
-        if interp is None:
-            self.report({'WARNING'}, "%s: %s interpolation is not supported, treated as Linear"
-                                     % (where, interpolation))
-            interp = core.INTERP_LINEAR
-        ext = _EXTENSION.get(extension)
-        if ext is None:
-            self.report({'WARNING'}, "%s: %s extension is not supported, treated as Repeat"
-                                     % (where, extension))
-            ext = core.EXTENSION_REPEAT
+        if space not in _SPACES_USED and not image.is_float:
+            self.report({'WARNING'}, unsupported_space)
         # Blender's pixels go straight into the core's buffer (one copy); the core keeps byte
         # images at 8 bits (their values are exactly b / 255), and alpha where it is not 1.
         image_id = self.core_scene.add_image_filled(image.pixels.foreach_get, width, height,
@@ -68,6 +96,33 @@ class ImageExporter:
                                                     core.ALPHA_IGNORE)
         self.ids[key] = image_id
         return image_id
+
+
+# Colour spaces whose byte values are used without a warning (sRGB decoded, the others as linear).
+_SPACES_USED = {'sRGB', 'Non-Color', 'Linear', 'Raw', 'Linear ACES'}
+# Blender's Image.alpha_mode as lt_alpha_mode names.
+_ALPHA_MODES = {'STRAIGHT': "STRAIGHT", 'PREMUL': "PREMULTIPLIED", 'CHANNEL_PACKED': "CHANNEL_PACKED",
+                'NONE': "NONE"}
+
+
+def image_file(image):
+    """The file the core may read an image from (absolute path), or None when the pixels must come
+    from Blender: packed, generated or viewer images, movies, sequences and UDIMs, images edited in
+    memory (dirty), and missing files (Blender's path then reports them). Reads nothing that
+    would make Blender load the pixels."""
+    if image.source != 'FILE' or image.packed_file is not None or len(image.packed_files) \
+            or image.is_dirty or image.use_multiview:
+        return None
+    path = bpy.path.abspath(image.filepath, library=image.library)
+    return path if os.path.isfile(path) else None
+
+
+def _color_space(image):
+    """The image's colour space as an lt_color_space name."""
+    settings = image.colorspace_settings
+    if settings.is_data:
+        return "DATA"
+    return {"sRGB": "SRGB", "Linear": "LINEAR"}.get(settings.name, "OTHER")
 
 
 def _alpha_mode(image):

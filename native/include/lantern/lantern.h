@@ -103,6 +103,37 @@ LT_API int lt_scene_add_image(lt_scene* scene, const lt_image_desc* desc, int* o
  * else RGB (alpha is not used). Beginning another image drops an unfinished one. */
 LT_API int lt_scene_begin_image(lt_scene* scene, const lt_image_desc* desc, float** out_pixels);
 LT_API int lt_scene_end_image(lt_scene* scene, int* out_id);
+/* An image the core reads from its file itself (OpenImageIO), as Cycles does, so that the caller
+ * never loads the pixels: they are held once, at the file's precision (8-bit files as bytes, half
+ * OpenEXR files as half floats unless the alpha mode is Straight, others as float).
+ * The texels are those Blender 3.4 gives in Image.pixels for an image datablock of this colour
+ * space and alpha mode, given to lt_scene_add_image with that datablock's srgb and alpha
+ * (native/src/io/image_file.h). PNG (8 and 16 bits) and single-part RGB(A) OpenEXR. Refused with
+ * LT_ERROR_INVALID_ARGUMENT (and why) for what Blender's loading would change otherwise (a float
+ * file in a colour space other than Linear or a data space, an 8-bit file with alpha in
+ * Premultiplied mode, other formats): the caller then loads it another way. A file that cannot
+ * be opened or read: LT_ERROR_IO. Added without an ABI version bump (still 7). */
+enum lt_color_space {
+  LT_COLOR_SPACE_SRGB = 0,
+  LT_COLOR_SPACE_LINEAR = 1, /* scene linear */
+  LT_COLOR_SPACE_DATA = 2,   /* Non-Color, Raw (ColorManagedInputColorspaceSettings.is_data) */
+  LT_COLOR_SPACE_OTHER = 3   /* another: 8-bit values are used as they are */
+};
+enum lt_alpha_mode { /* Blender's Image.alpha_mode */
+                     LT_ALPHA_MODE_STRAIGHT = 0,
+                     LT_ALPHA_MODE_PREMULTIPLIED = 1,
+                     LT_ALPHA_MODE_CHANNEL_PACKED = 2,
+                     LT_ALPHA_MODE_NONE = 3
+};
+typedef struct lt_image_file_desc {
+  const char* path;
+  int color_space;   /* lt_color_space */
+  int alpha_mode;    /* lt_alpha_mode */
+  int use_alpha;     /* != 0: keep the alpha as Cycles reads it (image textures), else drop it */
+  int interpolation; /* lt_interpolation */
+  int extension;     /* lt_extension */
+} lt_image_file_desc;
+LT_API int lt_scene_add_image_file(lt_scene* scene, const lt_image_file_desc* desc, int* out_id);
 
 /* Materials are shader programs: a material's node tree compiled by the add-on
  * (addon/lantern/export/nodes/) for the core's register machine (native/src/shading/program.h
@@ -448,11 +479,18 @@ LT_API int lt_pass_channels(int pass);
  * image last published, at most 0.25 s old; zeros before the first pass); every other kept pass
  * once the render has stopped (LT_ERROR_STATE before). */
 LT_API int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count);
+/* The same for rows [y0, y0 + rows) of the region only (row 0 at the bottom): width*rows*channels
+ * floats, so that a caller copies the image through a buffer of a few rows (the add-on hands
+ * Blender its RenderResult in bands). Added without an ABI version bump (still 7). */
+LT_API int lt_render_read_pass_rows(lt_render* render, int pass, int y0, int rows, float* out, size_t float_count);
 
 /* The strategy view of a finished (or cancelled) bidirectional render: a grid of RGB images of
  * the region's size, (depth + 2) columns (s = 0, 1, ...) by `depth` rows (path depth s + t - 2,
  * 0 at the top), rows bottom to top. With out == NULL only the grid's size is returned. */
 LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_count, int* width, int* height);
+/* The same for grid rows [y0, y0 + rows) only (width*rows*3 floats; the size from the call above
+ * with out == NULL), read through a few rows' buffer. Added without an ABI version bump (still 7). */
+LT_API int lt_render_read_strategy_grid_rows(lt_render* render, int y0, int rows, float* out, size_t float_count);
 
 LT_API void lt_render_destroy(lt_render* render);
 

@@ -12,6 +12,7 @@
 #include "api/handles.h"
 #include "core/error.h"
 #include "io/exr.h"
+#include "io/image_file.h"
 #include "io/vdb.h"
 #include "media/volume_material.h"
 #include "render/render.h"
@@ -224,6 +225,37 @@ int lt_scene_end_image(lt_scene* scene, int* out_id) {
     images.push_back(std::make_unique<lt::Image>(d.width, d.height, d.channels, std::move(p->pixels), d.srgb != 0,
                                                  interpolation(d), lt::Extension(d.extension),
                                                  lt::ImageAlpha(d.alpha)));
+    *out_id = int(images.size()) - 1;
+  });
+}
+
+int lt_scene_add_image_file(lt_scene* scene, const lt_image_file_desc* d, int* out_id) {
+  return guarded([&] {
+    require(scene && d && out_id, "lt_scene_add_image_file: NULL argument");
+    scene->scene.require_editable();
+    require(d->path != nullptr && *d->path != '\0', "image file path is empty");
+    require(d->color_space >= LT_COLOR_SPACE_SRGB && d->color_space <= LT_COLOR_SPACE_OTHER,
+            "unknown colour space " + std::to_string(d->color_space));
+    require(d->alpha_mode >= LT_ALPHA_MODE_STRAIGHT && d->alpha_mode <= LT_ALPHA_MODE_NONE,
+            "unknown alpha mode " + std::to_string(d->alpha_mode));
+    require(d->interpolation == LT_INTERP_LINEAR || d->interpolation == LT_INTERP_CLOSEST,
+            "unknown image interpolation");
+    require(d->extension >= LT_EXTENSION_REPEAT && d->extension <= LT_EXTENSION_CLIP, "unknown image extension");
+    lt::ImageFileRequest r;
+    r.path = d->path;
+    r.space = lt::FileColorSpace(d->color_space);
+    r.alpha_mode = lt::FileAlphaMode(d->alpha_mode);
+    r.use_alpha = d->use_alpha != 0;
+    r.interp = d->interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest : lt::Interpolation::Linear;
+    r.ext = lt::Extension(d->extension);
+    std::unique_ptr<lt::Image> image;
+    try {
+      image = lt::read_image_file(r);
+    } catch (const lt::ImageFileUnsupported& e) {
+      throw InvalidArgument(e.what());
+    }
+    auto& images = scene->scene.images;
+    images.push_back(std::move(image));
     *out_id = int(images.size()) - 1;
   });
 }
@@ -774,35 +806,67 @@ int lt_pass_channels(int pass) {
   return lt::pass_channels(lt::Pass(pass));
 }
 
+namespace {
+void read_pass_rows(lt_render* render, int pass, int y0, int rows, float* out, size_t float_count) {
+  require(render && out, "lt_render_read_pass: NULL argument");
+  require(pass >= 0 && pass < LT_PASS_COUNT, "unknown pass " + std::to_string(pass));
+  const auto& film = render->job->film();
+  if (rows < 0) rows = film.height();  // every row
+  require(y0 >= 0 && y0 <= film.height() - rows, "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                                                     " are not within the " + std::to_string(film.height()) +
+                                                     " rows of the render region");
+  size_t need = size_t(film.width()) * rows * lt::pass_channels(lt::Pass(pass));
+  require(float_count == need,
+          "pass buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) + " are needed");
+  film.read_rows(lt::Pass(pass), y0, rows, out);
+}
+
+// Rows [y0, y0 + rows) of the strategy grid (rows < 0: all); out NULL: only the grid's size.
+void read_strategy_rows(lt_render* render, int y0, int rows, float* out, size_t float_count, int* width, int* height) {
+  require(render != nullptr, "lt_render_read_strategy_grid: NULL argument");
+  const lt::RenderJob& job = *render->job;
+  const int depth = job.settings().integrator_settings.strategy_depth;
+  if (depth <= 0) throw lt::StateError("this render has no strategy view (bidirectional with strategy_view_depth > 0)");
+  const int columns = lt::strategy_columns(depth);
+  *width = columns * job.region_width();
+  *height = depth * job.region_height();
+  if (!out) return;
+  if (rows < 0) rows = *height;
+  require(y0 >= 0 && y0 <= *height - rows, "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                                               " are not within the strategy grid's " + std::to_string(*height));
+  if (job.status().state == lt::RenderState::Running)
+    throw lt::StateError("the strategy view can be read once the render has stopped");
+  size_t need = size_t(*width) * rows * 3;
+  require(float_count == need, "strategy grid buffer holds " + std::to_string(float_count) + " floats; " +
+                                   std::to_string(need) + " are needed");
+  job.film().read_strategy_grid(columns, depth, out, y0, rows);
+}
+}  // namespace
+
 int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count) {
+  return guarded([&] { read_pass_rows(render, pass, 0, -1, out, float_count); });
+}
+
+int lt_render_read_pass_rows(lt_render* render, int pass, int y0, int rows, float* out, size_t float_count) {
   return guarded([&] {
-    require(render && out, "lt_render_read_pass: NULL argument");
-    require(pass >= 0 && pass < LT_PASS_COUNT, "unknown pass " + std::to_string(pass));
-    const auto& film = render->job->film();
-    size_t need = size_t(film.width()) * film.height() * lt::pass_channels(lt::Pass(pass));
-    require(float_count == need,
-            "pass buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) + " are needed");
-    film.read(lt::Pass(pass), out);
+    require(rows >= 0, "lt_render_read_pass_rows: negative row count");
+    read_pass_rows(render, pass, y0, rows, out, float_count);
   });
 }
 
 int lt_render_read_strategy_grid(lt_render* render, float* out, size_t float_count, int* width, int* height) {
   return guarded([&] {
-    require(render && width && height, "lt_render_read_strategy_grid: NULL argument");
-    const lt::RenderJob& job = *render->job;
-    const int depth = job.settings().integrator_settings.strategy_depth;
-    if (depth <= 0)
-      throw lt::StateError("this render has no strategy view (bidirectional with strategy_view_depth > 0)");
-    const int columns = lt::strategy_columns(depth);
-    *width = columns * job.region_width();
-    *height = depth * job.region_height();
-    if (!out) return;
-    if (job.status().state == lt::RenderState::Running)
-      throw lt::StateError("the strategy view can be read once the render has stopped");
-    size_t need = size_t(*width) * *height * 3;
-    require(float_count == need, "strategy grid buffer holds " + std::to_string(float_count) + " floats; " +
-                                     std::to_string(need) + " are needed");
-    job.film().read_strategy_grid(columns, depth, out);
+    require(width && height, "lt_render_read_strategy_grid: NULL argument");
+    read_strategy_rows(render, 0, -1, out, float_count, width, height);
+  });
+}
+
+int lt_render_read_strategy_grid_rows(lt_render* render, int y0, int rows, float* out, size_t float_count) {
+  return guarded([&] {
+    require(out != nullptr, "lt_render_read_strategy_grid_rows: NULL argument");
+    require(rows >= 0, "lt_render_read_strategy_grid_rows: negative row count");
+    int width = 0, height = 0;
+    read_strategy_rows(render, y0, rows, out, float_count, &width, &height);
   });
 }
 

@@ -335,12 +335,16 @@ const char* pass_name(Pass p) {
 }
 }  // namespace
 
-void Film::read(Pass pass, float* out, bool labels) const {
+void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const {
   if (!has(pass))
     throw StateError(std::string("this render does not keep the ") + pass_name(pass) +
                      " pass (not enabled when it started)");
+  if (y0 < 0 || rows < 0 || y0 > height_ - rows)
+    throw InvalidArgument("rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                          " are not within the film's " + std::to_string(height_) + " rows");
   const int c = pass_channels(pass);
-  const size_t n = size_t(width_) * height_;
+  // Pixels [first, first + n) of the film; out[j * c] is pixel first + j.
+  const size_t first = size_t(y0) * width_, n = size_t(rows) * width_;
   std::unique_lock<std::mutex> lock(mutex_);
   const bool published = !finished_ && pass == Pass::Combined;
   if (!published) {
@@ -348,11 +352,13 @@ void Film::read(Pass pass, float* out, bool labels) const {
     lock = lock_accumulators();
   }
   if (published) {
-    for (size_t i = 0; i < 4 * n; ++i) out[i] = published_valid_ ? half_to_float(published_[i]) : 0.0f;
+    const uint16_t* p = published_.data() + 4 * first;
+    for (size_t j = 0; j < 4 * n; ++j) out[j] = published_valid_ ? half_to_float(p[j]) : 0.0f;
   } else {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        float* o = out + i * c;
+      for (size_t j = r.begin(); j < r.end(); ++j) {
+        const size_t i = first + j;
+        float* o = out + j * c;
         const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
         switch (pass) {
           case Pass::Combined:
@@ -385,11 +391,11 @@ void Film::read(Pass pass, float* out, bool labels) const {
     });
   }
   if (pass != Pass::Combined || !labels || labels_.empty()) return;
-  for (size_t i = 0; i < n; ++i)
-    if (labels_[i] != kLabelNone) {
-      const float v = labels_[i] == kLabelWhite ? 1.0f : 0.0f;
-      out[4 * i] = out[4 * i + 1] = out[4 * i + 2] = v;
-      out[4 * i + 3] = 1.0f;
+  for (size_t j = 0; j < n; ++j)
+    if (labels_[first + j] != kLabelNone) {
+      const float v = labels_[first + j] == kLabelWhite ? 1.0f : 0.0f;
+      out[4 * j] = out[4 * j + 1] = out[4 * j + 2] = v;
+      out[4 * j + 3] = 1.0f;
     }
 }
 
@@ -397,26 +403,28 @@ void Film::read(Pass pass, float* out, bool labels) const {
 
 namespace lt {
 
-void Film::read_strategy_grid(int columns, int rows, float* out) const {
+void Film::read_strategy_grid(int columns, int rows, float* out, int y0, int count) const {
   const int gw = columns * width_;
+  if (count < 0) count = rows * height_ - y0;
   const double splat_scale = light_paths_ ? 1.0 / double(light_paths_) : 0.0;
-  for (int d = 0; d < rows; ++d)
+  for (int gy = y0; gy < y0 + count; ++gy) {
+    // Grid row gy: cell row d (depth 0 at the top: the last rows), pixel row y of each cell.
+    const int d = rows - 1 - gy / height_, y = gy % height_;
     for (int s = 0; s < columns; ++s) {
       const int cell = d * columns + s;
-      const int oy = (rows - 1 - d) * height_, ox = s * width_;
-      for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x) {
-          const size_t i = size_t(y) * width_ + x;
-          const uint32_t n = count_[i];
-          float* o = out + (size_t(oy + y) * gw + ox + x) * 3;
-          for (int k = 0; k < 3; ++k) {
-            const size_t at = (i * layout_.strategy_cells + cell) * 3 + k;
-            double v = strategy_splats_[at] * splat_scale;
-            if (n) v += strategies_[at] / double(n);
-            o[k] = float(v);
-          }
+      for (int x = 0; x < width_; ++x) {
+        const size_t i = size_t(y) * width_ + x;
+        const uint32_t n = count_[i];
+        float* o = out + (size_t(gy - y0) * gw + size_t(s) * width_ + x) * 3;
+        for (int k = 0; k < 3; ++k) {
+          const size_t at = (i * layout_.strategy_cells + cell) * 3 + k;
+          double v = strategy_splats_[at] * splat_scale;
+          if (n) v += strategies_[at] / double(n);
+          o[k] = float(v);
         }
+      }
     }
+  }
 }
 
 }  // namespace lt

@@ -126,7 +126,8 @@ class Film {
   }
   // The grid of strategy images: `columns` x `rows` cells of the region's size, RGB, rows bottom
   // to top with depth 0 at the top. Only valid once rendering has stopped.
-  void read_strategy_grid(int columns, int rows, float* out) const;
+  // y0, count: only grid rows [y0, y0 + count) (count < 0: to the last), written from out on.
+  void read_strategy_grid(int columns, int rows, float* out, int y0 = 0, int count = -1) const;
   // Resolves Combined into the published image readers see while rendering (the rendering
   // thread, between passes). Allocates nothing.
   void publish();
@@ -143,7 +144,10 @@ class Film {
   // is the published image (zeros before the first publish) and the other passes are read between
   // two passes (waiting for the one being rendered); only the passes the film keeps (StateError).
   // `labels` false: Combined without the labels (tests).
-  void read(Pass pass, float* out, bool labels = true) const;
+  void read(Pass pass, float* out, bool labels = true) const { read_rows(pass, 0, height_, out, labels); }
+  // The same for rows [y0, y0 + rows) only (rows bottom to top): width*rows*channels floats, so
+  // that a reader copies a frame through a band-sized buffer.
+  void read_rows(Pass pass, int y0, int rows, float* out, bool labels = true) const;
   // The light-tracing (t = 1 splat) part of Combined, RGB per pixel; false when the render traced
   // no light paths (not bidirectional). Between passes, as read().
   bool read_light_tracing(float* out) const;

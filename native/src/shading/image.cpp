@@ -1,5 +1,7 @@
 #include "shading/image.h"
 
+#include <Imath/half.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <new>
@@ -9,36 +11,6 @@ namespace lt {
 float srgb_to_linear(float c) {
   if (c <= 0.04045f) return c * (1.0f / 12.92f);
   return std::pow((c + 0.055f) * (1.0f / 1.055f), 2.4f);
-}
-
-FloatBuffer::FloatBuffer(size_t n)
-    : p_(static_cast<float*>(std::malloc(std::max<size_t>(n, 1) * sizeof(float)))), n_(n) {
-  if (!p_) throw std::bad_alloc();
-}
-
-FloatBuffer& FloatBuffer::operator=(FloatBuffer&& o) noexcept {
-  if (this != &o) {
-    reset();
-    p_ = o.p_;
-    n_ = o.n_;
-    o.p_ = nullptr;
-    o.n_ = 0;
-  }
-  return *this;
-}
-
-FloatBuffer::~FloatBuffer() { reset(); }
-
-void FloatBuffer::reset() {
-  std::free(p_);
-  p_ = nullptr;
-  n_ = 0;
-}
-
-void FloatBuffer::shrink(size_t n) {
-  if (n >= n_) return;
-  if (void* q = std::realloc(p_, std::max<size_t>(n, 1) * sizeof(float))) p_ = static_cast<float*>(q);
-  n_ = n;  // a failed shrink keeps the larger block, which is still valid
 }
 
 namespace {
@@ -59,6 +31,73 @@ Image::Image(int width, int height, int channels, FloatBuffer pixels, bool srgb,
              ImageAlpha alpha)
     : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb), alpha_mode_(alpha) {
   store(channels, std::move(pixels));
+}
+
+Image::Image(int width, int height, int channels, ByteBuffer pixels, bool srgb, Interpolation interp, Extension ext,
+             ImageAlpha alpha)
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(srgb), alpha_mode_(alpha) {
+  store(channels, std::move(pixels));
+}
+
+Image::Image(int width, int height, int channels, HalfBuffer pixels, Interpolation interp, Extension ext,
+             ImageAlpha alpha)
+    : width_(width), height_(height), interp_(interp), ext_(ext), srgb_(false), alpha_mode_(alpha) {
+  store(channels, std::move(pixels));
+}
+
+namespace {
+inline float half_value(uint16_t h) { return imath_half_to_float(h); }
+}  // namespace
+
+void Image::store(int channels, HalfBuffer pixels) {
+  // As store(FloatBuffer) does with the same values (its byte-value test aside: a half image that
+  // holds only byte values is kept as halves, the same texels).
+  const size_t n = size_t(width_) * height_;
+  channels_ = channels >= 3 ? 3 : 1;
+  uint16_t* p = pixels.data();
+  if (channels == 4 && alpha_mode_ != ImageAlpha::Ignore) {
+    bool opaque = true;
+    for (size_t i = 0; i < n && opaque; ++i) opaque = half_value(p[4 * i + 3]) == 1.0f;
+    if (!opaque) {
+      alpha_floats_.resize(n);
+      for (size_t i = 0; i < n; ++i) {
+        const float a = half_value(p[4 * i + 3]);
+        alpha_floats_[i] = std::isfinite(a) ? clamp(a, 0.0f, 1.0f) : 0.0f;
+      }
+    }
+  }
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < channels_; ++k) {
+      const uint16_t v = p[i * channels + k];
+      p[i * channels_ + k] = std::isfinite(half_value(v)) ? v : uint16_t(0);  // never a bad texel
+    }
+  pixels.shrink(n * channels_);
+  halfs_ = std::move(pixels);
+}
+
+void Image::store(int channels, ByteBuffer pixels) {
+  const size_t n = size_t(width_) * height_;
+  const bool has_alpha = channels == 2 || channels == 4;
+  channels_ = channels >= 3 ? 3 : 1;
+  uint8_t* p = pixels.data();
+  // The alpha plane, kept when used and not all 255 (as store(FloatBuffer) keeps it).
+  if (has_alpha && alpha_mode_ != ImageAlpha::Ignore) {
+    bool opaque = true;
+    for (size_t i = 0; i < n && opaque; ++i) opaque = p[i * channels + channels - 1] == 255;
+    if (!opaque) {
+      alpha_bytes_.resize(n);
+      for (size_t i = 0; i < n; ++i) alpha_bytes_[i] = p[i * channels + channels - 1];
+    }
+  }
+  // In place: the write index never passes the read index.
+  if (channels != channels_)
+    for (size_t i = 0; i < n; ++i)
+      for (int k = 0; k < channels_; ++k) p[i * channels_ + k] = p[i * channels + k];
+  // Cycles associates straight byte images in integers, before any decoding: c a / 255.
+  if (!alpha_bytes_.empty() && alpha_mode_ == ImageAlpha::Straight)
+    for (size_t i = 0; i < n * channels_; ++i) p[i] = uint8_t(unsigned(p[i]) * alpha_bytes_[i / channels_] / 255u);
+  pixels.shrink(n * channels_);
+  bytes_ = std::move(pixels);
 }
 
 void Image::store(int channels, FloatBuffer pixels) {
@@ -92,7 +131,7 @@ void Image::store(int channels, FloatBuffer pixels) {
     bytes = byte_value(uint8_t(std::nearbyint(alpha[i] * 255.0f))) == alpha[i];
   const bool associate = !alpha.empty() && alpha_mode_ == ImageAlpha::Straight;
   if (bytes) {
-    bytes_.resize(n * channels_);
+    bytes_ = ByteBuffer(n * channels_);
     for (size_t i = 0; i < bytes_.size(); ++i) bytes_[i] = uint8_t(std::nearbyint(p[i] * 255.0f));
     if (!alpha.empty()) {
       alpha_bytes_.resize(n);
@@ -124,6 +163,11 @@ Vec3 Image::fetch(size_t i) const {
     if (channels_ == 1) return Vec3(byte_value(bytes_[i]));
     const uint8_t* b = &bytes_[3 * i];
     return Vec3(byte_value(b[0]), byte_value(b[1]), byte_value(b[2]));
+  }
+  if (!halfs_.empty()) {
+    if (channels_ == 1) return Vec3(half_value(halfs_[i]));
+    const uint16_t* h = &halfs_[3 * i];
+    return Vec3(half_value(h[0]), half_value(h[1]), half_value(h[2]));
   }
   const float* f = floats_.data();
   if (channels_ == 1) return Vec3(f[i]);

@@ -1,0 +1,42 @@
+// Image files read by the core itself (OpenImageIO), as Cycles reads them, so that Blender never
+// loads the pixels and they are held once, at the file's precision (8-bit files as bytes, half
+// OpenEXR files as half floats unless Blender would premultiply them, others as float). The texels are exactly those
+// the add-on would get from Blender 3.4's Image.pixels for the same image datablock: what Blender's
+// loader does to them (imbuf's png.c / openexr_api.cpp and imb_handle_alpha) is done here, and
+// files for which that would need Blender's colour management (a float file in a colour space
+// other than Linear or a data space) or its unpremultiplied byte buffers are refused
+// (ImageFileUnsupported) for the caller to load through Blender.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "shading/image.h"
+
+namespace lt {
+
+// The image datablock's colour space: sRGB, the scene-linear Linear, a data space (Non-Color,
+// Raw: is_data), or another (byte values then used as they are, as the add-on's own path does).
+enum class FileColorSpace { Srgb, Linear, Data, Other };
+// Blender's Image.alpha_mode.
+enum class FileAlphaMode { Straight, Premultiplied, ChannelPacked, None };
+
+struct ImageFileRequest {
+  std::string path;
+  FileColorSpace space = FileColorSpace::Srgb;
+  FileAlphaMode alpha_mode = FileAlphaMode::Straight;
+  bool use_alpha = false;  // the texture's alpha is read (image textures); else dropped
+  Interpolation interp = Interpolation::Linear;
+  Extension ext = Extension::Repeat;
+};
+
+// A file this reader does not take (the caller loads it another way); the message says why.
+struct ImageFileUnsupported : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Reads the file (throws IoError when it cannot be opened or read, ImageFileUnsupported as above).
+std::unique_ptr<Image> read_image_file(const ImageFileRequest& request);
+
+}  // namespace lt
