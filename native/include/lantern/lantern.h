@@ -211,7 +211,7 @@ typedef struct lt_camera_desc {
 LT_API int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* desc);
 
 /* World: colour x strength, optionally multiplied by an equirectangular image (image >= 0),
- * rotated about Z by rotation_z. */
+ * rotated about Z by rotation_z (the core makes it a world program, as below). */
 typedef struct lt_world_desc {
   float color[3];
   float strength;
@@ -220,6 +220,17 @@ typedef struct lt_world_desc {
   unsigned visibility; /* camera visibility of the background */
 } lt_world_desc;
 LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
+/* World: the World's Surface as a shader program (lt_shader_program, compiled as a material's),
+ * run for each direction a ray leaves the scene in: its Emission closures (Blender's Background
+ * and Emission nodes, summed with their Mix/Add Shader weights) are the radiance arriving from
+ * there; other closures give none. The shading point is Cycles' for the background (P and
+ * Generated the direction, N and I its reverse, Light Path flags of the ray that escaped).
+ * A program that folds to a constant is a constant world (no table); otherwise light sampling
+ * follows a map of the program baked on an equirectangular grid of map_resolution x
+ * map_resolution / 2 pixels (0: automatic, the largest Environment Texture image's size, else
+ * 1024 x 512; at most 8192 wide). visibility: LT_VISIBLE_CAMERA, whether camera rays see it. */
+LT_API int lt_scene_set_world_program(lt_scene* scene, const lt_shader_program* program, int map_resolution,
+                                      unsigned visibility);
 
 /* ---- volumes (docs/volumes.md) ---------------------------------------------------------------
  * A volume is a list of components, each a volume shader node with Cycles' formulas: Principled

@@ -53,6 +53,10 @@ enum InputOp : uint32_t {
   // Light Falloff (Cycles' svm_node_light_falloff): in: strength f, smooth f; out: quadratic f,
   // linear f, constant f (strength times 1, the ray length, its square; smoothed).
   kOpLightFalloff,
+  // Environment Texture (Cycles' svm_node_tex_environment): in: vector v (normalised here); out:
+  // color v, alpha f; params: image id, unassociate (as Image's), projection (0 equirectangular,
+  // 1 mirror ball).
+  kOpEnvironment,
 };
 
 }  // namespace lt
