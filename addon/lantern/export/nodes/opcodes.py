@@ -31,6 +31,7 @@ OBJECT_INFO = 43
 BUMP = 44
 CAMERA_DATA = 45
 LIGHT_FALLOFF = 46
+ENVIRONMENT = 47
 
 # Distribution params (shaders.h)
 DIST_SHARP = 0
