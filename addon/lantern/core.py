@@ -294,6 +294,8 @@ class SceneStats(ctypes.Structure):
         ("image_bytes", ctypes.c_uint64),
         ("image_texels", ctypes.c_uint64),
         ("byte_images", ctypes.c_uint64),
+        ("world_map_width", ctypes.c_uint64),
+        ("world_map_height", ctypes.c_uint64),
     ]
 
 

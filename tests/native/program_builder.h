@@ -10,6 +10,7 @@
 #include "shading/program.h"
 #include "shading/inputs.h"
 #include "shading/shaders.h"
+#include "shading/textures.h"
 
 struct Rgb {
   float x, y, z;
@@ -120,3 +121,14 @@ struct ShaderCode {
     return {w[0], w[1]};
   }
 };
+
+// A procedural world: a Noise texture of the direction (the Generated output), its colour as the
+// Background colour, strength 3.
+inline ShaderCode noise_world() {
+  ShaderCode p;
+  const uint32_t generated = p.tex_coord()[0];
+  const std::vector<uint32_t> noise =
+      p.emit(lt::kOpTexNoise, {generated, p.c1(0), p.c1(2.5f), p.c1(3), p.c1(0.5f), p.c1(0)}, {1, 3}, {3});
+  p.emit_color(p.one(), noise[1], 3);
+  return p;
+}

@@ -149,6 +149,19 @@ std::vector<LightCase> make_cases() {
     c.pole = normalize(Vec3(0.1f, 0.2f, 1));
     cs.push_back(std::move(c));
   }
+  {
+    // A procedural world: its map (32 x 16) decides the pdf, the program the radiance.
+    LightCase c;
+    c.name = "world_procedural";
+    c.scene = std::make_unique<Scene>();
+    const ShaderCode p = noise_world();
+    c.scene->world.set_program(std::make_shared<const Program>(p.code, p.k, p.registers, 0), 32);
+    c.scene->world_set = true;
+    c.scene->commit();
+    c.light = c.scene->lights.world_light();
+    c.pole = normalize(Vec3(0.1f, 0.2f, 1));
+    cs.push_back(std::move(c));
+  }
   // An emissive triangle (a mesh light).
   {
     LightCase c;

@@ -478,6 +478,8 @@ int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out) {
       out->image_texels += uint64_t(im->width()) * im->height();
       out->byte_images += im->is_byte() ? 1 : 0;
     }
+    out->world_map_width = uint64_t(scene->scene.world.map_width());
+    out->world_map_height = uint64_t(scene->scene.world.map_height());
   });
 }
 
