@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "lantern/lantern.h"
-#include "shading/program.h"
 #include "shading/inputs.h"
+#include "shading/program.h"
 #include "shading/shaders.h"
 #include "shading/textures.h"
 

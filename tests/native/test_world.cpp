@@ -148,12 +148,13 @@ TEST(World, EnvironmentProjections) {
     };
     // Cycles' direction_to_equirectangular and direction_to_mirrorball (kernel/camera/projection.h).
     const std::vector<Case> cases =
-        projection == 0 ? std::vector<Case>{{Vec3(1, 0, 0), 0.5f, 0.5f},
-                                            {Vec3(0, 1, 0), 0.25f, 0.5f},
-                                            {normalize(Vec3(-1, -1, 1)), 0.875f, 1 - std::acos(1 / std::sqrt(3.0f)) / kPi}}
-                        : std::vector<Case>{{Vec3(0, -2, 0), 0.5f, 0.5f},  // normalised first
-                                            {Vec3(1, 0, 0), 0.5f * (1 / std::sqrt(2.0f) + 1), 0.5f},
-                                            {normalize(Vec3(0.3f, 0.2f, 0.5f)), 0, 0}};
+        projection == 0
+            ? std::vector<Case>{{Vec3(1, 0, 0), 0.5f, 0.5f},
+                                {Vec3(0, 1, 0), 0.25f, 0.5f},
+                                {normalize(Vec3(-1, -1, 1)), 0.875f, 1 - std::acos(1 / std::sqrt(3.0f)) / kPi}}
+            : std::vector<Case>{{Vec3(0, -2, 0), 0.5f, 0.5f},  // normalised first
+                                {Vec3(1, 0, 0), 0.5f * (1 / std::sqrt(2.0f) + 1), 0.5f},
+                                {normalize(Vec3(0.3f, 0.2f, 0.5f)), 0, 0}};
     for (const Case& k : cases) {
       ShadingContext c;
       c.object_N = k.d;

@@ -323,9 +323,9 @@ typedef struct lt_scene_stats {
   uint64_t light_sampler_builds;
   uint64_t emissive_triangles;
   uint64_t emissive_instances;
-  uint64_t image_bytes;  /* memory the scene's images hold */
-  uint64_t image_texels; /* and their texels, all images */
-  uint64_t byte_images;  /* images stored at 8 bits per channel */
+  uint64_t image_bytes;                       /* memory the scene's images hold */
+  uint64_t image_texels;                      /* and their texels, all images */
+  uint64_t byte_images;                       /* images stored at 8 bits per channel */
   uint64_t world_map_width, world_map_height; /* the world's sampling map (0 x 0: none, a constant world) */
 } lt_scene_stats;
 LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);

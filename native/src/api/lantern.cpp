@@ -157,22 +157,24 @@ lt::Program to_program(const lt_scene* scene, const lt_shader_program* p) {
                      scene->scene.images.size());
 }
 
-lt::Material to_material(const lt_scene* scene, const lt_shader_program* p) { return lt::Material(to_program(scene, p)); }
+lt::Material to_material(const lt_scene* scene, const lt_shader_program* p) {
+  return lt::Material(to_program(scene, p));
+}
 
 // lt_world_desc's image as a world program: Emission(weight scale, colour Environment Texture of
 // the direction rotated about Z by rotation (the Texture Coordinate's Object output with that
 // matrix), strength 1).
 lt::Program image_world_program(const lt_scene* scene, int image, float rotation, const lt::Vec3& scale) {
   const float c = std::cos(rotation), s = std::sin(rotation);
-  std::vector<float> k = {12, c, -s, 0, 0, s, c, 0, 0, 0, 0, 1, 0,  // object table (rows)
-                          0,                                         // camera table: none
+  std::vector<float> k = {12,      c,       -s,      0, 0, s, c, 0, 0, 0, 0, 1, 0,  // object table (rows)
+                          0,                                                        // camera table: none
                           scale.x, scale.y, scale.z, 1};
   const uint32_t v3 = 3u << 24, f1 = 1u << 24;
   std::vector<uint32_t> code = {lt::kOpTexCoord, 7u << 8 | 3u << 16};
   for (uint32_t r = 0; r < 7; ++r) code.push_back(v3 | 3 * r);
   code.insert(code.end(), {0u, 13u, 0u});
-  code.insert(code.end(), {lt::kOpEnvironment, 1u | 2u << 8 | 3u << 16, v3 | 9u, v3 | 21u, f1 | 24u, uint32_t(image),
-                           0u, 0u});
+  code.insert(code.end(),
+              {lt::kOpEnvironment, 1u | 2u << 8 | 3u << 16, v3 | 9u, v3 | 21u, f1 | 24u, uint32_t(image), 0u, 0u});
   code.insert(code.end(), {lt::kOpEmission, 3u, lt::kConstBit | v3 | 14u, v3 | 21u, lt::kConstBit | f1 | 17u});
   return lt::Program(std::move(code), std::move(k), 25, scene->scene.images.size());
 }

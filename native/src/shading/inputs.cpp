@@ -65,10 +65,10 @@ void tex_coord(const Instr& in, Machine& m) {
     // A world ray's P is its direction: Cycles' Camera and Window read the point that far from the
     // camera (svm_node_tex_coord, camera_world_to_ndc). The camera's position: -R^T t.
     const float* r = camera + 1;
-    const Vec3 P = c.background ? c.P - Vec3(r[0] * r[3] + r[4] * r[7] + r[8] * r[11],
-                                             r[1] * r[3] + r[5] * r[7] + r[9] * r[11],
-                                             r[2] * r[3] + r[6] * r[7] + r[10] * r[11])
-                                : c.P;
+    const Vec3 P = c.background
+                       ? c.P - Vec3(r[0] * r[3] + r[4] * r[7] + r[8] * r[11], r[1] * r[3] + r[5] * r[7] + r[9] * r[11],
+                                    r[2] * r[3] + r[6] * r[7] + r[10] * r[11])
+                       : c.P;
     m.set(in.out[4], affine(camera + 1, P));
     // Cycles' Window output: the NDC position (x, y in [0, 1] across the frame), z 0.
     const float* p = camera + 13;
