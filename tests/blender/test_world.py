@@ -53,3 +53,40 @@ def test_world_warnings_name_node_and_world():
     summary, reports = ru.export(scene)
     assert any("World 'Odd Sky'" in r and "'Sky Texture'" in r and "ShaderNodeTexSky" in r for r in reports), reports
     assert any("World 'Odd Sky'" in r and "'Diffuse BSDF'" in r and "no light" in r for r in reports), reports
+
+
+@pytest.mark.parametrize("node,output", [("ShaderNodeTexCoord", o) for o in
+                                         ("Generated", "Normal", "UV", "Object", "Camera", "Window", "Reflection")]
+                         + [("ShaderNodeNewGeometry", o) for o in ("Position", "Normal", "Incoming")])
+def test_world_shading_point_matches_cycles(node, output, outdir):
+    """The background's shading point as Cycles sets it up (shader_setup_from_background: P the
+    direction, N and I its reverse, no object): a node output as the Background colour, seen by
+    camera rays at pixel centres, pixel by pixel against Cycles (node_cases' bound)."""
+    import numpy as np
+    from node_cases import beyond, slope_of
+
+    bs.reset_file()
+    scene = bs.new_scene("world_point", resolution=(96, 64), samples=1)
+    c = scene.cycles
+    c.pixel_filter_type = "GAUSSIAN"
+    c.filter_width = 0.01
+    c.max_bounces = 0
+    bs.add_camera(scene, (1.0, -2.0, 0.7), (0.2, 0.3, 0.9), lens=20.0)
+    world = bs.set_world(scene, (0.0, 0.0, 0.0), 1.0)
+    nt = world.node_tree
+    src = nt.nodes.new(node)
+    shift = nt.nodes.new("ShaderNodeVectorMath")  # 0.4 x + 0.5: mostly positive, as emission keeps it
+    shift.operation = "MULTIPLY_ADD"
+    shift.inputs[1].default_value = (0.4, 0.4, 0.4)
+    shift.inputs[2].default_value = (0.5, 0.5, 0.5)
+    nt.links.new(src.outputs[output], shift.inputs[0])
+    nt.links.new(shift.outputs[0], nt.nodes["Background"].inputs["Color"])
+    label = "world_%s_%s" % (node[10:].lower(), output.lower())
+    lantern = ru.render(scene, ru.LANTERN, 1, outdir=outdir, tag=label + "_lantern").combined[..., :3]
+    cycles = ru.render(scene, ru.CYCLES, 1, outdir=outdir, tag=label + "_cycles").combined[..., :3]
+    bad, worst = beyond(lantern, cycles, slope_of(cycles))
+    if bad.mean() > 0.005:
+        ru.write_png("%s/%s_lantern.png" % (outdir, label), lantern)
+        ru.write_png("%s/%s_cycles.png" % (outdir, label), cycles)
+    assert bad.mean() <= 0.005, "%s: %.2f%% of pixels beyond the bound (worst %.3g x)" % (
+        label, 100 * bad.mean(), worst)

@@ -221,9 +221,9 @@ typedef struct lt_world_desc {
 } lt_world_desc;
 LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
 /* World: the World's Surface as a shader program (lt_shader_program, compiled as a material's),
- * run for each direction a ray leaves the scene in: its Emission closures (Blender's Background
- * and Emission nodes, summed with their Mix/Add Shader weights) are the radiance arriving from
- * there; other closures give none. The shading point is Cycles' for the background (P and
+ * run for each direction a ray leaves the scene in: what it emits (Emission closures: Blender's
+ * Background and Emission nodes, summed with their Mix/Add Shader weights) is the radiance
+ * arriving from there; BSDF closures give none. The shading point is Cycles' for the background (P and
  * Generated the direction, N and I its reverse, Light Path flags of the ray that escaped).
  * A program that folds to a constant is a constant world (no table); otherwise light sampling
  * follows a map of the program baked on an equirectangular grid of map_resolution x
