@@ -62,7 +62,6 @@ def test_world_shading_point_matches_cycles(node, output, outdir):
     """The background's shading point as Cycles sets it up (shader_setup_from_background: P the
     direction, N and I its reverse, no object): a node output as the Background colour, seen by
     camera rays at pixel centres, pixel by pixel against Cycles (node_cases' bound)."""
-    import numpy as np
     from node_cases import beyond, slope_of
 
     bs.reset_file()
