@@ -50,7 +50,9 @@ def test_world_warnings_name_node_and_world():
     nt.links.new(bg.outputs[0], add.inputs[0])
     nt.links.new(diffuse.outputs[0], add.inputs[1])
     nt.links.new(add.outputs[0], nt.nodes["World Output"].inputs["Surface"])
+    world.cycles_visibility.glossy = False
     summary, reports = ru.export(scene)
+    assert any("World 'Odd Sky'" in r and "glossy off" in r for r in reports), reports
     assert any("World 'Odd Sky'" in r and "'Sky Texture'" in r and "ShaderNodeTexSky" in r for r in reports), reports
     assert any("World 'Odd Sky'" in r and "'Diffuse BSDF'" in r and "no light" in r for r in reports), reports
 

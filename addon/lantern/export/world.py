@@ -8,9 +8,15 @@ from .material import emissive_nodes, volume_keywords, without_emission
 _CAMERA_DEFAULT = 1
 
 
-def _visibility(world):
+def _visibility(world, warn):
+    """Camera visibility (the core's flag); the other kinds are not honoured yet: said so."""
     vis = getattr(world, "cycles_visibility", None)
-    return int(bool(vis.camera)) if vis is not None else _CAMERA_DEFAULT
+    if vis is None:
+        return _CAMERA_DEFAULT
+    hidden = [k for k in ("diffuse", "glossy", "transmission", "scatter") if not getattr(vis, k, True)]
+    if hidden:
+        warn("ray visibility (%s off) is not supported yet; those rays see the world" % ", ".join(hidden))
+    return int(bool(vis.camera))
 
 
 def _map_resolution(world):
@@ -34,7 +40,7 @@ def export_world(depsgraph, core_scene, report, images, camera=None):
     def warn(msg):
         report({'WARNING'}, "World '%s': %s" % (world.name, msg))
 
-    visibility = _visibility(world)
+    visibility = _visibility(world, warn)
     if not world.use_nodes or world.node_tree is None:
         core_scene.set_world(color=tuple(world.color[:3]), strength=1.0, visibility=visibility)
         return "color"
