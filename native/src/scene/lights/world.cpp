@@ -55,6 +55,10 @@ void World::build(const std::vector<std::unique_ptr<Image>>& images) {
       h = std::max(h, images[id]->height());
     }
     if (w == 0 || h == 0) w = 1024, h = 512;
+    if (w > 8192) {  // the largest map lantern.h allows (Cycles' Map Resolution maximum)
+      h = std::max(1, int(int64_t(h) * 8192 / w));
+      w = 8192;
+    }
   }
   w = std::max(w, 1);
   h = std::max(h, 1);
