@@ -25,6 +25,7 @@ is set explicitly: objects visible to every ray, lights not visible to the camer
 import math
 import os
 import sys
+import tempfile
 
 import bmesh
 import bpy
@@ -833,6 +834,102 @@ def build_sun_world(scene):
     add_camera(scene, (0, -6.0, 2.0), (0, 0, 0.5), lens=35.0)
 
 
+def hdri_pixels(width=64, height=32):
+    """An HDR equirectangular sky (RGBA, rows bottom first): a horizon-to-zenith gradient, a dark
+    ground and a bright sun-like disk (about 5 degrees across, radiance ~60) above the horizon."""
+    y, x = (np.mgrid[0:height, 0:width] + 0.5) / np.array([height, width])[:, None, None]
+    elevation = (y - 0.5) * math.pi  # v = 1 at the zenith
+    azimuth = math.pi - 2 * math.pi * x
+    sky = np.clip(np.sin(elevation), 0.0, 1.0)[..., None]
+    rgba = np.empty((height, width, 4))
+    rgba[..., :3] = np.where(elevation[..., None] > 0, 0.9 * (1 - sky) * (0.7, 0.8, 1.0) + sky * (0.2, 0.35, 0.8),
+                             (0.12, 0.1, 0.08))
+    d = np.stack([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth), np.sin(elevation)], -1)
+    sun = np.array([math.cos(0.6) * math.cos(2.0), math.cos(0.6) * math.sin(2.0), math.sin(0.6)])
+    blob = np.clip((d @ sun - math.cos(math.radians(5.0))) / (1 - math.cos(math.radians(5.0))), 0.0, 1.0)
+    rgba[..., :3] += 60.0 * blob[..., None] * (1.0, 0.9, 0.75)
+    rgba[..., 3] = 1.0
+    return rgba
+
+
+def hdri_image(name, pixels):
+    """A float image written as an OpenEXR file and loaded back (as an HDRI is), packed into the .blend."""
+    h, w, _ = pixels.shape
+    src = bpy.data.images.new(name + "_src", width=w, height=h, alpha=True, float_buffer=True)
+    src.pixels.foreach_set(np.ascontiguousarray(pixels, np.float32).ravel())
+    path = os.path.join(tempfile.mkdtemp(prefix="lantern_hdri_"), name + ".exr")
+    src.filepath_raw = path
+    src.file_format = "OPEN_EXR"
+    src.save()
+    bpy.data.images.remove(src)
+    img = bpy.data.images.load(path)
+    img.name = name
+    img.colorspace_settings.name = "Linear"
+    img.pack()
+    return img
+
+
+def _world_nodes(scene, name):
+    world = bpy.data.worlds.new(name)
+    world.use_nodes = True
+    nt = world.node_tree
+    nt.nodes.clear()
+    world.cycles_visibility.camera = True
+    scene.world = world
+    return world, nt, nt.nodes.new("ShaderNodeOutputWorld")
+
+
+def _world_objects(scene):
+    """A diffuse sphere, a glossy sphere and a grey ground: lit by the world only."""
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 30.0))
+    assign(ground, diffuse("Ground", (0.5, 0.5, 0.5)))
+    assign(add_object(scene, "DiffuseBall", mesh_sphere("DiffuseBall", 0.5), (-0.6, 0.0, 0.5)),
+           diffuse("Matte", (0.8, 0.6, 0.4)))
+    assign(add_object(scene, "GlossyBall", mesh_sphere("GlossyBall", 0.5), (0.6, 0.2, 0.5)),
+           glossy("Shiny", (0.9, 0.9, 0.9), 0.25))
+    add_camera(scene, (0, -4.5, 1.6), (0, 0, 0.5), lens=35.0)
+
+
+def build_hdri_world(scene):
+    """Issue 13's HDRI world: an equirectangular EXR (a sky with a sun-like disk) through a Mapping
+    node rotating about X, Y and Z, into a Background of strength 1.5."""
+    world, nt, out = _world_nodes(scene, "HDRI")
+    tc = nt.nodes.new("ShaderNodeTexCoord")
+    mapping = _node(nt, "ShaderNodeMapping", {"Vector": tc.outputs["Generated"], "Rotation": (0.3, -0.25, 1.1)})
+    env = _node(nt, "ShaderNodeTexEnvironment", {"Vector": mapping.outputs[0]}, projection="EQUIRECTANGULAR")
+    env.image = hdri_image("Sky", hdri_pixels())
+    bg = _node(nt, "ShaderNodeBackground", {"Color": env.outputs["Color"], "Strength": 1.5})
+    nt.links.new(bg.outputs[0], out.inputs["Surface"])
+    _world_objects(scene)
+
+
+def build_light_path_world(scene):
+    """The Light Path trick: camera rays see a grey backdrop, every other ray a warm light (a Mix
+    Shader of two Backgrounds by Is Camera Ray)."""
+    world, nt, out = _world_nodes(scene, "Backdrop")
+    lp = nt.nodes.new("ShaderNodeLightPath")
+    light = _node(nt, "ShaderNodeBackground", {"Color": (1.0, 0.75, 0.45), "Strength": 2.0})
+    backdrop = _node(nt, "ShaderNodeBackground", {"Color": (0.5, 0.5, 0.5), "Strength": 1.0})
+    mix = _node(nt, "ShaderNodeMixShader", {0: lp.outputs["Is Camera Ray"], 1: light.outputs[0],
+                                            2: backdrop.outputs[0]})
+    nt.links.new(mix.outputs[0], out.inputs["Surface"])
+    _world_objects(scene)
+
+
+def build_procedural_world(scene):
+    """A procedural sky: a Gradient texture of the direction mixing a dark blue and a Noise
+    texture's colour, into a Background of strength 1.2."""
+    world, nt, out = _world_nodes(scene, "Procedural")
+    tc = nt.nodes.new("ShaderNodeTexCoord")
+    grad = _node(nt, "ShaderNodeTexGradient", {"Vector": tc.outputs["Generated"]}, gradient_type="LINEAR")
+    noise = _node(nt, "ShaderNodeTexNoise", {"Vector": tc.outputs["Generated"], "Scale": 2.5, "Detail": 3.0})
+    mix = _node(nt, "ShaderNodeMixRGB", {"Fac": grad.outputs["Fac"], "Color1": (0.05, 0.1, 0.3),
+                                         "Color2": noise.outputs["Color"]})
+    bg = _node(nt, "ShaderNodeBackground", {"Color": mix.outputs[0], "Strength": 1.2})
+    nt.links.new(bg.outputs[0], out.inputs["Surface"])
+    _world_objects(scene)
+
+
 def build_textured(scene):
     set_world(scene, (0.1, 0.1, 0.1), 1.0)
     checker = packed_image("Checker", checker_pixels(), "sRGB")
@@ -1440,6 +1537,9 @@ SCENES = {
     "glossy_glass": (build_glossy_glass, (96, 96), 128),
     "sun_world": (build_sun_world, (96, 96), 128),
     "textured": (build_textured, (96, 96), 128),
+    "hdri_world": (build_hdri_world, (96, 64), 128),
+    "light_path_world": (build_light_path_world, (96, 64), 128),
+    "procedural_world": (build_procedural_world, (96, 64), 128),
     "instanced": (build_instanced, (96, 96), 128),
     "normal_mapped": (build_normal_mapped, (96, 96), 128),
     "displaced": (build_displaced, (96, 96), 128),

@@ -199,7 +199,8 @@ def engine_registered(idname=LANTERN):
 
 def export(scene):
     """Exports and commits the scene as a Lantern render would, into a scene that is then freed.
-    Returns (the export summary, the messages it reported)."""
+    Returns (the export summary, with the committed scene's lt_scene_stats as "stats", the messages
+    it reported)."""
     from lantern import core
     from lantern.export import export_scene
     depsgraph = scene.view_layers[0].depsgraph
@@ -209,6 +210,7 @@ def export(scene):
     try:
         summary = export_scene(depsgraph, core_scene, lambda level, message: reports.append(message))
         core_scene.commit()
+        summary["stats"] = core_scene.stats()
     finally:
         core_scene.close()
     return summary, reports

@@ -306,6 +306,8 @@ class SceneStats(ctypes.Structure):
         ("image_bytes", ctypes.c_uint64),
         ("image_texels", ctypes.c_uint64),
         ("byte_images", ctypes.c_uint64),
+        ("world_map_width", ctypes.c_uint64),
+        ("world_map_height", ctypes.c_uint64),
     ]
 
 
@@ -361,6 +363,7 @@ def _declare(lib, layout=True):
         "lt_scene_add_light": ([scene_p, P(LightDesc)], c_int),
         "lt_scene_set_camera": ([scene_p, P(CameraDesc)], c_int),
         "lt_scene_set_world": ([scene_p, P(WorldDesc)], c_int),
+        "lt_scene_set_world_program": ([scene_p, P(ShaderProgram), c_int, ctypes.c_uint], c_int),
         "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int, c_int], c_int),
         "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc), c_int], c_int),
         "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, ctypes.c_float, P(VolumeDesc),
@@ -716,6 +719,13 @@ class Scene:
         d.color[:] = [float(c) for c in color[:3]]
         d.strength, d.image, d.rotation_z, d.visibility = strength, int(image), rotation_z, int(visibility)
         _check(self._lib.lt_scene_set_world(self.handle, ctypes.byref(d)), "lt_scene_set_world")
+
+    def set_world_program(self, program, map_resolution=0, visibility=1):
+        """The World's Surface as a shader program (as add_material's); map_resolution: the width
+        of its importance map (0: automatic)."""
+        d, _keep = _program(program)
+        _check(self._lib.lt_scene_set_world_program(self.handle, ctypes.byref(d), int(map_resolution),
+                                                    int(visibility)), "lt_scene_set_world_program")
 
     @staticmethod
     def _volume_descs(components):

@@ -375,6 +375,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                             emissive_objects=stats["emissive_instances"],
                             image_bytes=stats["image_bytes"], image_texels=stats["image_texels"],
                             byte_images=stats["byte_images"])
+            if summary.get("world") == "nodes":
+                summary["world"] = ("nodes, sampling map %dx%d" % (stats["world_map_width"], stats["world_map_height"])
+                                    if stats["world_map_width"] else "nodes, constant")
             for w in core_scene.take_warnings():  # those export did not already report by name
                 report({'WARNING'}, w)
             print("Lantern: exported %s in %.2f s" % (summary, time.monotonic() - t0))

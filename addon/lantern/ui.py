@@ -384,6 +384,29 @@ class LANTERN_WORLD_PT_ray_visibility(LanternButtonsPanel, Panel):
         layout.prop(context.world.cycles_visibility, "camera")
 
 
+class LANTERN_WORLD_PT_settings(LanternButtonsPanel, Panel):
+    """Cycles' world importance-sampling map (the core bakes the world's nodes into it): its
+    resolution trades commit time and memory against noise from small bright spots."""
+    bl_label = "Settings"
+    bl_context = "world"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return context.world is not None and hasattr(context.world, "cycles") and super().poll(context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.world.cycles
+        col = layout.column()
+        col.prop(settings, "sampling_method", text="Sampling")
+        sub = col.column()
+        sub.active = settings.sampling_method == 'MANUAL'
+        sub.prop(settings, "sample_map_resolution")
+
+
 classes = (
     LANTERN_MT_presets,
     LANTERN_OT_apply_preset,
@@ -407,6 +430,7 @@ classes = (
     LANTERN_MATERIAL_PT_surface,
     LANTERN_WORLD_PT_surface,
     LANTERN_WORLD_PT_ray_visibility,
+    LANTERN_WORLD_PT_settings,
 )
 
 

@@ -28,9 +28,14 @@ import pytest
 import build_scenes
 import render_utils as ru
 
-# cornell_mesh_light: lit by an emissive quad 10 cm under the ceiling (two-sided mesh light)
+# cornell_mesh_light: lit by an emissive quad 10 cm under the ceiling (two-sided mesh light).
+# Issue 13's world node trees, lighting a diffuse and a glossy sphere: hdri_world (an HDR
+# equirectangular EXR with a sun-like disk through Mapping's X/Y/Z rotation, strength 1.5),
+# light_path_world (Is Camera Ray mixing a grey backdrop and a warm light), procedural_world
+# (Gradient and Noise textures of the direction).
+WORLD_SCENES = ["hdri_world", "light_path_world", "procedural_world"]
 PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "sun_world",
-               "textured", "instanced"]
+               "textured", "instanced"] + WORLD_SCENES
 TILE = 16
 ROUNDING = 1e-5  # float32 accumulation and EXR round trip
 
@@ -247,7 +252,7 @@ def student_t_upper(p, dof):
 # volume, a VDB grid by delta and ratio tracking); door_slabs: Cycles' per-kind bounce limits on
 # walls of two lobe kinds (issue 12, item 4)
 BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "door",
-               "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud"]
+               "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud"] + WORLD_SCENES
 # Scenes without media whose path-traced image mean is known within MEAN_POWER at their samples:
 # BDPT's image mean must equal PATH's there too (the door scenes' path tracing is too noisy).
 BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass"]

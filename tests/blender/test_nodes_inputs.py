@@ -464,3 +464,27 @@ def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_pa
     assert float(np.ptp(from_file[..., :3])) > 1e-3, "%s: the view shows no pattern" % case
     diff = float(np.abs(from_file - through_blender).max())
     assert diff <= 1e-6, "%s %s: the core's texels differ from Blender's by up to %g" % (case, output, diff)
+
+
+@pytest.mark.parametrize("projection", ["EQUIRECTANGULAR", "MIRROR_BALL"])
+@pytest.mark.parametrize("vector", ["Position", "Normal"])
+def test_environment_texture(projection, vector, outdir):
+    """Environment Texture on a sphere's material (Cycles' svm_node_tex_environment): the image
+    along the normalised vector, by default the Position (here the sphere's, centred at the
+    origin), or the Normal. A float image periodic in u, so the equirectangular seam is smooth."""
+    import bpy
+    import numpy as np
+
+    def build(nt, coords):
+        w, h = 64, 32
+        y, x = (np.mgrid[0:h, 0:w] + 0.5) / np.array([h, w])[:, None, None]
+        rgba = np.dstack([0.5 + 0.4 * np.cos(2 * np.pi * x), 0.2 + 0.6 * y,
+                          0.5 + 0.3 * np.sin(2 * np.pi * x) * np.sin(np.pi * y), np.ones_like(x)])
+        img = bpy.data.images.new("env", w, h, alpha=True, float_buffer=True)
+        img.pixels.foreach_set(np.ascontiguousarray(rgba, np.float32).ravel())
+        tex = node(nt, "ShaderNodeTexEnvironment", {"projection": projection, "interpolation": "Linear"})
+        tex.image = img
+        if vector == "Normal":
+            nt.links.new(node(nt, "ShaderNodeNewGeometry").outputs["Normal"], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+    compare_view(build, "environment_%s_%s" % (projection.lower(), vector.lower()), outdir, shape="sphere")

@@ -30,6 +30,7 @@ enum Op : uint8_t {
   kClearLights,
   kCommit,
   kRender,
+  kSetWorldProgram,
   kOpCount
 };
 

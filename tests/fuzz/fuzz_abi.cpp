@@ -247,6 +247,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             lt_scene_set_material_volume(scene, material, v.empty() ? nullptr : v.data(), int(v.size()), null_surface));
         break;
       }
+      case lt_fuzz::kSetWorldProgram: {
+        // Resolutions past 64 are refused or slow: negative values stay, others wrap to 0-64 (0:
+        // automatic, the Environment Texture's image size or 1024 x 512).
+        const int8_t b = r.i8();
+        const int resolution = b < 0 ? b : b % 65;
+        const unsigned visibility = r.u8();
+        ProgramData p = program(r);
+        check(lt_scene_set_world_program(scene, &p.desc, resolution, visibility));
+        break;
+      }
       case lt_fuzz::kSetWorldVolume: {
         std::vector<lt_volume_desc> v = volume(r);
         check(lt_scene_set_world_volume(scene, v.empty() ? nullptr : v.data(), int(v.size())));

@@ -315,7 +315,14 @@ std::vector<uint8_t> seed_textures_edits() {
   light(w, LT_LIGHT_AREA, 50, 0, 0, 3, LT_AREA_DISK);
   light(w, LT_LIGHT_SUN, 2, 0, 0, 5);
   camera(w, LT_CAMERA_ORTHOGRAPHIC);
-  world(w, 1, 0);
+  {  // a world program: Background(Environment Texture of image 0 along the direction), 16 x 8 map
+    w.op(lt_fuzz::kSetWorldProgram);
+    w.i8(16);
+    w.u8(LT_VISIBLE_ALL);
+    ShaderCode p;
+    p.emit_color(p.one(), p.environment(p.tex_coord()[0], 0), 2);
+    program(w, p);
+  }
   w.op(lt_fuzz::kCommit);
   Render r;
   r.integrator = LT_INTEGRATOR_BIDIRECTIONAL;

@@ -7,8 +7,10 @@
 #include <vector>
 
 #include "lantern/lantern.h"
+#include "shading/inputs.h"
 #include "shading/program.h"
 #include "shading/shaders.h"
+#include "shading/textures.h"
 
 struct Rgb {
   float x, y, z;
@@ -43,6 +45,26 @@ struct ShaderCode {
     code.insert(code.end(), outs.begin(), outs.end());
     code.insert(code.end(), params.begin(), params.end());
     return outs;
+  }
+  // A table in the pool (its length first); returns its offset for a 't' param.
+  uint32_t table(const std::vector<float>& t) {
+    k.push_back(float(t.size()));
+    k.insert(k.end(), t.begin(), t.end());
+    return uint32_t(k.size() - t.size() - 1);
+  }
+  // Texture Coordinate's outputs (Generated, Normal, UV, Object, Camera, Window, Reflection);
+  // object_table: a world-to-object matrix (12 floats, rows) for Object, or none.
+  std::vector<uint32_t> tex_coord(const std::vector<float>& object_table = {}) {
+    const uint32_t object = table(object_table), camera = table({});
+    return emit(lt::kOpTexCoord, {}, {3, 3, 3, 3, 3, 3, 3}, {object, camera, 0});
+  }
+  // Environment Texture's colour: projection 0 equirectangular, 1 mirror ball.
+  uint32_t environment(uint32_t vector, uint32_t image, uint32_t projection = 0) {
+    return emit(lt::kOpEnvironment, {vector}, {3, 1}, {image, 0, projection})[0];
+  }
+  // Emission (a world's Background) of a colour operand.
+  void emit_color(uint32_t weight, uint32_t color, float strength = 1) {
+    emit(lt::kOpEmission, {weight, color, c1(strength)}, {});
   }
   lt_shader_program desc() const { return {code.data(), int(code.size()), k.data(), int(k.size()), registers}; }
   uint32_t one() { return c3({1, 1, 1}); }
@@ -99,3 +121,14 @@ struct ShaderCode {
     return {w[0], w[1]};
   }
 };
+
+// A procedural world: a Noise texture of the direction (the Generated output), its colour as the
+// Background colour, strength 3.
+inline ShaderCode noise_world() {
+  ShaderCode p;
+  const uint32_t generated = p.tex_coord()[0];
+  const std::vector<uint32_t> noise =
+      p.emit(lt::kOpTexNoise, {generated, p.c1(0), p.c1(2.5f), p.c1(3), p.c1(0.5f), p.c1(0)}, {1, 3}, {3});
+  p.emit_color(p.one(), noise[1], 3);
+  return p;
+}

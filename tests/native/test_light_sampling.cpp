@@ -117,7 +117,7 @@ std::vector<LightCase> make_cases() {
     LightCase c;
     c.name = "world_uniform";
     c.scene = std::make_unique<Scene>();
-    c.scene->world.color = Spectrum(0.5f);
+    c.scene->world.set_color(Spectrum(0.5f));
     c.scene->world_set = true;
     c.scene->commit();
     c.light = c.scene->lights.world_light();
@@ -135,12 +135,31 @@ std::vector<LightCase> make_cases() {
           px[(size_t(y) * w + x) * 3 + k] = 0.05f + 0.1f * ((x + y) % 3) + (x == 5 && y == 6 ? 20.0f : 0.0f);
     c.scene->images.push_back(
         std::make_unique<Image>(w, h, 3, px.data(), false, Interpolation::Linear, Extension::Repeat));
-    c.scene->world.color = Spectrum(1.0f);
-    c.scene->world.image = c.scene->images.back().get();
-    c.scene->world.rotation_z = 0.3f;
+    // Background(Environment Texture(the direction rotated 0.3 about Z)).
+    ShaderCode p;
+    const float cr = std::cos(0.3f), sr = std::sin(0.3f);
+    const uint32_t object = p.tex_coord({cr, -sr, 0, 0, sr, cr, 0, 0, 0, 0, 1, 0})[3];
+    p.emit_color(p.one(), p.environment(object, 0));
+    c.scene->world.set_program(std::make_shared<const Program>(p.code, p.k, p.registers, 1), 0);
     c.scene->world_set = true;
     c.scene->commit();
     c.light = c.scene->lights.world_light();
+    // Bins around a tilted pole: the map's cell edges (equirectangular) then cross them, which the
+    // adaptive quadrature of the expected counts handles, rather than lying exactly on bin edges.
+    c.pole = normalize(Vec3(0.1f, 0.2f, 1));
+    cs.push_back(std::move(c));
+  }
+  {
+    // A procedural world: its map (32 x 16) decides the pdf, the program the radiance.
+    LightCase c;
+    c.name = "world_procedural";
+    c.scene = std::make_unique<Scene>();
+    const ShaderCode p = noise_world();
+    c.scene->world.set_program(std::make_shared<const Program>(p.code, p.k, p.registers, 0), 32);
+    c.scene->world_set = true;
+    c.scene->commit();
+    c.light = c.scene->lights.world_light();
+    c.pole = normalize(Vec3(0.1f, 0.2f, 1));
     cs.push_back(std::move(c));
   }
   // An emissive triangle (a mesh light).

@@ -61,7 +61,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
         materials.camera = camera_table(depsgraph, camera_object)
     meshes = MeshExporter(depsgraph, core_scene, report, materials)
     try:
-        summary["world"] = export_world(depsgraph, core_scene, report, images)
+        summary["world"] = export_world(depsgraph, core_scene, report, images, camera=materials.camera)
     except core.LanternError as e:  # a value the core refuses (not finite): no world, the render goes on
         if e.status != core.ERROR_INVALID_ARGUMENT:
             raise

@@ -1,64 +1,37 @@
-"""World export: Background colour or equirectangular Environment Texture, times strength; the
-World Output's Volume as a medium filling the scene."""
+"""World export: the World Output's Surface compiled into a shader program (export/nodes/, as
+materials are), its importance map resolution and camera visibility; the World Output's Volume
+as a medium filling the scene."""
 
-import math
-
-from .material import follow, emissive_nodes, volume_keywords, without_emission
+from . import nodes
+from .material import emissive_nodes, volume_keywords, without_emission
 
 _CAMERA_DEFAULT = 1
 
 
-def _visibility(world):
+def _visibility(world, warn):
+    """Camera visibility (the core's flag); the other kinds are not honoured yet: said so."""
     vis = getattr(world, "cycles_visibility", None)
-    return int(bool(vis.camera)) if vis is not None else _CAMERA_DEFAULT
+    if vis is None:
+        return _CAMERA_DEFAULT
+    hidden = [k for k in ("diffuse", "glossy", "transmission", "scatter") if not getattr(vis, k, True)]
+    if hidden:
+        warn("ray visibility (%s off) is not supported yet; those rays see the world" % ", ".join(hidden))
+    return int(bool(vis.camera))
 
 
-def _value(socket):
-    """Constant of a socket, from its own value or an RGB/Value node; None if unsupported."""
-    out = follow(socket)
-    if out is None:
-        v = socket.default_value
-        return tuple(v)[:3] if hasattr(v, "__len__") else float(v)
-    if out.node.type in {'RGB', 'VALUE'}:
-        v = out.default_value
-        return tuple(v)[:3] if hasattr(v, "__len__") else float(v)
-    return None
+def _map_resolution(world):
+    """Cycles' world sampling map: its width for 'MANUAL', 0 (the core's automatic rule: the largest
+    Environment Texture image, else 1024) otherwise. 'NONE' (no importance sampling) changes only
+    the noise, not the image: it is sampled as 'AUTOMATIC'."""
+    settings = getattr(world, "cycles", None)
+    if settings is None or getattr(settings, "sampling_method", 'AUTOMATIC') != 'MANUAL':
+        return 0
+    return int(settings.sample_map_resolution)
 
 
-def _rotation_z(tex, warn):
-    """Z rotation of a Mapping node between Texture Coordinate and the environment texture."""
-    out = follow(tex.inputs["Vector"])
-    if out is None:
-        return 0.0
-    node = out.node
-    if node.type == 'TEX_COORD':
-        return 0.0
-    if node.type != 'MAPPING':
-        warn("environment texture vector from '%s' is not supported, ignored" % node.name)
-        return 0.0
-    src = follow(node.inputs["Vector"])
-    if src is not None and src.node.type != 'TEX_COORD':
-        warn("Mapping node '%s' input from '%s' is not supported, ignored"
-             % (node.name, src.node.name))
-    rot = node.inputs["Rotation"]
-    loc = node.inputs.get("Location")
-    scale = node.inputs.get("Scale")
-    if any(s is not None and follow(s) is not None for s in (rot, loc, scale)):
-        warn("Mapping node '%s' with linked inputs is not supported, ignored" % node.name)
-        return 0.0
-    r = rot.default_value
-    if abs(r[0]) > 1e-6 or abs(r[1]) > 1e-6 or \
-            (loc is not None and node.vector_type in {'POINT', 'TEXTURE'}
-             and any(abs(c) > 1e-6 for c in loc.default_value)) or \
-            (scale is not None and any(abs(c - 1.0) > 1e-6 for c in scale.default_value)):
-        warn("Mapping node '%s': only a rotation about Z is supported, the rest is ignored"
-             % node.name)
-    # 'TEXTURE' mapping applies the inverse transform.
-    return -r[2] if node.vector_type == 'TEXTURE' else r[2]
-
-
-def export_world(depsgraph, core_scene, report, images):
-    """Sets the world; returns a short description of what was exported."""
+def export_world(depsgraph, core_scene, report, images, camera=None):
+    """Sets the world; returns a short description of what was exported. camera: the camera
+    table of Texture Coordinate's Camera and Window outputs (camera.camera_table), or None."""
     world = depsgraph.scene_eval.world
     if world is None:
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=1)
@@ -67,59 +40,27 @@ def export_world(depsgraph, core_scene, report, images):
     def warn(msg):
         report({'WARNING'}, "World '%s': %s" % (world.name, msg))
 
-    visibility = _visibility(world)
-    plain = dict(color=tuple(world.color[:3]), strength=1.0, visibility=visibility)
-
+    visibility = _visibility(world, warn)
     if not world.use_nodes or world.node_tree is None:
-        core_scene.set_world(**plain)
+        core_scene.set_world(color=tuple(world.color[:3]), strength=1.0, visibility=visibility)
         return "color"
-
-    def fallback(msg):
-        warn(msg + ", using the world colour")
-        core_scene.set_world(**plain)
-        return "color"
-
     output = world.node_tree.get_output_node('CYCLES')
+    c = nodes.Compiler(world.name, images, warn, camera=camera, world=True)
     if output is None:
+        warn("no active World Output node, rendered black")
+    else:
+        try:
+            c.compile_surface(output)
+        except nodes.Unsupported as e:
+            warn("%s; the world is left out (black)" % e)
+            core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=visibility)
+            return "none"
+    if c.bad:
+        warn("left out: %s not finite; rendered black" % ", ".join(c.bad))
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=visibility)
         return "none"
-    out = follow(output.inputs["Surface"])
-    if out is None:
-        core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=visibility)
-        return "none"
-    bg = out.node
-    if bg.type != 'BACKGROUND':
-        return fallback("node '%s' (%s) on the Surface output is not supported"
-                        % (bg.name, bg.bl_idname))
-
-    strength = _value(bg.inputs["Strength"])
-    if strength is None:
-        warn("Background strength from a '%s' node is not supported, using its value"
-             % follow(bg.inputs["Strength"]).node.name)
-        strength = float(bg.inputs["Strength"].default_value)
-
-    color_in = bg.inputs["Color"]
-    color = _value(color_in)
-    if color is not None:
-        core_scene.set_world(color=color, strength=strength, visibility=visibility)
-        return "color"
-
-    src = follow(color_in)
-    tex = src.node
-    if tex.type != 'TEX_ENVIRONMENT' or src.name != "Color":
-        return fallback("node '%s' (%s) feeding the Background colour is not supported"
-                        % (tex.name, tex.bl_idname))
-    if tex.projection != 'EQUIRECTANGULAR':
-        return fallback("environment texture '%s': %s projection is not supported"
-                        % (tex.name, tex.projection))
-    image_id = images.export(tex.image, tex.interpolation, 'REPEAT',
-                             "World '%s', environment texture '%s'" % (world.name, tex.name))
-    if image_id is None:
-        return fallback("environment texture '%s' has no usable image" % tex.name)
-    rotation = _rotation_z(tex, warn)
-    core_scene.set_world(color=(1.0, 1.0, 1.0), strength=strength, image=image_id,
-                         rotation_z=math.fmod(rotation, 2.0 * math.pi), visibility=visibility)
-    return "environment"
+    core_scene.set_world_program(c.program(), map_resolution=_map_resolution(world), visibility=visibility)
+    return "nodes"
 
 
 def export_world_volume(depsgraph, core_scene, report):

@@ -29,8 +29,10 @@ extern "C" {
  * lt_render_wait reports a failed render; lt_scene_begin/end_image; image memory in lt_scene_stats;
  * lt_render_status.unestimated_pixels; 6: lt_abi_layout; default samples 64 (the add-on's);
  * 7: materials are shader programs; meshes carry their texture space and attributes
- * (lt_mesh_attribute), instances their Object Info values and attributes, images their alpha. */
-#define LT_ABI_VERSION 7
+ * (lt_mesh_attribute), instances their Object Info values and attributes, images their alpha;
+ * 8: cubic interpolation; lt_scene_add_image_file (files read by the core); pass and strategy
+ * rows read in bands; lt_scene_set_world_program and the world map's size in lt_scene_stats. */
+#define LT_ABI_VERSION 8
 
 enum lt_status {
   LT_OK = 0,
@@ -243,7 +245,7 @@ typedef struct lt_camera_desc {
 LT_API int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* desc);
 
 /* World: colour x strength, optionally multiplied by an equirectangular image (image >= 0),
- * rotated about Z by rotation_z. */
+ * rotated about Z by rotation_z (the core makes it a world program, as below). */
 typedef struct lt_world_desc {
   float color[3];
   float strength;
@@ -252,6 +254,17 @@ typedef struct lt_world_desc {
   unsigned visibility; /* camera visibility of the background */
 } lt_world_desc;
 LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
+/* World: the World's Surface as a shader program (lt_shader_program, compiled as a material's),
+ * run for each direction a ray leaves the scene in: what it emits (Emission closures: Blender's
+ * Background and Emission nodes, summed with their Mix/Add Shader weights) is the radiance
+ * arriving from there; BSDF closures give none. The shading point is Cycles' for the background (P and
+ * Generated the direction, N and I its reverse, Light Path flags of the ray that escaped).
+ * A program that folds to a constant is a constant world (no table); otherwise light sampling
+ * follows a map of the program baked on an equirectangular grid of map_resolution x
+ * map_resolution / 2 pixels (0: automatic, the largest Environment Texture image's size, else
+ * 1024 x 512; at most 8192 wide). visibility: LT_VISIBLE_CAMERA, whether camera rays see it. */
+LT_API int lt_scene_set_world_program(lt_scene* scene, const lt_shader_program* program, int map_resolution,
+                                      unsigned visibility);
 
 /* ---- volumes (docs/volumes.md) ---------------------------------------------------------------
  * A volume is a list of components, each a volume shader node with Cycles' formulas: Principled
@@ -344,9 +357,10 @@ typedef struct lt_scene_stats {
   uint64_t light_sampler_builds;
   uint64_t emissive_triangles;
   uint64_t emissive_instances;
-  uint64_t image_bytes;  /* memory the scene's images hold */
-  uint64_t image_texels; /* and their texels, all images */
-  uint64_t byte_images;  /* images stored at 8 bits per channel */
+  uint64_t image_bytes;                       /* memory the scene's images hold */
+  uint64_t image_texels;                      /* and their texels, all images */
+  uint64_t byte_images;                       /* images stored at 8 bits per channel */
+  uint64_t world_map_width, world_map_height; /* the world's sampling map (0 x 0: none, a constant world) */
 } lt_scene_stats;
 LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);
 

@@ -181,6 +181,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_scene_stats, image_bytes),
     LT_FIELD(lt_scene_stats, image_texels),
     LT_FIELD(lt_scene_stats, byte_images),
+    LT_FIELD(lt_scene_stats, world_map_width),
+    LT_FIELD(lt_scene_stats, world_map_height),
 
     LT_CONST(lt_integrator, LT_INTEGRATOR_PATH),
     LT_CONST(lt_integrator, LT_INTEGRATOR_BIDIRECTIONAL),

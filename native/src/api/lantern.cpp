@@ -20,6 +20,8 @@
 #include "scene/lights/point.h"
 #include "scene/lights/sun.h"
 #include "scene/scene.h"
+#include "shading/inputs.h"
+#include "shading/shaders.h"
 
 namespace {
 
@@ -148,16 +150,38 @@ lt::Interpolation interpolation(const lt_image_desc& d) {
                                               : lt::Interpolation::Linear;
 }  // 268 M pixels: beyond this a render is a mistake
 
-lt::Material to_material(const lt_scene* scene, const lt_shader_program* p) {
+lt::Program to_program(const lt_scene* scene, const lt_shader_program* p) {
   require(p->code_words >= 0 && p->code_words <= lt::kMaxProgramWords,
           "shader program length " + std::to_string(p->code_words) + " is out of range");
   require(p->constant_count >= 0 && p->constant_count <= lt::kMaxProgramWords,
           "shader program constant count " + std::to_string(p->constant_count) + " is out of range");
   require(p->code_words == 0 || p->code, "shader program code is NULL");
   require(p->constant_count == 0 || p->constants, "shader program constants are NULL");
-  return lt::Material(lt::Program(std::vector<uint32_t>(p->code, p->code + p->code_words),
-                                  std::vector<float>(p->constants, p->constants + p->constant_count), p->registers,
-                                  scene->scene.images.size()));
+  return lt::Program(std::vector<uint32_t>(p->code, p->code + p->code_words),
+                     std::vector<float>(p->constants, p->constants + p->constant_count), p->registers,
+                     scene->scene.images.size());
+}
+
+lt::Material to_material(const lt_scene* scene, const lt_shader_program* p) {
+  return lt::Material(to_program(scene, p));
+}
+
+// lt_world_desc's image as a world program: Emission(weight scale, colour Environment Texture of
+// the direction rotated about Z by rotation (the Texture Coordinate's Object output with that
+// matrix), strength 1).
+lt::Program image_world_program(const lt_scene* scene, int image, float rotation, const lt::Vec3& scale) {
+  const float c = std::cos(rotation), s = std::sin(rotation);
+  std::vector<float> k = {12,      c,       -s,      0, 0, s, c, 0, 0, 0, 0, 1, 0,  // object table (rows)
+                          0,                                                        // camera table: none
+                          scale.x, scale.y, scale.z, 1};
+  const uint32_t v3 = 3u << 24, f1 = 1u << 24;
+  std::vector<uint32_t> code = {lt::kOpTexCoord, 7u << 8 | 3u << 16};
+  for (uint32_t r = 0; r < 7; ++r) code.push_back(v3 | 3 * r);
+  code.insert(code.end(), {0u, 13u, 0u});
+  code.insert(code.end(),
+              {lt::kOpEnvironment, 1u | 2u << 8 | 3u << 16, v3 | 9u, v3 | 21u, f1 | 24u, uint32_t(image), 0u, 0u});
+  code.insert(code.end(), {lt::kOpEmission, 3u, lt::kConstBit | v3 | 14u, v3 | 21u, lt::kConstBit | f1 | 17u});
+  return lt::Program(std::move(code), std::move(k), 25, scene->scene.images.size());
 }
 
 }  // namespace
@@ -492,6 +516,8 @@ int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out) {
       out->image_texels += uint64_t(im->width()) * im->height();
       out->byte_images += im->is_byte() ? 1 : 0;
     }
+    out->world_map_width = uint64_t(scene->scene.world.map_width());
+    out->world_map_height = uint64_t(scene->scene.world.map_height());
   });
 }
 
@@ -541,12 +567,32 @@ int lt_scene_set_world(lt_scene* scene, const lt_world_desc* d) {
             "world colour, strength and rotation must be finite");
     require(d->image >= -1 && d->image < int(scene->scene.images.size()),
             "world refers to image " + std::to_string(d->image) + ", which does not exist");
+    const lt::Vec3 color =
+        lt::vmax(lt::Vec3(0.0f), lt::Vec3(d->color[0], d->color[1], d->color[2]) * std::max(0.0f, d->strength));
+    std::shared_ptr<const lt::Program> program;
+    if (d->image >= 0)
+      program = std::make_shared<const lt::Program>(image_world_program(scene, d->image, d->rotation_z, color));
     begin_edit(scene);
     lt::World& w = scene->scene.world;
-    w.color = lt::vmax(lt::Vec3(0.0f), lt::Vec3(d->color[0], d->color[1], d->color[2]) * std::max(0.0f, d->strength));
-    w.image = d->image >= 0 ? scene->scene.images[d->image].get() : nullptr;
-    w.rotation_z = d->rotation_z;
+    if (program)
+      w.set_program(std::move(program), 0);
+    else
+      w.set_color(color);
     w.camera_visible = (d->visibility & LT_VISIBLE_CAMERA) != 0;
+    scene->scene.world_set = true;
+  });
+}
+
+int lt_scene_set_world_program(lt_scene* scene, const lt_shader_program* p, int map_resolution, unsigned visibility) {
+  return guarded([&] {
+    require(scene && p, "lt_scene_set_world_program: NULL argument");
+    require(map_resolution >= 0 && map_resolution <= 8192,
+            "world map resolution " + std::to_string(map_resolution) + " is out of range (0 to 8192)");
+    auto program = std::make_shared<const lt::Program>(to_program(scene, p));  // validated before anything changes
+    begin_edit(scene);
+    lt::World& w = scene->scene.world;
+    w.set_program(std::move(program), map_resolution);
+    w.camera_visible = (visibility & LT_VISIBLE_CAMERA) != 0;
     scene->scene.world_set = true;
   });
 }

@@ -39,6 +39,26 @@ inline Vec3 sample_uniform_sphere(Vec2 u) {
 }
 inline float uniform_sphere_pdf() { return kInv4Pi; }
 
+// Blender's equirectangular projection (Cycles' direction_to_equirectangular, kernel/camera/
+// projection.h): +X at the image centre, +Z at the top; a zero direction maps to (0, 0).
+inline Vec2 direction_to_equirectangular(const Vec3& d) {
+  const float l = length(d);
+  if (!(l > 0)) return {0, 0};
+  return {(std::atan2(d.y, d.x) - kPi) / (-2 * kPi), 1 - std::acos(clamp(d.z / l, -1.0f, 1.0f)) * kInvPi};
+}
+inline Vec3 equirectangular_to_direction(Vec2 uv) {
+  const float phi = kPi - 2 * kPi * uv.x, theta = kPi * (1 - uv.y);
+  const float s = std::sin(theta);
+  return {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
+}
+// Cycles' direction_to_mirrorball: a mirror ball seen from -Y (the image of a unit direction).
+inline Vec2 direction_to_mirrorball(Vec3 d) {
+  d.y -= 1;
+  const float div = 2 * std::sqrt(std::max(-0.5f * d.y, 0.0f));
+  if (div > 0) d = d / div;
+  return {0.5f * (d.x + 1), 0.5f * (d.z + 1)};
+}
+
 // Uniform direction in the cone around +Z with the given cos of the half angle.
 inline Vec3 sample_uniform_cone(Vec2 u, float cos_max) {
   float cos_theta = 1 - u.x * (1 - cos_max);

@@ -287,8 +287,14 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
             reverse_density(count, v);
             emitter_reached(path, count + 1, le);
           };
-          if (lights_.world_light() >= 0 && (!background || scene_.world.camera_visible))
-            reach(lights_.world_light(), scene_.world.radiance(ray.d));
+          if (lights_.world_light() >= 0 && (!background || scene_.world.camera_visible)) {
+            ShadingContext wc = world_context(ray.d);
+            Bounces b;  // a camera ray stays one through transparent passes, as at surfaces here
+            b.total = bounces;
+            describe_ray(b, visibility, &wc);
+            wc.transparent_depth = transparent;
+            reach(lights_.world_light(), scene_.world.radiance(wc));
+          }
           lights_.escaped_suns(ray.d, visibility, reach);
         }
       }

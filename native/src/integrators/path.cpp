@@ -129,8 +129,11 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
     } else if (!found) {
       bool background = b.from_camera();
       if (!(background && s.transparent_background)) {
-        if (lights.world_light() >= 0 && (!background || scene.world.camera_visible))
-          add(beta * scene.world.radiance(ray.d) * mis_emitter(lights.world_light(), ray.d, INFINITY));
+        if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
+          ShadingContext wc = world_context(ray.d);
+          describe_ray(b, visibility, &wc);
+          add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY));
+        }
         lights.escaped_suns(ray.d, visibility, [&](int i, const Spectrum& radiance) {
           add(beta * radiance * mis_emitter(i, ray.d, INFINITY));
         });

@@ -35,8 +35,8 @@ void Scene::commit() {
     emissive_triangles_ += all.size() - before;
     emissive_instances_ += all.size() > before;
   }
+  if (world_set) world.build(images);
   if (world_set && !world.black()) {
-    if (world.image) world.build_distribution();
     Light w;
     w.type = LightType::World;
     all.push_back(w);

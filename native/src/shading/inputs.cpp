@@ -36,6 +36,7 @@ const OpSignature kSignatures[] = {
     {"v", "", "", false},               // set normal
     {"fffv", "v", "i", false},          // displacement
     {"vff", "v", "ii", false},          // vector displacement
+    {"v", "vf", "gii", false},          // environment
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -68,18 +69,26 @@ void tex_coord(const Instr& in, Machine& m) {
   m.set(in.out[3], object[0] == 12 ? affine(object + 1, c.P) : c.object_P);
   const float* camera = m.k + in.param[1];
   if (camera[0] == 28) {
-    m.set(in.out[4], affine(camera + 1, c.P));
+    // A world ray's P is its direction: Cycles' Camera and Window read the point that far from the
+    // camera (svm_node_tex_coord, camera_world_to_ndc). The camera's position: -R^T t.
+    const float* r = camera + 1;
+    const Vec3 P = c.background
+                       ? c.P - Vec3(r[0] * r[3] + r[4] * r[7] + r[8] * r[11], r[1] * r[3] + r[5] * r[7] + r[9] * r[11],
+                                    r[2] * r[3] + r[6] * r[7] + r[10] * r[11])
+                       : c.P;
+    m.set(in.out[4], affine(camera + 1, P));
     // Cycles' Window output: the NDC position (x, y in [0, 1] across the frame), z 0.
     const float* p = camera + 13;
-    const float x = p[0] * c.P.x + p[1] * c.P.y + p[2] * c.P.z + p[3];
-    const float y = p[4] * c.P.x + p[5] * c.P.y + p[6] * c.P.z + p[7];
-    const float w = p[12] * c.P.x + p[13] * c.P.y + p[14] * c.P.z + p[15];
+    const float x = p[0] * P.x + p[1] * P.y + p[2] * P.z + p[3];
+    const float y = p[4] * P.x + p[5] * P.y + p[6] * P.z + p[7];
+    const float w = p[12] * P.x + p[13] * P.y + p[14] * P.z + p[15];
     m.set(in.out[5], w != 0 ? Vec3(x / w, y / w, 0.0f) : Vec3(0.0f));
   } else {
     m.set(in.out[4], Vec3(0.0f));
     m.set(in.out[5], Vec3(0.0f));
   }
-  m.set(in.out[6], 2.0f * dot(c.N, c.I) * c.N - c.I);
+  // Without an object Cycles' Reflection is I.
+  m.set(in.out[6], c.background ? c.I : 2.0f * dot(c.N, c.I) * c.N - c.I);
 }
 
 // An attribute at the shading point: 4 floats (unused ones 0, alpha 1) and its component count
@@ -394,7 +403,7 @@ void vector_displacement(const Instr& in, Machine& m) {
 }  // namespace
 
 const OpSignature* inputs_family_signature(uint32_t op) {
-  if (op < kOpTexCoord || op > kOpVectorDisplacement) return nullptr;
+  if (op < kOpTexCoord || op > kOpEnvironment) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
@@ -430,6 +439,16 @@ void exec_inputs_family(const Instr& in, Machine& m) {
       const Vec3 p = m.v(in.in[0]);
       m.set(in.out[0], image.lookup(Vec2{p.x, p.y}, in.param[1] != 0));
       m.set(in.out[1], image.lookup_alpha(Vec2{p.x, p.y}));
+      break;
+    }
+    case kOpEnvironment: {
+      const Image& image = *(*m.images)[in.param[0]];
+      const Vec3 d = m.v(in.in[0]);
+      const float l = length(d);
+      const Vec3 co = l > 0 && std::isfinite(l) ? d / l : Vec3(0.0f);
+      const Vec2 uv = in.param[2] == 1 ? direction_to_mirrorball(co) : direction_to_equirectangular(co);
+      m.set(in.out[0], image.lookup(uv, in.param[1] != 0));
+      m.set(in.out[1], image.lookup_alpha(uv));
       break;
     }
     case kOpFresnel: {

@@ -75,6 +75,10 @@ enum InputOp : uint32_t {
   // scale f; out: displacement v; params: space (0 tangent, 1 object, 2 world), the active UV
   // map's tangent attribute id.
   kOpVectorDisplacement,
+  // Environment Texture (Cycles' svm_node_tex_environment): in: vector v (normalised here); out:
+  // color v, alpha f; params: image id, unassociate (as Image's), projection (0 equirectangular,
+  // 1 mirror ball).
+  kOpEnvironment,
 };
 
 }  // namespace lt

@@ -214,6 +214,28 @@ bool Program::may_be_transparent() const {
   return false;
 }
 
+bool Program::constant_emission(const std::vector<std::unique_ptr<Image>>& images, Spectrum* emitted) const {
+  for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
+    Instr in = decode(w);
+    w += words_of(in);
+    if (in.op != kOpEmission) return false;
+    for (int k = 0; k < in.n_in; ++k)
+      if (!(in.in[k] & kConstBit)) return false;
+  }
+  *emitted = run(ShadingContext(), images, nullptr, nullptr);
+  return true;
+}
+
+std::vector<uint32_t> Program::environment_images() const {
+  std::vector<uint32_t> ids;
+  for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
+    Instr in = decode(w);
+    w += words_of(in);
+    if (in.op == kOpEnvironment) ids.push_back(in.param[0]);
+  }
+  return ids;
+}
+
 bool Program::emission_estimate(float* estimate) const {
   bool emits = false;
   float best = 0;

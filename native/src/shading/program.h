@@ -48,6 +48,7 @@ struct ShadingContext {
   Vec3 object_P;   // object-space position
   Vec3 object_N;   // object-space N
   bool backfacing = false;
+  bool background = false;  // a world ray's point (world_context): no object, P is the direction
   // Bump (add_differentials): the ray footprint (Cycles' compact sd->dP) and what the shading point
   // changes by when moved along the footprint's two differentials in the surface (Cycles'
   // differential_from_compact(Ng, dP)): [0] dx, [1] dy.
@@ -179,6 +180,11 @@ class Program {
   // Whether the program may give a Transparent lobe (Transparent, Holdout, Principled Alpha): then
   // shadow rays look at it (Cycles' transparent shadows).
   bool may_be_transparent() const;
+  // Whether the program is emission closures with constant inputs only (a constant world): then
+  // *emitted is what it emits everywhere.
+  bool constant_emission(const std::vector<std::unique_ptr<Image>>& images, Spectrum* emitted) const;
+  // The images its Environment Texture instructions read (a world's automatic map resolution).
+  std::vector<uint32_t> environment_images() const;
 
  private:
   std::vector<uint32_t> code_;

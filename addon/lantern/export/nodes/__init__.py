@@ -1,7 +1,7 @@
-"""Material node trees compiled into shader programs for the core's register machine
+"""Material and World node trees compiled into shader programs for the core's register machine
 (native/src/shading/program.h documents the encoding).
 
-The compiler walks back from the Material Output's Surface socket: node groups are flattened
+The compiler walks back from the Material (or World) Output's Surface socket: node groups are flattened
 (a group node's inside is compiled in the scope of that group node), reroutes and muted nodes are
 followed, each node is compiled once per scope, and the core folds the instructions whose inputs
 are all constant. Shader sockets are compiled with the weight Mix Shader gives them (the closure
@@ -53,12 +53,19 @@ def _is_vector_type(t):
     return t in ('RGBA', 'VECTOR')
 
 
-class Compiler:
-    """Compiles one material's surface. `warn(text)` receives messages naming the node; the
-    material's name is added by the caller."""
+# Shader nodes that mean something in a world: Cycles reads only the emission of a world's
+# closures (shader_background_eval); Background and Emission are the same closure there.
+WORLD_SHADERS = {'BACKGROUND', 'EMISSION', 'MIX_SHADER', 'ADD_SHADER'}
 
-    def __init__(self, material_name, images, warn, camera=None):
+
+class Compiler:
+    """Compiles one material's (or, with world=True, one world's) surface. `warn(text)` receives
+    messages naming the node; the material's or world's name is added by the caller."""
+
+    def __init__(self, material_name, images, warn, camera=None, world=False):
         self.material_name = material_name
+        self.world = world
+        self.subject = ("World '%s'" if world else "Material '%s'") % material_name
         self.images = images
         self._warn = warn
         self.camera = camera  # 28 floats for Texture Coordinate's Camera and Window, or None
@@ -325,6 +332,10 @@ class Compiler:
         self._scope = scope
         try:
             fn = SHADER_NODES.get(node.type)
+            if self.world and node.type not in WORLD_SHADERS:
+                self.warn("shader node '%s' (%s) gives no light in a world (Cycles uses only Background and "
+                          "Emission there); left out" % (node.name, node.bl_idname))
+                return
             if fn is None:
                 self.warn("shader node '%s' (%s) is not supported; replaced by grey diffuse (0.5)"
                           % (node.name, node.bl_idname))
@@ -343,7 +354,7 @@ class Compiler:
         self.emit(op, inputs, params=params)
 
     def compile_surface(self, output_node, displacement_method='BUMP'):
-        """The program for a Material Output's Surface input, after its Displacement as bump."""
+        """The program for a Material (or World) Output's Surface input, after its Displacement as bump."""
         disp = output_node.inputs.get("Displacement")
         if disp is not None and self.linked(disp):
             self.displacement_bump(disp, displacement_method)

@@ -87,7 +87,7 @@ _PROJECTIONS = {'BOX': 0, 'SPHERE': 1, 'TUBE': 2}  # Flat: kOpImage
 
 @register('TEX_IMAGE')
 def image_texture(c, node, want):
-    where = "Material '%s', image texture '%s'" % (c.material_name, node.name)
+    where = "%s, image texture '%s'" % (c.subject, node.name)
     image_id = c.images.export(node.image, node.interpolation, node.extension, where, alpha=True) \
         if node.image is not None else None
     if image_id is None:
@@ -141,3 +141,29 @@ def vector_displacement(c, node, want):
     tid = registry(c).id('tangent', '') if space == 0 else 0
     ins = [c.vector(node.inputs["Vector"]), c.float(node.inputs["Midlevel"]), c.float(node.inputs["Scale"])]
     return c.emit(ops.VECTOR_DISPLACEMENT, ins, [("Displacement", 3)], params=[space, tid])
+
+
+_ENV_PROJECTIONS = {'EQUIRECTANGULAR': 0, 'MIRROR_BALL': 1}
+
+
+@register('TEX_ENVIRONMENT')
+def environment_texture(c, node, want):
+    """Cycles' svm_node_tex_environment: the image seen along the (normalised) Vector, by default
+    the Position (in a world, the direction of the ray)."""
+    where = "%s, environment texture '%s'" % (c.subject, node.name)
+    projection = _ENV_PROJECTIONS.get(node.projection)
+    if projection is None:
+        c.warn("environment texture '%s': %s projection is not supported; Equirectangular is used"
+               % (node.name, node.projection))
+        projection = 0
+    # Cycles gives environment images no extension setting: they repeat.
+    image_id = c.images.export(node.image, node.interpolation, getattr(node, "extension", 'REPEAT'), where,
+                               alpha=True) if node.image is not None else None
+    if image_id is None:
+        if node.image is None:
+            c.warn("environment texture '%s' has no image; it renders magenta (as Cycles)" % node.name)
+        return {"Color": c.const(MAGENTA), "Alpha": c.const(1.0)}
+    vec = c.vector(node.inputs["Vector"], default=c.geometry()["Position"])
+    outputs = c.emit(ops.ENVIRONMENT, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id, 0, projection])
+    c.on_read(outputs["Alpha"], len(c.code) - 2)
+    return outputs

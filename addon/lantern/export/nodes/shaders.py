@@ -31,7 +31,9 @@ def add_shader(c, node, weight):
     c.shader(node.inputs[1], weight)
 
 
-@register_shader('EMISSION')
+# Cycles' background_setup and emission_setup are the same closure (kernel/closure/emissive.h): a
+# Background node emits colour x strength, in a world or on a surface.
+@register_shader('EMISSION', 'BACKGROUND')
 def emission(c, node, weight):
     c.closure(ops.EMISSION, [weight, c.color(node.inputs["Color"]), c.float(node.inputs["Strength"])])
 

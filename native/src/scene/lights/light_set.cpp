@@ -28,8 +28,7 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Bounds
         p *= kPi * scene_radius_ * scene_radius_;
         break;
       case LightType::World: {
-        float mean = average(world->color);
-        if (world->image) mean *= world->image_mean;
+        const float mean = world->mean();
         p = mean * 4 * kPi * kPi * scene_radius_ * scene_radius_;
         world_light_ = int(i);
         break;

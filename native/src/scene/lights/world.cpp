@@ -1,50 +1,87 @@
 #include "scene/lights/world.h"
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
 namespace lt {
 
-namespace {
-
-// Equirectangular mapping of Blender's Environment Texture: +X at the image centre, +Z at the top.
-Vec2 direction_to_equirect(const Vec3& d) {
-  float u = (std::atan2(d.y, d.x) - kPi) / (-2 * kPi);
-  float v = 1 - std::acos(clamp(d.z, -1.0f, 1.0f)) * kInvPi;
-  return {u, v};
-}
-Vec3 equirect_to_direction(Vec2 uv, float* sin_theta) {
-  float phi = kPi - 2 * kPi * uv.x;
-  float theta = kPi * (1 - uv.y);
-  *sin_theta = std::sin(theta);
-  return {*sin_theta * std::cos(phi), *sin_theta * std::sin(phi), std::cos(theta)};
-}
-Vec3 rotate_z(const Vec3& d, float angle) {
-  float c = std::cos(angle), s = std::sin(angle);
-  return {c * d.x - s * d.y, s * d.x + c * d.y, d.z};
+ShadingContext world_context(const Vec3& dir) {
+  ShadingContext c;
+  c.P = c.generated = c.object_P = dir;
+  c.N = c.Ng = c.I = c.object_N = -dir;
+  c.tangent = Vec3(0.0f);
+  c.uv = Vec2{0, 0};
+  c.bary = Vec2{0, 0};
+  c.background = true;
+  c.camera_ray = false;
+  return c;
 }
 
-}  // namespace
-
-Spectrum World::radiance(const Vec3& dir) const {
-  if (!image) return color;
-  return color * image->lookup(direction_to_equirect(rotate_z(dir, rotation_z)));
+void World::set_color(const Spectrum& c) {
+  color_ = c;
+  program_.reset();
+  built_ = false;
 }
 
-void World::build_distribution() {
-  const Image& img = *image;
-  std::vector<float> f(size_t(img.width()) * img.height());
-  for (int y = 0; y < img.height(); ++y) {
-    float sin_theta = std::sin(kPi * (y + 0.5f) / img.height());
-    for (int x = 0; x < img.width(); ++x) f[size_t(y) * img.width() + x] = luminance(img.texel(x, y)) * sin_theta;
+void World::set_program(std::shared_ptr<const Program> program, int map_resolution) {
+  program_ = std::move(program);
+  map_resolution_ = map_resolution;
+  color_ = Spectrum(0.0f);
+  built_ = false;
+}
+
+void World::build(const std::vector<std::unique_ptr<Image>>& images) {
+  images_ = &images;
+  if (built_) return;
+  built_ = true;
+  mean_ = average(abs(color_));
+  map_w_ = map_h_ = 0;
+  distribution_ = Distribution2D();
+  if (!program_) return;
+  Spectrum constant;
+  if (program_->constant_emission(images, &constant)) {
+    // No table for a constant world (it is sampled uniformly).
+    program_.reset();
+    color_ = constant;
+    mean_ = average(abs(color_));
+    return;
   }
-  distribution = Distribution2D(f, img.width(), img.height());
-  double sum = 0, weight = 0;
-  for (int y = 0; y < img.height(); ++y) {
-    float sin_theta = std::sin(kPi * (y + 0.5f) / img.height());
-    for (int x = 0; x < img.width(); ++x) {
-      sum += f[size_t(y) * img.width() + x];
-      weight += sin_theta;
+  int w = map_resolution_, h = map_resolution_ / 2;
+  if (map_resolution_ <= 0) {
+    w = h = 0;
+    for (uint32_t id : program_->environment_images()) {
+      w = std::max(w, images[id]->width());
+      h = std::max(h, images[id]->height());
+    }
+    if (w == 0 || h == 0) w = 1024, h = 512;
+    if (w > 8192) {  // the largest map lantern.h allows (Cycles' Map Resolution maximum)
+      h = std::max(1, int(int64_t(h) * 8192 / w));
+      w = 8192;
     }
   }
-  image_mean = weight > 0 ? float(sum / weight) : 0.0f;
+  w = std::max(w, 1);
+  h = std::max(h, 1);
+  // Cycles' background_cdf: the program at each pixel centre, average colour x sin(theta).
+  std::vector<float> f(size_t(w) * h);
+  tbb::parallel_for(0, h, [&](int y) {
+    const float v = (y + 0.5f) / h, sin_theta = std::sin(kPi * v);
+    for (int x = 0; x < w; ++x) {
+      const Spectrum L = radiance(equirectangular_to_direction({(x + 0.5f) / w, v}));
+      const float a = average(abs(L));
+      f[size_t(y) * w + x] = std::isfinite(a) ? a * sin_theta : 0.0f;
+    }
+  });
+  double sum = 0, weight = 0;
+  for (int y = 0; y < h; ++y) {
+    const double sin_theta = std::sin(kPi * (y + 0.5) / h);
+    for (int x = 0; x < w; ++x) sum += f[size_t(y) * w + x];
+    weight += sin_theta * w;
+  }
+  mean_ = weight > 0 ? float(sum / weight) : 0.0f;
+  distribution_ = Distribution2D(f, w, h);
+  map_w_ = w;
+  map_h_ = h;
 }
 
 bool world_sample(const World& w, Vec2 u, LightSample* s) {
@@ -52,13 +89,12 @@ bool world_sample(const World& w, Vec2 u, LightSample* s) {
   s->n = Vec3(0.0f);
   s->on_surface = false;
   s->delta = false;
-  if (w.image) {
+  if (w.has_map()) {
     float pdf_uv;
-    Vec2 uv = w.distribution.sample(u, &pdf_uv);
-    float sin_theta;
-    Vec3 tex_dir = equirect_to_direction(uv, &sin_theta);
+    const Vec2 uv = w.sample_map(u, &pdf_uv);
+    const float sin_theta = std::sin(kPi * (1 - uv.y));
     if (!(sin_theta > 0) || !(pdf_uv > 0)) return false;
-    s->wi = rotate_z(tex_dir, -w.rotation_z);
+    s->wi = equirectangular_to_direction(uv);
     s->pdf = pdf_uv / (2 * kPi * kPi * sin_theta);
   } else {
     s->wi = sample_uniform_sphere(u);
@@ -69,12 +105,10 @@ bool world_sample(const World& w, Vec2 u, LightSample* s) {
 }
 
 float world_pdf(const World& w, const Vec3& wi) {
-  if (!w.image) return uniform_sphere_pdf();
-  Vec3 tex_dir = rotate_z(wi, w.rotation_z);
-  Vec2 uv = direction_to_equirect(tex_dir);
-  float sin_theta = std::sqrt(tex_dir.x * tex_dir.x + tex_dir.y * tex_dir.y);  // exact near the poles
+  if (!w.has_map()) return uniform_sphere_pdf();
+  const float sin_theta = std::sqrt(wi.x * wi.x + wi.y * wi.y) / length(wi);  // exact near the poles
   if (!(sin_theta > 0)) return 0;
-  return w.distribution.pdf(uv) / (2 * kPi * kPi * sin_theta);
+  return w.map_pdf(direction_to_equirectangular(wi)) / (2 * kPi * kPi * sin_theta);
 }
 
 bool world_sample_emission(const World& w, const Vec3& center, float radius, Vec2 up, Vec2 ud, EmissionSample* e) {

@@ -1,24 +1,68 @@
-// The world background as a light: colour x strength, optionally times an equirectangular image
-// (Blender's Environment Texture), importance sampled by the image's luminance x sin(theta).
+// The world background as a light. Its Surface is a shader program (the add-on compiles the World's
+// node tree as it does materials) whose Background (emission) closures give the radiance arriving
+// from a direction, or, when it folds to a constant, one colour. As Cycles does, a non-constant
+// world is importance sampled from a map of the program baked on an equirectangular grid (weights
+// average(|rgb|) x sin(theta), kernel/light/background.h), while the radiance is always the
+// program's at the exact direction: the map decides only the pdf.
 #pragma once
+
+#include <memory>
+#include <vector>
 
 #include "core/distribution.h"
 #include "scene/lights/light.h"
 #include "shading/image.h"
+#include "shading/program.h"
 
 namespace lt {
 
-struct World {
-  Spectrum color{0.0f};
-  const Image* image = nullptr;
-  float rotation_z = 0;
+// The shading point of a ray that escaped in direction dir (Cycles' shader_setup_from_background:
+// P = dir, N = Ng = I = -dir; Generated and Object are dir). Its Light Path flags are those of
+// light sampling (Cycles' PATH_RAY_EMISSION: no ray kind set); an escaped ray's integrator sets its
+// own (describe_ray).
+ShadingContext world_context(const Vec3& dir);
+
+class World {
+ public:
+  // A constant world: radiance `color` from every direction.
+  void set_color(const Spectrum& c);
+  // A world program (emission closures); map_resolution: the sampling map's width (height half of
+  // it), 0 for automatic: the largest Environment Texture image's size, else 1024 x 512 (Cycles'
+  // world sample_map_resolution and its automatic rule).
+  void set_program(std::shared_ptr<const Program> program, int map_resolution);
+
   bool camera_visible = true;
-  Distribution2D distribution;  // over the image's (u, v), weighted by sin(theta)
-  float image_mean = 1;         // solid-angle mean of the image's luminance (for light picking)
-  Spectrum radiance(const Vec3& dir) const;
-  bool black() const { return is_black(color); }
-  // Builds distribution and image_mean from the image (at commit).
-  void build_distribution();
+
+  // Radiance arriving along -ctx.I (ctx from world_context, with the ray's Light Path flags).
+  Spectrum radiance(const ShadingContext& ctx) const {
+    return program_ ? program_->run(ctx, *images_, nullptr, nullptr) : color_;
+  }
+  // As light sampling sees it (Light Path flags of world_context).
+  Spectrum radiance(const Vec3& dir) const { return radiance(world_context(dir)); }
+  bool black() const { return !program_ && is_black(color_); }
+  // Whether a sampling map is used (false: constant, sampled uniformly over the sphere).
+  bool has_map() const { return program_ != nullptr; }
+  int map_width() const { return map_w_; }
+  int map_height() const { return map_h_; }
+  // Solid-angle mean of average(|radiance|) (light picking).
+  float mean() const { return mean_; }
+
+  // At commit (once after each set_*): folds a constant program into a colour, else bakes the
+  // sampling map.
+  void build(const std::vector<std::unique_ptr<Image>>& images);
+
+  Vec2 sample_map(Vec2 u, float* pdf_uv) const { return distribution_.sample(u, pdf_uv); }
+  float map_pdf(Vec2 uv) const { return distribution_.pdf(uv); }
+
+ private:
+  Spectrum color_{0.0f};
+  std::shared_ptr<const Program> program_;
+  int map_resolution_ = 0;
+  const std::vector<std::unique_ptr<Image>>* images_ = nullptr;
+  int map_w_ = 0, map_h_ = 0;
+  Distribution2D distribution_;  // over the map's (u, v), weighted by sin(theta)
+  float mean_ = 0;
+  bool built_ = false;
 };
 
 bool world_sample(const World& w, Vec2 u, LightSample* s);
