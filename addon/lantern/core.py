@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 7
+ABI_VERSION = 8
 
 # lt_status
 OK = 0
