@@ -747,8 +747,8 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     require(s->min_samples >= 1 && s->min_samples <= (1 << 24), "min samples must be in [1, 16777216]");
     require((s->passes & ~((1u << LT_PASS_COUNT) - 1)) == 0, "passes has bits beyond LT_PASS_COUNT");
     require(s->sample_pattern == LT_PATTERN_SOBOL_OWEN || s->sample_pattern == LT_PATTERN_INDEPENDENT,
-            "unknown sample pattern " + std::to_string(s->sample_pattern) + "; valid: " +
-                lt::abi_enum_names("lt_sample_pattern", "LT_PATTERN_"));
+            "unknown sample pattern " + std::to_string(s->sample_pattern) +
+                "; valid: " + lt::abi_enum_names("lt_sample_pattern", "LT_PATTERN_"));
     lt::RenderSettings rs;
     rs.width = s->width;
     rs.height = s->height;
