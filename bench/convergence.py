@@ -65,12 +65,19 @@ EPS = 1e-2  # relMSE denominator: ref^2 + EPS
 TRIM = 1e-3  # the trimmed relMSE leaves out this fraction of pixels, those of largest error
 SCENES = ("door", "door_bounce", "caustic", "cornell_area")
 # name: (engine, Lantern integrator)
+# name: (engine, Lantern integrator, Lantern sample pattern); --independent adds the last two
+# (the sampler's gain: the same integrators with independent random numbers).
 METHODS = {
-    "PATH": ("LANTERN", "PATH"),
-    "BIDIRECTIONAL": ("LANTERN", "BIDIRECTIONAL"),
-    "CYCLES": ("CYCLES", "PATH"),
+    "PATH": ("LANTERN", "PATH", "SOBOL_OWEN"),
+    "BIDIRECTIONAL": ("LANTERN", "BIDIRECTIONAL", "SOBOL_OWEN"),
+    "CYCLES": ("CYCLES", "PATH", None),
 }
-COLOURS = {"PATH": "tab:blue", "BIDIRECTIONAL": "tab:red", "CYCLES": "tab:green"}
+INDEPENDENT_METHODS = {
+    "PATH_INDEPENDENT": ("LANTERN", "PATH", "INDEPENDENT"),
+    "BIDIRECTIONAL_INDEPENDENT": ("LANTERN", "BIDIRECTIONAL", "INDEPENDENT"),
+}
+COLOURS = {"PATH": "tab:blue", "BIDIRECTIONAL": "tab:red", "CYCLES": "tab:green",
+           "PATH_INDEPENDENT": "tab:cyan", "BIDIRECTIONAL_INDEPENDENT": "tab:orange"}
 # Seeds: method j's rung i uses LADDER_SEED0 + 100 j + i (PATH and BIDIRECTIONAL share their camera
 # paths' random numbers at equal seeds); reference chunk k uses seed 1 + k.
 LADDER_SEED0 = 1000
@@ -92,6 +99,8 @@ def parse_args():
     p.add_argument("--ref-chunks", type=int, default=4)
     p.add_argument("--min-samples", type=int, default=4)
     p.add_argument("--threads", type=int, default=0, help="0: all cores")
+    p.add_argument("--independent", action="store_true",
+                   help="also render PATH and BIDIRECTIONAL with independent random numbers")
     p.add_argument("--analyse-only", action="store_true",
                    help="render nothing: recompute figures and plots from OUT/convergence.json")
     a = p.parse_args(argv)
@@ -135,7 +144,9 @@ class Renderer:
         self.media = render_utils.export(scene)[0].get("media", 0) > 0
 
     def __call__(self, method, samples, seed):
-        engine, integrator = METHODS[method]
+        engine, integrator, pattern = METHODS[method]
+        if pattern:
+            self.scene.lantern.sample_pattern = pattern
         if self.media and integrator == "PATH":
             integrator = "VOLPATH"
         c0 = time.process_time()
@@ -293,9 +304,24 @@ ERRORS = {"relmse": "relmse_corrected", "trimmed": "relmse_trimmed"}
 
 
 def ratios(e):
+    best = [e[m] for m in ("PATH", "BIDIRECTIONAL") if e.get(m) is not None]
     return {"cycles_over_bdpt": ratio(e["CYCLES"], e["BIDIRECTIONAL"]),
             "bdpt_over_path": ratio(e["BIDIRECTIONAL"], e["PATH"]),
-            "cycles_over_path": ratio(e["CYCLES"], e["PATH"])}
+            "cycles_over_path": ratio(e["CYCLES"], e["PATH"]),
+            "cycles_over_best": ratio(e["CYCLES"], min(best) if best else None),
+            # > 1: Sobol-Owen beats independent numbers at equal time (--independent)
+            "path_independent_over_path": ratio(e.get("PATH_INDEPENDENT"), e["PATH"]),
+            "bdpt_independent_over_bdpt": ratio(e.get("BIDIRECTIONAL_INDEPENDENT"), e["BIDIRECTIONAL"])}
+
+
+def per_sample(rows):
+    """Error per sample (relMSE x spp) and cost per sample (CPU s / spp), means over the last
+    three rungs: which of the two moved."""
+    rows = [r for r in rows if r.get("relmse_corrected") is not None][-3:]
+    if not rows:
+        return None
+    return {"relmse_x_spp": sum(r["relmse_corrected"] * r["samples"] for r in rows) / len(rows),
+            "cpu_s_per_spp": sum(r["cpu_seconds"] / r["samples"] for r in rows) / len(rows)}
 
 
 def analyse(res):
@@ -317,6 +343,7 @@ def analyse(res):
     res["equal_time"] = {"seconds": head["time"], "relmse": head["relmse"],
                          "ratios": head["ratios"], "variants": variants,
                          "trim_fraction": TRIM}
+    res["per_sample"] = {m: per_sample(rows) for m, rows in res["methods"].items()}
 
 
 def fmt(x):
@@ -379,6 +406,8 @@ GOALS = {  # scene: (ratio, comparison, bound)
 
 def main():
     args = parse_args()
+    if args.independent:
+        METHODS.update(INDEPENDENT_METHODS)
     if args.analyse_only:
         return reanalyse(args)
     lantern.register()
@@ -428,6 +457,17 @@ def finish(result, args):
             print("%-13s %-13s %7.2f s %17s %17s %17s" % (
                 name, variant, v["time"], *("%s [%s]" % (fmt(r[k]), fmt(rf[k])) for k in (
                     "cycles_over_bdpt", "bdpt_over_path", "cycles_over_path"))))
+    print("\n==== per sample: relMSE x spp, CPU s / spp (last three rungs) ====")
+    for name, res in result["scenes"].items():
+        print("%-13s %s" % (name, "; ".join(
+            "%s %s, %s" % (m, fmt(v["relmse_x_spp"]), fmt(v["cpu_s_per_spp"])) if v else "%s n/a" % m
+            for m, v in res.get("per_sample", {}).items())))
+    print("\n==== Cycles / best Lantern, Sobol-Owen gain (independent / Sobol-Owen), CPU time ====")
+    for name, res in result["scenes"].items():
+        r = res["equal_time"]["variants"]["cpu_relmse"]["ratios"]
+        print("%-13s Cycles/best %s  PATH gain %s  BDPT gain %s" % (
+            name, fmt(r["cycles_over_best"]), fmt(r["path_independent_over_path"]),
+            fmt(r["bdpt_independent_over_bdpt"])))
     for k, v in goals.items():
         print("Goal %s: %s" % (k, {True: "met", False: "not met", None: "n/a"}[v]))
     m = result["machine"]

@@ -524,6 +524,21 @@ def build_glossy_glass(scene):
     add_camera(scene, (0, -5.0, 1.6), (0, 0, 0.45), lens=40.0)
 
 
+def build_world_spheres(scene):
+    """Issue 14's "diffuse and glossy spheres under a constant white world": no lamps, every path
+    lit by the uniform sky, an integrand smooth in the pixel footprint and the first bounce."""
+    set_world(scene, (1.0, 1.0, 1.0), 1.0)
+    assign(add_object(scene, "Floor", mesh_plane("Floor", 12.0)), diffuse("FloorGrey", (0.5, 0.5, 0.5)))
+    spheres = [
+        ("Diffuse", diffuse("SphereDiffuse", (0.8, 0.3, 0.2))),
+        ("GlossyRough", glossy("SphereGlossyR03", (0.8, 0.8, 0.8), 0.3)),
+        ("DiffuseWhite", diffuse("SphereWhite", (0.8, 0.8, 0.8))),
+    ]
+    for i, (name, mat) in enumerate(spheres):
+        assign(add_object(scene, name, mesh_sphere(name, 0.5), (-1.2 + 1.2 * i, 0, 0.5)), mat)
+    add_camera(scene, (0, -4.5, 1.5), (0, 0, 0.4), lens=40.0)
+
+
 def principled(name, color, roughness, specular=0.5, metallic=0.0):
     """A Principled BSDF at Blender's defaults (GGX) but for Base Color, Roughness, Specular and
     Metallic."""
@@ -1536,6 +1551,7 @@ SCENES = {
     "cornell_mesh_light": (build_cornell_mesh_light, (96, 96), 512),
     "glossy_glass": (build_glossy_glass, (96, 96), 128),
     "sun_world": (build_sun_world, (96, 96), 128),
+    "world_spheres": (build_world_spheres, (96, 64), 128),
     "textured": (build_textured, (96, 96), 128),
     "hdri_world": (build_hdri_world, (96, 64), 128),
     "light_path_world": (build_light_path_world, (96, 64), 128),

@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 8
+ABI_VERSION = 9
 
 # lt_status
 OK = 0
@@ -56,6 +56,7 @@ VOLUME_RAY_MARCHING, VOLUME_TRACKING = 0, 1
 VOLUME_PRINCIPLED, VOLUME_SCATTER, VOLUME_ABSORPTION, VOLUME_EMISSION = 0, 1, 2, 3
 MIS_POWER, MIS_BALANCE, MIS_UNIFORM = 0, 1, 2
 FILTER_BOX, FILTER_GAUSSIAN, FILTER_BLACKMAN_HARRIS = 0, 1, 2
+PATTERN_SOBOL_OWEN, PATTERN_INDEPENDENT = 0, 1
 
 # lt_render_state
 STATE_RUNNING, STATE_DONE, STATE_CANCELLED, STATE_FAILED = 0, 1, 2, 3
@@ -259,6 +260,7 @@ class RenderSettings(ctypes.Structure):
         ("min_samples", ctypes.c_int),
         ("passes", ctypes.c_uint),
         ("caller_bytes", ctypes.c_ulonglong),
+        ("sample_pattern", ctypes.c_int),
     ]
 
 

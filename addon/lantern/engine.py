@@ -88,6 +88,7 @@ def render_settings(scene, width, height, border):
         strategy_view_depth=lt.strategy_view_depth if lt.integrator == 'BIDIRECTIONAL' else 0,
         volume_bounces=lt.volume_bounces, volume_estimator=core.enum_value("lt_volume_estimator", lt.volume_estimator),
         volume_step=lt.volume_step,
+        sample_pattern=core.enum_value("lt_sample_pattern", lt.sample_pattern),
     )
 
 
@@ -168,6 +169,7 @@ def render_metadata(st, settings):
         "lantern.min_samples": "%d" % settings.min_samples,
         "lantern.seed": "%d" % settings.seed,
         "lantern.integrator": core.enum_name("lt_integrator", settings.integrator),
+        "lantern.sample_pattern": core.enum_name("lt_sample_pattern", settings.sample_pattern),
     }
 
 

@@ -32,8 +32,8 @@ def apply_preset(settings, key):
 
 # Blender declares properties when the add-on registers, before (and without) the native library,
 # so the defaults below are written out; they are the core's (lt_render_settings_default) and the
-# enum identifiers are the core's enum names (lt_integrator, lt_mis, lt_volume_estimator without
-# their prefix), which engine.render_settings passes through core.enum_value. test_engine's
+# enum identifiers are the core's enum names (lt_integrator, lt_mis, lt_volume_estimator,
+# lt_sample_pattern without their prefix), which engine.render_settings passes through core.enum_value. test_engine's
 # test_properties_match_core holds both to the library.
 class LanternRenderSettings(bpy.types.PropertyGroup):
     samples: IntProperty(
@@ -190,6 +190,18 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
                     "reduce fireflies, at the cost of bias (darker indirect light); 0 disables "
                     "clamping (Cycles defaults to 10)",
         default=0.0, min=0.0,
+    )
+    sample_pattern: EnumProperty(
+        name="Pattern",
+        description="Where each sample's random numbers come from",
+        items=[
+            ("SOBOL_OWEN", "Sobol-Owen",
+             "Low-discrepancy Sobol' points, Owen-scrambled per pixel and per dimension: less noise "
+             "at equal samples on smooth lighting (soft shadows, skies, the pixel footprint)"),
+            ("INDEPENDENT", "Independent",
+             "Independent random numbers for every sample (PCG32)"),
+        ],
+        default="SOBOL_OWEN",
     )
     volume_estimator: EnumProperty(
         name="Volume Estimator",

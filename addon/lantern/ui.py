@@ -123,6 +123,7 @@ class LANTERN_RENDER_PT_sampling_advanced(LanternButtonsPanel, Panel):
 
     def draw(self, context):
         col = _split(self.layout).column(align=True)
+        col.prop(context.scene.lantern, "sample_pattern")
         col.prop(context.scene.lantern, "seed")
         col.prop(context.scene.lantern, "sample_offset")
 

@@ -160,7 +160,8 @@ def test_properties_match_core():
     this holds them to the library)."""
     props = bpy.types.Scene.bl_rna.properties["lantern"].fixed_type.properties
     default = core.default_settings()
-    enums = {"integrator": "lt_integrator", "mis_heuristic": "lt_mis", "volume_estimator": "lt_volume_estimator"}
+    enums = {"integrator": "lt_integrator", "mis_heuristic": "lt_mis", "volume_estimator": "lt_volume_estimator",
+             "sample_pattern": "lt_sample_pattern"}
     checked = []
     for name, _ in core.RenderSettings._fields_:
         if name not in props:

@@ -224,7 +224,7 @@ TEST(MediaHomogeneous, ClosedFormTransmittanceForEveryEstimator) {
     Sampler s(media_test::seed(1), 2, 3), copy = s;
     Spectrum T = m.transmittance(r, 0.25f, 1.5f, s, e, 0.01f);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(T[c], std::exp(-(sa[c] + ss[c]) * 2.5), 1e-6) << "channel " << c;
-    EXPECT_EQ(s.next_u32(), copy.next_u32()) << "closed form must consume no random numbers";
+    EXPECT_EQ(s.next_1d(), copy.next_1d()) << "closed form must consume no random numbers";
     Spectrum Tinf = m.transmittance(r, 0, INFINITY, s, e, 0.01f);
     EXPECT_EQ(max_component(Tinf), 0.0f);
     EXPECT_EQ(m.transmittance(r, 1, 1, s, e, 0.01f).x, 1.0f);

@@ -31,8 +31,9 @@ extern "C" {
  * 7: materials are shader programs; meshes carry their texture space and attributes
  * (lt_mesh_attribute), instances their Object Info values and attributes, images their alpha;
  * 8: cubic interpolation; lt_scene_add_image_file (files read by the core); pass and strategy
- * rows read in bands; lt_scene_set_world_program and the world map's size in lt_scene_stats. */
-#define LT_ABI_VERSION 8
+ * rows read in bands; lt_scene_set_world_program and the world map's size in lt_scene_stats;
+ * 9: lt_render_settings.sample_pattern. */
+#define LT_ABI_VERSION 9
 
 enum lt_status {
   LT_OK = 0,
@@ -381,6 +382,11 @@ enum lt_integrator {
 enum lt_volume_estimator { LT_VOLUME_RAY_MARCHING = 0, LT_VOLUME_TRACKING = 1 };
 enum lt_mis { LT_MIS_POWER = 0, LT_MIS_BALANCE = 1, LT_MIS_UNIFORM = 2 };
 enum lt_filter { LT_FILTER_BOX = 0, LT_FILTER_GAUSSIAN = 1, LT_FILTER_BLACKMAN_HARRIS = 2 };
+/* Where a sample's random numbers come from: SOBOL_OWEN (default), Sobol' points with hash-based
+ * Owen scrambling per pixel and per dimension (low discrepancy, as Cycles' Sobol/PMJ patterns);
+ * INDEPENDENT, an independent PCG32 stream per sample. Both depend only on (seed, pixel, sample
+ * index), so sample-split parts merge exactly either way. */
+enum lt_sample_pattern { LT_PATTERN_SOBOL_OWEN = 0, LT_PATTERN_INDEPENDENT = 1 };
 
 typedef struct lt_render_settings {
   int width, height;
@@ -434,6 +440,7 @@ typedef struct lt_render_settings {
    * and a message giving both when the sum exceeds what the process can allocate (MemAvailable,
    * RLIMIT_AS), before allocating anything. */
   unsigned long long caller_bytes;
+  int sample_pattern; /* lt_sample_pattern */
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);

@@ -197,6 +197,8 @@ const lt_abi_entry kLayout[] = {
     LT_CONST(lt_filter, LT_FILTER_BOX),
     LT_CONST(lt_filter, LT_FILTER_GAUSSIAN),
     LT_CONST(lt_filter, LT_FILTER_BLACKMAN_HARRIS),
+    LT_CONST(lt_sample_pattern, LT_PATTERN_SOBOL_OWEN),
+    LT_CONST(lt_sample_pattern, LT_PATTERN_INDEPENDENT),
     LT_STRUCT(lt_render_settings),
     LT_FIELD(lt_render_settings, width),
     LT_FIELD(lt_render_settings, height),
@@ -229,6 +231,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_settings, min_samples),
     LT_FIELD(lt_render_settings, passes),
     LT_FIELD(lt_render_settings, caller_bytes),
+    LT_FIELD(lt_render_settings, sample_pattern),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),

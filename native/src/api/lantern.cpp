@@ -683,6 +683,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->min_samples = 16;
   s->passes = (1u << LT_PASS_COUNT) - 1;
   s->caller_bytes = 0;
+  s->sample_pattern = LT_PATTERN_SOBOL_OWEN;
 }
 
 namespace {
@@ -745,6 +746,9 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     require(!s->adaptive || s->noise_target > 0, "adaptive sampling needs a noise target > 0");
     require(s->min_samples >= 1 && s->min_samples <= (1 << 24), "min samples must be in [1, 16777216]");
     require((s->passes & ~((1u << LT_PASS_COUNT) - 1)) == 0, "passes has bits beyond LT_PASS_COUNT");
+    require(s->sample_pattern == LT_PATTERN_SOBOL_OWEN || s->sample_pattern == LT_PATTERN_INDEPENDENT,
+            "unknown sample pattern " + std::to_string(s->sample_pattern) +
+                "; valid: " + lt::abi_enum_names("lt_sample_pattern", "LT_PATTERN_"));
     lt::RenderSettings rs;
     rs.width = s->width;
     rs.height = s->height;
@@ -791,6 +795,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.adaptive = s->adaptive != 0;
     rs.min_samples = s->min_samples;
     rs.passes = s->passes;
+    rs.pattern = lt::SamplePattern(s->sample_pattern);
     // Refuse before allocating, with what it would take, rather than fail (or be killed) later.
     const lt::MemoryEstimate need = lt::RenderJob::estimate_bytes(rs);
     const double total = double(need.total()) + double(s->caller_bytes);

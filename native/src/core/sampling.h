@@ -105,13 +105,11 @@ inline uint64_t mix_u64(uint64_t z) {  // splitmix64 finaliser
   return z ^ (z >> 31);
 }
 
-// PCG32 (O'Neill 2014). A sample's stream is keyed by (seed, pixel, sample index) only, so the
-// numbers a sample sees never depend on threads, tiles or on which samples ran before it.
-class Sampler {
+// PCG32 (O'Neill 2014): the independent stream.
+class Pcg32 {
  public:
-  Sampler(uint32_t seed, uint32_t pixel, uint32_t sample_index) {
-    uint64_t key = mix_u64((uint64_t(seed) << 32) ^ pixel);
-    uint64_t stream = mix_u64(key ^ (uint64_t(sample_index) * 0x9e3779b97f4a7c15ULL));
+  Pcg32() = default;
+  Pcg32(uint64_t key, uint64_t stream) {
     state_ = 0;
     inc_ = (stream << 1u) | 1u;
     next_u32();
@@ -125,14 +123,96 @@ class Sampler {
     uint32_t rot = uint32_t(old >> 59u);
     return (xorshifted >> rot) | (xorshifted << ((-rot) & 31));
   }
-  float next_1d() { return std::min(kOneMinusEpsilon, float(next_u32()) * 0x1p-32f); }
-  Vec2 next_2d() {
-    float a = next_1d();
-    return {a, next_1d()};
-  }
 
  private:
-  uint64_t state_, inc_;
+  uint64_t state_ = 0, inc_ = 1;
+};
+
+inline uint32_t reverse_bits(uint32_t x) {
+  x = (x << 16) | (x >> 16);
+  x = ((x & 0x00ff00ffu) << 8) | ((x & 0xff00ff00u) >> 8);
+  x = ((x & 0x0f0f0f0fu) << 4) | ((x & 0xf0f0f0f0u) >> 4);
+  x = ((x & 0x33333333u) << 2) | ((x & 0xccccccccu) >> 2);
+  return ((x & 0x55555555u) << 1) | ((x & 0xaaaaaaaau) >> 1);
+}
+
+// Owen scrambling of a 32-bit fixed-point value by a hash (Burley 2020, "Practical Hash-based
+// Owen Scrambling", with Vegdahl's improved Laine-Karras permutation): each bit is flipped by a
+// function of the bits above it, so the scrambled points keep every elementary interval.
+inline uint32_t laine_karras_permutation(uint32_t x, uint32_t seed) {
+  x ^= x * 0x3d20adeaU;
+  x += seed;
+  x *= (seed >> 16) | 1U;
+  x ^= x * 0x05526c56U;
+  x ^= x * 0x53a22864U;
+  return x;
+}
+inline uint32_t nested_uniform_scramble(uint32_t x, uint32_t seed) {
+  return reverse_bits(laine_karras_permutation(reverse_bits(x), seed));
+}
+
+// The first two dimensions of Sobol's sequence as 32-bit fractions: van der Corput and the
+// Pascal matrix mod 2 (direction numbers v_{k+1} = v_k ^ (v_k >> 1)).
+inline uint32_t sobol_0(uint32_t i) { return reverse_bits(i); }
+inline uint32_t sobol_1(uint32_t i) {
+  uint32_t x = 0;
+  for (uint32_t v = 1u << 31; i; i >>= 1, v ^= v >> 1)
+    if (i & 1) x ^= v;
+  return x;
+}
+
+inline float u32_to_unit(uint32_t x) { return std::min(kOneMinusEpsilon, float(x) * 0x1p-32f); }
+
+// Where a sample's numbers come from (lt_sample_pattern).
+enum class SamplePattern : uint8_t { SobolOwen = 0, Independent = 1 };
+
+// A sample's random numbers. They depend only on (seed, pixel, sample index) and the order of the
+// calls, so they never depend on threads, tiles or on which samples ran before.
+// SobolOwen (Burley 2020, as pbrt-v4's padded Sobol sampler): each call is its own dimension; a
+// call's 1D or 2D point is the Owen-scrambled Sobol point of the sample index, shuffled by a
+// nested uniform scramble of the index, with scrambles hashed from (seed, pixel, call): stratified
+// in every call's own dimensions over any power-of-two run of samples, padded (independent)
+// across calls. Even and odd sample indices are two independently scrambled sequences, so the
+// film's two halves (a pixel's even- and odd-numbered samples, core/film.h) stay independent and
+// the error estimate honest. Independent: one PCG32 stream per sample.
+class Sampler {
+ public:
+  Sampler(uint32_t seed, uint32_t pixel, uint32_t sample_index, SamplePattern pattern = SamplePattern::Independent)
+      : pattern_(pattern) {
+    const uint64_t key = mix_u64((uint64_t(seed) << 32) ^ pixel);
+    if (pattern == SamplePattern::Independent) {
+      pcg_ = Pcg32(key, mix_u64(key ^ (uint64_t(sample_index) * 0x9e3779b97f4a7c15ULL)));
+    } else {
+      key_ = mix_u64(key ^ (sample_index & 1u));
+      index_ = sample_index >> 1;
+    }
+  }
+  float next_1d() {
+    if (pattern_ == SamplePattern::Independent) return u32_to_unit(pcg_.next_u32());
+    const uint64_t h = next_hash();
+    const uint32_t i = nested_uniform_scramble(index_, uint32_t(h));
+    // sobol_0 is a bit reversal, so its nested scramble is reverse(LK(i)).
+    return u32_to_unit(reverse_bits(laine_karras_permutation(i, uint32_t(h >> 32))));
+  }
+  Vec2 next_2d() {
+    if (pattern_ == SamplePattern::Independent) {
+      float a = next_1d();
+      return {a, next_1d()};
+    }
+    const uint64_t h = next_hash();
+    const uint32_t i = nested_uniform_scramble(index_, uint32_t(h));
+    return {u32_to_unit(reverse_bits(laine_karras_permutation(i, uint32_t(h >> 32)))),
+            u32_to_unit(nested_uniform_scramble(sobol_1(i), hash_u32(uint32_t(h >> 32) ^ 0x68e31da4u)))};
+  }
+  SamplePattern pattern() const { return pattern_; }
+
+ private:
+  uint64_t next_hash() { return mix_u64(key_ ^ (uint64_t(++dim_) * 0x9e3779b97f4a7c15ULL)); }
+
+  SamplePattern pattern_;
+  Pcg32 pcg_;
+  uint64_t key_ = 0;
+  uint32_t index_ = 0, dim_ = 0;
 };
 
 }  // namespace lt

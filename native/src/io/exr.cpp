@@ -188,6 +188,7 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
   if (uint64_t lp = job.film().published_light_paths()) attrs["lantern/light_paths"] = std::to_string(lp);
   attrs["lantern/seed"] = std::to_string(s.seed);
   attrs["lantern/integrator"] = integrator_name(s.integrator);
+  attrs["lantern/sample_pattern"] = s.pattern == SamplePattern::SobolOwen ? "SOBOL_OWEN" : "INDEPENDENT";
   attrs["lantern/resolution"] = std::to_string(s.width) + "x" + std::to_string(s.height);
   attrs["lantern/region"] =
       std::to_string(s.x0) + " " + std::to_string(s.y0) + " " + std::to_string(s.x1) + " " + std::to_string(s.y1);

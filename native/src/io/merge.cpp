@@ -21,8 +21,8 @@ struct Range {
 };
 
 // The attributes that say which render a part belongs to: parts must agree on each.
-const char* const kIdentity[] = {"lantern/scene", "lantern/seed", "lantern/integrator", "lantern/resolution",
-                                 "lantern/region"};
+const char* const kIdentity[] = {"lantern/scene",      "lantern/seed",   "lantern/integrator",
+                                 "lantern/resolution", "lantern/region", "lantern/sample_pattern"};
 
 std::vector<Range> parse_ranges(const std::string& text, size_t part, const std::string& path) {
   std::vector<Range> out;

@@ -123,8 +123,9 @@ void RenderJob::render_pass(int sample_index) {
             const int fx = x + settings_.x0, fy = y + settings_.y0;
             // Random numbers depend only on (seed, pixel of the full frame, sample index).
             Sampler sampler(settings_.seed, uint32_t(fy) * uint32_t(settings_.width) + uint32_t(fx),
-                            uint32_t(sample_index));
-            float ox = filter_.sample(sampler.next_1d()), oy = filter_.sample(sampler.next_1d());
+                            uint32_t(sample_index), settings_.pattern);
+            const Vec2 uf = sampler.next_2d();
+            const float ox = filter_.sample(uf.x), oy = filter_.sample(uf.y);
             CameraSample cs;
             cs.pixel_center = {fx + 0.5f, fy + 0.5f};
             cs.film = {fx + 0.5f + ox, fy + 0.5f + oy};

@@ -21,6 +21,7 @@ struct RenderSettings {
   int samples = 16;
   uint32_t seed = 0;
   int sample_offset = 0;  // first sample index: the pass s uses sample_offset + s
+  SamplePattern pattern = SamplePattern::SobolOwen;
   IntegratorType integrator = IntegratorType::Path;
   IntegratorSettings integrator_settings;
   int threads = 0;
