@@ -184,8 +184,9 @@ TEST(Camera, LensRaysProjectBackToTheirFilmPosition) {
 // The camera's directional density from a lens point, 1 / (A cos^3) for a film uniform over its
 // area A at unit distance (pbrt-v4's PerspectiveCamera::PDF_We), integrates to one over the
 // directions that reach the film: Monte Carlo over the sphere of directions from several lens
-// points (4 standard errors). A projection that ignored the lens point's offset would see a
-// shifted film and miss the unit integral.
+// points (4 standard errors). It holds the projection's film scale (Camera::project) and the
+// film's area (pixel_plane_area) to the density BDPT uses (bdpt.h, camera_pdf_dir); the lens
+// offset itself only shifts the film and is held by LensRaysProjectBackToTheirFilmPosition.
 TEST(Camera, DirectionalDensityIntegratesToOne) {
   const lt_camera_desc d = with_dof(perspective_camera(kView, 20), 0.6f, 0.25f, 0, 0, 1);
   const lt::Camera cam = camera_of(d);
