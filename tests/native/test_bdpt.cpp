@@ -614,8 +614,7 @@ TEST(Bdpt, DoorSlabsBounceKindsAgreeWithPathTracing) {
 // F/0.04 (a 27.5 cm aperture radius for the 22 mm lens: the glass sphere and the back wall blur
 // over several of the 48 x 48 test's pixels), with `blades` blades and an anamorphic ratio.
 static lt_camera_desc room_lens(int blades, float ratio) {
-  return with_dof(perspective_camera(look_at({0, -1.5f, 1.0f}, {0, 0.5f, 0.8f}), 22), 1.9f, 0.04f, blades, 0.3f,
-                  ratio);
+  return with_dof(perspective_camera(look_at({0, -1.5f, 1.0f}, {0, 0.5f, 0.8f}), 22), 1.9f, 0.04f, blades, 0.3f, ratio);
 }
 
 // With a lens the camera vertex is a point on the aperture: the MIS weights of every strategy

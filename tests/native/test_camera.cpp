@@ -287,7 +287,7 @@ TEST(Camera, FisheyeDirections) {
   d = panorama_camera(view, LT_PANORAMA_FISHEYE_EQUISOLID);
   d.fisheye_lens = 8;
   d.fisheye_fov = 2.5f;
-  cam = camera_of(d, 120, 80);  // horizontal fit: sensor 36 x 24 mm
+  cam = camera_of(d, 120, 80);                 // horizontal fit: sensor 36 x 24 mm
   ASSERT_TRUE(cam.generate(60 + 30, 40, &r));  // 9 mm right of the centre
   EXPECT_NEAR(std::acos(r.d.y), 2 * std::asin(9.0f / 16), 1e-4f);
   EXPECT_GT(r.d.x, 0);
@@ -319,8 +319,8 @@ TEST(Camera, PanoramaRenders) {
   EXPECT_EQ(p.rgba(0, 0)[0], 0.0f);
   EXPECT_EQ(p.rgba(0, 0)[3], 1.0f);
   EXPECT_GT(p.rgba(16, 16)[0], 0.0f);
-  set_camera(s.get(), with_dof(panorama_camera(look_at({0, 0, 0}, {0, 1, 0}), LT_PANORAMA_FISHEYE_EQUISOLID), 1.5f,
-                               0.1f, 5));
+  set_camera(s.get(),
+             with_dof(panorama_camera(look_at({0, 0, 0}, {0, 1, 0}), LT_PANORAMA_FISHEYE_EQUISOLID), 1.5f, 0.1f, 5));
   for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
     rs.integrator = integrator;
     p = render(s.get(), rs);

@@ -535,7 +535,7 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
         "camera focal length, sensor size, ortho scale and pixel aspect must be positive");
     require(d->clip_start >= 0 && d->clip_end > d->clip_start, "camera clip end must exceed clip start >= 0");
     const float lens_values[] = {d->focus_distance, d->aperture_fstop, d->aperture_rotation, d->aperture_ratio,
-                                 d->fisheye_fov,    d->fisheye_lens,    d->latitude_min,      d->latitude_max,
+                                 d->fisheye_fov,    d->fisheye_lens,   d->latitude_min,      d->latitude_max,
                                  d->longitude_min,  d->longitude_max};
     require(finite_array(lens_values, 10), "camera depth of field and panorama parameters must be finite");
     if (d->use_dof) {

@@ -48,7 +48,7 @@ struct CameraSample {
   Ray ray;
   Vec2 film;
   Vec2 pixel_center;
-  float dP = 0, dD = 0;  // the ray's compact differentials (Camera::differentials), for bump
+  float dP = 0, dD = 0;   // the ray's compact differentials (Camera::differentials), for bump
   Vec2 lens{0.5f, 0.5f};  // the lens sample the ray was generated with (Camera::generate)
 };
 

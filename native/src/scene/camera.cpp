@@ -75,8 +75,8 @@ Vec2 Camera::aperture_offset(Vec2 u) const {
 float Camera::lens_area() const {
   if (!has_lens()) return 0;
   const float r = d_.aperture_radius;
-  const float shape = d_.aperture_blades >= 3 ? 0.5f * float(d_.aperture_blades) * std::sin(2 * kPi / d_.aperture_blades)
-                                              : kPi;
+  const float shape =
+      d_.aperture_blades >= 3 ? 0.5f * float(d_.aperture_blades) * std::sin(2 * kPi / d_.aperture_blades) : kPi;
   return shape * r * r / d_.aperture_ratio;
 }
 

@@ -55,9 +55,7 @@ class Camera {
   void differentials(float x, float y, float* dP, float* dD) const;
   // Blender's Z depth of a world point: the distance along the viewing axis, or from the camera
   // for a panorama (Cycles' camera_z_depth).
-  float depth(const Vec3& p) const {
-    return d_.panorama ? length(p - origin_) : -dot(p - origin_, forward_neg_);
-  }
+  float depth(const Vec3& p) const { return d_.panorama ? length(p - origin_) : -dot(p - origin_, forward_neg_); }
   Vec3 position() const { return origin_; }
   Vec3 forward() const { return -forward_neg_; }
   bool orthographic() const { return d_.orthographic; }
@@ -102,7 +100,7 @@ class Camera {
   int width_ = 1, height_ = 1;
   float x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // view plane at unit distance (or ortho plane)
   float pixel_area_ = 1;
-  float fisheye_w_ = 36, fisheye_h_ = 24;    // the equisolid's sensor, fitted to the frame
+  float fisheye_w_ = 36, fisheye_h_ = 24;   // the equisolid's sensor, fitted to the frame
   Vec3 origin_, right_, up_, forward_neg_;  // forward_neg_: local +Z (the camera looks down -Z)
 };
 
