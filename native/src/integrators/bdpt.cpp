@@ -7,7 +7,8 @@
 // Strategies: s = 0 (the camera subpath reaches an emitter: a mesh light, a lamp, the sun or the
 // world, or crosses an emitting medium: volume emission, found by s = 0 only, weight 1), s = 1 (a
 // fresh light sample at the camera vertex, as next-event estimation), s >= 2, and t = 1 (a light
-// vertex connected to the pinhole and splatted through the pixel filter).
+// vertex connected to the pinhole, or to a point sampled on the lens, and splatted through the
+// pixel filter; not for orthographic and panoramic cameras, which are not connectable).
 //
 // Media (scenes with volumes; pbrt 3, section 16.3): both walks sample free flights along every
 // segment as the volumetric path tracer does and scatter at medium vertices with the phase
