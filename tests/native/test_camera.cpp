@@ -228,10 +228,22 @@ TEST(Camera, BadDepthOfFieldInput) {
   nan.aperture_rotation = NAN;
   EXPECT_EQ(lt_scene_set_camera(s.get(), &nan), LT_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(std::string(lt_last_error()).find("finite"), std::string::npos);
-  // Orthographic: Cycles' 1 / (2 F-stop), in scene units.
+  // Orthographic: Cycles' 1 / (2 F-stop), in scene units, and every ray aimed at the focus point
+  // on the view axis (camera_sample_orthographic): at the focus depth a ray is off the pinhole
+  // ray's point by the film position's offset from the axis.
   const lt::Camera ortho = camera_of(with_dof(orthographic_camera(kView, 4), 3, 5));
+  const lt::Camera ortho_pin = camera_of(orthographic_camera(kView, 4));
   EXPECT_NEAR(lt::length(ortho.lens_point({1, 0.5f}) - ortho.position()), 0.1f, 1e-5f);
   EXPECT_FALSE(ortho.connectable());
+  lt::Ray centre, r, p;
+  ASSERT_TRUE(ortho_pin.generate(kW / 2.0f, kH / 2.0f, &centre));
+  ASSERT_TRUE(ortho_pin.generate(10, 40, &p));
+  for (lt::Vec2 u : {lt::Vec2{0.1f, 0.7f}, lt::Vec2{0.9f, 0.2f}}) {
+    ASSERT_TRUE(ortho.generate(10, 40, u, &r));
+    const lt::Vec3 at_focus = r.o + r.d * (3 / lt::dot(r.d, ortho.forward()));
+    EXPECT_LT(dist(at_focus, centre.o + centre.d * 3.0f + (p.o - centre.o)), 1e-4f);
+    EXPECT_GT(dist(r.o, p.o), 1e-3f) << "the ray starts on the lens";
+  }
 }
 
 // Equirectangular (Blender's defaults: the whole sphere): the film's centre looks along the view
