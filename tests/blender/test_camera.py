@@ -74,3 +74,15 @@ def test_depth_of_field_and_panorama_panels_show_for_lantern(scene_factory):
         assert ("panorama_type" in [n for _, n in drawn]) and len(drawn) >= 2, (kind, drawn)
         for data, name in drawn:
             assert name in data.bl_rna.properties, name
+
+
+def test_film_outside_a_fisheye_is_black_and_opaque_as_in_cycles(scene_factory):
+    """With Film > Transparent, the film a fisheye does not see is black with alpha 1 in Cycles
+    (it skips those samples) and in Lantern; inside, both see the box (alpha 1, some light)."""
+    scene = scene_factory("pano_fisheye_equidistant", resolution=(24, 24))
+    scene.render.film_transparent = True
+    for engine in (ru.CYCLES, ru.LANTERN):
+        img = ru.render(scene, engine, 4, seed=0).combined
+        for corner in (img[0, 0], img[0, -1], img[-1, 0], img[-1, -1]):
+            assert list(corner) == [0.0, 0.0, 0.0, 1.0], (engine, corner)
+        assert img[12, 12, 3] == 1.0 and img[8:16, 8:16, :3].mean() > 0, engine
