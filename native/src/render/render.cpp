@@ -132,6 +132,8 @@ void RenderJob::render_pass(int sample_index) {
             if (camera_.has_lens()) cs.lens = sampler.next_2d();
             if (!camera_.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray)) {
               // The film sees nothing there (outside a fisheye's circle): black and opaque, as Cycles.
+              // No light path is traced for it; it still counts as one, harmlessly: only panoramas
+              // have such samples, and BDPT splats nothing for them (Camera::connectable).
               SampleValue none;
               none.alpha = 1;
               film_.add(x, y, none);
