@@ -491,6 +491,46 @@ def build_cornell_spot(scene):
               spot_size=math.radians(60.0), spot_blend=0.2, show_cone=False)
 
 
+def build_cornell_dof(scene):
+    """The Cornell box (area light) through a lens with depth of field (issue 15): in focus on the
+    short box (Focus Object: its distance along the view axis), at F/0.05 (Cycles: a 50 cm
+    aperture radius for the 50 mm lens, so the walls and the tall box blur over several pixels),
+    6 blades turned 10 degrees and an anamorphic ratio of 1.3."""
+    build_cornell_area(scene)
+    cam = scene.camera.data
+    cam.dof.use_dof = True
+    cam.dof.focus_object = scene.objects["ShortBox"]
+    cam.dof.aperture_fstop = 0.05
+    cam.dof.aperture_blades = 6
+    cam.dof.aperture_rotation = math.radians(10.0)
+    cam.dof.aperture_ratio = 1.3
+
+
+# Issue 15's panoramas, from inside the Cornell box (area light) towards its back wall: Cycles'
+# settings on the camera (cam.cycles, the Cycles add-on's), asymmetric ranges and a shift so that
+# a mirrored or offset mapping shows.
+PANORAMAS = {
+    "EQUIRECTANGULAR": dict(latitude_min=math.radians(-60.0), latitude_max=math.radians(75.0),
+                            longitude_min=math.radians(-150.0), longitude_max=math.radians(120.0)),
+    "FISHEYE_EQUIDISTANT": dict(fisheye_fov=math.radians(200.0)),
+    "FISHEYE_EQUISOLID": dict(fisheye_lens=9.0, fisheye_fov=math.radians(170.0)),
+}
+
+
+def build_panorama(scene, panorama_type):
+    build_cornell_area(scene)
+    obj = scene.camera
+    obj.location = (0.1, -0.6, 1.0)
+    look_at(obj, (0.2, 1.0, 0.9))
+    cam = obj.data
+    cam.type = "PANO"
+    cam.cycles.panorama_type = panorama_type
+    for key, value in PANORAMAS[panorama_type].items():
+        setattr(cam.cycles, key, value)
+    cam.shift_x = 0.04
+    cam.shift_y = -0.03
+
+
 def emission(name, color, strength):
     return _bsdf_material(name, "ShaderNodeEmission", color, Strength=strength)
 
@@ -1550,6 +1590,10 @@ SCENES = {
     "cornell_spot": (build_cornell_spot, (96, 96), 128),
     "cornell_mesh_light": (build_cornell_mesh_light, (96, 96), 512),
     "glossy_glass": (build_glossy_glass, (96, 96), 128),
+    "cornell_dof": (build_cornell_dof, (96, 96), 128),
+    "pano_equirectangular": (lambda scene: build_panorama(scene, "EQUIRECTANGULAR"), (64, 32), 128),
+    "pano_fisheye_equidistant": (lambda scene: build_panorama(scene, "FISHEYE_EQUIDISTANT"), (48, 48), 128),
+    "pano_fisheye_equisolid": (lambda scene: build_panorama(scene, "FISHEYE_EQUISOLID"), (48, 32), 128),
     "sun_world": (build_sun_world, (96, 96), 128),
     "world_spheres": (build_world_spheres, (96, 64), 128),
     "textured": (build_textured, (96, 96), 128),

@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 9
+ABI_VERSION = 10
 
 # lt_status
 OK = 0
@@ -46,9 +46,10 @@ VISIBLE_ALL = 31
 LIGHT_POINT, LIGHT_SPOT, LIGHT_AREA, LIGHT_SUN = 0, 1, 2, 3
 AREA_SQUARE, AREA_RECTANGLE, AREA_DISK, AREA_ELLIPSE = 0, 1, 2, 3
 
-# lt_camera_type, lt_sensor_fit
-CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC = 0, 1
+# lt_camera_type, lt_sensor_fit, lt_panorama_type
+CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC, CAMERA_PANORAMA = 0, 1, 2
 SENSOR_AUTO, SENSOR_HORIZONTAL, SENSOR_VERTICAL = 0, 1, 2
+PANORAMA_EQUIRECTANGULAR, PANORAMA_FISHEYE_EQUIDISTANT, PANORAMA_FISHEYE_EQUISOLID = 0, 1, 2
 
 # lt_integrator: by name from the core (enum_value("lt_integrator", "PATH"), enum_names).
 # lt_volume_estimator, lt_volume_node
@@ -212,6 +213,19 @@ class CameraDesc(ctypes.Structure):
         ("clip_start", ctypes.c_float),
         ("clip_end", ctypes.c_float),
         ("pixel_aspect", ctypes.c_float),
+        ("use_dof", ctypes.c_int),
+        ("focus_distance", ctypes.c_float),
+        ("aperture_fstop", ctypes.c_float),
+        ("aperture_blades", ctypes.c_int),
+        ("aperture_rotation", ctypes.c_float),
+        ("aperture_ratio", ctypes.c_float),
+        ("panorama_type", ctypes.c_int),
+        ("fisheye_fov", ctypes.c_float),
+        ("fisheye_lens", ctypes.c_float),
+        ("latitude_min", ctypes.c_float),
+        ("latitude_max", ctypes.c_float),
+        ("longitude_min", ctypes.c_float),
+        ("longitude_max", ctypes.c_float),
     ]
 
 
@@ -705,7 +719,11 @@ class Scene:
     def set_camera(self, transform, type=CAMERA_PERSPECTIVE, focal_length=50.0,
                    sensor_width=36.0, sensor_height=24.0, sensor_fit=SENSOR_AUTO,
                    ortho_scale=6.0, shift_x=0.0, shift_y=0.0, clip_start=0.1, clip_end=100.0,
-                   pixel_aspect=1.0):
+                   pixel_aspect=1.0, use_dof=False, focus_distance=10.0, aperture_fstop=2.8,
+                   aperture_blades=0, aperture_rotation=0.0, aperture_ratio=1.0,
+                   panorama_type=PANORAMA_FISHEYE_EQUISOLID, fisheye_fov=3.14159265,
+                   fisheye_lens=10.5, latitude_min=-1.57079633, latitude_max=1.57079633,
+                   longitude_min=-3.14159265, longitude_max=3.14159265):
         d = CameraDesc()
         d.type = int(type)
         d.transform = _transform(transform)
@@ -713,6 +731,12 @@ class Scene:
         d.sensor_fit, d.ortho_scale = int(sensor_fit), ortho_scale
         d.shift_x, d.shift_y, d.clip_start, d.clip_end = shift_x, shift_y, clip_start, clip_end
         d.pixel_aspect = pixel_aspect
+        d.use_dof, d.focus_distance, d.aperture_fstop = int(bool(use_dof)), focus_distance, aperture_fstop
+        d.aperture_blades, d.aperture_rotation = int(aperture_blades), aperture_rotation
+        d.aperture_ratio, d.panorama_type = aperture_ratio, int(panorama_type)
+        d.fisheye_fov, d.fisheye_lens = fisheye_fov, fisheye_lens
+        d.latitude_min, d.latitude_max = latitude_min, latitude_max
+        d.longitude_min, d.longitude_max = longitude_min, longitude_max
         _check(self._lib.lt_scene_set_camera(self.handle, ctypes.byref(d)), "lt_scene_set_camera")
 
     def set_world(self, color=(0.0, 0.0, 0.0), strength=1.0, image=-1, rotation_z=0.0,

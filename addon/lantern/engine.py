@@ -10,7 +10,7 @@ from gpu_extras.presets import draw_texture_2d
 from . import core
 from .export import export_scene
 from .export.camera import export_camera
-from .viewport import ViewportSession, view_camera
+from .viewport import ViewportSession, view_camera, with_camera_lens
 
 REDRAW_SECONDS = 0.05      # while a viewport refines, it is redrawn this often
 
@@ -545,7 +545,12 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         scene = depsgraph.scene
         width, height = region.width, region.height
         try:
-            session.set_view(view_camera(context.region_data, width, height), width, height)
+            view = view_camera(context.region_data, width, height)
+            if context.region_data.view_perspective == 'CAMERA':
+                space = context.space_data
+                camera = space.camera if space.use_local_camera else scene.camera
+                view = with_camera_lens(view, camera, depsgraph)
+            session.set_view(view, width, height)
             settings = render_settings(scene, width, height, [0, 0, 0, 0])
             # The viewport stops at its own samples or the noise target, never by the time limit.
             settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0,

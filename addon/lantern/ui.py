@@ -341,6 +341,44 @@ def _node_view(layout, id_data, input_name, fallback_prop):
         layout.template_node_view(ntree, node, socket)
 
 
+class LANTERN_CAMERA_PT_panorama(Panel):
+    """A panoramic camera's projection (Cycles' camera settings, which Blender's Lens panel draws
+    only under Cycles), under the Lens panel."""
+    bl_label = "Panorama"
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    bl_context = "data"
+    bl_parent_id = "DATA_PT_lens"
+    COMPAT_ENGINES = {ENGINE}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES and context.camera and context.camera.type == 'PANO'
+
+    def draw(self, context):
+        layout = _split(self.layout)
+        ccam = getattr(context.camera, "cycles", None)
+        if ccam is None or not hasattr(ccam, "panorama_type"):
+            layout.label(text="Panorama settings need the Cycles add-on", icon='ERROR')
+            return
+        layout.prop(ccam, "panorama_type")
+        col = layout.column()
+        if ccam.panorama_type == 'FISHEYE_EQUIDISTANT':
+            col.prop(ccam, "fisheye_fov")
+        elif ccam.panorama_type == 'FISHEYE_EQUISOLID':
+            col.prop(ccam, "fisheye_lens", text="Lens")
+            col.prop(ccam, "fisheye_fov")
+        elif ccam.panorama_type == 'EQUIRECTANGULAR':
+            sub = col.column(align=True)
+            sub.prop(ccam, "latitude_min", text="Latitude Min")
+            sub.prop(ccam, "latitude_max", text="Max")
+            sub = col.column(align=True)
+            sub.prop(ccam, "longitude_min", text="Longitude Min")
+            sub.prop(ccam, "longitude_max", text="Max")
+        else:
+            col.label(text="Not supported by Lantern: rendered as perspective", icon='ERROR')
+
+
 class LANTERN_MATERIAL_PT_surface(LanternButtonsPanel, Panel):
     bl_label = "Surface"
     bl_context = "material"
@@ -428,6 +466,7 @@ classes = (
     LANTERN_VIEWLAYER_PT_passes,
     LANTERN_OBJECT_PT_visibility,
     LANTERN_LIGHT_PT_light,
+    LANTERN_CAMERA_PT_panorama,
     LANTERN_MATERIAL_PT_surface,
     LANTERN_WORLD_PT_surface,
     LANTERN_WORLD_PT_ray_visibility,
@@ -451,6 +490,8 @@ _EXTRA_PANELS = {
     "DATA_PT_spot",                         # spot size and blend
     "RENDER_PT_color_management",
     "MATERIAL_PT_preview",                  # Lantern renders material previews (bl_use_preview)
+    "DATA_PT_camera_dof",                   # depth of field, as Cycles renders it
+    "DATA_PT_camera_dof_aperture",
 }
 
 _patched = []

@@ -64,6 +64,26 @@ def view_camera(region_data, width, height):
     return kw
 
 
+def with_camera_lens(kw, camera_object, depsgraph):
+    """view_camera's keywords for a view through a perspective camera, plus its depth of field
+    (Cycles shows it there): the focus distance as for renders, and the F-stop scaled by the
+    view's focal length over the camera's, so that the aperture radius (focal length / 2 F-stop)
+    is the camera's."""
+    from .export.camera import focus_distance
+    if camera_object is None or camera_object.type != 'CAMERA' or kw.get("type") != core.CAMERA_PERSPECTIVE:
+        return kw
+    cam = camera_object.data
+    if cam.type != 'PERSP' or not cam.dof.use_dof:
+        return kw
+    distance = focus_distance(depsgraph, camera_object.evaluated_get(depsgraph))
+    if not distance > 0:
+        return kw
+    return dict(kw, use_dof=True, focus_distance=distance,
+                aperture_fstop=cam.dof.aperture_fstop * kw["focal_length"] / cam.lens,
+                aperture_blades=cam.dof.aperture_blades, aperture_rotation=cam.dof.aperture_rotation,
+                aperture_ratio=cam.dof.aperture_ratio)
+
+
 def _same_camera(a, b):
     if a is None or b is None or a.keys() != b.keys():
         return False

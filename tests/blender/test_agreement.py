@@ -34,8 +34,12 @@ import render_utils as ru
 # light_path_world (Is Camera Ray mixing a grey backdrop and a warm light), procedural_world
 # (Gradient and Noise textures of the direction).
 WORLD_SCENES = ["hdri_world", "light_path_world", "procedural_world"]
+# cornell_dof: depth of field (a focus object, 6 blades, anamorphic; issue 15).
 PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "sun_world",
-               "textured", "instanced"] + WORLD_SCENES
+               "textured", "instanced", "cornell_dof"] + WORLD_SCENES
+# Issue 15's panoramic cameras, one small render each (path tracing: BIDIRECTIONAL does not
+# connect to panoramas, tests/native/test_bdpt.cpp checks it agrees with path tracing there).
+PANORAMA_SCENES = ["pano_equirectangular", "pano_fisheye_equidistant", "pano_fisheye_equisolid"]
 TILE = 16
 ROUNDING = 1e-5  # float32 accumulation and EXR round trip
 
@@ -82,6 +86,16 @@ def test_volumetric_path_tracer_agrees_with_cycles_and_path_without_media(name, 
     report, _ = ru.agreement_report(name + "_volpath_vs_path", both[ru.LANTERN],
                                     runs(scene_factory, name, ru.LANTERN, "PATH"), outdir, TILE, ROUNDING,
                                     ("volpath", "path"))
+    assert report == "", report
+
+
+@pytest.mark.parametrize("name", PANORAMA_SCENES)
+def test_panoramic_cameras_agree_with_cycles(name, scene_factory, outdir):
+    """Equirectangular (reduced ranges) and the fisheyes (equidistant over 200 degrees, equisolid
+    with its lens and sensor), each with a shift: per 8 x 8 tile (these images are small) and in
+    the image mean as above. The film outside a fisheye's circle is black (and opaque) in both."""
+    both = lantern_and_cycles(scene_factory, name, "PATH")
+    report, _ = ru.agreement_report(name, both[ru.LANTERN], both[ru.CYCLES], outdir, 8, ROUNDING)
     assert report == "", report
 
 
@@ -252,10 +266,10 @@ def student_t_upper(p, dof):
 # volume, a VDB grid by delta and ratio tracking); door_slabs: Cycles' per-kind bounce limits on
 # walls of two lobe kinds (issue 12, item 4)
 BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "door",
-               "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud"] + WORLD_SCENES
+               "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud", "cornell_dof"] + WORLD_SCENES
 # Scenes without media whose path-traced image mean is known within MEAN_POWER at their samples:
 # BDPT's image mean must equal PATH's there too (the door scenes' path tracing is too noisy).
-BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass"]
+BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "cornell_dof"]
 # Open discrepancy, measured and not yet explained: on world_fog (a delta point light inside a World
 # volume) BDPT's image mean is 0.3-0.5 % below Cycles' (0.9949 at 0.10 % standard error in this
 # test; 0.9971 +- 0.0006 with the lamp out of frame), while every internal check agrees (light

@@ -8,7 +8,7 @@ import numpy as np
 from lantern import core
 from lantern.engine import render_settings
 from lantern.export import export_scene
-from lantern.viewport import ViewportSession, view_camera
+from lantern.viewport import ViewportSession, view_camera, with_camera_lens
 
 
 def _render(core_scene, width, height, samples=4):
@@ -58,6 +58,34 @@ def test_view_camera_renders_what_the_scene_camera_renders(scene_factory):
         # follows the same path. A wrong focal length, shift or fit moves the walls' edges.
         diff = np.abs(ia[..., :3] - ib[..., :3]).mean(axis=2)
         assert (diff < 1e-3).mean() > 0.97, (kind, sx, sy, w, h, (diff < 1e-3).mean())
+
+
+def test_view_through_a_camera_has_its_depth_of_field(scene_factory):
+    """Looking through a camera with depth of field, the viewport's lens is the camera's: the
+    same pixels as the render's camera (same seed, same lens samples), and not the pinhole's."""
+    scene = scene_factory("cornell_dof")
+    cam = scene.camera
+    w, h = 48, 48
+    scene.render.resolution_x, scene.render.resolution_y = w, h
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    images = []
+    for lens in (True, False):
+        a, b = core.Scene(), core.Scene()
+        try:
+            export_scene(depsgraph, a, lambda *m: None)
+            export_scene(depsgraph, b, lambda *m: None, state={})
+            view = view_camera(_camera_view(cam.evaluated_get(depsgraph), depsgraph, w, h), w, h)
+            b.set_camera(**(with_camera_lens(view, cam, depsgraph) if lens else view))
+            a.commit()
+            b.commit()
+            images.append((_render(a, w, h), _render(b, w, h)))
+        finally:
+            a.close()
+            b.close()
+    for (ia, ib), expected in zip(images, (True, False)):
+        same = (np.abs(ia[..., :3] - ib[..., :3]).mean(axis=2) < 1e-3).mean()
+        assert (same > 0.97) == expected, (expected, same)
 
 
 def _rss_mb():

@@ -31,6 +31,7 @@ enum Op : uint8_t {
   kCommit,
   kRender,
   kSetWorldProgram,
+  kSetCameraLens,  // kSetCamera's fields, then depth of field and panorama settings (ABI 9)
   kOpCount
 };
 

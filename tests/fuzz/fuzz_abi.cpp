@@ -212,8 +212,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         check(lt_scene_add_light(scene, &d));
         break;
       }
-      case lt_fuzz::kSetCamera: {
-        lt_camera_desc d;
+      case lt_fuzz::kSetCamera:
+      case lt_fuzz::kSetCameraLens: {
+        lt_camera_desc d{};
         d.type = r.i8();
         r.floats(d.transform, 12);
         d.focal_length = r.f32();
@@ -226,6 +227,21 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         d.clip_start = r.f32();
         d.clip_end = r.f32();
         d.pixel_aspect = r.f32();
+        if (op == lt_fuzz::kSetCameraLens) {
+          d.use_dof = r.u8() & 1;
+          d.focus_distance = r.f32();
+          d.aperture_fstop = r.f32();
+          d.aperture_blades = r.i8();
+          d.aperture_rotation = r.f32();
+          d.aperture_ratio = r.f32();
+          d.panorama_type = r.i8();
+          d.fisheye_fov = r.f32();
+          d.fisheye_lens = r.f32();
+          d.latitude_min = r.f32();
+          d.latitude_max = r.f32();
+          d.longitude_min = r.f32();
+          d.longitude_max = r.f32();
+        }
         check(lt_scene_set_camera(scene, &d));
         break;
       }

@@ -161,6 +161,37 @@ void camera(Writer& w, int type = LT_CAMERA_PERSPECTIVE) {
   w.f32(1);
 }
 
+// camera()'s fields as kSetCameraLens, then depth of field (focus 5, F/0.5, 5 blades) and the
+// panorama settings (Blender's defaults; type `panorama`).
+void camera_lens(Writer& w, int type, bool dof, int panorama) {
+  w.op(lt_fuzz::kSetCameraLens);
+  w.i8(type);
+  translation(w, 0, 0, 6);
+  w.f32(50);
+  w.f32(36);
+  w.f32(24);
+  w.i8(LT_SENSOR_AUTO);
+  w.f32(4);
+  w.f32(0);
+  w.f32(0);
+  w.f32(0.125f);
+  w.f32(100);
+  w.f32(1);
+  w.u8(dof ? 1 : 0);
+  w.f32(5);
+  w.f32(0.5f);
+  w.i8(5);
+  w.f32(0.25f);
+  w.f32(1.5f);
+  w.i8(panorama);
+  w.f32(3.125f);
+  w.f32(10.5f);
+  w.f32(-1.5f);
+  w.f32(1.5f);
+  w.f32(-3);
+  w.f32(3);
+}
+
 void world(Writer& w, float strength, int image = -1) {
   w.op(lt_fuzz::kSetWorld);
   const float c[3] = {0.5f, 0.625f, 0.75f};
@@ -246,6 +277,29 @@ std::vector<uint8_t> seed_basic() {
   r.integrator = LT_INTEGRATOR_VOLPATH;
   r.border = true;
   render(w, r);
+  return w.bytes;
+}
+
+// The basic scene through a lens with depth of field (PATH and BDPT, whose light tracing samples
+// the lens) and through each panorama with depth of field.
+std::vector<uint8_t> seed_cameras() {
+  Writer w;
+  material(w, diffuse(0.75f, 0.5f, 0.25f));
+  box(w, 1);
+  quad(w, 4);
+  instance(w, 0, {0});
+  instance(w, 1, {0});
+  light(w, LT_LIGHT_POINT, 100, 2, 2, 4);
+  camera_lens(w, LT_CAMERA_PERSPECTIVE, true, 0);
+  w.op(lt_fuzz::kCommit);
+  Render r;
+  render(w, r);
+  r.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
+  render(w, r);
+  for (int panorama : {LT_PANORAMA_EQUIRECTANGULAR, LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_FISHEYE_EQUISOLID}) {
+    camera_lens(w, LT_CAMERA_PANORAMA, true, panorama);
+    render(w, r);
+  }
   return w.bytes;
 }
 
@@ -349,6 +403,7 @@ void write_abi(const fs::path& dir) {
   save(dir / "basic", seed_basic());
   save(dir / "volume", seed_volume());
   save(dir / "textures_edits", seed_textures_edits());
+  save(dir / "cameras", seed_cameras());
 }
 
 // ---- EXR seeds: parts of small renders, as lt_merge_exr reads them ---------------------------

@@ -296,6 +296,29 @@ lt_camera_desc orthographic_camera(const Xform& xf, float ortho_scale) {
   return c;
 }
 
+lt_camera_desc panorama_camera(const Xform& xf, int panorama_type) {
+  lt_camera_desc c = perspective_camera(xf);
+  c.type = LT_CAMERA_PANORAMA;
+  c.panorama_type = panorama_type;
+  c.fisheye_fov = float(M_PI);
+  c.fisheye_lens = 10.5f;
+  c.latitude_min = -float(M_PI / 2);
+  c.latitude_max = float(M_PI / 2);
+  c.longitude_min = -float(M_PI);
+  c.longitude_max = float(M_PI);
+  return c;
+}
+
+lt_camera_desc with_dof(lt_camera_desc c, float focus_distance, float fstop, int blades, float rotation, float ratio) {
+  c.use_dof = 1;
+  c.focus_distance = focus_distance;
+  c.aperture_fstop = fstop;
+  c.aperture_blades = blades;
+  c.aperture_rotation = rotation;
+  c.aperture_ratio = ratio;
+  return c;
+}
+
 void set_camera(lt_scene* s, const lt_camera_desc& c) { check(lt_scene_set_camera(s, &c), "lt_scene_set_camera"); }
 
 lt_world_desc world(V3 color, float strength) {

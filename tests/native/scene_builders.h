@@ -85,6 +85,11 @@ int add_object(lt_scene* s, const MeshData& m, int material, const Xform& xf = i
 
 lt_camera_desc perspective_camera(const Xform& xf, float focal_mm = 50, float sensor_mm = 36);
 lt_camera_desc orthographic_camera(const Xform& xf, float ortho_scale);
+// Blender's defaults for the panorama settings (Cycles' camera properties), of the given type.
+lt_camera_desc panorama_camera(const Xform& xf, int panorama_type);
+// Depth of field on a camera: Blender's defaults (a round aperture, ratio 1) at this F-stop.
+lt_camera_desc with_dof(lt_camera_desc c, float focus_distance, float fstop, int blades = 0, float rotation = 0,
+                        float ratio = 1);
 void set_camera(lt_scene* s, const lt_camera_desc& c);
 
 lt_world_desc world(V3 color, float strength);

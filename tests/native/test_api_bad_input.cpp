@@ -435,11 +435,17 @@ TEST(ApiBadInput, UnknownEnumValuesListTheValidNames) {
     std::string msg = EXPECT_INVALID(lt_scene_add_light(s, &l));
     for (const char* name : {"POINT", "SPOT", "AREA", "SUN"}) EXPECT_CONTAINS(msg, name);
   }
-  for (int type : {-1, 2, 1000}) {
+  for (int type : {-1, 3, 1000}) {
     lt_camera_desc c = perspective_camera(identity());
     c.type = type;
     std::string msg = EXPECT_INVALID(lt_scene_set_camera(s, &c));
-    for (const char* name : {"PERSPECTIVE", "ORTHOGRAPHIC"}) EXPECT_CONTAINS(msg, name);
+    for (const char* name : {"PERSPECTIVE", "ORTHOGRAPHIC", "PANORAMA"}) EXPECT_CONTAINS(msg, name);
+  }
+  for (int type : {-1, 3, 1000}) {
+    lt_camera_desc c = panorama_camera(identity(), LT_PANORAMA_EQUIRECTANGULAR);
+    c.panorama_type = type;
+    std::string msg = EXPECT_INVALID(lt_scene_set_camera(s, &c));
+    for (const char* name : {"EQUIRECTANGULAR", "FISHEYE_EQUIDISTANT", "FISHEYE_EQUISOLID"}) EXPECT_CONTAINS(msg, name);
   }
   // Other enums: refused with a message.
   lt_camera_desc c = perspective_camera(identity());

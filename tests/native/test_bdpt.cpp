@@ -159,7 +159,7 @@ TEST(Bdpt, MisWeightsSumToOne) {
         lt::CameraSample cs;
         cs.pixel_center = {px + 0.5f, py + 0.5f};
         cs.film = {px + 0.5f + ox, py + 0.5f + oy};
-        cs.ray = camera.generate(cs.film.x, cs.film.y);
+        camera.generate(cs.film.x, cs.film.y, &cs.ray);
         for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
           ++checked;
           worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
@@ -345,7 +345,7 @@ TEST(Bdpt, LongPathsStayFinite) {
     lt::CameraSample cs;
     cs.pixel_center = {12.5f, 11.5f};
     cs.film = {12.3f, 11.7f};
-    cs.ray = camera.generate(cs.film.x, cs.film.y);
+    camera.generate(cs.film.x, cs.film.y, &cs.ray);
     std::vector<float> sums = lt::bdpt_mis_weight_sums(ctx, cs, sampler);
     for (float sum : sums) worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
     checked += int(sums.size());
@@ -438,7 +438,7 @@ TEST(Bdpt, NoHeapAllocationPerSample) {
         lt::CameraSample cs;
         cs.film = {float(i % size) + 0.5f, float((i / size) % size) + 0.5f};
         cs.pixel_center = cs.film;
-        cs.ray = camera.generate(cs.film.x, cs.film.y);
+        camera.generate(cs.film.x, cs.film.y, &cs.ray);
         bdpt->trace(cs, sampler, stats, splats);
         path->trace(cs, sampler, stats, splats);
         if (splats.size() > (1 << 15)) splats.clear();
@@ -608,4 +608,78 @@ TEST(Bdpt, DoorSlabsBounceKindsAgreeWithPathTracing) {
   EXPECT_LT(std::abs(b.first - a.first), 4 * se)
       << "PATH " << a.first << " +- " << a.second << ", BIDIRECTIONAL " << b.first << " +- " << b.second << " (ratio "
       << b.first / a.first << ")";
+}
+
+// ---- cameras with a lens, and panoramas -----------------------------------------------------------
+
+// The room's camera with depth of field: in focus at the glossy sphere (1.9 m along the axis), at
+// F/0.04 (a 27.5 cm aperture radius for the 22 mm lens: the glass sphere and the back wall blur
+// over several of the 48 x 48 test's pixels), with `blades` blades and an anamorphic ratio.
+static lt_camera_desc room_lens(int blades, float ratio) {
+  return with_dof(perspective_camera(look_at({0, -1.5f, 1.0f}, {0, 0.5f, 0.8f}), 22), 1.9f, 0.04f, blades, 0.3f, ratio);
+}
+
+// With a lens the camera vertex is a point on the aperture: the MIS weights of every strategy
+// that can sample a path, t = 1 connecting to that lens point included, still sum to one.
+TEST(Bdpt, MisWeightsSumToOneWithALens) {
+  for (int blades : {0, 5}) {
+    ScenePtr s = room(Lights::Area);
+    set_camera(s.get(), room_lens(blades, 1.4f));
+    const lt::Scene& scene = s->scene;
+    const int size = 32;
+    lt::Camera camera(scene.camera, size, size);
+    ASSERT_TRUE(camera.has_lens());
+    lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
+    for (lt::MisHeuristic h : {lt::MisHeuristic::Power, lt::MisHeuristic::Balance}) {
+      lt::IntegratorSettings is;
+      is.max_bounces = 8;
+      is.mis = h;
+      lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
+      int checked = 0;
+      double worst = 0;
+      for (int i = 0; i < 3000; ++i) {
+        int px = i % size, py = (i / size) % size;
+        lt::Sampler sampler(7, uint32_t(py * size + px), uint32_t(i));
+        float ox = filter.sample(sampler.next_1d()), oy = filter.sample(sampler.next_1d());
+        lt::CameraSample cs;
+        cs.pixel_center = {px + 0.5f, py + 0.5f};
+        cs.film = {px + 0.5f + ox, py + 0.5f + oy};
+        cs.lens = sampler.next_2d();
+        ASSERT_TRUE(camera.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray));
+        for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
+          ++checked;
+          worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
+        }
+      }
+      EXPECT_GT(checked, 1000) << "too few connected paths to test";
+      EXPECT_LT(worst, 1e-3) << "blades " << blades << " heuristic " << int(h) << ": " << checked << " paths";
+    }
+  }
+}
+
+// Depth of field in BDPT: with light subpaths of length 1 it is path tracing (per tile within 5
+// SE from the Variance passes); full BDPT, whose light tracing (t = 1) samples a point on the
+// aperture and weighs it by the lens's importance, agrees with path tracing from K renders each.
+// A panorama is not connectable: BDPT leaves t = 1 out and still agrees.
+TEST(Bdpt, DepthOfFieldAndPanoramasAgreeWithPathTracing) {
+  ScenePtr s = room(Lights::Area, 0.5f);
+  set_camera(s.get(), room_lens(0, 1.0f));
+  {
+    const int size = 48;
+    Passes pt = render(s.get(), settings(LT_INTEGRATOR_PATH, size, 96, 1, 1));
+    Passes bd = render(s.get(), settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 96, 2, 1));
+    ASSERT_EQ(pt.first_non_finite(), "");
+    ASSERT_EQ(bd.first_non_finite(), "");
+    EXPECT_EQ(differing_tiles(pt, bd, 8, 5), "") << "light length 1";
+  }
+  const int size = 48, tile = 8, K = 6;  // tiles of a few blur radii: light tracing to the wrong pixels shows
+  lt_render_settings pa = settings(LT_INTEGRATOR_PATH, size, 48, 100, 64);
+  lt_render_settings pb = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 200, 64);
+  set_camera(s.get(), room_lens(6, 1.5f));
+  EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, K, tile), "") << "full BDPT, 6 blades, anamorphic";
+  lt_camera_desc pano = panorama_camera(look_at({0, -1.2f, 1.0f}, {0, 0.5f, 0.8f}), LT_PANORAMA_FISHEYE_EQUIDISTANT);
+  pano.fisheye_fov = 3.5f;
+  set_camera(s.get(), pano);
+  pa.width = pb.width = pa.height = pb.height = 32;
+  EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, 4, 16), "") << "full BDPT, fisheye";
 }

@@ -9,6 +9,32 @@ _SENSOR_FIT = {
     'HORIZONTAL': core.SENSOR_HORIZONTAL,
     'VERTICAL': core.SENSOR_VERTICAL,
 }
+# Cycles 3.4's panoramic projections that Lantern renders (cam.cycles.panorama_type).
+_PANORAMA = {
+    'EQUIRECTANGULAR': core.PANORAMA_EQUIRECTANGULAR,
+    'FISHEYE_EQUIDISTANT': core.PANORAMA_FISHEYE_EQUIDISTANT,
+    'FISHEYE_EQUISOLID': core.PANORAMA_FISHEYE_EQUISOLID,
+}
+
+
+def focus_distance(depsgraph, camera_object, matrix=None):
+    """Cycles' focus distance (blender_camera_focal_distance): dof.focus_distance, or with a focus
+    object (or its bone, focus_subtarget) the distance between it and the camera along the
+    camera's view axis, taken absolute as Cycles does (an object behind the camera focuses at the
+    same distance in front)."""
+    import mathutils
+    cam = camera_object.data
+    target = cam.dof.focus_object
+    if target is None:
+        return cam.dof.focus_distance
+    target = target.evaluated_get(depsgraph)
+    target_matrix = target.matrix_world
+    bone = cam.dof.focus_subtarget
+    if bone and target.pose and bone in target.pose.bones:
+        target_matrix = target_matrix @ target.pose.bones[bone].matrix
+    m = mathutils.Matrix(camera_object.matrix_world if matrix is None else matrix)
+    view_axis = m.col[2].to_3d().normalized()
+    return abs(view_axis.dot(m.col[3].to_3d() - target_matrix.col[3].to_3d()))
 
 
 def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None, shift_x=None):
@@ -34,16 +60,21 @@ def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None
         return obj.name
 
     cam = obj.data
+    kw["type"] = core.CAMERA_PERSPECTIVE
     if cam.type == 'ORTHO':
         kw["type"] = core.CAMERA_ORTHOGRAPHIC
-    else:
-        if cam.type == 'PANO':
-            report({'WARNING'}, "Camera '%s': panoramic cameras are not supported, rendered as "
-                                "perspective" % obj.name)
-        kw["type"] = core.CAMERA_PERSPECTIVE
-    if cam.dof.use_dof:
-        report({'WARNING'}, "Camera '%s': depth of field is not supported yet and is ignored"
-                            % obj.name)
+    elif cam.type == 'PANO':
+        kw.update(_panorama(cam, obj.name, report))
+    dof = cam.dof
+    if dof.use_dof:
+        distance = focus_distance(depsgraph, obj, matrix)
+        if distance > 0:
+            kw.update(use_dof=True, focus_distance=distance, aperture_fstop=dof.aperture_fstop,
+                      aperture_blades=dof.aperture_blades, aperture_rotation=dof.aperture_rotation,
+                      aperture_ratio=dof.aperture_ratio)
+        else:
+            report({'WARNING'}, "Camera '%s': the focus distance is 0 (the plane in focus at the "
+                                "lens), depth of field is ignored" % obj.name)
     kw.update(
         focal_length=cam.lens,
         sensor_width=cam.sensor_width,
@@ -57,6 +88,26 @@ def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None
     )
     core_scene.set_camera(**kw)
     return obj.name
+
+
+def _panorama(cam, name, report):
+    """set_camera keywords for a panoramic camera: Cycles' panorama settings, which Blender 3.4
+    keeps in the Cycles add-on's camera properties (cam.cycles)."""
+    ccam = getattr(cam, "cycles", None)
+    if ccam is None or not hasattr(ccam, "panorama_type"):
+        report({'WARNING'}, "Camera '%s': a panoramic camera's settings are the Cycles add-on's; "
+                            "enable Cycles (Preferences > Add-ons) to render them. Rendered as "
+                            "perspective" % name)
+        return {}
+    if ccam.panorama_type not in _PANORAMA:
+        report({'WARNING'}, "Camera '%s': panorama type %s is not supported by Lantern (it "
+                            "renders %s); rendered as perspective"
+                            % (name, ccam.panorama_type, ", ".join(sorted(_PANORAMA))))
+        return {}
+    return dict(type=core.CAMERA_PANORAMA, panorama_type=_PANORAMA[ccam.panorama_type],
+                fisheye_fov=ccam.fisheye_fov, fisheye_lens=ccam.fisheye_lens,
+                latitude_min=ccam.latitude_min, latitude_max=ccam.latitude_max,
+                longitude_min=ccam.longitude_min, longitude_max=ccam.longitude_max)
 
 
 def camera_table(depsgraph, camera_object=None):

@@ -32,8 +32,8 @@ extern "C" {
  * (lt_mesh_attribute), instances their Object Info values and attributes, images their alpha;
  * 8: cubic interpolation; lt_scene_add_image_file (files read by the core); pass and strategy
  * rows read in bands; lt_scene_set_world_program and the world map's size in lt_scene_stats;
- * 9: lt_render_settings.sample_pattern. */
-#define LT_ABI_VERSION 9
+ * 9: lt_render_settings.sample_pattern; 10: lt_camera_desc's lens and panorama fields. */
+#define LT_ABI_VERSION 10
 
 enum lt_status {
   LT_OK = 0,
@@ -230,8 +230,14 @@ typedef struct lt_light_desc {
 } lt_light_desc;
 LT_API int lt_scene_add_light(lt_scene* scene, const lt_light_desc* desc);
 
-enum lt_camera_type { LT_CAMERA_PERSPECTIVE = 0, LT_CAMERA_ORTHOGRAPHIC = 1 };
+enum lt_camera_type { LT_CAMERA_PERSPECTIVE = 0, LT_CAMERA_ORTHOGRAPHIC = 1, LT_CAMERA_PANORAMA = 2 };
 enum lt_sensor_fit { LT_SENSOR_AUTO = 0, LT_SENSOR_HORIZONTAL = 1, LT_SENSOR_VERTICAL = 2 };
+/* Cycles 3.4's panoramic projections Lantern renders (Blender's cam.cycles.panorama_type). */
+enum lt_panorama_type {
+  LT_PANORAMA_EQUIRECTANGULAR = 0,
+  LT_PANORAMA_FISHEYE_EQUIDISTANT = 1,
+  LT_PANORAMA_FISHEYE_EQUISOLID = 2
+};
 typedef struct lt_camera_desc {
   int type;
   float transform[12];               /* camera looks down local -Z, +Y up */
@@ -242,6 +248,22 @@ typedef struct lt_camera_desc {
   float shift_x, shift_y;
   float clip_start, clip_end;
   float pixel_aspect; /* pixel_aspect_y / pixel_aspect_x, 1 for square pixels */
+  /* Depth of field (Blender's camera.dof): the core takes Cycles' aperture radius from the
+   * F-stop (focal length in metres / (2 F-stop), 1 / (2 F-stop) for orthographic; F-stop clamped
+   * to 1e-5). focus_distance: along the view axis (> 0 with use_dof; a focus object's resolved by
+   * the caller). Blades < 3 make a round aperture. Panoramas and orthographic cameras with depth
+   * of field render it but are not connectable for BIDIRECTIONAL's light tracing (docs). */
+  int use_dof;
+  float focus_distance;
+  float aperture_fstop; /* >= 0 */
+  int aperture_blades;  /* 0 .. 16 */
+  float aperture_rotation;
+  float aperture_ratio; /* > 0 */
+  /* LT_CAMERA_PANORAMA (Cycles' camera settings): lt_panorama_type, the fisheyes' field of view
+   * (radians, > 0), the equisolid's lens (mm, > 0), the equirectangular's ranges (radians). */
+  int panorama_type;
+  float fisheye_fov, fisheye_lens;
+  float latitude_min, latitude_max, longitude_min, longitude_max;
 } lt_camera_desc;
 LT_API int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* desc);
 

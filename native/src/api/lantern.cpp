@@ -524,8 +524,8 @@ int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out) {
 int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
   return guarded([&] {
     require(scene && d, "lt_scene_set_camera: NULL argument");
-    require(d->type == LT_CAMERA_PERSPECTIVE || d->type == LT_CAMERA_ORTHOGRAPHIC,
-            "unknown camera type " + std::to_string(d->type) + "; valid types are PERSPECTIVE, ORTHOGRAPHIC");
+    require(d->type == LT_CAMERA_PERSPECTIVE || d->type == LT_CAMERA_ORTHOGRAPHIC || d->type == LT_CAMERA_PANORAMA,
+            "unknown camera type " + std::to_string(d->type) + "; valid types are PERSPECTIVE, ORTHOGRAPHIC, PANORAMA");
     require(d->sensor_fit >= LT_SENSOR_AUTO && d->sensor_fit <= LT_SENSOR_VERTICAL, "unknown sensor fit");
     const float values[] = {d->focal_length, d->sensor_width, d->sensor_height, d->ortho_scale, d->shift_x,
                             d->shift_y,      d->clip_start,   d->clip_end,      d->pixel_aspect};
@@ -534,8 +534,39 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
         d->focal_length > 0 && d->sensor_width > 0 && d->sensor_height > 0 && d->ortho_scale > 0 && d->pixel_aspect > 0,
         "camera focal length, sensor size, ortho scale and pixel aspect must be positive");
     require(d->clip_start >= 0 && d->clip_end > d->clip_start, "camera clip end must exceed clip start >= 0");
+    const float lens_values[] = {d->focus_distance, d->aperture_fstop, d->aperture_rotation, d->aperture_ratio,
+                                 d->fisheye_fov,    d->fisheye_lens,   d->latitude_min,      d->latitude_max,
+                                 d->longitude_min,  d->longitude_max};
+    require(finite_array(lens_values, 10), "camera depth of field and panorama parameters must be finite");
+    if (d->use_dof) {
+      require(d->focus_distance > 0,
+              "camera focus distance must be positive with depth of field (the plane in focus cannot be at the lens)");
+      require(d->aperture_fstop >= 0, "camera F-stop must be >= 0");
+      require(d->aperture_blades >= 0 && d->aperture_blades <= 16, "camera aperture blades must be in [0, 16]");
+      require(d->aperture_ratio > 0, "camera aperture ratio must be positive");
+    }
+    if (d->type == LT_CAMERA_PANORAMA) {
+      require(d->panorama_type >= LT_PANORAMA_EQUIRECTANGULAR && d->panorama_type <= LT_PANORAMA_FISHEYE_EQUISOLID,
+              "unknown panorama type " + std::to_string(d->panorama_type) +
+                  "; valid types are EQUIRECTANGULAR, FISHEYE_EQUIDISTANT, FISHEYE_EQUISOLID");
+      require(d->fisheye_fov > 0 && d->fisheye_lens > 0, "camera fisheye field of view and lens must be positive");
+    }
     lt::CameraDesc c = scene->scene.camera;  // assigned only once valid: a refused call changes nothing
     c.orthographic = d->type == LT_CAMERA_ORTHOGRAPHIC;
+    c.panorama = d->type == LT_CAMERA_PANORAMA;
+    c.aperture_radius =
+        d->use_dof ? lt::aperture_radius_from_fstop(c.orthographic, d->focal_length, d->aperture_fstop) : 0.0f;
+    c.focus_distance = d->focus_distance;
+    c.aperture_blades = d->aperture_blades;
+    c.aperture_rotation = d->aperture_rotation;
+    c.aperture_ratio = d->aperture_ratio;
+    c.panorama_type = lt::PanoramaType(d->panorama_type);
+    c.fisheye_fov = d->fisheye_fov;
+    c.fisheye_lens = d->fisheye_lens;
+    c.latitude_min = d->latitude_min;
+    c.latitude_max = d->latitude_max;
+    c.longitude_min = d->longitude_min;
+    c.longitude_max = d->longitude_max;
     c.xf = to_transform(d->transform, "camera");
     require(std::abs(c.xf.determinant()) > 1e-30f, "camera transform is singular");
     c.focal_length = d->focal_length;

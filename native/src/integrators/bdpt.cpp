@@ -7,7 +7,8 @@
 // Strategies: s = 0 (the camera subpath reaches an emitter: a mesh light, a lamp, the sun or the
 // world, or crosses an emitting medium: volume emission, found by s = 0 only, weight 1), s = 1 (a
 // fresh light sample at the camera vertex, as next-event estimation), s >= 2, and t = 1 (a light
-// vertex connected to the pinhole and splatted through the pixel filter).
+// vertex connected to the pinhole, or to a point sampled on the lens, and splatted through the
+// pixel filter; not for orthographic and panoramic cameras, which are not connectable).
 //
 // Media (scenes with volumes; pbrt 3, section 16.3): both walks sample free flights along every
 // segment as the volumetric path tracer does and scatter at medium vertices with the phase
@@ -412,13 +413,15 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   return count;
 }
 
-// z0 on the pinhole; z1's density is the filter's choice of film position.
+// z0 on the pinhole or the lens; z1's density is the filter's choice of film position seen from it.
 int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   PathVertex& z0 = path[0];
   z0 = PathVertex();
   z0.type = VertexType::Camera;
   z0.p = cs_.ray.o;
-  z0.delta = ctx_.camera.orthographic();  // a delta direction: t = 1 cannot reach it
+  // On the lens (camera_sample_perspective's ray origin). Orthographic cameras (a delta direction)
+  // and panoramas are not connectable: t = 1 cannot reach them (Camera::connectable).
+  z0.delta = !ctx_.camera.connectable();
   if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, cs_.ray, &z0.stack, stats_);
   FirstSegment first;
   const int count = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, z0.stack, path, &first);
@@ -596,20 +599,26 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   const float kinds = kind_limit_factor(light, camera, s, 1);
   if (!(kinds > 0)) return;
   const Camera& cam = ctx_.camera;
+  if (!cam.connectable()) return;
+  // A point on the lens, uniform over the aperture as the camera's rays sample it (pbrt-v4's
+  // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were.
+  const Vec3 lens = cam.has_lens() ? cam.lens_point(sampler_.next_2d()) : cam.position();
   Vec2 film;
   Vec3 dir;
   float dist;
-  if (!cam.project(qs.p, ctx_.filter.radius(), &film, &dir, &dist)) return;
+  if (!cam.project(lens, qs.p, ctx_.filter.radius(), &film, &dir, &dist)) return;
   Spectrum base = qs.beta * f(qs, -dir, Mode::Importance) * kinds;
   if (is_black(base)) return;
   PathVertex& z0 = endpoint(VertexType::Camera);
-  z0.p = cam.position();
+  z0.p = lens;
   base *= transmittance(qs, z0);
   if (is_black(base)) return;
   float c = dot(dir, cam.forward());
-  // Pixel j's importance is W_j = h_j(x) / (a cos^4) (a: view-plane area of a pixel); with the
-  // geometry term cos * cos_qs / d^2 the contribution is h_j cos_qs / (a cos^3 d^2). The film
-  // divides the sum of splats by the number of light paths.
+  // Pixel j's importance is W_j = h_j(x) / (a A_lens cos^4) (a: view-plane area of a pixel,
+  // A_lens the aperture's area, 1 for a pinhole), the lens point's density 1 / A_lens; with the
+  // geometry term cos * cos_qs / d^2 the contribution is h_j cos_qs / (a cos^3 d^2), cos and d
+  // seen from the lens point (pbrt-v4's PerspectiveCamera::We and SampleWi). The film divides the
+  // sum of splats by the number of light paths.
   base *= cos_at(qs, dir) / (cam.pixel_plane_area() * c * c * c * dist * dist);
   const float r = ctx_.filter.radius();
   const int px0 = std::max(ctx_.x0, int(std::ceil(film.x - r - 0.5f))),

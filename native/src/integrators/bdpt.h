@@ -42,15 +42,17 @@ class Bdpt {
     if (to.on_surface()) pdf *= std::abs(dot(to.n, w)) / std::sqrt(d2);
     return pdf / d2;
   }
-  // Solid-angle density with which the camera, for the pixel centred at `pixel`, shoots towards p,
-  // as MIS must see it: each pixel has spp camera samples but N * spp light paths (N pixels in the
-  // region), so the camera's per-pixel density is divided by N (Veach's sample-count-weighted
-  // heuristics; it equals pbrt's density normalised over the whole film).
-  float camera_pdf_dir(const Vec3& p, const Vec2& pixel) const {
+  // Solid-angle density with which the camera, for the pixel centred at `pixel`, shoots from the
+  // lens point o towards p, as MIS must see it: each pixel has spp camera samples but N * spp
+  // light paths (N pixels in the region), so the camera's per-pixel density is divided by N
+  // (Veach's sample-count-weighted heuristics; it equals pbrt's density normalised over the whole
+  // film). The lens point's own density (uniform over the aperture) is the same for every
+  // strategy (t = 1 samples it as the camera does) and no strategy moves it, so MIS leaves it out.
+  float camera_pdf_dir(const Vec3& o, const Vec3& p, const Vec2& pixel) const {
     Vec2 film;
     Vec3 dir;
     float dist;
-    if (!ctx_.camera.project(p, ctx_.filter.radius() + 1, &film, &dir, &dist)) return 0;
+    if (!ctx_.camera.project(o, p, ctx_.filter.radius() + 1, &film, &dir, &dist)) return 0;
     float h = ctx_.filter.pdf(film.x - pixel.x) * ctx_.filter.pdf(film.y - pixel.y);
     float c = dot(dir, ctx_.camera.forward());
     return h / (film_area_ * c * c * c);
@@ -68,7 +70,7 @@ class Bdpt {
     if (!(length_squared(wn) > 0)) return 0;
     float p;
     if (v.type == VertexType::Camera) {
-      p = camera_pdf_dir(next.p, pixel);
+      p = camera_pdf_dir(v.p, next.p, pixel);
     } else {
       Vec3 wp = normalize(prev->p - v.p);
       p = bsdf_pdf(v, wp, normalize(wn));

@@ -70,7 +70,7 @@ std::vector<float> Bdpt::weight_sums() {
         if (t2 >= 1 && s2 >= 1) {
           const PathVertex& a = c2[t2 - 1];
           const PathVertex& b = l2[s2 - 1];
-          bool a_ok = a.type == VertexType::Camera ? !ctx_.camera.orthographic() : (scatters(a) && !a.delta);
+          bool a_ok = a.type == VertexType::Camera ? ctx_.camera.connectable() : (scatters(a) && !a.delta);
           bool b_ok = b.type == VertexType::Light ? !b.delta_direction : (scatters(b) && !b.delta);
           if (!a_ok || !b_ok) continue;
         }

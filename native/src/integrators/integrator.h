@@ -48,7 +48,8 @@ struct CameraSample {
   Ray ray;
   Vec2 film;
   Vec2 pixel_center;
-  float dP = 0, dD = 0;  // the ray's compact differentials (Camera::differentials), for bump
+  float dP = 0, dD = 0;   // the ray's compact differentials (Camera::differentials), for bump
+  Vec2 lens{0.5f, 0.5f};  // the lens sample the ray was generated with (Camera::generate)
 };
 
 // A light-tracing contribution to a pixel of the render region (BDPT's t = 1), and its cell in

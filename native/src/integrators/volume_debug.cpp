@@ -80,7 +80,13 @@ class VolumeDebugIntegrator final : public Integrator {
     const int col = cs.film.x >= hw ? 1 : 0, top = cs.film.y >= hh ? 1 : 0;
     float fx = std::min(cs.film.x - col * hw, float(hw)) * w_ / float(hw);
     float fy = std::min(cs.film.y - top * hh, float(hh)) * h_ / float(hh);
-    return trace_panel(ctx_.scene, ctx_.settings, ctx_.camera.generate(fx, fy), (1 - top) * 2 + col, sampler, stats);
+    Ray ray;
+    if (!ctx_.camera.generate(fx, fy, cs.lens, &ray)) {
+      SampleValue none;  // nothing seen there: black and opaque, as render.cpp
+      none.alpha = 1;
+      return none;
+    }
+    return trace_panel(ctx_.scene, ctx_.settings, ray, (1 - top) * 2 + col, sampler, stats);
   }
 
  private:

@@ -129,7 +129,17 @@ void RenderJob::render_pass(int sample_index) {
             CameraSample cs;
             cs.pixel_center = {fx + 0.5f, fy + 0.5f};
             cs.film = {fx + 0.5f + ox, fy + 0.5f + oy};
-            cs.ray = camera_.generate(cs.film.x, cs.film.y);
+            // A lens sample only for a camera with an aperture: a pinhole's renders stay as they were.
+            if (camera_.has_lens()) cs.lens = sampler.next_2d();
+            if (!camera_.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray)) {
+              // The film sees nothing there (outside a fisheye's circle): black and opaque, as Cycles.
+              // No light path is traced for it; it still counts as one, harmlessly: only panoramas
+              // have such samples, and BDPT splats nothing for them (Camera::connectable).
+              SampleValue none;
+              none.alpha = 1;
+              film_.add(x, y, none);
+              continue;
+            }
             camera_.differentials(cs.film.x, cs.film.y, &cs.dP, &cs.dD);
             size_t splat_mark = splats.size();
             SampleValue v = integrator_->trace(cs, sampler, stats, splats);

@@ -1,5 +1,7 @@
 // Blender's camera model: sensor fit, focal length, shift, orthographic scale and clipping planes
-// (BKE_camera_params_compute_viewplane), looking down local -Z with +Y up.
+// (BKE_camera_params_compute_viewplane), looking down local -Z with +Y up; Cycles' thin lens
+// (depth of field: circular or polygonal aperture, anamorphic ratio) and its panoramic projections
+// (equirectangular, fisheye equidistant and equisolid; kernel/camera/camera.h and projection.h).
 #pragma once
 
 #include "core/math.h"
@@ -7,8 +9,11 @@
 
 namespace lt {
 
+enum class PanoramaType { Equirectangular = 0, FisheyeEquidistant = 1, FisheyeEquisolid = 2 };
+
 struct CameraDesc {
   bool orthographic = false;
+  bool panorama = false;
   Transform xf;
   float focal_length = 50, sensor_width = 36, sensor_height = 24;
   int sensor_fit = 0;  // 0 auto, 1 horizontal, 2 vertical
@@ -16,41 +21,86 @@ struct CameraDesc {
   float shift_x = 0, shift_y = 0;
   float clip_start = 0.1f, clip_end = 1000;
   float pixel_aspect = 1;
+  // Depth of field: the aperture's radius in scene units (0: a pinhole), the distance of the plane
+  // in focus along the view axis, the aperture's blades (< 3: a disk) and their rotation
+  // (radians), and the anamorphic ratio (the aperture's x is divided by it).
+  float aperture_radius = 0, focus_distance = 10;
+  int aperture_blades = 0;
+  float aperture_rotation = 0, aperture_ratio = 1;
+  // Panoramas (Cycles' camera settings): the projection, the fisheyes' field of view (radians)
+  // and the equisolid's lens (mm), the equirectangular's latitude and longitude ranges (radians).
+  PanoramaType panorama_type = PanoramaType::FisheyeEquisolid;
+  float fisheye_fov = kPi, fisheye_lens = 10.5f;
+  float latitude_min = -0.5f * kPi, latitude_max = 0.5f * kPi, longitude_min = -kPi, longitude_max = kPi;
 };
+
+// Cycles' aperture radius from Blender's F-stop (blender/camera.cpp): the focal length in metres
+// (scene units, whatever the unit scale) over twice the F-stop, which is clamped to 1e-5; an
+// orthographic camera has no focal length and takes 1 / (2 F-stop).
+float aperture_radius_from_fstop(bool orthographic, float focal_length_mm, float fstop);
 
 class Camera {
  public:
   Camera() = default;
   Camera(const CameraDesc& desc, int width, int height);
-  // Ray through the film position (x, y) in pixels of the full frame, y up from the bottom.
-  Ray generate(float x, float y) const;
-  // Cycles' compact ray differentials there (camera_sample_perspective / _orthographic): the
-  // footprint's size at the camera (dP: a pixel for orthographic, 0 for a pinhole) and its growth
+  // The ray through the film position (x, y) in pixels of the full frame, y up from the bottom,
+  // from the lens point u_lens picks (ignored by a pinhole: has_lens()). False where the film
+  // sees nothing (outside a fisheye's circle): Cycles leaves such samples black and opaque.
+  bool generate(float x, float y, Vec2 u_lens, Ray* ray) const;
+  // The pinhole's ray (no lens) through (x, y); false as generate.
+  bool generate(float x, float y, Ray* ray) const { return generate(x, y, Vec2{0.5f, 0.5f}, ray); }
+  // Cycles' compact ray differentials there (camera_sample_perspective / _orthographic /
+  // _panorama, without depth of field): the footprint's size at the camera (dP) and its growth
   // per unit distance (dD: the angle between neighbouring pixels' rays).
   void differentials(float x, float y, float* dP, float* dD) const;
-  // Distance along the camera's viewing axis (Blender's Z depth) of a world point.
-  float depth(const Vec3& p) const { return -dot(p - origin_, forward_neg_); }
+  // Blender's Z depth of a world point: the distance along the viewing axis, or from the camera
+  // for a panorama (Cycles' camera_z_depth).
+  float depth(const Vec3& p) const { return d_.panorama ? length(p - origin_) : -dot(p - origin_, forward_neg_); }
   Vec3 position() const { return origin_; }
   Vec3 forward() const { return -forward_neg_; }
   bool orthographic() const { return d_.orthographic; }
+  bool panorama() const { return d_.panorama; }
+  // A thin lens with an aperture: camera rays start on it and draw a lens sample (one next_2d).
+  bool has_lens() const { return d_.aperture_radius > 0; }
+  // The point on the lens for the sample u (world space; the camera's position without a lens).
+  // Uniform over the aperture's shape, whose area lens_area() is.
+  Vec3 lens_point(Vec2 u) const;
+  float lens_area() const;
   int width() const { return width_; }  // the film: the full frame in pixels
   int height() const { return height_; }
 
-  // For connecting a point to the pinhole (BDPT's t = 1): the full-frame film position (pixels,
-  // y up) where the point is seen, the unit direction from the camera to it and the distance.
-  // False if it is behind the camera, outside the clipping range or off the film (filter margin
-  // included).
-  bool project(const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance) const;
-  // Solid-angle density of camera rays through the film area around `film` per unit film pixel
-  // area density: a ray through film position x has solid-angle pdf = pixel_density(x) / (a cos^3),
-  // with a the view-plane area of one pixel at unit distance (pbrt 3, section 16.1.1).
+  // Whether a point can be connected to the camera (BDPT's t = 1): a perspective camera, with or
+  // without a lens. Orthographic cameras (a delta direction) and panoramas (light tracing to them
+  // is not implemented) cannot: their connection strategy has density 0 and MIS leaves it out.
+  bool connectable() const { return !d_.orthographic && !d_.panorama; }
+  // For connecting a point p to the lens point o (the camera's position for a pinhole): the
+  // full-frame film position (pixels, y up) of the camera ray from o that passes through p, the
+  // unit direction from o to p and the distance. False if the camera is not connectable, or p is
+  // behind the camera, outside the ray's clipping range or off the film (margin included).
+  bool project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance) const;
+  // The view-plane area of one pixel at unit distance, a: a camera ray from any lens point in the
+  // direction making angle theta with the view axis has solid-angle density
+  // pixel_density / (a cos^3 theta) (pbrt 3, section 16.1.1; the same with a lens, pbrt-v4's
+  // PerspectiveCamera::PDF_We, since the focus plane is at cos theta times the ray's length).
   float pixel_plane_area() const { return pixel_area_; }
 
  private:
+  // The view plane (x, y at unit distance, or the orthographic plane) at film position (x, y).
+  Vec2 plane_point(float x, float y) const {
+    return {x0_ + (x1_ - x0_) * (x / width_), y0_ + (y1_ - y0_) * (y / height_)};
+  }
+  // The aperture offset (camera x, y in scene units) for the sample u.
+  Vec2 aperture_offset(Vec2 u) const;
+  // A panorama's direction in camera space (x right, y up, -z forward) at film position (x, y);
+  // zero where the projection sees nothing.
+  Vec3 panorama_direction(float x, float y) const;
+  Vec3 to_world(const Vec3& local) const { return right_ * local.x + up_ * local.y + forward_neg_ * local.z; }
+
   CameraDesc d_;
   int width_ = 1, height_ = 1;
   float x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // view plane at unit distance (or ortho plane)
   float pixel_area_ = 1;
+  float fisheye_w_ = 36, fisheye_h_ = 24;   // the equisolid's sensor, fitted to the frame
   Vec3 origin_, right_, up_, forward_neg_;  // forward_neg_: local +Z (the camera looks down -Z)
 };
 

@@ -1,0 +1,342 @@
+// The camera: the thin lens (Cycles' depth of field) keeps the plane in focus sharp, samples its
+// aperture uniformly and agrees with the projection BDPT's light tracing uses (a camera ray's
+// points project back to its film position and lens point, and the camera's directional density
+// integrates to one over the film); without an aperture the rays are the pinhole's. Panoramas map
+// the film as Cycles' equirectangular and fisheye projections do, and leave the film outside a
+// fisheye's circle black and opaque.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "api/handles.h"
+#include "core/sampling.h"
+#include "scene/camera.h"
+#include "scene_builders.h"
+
+using namespace lt_test;
+
+namespace {
+
+constexpr int kW = 64, kH = 48;
+
+lt::Camera camera_of(const lt_camera_desc& d, int w = kW, int h = kH) {
+  ScenePtr s = new_scene();
+  set_camera(s.get(), d);  // through the ABI: its validation and conversions
+  return lt::Camera(s->scene.camera, w, h);
+}
+
+float dist(const lt::Vec3& a, const lt::Vec3& b) { return lt::length(a - b); }
+
+const Xform kView = look_at({1, -4, 2}, {0, 0, 0.5f});
+
+}  // namespace
+
+// Every lens sample's ray through a film position meets the plane in focus (at the focus
+// distance along the view axis) at the pinhole ray's point there; points off that plane spread.
+// With a 50 mm lens at F/1.4 the aperture radius is 17.9 mm (Cycles: focal length in metres /
+// 2 F-stop), for a round aperture and for 6 rotated blades with an anamorphic ratio.
+TEST(Camera, ThinLensKeepsThePlaneInFocusSharp) {
+  for (int blades : {0, 6}) {
+    const lt_camera_desc d = with_dof(perspective_camera(kView, 50), 3.5f, 1.4f, blades, 0.3f, 1.7f);
+    const lt::Camera cam = camera_of(d), pin = camera_of(perspective_camera(kView, 50));
+    ASSERT_TRUE(cam.has_lens());
+    ASSERT_FALSE(pin.has_lens());
+    if (blades == 0)  // the disk's rightmost point: the radius over the ratio
+      EXPECT_NEAR(lt::length(cam.lens_point({1, 0.5f}) - cam.position()), 0.05f / (2 * 1.4f) / 1.7f, 1e-5f);
+    lt::Sampler sampler(3, 0, 0);
+    double spread_off_focus = 0;
+    for (int i = 0; i < 200; ++i) {
+      const float x = sampler.next_1d() * kW, y = sampler.next_1d() * kH;
+      lt::Ray p;
+      ASSERT_TRUE(pin.generate(x, y, &p));
+      // The pinhole ray's point at depth 3.5 and at depth 2.
+      const lt::Vec3 focus = p.o + p.d * (3.5f / lt::dot(p.d, pin.forward()));
+      const lt::Vec3 near = p.o + p.d * (2.0f / lt::dot(p.d, pin.forward()));
+      for (int k = 0; k < 16; ++k) {
+        lt::Ray r;
+        ASSERT_TRUE(cam.generate(x, y, sampler.next_2d(), &r));
+        EXPECT_NEAR(lt::length(r.d), 1.0f, 1e-5f);
+        EXPECT_NEAR(cam.depth(r.o), 0.0f, 1e-5f) << "the lens lies in the camera's plane";
+        const float t = (3.5f - cam.depth(r.o)) / lt::dot(r.d, cam.forward());
+        EXPECT_LT(dist(r.o + r.d * t, focus), 2e-5f * 3.5f) << "blades " << blades;
+        const float tn = (2.0f - cam.depth(r.o)) / lt::dot(r.d, cam.forward());
+        spread_off_focus += dist(r.o + r.d * tn, near);
+        // The clipping range is the pinhole ray's (Cycles).
+        EXPECT_NEAR(r.tmin, p.tmin, 1e-6f);
+        EXPECT_NEAR(r.tmax, p.tmax, 1e-2f);
+      }
+    }
+    EXPECT_GT(spread_off_focus / (200 * 16), 0.003) << "points off the focus plane must blur";
+  }
+}
+
+// Without an aperture (use_dof off) the rays are exactly the pinhole's: the same origin for every
+// lens sample, whatever the focus settings say.
+TEST(Camera, NoApertureIsThePinhole) {
+  lt_camera_desc d = with_dof(perspective_camera(kView, 35), 2, 2.8f, 5);
+  d.use_dof = 0;
+  const lt::Camera cam = camera_of(d), pin = camera_of(perspective_camera(kView, 35));
+  EXPECT_FALSE(cam.has_lens());
+  EXPECT_TRUE(cam.connectable());
+  for (float x : {0.5f, 17.25f, 63.9f}) {
+    lt::Ray a, b;
+    ASSERT_TRUE(cam.generate(x, 11.5f, {0.9f, 0.1f}, &a));
+    ASSERT_TRUE(pin.generate(x, 11.5f, &b));
+    EXPECT_EQ(a.o.x, b.o.x);
+    EXPECT_EQ(a.d.x, b.d.x);
+    EXPECT_EQ(a.d.y, b.d.y);
+    EXPECT_EQ(a.d.z, b.d.z);
+    EXPECT_EQ(a.tmax, b.tmax);
+  }
+}
+
+// The lens points are uniform over the aperture: the fraction in each of 8 x 8 cells of its
+// bounding box matches the cell's share of the aperture's area (measured on a fine grid against
+// the disk or the regular polygon of Cycles' regular_polygon_sample: corners at rotation +
+// (2k + 1) pi / blades), chi-square over the cells; lens_area is the shape's area.
+TEST(Camera, LensSamplesAreUniformOverTheAperture) {
+  struct Case {
+    int blades;
+    float rotation, ratio;
+  };
+  for (Case c : {Case{0, 0, 1}, Case{5, 0.4f, 1}, Case{3, -1.0f, 2.0f}, Case{0, 0, 0.6f}}) {
+    const lt_camera_desc d = with_dof(perspective_camera(identity(), 50), 4, 2.0f, c.blades, c.rotation, c.ratio);
+    const lt::Camera cam = camera_of(d);
+    const float r = 0.05f / 4, rx = r / c.ratio;  // identity transform: lens x, y are world x, y
+    auto inside = [&](float x, float y) {
+      x *= c.ratio;  // back to the round / regular shape
+      if (c.blades < 3) return x * x + y * y <= r * r;
+      // Inside every edge: the apothem along each edge's mid-angle.
+      const float a = float(M_PI) / c.blades, apothem = r * std::cos(a);
+      for (int k = 0; k < c.blades; ++k) {
+        const float mid = c.rotation + 2 * a * k;
+        if (x * std::cos(mid) + y * std::sin(mid) > apothem) return false;
+      }
+      return true;
+    };
+    constexpr int kCells = 8, kFine = 64, kN = 200000;
+    std::vector<double> expected(kCells * kCells, 0), observed(kCells * kCells, 0);
+    double area = 0;
+    for (int j = 0; j < kCells * kFine; ++j)
+      for (int i = 0; i < kCells * kFine; ++i) {
+        const float x = -rx + 2 * rx * (i + 0.5f) / (kCells * kFine), y = -r + 2 * r * (j + 0.5f) / (kCells * kFine);
+        if (!inside(x, y)) continue;
+        expected[(j / kFine) * kCells + i / kFine] += 1;
+        area += 4 * rx * r / double(kCells * kFine * kCells * kFine);
+      }
+    EXPECT_NEAR(cam.lens_area(), area, 0.01 * area) << "blades " << c.blades;
+    double total = 0;
+    for (double& e : expected) total += e;
+    for (double& e : expected) e *= kN / total;
+    lt::Sampler sampler(9, 1, 2);
+    for (int n = 0; n < kN; ++n) {
+      const lt::Vec3 p = cam.lens_point(sampler.next_2d());
+      ASSERT_TRUE(inside(p.x * (1 - 1e-5f), p.y * (1 - 1e-5f))) << p.x << " " << p.y;
+      const int i = std::min(kCells - 1, int((p.x + rx) / (2 * rx) * kCells));
+      const int j = std::min(kCells - 1, int((p.y + r) / (2 * r) * kCells));
+      observed[j * kCells + i] += 1;
+    }
+    // Chi-square over the cells with a fair share of the aperture (edge cells the fine grid
+    // barely reaches would be dominated by its discretisation error).
+    double chi2 = 0;
+    int dof = -1;
+    for (int k = 0; k < kCells * kCells; ++k) {
+      if (expected[k] < 0.2 * kN / (kCells * kCells)) continue;
+      chi2 += (observed[k] - expected[k]) * (observed[k] - expected[k]) / expected[k];
+      ++dof;
+    }
+    // The 1e-4 quantile of chi-square is below dof + 5 sqrt(2 dof) for these dof (about 40..64).
+    EXPECT_LT(chi2, dof + 5 * std::sqrt(2.0 * dof)) << "blades " << c.blades << " ratio " << c.ratio;
+  }
+}
+
+// A camera ray's points, within its clipping range, project back (Camera::project, BDPT's t = 1)
+// to the ray's film position and direction from its lens point; beyond the range they do not.
+TEST(Camera, LensRaysProjectBackToTheirFilmPosition) {
+  lt_camera_desc d = with_dof(perspective_camera(kView, 28), 2.5f, 0.7f, 7, 0.2f, 1.4f);
+  d.clip_start = 0.5f;
+  d.clip_end = 20;
+  d.shift_x = 0.1f;
+  const lt::Camera cam = camera_of(d);
+  lt::Sampler sampler(5, 0, 0);
+  int checked = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const float x = sampler.next_1d() * kW, y = sampler.next_1d() * kH;
+    lt::Ray r;
+    ASSERT_TRUE(cam.generate(x, y, sampler.next_2d(), &r));
+    // Inside the range (its ends are where rounding decides).
+    const float t = r.tmin * 1.001f + (r.tmax * 0.999f - r.tmin * 1.001f) * std::pow(sampler.next_1d(), 3.0f);
+    lt::Vec2 film;
+    lt::Vec3 dir;
+    float distance;
+    ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &film, &dir, &distance)) << t;
+    EXPECT_NEAR(film.x, x, 2e-3f * (1 + t));
+    EXPECT_NEAR(film.y, y, 2e-3f * (1 + t));
+    EXPECT_NEAR(distance, t, 1e-4f * t);
+    EXPECT_GT(lt::dot(dir, r.d), 1 - 1e-6f);
+    EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmin * 0.98f), 1, &film, &dir, &distance));
+    EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmax * 1.02f), 1, &film, &dir, &distance));
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2000);
+}
+
+// The camera's directional density from a lens point, 1 / (A cos^3) for a film uniform over its
+// area A at unit distance (pbrt-v4's PerspectiveCamera::PDF_We), integrates to one over the
+// directions that reach the film: Monte Carlo over the sphere of directions from several lens
+// points (4 standard errors). It holds the projection's film scale (Camera::project) and the
+// film's area (pixel_plane_area) to the density BDPT uses (bdpt.h, camera_pdf_dir); the lens
+// offset itself only shifts the film and is held by LensRaysProjectBackToTheirFilmPosition.
+TEST(Camera, DirectionalDensityIntegratesToOne) {
+  const lt_camera_desc d = with_dof(perspective_camera(kView, 20), 0.6f, 0.25f, 0, 0, 1);
+  const lt::Camera cam = camera_of(d);
+  const float film_area = cam.pixel_plane_area() * kW * kH;
+  lt::Sampler sampler(8, 0, 0);
+  for (lt::Vec2 u : {lt::Vec2{0.5f, 0.5f}, lt::Vec2{0.95f, 0.5f}, lt::Vec2{0.1f, 0.85f}}) {
+    const lt::Vec3 o = cam.lens_point(u);
+    constexpr int kN = 400000;
+    double sum = 0, sum2 = 0;
+    for (int n = 0; n < kN; ++n) {
+      const lt::Vec3 w = lt::sample_uniform_sphere(sampler.next_2d());
+      lt::Vec2 film;
+      lt::Vec3 dir;
+      float distance;
+      double f = 0;
+      if (cam.project(o, o + w * 5.0f, 0, &film, &dir, &distance)) {
+        const float c = lt::dot(dir, cam.forward());
+        f = 1.0 / (film_area * c * c * c) / lt::uniform_sphere_pdf();
+      }
+      sum += f;
+      sum2 += f * f;
+    }
+    const double mean = sum / kN, se = std::sqrt((sum2 / kN - mean * mean) / kN);
+    EXPECT_NEAR(mean, 1.0, 4 * se + 1e-3) << "lens point " << o.x << " " << o.y << " " << o.z;
+  }
+}
+
+// Blender's F-stop 0 (its minimum) is Cycles' 1e-5: a finite, huge aperture; a negative F-stop,
+// a focus distance of 0 with depth of field and a non-positive aperture ratio are refused.
+TEST(Camera, BadDepthOfFieldInput) {
+  const lt::Camera wide = camera_of(with_dof(perspective_camera(kView, 50), 3, 0.0f));
+  EXPECT_NEAR(lt::length(wide.lens_point({1, 0.5f}) - wide.position()), 0.05f / 2e-5f, 1.0f);
+  ScenePtr s = new_scene();
+  auto set = [&](const lt_camera_desc& c) { return lt_scene_set_camera(s.get(), &c); };
+  EXPECT_EQ(set(with_dof(perspective_camera(kView), 3, -1)), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(set(with_dof(perspective_camera(kView), 0, 2)), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(set(with_dof(perspective_camera(kView), 2, 2, 0, 0, 0)), LT_ERROR_INVALID_ARGUMENT);
+  lt_camera_desc nan = with_dof(perspective_camera(kView), 2, 2);
+  nan.aperture_rotation = NAN;
+  EXPECT_EQ(lt_scene_set_camera(s.get(), &nan), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(lt_last_error()).find("finite"), std::string::npos);
+  // Orthographic: Cycles' 1 / (2 F-stop), in scene units, and every ray aimed at the focus point
+  // on the view axis (camera_sample_orthographic): at the focus depth a ray is off the pinhole
+  // ray's point by the film position's offset from the axis.
+  const lt::Camera ortho = camera_of(with_dof(orthographic_camera(kView, 4), 3, 5));
+  const lt::Camera ortho_pin = camera_of(orthographic_camera(kView, 4));
+  EXPECT_NEAR(lt::length(ortho.lens_point({1, 0.5f}) - ortho.position()), 0.1f, 1e-5f);
+  EXPECT_FALSE(ortho.connectable());
+  lt::Ray centre, r, p;
+  ASSERT_TRUE(ortho_pin.generate(kW / 2.0f, kH / 2.0f, &centre));
+  ASSERT_TRUE(ortho_pin.generate(10, 40, &p));
+  for (lt::Vec2 u : {lt::Vec2{0.1f, 0.7f}, lt::Vec2{0.9f, 0.2f}}) {
+    ASSERT_TRUE(ortho.generate(10, 40, u, &r));
+    const lt::Vec3 at_focus = r.o + r.d * (3 / lt::dot(r.d, ortho.forward()));
+    EXPECT_LT(dist(at_focus, centre.o + centre.d * 3.0f + (p.o - centre.o)), 1e-4f);
+    EXPECT_GT(dist(r.o, p.o), 1e-3f) << "the ray starts on the lens";
+  }
+}
+
+// Equirectangular (Blender's defaults: the whole sphere): the film's centre looks along the view
+// axis, its left and right edges behind, its top up; longitude grows to the right. A reduced
+// range maps the film onto it.
+TEST(Camera, EquirectangularDirections) {
+  const Xform view = look_at({0, 0, 0}, {0, 1, 0});  // forward +Y, right +X, up +Z
+  lt::Camera cam = camera_of(panorama_camera(view, LT_PANORAMA_EQUIRECTANGULAR), 200, 100);
+  EXPECT_FALSE(cam.connectable());
+  auto dir = [&](float x, float y) {
+    lt::Ray r;
+    EXPECT_TRUE(cam.generate(x, y, &r));
+    return r.d;
+  };
+  EXPECT_LT(dist(dir(100, 50), {0, 1, 0}), 1e-5f);
+  EXPECT_LT(dist(dir(150, 50), {1, 0, 0}), 1e-5f);  // a quarter turn right
+  EXPECT_LT(dist(dir(50, 50), {-1, 0, 0}), 1e-5f);
+  EXPECT_LT(dist(dir(0, 50), {0, -1, 0}), 1e-5f);
+  EXPECT_LT(dist(dir(100, 100), {0, 0, 1}), 1e-5f);
+  EXPECT_LT(dist(dir(100, 75), lt::normalize(lt::Vec3(0, 1, 1))), 1e-5f);
+  lt_camera_desc d = panorama_camera(view, LT_PANORAMA_EQUIRECTANGULAR);
+  d.longitude_min = 0;
+  d.longitude_max = float(M_PI / 2);
+  d.latitude_min = 0;
+  cam = camera_of(d, 200, 100);
+  EXPECT_LT(dist(dir(0, 0), {0, 1, 0}), 1e-5f);
+  EXPECT_LT(dist(dir(200, 0), {1, 0, 0}), 1e-5f);
+  EXPECT_LT(dist(dir(0, 100), {0, 0, 1}), 1e-5f);
+  // Depth is the distance from the camera for panoramas (Cycles' camera_z_depth).
+  EXPECT_NEAR(cam.depth({3, -4, 0}), 5, 1e-5f);
+}
+
+// Fisheyes: the angle from the axis at film radius r is r fov / 2 over the frame's inscribed
+// circle (equidistant) or 2 asin(r / 2 lens) with r on the sensor fitted to the frame (equisolid,
+// in mm); outside the circle (equidistant) or the field of view (equisolid) the film sees nothing.
+TEST(Camera, FisheyeDirections) {
+  const Xform view = look_at({0, 0, 0}, {0, 1, 0});
+  lt_camera_desc d = panorama_camera(view, LT_PANORAMA_FISHEYE_EQUIDISTANT);
+  d.fisheye_fov = 3.0f;
+  lt::Camera cam = camera_of(d, 100, 80);
+  lt::Ray r;
+  ASSERT_TRUE(cam.generate(50, 40, &r));
+  EXPECT_LT(dist(r.d, {0, 1, 0}), 1e-5f);
+  // Half way to the circle's right edge (the circle spans each axis of the frame).
+  ASSERT_TRUE(cam.generate(75, 40, &r));
+  EXPECT_NEAR(std::acos(r.d.y), 0.5f * 1.5f, 1e-4f);
+  EXPECT_GT(r.d.x, 0);
+  ASSERT_TRUE(cam.generate(50, 60, &r));
+  EXPECT_NEAR(std::acos(r.d.y), 0.5f * 1.5f, 1e-4f);
+  EXPECT_GT(r.d.z, 0);
+  EXPECT_FALSE(cam.generate(99, 79, &r));
+
+  d = panorama_camera(view, LT_PANORAMA_FISHEYE_EQUISOLID);
+  d.fisheye_lens = 8;
+  d.fisheye_fov = 2.5f;
+  cam = camera_of(d, 120, 80);                 // horizontal fit: sensor 36 x 24 mm
+  ASSERT_TRUE(cam.generate(60 + 30, 40, &r));  // 9 mm right of the centre
+  EXPECT_NEAR(std::acos(r.d.y), 2 * std::asin(9.0f / 16), 1e-4f);
+  EXPECT_GT(r.d.x, 0);
+  // Beyond the field of view: r > 2 lens sin(fov / 4) = 9.5 mm.
+  EXPECT_FALSE(cam.generate(60 + 32, 40, &r));
+  EXPECT_TRUE(cam.generate(60 + 31, 40, &r));
+}
+
+// Rendering through the ABI inside a sphere around an equirectangular camera sees it everywhere
+// at its radius (depth pass); a fisheye's film outside its circle is black and opaque, as in
+// Cycles, even with a transparent film; depth of field on panoramas renders finite pixels.
+TEST(Camera, PanoramaRenders) {
+  ScenePtr s = new_scene();
+  add_object(s.get(), uv_sphere(2, 64, 32), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}));
+  add_light(s.get(), point_light({0.5f, 0.3f, 0.2f}, 50));
+  check(lt_scene_commit(s.get()), "commit");
+  set_camera(s.get(), panorama_camera(look_at({0, 0, 0}, {0, 1, 0}), LT_PANORAMA_EQUIRECTANGULAR));
+  lt_render_settings rs = render_settings(32, 16, 2, 1);
+  Passes p = render(s.get(), rs);
+  ASSERT_EQ(p.first_non_finite(), "");
+  EXPECT_GT(p.rgba(16, 8)[0], 0.0f);
+  for (int y = 1; y < 15; ++y)
+    for (int x = 0; x < 32; ++x) EXPECT_NEAR(p.depth[size_t(y) * 32 + x], 2.0f, 0.02f) << x << " " << y;
+  set_camera(s.get(), panorama_camera(look_at({0, 0, 0}, {0, 1, 0}), LT_PANORAMA_FISHEYE_EQUIDISTANT));
+  rs = render_settings(32, 32, 2, 1);
+  rs.transparent_background = 1;
+  p = render(s.get(), rs);
+  ASSERT_EQ(p.first_non_finite(), "");
+  EXPECT_EQ(p.rgba(0, 0)[0], 0.0f);
+  EXPECT_EQ(p.rgba(0, 0)[3], 1.0f);
+  EXPECT_GT(p.rgba(16, 16)[0], 0.0f);
+  set_camera(s.get(),
+             with_dof(panorama_camera(look_at({0, 0, 0}, {0, 1, 0}), LT_PANORAMA_FISHEYE_EQUISOLID), 1.5f, 0.1f, 5));
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    rs.integrator = integrator;
+    p = render(s.get(), rs);
+    EXPECT_EQ(p.first_non_finite(), "");
+    EXPECT_EQ(p.status.nan_samples, 0u);
+  }
+}
