@@ -70,7 +70,10 @@ METHODS = {
     "BIDIRECTIONAL": ("LANTERN", "BIDIRECTIONAL"),
     "CYCLES": ("CYCLES", "PATH"),
 }
-COLOURS = {"PATH": "tab:blue", "BIDIRECTIONAL": "tab:red", "CYCLES": "tab:green"}
+COLOURS = {"PATH": "tab:blue", "BIDIRECTIONAL": "tab:red", "CYCLES": "tab:green", "PATH_POWER": "tab:purple"}
+# --power-pick adds Lantern's path tracer with next-event estimation picking lights by power, the
+# selection before the light tree (LANTERN_LIGHT_SELECTION=power, read when the scene is committed).
+POWER_PICK = {"PATH_POWER": ("LANTERN", "PATH")}
 # Seeds: method j's rung i uses LADDER_SEED0 + 100 j + i (PATH and BIDIRECTIONAL share their camera
 # paths' random numbers at equal seeds); reference chunk k uses seed 1 + k.
 LADDER_SEED0 = 1000
@@ -92,6 +95,8 @@ def parse_args():
     p.add_argument("--ref-chunks", type=int, default=4)
     p.add_argument("--min-samples", type=int, default=4)
     p.add_argument("--threads", type=int, default=0, help="0: all cores")
+    p.add_argument("--power-pick", action="store_true",
+                   help="also PATH_POWER: the path tracer with the power pick instead of the light tree")
     p.add_argument("--analyse-only", action="store_true",
                    help="render nothing: recompute figures and plots from OUT/convergence.json")
     a = p.parse_args(argv)
@@ -138,10 +143,17 @@ class Renderer:
         engine, integrator = METHODS[method]
         if self.media and integrator == "PATH":
             integrator = "VOLPATH"
+        power = method in POWER_PICK
+        if power:
+            os.environ["LANTERN_LIGHT_SELECTION"] = "power"
         c0 = time.process_time()
-        out = render_utils.render(self.scene, engine, samples, seed, threads=self.threads,
-                                  outdir=self.tmpdir, integrator=integrator,
-                                  tag="%s_%s_s%d_seed%d" % (self.scene.name, method, samples, seed))
+        try:
+            out = render_utils.render(self.scene, engine, samples, seed, threads=self.threads,
+                                      outdir=self.tmpdir, integrator=integrator,
+                                      tag="%s_%s_s%d_seed%d" % (self.scene.name, method, samples, seed))
+        finally:
+            if power:
+                del os.environ["LANTERN_LIGHT_SELECTION"]
         cpu = time.process_time() - c0
         img = out.combined
         if not np.all(np.isfinite(img)):
@@ -293,9 +305,13 @@ ERRORS = {"relmse": "relmse_corrected", "trimmed": "relmse_trimmed"}
 
 
 def ratios(e):
-    return {"cycles_over_bdpt": ratio(e["CYCLES"], e["BIDIRECTIONAL"]),
-            "bdpt_over_path": ratio(e["BIDIRECTIONAL"], e["PATH"]),
-            "cycles_over_path": ratio(e["CYCLES"], e["PATH"])}
+    r = {"cycles_over_bdpt": ratio(e["CYCLES"], e["BIDIRECTIONAL"]),
+         "bdpt_over_path": ratio(e["BIDIRECTIONAL"], e["PATH"]),
+         "cycles_over_path": ratio(e["CYCLES"], e["PATH"])}
+    if "PATH_POWER" in e:
+        r["power_over_tree"] = ratio(e["PATH_POWER"], e["PATH"])
+        r["cycles_over_power"] = ratio(e["CYCLES"], e["PATH_POWER"])
+    return r
 
 
 def analyse(res):
@@ -379,6 +395,8 @@ GOALS = {  # scene: (ratio, comparison, bound)
 
 def main():
     args = parse_args()
+    if args.power_pick:
+        METHODS.update(POWER_PICK)
     if args.analyse_only:
         return reanalyse(args)
     lantern.register()

@@ -1,5 +1,7 @@
 #include "scene/lights/light_tree.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -127,19 +129,23 @@ void LightTree::build(std::vector<Item> items, size_t light_count) {
   trail_.assign(light_count, 0);
   if (items.empty()) return;
   nodes_.reserve(2 * items.size() - 1);
-  build_node(items, 0, items.size(), 0, 0);
+  build_node(items, 0, items.size(), 0, 0, nodes_);
 }
 
-int LightTree::build_node(std::vector<Item>& items, size_t begin, size_t end, uint64_t trail, int depth) {
-  const int index = int(nodes_.size());
-  nodes_.emplace_back();
+// Appends the subtree of items[begin, end) to out in depth-first order (a node's first child
+// follows it; inner nodes' indices are positions in out). Large subtrees build their two halves
+// on TBB threads, each into its own vector, then move them in.
+void LightTree::build_node(std::vector<Item>& items, size_t begin, size_t end, uint64_t trail, int depth,
+                           std::vector<Node>& out) {
+  const size_t index = out.size();
+  out.emplace_back();
   if (end - begin == 1) {
-    Node& leaf = nodes_[index];
+    Node& leaf = out[index];
     leaf.bounds = items[begin].bounds;
     leaf.index = uint32_t(items[begin].light);
     leaf.leaf = true;
     trail_[items[begin].light] = trail;
-    return index;
+    return;
   }
   LightBounds all;
   Bounds centroids;
@@ -147,7 +153,36 @@ int LightTree::build_node(std::vector<Item>& items, size_t begin, size_t end, ui
     all = light_bounds_union(all, items[i].bounds);
     centroids.extend(box_center(items[i].bounds.box));
   }
-  // Binned split search over the centroids (pbrt-v4's buildBVH): 12 buckets per axis.
+  const size_t mid = split(items, begin, end, all, centroids, depth);
+  const uint64_t second_trail = trail | (uint64_t(1) << depth);
+  size_t second;
+  if (end - begin < 8192) {
+    build_node(items, begin, mid, trail, depth + 1, out);
+    second = out.size();
+    build_node(items, mid, end, second_trail, depth + 1, out);
+  } else {
+    std::vector<Node> first_nodes, second_nodes;
+    tbb::parallel_invoke([&] { build_node(items, begin, mid, trail, depth + 1, first_nodes); },
+                         [&] { build_node(items, mid, end, second_trail, depth + 1, second_nodes); });
+    for (std::vector<Node>* part : {&first_nodes, &second_nodes}) {
+      const uint32_t base = uint32_t(out.size());
+      if (part == &second_nodes) second = base;
+      for (Node n : *part) {
+        if (!n.leaf) n.index += base;
+        out.push_back(n);
+      }
+    }
+  }
+  Node& node = out[index];
+  node.bounds = all;
+  node.index = uint32_t(second);
+  node.leaf = false;
+}
+
+// Where to cut items[begin, end) (reordering them): binned split search over the centroids
+// (pbrt-v4's buildBVH, 12 buckets per axis), else halves along the widest axis.
+size_t LightTree::split(std::vector<Item>& items, size_t begin, size_t end, const LightBounds& all,
+                        const Bounds& centroids, int depth) {
   constexpr int kBuckets = 12;
   float best_cost = INFINITY;
   int best_dim = -1, best_bucket = -1;
@@ -182,29 +217,20 @@ int LightTree::build_node(std::vector<Item>& items, size_t begin, size_t end, ui
       }
     }
   }
-  size_t mid = begin + count / 2;
   if (best_dim >= 0) {
     auto it = std::partition(items.begin() + begin, items.begin() + end,
                              [&](const Item& item) { return bucket_of(item, best_dim) <= best_bucket; });
-    mid = size_t(it - items.begin());
+    const size_t mid = size_t(it - items.begin());
+    if (mid != begin && mid != end) return mid;
   }
-  if (best_dim < 0 || mid == begin || mid == end) {
-    // No useful split: halve along the widest axis of the centroids.
-    mid = begin + count / 2;
-    const Vec3 ext = centroids.hi - centroids.lo;
-    const int dim = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
-    std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end,
-                     [&](const Item& a, const Item& b) {
-                       return box_center(a.bounds.box)[dim] < box_center(b.bounds.box)[dim];
-                     });
-  }
-  build_node(items, begin, mid, trail, depth + 1);
-  const int second = build_node(items, mid, end, trail | (uint64_t(1) << depth), depth + 1);
-  Node& node = nodes_[index];
-  node.bounds = all;
-  node.index = uint32_t(second);
-  node.leaf = false;
-  return index;
+  // No useful split: halve along the widest axis of the centroids.
+  const size_t mid = begin + count / 2;
+  const Vec3 ext = centroids.hi - centroids.lo;
+  const int dim = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+  std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end, [&](const Item& a, const Item& b) {
+    return box_center(a.bounds.box)[dim] < box_center(b.bounds.box)[dim];
+  });
+  return mid;
 }
 
 // One function for both walks, so that sample() and pmf() multiply bit-identical factors.

@@ -39,8 +39,8 @@ class LightTree {
     int light;  // the caller's index of the light
     LightBounds bounds;
   };
-  // O(n log n): binned SAH-like splits over the centroids (pbrt-v4's EvaluateCost), at most 63
-  // levels deep so that a light's path from the root fits in 64 bits. light_count: the caller's
+  // O(n log n), the halves of large subtrees on TBB threads: binned SAH-like splits over the
+  // centroids (pbrt-v4's EvaluateCost), at most 63 levels deep so that a light's path from the root fits in 64 bits. light_count: the caller's
   // number of lights (indices of items lie below it).
   void build(std::vector<Item> items, size_t light_count);
   bool empty() const { return nodes_.empty(); }
@@ -58,7 +58,10 @@ class LightTree {
     uint32_t index = 0;  // inner: the second child (the first follows the node); leaf: the light
     bool leaf = false;
   };
-  int build_node(std::vector<Item>& items, size_t begin, size_t end, uint64_t trail, int depth);
+  void build_node(std::vector<Item>& items, size_t begin, size_t end, uint64_t trail, int depth,
+                  std::vector<Node>& out);
+  size_t split(std::vector<Item>& items, size_t begin, size_t end, const LightBounds& all, const Bounds& centroids,
+               int depth);
   // Probability of the first child of inner node i at (p, n); negative if neither child can reach p.
   float first_child_probability(int i, const Vec3& p, const Vec3& n) const;
   std::vector<Node> nodes_;
