@@ -8,14 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
-#include <sstream>
 #include <vector>
 
 #include "api/handles.h"
-#include "integrators/bdpt_test_hooks.h"
-#include "core/film.h"
-#include "integrators/integrator.h"
 #include "chi2.h"
+#include "core/film.h"
+#include "integrators/bdpt_test_hooks.h"
+#include "integrators/integrator.h"
 #include "scene_builders.h"
 
 namespace lt_test {
@@ -186,8 +185,8 @@ void expect_same_mean(int integrator, bool fog) {
   for (int c = 0; c < 3; ++c) {
     RegionStats ra = region_stats(a, c, 0, a.width, 0, a.height), rb = region_stats(b, c, 0, b.width, 0, b.height);
     const double se = std::hypot(ra.standard_error, rb.standard_error);
-    EXPECT_LT(std::abs(ra.mean - rb.mean), kSigmas * se) << "channel " << c << ": tree " << ra.mean << " se " << se << " power "
-                                                         << rb.mean;
+    EXPECT_LT(std::abs(ra.mean - rb.mean), kSigmas * se)
+        << "channel " << c << ": tree " << ra.mean << " se " << se << " power " << rb.mean;
   }
 }
 

@@ -29,7 +29,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
   float prev_pdf = 0;
   bool prev_delta = true;
   Vec3 prev_p = ray.o, prev_n(0.0f);  // prev_n: the geometric normal there (zero in a medium)
-  float t_prev = 0;  // distance from prev_p to ray.o (the ray crossed invisible boundaries)
+  float t_prev = 0;                   // distance from prev_p to ray.o (the ray crossed invisible boundaries)
   // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
   float footprint = cs.dP;
   VolumeStack stack;

@@ -60,7 +60,8 @@ LightBounds bounds_of(const Light& l, const Geometry& geometry) {
     case LightType::World:
       break;  // infinite: not in the tree
   }
-  if (!std::isfinite(b.phi) || !std::isfinite(b.box.lo.x + b.box.lo.y + b.box.lo.z + b.box.hi.x + b.box.hi.y + b.box.hi.z) ||
+  if (!std::isfinite(b.phi) ||
+      !std::isfinite(b.box.lo.x + b.box.lo.y + b.box.lo.z + b.box.hi.x + b.box.hi.y + b.box.hi.z) ||
       !(std::isfinite(b.w.x) && std::isfinite(b.w.y) && std::isfinite(b.w.z)))
     b.phi = 0;
   return b;

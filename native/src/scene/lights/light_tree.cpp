@@ -43,9 +43,9 @@ float split_cost(const LightBounds& b, const Bounds& node, int dim) {
   const float theta_o = safe_acos(b.cos_o), theta_e = safe_acos(b.cos_e);
   const float theta_w = std::min(theta_o + theta_e, kPi);
   const float sin_o = safe_sqrt(1 - b.cos_o * b.cos_o);
-  const float m_omega = 2 * kPi * (1 - b.cos_o) + kPi / 2 *
-                                                      (2 * theta_w * sin_o - std::cos(theta_o - 2 * theta_w) -
-                                                       2 * theta_o * sin_o + b.cos_o);
+  const float m_omega =
+      2 * kPi * (1 - b.cos_o) +
+      kPi / 2 * (2 * theta_w * sin_o - std::cos(theta_o - 2 * theta_w) - 2 * theta_o * sin_o + b.cos_o);
   const Vec3 d = node.hi - node.lo;
   const float kr = max_component(d) / d[dim];
   return b.phi * m_omega * kr * box_area(b.box);
@@ -99,7 +99,7 @@ float light_importance(const LightBounds& b, const Vec3& p, const Vec3& n) {
   // pbrt-v4 clamps the distance with the box's half diagonal so that points near or inside a
   // large node do not blow up.
   const float d2 = std::max(dist2, std::sqrt(radius2));
-  if (!(d2 > 0)) return 0;  // a point light at p sends nothing to p
+  if (!(d2 > 0)) return 0;                  // a point light at p sends nothing to p
   if (dist2 <= radius2) return b.phi / d2;  // inside the node's bounding sphere: every direction
   const Vec3 wi = (p - pc) / std::sqrt(dist2);
   float cos_w = dot(b.w, wi);

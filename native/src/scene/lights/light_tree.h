@@ -40,8 +40,8 @@ class LightTree {
     LightBounds bounds;
   };
   // O(n log n), the halves of large subtrees on TBB threads: binned SAH-like splits over the
-  // centroids (pbrt-v4's EvaluateCost), at most 63 levels deep so that a light's path from the root fits in 64 bits. light_count: the caller's
-  // number of lights (indices of items lie below it).
+  // centroids (pbrt-v4's EvaluateCost), at most 63 levels deep so that a light's path from the
+  // root fits in 64 bits. light_count: the caller's number of lights (items' indices are below).
   void build(std::vector<Item> items, size_t light_count);
   bool empty() const { return nodes_.empty(); }
   size_t node_count() const { return nodes_.size(); }
