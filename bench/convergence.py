@@ -64,7 +64,6 @@ from lantern import core as lt_core  # noqa: E402
 EPS = 1e-2  # relMSE denominator: ref^2 + EPS
 TRIM = 1e-3  # the trimmed relMSE leaves out this fraction of pixels, those of largest error
 SCENES = ("door", "door_bounce", "caustic", "cornell_area")
-# name: (engine, Lantern integrator)
 # name: (engine, Lantern integrator, Lantern sample pattern); --independent adds the last two
 # (the sampler's gain: the same integrators with independent random numbers).
 METHODS = {
@@ -77,7 +76,11 @@ INDEPENDENT_METHODS = {
     "BIDIRECTIONAL_INDEPENDENT": ("LANTERN", "BIDIRECTIONAL", "INDEPENDENT"),
 }
 COLOURS = {"PATH": "tab:blue", "BIDIRECTIONAL": "tab:red", "CYCLES": "tab:green",
-           "PATH_INDEPENDENT": "tab:cyan", "BIDIRECTIONAL_INDEPENDENT": "tab:orange"}
+           "PATH_INDEPENDENT": "tab:cyan", "BIDIRECTIONAL_INDEPENDENT": "tab:orange",
+           "PATH_POWER": "tab:purple"}
+# --power-pick adds Lantern's path tracer with next-event estimation picking lights by power, the
+# selection before the light tree (LANTERN_LIGHT_SELECTION=power, read when the scene is committed).
+POWER_PICK = {"PATH_POWER": ("LANTERN", "PATH", "SOBOL_OWEN")}
 # Seeds: method j's rung i uses LADDER_SEED0 + 100 j + i (PATH and BIDIRECTIONAL share their camera
 # paths' random numbers at equal seeds); reference chunk k uses seed 1 + k.
 LADDER_SEED0 = 1000
@@ -101,6 +104,8 @@ def parse_args():
     p.add_argument("--threads", type=int, default=0, help="0: all cores")
     p.add_argument("--independent", action="store_true",
                    help="also render PATH and BIDIRECTIONAL with independent random numbers")
+    p.add_argument("--power-pick", action="store_true",
+                   help="also PATH_POWER: the path tracer with the power pick instead of the light tree")
     p.add_argument("--analyse-only", action="store_true",
                    help="render nothing: recompute figures and plots from OUT/convergence.json")
     a = p.parse_args(argv)
@@ -149,10 +154,17 @@ class Renderer:
             self.scene.lantern.sample_pattern = pattern
         if self.media and integrator == "PATH":
             integrator = "VOLPATH"
+        power = method in POWER_PICK
+        if power:
+            os.environ["LANTERN_LIGHT_SELECTION"] = "power"
         c0 = time.process_time()
-        out = render_utils.render(self.scene, engine, samples, seed, threads=self.threads,
-                                  outdir=self.tmpdir, integrator=integrator,
-                                  tag="%s_%s_s%d_seed%d" % (self.scene.name, method, samples, seed))
+        try:
+            out = render_utils.render(self.scene, engine, samples, seed, threads=self.threads,
+                                      outdir=self.tmpdir, integrator=integrator,
+                                      tag="%s_%s_s%d_seed%d" % (self.scene.name, method, samples, seed))
+        finally:
+            if power:
+                del os.environ["LANTERN_LIGHT_SELECTION"]
         cpu = time.process_time() - c0
         img = out.combined
         if not np.all(np.isfinite(img)):
@@ -311,7 +323,10 @@ def ratios(e):
             "cycles_over_best": ratio(e["CYCLES"], min(best) if best else None),
             # > 1: Sobol-Owen beats independent numbers at equal time (--independent)
             "path_independent_over_path": ratio(e.get("PATH_INDEPENDENT"), e["PATH"]),
-            "bdpt_independent_over_bdpt": ratio(e.get("BIDIRECTIONAL_INDEPENDENT"), e["BIDIRECTIONAL"])}
+            "bdpt_independent_over_bdpt": ratio(e.get("BIDIRECTIONAL_INDEPENDENT"), e["BIDIRECTIONAL"]),
+            # --power-pick: > 1, the light tree beats the power pick
+            "power_over_tree": ratio(e.get("PATH_POWER"), e["PATH"]),
+            "cycles_over_power": ratio(e["CYCLES"], e.get("PATH_POWER"))}
 
 
 def per_sample(rows):
@@ -408,6 +423,8 @@ def main():
     args = parse_args()
     if args.independent:
         METHODS.update(INDEPENDENT_METHODS)
+    if args.power_pick:
+        METHODS.update(POWER_PICK)
     if args.analyse_only:
         return reanalyse(args)
     lantern.register()

@@ -1584,7 +1584,37 @@ def build_sponza(scene):
     add_camera(scene, (-13.5, 0.0, 1.6), (10.0, 0.0, 4.0), lens=18.0)
 
 
+def build_lamps500(scene):
+    """Many lights (issue 14's 500-lamp room): a closed 8 x 6 x 3 m room, two boxes, and a 25 x 20
+    grid of small point lamps (2 W, radius 3 cm, alternately warm and cool) 40 cm below the
+    ceiling. Each point sees a few lamps close by and hundreds far away: the case a light tree
+    is for."""
+    white = diffuse("White", WHITE)
+    walls = [  # the +Z unit plane into place, normals facing inward
+        ("Floor", Matrix.Identity(4), 8.0, 6.0),
+        ("Ceiling", Matrix.Translation((0, 0, 3)) @ Matrix.Rotation(math.pi, 4, "X"), 8.0, 6.0),
+        ("Back", Matrix.Translation((0, 3, 1.5)) @ Matrix.Rotation(math.pi / 2, 4, "X"), 8.0, 3.0),
+        ("Front", Matrix.Translation((0, -3, 1.5)) @ Matrix.Rotation(-math.pi / 2, 4, "X"), 8.0, 3.0),
+        ("Left", Matrix.Translation((-4, 0, 1.5)) @ Matrix.Rotation(math.pi / 2, 4, "Y"), 3.0, 6.0),
+        ("Right", Matrix.Translation((4, 0, 1.5)) @ Matrix.Rotation(-math.pi / 2, 4, "Y"), 3.0, 6.0),
+    ]
+    for name, m, sx, sy in walls:
+        assign(add_object(scene, name, mesh_plane(name, sx, sy, matrix=m)), white)
+    assign(add_object(scene, "TallBox", mesh_box("TallBox", (0.8, 0.8, 1.6)), (-1.2, 0.8, 0.0), (0, 0, 20)),
+           white)
+    assign(add_object(scene, "LowBox", mesh_box("LowBox", (1.2, 0.8, 0.6)), (1.4, -0.2, 0.0), (0, 0, -15)),
+           diffuse("Red", RED))
+    for i in range(25):
+        for j in range(20):
+            warm = (i + j) % 2 == 0
+            add_light(scene, "Lamp_%02d_%02d" % (i, j), "POINT", 2.0,
+                      (-3.6 + 7.2 * i / 24, -2.7 + 5.4 * j / 19, 2.6), radius=0.03,
+                      color=(1.0, 0.85, 0.7) if warm else (0.75, 0.85, 1.0))
+    add_camera(scene, (0.0, -2.8, 1.4), (0.0, 1.0, 0.9), lens=20.0)
+
+
 SCENES = {
+    "lamps500": (build_lamps500, (160, 120), 64),
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),
     "cornell_spot": (build_cornell_spot, (96, 96), 128),

@@ -179,7 +179,7 @@ bool Bdpt::mixed_kind(const PathVertex& v, const Vec3& camera_side, const Vec3& 
 
 // Adds the s = 0 strategy for a camera subpath whose vertex t - 1 is on an emitter.
 void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le) {
-  const PathVertex& v = camera[t - 1];
+  PathVertex& v = camera[t - 1];
   if (v.type == VertexType::Surface && v.light < 0) {
     // Emission no light sampler knows: s = 0 alone finds it, with no MIS partner.
     if (!is_black(le)) add(v.beta * le, 0, t);
@@ -190,6 +190,9 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   if (is_black(c)) return;
   c *= kind_limit_factor(camera /*unused light*/, camera, 0, t);
   if (is_black(c)) return;
+  // Strategy s = 1 would have picked this light from the vertex before (mis_weight).
+  const PathVertex& before = camera[t - 2];
+  v.pick_nee = before.type == VertexType::Camera ? 0.0f : lights_.pmf_nee(before.p, nee_normal(before), v.light);
   add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t, pixel_center_), 0, t);
 }
 
@@ -473,6 +476,8 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   // An infinite light's vertex is a direction: its density is the direction's (pbrt 3, 16.3.2);
   // y1's is the disk's (pdf_light handles it).
   if (y0.infinite) y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY);
+  // Strategy s = 1 would have picked this light from y1 with the light tree (mis_weight).
+  y0.pick_nee = count >= 2 ? lights_.pmf_nee(path[1].p, nee_normal(path[1]), li) : 0.0f;
   return count;
 }
 
@@ -526,11 +531,18 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light);
   };
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
+  // The light endpoint's densities above hold the light subpaths' power pick (pdf_light_origin);
+  // strategy s' = 1 picks it with the light tree from x[1] instead (pick_nee), so its ratio takes
+  // the factor lambda = pick_nee / pick_power, and when s = 1 is the strategy weighed, every
+  // other's takes 1 / lambda.
+  const float pick_power = light_end.light >= 0 ? lights_.pmf(light_end.light) : 0.0f;
+  const double lambda = pick_power > 0 ? double(light_end.pick_nee) / pick_power : 1.0;
+  auto ratio = [&](double r, int s2) { return s == 1 ? r / lambda : (s2 == 1 ? r * lambda : r); };
   double sum = 0, r = 1;
   for (int i = t - 1; i > 0; --i) {
     const PathVertex& c = C(i);
     r *= remap0(c.pdf_rev) / remap0(c.pdf_fwd);
-    if (!c.delta && !C(i - 1).delta && exists(s + t - i, i)) sum += heuristic(float(r));
+    if (!c.delta && !C(i - 1).delta && exists(s + t - i, i)) sum += heuristic(float(ratio(r, s + t - i)));
   }
   const double camera_sum = sum;
   r = 1;
@@ -538,7 +550,7 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     const PathVertex& l = L(i);
     r *= remap0(l.pdf_rev) / remap0(l.pdf_fwd);
     bool delta_light_vertex = i > 0 ? L(i - 1).delta : is_delta_light(l);
-    if (!l.delta && !delta_light_vertex && exists(i, s + t - i)) sum += heuristic(float(r));
+    if (!l.delta && !delta_light_vertex && exists(i, s + t - i)) sum += heuristic(float(ratio(r, i)));
   }
   if (light_sum) *light_sum = sum - camera_sum;
 
@@ -556,15 +568,16 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   if (!(kinds > 0)) return Spectrum(0.0f);
   if (s == 1) {
     // A fresh light sample at the camera vertex: exactly the path tracer's next-event estimation.
-    float pmf, u_remapped;
-    int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
+    float pmf;
+    int li = lights_.pick_nee(pt.p, nee_normal(pt), sampler_.next_1d(), &pmf);
     Vec2 u = sampler_.next_2d();
     LightSample ls;
-    if (!(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance))
+    if (li < 0 || !(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance))
       return Spectrum(0.0f);
     const Light& l = lights_.light(li);
     PathVertex& sampled = endpoint(VertexType::Light);
     sampled.light = li;
+    sampled.pick_nee = pmf;
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
     sampled.n = ls.n;

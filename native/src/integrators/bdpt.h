@@ -94,7 +94,8 @@ class Bdpt {
     if (to.on_surface()) p *= std::abs(dot(to.n, w));
     return p;
   }
-  // Density that a light subpath starts at v (light choice included).
+  // Density that a light subpath starts at v (light choice included: by power, as light subpaths
+  // pick; mis_weight corrects strategy s = 1's, which picks with the light tree).
   float pdf_light_origin(const PathVertex& v, const PathVertex& to) const {
     float pmf = lights_.pmf(v.light);
     if (v.infinite) {
@@ -105,6 +106,9 @@ class Bdpt {
     lights_.pdf_emission(scene_, v.light, v.p, v.n, normalize(to.p - v.p), &pdf_pos, &pdf_dir);
     return pmf * pdf_pos;
   }
+  // The normal the light tree weighs at a vertex for next-event estimation: the geometric one at
+  // surfaces (either side: it does not depend on the walk that reached the vertex), none in media.
+  static Vec3 nee_normal(const PathVertex& v) { return v.type == VertexType::Surface ? v.n : Vec3(0.0f); }
   bool is_delta_light(const PathVertex& v) const {
     return v.type == VertexType::Light && lights_.light(v.light).delta();
   }
@@ -196,6 +200,7 @@ class Bdpt {
     v.kind = BounceKind::None;
     v.beta = Spectrum(1.0f);
     v.pdf_fwd = v.pdf_rev = 0;
+    v.pick_nee = 0;
     v.n = Vec3(0.0f);
     return v;
   }

@@ -28,8 +28,8 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
   // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
   float prev_pdf = 0;
   bool prev_delta = true;
-  Vec3 prev_p = ray.o;
-  float t_prev = 0;  // distance from prev_p to ray.o (the ray crossed invisible boundaries)
+  Vec3 prev_p = ray.o, prev_n(0.0f);  // prev_n: the geometric normal there (zero in a medium)
+  float t_prev = 0;                   // distance from prev_p to ray.o (the ray crossed invisible boundaries)
   // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
   float footprint = cs.dP;
   VolumeStack stack;
@@ -39,19 +39,19 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
   auto add = [&](const Spectrum& c) { L += clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect); };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
     if (prev_delta) return 1.0f;
-    float light_pdf = lights.pmf(light) * lights.pdf(scene, light, prev_p, dir, t);
+    float light_pdf = lights.pmf_nee(prev_p, prev_n, light) * lights.pdf(scene, light, prev_p, dir, t);
     return power_heuristic(prev_pdf, light_pdf);
   };
-  // NEE from p (a medium point when sp is null): one light picked by power, MIS-weighted against
-  // the scattering; f(wi, &pdf) returns the BSDF x cos or phase value. `st` is the volume stack on
+  // NEE from p (a medium point when sp is null): one light picked by the light tree at p, MIS-weighted
+  // against the scattering; f(wi, &pdf) returns the BSDF x cos or phase value. `st` is the volume stack on
   // the side the path arrived from, whose geometric normal is `side`: a shadow ray leaving
   // through the surface crosses it (one on that side must not enter the surface's medium again).
   auto next_event = [&](const Vec3& p, const SurfacePoint* sp, const Vec3& side, const VolumeStack& st, auto f) {
-    float pmf, u_light;
-    int li = lights.pick(sampler.next_1d(), &pmf, &u_light);
+    float pmf;
+    int li = lights.pick_nee(p, sp ? side : Vec3(0.0f), sampler.next_1d(), &pmf);
     Vec2 u = sampler.next_2d();
     LightSample ls;
-    if (!(pmf > 0) || !lights.sample(scene, li, p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance)) return;
+    if (li < 0 || !(pmf > 0) || !lights.sample(scene, li, p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance)) return;
     float scatter_pdf;
     Spectrum fv = f(ls.wi, &scatter_pdf);
     if (is_black(fv)) return;
@@ -121,6 +121,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
       prev_pdf = pdf;
       prev_delta = false;
       prev_p = mi.p;
+      prev_n = Vec3(0.0f);
       t_prev = 0;
       ray.o = mi.p;
       ray.d = wi;
@@ -210,6 +211,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
       prev_pdf = bs.pdf;
       prev_delta = (bs.flags & kLobeSpecular) != 0;
       prev_p = sp.p;
+      prev_n = ng;
       t_prev = 0;
       footprint = footprint_here;
       ray.o = spawn_origin(sp, wi);

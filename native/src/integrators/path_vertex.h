@@ -31,6 +31,9 @@ struct PathVertex {
   Spectrum beta{1.0f};  // throughput of the subpath up to and including this vertex
   float pdf_fwd = 0;    // density of sampling this vertex from its predecessor
   float pdf_rev = 0;    // density of sampling it from its successor (the other direction)
+  // Light vertices: the probability that next-event estimation from the neighbouring vertex picks
+  // this light (the light tree's; light subpaths pick by power: pdf_fwd).
+  float pick_nee = 0;
   Vec3 p;
   Vec3 n;       // geometric normal (zero for points in space: point lights, camera, media)
   Frame frame;  // shading frame, z facing the side the vertex was reached from

@@ -61,7 +61,7 @@ void Scene::commit() {
     warnings.push_back(
         "the scene reaches beyond 1.8e18 from the origin, the range within which rays can be traced "
         "(Embree's); rays from beyond it miss");
-  lights.build(std::move(all), world_set ? &world : nullptr, bounds);
+  lights.build(std::move(all), world_set ? &world : nullptr, bounds, &geometry);
   ++light_builds_;
   material_medium.resize(materials.size(), -1);
   material_null.resize(materials.size(), 0);

@@ -1,6 +1,8 @@
 #include "scene/lights/light_set.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <cstring>
 
 #include "scene/lights/area.h"
 #include "scene/lights/point.h"
@@ -8,7 +10,73 @@
 
 namespace lt {
 
-void LightSet::build(std::vector<Light> lights, const World* world, const Bounds& b) {
+namespace {
+
+// What a bounded light can emit, for the light tree: its box, its flux as the tree weighs it
+// (pbrt-v4's Light::Bounds: 4 pi I for points, L A pi for one-sided cosine emitters, twice that
+// for two-sided ones) and its cones.
+LightBounds bounds_of(const Light& l, const Geometry& geometry) {
+  LightBounds b;
+  const float power = average(abs(l.power));
+  switch (l.type) {
+    case LightType::Point:
+    case LightType::Spot:
+      // A lamp with a radius is a disk facing the receiver: anywhere within its sphere.
+      b.box.extend(l.position - Vec3(l.radius));
+      b.box.extend(l.position + Vec3(l.radius));
+      b.phi = power;  // intensity P / (4 pi), spots as the point they are cut from
+      if (l.type == LightType::Spot) {
+        // The cone of the spot (widened by a little against rounding at a hard edge).
+        b.w = l.direction;
+        b.cos_o = 1;
+        b.cos_e = std::cos(std::min(std::acos(clamp(l.cos_half_angle, -1.0f, 1.0f)) + 1e-3f, kPi));
+      } else {
+        b.cos_o = -1;  // every direction
+        b.cos_e = 0;
+      }
+      break;
+    case LightType::Area:
+      for (float su : {-1.0f, 1.0f})
+        for (float sv : {-1.0f, 1.0f}) b.box.extend(l.position + l.axis_u * su + l.axis_v * sv);
+      b.phi = power * 0.25f * kPi;  // radiance P / (4 A) over A, one-sided cosine
+      b.w = l.direction;
+      b.cos_o = 1;
+      b.cos_e = 0;
+      break;
+    case LightType::Triangle: {
+      Vec3 p0, p1, p2;
+      geometry.triangle(l.instance, l.primitive, &p0, &p1, &p2);
+      b.box.extend(p0);
+      b.box.extend(p1);
+      b.box.extend(p2);
+      b.phi = 2 * power;  // power: the emission estimate x area x pi; both sides emit
+      b.w = normalize(cross(p1 - p0, p2 - p0));
+      b.cos_o = 1;
+      b.cos_e = 0;
+      b.two_sided = true;
+      break;
+    }
+    case LightType::Sun:
+    case LightType::World:
+      break;  // infinite: not in the tree
+  }
+  if (!std::isfinite(b.phi) ||
+      !std::isfinite(b.box.lo.x + b.box.lo.y + b.box.lo.z + b.box.hi.x + b.box.hi.y + b.box.hi.z) ||
+      !(std::isfinite(b.w.x) && std::isfinite(b.w.y) && std::isfinite(b.w.z)))
+    b.phi = 0;
+  return b;
+}
+
+LightSelection selection_from_environment(LightSelection s) {
+  const char* e = std::getenv("LANTERN_LIGHT_SELECTION");
+  if (e && std::strcmp(e, "power") == 0) return LightSelection::Power;
+  if (e && std::strcmp(e, "tree") == 0) return LightSelection::Tree;
+  return s;
+}
+
+}  // namespace
+
+void LightSet::build(std::vector<Light> lights, const World* world, const Bounds& b, const Geometry* geometry) {
   lights_ = std::move(lights);
   hittable_.clear();
   suns_.clear();
@@ -45,6 +113,59 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Bounds
   }
   std::sort(triangle_index_.begin(), triangle_index_.end());
   distribution_ = Distribution1D(power);
+
+  // Next-event estimation: the infinite lights keep their power share, the tree gets the rest.
+  tree_ = LightTree();
+  infinite_ = Distribution1D();
+  infinite_lights_.clear();
+  infinite_slot_.assign(lights_.size(), -1);
+  tree_share_ = 0;
+  double total = 0, bounded = 0;
+  for (size_t i = 0; i < lights_.size(); ++i) {
+    total += power[i];
+    if (!lights_[i].infinite()) bounded += power[i];
+  }
+  // Without any power to go by, the power pick is uniform; the tree has nothing to weigh.
+  tree_used_ = selection_from_environment(selection_) == LightSelection::Tree && total > 0 && geometry;
+  if (!tree_used_) return;
+  std::vector<LightTree::Item> items;
+  std::vector<float> infinite_power;
+  for (size_t i = 0; i < lights_.size(); ++i) {
+    if (lights_[i].infinite()) {
+      infinite_slot_[i] = int(infinite_lights_.size());
+      infinite_lights_.push_back(int(i));
+      infinite_power.push_back(power[i]);
+      continue;
+    }
+    if (!(power[i] > 0)) continue;  // never picked by power either
+    LightTree::Item it{int(i), bounds_of(lights_[i], *geometry)};
+    if (it.bounds.phi > 0) items.push_back(it);
+  }
+  tree_.build(std::move(items), lights_.size());
+  tree_share_ = bounded == total ? 1.0f : float(bounded / total);
+  if (!infinite_lights_.empty()) infinite_ = Distribution1D(infinite_power);
+}
+
+int LightSet::pick_nee(const Vec3& p, const Vec3& n, float u, float* pmf) const {
+  if (!tree_used_) return distribution_.sample_discrete(u, pmf);
+  if (u < tree_share_) {
+    float tree_pmf;
+    const int light = tree_.sample(p, n, std::min(u / tree_share_, kOneMinusEpsilon), &tree_pmf);
+    *pmf = tree_share_ * tree_pmf;
+    return light;
+  }
+  const float v = std::min((u - tree_share_) / (1 - tree_share_), kOneMinusEpsilon);
+  float infinite_pmf;
+  const int k = infinite_.sample_discrete(v, &infinite_pmf);
+  *pmf = (1 - tree_share_) * infinite_pmf;
+  return infinite_lights_[k];
+}
+
+float LightSet::pmf_nee(const Vec3& p, const Vec3& n, int light) const {
+  if (!tree_used_) return pmf(light);
+  const int slot = infinite_slot_[light];
+  if (slot >= 0) return (1 - tree_share_) * infinite_.discrete_pmf(slot);
+  return tree_share_ * tree_.pmf(p, n, light);
 }
 
 int LightSet::pick(float u, float* pmf, float* u_remapped) const {

@@ -1,5 +1,7 @@
-// The scene's lights and the sampler that picks one for next-event estimation and light subpaths,
-// by power; each call goes to the light's type (point.h, area.h, sun.h, triangle.h, world.h).
+// The scene's lights and the samplers that pick one: for next-event estimation from a shading point,
+// the light tree (light_tree.h) over the bounded lights beside the infinite ones (sun, world), which
+// keep their share of the power; for light subpaths (no shading point), by power. Each call on a
+// light goes to its type (point.h, area.h, sun.h, triangle.h, world.h).
 #pragma once
 
 #include <vector>
@@ -7,6 +9,7 @@
 #include "core/distribution.h"
 #include "geometry/geometry.h"
 #include "scene/lights/light.h"
+#include "scene/lights/light_tree.h"
 #include "scene/lights/sun.h"
 #include "scene/lights/world.h"
 
@@ -14,18 +17,32 @@ namespace lt {
 
 class Scene;
 
+// How next-event estimation picks a light. Power: as light subpaths do (the selection before the
+// tree, kept for tests and benchmarks: LightSet::set_selection, or LANTERN_LIGHT_SELECTION=power
+// in the environment when the scene is committed).
+enum class LightSelection { Tree, Power };
+
 class LightSet {
  public:
   // bounds: everything light can scatter from (geometry and Volume objects); infinite lights emit
-  // from a disk over its bounding sphere.
-  void build(std::vector<Light> lights, const World* world, const Bounds& bounds);
+  // from a disk over its bounding sphere. geometry: the emissive triangles' corners.
+  void build(std::vector<Light> lights, const World* world, const Bounds& bounds, const Geometry* geometry);
+  // For the next build.
+  void set_selection(LightSelection s) { selection_ = s; }
+  LightSelection selection() const { return tree_used_ ? LightSelection::Tree : LightSelection::Power; }
+  const LightTree& tree() const { return tree_; }
   size_t size() const { return lights_.size(); }
   const Light& light(int i) const { return lights_[i]; }
   bool empty() const { return lights_.empty(); }
 
-  // Picks a light with probability proportional to its estimated power.
+  // Picks a light with probability proportional to its estimated power (light subpaths).
   int pick(float u, float* pmf, float* u_remapped) const;
   float pmf(int light) const { return distribution_.discrete_pmf(light); }
+  // Picks a light for next-event estimation at p (n: the geometric normal at a surface, either
+  // side, or zero in a medium): -1 if none can reach p. pmf_nee is exactly the probability it
+  // picks `light` there (for MIS against the BSDF or phase function, and BDPT's weights).
+  int pick_nee(const Vec3& p, const Vec3& n, float u, float* pmf) const;
+  float pmf_nee(const Vec3& p, const Vec3& n, int light) const;
   // Index of the light of an emissive triangle, or -1.
   int triangle_light(int instance, int primitive) const;
   int world_light() const { return world_light_; }
@@ -69,6 +86,13 @@ class LightSet {
   std::vector<int> hittable_, suns_;
   std::vector<std::pair<uint64_t, int>> triangle_index_;  // sorted (instance<<32 | prim) -> light
   Distribution1D distribution_;
+  LightSelection selection_ = LightSelection::Tree;
+  bool tree_used_ = false;
+  LightTree tree_;           // over the bounded lights of non-zero power
+  float tree_share_ = 0;     // the power share of the tree's lights: its probability
+  Distribution1D infinite_;  // the infinite lights by power, for the rest
+  std::vector<int> infinite_lights_;
+  std::vector<int> infinite_slot_;  // light -> its bin of infinite_, or -1
   int world_light_ = -1;
   float scene_radius_ = 1;
   Vec3 scene_center_;
