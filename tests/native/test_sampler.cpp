@@ -103,7 +103,7 @@ TEST(Sampler, SobolOwenIsUniformOverPixels) {
   // One sample (index 5) in each of 2^16 pixels: each call's values are uniform (chi-square over
   // 64 x 64 cells, 4095 degrees of freedom: mean 4095, sd 90.5; bound at 5 sd).
   const int cells = 64, n = 1 << 16;
-  for (int call : {0, 1, 17}) {
+  for (int call : {0, 1, 17, 70}) {
     std::vector<int> count(size_t(cells) * cells, 0);
     double mean_x = 0;
     for (int px = 0; px < n; ++px) {

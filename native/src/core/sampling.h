@@ -151,14 +151,29 @@ inline uint32_t nested_uniform_scramble(uint32_t x, uint32_t seed) {
   return reverse_bits(laine_karras_permutation(reverse_bits(x), seed));
 }
 
-// The first two dimensions of Sobol's sequence as 32-bit fractions: van der Corput and the
-// Pascal matrix mod 2 (direction numbers v_{k+1} = v_k ^ (v_k >> 1)).
-inline uint32_t sobol_0(uint32_t i) { return reverse_bits(i); }
-inline uint32_t sobol_1(uint32_t i) {
-  uint32_t x = 0;
-  for (uint32_t v = 1u << 31; i; i >>= 1, v ^= v >> 1)
-    if (i & 1) x ^= v;
-  return x;
+// The second dimension of Sobol's sequence (the Pascal matrix mod 2: direction numbers
+// v_0 = 2^31, v_{k+1} = v_k ^ (v_k >> 1)), taken from and returned in bit-reversed form:
+// reverse(sobol_1(reverse(r))), by byte tables (the first dimension is a bit reversal).
+struct Sobol1Tables {
+  uint32_t t[4][256];  // t[b][k]: XOR over the bits j of k of reverse(v[31 - (8b + j)])
+  constexpr Sobol1Tables() : t() {
+    uint32_t v[32] = {};
+    v[0] = 1u << 31;
+    for (int k = 1; k < 32; ++k) v[k] = v[k - 1] ^ (v[k - 1] >> 1);
+    for (int b = 0; b < 4; ++b)
+      for (int k = 0; k < 256; ++k)
+        for (int j = 0; j < 8; ++j)
+          if (k >> j & 1) {
+            uint32_t x = v[31 - (8 * b + j)], r = 0;
+            for (int q = 0; q < 32; ++q) r |= ((x >> q) & 1u) << (31 - q);
+            t[b][k] ^= r;
+          }
+  }
+};
+inline constexpr Sobol1Tables kSobol1{};
+inline uint32_t sobol_1_reversed(uint32_t r) {
+  return kSobol1.t[0][r & 255] ^ kSobol1.t[1][(r >> 8) & 255] ^ kSobol1.t[2][(r >> 16) & 255] ^
+         kSobol1.t[3][r >> 24];
 }
 
 inline float u32_to_unit(uint32_t x) { return std::min(kOneMinusEpsilon, float(x) * 0x1p-32f); }
@@ -174,7 +189,8 @@ enum class SamplePattern : uint8_t { SobolOwen = 0, Independent = 1 };
 // in every call's own dimensions over any power-of-two run of samples, padded (independent)
 // across calls. Even and odd sample indices are two independently scrambled sequences, so the
 // film's two halves (a pixel's even- and odd-numbered samples, core/film.h) stay independent and
-// the error estimate honest. Independent: one PCG32 stream per sample.
+// the error estimate honest. Calls past kQmcCalls draw from a PCG32 stream. Independent: one
+// PCG32 stream per sample.
 class Sampler {
  public:
   Sampler(uint32_t seed, uint32_t pixel, uint32_t sample_index, SamplePattern pattern = SamplePattern::Independent)
@@ -184,35 +200,43 @@ class Sampler {
       pcg_ = Pcg32(key, mix_u64(key ^ (uint64_t(sample_index) * 0x9e3779b97f4a7c15ULL)));
     } else {
       key_ = mix_u64(key ^ (sample_index & 1u));
-      index_ = sample_index >> 1;
+      pcg_ = Pcg32(key, mix_u64(key ^ (uint64_t(sample_index) * 0x9e3779b97f4a7c15ULL) ^ 0x5851f42d4c957f2dULL));
+      reversed_index_ = reverse_bits(sample_index >> 1);
     }
   }
+  // With i the sample's index within its half and r = LK(reverse(i), s1), Burley's shuffled
+  // index is reverse(r); its first Sobol dimension is r itself, scrambled as
+  // reverse(LK(reverse(r), s2)); its second is scrambled from its bit-reversed form.
   float next_1d() {
-    if (pattern_ == SamplePattern::Independent) return u32_to_unit(pcg_.next_u32());
+    if (pattern_ == SamplePattern::Independent || dim_ >= kQmcCalls) return u32_to_unit(pcg_.next_u32());
     const uint64_t h = next_hash();
-    const uint32_t i = nested_uniform_scramble(index_, uint32_t(h));
-    // sobol_0 is a bit reversal, so its nested scramble is reverse(LK(i)).
-    return u32_to_unit(reverse_bits(laine_karras_permutation(i, uint32_t(h >> 32))));
+    const uint32_t r = laine_karras_permutation(reversed_index_, uint32_t(h));
+    return u32_to_unit(reverse_bits(laine_karras_permutation(reverse_bits(r), uint32_t(h >> 32))));
   }
   Vec2 next_2d() {
-    if (pattern_ == SamplePattern::Independent) {
+    if (pattern_ == SamplePattern::Independent || dim_ >= kQmcCalls) {
       float a = next_1d();
       return {a, next_1d()};
     }
     const uint64_t h = next_hash();
-    const uint32_t i = nested_uniform_scramble(index_, uint32_t(h));
-    return {u32_to_unit(reverse_bits(laine_karras_permutation(i, uint32_t(h >> 32)))),
-            u32_to_unit(nested_uniform_scramble(sobol_1(i), hash_u32(uint32_t(h >> 32) ^ 0x68e31da4u)))};
+    const uint32_t r = laine_karras_permutation(reversed_index_, uint32_t(h));
+    const uint32_t s3 = hash_u32(uint32_t(h >> 32) ^ 0x68e31da4u);
+    return {u32_to_unit(reverse_bits(laine_karras_permutation(reverse_bits(r), uint32_t(h >> 32)))),
+            u32_to_unit(reverse_bits(laine_karras_permutation(sobol_1_reversed(r), s3)))};
   }
   SamplePattern pattern() const { return pattern_; }
 
  private:
   uint64_t next_hash() { return mix_u64(key_ ^ (uint64_t(++dim_) * 0x9e3779b97f4a7c15ULL)); }
 
+  // Calls past this many take independent numbers: deep in a path (long walks through media,
+  // many bounces) the calls of different samples no longer mean the same thing, so their
+  // stratification buys nothing, and PCG32 costs a tenth of a scrambled point.
+  static constexpr uint32_t kQmcCalls = 64;
   SamplePattern pattern_;
   Pcg32 pcg_;
   uint64_t key_ = 0;
-  uint32_t index_ = 0, dim_ = 0;
+  uint32_t reversed_index_ = 0, dim_ = 0;
 };
 
 }  // namespace lt
