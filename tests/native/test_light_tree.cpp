@@ -214,7 +214,7 @@ TEST(LightTree, BdptMisWeightsSumToOne) {
     lt::CameraSample cs;
     cs.pixel_center = {px + 0.5f, py + 0.5f};
     cs.film = cs.pixel_center;
-    cs.ray = camera.generate(cs.film.x, cs.film.y);
+    camera.generate(cs.film.x, cs.film.y, &cs.ray);
     for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
       ++checked;
       worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
