@@ -13,7 +13,7 @@
 // cell keeps a lower bound ("minorant"): the minimum over the same footprint (and the background
 // where the footprint reaches voxels no node stores), clamped to >= 0; trilinear interpolation
 // never falls below the smallest corner, so it bounds the density from below. It is the control
-// extinction of residual ratio tracking and decomposition tracking (media/medium.h).
+// extinction of residual ratio tracking (media/medium.h).
 #pragma once
 
 #include <cstddef>
@@ -53,7 +53,7 @@ class MajorantGrid {
   // Raises the bound of one cell, or of every cell, to v.
   void raise_cell(int x, int y, int z, float v);
   void raise_all(float v);
-  // Sets every cell's lower bound to 0: the estimators then reduce to plain ratio and delta
+  // Sets every cell's lower bound to 0: residual ratio tracking then reduces to plain ratio
   // tracking (for comparisons and tests).
   void clear_minima() { minima_.assign(minima_.size(), 0.0f); }
   // The voxels in a cell's interpolation footprint along an axis: lo + c*C ... lo + (c+1)*C.
