@@ -375,6 +375,48 @@ TEST(MediaHeterogeneous, RatioTrackingMatchesQuadrature) {
   }
 }
 
+// Residual ratio tracking (the Tracking transmittance) and plain ratio tracking (the same with the
+// control dropped) against quadrature on a denser blob cut to zero below 1e-3 of its peak (empty
+// cells at the corners), through the dense centre, thin edges, empty cells and along the grid's
+// boundary; then the variance on the dense ray, which the control must reduce.
+TEST(MediaHeterogeneous, ResidualRatioTrackingMatchesQuadratureWithLessVariance) {
+  RefGrid g = blob(4, 5);
+  for (float& v : g.v)
+    if (v < 4e-3f) v = 0;
+  const float sigma_t = 2.0f;
+  Medium m = make_medium(g, Spectrum(0.5f), Spectrum(1.5f)), plain = m;
+  plain.drop_control();
+  const float lo = -16.5f / 16;  // the domain's face: one voxel beyond the first voxel centre
+  const std::vector<Ray> rays = {
+      make_ray(Vec3(-2, 0.01f, -0.02f), Vec3(1, 0, 0)),                      // dense (first: the variance ray)
+      make_ray(Vec3(-2, 0.6f, 0.3f), Vec3(1, 0, 0)),                         // thin
+      make_ray(Vec3(-1.5f, -0.9f, 0.9f), normalize(Vec3(1, 0.9f, -0.95f))),  // empty corner cells
+      make_ray(Vec3(-2, lo + 1e-3f, 0.1f), Vec3(1, 0, 0)),                   // grazing the boundary
+      make_ray(Vec3(0.2f, -0.1f, 2), Vec3(0.01f, 0.02f, -3))};               // non-unit direction
+  Sampler s(media_test::seed(44), 0, 0);
+  double var_new = 0, var_plain = 0;
+  for (size_t k = 0; k < rays.size(); ++k) {
+    const Ray& r = rays[k];
+    const float t0 = 0.1f / length(r.d), t1 = 3.9f / length(r.d);
+    std::vector<double> D = density_integral(g, r, t0, t1, 8000);
+    const double expect = std::exp(-sigma_t * D.back());
+    for (Medium* med : {&m, &plain}) {
+      Mean mt;
+      for (int i = 0; i < 100000; ++i) {
+        Spectrum T = med->transmittance(r, t0, t1, s, kTrack, 0);
+        ASSERT_TRUE(T.x >= 0 && std::isfinite(T.x));
+        mt.add(T.x);
+      }
+      const char* name = med == &m ? "residual ratio tracking" : "ratio tracking";
+      EXPECT_TRUE(within_se(mt, expect)) << name << ", ray " << k << " (tau " << sigma_t * D.back() << ")";
+      if (k == 0) (med == &m ? var_new : var_plain) = sqr(mt.se()) * mt.n;
+    }
+  }
+  std::printf("[ media    ] dense ray variance: residual ratio tracking %.3g, ratio tracking %.3g\n", var_new,
+              var_plain);
+  EXPECT_LT(var_new, 0.5 * var_plain);
+}
+
 TEST(MediaHeterogeneous, DeltaTrackingDistancesFollowFreeFlightDistribution) {
   RefGrid g = blob();
   const float sigma_t = 3.0f;
@@ -576,15 +618,16 @@ TEST(MediaChromatic, RayMarchingIsUnbiasedForTheMarchedField) {
 // ---- majorant grid and DDA -------------------------------------------------------------------
 
 TEST(MediaMajorant, BoundsTheInterpolatedDensityAndIsTight) {
-  // Sparse spikes on noise: a cell's bound must cover the interpolation footprint one voxel past
-  // the cell, and equal the largest voxel in it.
+  // Sparse spikes on noise: a cell's bounds must cover the interpolation footprint one voxel past
+  // the cell, and equal the largest and the smallest voxel in it.
   RefGrid g;
   g.n[0] = 21;
   g.n[1] = 17;
   g.n[2] = 9;
   g.v.resize(21 * 17 * 9);
   Sampler rng(media_test::seed(81), 0, 0);
-  for (float& v : g.v) v = rng.next_1d() < 0.03f ? 50 * rng.next_1d() : 0.1f * rng.next_1d();
+  for (float& v : g.v) v = rng.next_1d() < 0.03f ? 50 * rng.next_1d() : 0.05f + 0.1f * rng.next_1d();
+  int lower_bounded = 0;  // cells with a positive lower bound (the interior ones)
   for (int cell : {1, 4, 8}) {
     Medium m = make_medium(g, Spectrum(1.0f), Spectrum(0.0f), 0, cell);
     const MajorantGrid& maj = m.majorant_grid();
@@ -596,20 +639,33 @@ TEST(MediaMajorant, BoundsTheInterpolatedDensityAndIsTight) {
           int v0[3], v1[3];
           const int c[3] = {x, y, z};
           for (int a = 0; a < 3; ++a) maj.footprint(a, c[a], &v0[a], &v1[a]);
-          double mx = 0;
-          for (int k = v0[2]; k <= v1[2]; ++k)
-            for (int j = v0[1]; j <= v1[1]; ++j)
-              for (int i = v0[0]; i <= v1[0]; ++i) mx = std::max(mx, g.at(i, j, k));
+          // The lower bound: the smallest voxel of the footprint within the domain (0 outside
+          // the array), clamped >= 0.
+          double mx = 0, mn = INFINITY;
+          for (int k = v0[2]; k <= std::min(v1[2], maj.hi()[2]); ++k)
+            for (int j = v0[1]; j <= std::min(v1[1], maj.hi()[1]); ++j)
+              for (int i = v0[0]; i <= std::min(v1[0], maj.hi()[0]); ++i) {
+                mx = std::max(mx, g.at(i, j, k));
+                mn = std::min(mn, g.at(i, j, k));
+              }
           ASSERT_FLOAT_EQ(maj.cell_value(x, y, z), float(mx)) << "cell " << x << " " << y << " " << z;
+          ASSERT_FLOAT_EQ(maj.cell_min(x, y, z), float(std::max(0.0, mn))) << "cell " << x << " " << y << " " << z;
+          lower_bounded += maj.cell_min(x, y, z) > 0;
         }
-    // ... and bounds the interpolated density at random points of the domain.
+    // ... and bounds the interpolated density from above and below at random points of the domain.
     for (int i = 0; i < 200000; ++i) {
       Vec3 p;
       for (int a = 0; a < 3; ++a) p[a] = maj.lo()[a] + rng.next_1d() * (maj.hi()[a] - maj.lo()[a]);
+      MajorantGrid::Iterator it = maj.traverse(p, Vec3(1, 0, 0), 0, 1e-6f);
+      MajorantSegment seg;
+      ASSERT_TRUE(it.next(&seg));
       float d = g.index_density(p.x, p.y, p.z);
       ASSERT_LE(d, maj.value_at(p) * (1 + 1e-6f)) << "cell size " << cell;
+      ASSERT_EQ(seg.value, maj.value_at(p));
+      ASSERT_GE(d, seg.min * (1 - 1e-6f)) << "cell size " << cell;
     }
   }
+  EXPECT_GT(lower_bounded, 1000);  // the lower bounds are not all 0
 }
 
 TEST(MediaMajorant, DdaVisitsCellsInOrderAndCoversTheSegment) {

@@ -101,12 +101,18 @@ TEST(VdbLoad, NanoVdbPathMatchesDensePath) {
   auto dense = std::make_shared<const GridData>(GridData::from_dense(v, n[0], n[1], n[2], shift));
   const Spectrum sa(2, 5, 9), ss(3, 1, 4);
   Medium a = Medium::heterogeneous(nano, sa, ss, 0.2f), b = Medium::heterogeneous(dense, sa, ss, 0.2f);
-  // Identical majorants (the domains coincide: both are the bounding box widened by one voxel).
+  // Identical majorants and lower bounds (the domains coincide: both are the bounding box widened
+  // by one voxel).
+  int positive_minima = 0;
   ASSERT_EQ(a.majorant_grid().resolution(0), b.majorant_grid().resolution(0));
   for (int z = 0; z < a.majorant_grid().resolution(2); ++z)
     for (int y = 0; y < a.majorant_grid().resolution(1); ++y)
-      for (int x = 0; x < a.majorant_grid().resolution(0); ++x)
+      for (int x = 0; x < a.majorant_grid().resolution(0); ++x) {
         ASSERT_FLOAT_EQ(a.majorant_grid().cell_value(x, y, z), b.majorant_grid().cell_value(x, y, z));
+        ASSERT_FLOAT_EQ(a.majorant_grid().cell_min(x, y, z), b.majorant_grid().cell_min(x, y, z));
+        positive_minima += a.majorant_grid().cell_min(x, y, z) > 0;
+      }
+  EXPECT_GT(positive_minima, 0);
   Sampler s(media_test::seed(102), 0, 0);
   for (int i = 0; i < 200; ++i) {
     Vec3 o = Vec3(1.75f, -1.25f, 1.45f) + sample_uniform_sphere(s.next_2d()) * 2.0f;
@@ -136,6 +142,19 @@ TEST(VdbLoad, TileGridMajorantAndTransmittance) {
   EXPECT_EQ(maj.value_at(Vec3(200, 200, 200)), tv::kBoxBValue);
   EXPECT_EQ(maj.value_at(Vec3(80, 80, 80)), 0.0f);  // between the boxes: no over-raising by tiles
   EXPECT_EQ(maj.value_at(Vec3(200, 10, 10)), 0.0f);
+  // Lower bounds: the box values inside, 0 in cells reaching past a box (tiles of 0 or no node).
+  auto min_at = [&](const Vec3& p) {
+    MajorantSegment seg;
+    MajorantGrid::Iterator it = maj.traverse(p, Vec3(1, 0, 0), 0, 1e-3f);
+    EXPECT_TRUE(it.next(&seg));
+    return seg.min;
+  };
+  EXPECT_EQ(min_at(Vec3(10, 10, 10)), tv::kBoxAValue);
+  EXPECT_EQ(min_at(Vec3(200, 200, 200)), tv::kBoxBValue);
+  EXPECT_EQ(min_at(Vec3(127.5f, 200, 200)), 0.0f);
+  EXPECT_EQ(min_at(Vec3(31.5f, 10, 10)), 0.0f);
+  EXPECT_EQ(min_at(Vec3(0.5f, 10, 10)), 0.0f);  // voxel -1: no node stores it (the background)
+  EXPECT_EQ(min_at(Vec3(80, 80, 80)), 0.0f);
   // Box B along x at y = z = 190: density 0.5 from x = 128 to 255, falling linearly to 0 over one
   // voxel on either side: integral = 0.5 * 128 exactly.
   const Ray r = make_ray(Vec3(-50, 190, 190), Vec3(1, 0, 0));

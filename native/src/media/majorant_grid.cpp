@@ -24,6 +24,27 @@ MajorantGrid::MajorantGrid(const int lo[3], const int hi[3], int cell) : cell_(s
                           std::to_string(kMaxCells) + " are supported");
   for (int a = 0; a < 3; ++a) res_[a] = int(res[a]);
   values_.assign(size_t(cells), 0.0f);
+  minima_.assign(size_t(cells), 0.0f);
+}
+
+template <class F>
+void MajorantGrid::for_cells(const int a[3], const int b[3], F&& f) {
+  long lo[3], hi[3];
+  int c0[3], c1[3];
+  for (int k = 0; k < 3; ++k) {
+    // Voxel x lies in the footprint of cells c with c*C <= x - lo <= (c+1)*C.
+    lo[k] = std::max<long>(a[k], lo_[k]) - lo_[k];
+    hi[k] = std::min<long>(b[k], hi_[k]) - lo_[k];
+    if (hi[k] < lo[k]) return;
+    c0[k] = int(std::max<long>(0, (lo[k] + cell_ - 1) / cell_ - 1));
+    c1[k] = int(std::min<long>(res_[k] - 1, hi[k] / cell_));
+  }
+  auto overlap = [&](int k, int c) {
+    return std::max<long>(0, std::min<long>(hi[k], long(c + 1) * cell_) - std::max<long>(lo[k], long(c) * cell_) + 1);
+  };
+  for (int z = c0[2]; z <= c1[2]; ++z)
+    for (int y = c0[1]; y <= c1[1]; ++y)
+      for (int x = c0[0]; x <= c1[0]; ++x) f(index(x, y, z), int64_t(overlap(0, x)) * overlap(1, y) * overlap(2, z));
 }
 
 MajorantGrid MajorantGrid::build(const GridData& grid, int cell) {
@@ -43,20 +64,31 @@ MajorantGrid MajorantGrid::build(const GridData& grid, int cell) {
     using Upper = Root::ChildNodeType;
     using Lower = Upper::ChildNodeType;
     using Leaf = Lower::ChildNodeType;
+    // The lower bounds start at +inf and fall to every stored value met; `covered` counts the
+    // footprint voxels met per cell, so that a cell reaching voxels no node stores (they read the
+    // background) falls to the background too.
     const Root& root = as_nano(grid)->tree().root();
-    maj.raise_all(std::max(0.0f, root.background()));
+    const float background = root.background();
+    maj.raise_all(std::max(0.0f, background));
+    maj.minima_.assign(maj.values_.size(), INFINITY);
+    std::vector<int64_t> covered(maj.values_.size(), 0);
+    auto add = [&](const int a[3], const int b[3], float v) {
+      maj.add_voxels(a, b, v);
+      maj.for_cells(a, b, [&](size_t i, int64_t n) {
+        maj.minima_[i] = std::min(maj.minima_[i], v);
+        covered[i] += n;
+      });
+    };
     auto add_tile = [&](const nanovdb::Coord& origin, int dim, float v) {
       int a[3] = {origin[0], origin[1], origin[2]}, b[3];
       for (int k = 0; k < 3; ++k) b[k] = int(std::min<int64_t>(int64_t(origin[k]) + dim - 1, INT32_MAX));
-      maj.add_voxels(a, b, v);
+      add(a, b, v);
     };
     auto visit_leaf = [&](const Leaf* leaf) {
       for (uint32_t n = 0; n < Leaf::SIZE; ++n) {
-        float v = leaf->getValue(n);
-        if (!(v > 0)) continue;
         nanovdb::Coord c = leaf->offsetToGlobalCoord(n);
         int a[3] = {c[0], c[1], c[2]};
-        maj.add_voxels(a, a, v);
+        add(a, a, leaf->getValue(n));
       }
     };
     auto visit_lower = [&](const Lower* node) {
@@ -82,49 +114,59 @@ MajorantGrid MajorantGrid::build(const GridData& grid, int cell) {
       else
         add_tile(tile->origin(), Upper::DIM, tile->value);
     }
+    for (int z = 0; z < maj.res_[2]; ++z)
+      for (int y = 0; y < maj.res_[1]; ++y)
+        for (int x = 0; x < maj.res_[0]; ++x) {
+          int64_t total = 1;
+          const int c[3] = {x, y, z};
+          for (int a = 0; a < 3; ++a) {
+            int v0, v1;
+            maj.footprint(a, c[a], &v0, &v1);
+            total *= std::min(v1, maj.hi_[a]) - std::max(v0, maj.lo_[a]) + 1;
+          }
+          const size_t i = maj.index(x, y, z);
+          float& m = maj.minima_[i];
+          if (covered[i] < total) m = std::min(m, background);
+          m = std::min(std::max(m, 0.0f), maj.values_[i]);
+        }
     return maj;
   }
-  // Dense: each cell's maximum over its footprint directly.
+  // Dense: each cell's maximum and minimum over its footprint directly (voxels outside the array
+  // read 0).
   const DenseLookup d = dense_lookup(grid);
   for (int z = 0; z < maj.res_[2]; ++z)
     for (int y = 0; y < maj.res_[1]; ++y)
       for (int x = 0; x < maj.res_[0]; ++x) {
         int v0[3], v1[3];
         const int c[3] = {x, y, z};
+        bool outside = false;  // the footprint (within the domain) reaches voxels outside the array
         for (int a = 0; a < 3; ++a) {
           maj.footprint(a, c[a], &v0[a], &v1[a]);
+          outside = outside || std::max(v0[a], maj.lo_[a]) < 0 || std::min(v1[a], maj.hi_[a]) > grid.dims[a] - 1;
           v0[a] = std::max(v0[a], 0);
           v1[a] = std::min(v1[a], grid.dims[a] - 1);
         }
-        float mx = 0;
+        float mx = 0, mn = outside ? 0.0f : INFINITY;
         for (int k = v0[2]; k <= v1[2]; ++k)
           for (int j = v0[1]; j <= v1[1]; ++j)
-            for (int i = v0[0]; i <= v1[0]; ++i) mx = std::max(mx, d.at(i, j, k));
+            for (int i = v0[0]; i <= v1[0]; ++i) {
+              const float v = d.at(i, j, k);
+              mx = std::max(mx, v);
+              mn = std::min(mn, v);
+            }
         maj.raise_cell(x, y, z, mx);
+        maj.minima_[maj.index(x, y, z)] = std::min(std::max(mn, 0.0f), maj.cell_value(x, y, z));
       }
   return maj;
 }
 
 void MajorantGrid::add_voxels(const int a[3], const int b[3], float v) {
   if (!(v > 0)) return;  // the density is clamped to >= 0, so 0 is every cell's floor
-  int c0[3], c1[3];
-  for (int k = 0; k < 3; ++k) {
-    // Voxel x lies in the footprint of cells c with c*C <= x - lo <= (c+1)*C.
-    long lo = std::max<long>(a[k], lo_[k]) - lo_[k], hi = std::min<long>(b[k], hi_[k]) - lo_[k];
-    if (hi < lo) return;
-    c0[k] = int(std::max<long>(0, (lo + cell_ - 1) / cell_ - 1));
-    c1[k] = int(std::min<long>(res_[k] - 1, hi / cell_));
-  }
-  for (int z = c0[2]; z <= c1[2]; ++z)
-    for (int y = c0[1]; y <= c1[1]; ++y)
-      for (int x = c0[0]; x <= c1[0]; ++x) {
-        float& m = values_[(size_t(z) * res_[1] + y) * res_[0] + x];
-        m = std::max(m, v);
-      }
+  for_cells(a, b, [&](size_t i, int64_t) { values_[i] = std::max(values_[i], v); });
 }
 
 void MajorantGrid::raise_cell(int x, int y, int z, float v) {
-  float& m = values_[(size_t(z) * res_[1] + y) * res_[0] + x];
+  float& m = values_[index(x, y, z)];
   m = std::max(m, v);
 }
 
@@ -199,6 +241,7 @@ bool MajorantGrid::Iterator::next(MajorantSegment* seg) {
   seg->t0 = t_;
   seg->t1 = std::max(t_, tb);
   seg->value = grid_->cell_value(cell_[0], cell_[1], cell_[2]);
+  seg->min = grid_->cell_min(cell_[0], cell_[1], cell_[2]);
   t_ = seg->t1;
   if (tb >= t_end_) {
     done_ = true;

@@ -6,12 +6,14 @@
 //    starting where the ray enters the grid's domain; distance sampling accumulates optical depth
 //    in the same steps up to tau = -ln(1 - u) and reverts linearly inside the last step (sigma_t is
 //    taken as constant within a step, so the revert is exact for the marched field).
-//  * Tracking (unbiased): ratio tracking for transmittance (Novak et al. 2014) and delta tracking
-//    for distances (Woodcock et al. 1965), generalised to chromatic media as spectral tracking
-//    (Kutz et al. 2017). Both are callbacks of one track(), which walks the majorant segments and
-//    samples the tentative collisions (pbrt-v4's SampleT_maj). The majorant is piecewise constant: a
-//    coarse grid of per-cell maxima of the interpolated density (media/majorant_grid.h), traversed
-//    by 3D DDA, not one global maximum.
+//  * Tracking (unbiased): residual ratio tracking for transmittance (Novak et al. 2014) and delta
+//    tracking for distances (Woodcock et al. 1965), generalised to chromatic media as spectral
+//    tracking (Kutz et al. 2017). Both are callbacks of one track(), which walks the majorant
+//    segments and samples the tentative collisions (pbrt-v4's SampleT_maj). The majorant is
+//    piecewise constant: a coarse grid of per-cell maxima of the interpolated density
+//    (media/majorant_grid.h), traversed by 3D DDA, not one global maximum; the same grid keeps
+//    per-cell minima, the control extinction of residual ratio tracking, whose share of the
+//    transmittance is computed exactly, so that only the residual max - min is tracked.
 // Homogeneous media always use the closed forms, whatever the estimator.
 //
 // Conventions the caller must follow (pbrt-v3's):
@@ -62,7 +64,7 @@ class Medium {
  public:
   static constexpr int kMaxTrackingSteps = 1 << 16;
   static constexpr int kMaxMarchingSteps = 1 << 16;
-  static constexpr int kDefaultMajorantCell = 8;  // voxels per majorant cell edge
+  static constexpr int kDefaultMajorantCell = 4;  // voxels per majorant cell edge
 
   Medium() = default;  // vacuum: empty()
   Medium(const Medium& o);
@@ -113,6 +115,9 @@ class Medium {
   float march_step() const { return march_step_; }
   void set_march_step(float step) { march_step_ = step; }
   const MajorantGrid& majorant_grid() const { return majorant_; }
+  // Drops the control (every cell's lower bound becomes 0): Tracking's transmittance then is plain
+  // ratio tracking, the baseline that tests and comparisons measure against.
+  void drop_control() { majorant_.clear_minima(); }
   const Transform& world_to_index() const { return world_to_index_; }
   std::shared_ptr<const GridData> grid() const { return grid_; }
   // Bytes held for this medium's grid: NanoVDB buffer (or dense array) + majorant grid.
