@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 8
+ABI_VERSION = 9
 
 # lt_status
 OK = 0
@@ -70,7 +70,11 @@ PASS_NORMAL = 2
 PASS_ALBEDO = 3
 PASS_VARIANCE = 4
 PASS_SAMPLE_COUNT = 5
-PASS_COUNT = 6
+PASS_NOISY_IMAGE = 6
+PASS_DENOISING_NORMAL = 7
+PASS_DENOISING_ALBEDO = 8
+PASS_DENOISING_DEPTH = 9
+PASS_COUNT = 10
 
 
 class LanternError(RuntimeError):
@@ -259,6 +263,7 @@ class RenderSettings(ctypes.Structure):
         ("min_samples", ctypes.c_int),
         ("passes", ctypes.c_uint),
         ("caller_bytes", ctypes.c_ulonglong),
+        ("denoise", ctypes.c_int),
     ]
 
 
@@ -292,6 +297,8 @@ class RenderStatus(ctypes.Structure):
         ("halt_reason", ctypes.c_int),
         ("active_pixels", ctypes.c_uint64),
         ("unestimated_pixels", ctypes.c_uint64),
+        ("denoised", ctypes.c_int),
+        ("denoise_seconds", ctypes.c_double),
     ]
 
 

@@ -683,6 +683,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->min_samples = 16;
   s->passes = (1u << LT_PASS_COUNT) - 1;
   s->caller_bytes = 0;
+  s->denoise = 0;
 }
 
 namespace {
@@ -791,6 +792,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.adaptive = s->adaptive != 0;
     rs.min_samples = s->min_samples;
     rs.passes = s->passes;
+    rs.denoise = s->denoise != 0;
     // Refuse before allocating, with what it would take, rather than fail (or be killed) later.
     const lt::MemoryEstimate need = lt::RenderJob::estimate_bytes(rs);
     const double total = double(need.total()) + double(s->caller_bytes);
@@ -825,6 +827,8 @@ int lt_render_poll(lt_render* render, lt_render_status* st) {
     st->halt_reason = int(s.halt_reason);
     st->active_pixels = s.active_pixels;
     st->unestimated_pixels = s.unestimated_pixels;
+    st->denoised = s.denoised ? 1 : 0;
+    st->denoise_seconds = s.denoise_seconds;
   });
 }
 
