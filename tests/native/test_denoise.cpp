@@ -43,9 +43,9 @@ lt::HalfImages synthetic(int w, int h, unsigned seed) {
           in.variance[j][3 * i + c] = var;
         }
         float* f = &in.feature[j][lt::kFeatureChannels * i];
-        f[0] = 0, f[1] = 0, f[2] = -1;          // normal, facing the camera
-        f[3] = f[4] = f[5] = albedo;             // albedo
-        f[6] = 3.0f + 0.01f * float(y);          // distance
+        f[0] = 0, f[1] = 0, f[2] = -1;   // normal, facing the camera
+        f[3] = f[4] = f[5] = albedo;     // albedo
+        f[6] = 3.0f + 0.01f * float(y);  // distance
       }
     }
   return in;
@@ -162,8 +162,8 @@ TEST(Denoise, KeepsTheMeanWithinTheNoise) {
           n += 1;
         }
       const double sigma = std::sqrt(var) / n, shift = std::abs(denoised - noisy) / n;
-      EXPECT_LE(shift, kSigmas * sigma) << "region " << x0 << "," << y0 << " channel " << c << ": mean "
-                                        << noisy / n << " became " << denoised / n;
+      EXPECT_LE(shift, kSigmas * sigma) << "region " << x0 << "," << y0 << " channel " << c << ": mean " << noisy / n
+                                        << " became " << denoised / n;
     }
   };
   check_region(0, w, 0, h);

@@ -309,7 +309,8 @@ HalfImages Film::half_images() const {
         h.color[1][3 * i + k] = float(b[k]);
         h.variance[0][3 * i + k] = float(sigma2 / na);
         h.variance[1][3 * i + k] = float(sigma2 / nb);
-        finite = finite && std::isfinite(float(a[k])) && std::isfinite(float(b[k])) && std::isfinite(float(sigma2 / nb));
+        finite =
+            finite && std::isfinite(float(a[k])) && std::isfinite(float(b[k])) && std::isfinite(float(sigma2 / nb));
       }
       for (int k = 0; k < kFeatureChannels; ++k) {
         const double sum = feature_[kFeatureChannels * i + k], sum_b = feature_half_[kFeatureChannels * i + k];
@@ -411,8 +412,8 @@ uint64_t Film::total_samples() const {
 
 namespace {
 const char* pass_name(Pass p) {
-  static const char* const kNames[] = {"Combined",        "Depth",           "Normal",          "Albedo",
-                                       "Variance",        "Sample Count",    "Noisy Image",     "Denoising Normal",
+  static const char* const kNames[] = {"Combined",         "Depth",          "Normal",      "Albedo",
+                                       "Variance",         "Sample Count",   "Noisy Image", "Denoising Normal",
                                        "Denoising Albedo", "Denoising Depth"};
   return unsigned(p) < unsigned(Pass::Count) ? kNames[int(p)] : "?";
 }

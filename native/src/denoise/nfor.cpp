@@ -17,7 +17,7 @@ namespace {
 
 constexpr int kDims = 1 + kFeatureChannels;      // the regression's intercept and features
 constexpr int kPairs = kDims * (kDims + 1) / 2;  // entries of the symmetric normal matrix
-constexpr int kTile = 16;                        // output pixels per task side (accumulators stay in L2)
+constexpr int kTile = 32;                        // output pixels per task side (accumulators stay in L2)
 // Ridge added to the features' diagonal, relative to the weight sum: keeps the normal equations
 // solvable where a feature is constant over the window (a flat wall's normal).
 constexpr double kRidge = 1e-3;
@@ -26,9 +26,8 @@ constexpr double kRidge = 1e-3;
 // degree-5 polynomial for the fraction (relative error below 2e-6; the same bits on every thread).
 inline float exp_neg(float x) {
   const float t = std::min(x, 80.0f) * -1.44269504f;  // in [-115.4, 0]
-  const float fl = std::floor(t), f = t - fl;          // f in [0, 1)
-  const float p =
-      1.0f + f * (0.693147f + f * (0.240227f + f * (0.0555041f + f * (0.00961813f + f * 0.00133336f))));
+  const float fl = std::floor(t), f = t - fl;         // f in [0, 1)
+  const float p = 1.0f + f * (0.693147f + f * (0.240227f + f * (0.0555041f + f * (0.00961813f + f * 0.00133336f))));
   int32_t bits;
   std::memcpy(&bits, &p, 4);
   bits += int32_t(fl) << 23;
@@ -167,8 +166,7 @@ bool solve_intercept(const double* a_packed, const double* r, double ridge, doub
 }
 
 // Denoises the tile [x0, x1) x [y0, y1) into out (RGB of the whole image).
-void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int y0, int y1, Scratch& s,
-                  float* out) {
+void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int y0, int y1, Scratch& s, float* out) {
   const int w = pl.w, h = pl.h, f = p.patch, r = p.window;
   const int tw = x1 - x0, th = y1 - y0, ew = tw + 2 * f, eh = th + 2 * f;
   const size_t tn = size_t(tw) * th;

@@ -65,8 +65,8 @@ struct RenderStatus {
   HaltReason halt_reason = HaltReason::None;
   uint64_t active_pixels = 0;       // pixels still sampling (all of them without adaptive sampling)
   uint64_t unestimated_pixels = 0;  // ErrorEstimate::unestimated_pixels of the last estimate
-  bool denoised = false;             // Combined holds the denoised image (Noisy Image the film's)
-  double denoise_seconds = 0;        // the denoiser's time
+  bool denoised = false;            // Combined holds the denoised image (Noisy Image the film's)
+  double denoise_seconds = 0;       // the denoiser's time
 };
 
 class RenderJob {
