@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 10
+ABI_VERSION = 11
 
 # lt_status
 OK = 0
@@ -72,7 +72,11 @@ PASS_NORMAL = 2
 PASS_ALBEDO = 3
 PASS_VARIANCE = 4
 PASS_SAMPLE_COUNT = 5
-PASS_COUNT = 6
+PASS_NOISY_IMAGE = 6
+PASS_DENOISING_NORMAL = 7
+PASS_DENOISING_ALBEDO = 8
+PASS_DENOISING_DEPTH = 9
+PASS_COUNT = 10
 
 
 class LanternError(RuntimeError):
@@ -275,6 +279,7 @@ class RenderSettings(ctypes.Structure):
         ("passes", ctypes.c_uint),
         ("caller_bytes", ctypes.c_ulonglong),
         ("sample_pattern", ctypes.c_int),
+        ("denoise", ctypes.c_int),
     ]
 
 
@@ -308,6 +313,8 @@ class RenderStatus(ctypes.Structure):
         ("halt_reason", ctypes.c_int),
         ("active_pixels", ctypes.c_uint64),
         ("unestimated_pixels", ctypes.c_uint64),
+        ("denoised", ctypes.c_int),
+        ("denoise_seconds", ctypes.c_double),
     ]
 
 

@@ -18,7 +18,9 @@ POLL_SECONDS = 0.05        # test_break() and status poll period: cancel acts we
 MIN_UPDATE_SECONDS = 0.2   # progressive image updates at most 5 times a second...
 UPDATE_COST_FACTOR = 5.0   # ...and spaced so that copying the image takes at most ~20% of the time
 
-# (Blender pass name, lt_pass, Blender channels, channel ids, type, view layer flag or None)
+# (Blender pass name, lt_pass, Blender channels, channel ids, type, view layer flag or None; a
+# "scene." flag is one of scene.lantern's). Noisy Image and the Denoising data under Cycles' names
+# and flags, so that compositor trees made for Cycles find them.
 PASSES = (
     ("Combined", core.PASS_COMBINED, 4, "RGBA", 'COLOR', None),
     ("Depth", core.PASS_DEPTH, 1, "Z", 'VALUE', "use_pass_z"),
@@ -26,11 +28,23 @@ PASSES = (
     ("Albedo", core.PASS_ALBEDO, 3, "RGB", 'COLOR', "lantern_extra_passes"),
     ("Variance", core.PASS_VARIANCE, 3, "RGB", 'COLOR', "lantern_extra_passes"),
     ("Sample Count", core.PASS_SAMPLE_COUNT, 1, "X", 'VALUE', "lantern_extra_passes"),
+    ("Noisy Image", core.PASS_NOISY_IMAGE, 4, "RGBA", 'COLOR', "scene.use_denoising"),
+    ("Denoising Normal", core.PASS_DENOISING_NORMAL, 3, "XYZ", 'VECTOR', "lantern_denoising_store_passes"),
+    ("Denoising Albedo", core.PASS_DENOISING_ALBEDO, 3, "RGB", 'COLOR', "lantern_denoising_store_passes"),
+    ("Denoising Depth", core.PASS_DENOISING_DEPTH, 1, "Z", 'VALUE', "lantern_denoising_store_passes"),
 )
 
 
-def enabled_passes(view_layer):
-    return [p for p in PASSES if p[5] is None or getattr(view_layer, p[5], False)]
+def _pass_enabled(scene, view_layer, flag):
+    if flag is None:
+        return True
+    if flag.startswith("scene."):
+        return bool(getattr(scene.lantern, flag[len("scene."):]))
+    return bool(getattr(view_layer, flag, False))
+
+
+def enabled_passes(scene, view_layer):
+    return [p for p in PASSES if _pass_enabled(scene, view_layer, p[5])]
 
 
 def pass_settings(passes, pixels):
@@ -89,6 +103,7 @@ def render_settings(scene, width, height, border):
         volume_bounces=lt.volume_bounces, volume_estimator=core.enum_value("lt_volume_estimator", lt.volume_estimator),
         volume_step=lt.volume_step,
         sample_pattern=core.enum_value("lt_sample_pattern", lt.sample_pattern),
+        denoise=int(lt.use_denoising),
     )
 
 
@@ -144,6 +159,8 @@ def format_stats(st, pixels=0):
         text += " | %.0f%% of pixels sampling" % (100.0 * st.active_pixels / pixels)
     if st.unestimated_pixels:
         text += " | %d pixel(s) without finite samples" % st.unestimated_pixels
+    if st.denoised:  # the error above stays the noisy image's (the Noisy Image pass)
+        text += " | denoised (%s)" % _seconds(st.denoise_seconds)
     if st.state == core.STATE_RUNNING:
         text += " | Remaining %s" % _clock(st.remaining_seconds)
     elif st.halt_reason in (core.HALT_CANCELLED, core.HALT_FAILED):
@@ -170,6 +187,9 @@ def render_metadata(st, settings):
         "lantern.seed": "%d" % settings.seed,
         "lantern.integrator": core.enum_name("lt_integrator", settings.integrator),
         "lantern.sample_pattern": core.enum_name("lt_sample_pattern", settings.sample_pattern),
+        # rel_error is the noisy image's; "1": Combined is denoised (the noisy one: Noisy Image).
+        "lantern.denoised": "%d" % st.denoised,
+        "lantern.denoise_seconds": "%.3f" % st.denoise_seconds,
     }
 
 
@@ -348,7 +368,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             session.close()
 
     def update_render_passes(self, scene=None, renderlayer=None):
-        for name, _, channels, chan_id, kind, _ in enabled_passes(renderlayer):
+        for name, _, channels, chan_id, kind, _ in enabled_passes(scene, renderlayer):
             self.register_pass(scene, renderlayer, name, channels, chan_id, kind)
 
     def render(self, depsgraph):
@@ -390,7 +410,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
 
             settings = render_settings(scene, width, height, border)
             region = ((border[1] - border[0]) * (border[3] - border[2])) if any(border) else width * height
-            settings.update(pass_settings(enabled_passes(view_layer), region))
+            settings.update(pass_settings(enabled_passes(scene, view_layer), region))
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:
@@ -398,7 +418,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             else:
                 render = core.Render(core_scene, settings)
                 render.start()
-                st = self._progress([render], view_layer, border)
+                st = self._progress([render], scene, view_layer, border)
             rw, rh = render.region_size
             text = scene_report(summary, render.settings, warnings, st, rw * rh)
             LAST_RENDER["report"] = text
@@ -446,18 +466,18 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             render.start()
             return render
         try:
-            st = self._progress(view_render, view_layer, border)
+            st = self._progress(view_render, depsgraph.scene, view_layer, border)
         except BaseException:
             for r in renders:
                 r.close()
             raise
         return renders[-1], st
 
-    def _progress(self, renders, view_layer, border):
+    def _progress(self, renders, scene, view_layer, border):
         """Polls the render of each view into its passes. renders: [the started core.Render] for
         one view (mono), or view_render(index, view name) -> a started render, called for every
         view of the render result (multiview)."""
-        passes = enabled_passes(view_layer)
+        passes = enabled_passes(scene, view_layer)
         first = renders[0] if isinstance(renders, list) else None
         # The render's result (its size is the render rectangle: the border when there is one);
         # passes are handed over in bands (_PassWriter), never through a full-frame copy.

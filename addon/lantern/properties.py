@@ -71,6 +71,14 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
                     "from too few samples (fireflies not yet seen)",
         default=16, min=1, max=1 << 24, soft_max=1024,
     )
+    use_denoising: BoolProperty(
+        name="Denoise",
+        description="Denoise the rendered image (Lantern's NFOR-style denoiser on the CPU; the "
+                    "image as rendered is kept as the Noisy Image pass and the status line's "
+                    "error is its own). Off by default: a denoised image is no longer unbiased",
+        default=False,
+        update=lambda self, context: _update_render_passes(context),
+    )
     viewport_samples: IntProperty(
         name="Viewport Samples",
         description="Samples per pixel the viewport refines to before it stops: more give a "
@@ -251,9 +259,22 @@ def register():
         description="Also render the Albedo, Variance and Sample Count passes (each costs memory "
                     "for every pixel)",
         default=False)
+    bpy.types.ViewLayer.lantern_denoising_store_passes = BoolProperty(
+        name="Denoising Data",
+        description="Store the denoising feature passes (Denoising Normal, Albedo and Depth, as "
+                    "Cycles names them); each costs memory for every pixel",
+        default=False, update=lambda self, context: _update_render_passes(context))
+
+
+def _update_render_passes(context):
+    """Lets Blender ask the engine for its passes again (the compositor's Render Layers node)."""
+    view_layer = getattr(context, "view_layer", None)
+    if view_layer is not None:
+        view_layer.update_render_passes()
 
 
 def unregister():
+    del bpy.types.ViewLayer.lantern_denoising_store_passes
     del bpy.types.ViewLayer.lantern_extra_passes
     del bpy.types.Scene.lantern
     for c in reversed(classes):

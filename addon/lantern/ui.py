@@ -98,6 +98,21 @@ class LANTERN_RENDER_PT_sampling_render(LanternButtonsPanel, Panel):
         sub.prop(settings, "adaptive")
 
 
+class LANTERN_RENDER_PT_sampling_render_denoise(LanternButtonsPanel, Panel):
+    """Cycles' Sampling > Render > Denoise (Lantern's denoiser; no viewport denoising yet)."""
+    bl_label = "Denoise"
+    bl_parent_id = "LANTERN_RENDER_PT_sampling_render"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.lantern, "use_denoising", text="")
+
+    def draw(self, context):
+        col = _split(self.layout).column()
+        col.active = context.scene.lantern.use_denoising
+        col.label(text="Denoiser: Lantern NFOR (CPU)")
+
+
 class LANTERN_RENDER_PT_sampling_bidirectional(LanternButtonsPanel, Panel):
     bl_label = "Bidirectional"
     bl_parent_id = "LANTERN_RENDER_PT_sampling"
@@ -257,6 +272,7 @@ class LANTERN_VIEWLAYER_PT_passes(LanternButtonsPanel, Panel):
         col.prop(view_layer, "use_pass_z")
         col.prop(view_layer, "use_pass_normal")
         col.prop(view_layer, "lantern_extra_passes")
+        col.prop(view_layer, "lantern_denoising_store_passes")
 
 
 # ---- object, light, material, world ----------------------------------------------------------
@@ -452,6 +468,7 @@ classes = (
     LANTERN_RENDER_PT_sampling,
     LANTERN_RENDER_PT_sampling_viewport,
     LANTERN_RENDER_PT_sampling_render,
+    LANTERN_RENDER_PT_sampling_render_denoise,
     LANTERN_RENDER_PT_sampling_bidirectional,
     LANTERN_RENDER_PT_sampling_advanced,
     LANTERN_RENDER_PT_light_paths,

@@ -45,6 +45,22 @@ def test_passes_not_enabled_are_not_rendered(scene_factory):
     assert np.array_equal(lean["Depth"], full["Depth"])
 
 
+def test_denoising_passes_have_cycles_names_and_are_finite(scene_factory):
+    """Render > Sampling > Denoise and View Layer > Denoising Data give Cycles' pass names; the
+    denoised Combined is finite, differs from the Noisy Image, and the status says it was denoised."""
+    scene = scene_factory("cornell_area")
+    scene.lantern.use_denoising = True
+    scene.view_layers[0].lantern_denoising_store_passes = True
+    out = ru.render(scene, ru.LANTERN, 8, seed=2)
+    for name in ("Combined", "Noisy Image", "Denoising Normal", "Denoising Albedo", "Denoising Depth"):
+        assert name in out, "pass %s missing; got %s" % (name, sorted(out))
+        assert np.isfinite(out[name]).all(), name
+    assert not np.array_equal(out["Combined"], out["Noisy Image"])
+    assert engine.LAST_RENDER["stats"].denoised
+    assert engine.LAST_RENDER["metadata"]["lantern.denoised"] == "1"
+    assert "denoised" in engine.format_stats(engine.LAST_RENDER["stats"])
+
+
 def test_transparent_film_gives_alpha_zero_on_background(scene_factory):
     scene = scene_factory("sun_world")
     scene.render.film_transparent = True

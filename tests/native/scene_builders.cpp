@@ -417,9 +417,16 @@ lt_render_settings render_settings(int width, int height, int samples, unsigned 
 // ---- rendering -------------------------------------------------------------------------------
 
 std::string Passes::first_non_finite() const {
-  const std::pair<const char*, const std::vector<float>*> all[] = {
-      {"Combined", &combined}, {"Depth", &depth},       {"Normal", &normal},
-      {"Albedo", &albedo},     {"Variance", &variance}, {"SampleCount", &sample_count}};
+  const std::pair<const char*, const std::vector<float>*> all[] = {{"Combined", &combined},
+                                                                   {"Depth", &depth},
+                                                                   {"Normal", &normal},
+                                                                   {"Albedo", &albedo},
+                                                                   {"Variance", &variance},
+                                                                   {"SampleCount", &sample_count},
+                                                                   {"Noisy Image", &noisy},
+                                                                   {"Denoising Normal", &denoising_normal},
+                                                                   {"Denoising Albedo", &denoising_albedo},
+                                                                   {"Denoising Depth", &denoising_depth}};
   for (const auto& [name, v] : all)
     for (float x : *v)
       if (!std::isfinite(x)) return name;
@@ -431,7 +438,10 @@ Passes read_passes(lt_render* r, int width, int height) {
   p.width = width;
   p.height = height;
   const size_t n = size_t(width) * height;
-  std::vector<float>* bufs[] = {&p.combined, &p.depth, &p.normal, &p.albedo, &p.variance, &p.sample_count};
+  std::vector<float>* bufs[] = {&p.combined,         &p.depth,          &p.normal, &p.albedo,
+                                &p.variance,         &p.sample_count,   &p.noisy,  &p.denoising_normal,
+                                &p.denoising_albedo, &p.denoising_depth};
+  static_assert(sizeof bufs / sizeof bufs[0] == LT_PASS_COUNT, "one buffer per pass");
   for (int pass = 0; pass < LT_PASS_COUNT; ++pass) {
     bufs[pass]->assign(n * lt_pass_channels(pass), 0.0f);
     check(lt_render_read_pass(r, pass, bufs[pass]->data(), bufs[pass]->size()), "lt_render_read_pass");
@@ -525,6 +535,25 @@ ScenePtr varied_scene(bool fog) {
   add_light(s, sun_light({0.3f, 0.2f, -1}, 2, 0.05f));
   set_world(s, {0.2f, 0.3f, 0.5f}, 0.5f);
   set_camera(s, perspective_camera(look_at({0.5f, -5, 2.5f}, {0, 0, 0.5f}), 35));
+  check(lt_scene_commit(s), "commit");
+  return sp;
+}
+
+ScenePtr cornell_scene() {
+  ScenePtr sp = new_scene();
+  lt_scene* s = sp.get();
+  const float half_pi = float(kPi / 2);
+  const int white = add_diffuse(s, {0.73f, 0.73f, 0.73f}), red = add_diffuse(s, {0.65f, 0.05f, 0.05f});
+  const int green = add_diffuse(s, {0.12f, 0.45f, 0.15f});
+  add_object(s, plane(2, 2), white);                                                                 // floor
+  add_object(s, plane(2, 2), white, compose(translate({0, 0, 2}), rotate({1, 0, 0}, 2 * half_pi)));  // ceiling
+  add_object(s, plane(2, 2), white, compose(translate({0, 1, 1}), rotate({1, 0, 0}, half_pi)));      // back
+  add_object(s, plane(2, 2), red, compose(translate({-1, 0, 1}), rotate({0, 1, 0}, half_pi)));
+  add_object(s, plane(2, 2), green, compose(translate({1, 0, 1}), rotate({0, 1, 0}, -half_pi)));
+  add_object(s, box({-0.65f, -0.05f, 0}, {-0.1f, 0.5f, 1.2f}), white);
+  add_object(s, box({0.1f, -0.6f, 0}, {0.65f, -0.05f, 0.6f}), white);
+  add_light(s, area_light(LT_AREA_SQUARE, 0.5f, 0.5f, look_at({0, 0, 1.98f}, {0, 0, 0}, {0, 1, 0}), 60));
+  set_camera(s, perspective_camera(look_at({0, -3.0f, 1}, {0, 0, 1}), 40));
   check(lt_scene_commit(s), "commit");
   return sp;
 }

@@ -113,6 +113,10 @@ int add_volume_material(lt_scene* s, const lt_volume_desc& d);
 // surfaces, an area light, a soft point light, a sun and the world; with fog, a fog box around the
 // glossy sphere (the determinism tests and the ThreadSanitizer driver).
 ScenePtr varied_scene(bool fog = false);
+// A committed Cornell-like box: a 2 m room (white floor, ceiling and back wall, red left and green
+// right walls, open towards the camera), a square area light under the ceiling, a tall and a short
+// white block (the denoiser's tests and benchmark).
+ScenePtr cornell_scene();
 
 // Defaults with the given size, samples and seed.
 lt_render_settings render_settings(int width, int height, int samples, unsigned seed = 0);
@@ -123,6 +127,7 @@ lt_render_settings volpath_settings(int width, int height, int samples, unsigned
 struct Passes {
   int width = 0, height = 0;
   std::vector<float> combined, depth, normal, albedo, variance, sample_count;
+  std::vector<float> noisy, denoising_normal, denoising_albedo, denoising_depth;
   lt_render_status status{};
   const float* rgba(int x, int y) const { return &combined[(size_t(y) * width + x) * 4]; }
   const float* var(int x, int y) const { return &variance[(size_t(y) * width + x) * 3]; }

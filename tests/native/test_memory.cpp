@@ -107,7 +107,8 @@ TEST(Memory, FilmKeepsOnlyThePassesAskedFor) {
   // floats; Blender's RenderResult adds 5 more for either engine (bench/memory.py measures it).
   EXPECT_EQ(lean.bytes_per_pixel(), 11u * 4u);
   lt::FilmLayout all;
-  EXPECT_EQ(all.bytes_per_pixel(), (11u + 3 + 3 + 3) * 4u);
+  // Every pass: Normal, Albedo, Variance's squares and the denoising features (both halves' sums).
+  EXPECT_EQ(all.bytes_per_pixel(), (11u + 3 + 3 + 3 + 2 * lt::kFeatureChannels) * 4u);
   // Reading a pass the film does not keep is an error, never zeros that look like data.
   lt::Film film(4, 3, lean);
   film.finish();

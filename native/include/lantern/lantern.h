@@ -32,8 +32,10 @@ extern "C" {
  * (lt_mesh_attribute), instances their Object Info values and attributes, images their alpha;
  * 8: cubic interpolation; lt_scene_add_image_file (files read by the core); pass and strategy
  * rows read in bands; lt_scene_set_world_program and the world map's size in lt_scene_stats;
- * 9: lt_render_settings.sample_pattern; 10: lt_camera_desc's lens and panorama fields. */
-#define LT_ABI_VERSION 10
+ * 9: lt_render_settings.sample_pattern; 10: lt_camera_desc's lens and panorama fields;
+ * 11: denoising (lt_render_settings.denoise, lt_render_status.denoised and denoise_seconds, the
+ * Noisy Image and Denoising passes). */
+#define LT_ABI_VERSION 11
 
 enum lt_status {
   LT_OK = 0,
@@ -463,6 +465,13 @@ typedef struct lt_render_settings {
    * RLIMIT_AS), before allocating anything. */
   unsigned long long caller_bytes;
   int sample_pattern; /* lt_sample_pattern */
+  /* != 0: once rendering stops (at the samples, the time limit or the noise target; not after a
+   * cancel, nor with fewer than 2 samples), Combined's RGB is denoised (native/src/denoise/nfor.h:
+   * NFOR-style first-order regression on the Denoising passes, cross-filtering the two half
+   * images) and LT_PASS_NOISY_IMAGE keeps the image as rendered; the film then keeps the Noisy
+   * Image and Denoising passes whatever `passes` says. lt_render_status.rel_error stays the noisy
+   * image's estimate. Default 0. */
+  int denoise;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -489,6 +498,8 @@ typedef struct lt_render_status {
   int halt_reason;             /* lt_halt_reason */
   uint64_t active_pixels;      /* pixels still sampling (fewer than the region's with adaptive sampling) */
   uint64_t unestimated_pixels; /* pixels left out of rel_error: fewer than 2 finite samples */
+  int denoised;                /* != 0: Combined holds the denoised image (settings.denoise) */
+  double denoise_seconds;      /* the denoiser's time, included in elapsed_seconds */
 } lt_render_status;
 enum lt_halt_reason {
   LT_HALT_NONE = 0, /* still running */
@@ -513,7 +524,15 @@ enum lt_pass {
   LT_PASS_ALBEDO = 3,       /* 3 channels: colour of the first non-specular hit */
   LT_PASS_VARIANCE = 4,     /* 3 channels: variance of the Combined pixel mean, per channel */
   LT_PASS_SAMPLE_COUNT = 5, /* 1 channel: samples accumulated in the pixel */
-  LT_PASS_COUNT = 6
+  /* Cycles' denoising passes. NOISY_IMAGE: RGBA, Combined as rendered (equal to Combined unless
+   * the render is denoised). The Denoising data, means over the pixel's samples of the first
+   * hit's: NORMAL (3) the shading normal in camera space (x right, y up, z forward, as Cycles),
+   * ALBEDO (3) as LT_PASS_ALBEDO, DEPTH (1) the distance along the camera ray (0: background). */
+  LT_PASS_NOISY_IMAGE = 6,
+  LT_PASS_DENOISING_NORMAL = 7,
+  LT_PASS_DENOISING_ALBEDO = 8,
+  LT_PASS_DENOISING_DEPTH = 9,
+  LT_PASS_COUNT = 10
 };
 LT_API int lt_pass_channels(int pass);
 

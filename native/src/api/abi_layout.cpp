@@ -249,6 +249,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_settings, passes),
     LT_FIELD(lt_render_settings, caller_bytes),
     LT_FIELD(lt_render_settings, sample_pattern),
+    LT_FIELD(lt_render_settings, denoise),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),
@@ -266,6 +267,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_status, halt_reason),
     LT_FIELD(lt_render_status, active_pixels),
     LT_FIELD(lt_render_status, unestimated_pixels),
+    LT_FIELD(lt_render_status, denoised),
+    LT_FIELD(lt_render_status, denoise_seconds),
     LT_CONST(lt_halt_reason, LT_HALT_NONE),
     LT_CONST(lt_halt_reason, LT_HALT_SAMPLES),
     LT_CONST(lt_halt_reason, LT_HALT_TIME_LIMIT),
@@ -279,6 +282,10 @@ const lt_abi_entry kLayout[] = {
     LT_CONST(lt_pass, LT_PASS_ALBEDO),
     LT_CONST(lt_pass, LT_PASS_VARIANCE),
     LT_CONST(lt_pass, LT_PASS_SAMPLE_COUNT),
+    LT_CONST(lt_pass, LT_PASS_NOISY_IMAGE),
+    LT_CONST(lt_pass, LT_PASS_DENOISING_NORMAL),
+    LT_CONST(lt_pass, LT_PASS_DENOISING_ALBEDO),
+    LT_CONST(lt_pass, LT_PASS_DENOISING_DEPTH),
     LT_CONST(lt_pass, LT_PASS_COUNT),
 };
 

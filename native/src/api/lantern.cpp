@@ -715,6 +715,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->passes = (1u << LT_PASS_COUNT) - 1;
   s->caller_bytes = 0;
   s->sample_pattern = LT_PATTERN_SOBOL_OWEN;
+  s->denoise = 0;
 }
 
 namespace {
@@ -827,6 +828,7 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.min_samples = s->min_samples;
     rs.passes = s->passes;
     rs.pattern = lt::SamplePattern(s->sample_pattern);
+    rs.denoise = s->denoise != 0;
     // Refuse before allocating, with what it would take, rather than fail (or be killed) later.
     const lt::MemoryEstimate need = lt::RenderJob::estimate_bytes(rs);
     const double total = double(need.total()) + double(s->caller_bytes);
@@ -861,6 +863,8 @@ int lt_render_poll(lt_render* render, lt_render_status* st) {
     st->halt_reason = int(s.halt_reason);
     st->active_pixels = s.active_pixels;
     st->unestimated_pixels = s.unestimated_pixels;
+    st->denoised = s.denoised ? 1 : 0;
+    st->denoise_seconds = s.denoise_seconds;
   });
 }
 

@@ -119,8 +119,10 @@ float FilterSampler::pdf(float offset) const {
 int pass_channels(Pass pass) {
   switch (pass) {
     case Pass::Combined:
+    case Pass::NoisyImage:
       return 4;
     case Pass::Depth:
+    case Pass::DenoisingDepth:
       return 1;
     case Pass::SampleCount:
       return 1;
@@ -138,6 +140,7 @@ size_t FilmLayout::bytes_per_pixel() const {
   if (has(Pass::Depth)) floats += 1;
   if (has(Pass::Normal)) floats += 3;
   if (has(Pass::Albedo)) floats += 3;
+  if (passes & kDenoisingFeatures) floats += 2 * kFeatureChannels;
   if (squares) floats += 3;
   if (splats) floats += 6;
   floats += size_t(strategy_cells) * 6;
@@ -157,6 +160,11 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
   if (has(Pass::Depth)) depth_.assign(n, 1e10f);
   if (has(Pass::Normal)) normal_.assign(3 * n, 0.0f);
   if (has(Pass::Albedo)) albedo_.assign(3 * n, 0.0f);
+  if (layout_.passes & kDenoisingFeatures) {
+    layout_.passes |= kDenoisingFeatures;  // one accumulator holds the three
+    feature_.assign(kFeatureChannels * n, 0.0f);
+    feature_half_.assign(kFeatureChannels * n, 0.0f);
+  }
   if (layout_.splats) {
     splat_.assign(3 * n, 0.0f);
     splat_half_.assign(3 * n, 0.0f);
@@ -188,18 +196,51 @@ void Film::add(int x, int y, const SampleValue& s) {
     for (int k = 0; k < 3; ++k) normal_[3 * i + k] += s.normal[k];
   if (!albedo_.empty())
     for (int k = 0; k < 3; ++k) albedo_[3 * i + k] += s.albedo[k];
+  if (!feature_.empty()) {
+    const float f[kFeatureChannels] = {s.feature_normal.x, s.feature_normal.y, s.feature_normal.z, s.albedo[0],
+                                       s.albedo[1],        s.albedo[2],        s.feature_distance};
+    float* sum = &feature_[kFeatureChannels * i];
+    for (int k = 0; k < kFeatureChannels; ++k) sum[k] += f[k];
+    if (half)
+      for (int k = 0; k < kFeatureChannels; ++k) feature_half_[kFeatureChannels * i + k] += f[k];
+  }
   alpha_[i] += s.alpha;
   if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
   count_[i] = n;
 }
 
+Film::SplatScales Film::splat_scales() const {
+  SplatScales s;
+  s.on = !splat_.empty() && light_paths_half_ > 0 && light_paths_ > light_paths_half_;
+  if (s.on) {
+    s.inv_la = 1.0 / double(light_paths_ - light_paths_half_);
+    s.inv_lb = 1.0 / double(light_paths_half_);
+    s.inv_l = 1.0 / double(light_paths_);
+  }
+  return s;
+}
+
+void Film::half_means(size_t i, const SplatScales& sc, double* a, double* b, double* mean) const {
+  const double n = count_[i], nb = double(count_[i] / 2), na = n - nb;
+  for (int k = 0; k < 3; ++k) {
+    double m = mean_[3 * i + k], mb = half_[3 * i + k];
+    double ma = (m * n - mb * nb) / na;
+    if (sc.on) {
+      const double s = splat_[3 * i + k], sb = splat_half_[3 * i + k];
+      ma += (s - sb) * sc.inv_la;
+      mb += sb * sc.inv_lb;
+      m += s * sc.inv_l;
+    }
+    a[k] = ma;
+    b[k] = mb;
+    mean[k] = m;
+  }
+}
+
 ErrorEstimate Film::error_estimate(int passes) const {
   ErrorEstimate e;
   if (passes < 2) return e;
-  const bool splats = !splat_.empty() && light_paths_half_ > 0 && light_paths_ > light_paths_half_;
-  const double inv_la = splats ? 1.0 / double(light_paths_ - light_paths_half_) : 0.0;
-  const double inv_lb = splats ? 1.0 / double(light_paths_half_) : 0.0;
-  const double inv_l = splats ? 1.0 / double(light_paths_) : 0.0;
+  const SplatScales sc = splat_scales();
   // Per-row sums in parallel, added in row order: the same bits for any thread count.
   std::vector<double> row_var(height_, 0.0), row_sq(height_, 0.0);
   std::vector<uint64_t> row_skipped(height_, 0);
@@ -212,18 +253,12 @@ ErrorEstimate Film::error_estimate(int passes) const {
         continue;
       }
       const double n = count, nb = double(count / 2), na = n - nb;
+      double a[3], b[3], mean[3];
+      half_means(i, sc, a, b, mean);
       for (int k = 0; k < 3; ++k) {
-        double mean = mean_[3 * i + k], mean_b = half_[3 * i + k];
-        double mean_a = (mean * n - mean_b * nb) / na;
-        if (splats) {
-          const double s = splat_[3 * i + k], sb = splat_half_[3 * i + k];
-          mean_a += (s - sb) * inv_la;
-          mean_b += sb * inv_lb;
-          mean += s * inv_l;
-        }
-        const double d = mean_a - mean_b;
+        const double d = a[k] - b[k];
         var_sum += d * d * na * nb / (n * n);
-        square_sum += mean * mean;
+        square_sum += mean[k] * mean[k];
       }
     }
     row_var[y] = var_sum;
@@ -245,6 +280,53 @@ ErrorEstimate Film::error_estimate(int passes) const {
   else
     e.rel_error = signal > 0 ? std::sqrt(var_sum / signal) : std::numeric_limits<double>::infinity();
   return e;
+}
+
+HalfImages Film::half_images() const {
+  if (feature_.empty()) throw StateError("this render does not keep the denoising features");
+  HalfImages h;
+  h.width = width_;
+  h.height = height_;
+  const size_t n = count_.size();
+  for (int j = 0; j < 2; ++j) {
+    h.color[j].assign(3 * n, 0.0f);
+    h.variance[j].assign(3 * n, 0.0f);
+    h.feature[j].assign(kFeatureChannels * n, 0.0f);
+  }
+  h.valid.assign(n, 0);
+  const SplatScales sc = splat_scales();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      if (count_[i] < 2) continue;
+      const double nb = double(count_[i] / 2), na = double(count_[i]) - nb;
+      double a[3], b[3], mean[3];
+      half_means(i, sc, a, b, mean);
+      bool finite = true;
+      for (int k = 0; k < 3; ++k) {
+        // (A - B)^2 is unbiased for Var A + Var B = sigma^2 (1/n_A + 1/n_B), sigma^2 a sample's variance.
+        const double d = a[k] - b[k], sigma2 = d * d / (1.0 / na + 1.0 / nb);
+        h.color[0][3 * i + k] = float(a[k]);
+        h.color[1][3 * i + k] = float(b[k]);
+        h.variance[0][3 * i + k] = float(sigma2 / na);
+        h.variance[1][3 * i + k] = float(sigma2 / nb);
+        finite =
+            finite && std::isfinite(float(a[k])) && std::isfinite(float(b[k])) && std::isfinite(float(sigma2 / nb));
+      }
+      for (int k = 0; k < kFeatureChannels; ++k) {
+        const double sum = feature_[kFeatureChannels * i + k], sum_b = feature_half_[kFeatureChannels * i + k];
+        h.feature[0][kFeatureChannels * i + k] = float((sum - sum_b) / na);
+        h.feature[1][kFeatureChannels * i + k] = float(sum_b / nb);
+      }
+      h.valid[i] = finite;
+    }
+  });
+  return h;
+}
+
+void Film::set_denoised(std::vector<float> rgb) {
+  if (rgb.size() != 3 * count_.size()) throw InvalidArgument("denoised image of the wrong size");
+  std::lock_guard<std::mutex> lock(mutex_);
+  denoised_ = std::move(rgb);
 }
 
 double Film::pixel_variance(int x, int y) const {
@@ -330,7 +412,9 @@ uint64_t Film::total_samples() const {
 
 namespace {
 const char* pass_name(Pass p) {
-  static const char* const kNames[] = {"Combined", "Depth", "Normal", "Albedo", "Variance", "Sample Count"};
+  static const char* const kNames[] = {"Combined",         "Depth",          "Normal",      "Albedo",
+                                       "Variance",         "Sample Count",   "Noisy Image", "Denoising Normal",
+                                       "Denoising Albedo", "Denoising Depth"};
   return unsigned(p) < unsigned(Pass::Count) ? kNames[int(p)] : "?";
 }
 }  // namespace
@@ -363,7 +447,19 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
         switch (pass) {
           case Pass::Combined:
             resolve_combined(i, o);
+            if (!denoised_.empty())
+              for (int k = 0; k < 3; ++k) o[k] = denoised_[3 * i + k];
             break;
+          case Pass::NoisyImage:
+            resolve_combined(i, o);
+            break;
+          case Pass::DenoisingNormal:
+          case Pass::DenoisingAlbedo:
+          case Pass::DenoisingDepth: {
+            const int first_channel = pass == Pass::DenoisingNormal ? 0 : pass == Pass::DenoisingAlbedo ? 3 : 6;
+            for (int k = 0; k < c; ++k) o[k] = float(feature_[kFeatureChannels * i + first_channel + k] * inv);
+            break;
+          }
           case Pass::Depth:
             o[0] = depth_[i];
             break;
@@ -390,7 +486,7 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
       }
     });
   }
-  if (pass != Pass::Combined || !labels || labels_.empty()) return;
+  if ((pass != Pass::Combined && pass != Pass::NoisyImage) || !labels || labels_.empty()) return;
   for (size_t j = 0; j < n; ++j)
     if (labels_[first + j] != kLabelNone) {
       const float v = labels_[first + j] == kLabelWhite ? 1.0f : 0.0f;

@@ -39,12 +39,46 @@ struct SampleValue {
   float depth = 1e10f;  // Blender's background depth
   Vec3 normal{0.0f};
   Spectrum albedo{0.0f};
+  // Denoising features, as Cycles writes them (film/denoising_passes.h): the first hit's normal in
+  // camera space (x right, y up, z forward) and its distance along the camera ray (0: none). Set
+  // by the render job from normal and depth when the film keeps them.
+  Vec3 feature_normal{0.0f};
+  float feature_distance = 0;
 };
 
-enum class Pass { Combined = 0, Depth = 1, Normal = 2, Albedo = 3, Variance = 4, SampleCount = 5, Count = 6 };
+// NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
+// Denoising*: Cycles' denoising data passes, the means of SampleValue's albedo and features.
+enum class Pass {
+  Combined = 0,
+  Depth = 1,
+  Normal = 2,
+  Albedo = 3,
+  Variance = 4,
+  SampleCount = 5,
+  NoisyImage = 6,
+  DenoisingNormal = 7,
+  DenoisingAlbedo = 8,
+  DenoisingDepth = 9,
+  Count = 10
+};
 int pass_channels(Pass pass);
 constexpr unsigned pass_bit(Pass p) { return 1u << unsigned(p); }
 constexpr unsigned kAllPasses = (1u << unsigned(Pass::Count)) - 1;
+constexpr unsigned kDenoisingFeatures =
+    pass_bit(Pass::DenoisingNormal) | pass_bit(Pass::DenoisingAlbedo) | pass_bit(Pass::DenoisingDepth);
+// Per pixel, the features a denoiser reads: camera-space normal (3), albedo (3), distance (1).
+constexpr int kFeatureChannels = 7;
+
+// A film's two half images (see ErrorEstimate) of Combined and of the denoising features, the
+// means of each half per pixel: what a denoiser reads (denoise/). Pixels without a sample in
+// both halves are not valid (their values are zero).
+struct HalfImages {
+  int width = 0, height = 0;
+  std::vector<float> color[2];     // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
+  std::vector<float> variance[2];  // RGB: variance of each half's mean, (A - B)^2 / (1/n_A + 1/n_B) / n_h
+  std::vector<float> feature[2];   // kFeatureChannels per pixel
+  std::vector<uint8_t> valid;
+};
 
 // What a film keeps: the passes (Combined and Sample Count always), and whether it keeps the sum
 // of squares (the Variance pass, adaptive sampling), splats (BDPT) and a strategy grid.
@@ -82,6 +116,7 @@ class Film {
   int width() const { return width_; }
   int height() const { return height_; }
   bool has(Pass pass) const { return (layout_.passes & pass_bit(pass)) != 0; }
+  bool has_features() const { return !feature_.empty(); }
   const FilmLayout& layout() const { return layout_; }
   // Only the thread that owns the pixel in the current pass writes it.
   void add(int x, int y, const SampleValue& s);
@@ -152,9 +187,26 @@ class Film {
   // no light paths (not bidirectional). Between passes, as read().
   bool read_light_tracing(float* out) const;
   uint64_t total_samples() const;
+  // The half images (the rendering thread, once the last pass is done); needs the features.
+  HalfImages half_images() const;
+  // The denoised Combined RGB (width*height*3, rows bottom to top; its alpha stays the film's):
+  // once set, reading Combined gives it and NoisyImage the film's own. Before finish().
+  void set_denoised(std::vector<float> rgb);
+  bool denoised() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return !denoised_.empty();
+  }
 
  private:
   void resolve_combined(size_t i, float* o) const;
+  // Pixel i's means of Combined RGB over half A, half B and all its samples (count >= 2), light
+  // tracing's splats split the same way and normalised by each half's light paths.
+  struct SplatScales {
+    bool on = false;
+    double inv_la = 0, inv_lb = 0, inv_l = 0;
+  };
+  SplatScales splat_scales() const;
+  void half_means(size_t i, const SplatScales& sc, double* a, double* b, double* mean) const;
   // Locks the film for reading the accumulators: waits while a pass is being rendered.
   std::unique_lock<std::mutex> lock_accumulators() const;
   int width_, height_;
@@ -165,6 +217,9 @@ class Film {
   // the rest make two independent half images for the error estimate (Film::error_estimate).
   // alpha_, normal_, albedo_: sums; depth_: the minimum.
   std::vector<float> mean_, m2_, half_, alpha_, normal_, albedo_, depth_;
+  // The denoising features (kFeatureChannels per pixel): sums over all samples and over the
+  // odd-numbered ones; empty unless a Denoising pass is kept. denoised_: set_denoised's RGB.
+  std::vector<float> feature_, feature_half_, denoised_;
   std::vector<uint32_t> count_;
   std::vector<float> splat_, splat_half_;  // empty without splats
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;

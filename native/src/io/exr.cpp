@@ -171,7 +171,9 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
   std::vector<ExrChannel> channels;
   for (const Out& o : outs) {
     std::vector<float> buf(n * pass_channels(o.pass));
-    job.film().read(o.pass, buf.data());
+    // Parts hold the image as rendered, so that merging them stays exact (a merge is not denoised).
+    const Pass pass = o.pass == Pass::Combined && job.film().has(Pass::NoisyImage) ? Pass::NoisyImage : o.pass;
+    job.film().read(pass, buf.data());
     add_channels(channels, buf, n, o.names);
   }
   std::vector<float> light(n * 3);

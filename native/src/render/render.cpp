@@ -12,6 +12,8 @@
 #include <cstring>
 #include <new>
 
+#include "denoise/nfor.h"
+
 namespace lt {
 
 namespace {
@@ -33,11 +35,15 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
       active_(size_t(film_.width()) * film_.height(), 1) {
   active_pixels_.store(active_.size());
   film_.set_labels(integrator_->film_labels());
+  camera_x_ = normalize(scene.camera.xf.column(0));
+  camera_y_ = normalize(scene.camera.xf.column(1));
+  camera_z_ = -normalize(scene.camera.xf.column(2));
 }
 
 FilmLayout RenderJob::film_layout(const RenderSettings& s) {
   FilmLayout l;
   l.passes = s.passes;
+  if (s.denoise) l.passes |= kDenoisingFeatures | pass_bit(Pass::NoisyImage);
   l.squares = (s.passes & pass_bit(Pass::Variance)) || s.adaptive;
   l.splats = s.integrator == IntegratorType::Bidirectional;
   const int depth = s.integrator_settings.strategy_depth;
@@ -53,6 +59,8 @@ MemoryEstimate RenderJob::estimate_bytes(const RenderSettings& s) {
   if (s.adaptive) m.other += pixels * 8;  // update_active's per-pixel variances
   if (s.integrator == IntegratorType::Bidirectional)
     m.other += pixels * sizeof(Splat);  // a pass's splats: about one per camera sample
+  // Denoising: the half images, the denoiser's planes and its output (denoise/nfor.cpp).
+  if (s.denoise) m.other += pixels * (2 * (3 + 3 + kFeatureChannels) + 1 + 12 + 6 + kFeatureChannels + 1 + 6) * 4;
   return m;
 }
 
@@ -148,7 +156,13 @@ void RenderJob::render_pass(int sample_index) {
               splats.resize(splat_mark);
               continue;
             }
-            if (v.depth < 1e10f) v.depth = camera_.depth(cs.ray.o + cs.ray.d * v.depth);
+            if (v.depth < 1e10f) {
+              if (film_.has_features()) {
+                v.feature_distance = v.depth * length(cs.ray.d);
+                v.feature_normal = {dot(v.normal, camera_x_), dot(v.normal, camera_y_), dot(v.normal, camera_z_)};
+              }
+              v.depth = camera_.depth(cs.ray.o + cs.ray.d * v.depth);
+            }
             film_.add(x, y, v);
           }
       }
@@ -277,6 +291,12 @@ void RenderJob::run() noexcept {
       const ErrorEstimate e = film_.error_estimate(samples_done_.load());
       rel_error_.store(e.rel_error);
       unestimated_pixels_.store(e.unestimated_pixels);
+      // The denoiser needs both half images; a cancel asks to stop now, so it is not run then.
+      if (settings_.denoise && !cancel_.load() && samples_done_.load() >= 2) {
+        const auto t0 = std::chrono::steady_clock::now();
+        film_.set_denoised(denoise(film_.half_images()));
+        denoise_seconds_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      }
     });
     film_.finish();
     finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
@@ -318,6 +338,8 @@ RenderStatus RenderJob::status() const {
   st.halt_reason = HaltReason(halt_reason_.load());
   st.active_pixels = active_pixels_.load();
   st.unestimated_pixels = unestimated_pixels_.load();
+  st.denoised = st.state != RenderState::Running && film_.denoised();
+  st.denoise_seconds = denoise_seconds_.load();
   if (st.state != RenderState::Running) {
     st.remaining = 0;
   } else if (st.samples_done > 0) {

@@ -36,6 +36,9 @@ struct RenderSettings {
   bool adaptive = false;
   int min_samples = 16;
   unsigned passes = kAllPasses;  // what the film keeps (FilmLayout::passes)
+  // Denoise Combined once rendering stops (denoise/nfor.h; not after a cancel, nor with fewer
+  // than 2 passes); the film then keeps the features and Noisy Image.
+  bool denoise = false;
 };
 
 // The film and per-pixel buffers a render allocates, in bytes (RenderJob::estimate_bytes).
@@ -63,6 +66,8 @@ struct RenderStatus {
   HaltReason halt_reason = HaltReason::None;
   uint64_t active_pixels = 0;       // pixels still sampling (all of them without adaptive sampling)
   uint64_t unestimated_pixels = 0;  // ErrorEstimate::unestimated_pixels of the last estimate
+  bool denoised = false;            // Combined holds the denoised image (Noisy Image the film's)
+  double denoise_seconds = 0;       // the denoiser's time
 };
 
 class RenderJob {
@@ -107,6 +112,9 @@ class RenderJob {
   std::atomic<double> rel_error_{-1};
   std::atomic<int> halt_reason_{0};
   std::atomic<uint64_t> active_pixels_{0}, unestimated_pixels_{0};
+  std::atomic<double> denoise_seconds_{0};
+  // The camera's axes in world space (x right, y up, z forward): Denoising Normal's frame.
+  Vec3 camera_x_, camera_y_, camera_z_;
   // Samples traced in the current pass, of them in half B (BDPT: one light path each).
   std::atomic<uint64_t> pass_samples_{0}, pass_samples_half_{0};
   std::vector<uint8_t> active_;  // per pixel of the region: still sampling

@@ -1,0 +1,186 @@
+// The denoiser (native/src/denoise/nfor.h): finite for any input, a NaN or Inf pixel does not
+// spread, deterministic for any thread count, the image mean kept within its noise, and a lower
+// error against a converged reference than the noisy image's.
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include "denoise/nfor.h"
+#include "scene_builders.h"
+
+using namespace lt_test;
+
+namespace {
+
+// Half images of a known image: a smooth gradient with a darker square (the albedo feature marks
+// it), each half's value the truth plus Gaussian noise of the variance it reports (fixed seed).
+lt::HalfImages synthetic(int w, int h, unsigned seed) {
+  lt::HalfImages in;
+  in.width = w;
+  in.height = h;
+  const size_t n = size_t(w) * h;
+  for (int j = 0; j < 2; ++j) {
+    in.color[j].resize(3 * n);
+    in.variance[j].resize(3 * n);
+    in.feature[j].resize(lt::kFeatureChannels * n);
+  }
+  in.valid.assign(n, 1);
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> gauss;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      const bool inside = x > w / 4 && x < w / 2 && y > h / 4 && y < h / 2;
+      const float albedo = inside ? 0.2f : 0.8f;
+      for (int j = 0; j < 2; ++j) {
+        for (int c = 0; c < 3; ++c) {
+          const float truth = albedo * (0.5f + float(x) / w + 0.2f * c), var = 0.04f * truth;
+          in.color[j][3 * i + c] = truth + std::sqrt(var) * gauss(rng);
+          in.variance[j][3 * i + c] = var;
+        }
+        float* f = &in.feature[j][lt::kFeatureChannels * i];
+        f[0] = 0, f[1] = 0, f[2] = -1;   // normal, facing the camera
+        f[3] = f[4] = f[5] = albedo;     // albedo
+        f[6] = 3.0f + 0.01f * float(y);  // distance
+      }
+    }
+  return in;
+}
+
+std::vector<float> denoise_on(int threads, const lt::HalfImages& in) {
+  tbb::task_arena arena(threads);
+  std::vector<float> out;
+  arena.execute([&] { out = lt::denoise(in); });
+  return out;
+}
+
+bool all_finite(const std::vector<float>& v) {
+  for (float x : v)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+// relMSE (Rousselle et al. 2011): mean over pixels and channels of (x - r)^2 / (r^2 + 0.01).
+double rel_mse(const float* image, int stride, const std::vector<float>& ref, size_t pixels) {
+  double sum = 0;
+  for (size_t i = 0; i < pixels; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double r = ref[4 * i + c], d = image[stride * i + c] - r;
+      sum += d * d / (r * r + 0.01);
+    }
+  return sum / (3.0 * pixels);
+}
+
+lt_render_settings denoised_settings(int w, int h, int samples, unsigned seed) {
+  lt_render_settings rs = render_settings(w, h, samples, seed);
+  rs.denoise = 1;
+  return rs;
+}
+
+}  // namespace
+
+TEST(Denoise, NonFiniteInputsDoNotSpread) {
+  const int w = 40, h = 32;
+  lt::HalfImages in = synthetic(w, h, 3);
+  // The same pixels, once marked invalid and once holding NaN or Inf in a colour, a variance or
+  // a feature: the outputs must be the same bits, all finite.
+  const size_t bad[] = {0, 5 * w + 7, 17 * w + 20, 31 * w + 39, 12 * w + 12};
+  lt::HalfImages marked = in, poisoned = in;
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (size_t i : bad) marked.valid[i] = 0;
+  poisoned.color[0][3 * bad[0]] = nan;
+  poisoned.color[1][3 * bad[1] + 2] = inf;
+  poisoned.variance[0][3 * bad[2] + 1] = nan;
+  poisoned.feature[1][lt::kFeatureChannels * bad[3] + 6] = -inf;
+  poisoned.feature[0][lt::kFeatureChannels * bad[4] + 3] = nan;
+  const std::vector<float> a = denoise_on(2, marked), b = denoise_on(2, poisoned);
+  ASSERT_TRUE(all_finite(a));
+  ASSERT_TRUE(all_finite(b));
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+  // A left-out pixel is rebuilt from its neighbours: within the valid inputs' range.
+  float lo = 1e30f, hi = -1e30f;
+  for (int j = 0; j < 2; ++j)
+    for (float v : in.color[j]) lo = std::min(lo, v), hi = std::max(hi, v);
+  for (size_t i : bad)
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_GE(b[3 * i + c], std::min(lo, 0.0f)) << i;
+      EXPECT_LE(b[3 * i + c], hi) << i;
+    }
+}
+
+TEST(Denoise, SameBitsForAnyThreadCount) {
+  const lt::HalfImages in = synthetic(53, 37, 5);  // tiles cut at the edges
+  const std::vector<float> one = denoise_on(1, in), many = denoise_on(4, in);
+  ASSERT_EQ(one.size(), many.size());
+  EXPECT_EQ(std::memcmp(one.data(), many.data(), one.size() * sizeof(float)), 0);
+}
+
+TEST(Denoise, RenderKeepsTheNoisyImageAndFeatures) {
+  ScenePtr s = cornell_scene();
+  const Passes p = render(s.get(), denoised_settings(24, 20, 4, 1));
+  EXPECT_TRUE(p.status.denoised);
+  EXPECT_EQ(p.first_non_finite(), "");
+  // Noisy Image is the film's Combined: the same render without denoising gives it bit for bit.
+  const Passes plain = render(s.get(), render_settings(24, 20, 4, 1));
+  EXPECT_FALSE(plain.status.denoised);
+  EXPECT_EQ(std::memcmp(p.noisy.data(), plain.combined.data(), p.noisy.size() * sizeof(float)), 0);
+  EXPECT_NE(std::memcmp(p.combined.data(), plain.combined.data(), p.noisy.size() * sizeof(float)), 0);
+  // Features: camera-space normals of at most unit length (means: shorter at edges), never facing
+  // away from the camera (z > 0), about unit length on average; distances beyond the box's front.
+  double mean_length = 0;
+  for (size_t i = 0; i < 24 * 20; ++i) {
+    const float* nrm = &p.denoising_normal[3 * i];
+    const float length = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+    mean_length += length / (24 * 20);
+    EXPECT_LE(length, 1.0001f) << i;
+    EXPECT_LE(nrm[2], 1e-6f) << i;
+    EXPECT_GT(p.denoising_depth[i], 2.0f) << i;
+  }
+  EXPECT_GT(mean_length, 0.9);
+}
+
+// The denoised image's mean stays within the noise of the noisy image's mean, over the whole image
+// and over each quadrant: the noise estimate from the Variance pass, sqrt(sum_p var_p) / N.
+TEST(Denoise, KeepsTheMeanWithinTheNoise) {
+  ScenePtr s = cornell_scene();
+  const int w = 64, h = 64;
+  const Passes p = render(s.get(), denoised_settings(w, h, 16, 11));
+  ASSERT_TRUE(p.status.denoised);
+  auto check_region = [&](int x0, int x1, int y0, int y1) {
+    for (int c = 0; c < 3; ++c) {
+      double noisy = 0, denoised = 0, var = 0, n = 0;
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+          const size_t i = size_t(y) * w + x;
+          noisy += p.noisy[4 * i + c];
+          denoised += p.combined[4 * i + c];
+          var += p.variance[3 * i + c];
+          n += 1;
+        }
+      const double sigma = std::sqrt(var) / n, shift = std::abs(denoised - noisy) / n;
+      EXPECT_LE(shift, kSigmas * sigma) << "region " << x0 << "," << y0 << " channel " << c << ": mean " << noisy / n
+                                        << " became " << denoised / n;
+    }
+  };
+  check_region(0, w, 0, h);
+  for (int qy = 0; qy < 2; ++qy)
+    for (int qx = 0; qx < 2; ++qx) check_region(qx * w / 2, (qx + 1) * w / 2, qy * h / 2, (qy + 1) * h / 2);
+}
+
+TEST(Denoise, LowersTheErrorAgainstAReference) {
+  ScenePtr s = cornell_scene();
+  const int w = 48, h = 48;
+  const Passes ref = render(s.get(), render_settings(w, h, 1024, 99));
+  const Passes p = render(s.get(), denoised_settings(w, h, 16, 7));
+  const size_t n = size_t(w) * h;
+  const double noisy = rel_mse(p.noisy.data(), 4, ref.combined, n);
+  const double denoised = rel_mse(p.combined.data(), 4, ref.combined, n);
+  RecordProperty("relmse_noisy", std::to_string(noisy));
+  RecordProperty("relmse_denoised", std::to_string(denoised));
+  std::printf("relMSE noisy %.5f denoised %.5f\n", noisy, denoised);
+  EXPECT_LT(denoised, 0.5 * noisy);
+}
