@@ -172,8 +172,7 @@ struct Sobol1Tables {
 };
 inline constexpr Sobol1Tables kSobol1{};
 inline uint32_t sobol_1_reversed(uint32_t r) {
-  return kSobol1.t[0][r & 255] ^ kSobol1.t[1][(r >> 8) & 255] ^ kSobol1.t[2][(r >> 16) & 255] ^
-         kSobol1.t[3][r >> 24];
+  return kSobol1.t[0][r & 255] ^ kSobol1.t[1][(r >> 8) & 255] ^ kSobol1.t[2][(r >> 16) & 255] ^ kSobol1.t[3][r >> 24];
 }
 
 inline float u32_to_unit(uint32_t x) { return std::min(kOneMinusEpsilon, float(x) * 0x1p-32f); }
