@@ -1643,7 +1643,7 @@ SCENES = {
     "bsdf_zoo_departures": (lambda scene: build_bsdf_zoo(scene, departures=True), (128, 80), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
-    "door_bounce": (build_door_bounce, (96, 96), 1280),
+    "door_bounce": (build_door_bounce, (96, 96), 1600),
     "door_slabs": (build_door_slabs, (64, 48), 640),
     "caustic": (build_caustic, (96, 96), 256),
     "smoke_box": (build_smoke_box, (64, 64), 128),
