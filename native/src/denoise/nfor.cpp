@@ -30,7 +30,7 @@ inline float exp_neg(float x) {
   const float p = 1.0f + f * (0.693147f + f * (0.240227f + f * (0.0555041f + f * (0.00961813f + f * 0.00133336f))));
   int32_t bits;
   std::memcpy(&bits, &p, 4);
-  bits += int32_t(fl) << 23;
+  bits += int32_t(fl) * (1 << 23);  // a multiply: shifting a negative value is undefined
   float r;
   std::memcpy(&r, &bits, 4);
   return r;
