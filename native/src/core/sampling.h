@@ -136,9 +136,9 @@ inline uint32_t reverse_bits(uint32_t x) {
   return ((x & 0x55555555u) << 1) | ((x & 0xaaaaaaaau) >> 1);
 }
 
-// Owen scrambling of a 32-bit fixed-point value by a hash (Burley 2020, "Practical Hash-based
-// Owen Scrambling", with Vegdahl's improved Laine-Karras permutation): each bit is flipped by a
-// function of the bits above it, so the scrambled points keep every elementary interval.
+// Vegdahl's improved Laine-Karras permutation: each bit is flipped by a function of the bits
+// below it, so reverse(LK(reverse(y))) is an Owen scrambling of the fixed-point value y (Burley
+// 2020, "Practical Hash-based Owen Scrambling"): the scrambled points keep every elementary interval.
 inline uint32_t laine_karras_permutation(uint32_t x, uint32_t seed) {
   x ^= x * 0x3d20adeaU;
   x += seed;
@@ -146,9 +146,6 @@ inline uint32_t laine_karras_permutation(uint32_t x, uint32_t seed) {
   x ^= x * 0x05526c56U;
   x ^= x * 0x53a22864U;
   return x;
-}
-inline uint32_t nested_uniform_scramble(uint32_t x, uint32_t seed) {
-  return reverse_bits(laine_karras_permutation(reverse_bits(x), seed));
 }
 
 // The second dimension of Sobol's sequence (the Pascal matrix mod 2: direction numbers
