@@ -10,7 +10,9 @@
 
 #include "chi2.h"
 #include "cycles_ggx_reference.h"
+#include "program_builder.h"
 #include "shading/bsdf.h"
+#include "shading/image.h"
 
 namespace lt {
 namespace {
@@ -1259,6 +1261,65 @@ TEST(BsdfValues, CyclesClosedForms) {
       if (wg.z > 0) EXPECT_NEAR(lobe_eval(toon(true, size, smooth), wo, wg).x * wg.z, pc * is, 1e-4 * pc) << t;
     }
   }
+}
+
+}  // namespace
+}  // namespace lt
+
+namespace lt {
+namespace {
+
+// The Principled BSDF's layers as Cycles 3.4's svm_node_closure_bsdf builds them: the diffuse
+// weighted by (1 - metallic)(1 - transmission), the sheen tinted by the base colour over its
+// Rec. 709 luminance, the specular's cspec0 = 0.08 Specular mix(1, base / (0.3 R + 0.6 G + 0.1 B),
+// Specular Tint) (Cycles' "luminance approx."), the clearcoat 0.25 Clearcoat at alpha = cr^2.
+TEST(PrincipledLayers, WeightsAndTintsAsCycles) {
+  const Rgb base{0.7f, 0.25f, 0.1f};
+  const float spec = 0.5f, spec_tint = 0.6f, sheen = 1.0f, sheen_tint = 0.7f, cc = 0.8f, ccr = 0.15f;
+  ShaderCode p;
+  const uint32_t z3 = p.c3({0, 0, 0}), z = p.c1(0);
+  // Operand order of kOpPrincipled (program_builder.h's principled()).
+  p.emit(kOpPrincipled,
+         {p.one(), z3, p.c3(base), z, p.c3({1, 0.2f, 0.1f}), p.c3(base), p.c1(1.4f), z, z, p.c1(spec),
+          p.c1(spec_tint), p.c1(0.45f), z, z, p.c1(sheen), p.c1(sheen_tint), p.c1(cc), p.c1(ccr), p.c1(1.45f), z, z,
+          z3, p.c1(1), p.c1(1), z3, z3},
+         {}, {kDistGGX, 0});
+  const Program prog(p.code, p.k, p.registers, 0);
+  ShadingContext ctx{};
+  ctx.N = ctx.Ng = ctx.I = Vec3(0, 0, 1);
+  Bsdf bsdf;
+  ShadingFrame frame{ctx.N};
+  const std::vector<std::unique_ptr<Image>> images;
+  prog.run(ctx, images, &bsdf, &frame);
+  const double b[3] = {base.x, base.y, base.z};
+  const double lum709 = 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
+  const double lum_approx = 0.3 * b[0] + 0.6 * b[1] + 0.1 * b[2];
+  int seen = 0;
+  for (int k = 0; k < bsdf.count(); ++k) {
+    const Lobe& l = bsdf.lobe(k);
+    for (int c = 0; c < 3; ++c) {
+      switch (l.type) {
+        case LobeType::PrincipledDiffuse:
+          EXPECT_NEAR(l.weight[c], b[c], 1e-6);
+          break;
+        case LobeType::Sheen:
+          EXPECT_NEAR(l.weight[c], sheen * (1 - sheen_tint + sheen_tint * b[c] / lum709), 1e-5) << c;
+          break;
+        case LobeType::SpecularGGX:
+          EXPECT_NEAR(l.weight[c], 1, 1e-6);
+          EXPECT_NEAR(l.f0[c], 0.08 * spec * (1 - spec_tint + spec_tint * b[c] / lum_approx), 1e-6) << c;
+          break;
+        case LobeType::Clearcoat:
+          EXPECT_NEAR(l.weight[c], 0.25 * cc, 1e-6);
+          EXPECT_NEAR(l.alpha, ccr * ccr, 1e-7);
+          break;
+        default:
+          ADD_FAILURE() << "unexpected lobe " << int(l.type);
+      }
+    }
+    ++seen;
+  }
+  EXPECT_EQ(seen, 4);
 }
 
 }  // namespace

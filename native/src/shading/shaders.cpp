@@ -92,9 +92,13 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   // 12.5 is where 0.08 specular reaches 1 (an infinite IOR); NaN becomes 0.
   const float spec = std::min(std::max(0.0f, m.f(in.in[9])), 12.5f);
   const float diffuse_weight = (1 - metallic) * (1 - transmission);
-  // The base colour normalised by its luminance: the tint of sheen and specular.
+  // The base colour normalised by its luminance: the tint of sheen (Rec. 709 luminance, Cycles'
+  // linear_rgb_to_gray) and of specular (Cycles 3.4 uses the approximation 0.3 R + 0.6 G + 0.1 B
+  // there, svm_node_closure_bsdf).
   const float lum = 0.2126f * base.x + 0.7152f * base.y + 0.0722f * base.z;
   const Vec3 tint = lum > 0 ? base / lum : Vec3(1.0f);
+  const float spec_lum = 0.3f * base.x + 0.6f * base.y + 0.1f * base.z;
+  const Vec3 spec_tint = spec_lum > 0 ? base / spec_lum : Vec3(1.0f);
   // Subsurface scattering is rendered in its radius-0 limit (README: departures): the diffuse
   // takes the colour Cycles gives its BSSRDF, mix(base, Subsurface Color, Subsurface).
   const Vec3 diffuse_color = lerp(subsurface, base, non_negative(m.v(in.in[5])));
@@ -125,7 +129,7 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
     } else {
       g.alpha = r * r;
     }
-    const Vec3 tinted = lerp(unit(m.f(in.in[10])), Vec3(1.0f), tint);
+    const Vec3 tinted = lerp(unit(m.f(in.in[10])), Vec3(1.0f), spec_tint);
     g.f0 = lerp(metallic, tinted * (0.08f * spec), base);  // fresnel_principled saturates it
     g.eta = principled_specular_ior(spec);
     m.bsdf->add(g);
