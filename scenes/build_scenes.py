@@ -773,19 +773,22 @@ def bsdf_zoo_materials():
 ZOO_DEPARTURES = ("ToonDiffuse", "ToonGlossy", "MultiGGX", "PrincipledClearcoat")
 
 
-def build_bsdf_zoo(scene, departures=False):
+def build_bsdf_zoo(scene, departures=False, sun_only=False, hidden=False):
     """Issue 13's lit agreement of the new shader nodes: spheres of Velvet, Translucent, Beckmann
     glass, Anisotropic GGX, Beckmann and Ashikhmin-Shirley glossy, and the Principled BSDF's sheen,
     specular tint and anisotropy (departures: the ZOO_DEPARTURES nodes instead) on a ground under
-    a sun and a sky."""
-    set_world(scene, (0.35, 0.45, 0.6), 0.8)
-    ground = add_object(scene, "Ground", mesh_plane("Ground", 30.0))
-    assign(ground, principled("Ground", (0.5, 0.5, 0.5), 0.7))
+    a sun and a sky. sun_only: no sky and no ground; hidden: spheres that indirect rays do not
+    see, so that all light comes from the sun through Cycles' light samples."""
+    set_world(scene, (0.35, 0.45, 0.6), 0.0 if sun_only else 0.8)
+    if not sun_only:
+        ground = add_object(scene, "Ground", mesh_plane("Ground", 30.0))
+        assign(ground, principled("Ground", (0.5, 0.5, 0.5), 0.7))
     mats = [m for m in bsdf_zoo_materials() if (m.name in ZOO_DEPARTURES) == departures]
     for i, mat in enumerate(mats):
         row, col = divmod(i, 4)
+        visibility = dict(diffuse=False, glossy=False, transmission=False) if hidden else {}
         sphere = add_object(scene, "Sphere_" + mat.name, mesh_sphere("Sphere_" + mat.name, 0.4),
-                            ((col - 1.5) * 0.95, row * 1.1, 0.4))
+                            ((col - 1.5) * 0.95, row * 1.1, 0.4), **visibility)
         assign(sphere, mat)
     add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(40, 0, 25), angle=math.radians(3.0))
     add_camera(scene, (0, -5.2, 2.6), (0, 0.55, 0.35), lens=38.0)
@@ -1646,6 +1649,10 @@ SCENES = {
     "wide_sun": (build_wide_sun, (64, 48), 128),
     "bsdf_zoo": (build_bsdf_zoo, (128, 80), 128),
     "bsdf_zoo_departures": (lambda scene: build_bsdf_zoo(scene, departures=True), (128, 80), 128),
+    "bsdf_zoo_departures_sun": (lambda scene: build_bsdf_zoo(scene, departures=True, sun_only=True, hidden=True),
+                                (128, 80), 128),
+    "bsdf_zoo_departures_sun_visible": (lambda scene: build_bsdf_zoo(scene, departures=True, sun_only=True),
+                                        (128, 80), 128),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
     "door_bounce": (build_door_bounce, (96, 96), 1600),

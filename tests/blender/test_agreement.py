@@ -192,6 +192,29 @@ def test_shader_nodes_that_depart_from_cycles_when_lit(scene_factory, outdir):
     assert report == "", report
 
 
+def test_departing_nodes_agree_with_cycles_under_the_sun_alone(scene_factory, outdir):
+    """The same nodes lit by the sun alone (bsdf_zoo_departures_sun: no sky, no ground, spheres
+    hidden from indirect rays), where Cycles' image comes from its light samples, weighed by its
+    eval(): Lantern's lobes are Cycles' eval() (per tile and in the image mean as above)."""
+    both = lantern_and_cycles(scene_factory, "bsdf_zoo_departures_sun", "PATH")
+    report, _ = ru.agreement_report("bsdf_zoo_departures_sun", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
+def test_bidirectional_renders_the_departing_nodes_as_path_does(scene_factory, outdir):
+    """Toon is not reciprocal (Cycles' f cos is the ramp of the light's angle): BDPT's light
+    subpaths must evaluate the adjoint BSDF. Lit by the sun alone, where light tracing carries much
+    of the image (bsdf_zoo_departures_sun_visible: the spheres seen by every ray), BDPT agrees with
+    Lantern's path tracer per tile and in the image mean as above (without the adjoint the diffuse
+    Toon sphere is 5 % darker)."""
+    name = "bsdf_zoo_departures_sun_visible"
+    report, _ = ru.agreement_report(name + "_bdpt_vs_path", runs(scene_factory, name, ru.LANTERN, "BIDIRECTIONAL"),
+                                    runs(scene_factory, name, ru.LANTERN, "PATH"), outdir, TILE, ROUNDING,
+                                    ("bdpt", "path"))
+    assert report == "", report
+
+
 @pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
 def test_gltf_imported_pbr_material_agrees_with_cycles(integrator, scene_factory, outdir):
     """Issue 13's "glTF-imported PBR material" (gltf_pbr: Blender's glTF importer builds Separate

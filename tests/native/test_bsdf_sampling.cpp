@@ -1058,6 +1058,47 @@ TEST(BsdfMixture, SampleMatchesEval) {
   EXPECT_GT(checked, 15000);
 }
 
+// Light transport (BDPT's light subpaths, set_light_is_wo): eval() and sample() give the adjoint
+// f(wi, wo), which differs for the non-reciprocal Toon lobes (f cos = the ramp of the light's
+// angle); the pdfs stay those of sampling wi from wo, and sample() still matches eval().
+TEST(BsdfMixture, AdjointForLightTransport) {
+  const std::vector<Lobe> lobes = {toon(false, 0.4f, 0.2f, Spectrum(0.5f)), toon(true, 0.3f, 0.1f, Spectrum(0.3f)),
+                                   glossy(0.2f, Spectrum(0.2f)), sheen(Spectrum(0.3f))};
+  Bsdf radiance, importance;
+  for (const Lobe& l : lobes) {
+    radiance.add(l);
+    importance.add(l);
+  }
+  importance.set_light_is_wo(true);
+  Sampler rng(29, 0, 0);
+  int checked = 0, differ = 0;
+  for (int k = 0; k < 20000; ++k) {
+    Vec3 wo = sample_uniform_sphere(rng.next_2d());
+    if (std::abs(wo.z) < 1e-3f) continue;
+    BsdfSample s;
+    if (!importance.sample(wo, rng.next_1d(), rng.next_2d(), &s)) continue;
+    float pdf, pdf_radiance;
+    const Spectrum f = importance.eval(wo, s.wi, &pdf);
+    const Spectrum swapped = radiance.eval(s.wi, wo, nullptr);
+    radiance.eval(wo, s.wi, &pdf_radiance);
+    ASSERT_NEAR(pdf, s.pdf, 1e-4f * s.pdf);
+    ASSERT_EQ(pdf, pdf_radiance);
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_NEAR(f[c], s.f[c], 1e-4f * std::max(1e-3f, s.f[c]));
+      ASSERT_NEAR(f[c], swapped[c], 1e-5f * std::max(1e-3f, swapped[c]));
+    }
+    if (std::abs(f.x - radiance.eval(wo, s.wi, nullptr).x) > 1e-3f * f.x) ++differ;
+    ++checked;
+  }
+  EXPECT_GT(checked, 15000);
+  EXPECT_GT(differ, checked / 4);  // Toon's value does depend on the direction of transport
+  importance.clear();              // clear() returns to radiance transport
+  importance.add(lobes[0]);
+  const Vec3 wo = from_angles(60), wi = from_angles(10, 180);
+  EXPECT_EQ(importance.eval(wo, wi, nullptr).x, lobe_eval(lobes[0], wo, wi).x);
+  EXPECT_NE(lobe_eval(lobes[0], wo, wi).x, lobe_eval(lobes[0], wi, wo).x);
+}
+
 TEST(BsdfMixture, Bookkeeping) {
   Bsdf b;
   b.add(diffuse(0, Spectrum(0.0f)));

@@ -1127,22 +1127,34 @@ float Bsdf::bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const {
   return -g * g * g + g * g + g;
 }
 
+namespace {
+// Lobes whose f is not symmetric in (wo, wi): Cycles' Toon closures make f cos(wi) the ramp.
+inline bool lobe_reciprocal(const Lobe& l) { return l.type != LobeType::DiffuseToon && l.type != LobeType::GlossyToon; }
+}  // namespace
+
+// A lobe's f for the transport set (the adjoint under set_light_is_wo) and its pdf of sampling wi.
+Spectrum Bsdf::lobe_value(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf) const {
+  if (!light_is_wo_ || lobe_reciprocal(l)) return lobe_eval_pdf(l, wo, wi, pdf);
+  *pdf = lobe_pdf(l, wo, wi);
+  return lobe_eval(l, wi, wo);
+}
+
 Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf) const {
   Spectrum f(0.0f);
   float p_total = 0;
   float p[kMaxLobes];
+  float pk;
   if (!pdf) {
     for (int k = 0; k < count_; ++k)
-      f += lobe_eval(lobes_[k], wo, wi) * bump_term(lobes_[k], wo, wi);  // zero for delta lobes
+      f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);  // zero for delta lobes
   } else if (selection_probabilities(*this, wo, p)) {
     for (int k = 0; k < count_; ++k) {
       if (lobe_is_delta(lobes_[k])) continue;
-      float pk;
-      f += lobe_eval_pdf(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
+      f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
       p_total += p[k] * pk;
     }
   } else {
-    for (int k = 0; k < count_; ++k) f += lobe_eval(lobes_[k], wo, wi) * bump_term(lobes_[k], wo, wi);
+    for (int k = 0; k < count_; ++k) f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
   }
   if (!is_finite(f)) f = Spectrum(0.0f);
   if (pdf) *pdf = std::isfinite(p_total) ? p_total : 0.0f;
@@ -1180,11 +1192,12 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
     // Mixture pdf of the direction (one-sample MIS over the lobes' strategies) and the sum of
     // every non-delta lobe's value, so that MIS against light sampling sees one consistent pdf.
     float pdf = p[chosen] * s.pdf;
+    if (light_is_wo_ && !lobe_reciprocal(lobes_[chosen])) s.f = lobe_eval(lobes_[chosen], s.wi, wo);
     s.f *= bump_term(lobes_[chosen], wo, s.wi);
     for (int k = 0; k < count_; ++k) {
       if (k == chosen || lobe_is_delta(lobes_[k])) continue;
       float pk;
-      s.f += lobe_eval_pdf(lobes_[k], wo, s.wi, &pk) * bump_term(lobes_[k], wo, s.wi);
+      s.f += lobe_value(lobes_[k], wo, s.wi, &pk) * bump_term(lobes_[k], wo, s.wi);
       pdf += p[k] * pk;
     }
     s.pdf = pdf;

@@ -121,7 +121,13 @@ class Bsdf {
     count_ = 0;
     overflowed_ = false;
     bumped_ = false;
+    light_is_wo_ = false;
   }
+  // Light transport (BDPT's light subpaths): the light arrives along wo, so eval() and sample()
+  // give the adjoint BSDF f(wi, wo) (Veach 1997, sec. 3.7.6). It differs from f(wo, wi) for the
+  // Toon lobes only, which Cycles divides by the light's cosine (f cos = the ramp); the others
+  // are reciprocal as Lantern writes them. Pdfs stay those of sampling wi from wo. clear() resets.
+  void set_light_is_wo(bool light_is_wo) { light_is_wo_ = light_is_wo; }
   // The interpolated normal (local frame) when a Normal input bent the shading normal: Cycles 3.4
   // then scales its diffuse closures by bump_shadowing_term (kernel/closure/bsdf.h), which darkens
   // light grazing the smooth surface. light_is_wo: light transport (BDPT's light subpaths), where
@@ -172,6 +178,7 @@ class Bsdf {
   bool bumped_ = false, light_is_wo_ = false;
   Vec3 smooth_{0.0f, 0.0f, 1.0f};
   float bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const;
+  Spectrum lobe_value(const Lobe& lobe, const Vec3& wo, const Vec3& wi, float* pdf) const;
 };
 
 // ---- single-lobe routines, exposed for the chi-square tests ----------------------------------
