@@ -759,6 +759,7 @@ def bsdf_zoo_materials():
         principled("PrincipledLayers", (0.7, 0.25, 0.1), Sheen=1.0, Sheen_Tint=0.7, Specular_Tint=0.6, Anisotropic=0.6,
                    Anisotropic_Rotation=0.2, Roughness=0.45),
         principled("PrincipledClearcoat", (0.2, 0.35, 0.6), Clearcoat=0.8, Clearcoat_Roughness=0.15, Roughness=0.45),
+        principled("PrincipledGlass", (0.9, 0.35, 0.2), Transmission=1.0, Roughness=0.25, Specular_Tint=0.3),
     ]
 
 
@@ -775,8 +776,8 @@ ZOO_DEPARTURES = ("ToonDiffuse", "ToonGlossy", "MultiGGX", "PrincipledClearcoat"
 
 def build_bsdf_zoo(scene, departures=False, sun_only=False, hidden=False):
     """Issue 13's lit agreement of the new shader nodes: spheres of Velvet, Translucent, Beckmann
-    glass, Anisotropic GGX, Beckmann and Ashikhmin-Shirley glossy, and the Principled BSDF's sheen,
-    specular tint and anisotropy (departures: the ZOO_DEPARTURES nodes instead) on a ground under
+    glass, Anisotropic GGX, Beckmann and Ashikhmin-Shirley glossy, the Principled BSDF's sheen,
+    specular tint and anisotropy, and its glass (departures: the ZOO_DEPARTURES nodes instead) on a ground under
     a sun and a sky. sun_only: no sky and no ground; hidden: spheres that indirect rays do not
     see, so that all light comes from the sun through Cycles' light samples."""
     set_world(scene, (0.35, 0.45, 0.6), 0.0 if sun_only else 0.8)

@@ -171,8 +171,8 @@ def test_displaced_scene_agrees_with_cycles(integrator, scene_factory, outdir):
 def test_every_new_shader_node_agrees_with_cycles_when_lit(integrator, scene_factory, outdir):
     """Issue 13: "agreement with Cycles in lit scenes for PATH and BIDIRECTIONAL" of each BSDF
     (bsdf_zoo: Velvet, Translucent, Beckmann glass, Anisotropic GGX, Beckmann and
-    Ashikhmin-Shirley glossy, the Principled BSDF's sheen, specular tint and anisotropy), per tile
-    and in the image mean as above."""
+    Ashikhmin-Shirley glossy, the Principled BSDF's sheen, specular tint and anisotropy, and its
+    glass), per tile and in the image mean as above."""
     both = lantern_and_cycles(scene_factory, "bsdf_zoo", integrator)
     report, _ = ru.agreement_report("bsdf_zoo_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
                                     ROUNDING)

@@ -62,6 +62,14 @@ Lobe dielectric(float alpha, float eta, Spectrum w = Spectrum(1.0f)) {
   l.weight = w;
   return l;
 }
+// The Principled BSDF's glass (Transmission 1): refraction tinted by the base colour, reflection
+// blended from mix(1, base, Specular Tint) towards 1 by interpolate_fresnel_color.
+Lobe principled_glass(float alpha, float eta, Spectrum base, float spec_tint) {
+  Lobe l = dielectric(alpha, eta);
+  l.refraction_tint = base;
+  l.glass_f0 = Spectrum(1 - spec_tint) + base * spec_tint;
+  return l;
+}
 // The Principled BSDF's specular layer: f0 is Cycles' cspec0, `spec` the Specular input.
 Lobe specular(float alpha, Spectrum f0, Spectrum w = Spectrum(1.0f), float spec = 0.5f) {
   Lobe l;
@@ -916,6 +924,8 @@ TEST(BsdfFurnace, NewLobesConserveEnergy) {
       {"beckmann_1", beckmann(1), -1, 2e-3},
       {"beckmann_aniso_0.2_0.6", aniso(beckmann(0.2f), 0.6f), -1, 3e-3},
       {"beckmann_glass_0.4", beckmann_glass(0.4f, 1.5f), -1, 3e-3},
+      {"principled_glass_0.3", principled_glass(0.3f, 1.45f, Spectrum(0.9f, 0.35f, 0.2f), 0.3f), -1, 3e-3},
+      {"principled_glass_inside", principled_glass(0.3f, 1 / 1.45f, Spectrum(0.9f, 0.35f, 0.2f), 0.3f), -1, 3e-3},
       {"ashikhmin_0.4", ashikhmin(0.4f), -1, 3e-3},
       {"ashikhmin_aniso_0.3_0.8", aniso(ashikhmin(0.3f), 0.8f), -1, 3e-3},
       {"clearcoat_0.3", clearcoat(0.3f), -1, 2e-3},
@@ -1026,6 +1036,8 @@ TEST(BsdfSanity, FiniteEverywhere) {
 TEST(BsdfMixture, SampleMatchesEval) {
   Bsdf b = mixture({diffuse(0.5f, Spectrum(0.4f, 0.5f, 0.6f)), glossy(0.1f, Spectrum(0.3f)),
                     specular(0.4f, Spectrum(0.04f)), dielectric(0.3f, 1.33f, Spectrum(0.2f, 0.4f, 0.2f))});
+  Bsdf b3 = mixture({principled_glass(0.3f, 1.45f, Spectrum(0.9f, 0.35f, 0.2f), 0.3f),
+                     principled_glass(0, 1.45f, Spectrum(0.2f, 0.5f, 0.9f), 0.6f), diffuse(0, Spectrum(0.2f))});
   Bsdf b2 = mixture({aniso(beckmann(0.3f), 0.1f), aniso(multi_ggx(0.3f), 0.1f), clearcoat(0.2f, Spectrum(0.1f)),
                      sheen(Spectrum(0.5f)), velvet(0.5f), translucent(Spectrum(0.3f)), toon(false, 0.4f, 0.2f),
                      toon(true, 0.3f, 0.1f)});
@@ -1056,6 +1068,19 @@ TEST(BsdfMixture, SampleMatchesEval) {
     ++checked;
   }
   EXPECT_GT(checked, 15000);
+  checked = 0;
+  for (int k = 0; k < 20000; ++k) {
+    Vec3 wo = sample_uniform_sphere(rng.next_2d());
+    if (std::abs(wo.z) < 1e-3f) continue;
+    BsdfSample s;
+    if (!b3.sample(wo, rng.next_1d(), rng.next_2d(), &s) || (s.flags & kLobeSpecular)) continue;
+    float pdf;
+    Spectrum f = b3.eval(wo, s.wi, &pdf);
+    ASSERT_NEAR(pdf, s.pdf, 1e-4f * s.pdf);
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(f[c], s.f[c], 1e-4f * std::max(1e-3f, s.f[c]));
+    ++checked;
+  }
+  EXPECT_GT(checked, 5000);
 }
 
 // Light transport (BDPT's light subpaths, set_light_is_wo): eval() and sample() give the adjoint
@@ -1384,6 +1409,47 @@ TEST(PrincipledLayers, WeightsAndTintsAsCycles) {
     ++seen;
   }
   EXPECT_EQ(seen, 4);
+
+  // Transmission 1 (and Metallic 0): one glass lobe, white, its refraction tinted by the base.
+  ShaderCode g;
+  g.principled(g.one(), base, 0, 0.3f, 0.5f, 1.0f, 1.45f);
+  Bsdf glass;
+  Program(g.code, g.k, g.registers, 0).run(ctx, images, &glass, &frame);
+  ASSERT_EQ(glass.count(), 1);
+  const Lobe& l = glass.lobe(0);
+  EXPECT_EQ(l.type, LobeType::Dielectric);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(l.weight[c], 1, 1e-6);
+    EXPECT_NEAR(l.refraction_tint[c], b[c], 1e-6);
+    EXPECT_NEAR(l.glass_f0[c], 1, 1e-6);  // Specular Tint 0
+  }
+}
+
+// The Principled glass as Cycles 3.4 builds it (svm_node_closure_bsdf): the reflection closure
+// has weight Transmission x F(wo.n) and colour interpolate_fresnel_color(i.h) towards cspec0 =
+// mix(1, base, Specular Tint), the refraction closure weight base x Transmission x (1 - F).
+TEST(PrincipledLayers, GlassReflectsUntintedAndRefractsTinted) {
+  const Spectrum base(0.9f, 0.35f, 0.2f);
+  const Vec3 wo = from_angles(40, 10), wr = from_angles(50, 200), wt = flip_z_test(from_angles(25, 180));
+  for (float alpha : {0.0625f, 0.2f}) {
+    const Lobe white = dielectric(alpha, 1.45f), untinted = principled_glass(alpha, 1.45f, base, 0);
+    const Spectrum r_white = lobe_eval(white, wo, wr), t_white = lobe_eval(white, wo, wt);
+    ASSERT_GT(r_white.x, 0);
+    ASSERT_GT(t_white.x, 0);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_EQ(lobe_eval(untinted, wo, wr)[c], r_white[c]) << c;  // Specular Tint 0: white reflection
+      EXPECT_NEAR(lobe_eval(untinted, wo, wt)[c], base[c] * t_white[c], 1e-6f * t_white[c]) << c;
+    }
+    // Specular Tint 0.5: the reflection is r_white x (cspec0 (1 - FH) + FH), FH from the IOR's
+    // dielectric Fresnel at i.h (Cycles' interpolate_fresnel_color).
+    const Vec3 h = normalize(wo + wr);
+    const double F0 = std::pow(0.45 / 2.45, 2), fh = (fresnel_dielectric(dot(wr, h), 1.45f) - F0) / (1 - F0);
+    const Spectrum tinted = lobe_eval(principled_glass(alpha, 1.45f, base, 0.5f), wo, wr);
+    for (int c = 0; c < 3; ++c) {
+      const double c0 = 0.5 + 0.5 * base[c];
+      EXPECT_NEAR(tinted[c], r_white[c] * (c0 * (1 - fh) + fh), 1e-5 * r_white[c]) << c;
+    }
+  }
 }
 
 }  // namespace

@@ -647,6 +647,19 @@ bool ms_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* i) {
 }
 
 // ---- per-lobe evaluation in the frame where o.z > 0 -------------------------------------------
+// The glass reflection's colour: Cycles 3.4's Principled glass reflection closure
+// (bsdf_microfacet_ggx_fresnel_setup: interpolate_fresnel_color at i.h, cspec0 = glass_f0
+// saturated), for eta on either side of 1 (total internal reflection gives 1); exactly 1 for the
+// Glass BSDF node (glass_f0 white).
+Spectrum glass_reflection_color(const Lobe& l, float eta, float cos_ih) {
+  if (l.glass_f0.x == 1 && l.glass_f0.y == 1 && l.glass_f0.z == 1) return Spectrum(1.0f);
+  const Spectrum c0 = vmin(vmax(l.glass_f0, Spectrum(0.0f)), Spectrum(1.0f));
+  const float r = (eta - 1) / (eta + 1), F0 = r * r;
+  if (!(F0 < 1)) return Spectrum(1.0f);
+  const float fh = (fresnel_dielectric(clamp(cos_ih, 0.0f, 1.0f), eta) - F0) / (1 - F0);
+  return vmin(vmax(c0 * (1 - fh) + Spectrum(fh), Spectrum(0.0f)), Spectrum(1.0f));
+}
+
 Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
   *pdf = 0;
   switch (l.type) {
@@ -670,13 +683,14 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
       float fr = fresnel_dielectric(o.z, eta);
       float p = 0, v;
       if (i.z > 0) {
-        v = fr * micro_reflect(o, i, mf, &p, nullptr);
+        float cos_oh = 1;
+        v = fr * micro_reflect(o, i, mf, &p, &cos_oh);
         *pdf = fr * p;
-      } else {
-        v = (1 - fr) * micro_refract(o, i, mf, eta, &p);
-        *pdf = (1 - fr) * p;
+        return v > 0 ? l.weight * glass_reflection_color(l, eta, cos_oh) * v : Spectrum(0.0f);
       }
-      return l.weight * v;
+      v = (1 - fr) * micro_refract(o, i, mf, eta, &p);
+      *pdf = (1 - fr) * p;
+      return l.weight * l.refraction_tint * v;
     }
     case LobeType::AshikhminShirley:
       return l.weight * as_eval(l, o, i, pdf);
@@ -996,7 +1010,7 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         if (u_extra < fr) {
           s.wi = mirror;
           s.pdf = fr;
-          s.f = l.weight * fr / o.z;
+          s.f = l.weight * glass_reflection_color(l, eta, o.z) * fr / o.z;
           s.flags = kLobeSpecular | kLobeReflection;
         } else {
           float sin2_t = (1 - o.z * o.z) / (eta * eta);
@@ -1004,7 +1018,7 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
           float cos_t = std::sqrt(1 - sin2_t);
           s.wi = normalize(Vec3(-o.x / eta, -o.y / eta, -cos_t));
           s.pdf = 1 - fr;
-          s.f = l.weight * (1 - fr) / std::abs(s.wi.z);
+          s.f = l.weight * l.refraction_tint * (1 - fr) / std::abs(s.wi.z);
           s.flags = kLobeSpecular | kLobeTransmission;
           s.eta = eta;
         }

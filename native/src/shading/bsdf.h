@@ -102,6 +102,12 @@ struct Lobe {
   float toon_size = 0;      // DiffuseToon, GlossyToon: Size
   float toon_smooth = 0;    // DiffuseToon, GlossyToon: Smooth
   Spectrum ms_color{1.0f};  // MultiGGX: the colour of each bounce after the first
+  // Dielectric, DielectricBeckmann: the Principled BSDF's glass (Cycles 3.4 makes it a Fresnel
+  // reflection closure and a refraction closure of other colours): the refraction's colour
+  // relative to weight (the base colour), and the cspec0 its reflection blends towards 1 by
+  // fresnel_principled (mix(1, base, Specular Tint)). Both white for the Glass BSDF node.
+  Spectrum refraction_tint{1.0f};
+  Spectrum glass_f0{1.0f};
 };
 
 struct BsdfSample {

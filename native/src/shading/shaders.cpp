@@ -137,7 +137,12 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   if (transmission > 0) {
     Lobe t;
     t.type = LobeType::Dielectric;
-    t.weight = weight * base * transmission;
+    // Cycles 3.4: a reflection closure of weight transmission x F, coloured by
+    // interpolate_fresnel_color towards cspec0 = mix(1, base, Specular Tint), and a refraction
+    // closure of weight base x transmission x (1 - F).
+    t.weight = weight * transmission;
+    t.refraction_tint = base;
+    t.glass_f0 = lerp(unit(m.f(in.in[10])), Vec3(1.0f), base);
     t.alpha = r * r;
     const float ior = glass_ior(m.f(in.in[18]));
     t.eta = backfacing(m) ? 1 / ior : ior;
