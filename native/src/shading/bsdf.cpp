@@ -5,7 +5,9 @@
 //                D and G1 (Heitz 2014) with alpha_x along +X
 //   Dielectric   Cycles' Glass BSDF node: a GGX reflection closure weighted by F(wo.n) and a GGX
 //                refraction closure (Walter et al. 2007) weighted by 1 - F(wo.n), F the exact
-//                dielectric Fresnel at the macro normal; no 1/eta^2 radiance scaling
+//                dielectric Fresnel at the macro normal; no 1/eta^2 radiance scaling. The
+//                Principled glass's refraction takes refraction_tint (the base colour) and its
+//                reflection interpolate_fresnel_color towards glass_f0, as Cycles' two closures
 //   SpecularGGX  bsdf_microfacet_ggx_fresnel_setup as the Principled BSDF sets it up: GGX
 //                reflection times interpolate_fresnel_color, f0 (1 - FH) + FH with
 //                FH = (F(wi.m, eta) - F(1, eta)) / (1 - F(1, eta)), F the dielectric Fresnel
