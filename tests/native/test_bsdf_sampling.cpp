@@ -1410,6 +1410,32 @@ TEST(PrincipledLayers, WeightsAndTintsAsCycles) {
   }
   EXPECT_EQ(seen, 4);
 
+  // Anisotropic as Cycles reads it, unclamped: aspect = sqrt(1 - 0.9 a), alpha = r^2 / aspect,
+  // alpha_y = r^2 aspect (a < 0 turns the lobe the other way).
+  for (float a : {0.6f, -0.5f}) {
+    ShaderCode q;
+    const uint32_t q3 = q.c3({0, 0, 0}), q0 = q.c1(0);
+    q.emit(kOpPrincipled, {q.one(),    q3,          q.c3(base),  q0,          q.c3({1, 0.2f, 0.1f}),
+                           q.c3(base), q.c1(1.4f),  q0,          q0,          q.c1(0.5f),
+                           q0,         q.c1(0.45f), q.c1(a),     q0,          q0,
+                           q.c1(0.5f), q0,          q.c1(0.03f), q.c1(1.45f), q0,
+                           q0,         q3,          q.c1(1),     q.c1(1),     q3,
+                           q3},
+           {}, {kDistGGX, 0});
+    Bsdf aniso_bsdf;
+    Program(q.code, q.k, q.registers, 0).run(ctx, images, &aniso_bsdf, &frame);
+    const double aspect = std::sqrt(1 - 0.9 * a), r2 = 0.45 * 0.45;
+    bool found = false;
+    for (int k = 0; k < aniso_bsdf.count(); ++k) {
+      const Lobe& l = aniso_bsdf.lobe(k);
+      if (l.type != LobeType::SpecularGGX) continue;
+      EXPECT_NEAR(l.alpha, r2 / aspect, 1e-6) << a;
+      EXPECT_NEAR(l.alpha_y, r2 * aspect, 1e-6) << a;
+      found = true;
+    }
+    EXPECT_TRUE(found) << a;
+  }
+
   // Transmission 1 (and Metallic 0): one glass lobe, white, its refraction tinted by the base.
   ShaderCode g;
   g.principled(g.one(), base, 0, 0.3f, 0.5f, 1.0f, 1.45f);

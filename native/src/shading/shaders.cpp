@@ -119,11 +119,13 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
     Lobe g;
     g.type = LobeType::SpecularGGX;
     g.weight = weight * (1 - transmission);
-    const float anisotropic = unit(m.f(in.in[12]));
-    if (anisotropic > 0) {
+    // Cycles does not clamp Anisotropic: a linked value below 0 turns the lobe the other way, one
+    // above 1/0.9 makes aspect 0 (alpha saturates to 1). NaN is 0.
+    const float anisotropic = std::isfinite(m.f(in.in[12])) ? m.f(in.in[12]) : 0.0f;
+    if (anisotropic != 0) {
       // bsdf.h: alpha = r^2 / aspect, alpha_y = r^2 aspect, along the (rotated) tangent.
-      const float aspect = std::sqrt(1 - 0.9f * anisotropic);
-      g.alpha = r * r / aspect;
+      const float aspect = std::sqrt(std::max(0.0f, 1 - 0.9f * anisotropic));
+      g.alpha = aspect > 0 ? r * r / aspect : (r > 0 ? 1.0f : 0.0f);
       g.alpha_y = r * r * aspect;
       take_tangent(m, m.v(in.in[25]), m.has_shading_normal ? m.shading_normal : m.ctx->N, m.f(in.in[13]));
     } else {
