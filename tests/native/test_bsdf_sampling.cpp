@@ -1476,6 +1476,20 @@ TEST(PrincipledLayers, GlassReflectsUntintedAndRefractsTinted) {
       EXPECT_NEAR(tinted[c], r_white[c] * (c0 * (1 - fh) + fh), 1e-5 * r_white[c]) << c;
     }
   }
+  // Smooth: the mirror's weight is the colour at wo.n (FH at the macro normal), the refraction's
+  // the base colour.
+  const Lobe smooth = principled_glass(0, 1.45f, base, 0.5f);
+  const double F0 = std::pow(0.45 / 2.45, 2), fh = (fresnel_dielectric(wo.z, 1.45f) - F0) / (1 - F0);
+  for (float u : {0.01f, 0.99f}) {
+    BsdfSample s;
+    ASSERT_TRUE(lobe_sample(smooth, wo, Vec2{0.5f, 0.5f}, u, &s));
+    const bool reflected = s.wi.z > 0;
+    EXPECT_EQ(reflected, u < 0.5f);
+    for (int c = 0; c < 3; ++c) {
+      const double expect = reflected ? (0.5 + 0.5 * base[c]) * (1 - fh) + fh : base[c];
+      EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, expect, 1e-5) << c << " u " << u;
+    }
+  }
 }
 
 }  // namespace
