@@ -47,16 +47,23 @@ ScenePtr passes_scene() {
 // largest relative difference, for the integrator of `rs`.
 struct Recombination {
   int bad = 0, pixels = 0;
+  // Pixels off only where light-tracing splats (BDPT's t = 1) reached a kind whose Colour is zero
+  // there: Cycles' division leaves such light out of the light passes (docs/passes.md).
+  int zero_colour = 0;
   double worst = 0;
   std::string first;
 };
 
-Recombination recombine(const Passes& p) {
+Recombination recombine(const Passes& p, bool splats) {
   Recombination r;
   const int n = p.width * p.height;
   for (int i = 0; i < n; ++i) {
     ++r.pixels;
-    bool bad = false;
+    bool bad = false, zero_colour = false, off = false;
+    for (int col : {LT_PASS_DIFFUSE_COLOR, LT_PASS_GLOSSY_COLOR, LT_PASS_TRANSMISSION_COLOR}) {
+      const float* c = &p.pass(col)[3 * i];
+      zero_colour = zero_colour || (c[0] == 0 && c[1] == 0 && c[2] == 0);
+    }
     for (int c = 0; c < 3; ++c) {
       double sum = 0, scale = std::abs(p.combined[4 * i + c]);
       auto v = [&](int pass) { return double(p.pass(pass)[3 * i + c]); };
@@ -74,7 +81,8 @@ Recombination recombine(const Passes& p) {
       }
       // Float rounding: each pass is a float mean of its own sums (and a quotient and product).
       const double diff = std::abs(sum - p.combined[4 * i + c]), tol = 1e-5 * scale + 1e-7;
-      if (diff > tol) {
+      off = off || diff > tol;
+      if (diff > tol && !(splats && zero_colour)) {
         bad = true;
         if (r.first.empty())
           r.first = "pixel " + std::to_string(i) + " channel " + std::to_string(c) + ": passes " +
@@ -83,6 +91,7 @@ Recombination recombine(const Passes& p) {
       if (scale > 0) r.worst = std::max(r.worst, diff / scale);
     }
     r.bad += bad;
+    r.zero_colour += splats && zero_colour && off;
   }
   return r;
 }
@@ -101,7 +110,9 @@ void expect_recombines(int integrator, int samples) {
   rs.volume_bounces = 2;
   const Passes p = render(s.get(), rs);
   ASSERT_EQ(p.first_non_finite(), "");
-  const Recombination r = recombine(p);
+  const Recombination r = recombine(p, integrator == LT_INTEGRATOR_BIDIRECTIONAL);
+  // The silhouettes against the world: a pixel or two wide.
+  EXPECT_LT(r.zero_colour, r.pixels / 5);
   EXPECT_EQ(r.bad, 0) << r.bad << " of " << r.pixels << " pixels; first " << r.first << "; worst relative "
                       << r.worst;
   for (int pass : {LT_PASS_DIFFUSE_DIRECT, LT_PASS_DIFFUSE_INDIRECT, LT_PASS_DIFFUSE_COLOR, LT_PASS_GLOSSY_DIRECT,

@@ -456,6 +456,31 @@ std::unique_lock<std::mutex> Film::lock_accumulators() const {
   return lock;
 }
 
+const char* exr_pass_name(Pass p) {
+  static const char* const kNames[] = {"DiffDir",  "DiffInd",   "DiffCol",   "GlossDir", "GlossInd", "GlossCol",
+                                       "TransDir", "TransInd",  "TransCol",  "VolumeDir", "VolumeInd", "Emit",
+                                       "Env",      "Position",  "UV",        "Mist",      "IndexOB",   "IndexMA"};
+  static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(kSummedPasses), "a name per pass");
+  return int(p) >= kFirstSummedPass && p < Pass::Count ? kNames[int(p) - kFirstSummedPass] : nullptr;
+}
+
+const char* exr_channel_letters(Pass p) {
+  if (is_light_pass(p)) return "RGB";
+  switch (p) {
+    case Pass::Position:
+      return "XYZ";
+    case Pass::UV:
+      return "UVA";
+    case Pass::Mist:
+      return "Z";
+    case Pass::ObjectIndex:
+    case Pass::MaterialIndex:
+      return "X";
+    default:
+      return nullptr;
+  }
+}
+
 bool Film::has_light_passes() const {
   for (int j = 0; j < kLightParts; ++j)
     if (!sums_[j].empty()) return true;
@@ -464,7 +489,7 @@ bool Film::has_light_passes() const {
 
 // Cycles' safe_divide_even_color (util/math.h): a channel whose divisor is zero takes the others'
 // ratio, so that a colour with a zero channel still gives a grey light pass.
-static void divide_even_color(const double* a, const double* b, float* o) {
+void divide_even_color(const double* a, const double* b, float* o) {
   double r[3];
   for (int k = 0; k < 3; ++k) r[k] = b[k] != 0 ? a[k] / b[k] : 0.0;
   const bool z[3] = {b[0] == 0, b[1] == 0, b[2] == 0};
@@ -511,6 +536,16 @@ bool Film::read_light_tracing(float* out) const {
   if (!light_paths_ || splat_.empty()) return false;
   const double scale = 1.0 / double(light_paths_);
   for (size_t i = 0; i < splat_.size(); ++i) out[i] = float(splat_[i] * scale);
+  return true;
+}
+
+bool Film::read_light_tracing(Pass pass, float* out) const {
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  if (!is_light_pass(pass) || !light_paths_) return false;
+  const std::vector<float>& a = light_splat_[int(pass) - kFirstSummedPass];
+  if (a.empty()) return false;
+  const double scale = 1.0 / double(light_paths_);
+  for (size_t i = 0; i < a.size(); ++i) out[i] = float(a[i] * scale);
   return true;
 }
 

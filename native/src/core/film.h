@@ -113,6 +113,13 @@ constexpr int kSummedPasses = int(Pass::Count) - kFirstSummedPass;
 inline bool is_light_pass(Pass p) { return p >= Pass::DiffuseDirect && p <= Pass::Environment; }
 // The Colour pass a Direct or Indirect pass is divided by when read (Cycles' divide_type); Count: none.
 Pass light_pass_color(Pass p);
+// a / b per RGB channel as Cycles' safe_divide_even_color (util/math.h): a channel whose divisor
+// is zero takes the other channels' ratio.
+void divide_even_color(const double* a, const double* b, float* o);
+// The pass's channel names in Lantern's EXR files ("DiffDir.R", ...), Blender's pass name and
+// channel letters; nullptr for the passes the files do not hold.
+const char* exr_pass_name(Pass p);
+const char* exr_channel_letters(Pass p);
 int pass_channels(Pass pass);
 constexpr unsigned pass_bit(Pass p) { return 1u << unsigned(p); }
 constexpr unsigned kAllPasses = (1u << unsigned(Pass::Count)) - 1;
@@ -245,6 +252,8 @@ class Film {
   // The light-tracing (t = 1 splat) part of Combined, RGB per pixel; false when the render traced
   // no light paths (not bidirectional). Between passes, as read().
   bool read_light_tracing(float* out) const;
+  // The same for a light pass (not a Colour): its splats' part, undivided (merges need it apart).
+  bool read_light_tracing(Pass pass, float* out) const;
   uint64_t total_samples() const;
   // The half images (the rendering thread, once the last pass is done); needs the features.
   HalfImages half_images() const;
