@@ -76,10 +76,11 @@ TEST(ApiExr, WritesEveryPassAndReadsBackTheSameCombined) {
   for (auto it = channels.begin(); it != channels.end(); ++it, ++count)
     EXPECT_EQ(it.channel().type, Imf::FLOAT) << it.name() << " is not 32-bit float";
   EXPECT_EQ(count, kChannels);
-  for (const char* name : {"R", "G", "B", "A", "Depth.Z", "Normal.X", "Normal.Y", "Normal.Z", "Albedo.R", "Albedo.G",
-                           "Albedo.B", "Variance.R", "Variance.G", "Variance.B", "SampleCount.X", "DiffDir.R",
-                           "GlossCol.B", "VolumeInd.G", "Emit.R", "Env.B", "Position.X", "UV.U", "UV.A", "Mist.Z",
-                           "IndexOB.X", "IndexMA.X"})
+  for (const char* name :
+       {"R",          "G",           "B",        "A",          "Depth.Z",    "Normal.X",   "Normal.Y",      "Normal.Z",
+        "Albedo.R",   "Albedo.G",    "Albedo.B", "Variance.R", "Variance.G", "Variance.B", "SampleCount.X", "DiffDir.R",
+        "GlossCol.B", "VolumeInd.G", "Emit.R",   "Env.B",      "Position.X", "UV.U",       "UV.A",          "Mist.Z",
+        "IndexOB.X",  "IndexMA.X"})
     EXPECT_NE(channels.findChannel(name), nullptr) << "missing channel " << name;
 
   const char* rgba[4] = {"R", "G", "B", "A"};

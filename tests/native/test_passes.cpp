@@ -67,9 +67,10 @@ Recombination recombine(const Passes& p, bool splats) {
     for (int c = 0; c < 3; ++c) {
       double sum = 0, scale = std::abs(p.combined[4 * i + c]);
       auto v = [&](int pass) { return double(p.pass(pass)[3 * i + c]); };
-      const int kinds[3][3] = {{LT_PASS_DIFFUSE_DIRECT, LT_PASS_DIFFUSE_INDIRECT, LT_PASS_DIFFUSE_COLOR},
-                               {LT_PASS_GLOSSY_DIRECT, LT_PASS_GLOSSY_INDIRECT, LT_PASS_GLOSSY_COLOR},
-                               {LT_PASS_TRANSMISSION_DIRECT, LT_PASS_TRANSMISSION_INDIRECT, LT_PASS_TRANSMISSION_COLOR}};
+      const int kinds[3][3] = {
+          {LT_PASS_DIFFUSE_DIRECT, LT_PASS_DIFFUSE_INDIRECT, LT_PASS_DIFFUSE_COLOR},
+          {LT_PASS_GLOSSY_DIRECT, LT_PASS_GLOSSY_INDIRECT, LT_PASS_GLOSSY_COLOR},
+          {LT_PASS_TRANSMISSION_DIRECT, LT_PASS_TRANSMISSION_INDIRECT, LT_PASS_TRANSMISSION_COLOR}};
       for (const auto& k : kinds) {
         const double part = (v(k[0]) + v(k[1])) * v(k[2]);
         sum += part;
@@ -85,8 +86,8 @@ Recombination recombine(const Passes& p, bool splats) {
       if (diff > tol && !(splats && zero_colour)) {
         bad = true;
         if (r.first.empty())
-          r.first = "pixel " + std::to_string(i) + " channel " + std::to_string(c) + ": passes " +
-                    std::to_string(sum) + ", combined " + std::to_string(p.combined[4 * i + c]);
+          r.first = "pixel " + std::to_string(i) + " channel " + std::to_string(c) + ": passes " + std::to_string(sum) +
+                    ", combined " + std::to_string(p.combined[4 * i + c]);
       }
       if (scale > 0) r.worst = std::max(r.worst, diff / scale);
     }
@@ -113,8 +114,7 @@ void expect_recombines(int integrator, int samples) {
   const Recombination r = recombine(p, integrator == LT_INTEGRATOR_BIDIRECTIONAL);
   // The silhouettes against the world: a pixel or two wide.
   EXPECT_LT(r.zero_colour, r.pixels / 5);
-  EXPECT_EQ(r.bad, 0) << r.bad << " of " << r.pixels << " pixels; first " << r.first << "; worst relative "
-                      << r.worst;
+  EXPECT_EQ(r.bad, 0) << r.bad << " of " << r.pixels << " pixels; first " << r.first << "; worst relative " << r.worst;
   for (int pass : {LT_PASS_DIFFUSE_DIRECT, LT_PASS_DIFFUSE_INDIRECT, LT_PASS_DIFFUSE_COLOR, LT_PASS_GLOSSY_DIRECT,
                    LT_PASS_GLOSSY_INDIRECT, LT_PASS_GLOSSY_COLOR, LT_PASS_TRANSMISSION_DIRECT,
                    LT_PASS_TRANSMISSION_INDIRECT, LT_PASS_TRANSMISSION_COLOR, LT_PASS_EMISSION, LT_PASS_ENVIRONMENT})

@@ -457,9 +457,9 @@ std::unique_lock<std::mutex> Film::lock_accumulators() const {
 }
 
 const char* exr_pass_name(Pass p) {
-  static const char* const kNames[] = {"DiffDir",  "DiffInd",   "DiffCol",   "GlossDir", "GlossInd", "GlossCol",
-                                       "TransDir", "TransInd",  "TransCol",  "VolumeDir", "VolumeInd", "Emit",
-                                       "Env",      "Position",  "UV",        "Mist",      "IndexOB",   "IndexMA"};
+  static const char* const kNames[] = {"DiffDir",  "DiffInd",  "DiffCol",  "GlossDir",  "GlossInd",  "GlossCol",
+                                       "TransDir", "TransInd", "TransCol", "VolumeDir", "VolumeInd", "Emit",
+                                       "Env",      "Position", "UV",       "Mist",      "IndexOB",   "IndexMA"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(kSummedPasses), "a name per pass");
   return int(p) >= kFirstSummedPass && p < Pass::Count ? kNames[int(p) - kFirstSummedPass] : nullptr;
 }
@@ -493,12 +493,18 @@ void divide_even_color(const double* a, const double* b, float* o) {
   double r[3];
   for (int k = 0; k < 3; ++k) r[k] = b[k] != 0 ? a[k] / b[k] : 0.0;
   const bool z[3] = {b[0] == 0, b[1] == 0, b[2] == 0};
-  if (z[0] && z[1]) r[0] = r[1] = r[2];
-  else if (z[0] && z[2]) r[0] = r[2] = r[1];
-  else if (z[1] && z[2]) r[1] = r[2] = r[0];
-  else if (z[0]) r[0] = 0.5 * (r[1] + r[2]);
-  else if (z[1]) r[1] = 0.5 * (r[0] + r[2]);
-  else if (z[2]) r[2] = 0.5 * (r[0] + r[1]);
+  if (z[0] && z[1])
+    r[0] = r[1] = r[2];
+  else if (z[0] && z[2])
+    r[0] = r[2] = r[1];
+  else if (z[1] && z[2])
+    r[1] = r[2] = r[0];
+  else if (z[0])
+    r[0] = 0.5 * (r[1] + r[2]);
+  else if (z[1])
+    r[1] = 0.5 * (r[0] + r[2]);
+  else if (z[2])
+    r[2] = 0.5 * (r[0] + r[1]);
   for (int k = 0; k < 3; ++k) o[k] = float(r[k]);
 }
 
@@ -558,13 +564,34 @@ uint64_t Film::total_samples() const {
 
 namespace {
 const char* pass_name(Pass p) {
-  static const char* const kNames[] = {"Combined",         "Depth",           "Normal",      "Albedo",
-                                       "Variance",         "Sample Count",    "Noisy Image", "Denoising Normal",
-                                       "Denoising Albedo", "Denoising Depth", "DiffDir",     "DiffInd",
-                                       "DiffCol",          "GlossDir",        "GlossInd",    "GlossCol",
-                                       "TransDir",         "TransInd",        "TransCol",    "VolumeDir",
-                                       "VolumeInd",        "Emit",            "Env",         "Position",
-                                       "UV",               "Mist",            "IndexOB",     "IndexMA"};
+  static const char* const kNames[] = {"Combined",
+                                       "Depth",
+                                       "Normal",
+                                       "Albedo",
+                                       "Variance",
+                                       "Sample Count",
+                                       "Noisy Image",
+                                       "Denoising Normal",
+                                       "Denoising Albedo",
+                                       "Denoising Depth",
+                                       "DiffDir",
+                                       "DiffInd",
+                                       "DiffCol",
+                                       "GlossDir",
+                                       "GlossInd",
+                                       "GlossCol",
+                                       "TransDir",
+                                       "TransInd",
+                                       "TransCol",
+                                       "VolumeDir",
+                                       "VolumeInd",
+                                       "Emit",
+                                       "Env",
+                                       "Position",
+                                       "UV",
+                                       "Mist",
+                                       "IndexOB",
+                                       "IndexMA"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(Pass::Count), "a name per pass");
   return unsigned(p) < unsigned(Pass::Count) ? kNames[int(p)] : "?";
 }

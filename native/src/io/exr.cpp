@@ -183,7 +183,8 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
     std::vector<float> buf(n * pass_channels(Pass(p)));
     job.film().read(Pass(p), buf.data());
     std::vector<std::string> names;
-    for (const char* c = exr_channel_letters(Pass(p)); *c; ++c) names.push_back(std::string(exr_pass_name(Pass(p))) + "." + *c);
+    for (const char* c = exr_channel_letters(Pass(p)); *c; ++c)
+      names.push_back(std::string(exr_pass_name(Pass(p))) + "." + *c);
     add_channels(channels, buf, n, names);
     // BDPT: the splats' part apart, as for Combined, so that merges stay exact (merge.cpp).
     if (is_light_pass(Pass(p)) && job.film().read_light_tracing(Pass(p), buf.data()))

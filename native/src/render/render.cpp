@@ -40,8 +40,8 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
     : settings_(s),
       camera_(scene.camera, s.width, s.height),
       filter_(s.filter, s.filter_width),
-      integrator_(make_integrator(s.integrator, RenderContext{scene, camera_, filter_, with_passes(s), s.x0,
-                                                              s.y0, s.x1 - s.x0, s.y1 - s.y0})),
+      integrator_(make_integrator(
+          s.integrator, RenderContext{scene, camera_, filter_, with_passes(s), s.x0, s.y0, s.x1 - s.x0, s.y1 - s.y0})),
       film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
       active_(size_t(film_.width()) * film_.height(), 1) {
   active_pixels_.store(active_.size());
