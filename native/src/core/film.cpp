@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -505,7 +507,8 @@ void divide_even_color(const double* a, const double* b, float* o) {
     r[1] = 0.5 * (r[0] + r[2]);
   else if (z[2])
     r[2] = 0.5 * (r[0] + r[1]);
-  for (int k = 0; k < 3; ++k) o[k] = float(r[k]);
+  // A ratio past float range (a splat over a denormal Colour) stays the largest float, never inf.
+  for (int k = 0; k < 3; ++k) o[k] = float(std::clamp(r[k], -double(FLT_MAX), double(FLT_MAX)));
 }
 
 void Film::read_summed(Pass pass, size_t i, float* o) const {
