@@ -92,6 +92,10 @@ def main():
     width, height, border = engine.frame_size(scene.render)
     settings = engine.render_settings(scene, width, height, border)
     settings.update(samples=args.samples, sample_offset=args.offset)
+    # Every pass before the light and data passes (parts need them to merge), and those the view
+    # layer enables: default scenes render at the same cost as before them.
+    wanted = engine.pass_settings(engine.enabled_passes(scene, bpy.context.view_layer), 0)["passes"]
+    settings["passes"] = ((1 << core.PASS_DIFFUSE_DIRECT) - 1) | wanted
     warnings = []
     core_scene = core.Scene()
     export_scene(bpy.context.evaluated_depsgraph_get(), core_scene,

@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 11
+ABI_VERSION = 12
 
 # lt_status
 OK = 0
@@ -76,7 +76,25 @@ PASS_NOISY_IMAGE = 6
 PASS_DENOISING_NORMAL = 7
 PASS_DENOISING_ALBEDO = 8
 PASS_DENOISING_DEPTH = 9
-PASS_COUNT = 10
+PASS_DIFFUSE_DIRECT = 10
+PASS_DIFFUSE_INDIRECT = 11
+PASS_DIFFUSE_COLOR = 12
+PASS_GLOSSY_DIRECT = 13
+PASS_GLOSSY_INDIRECT = 14
+PASS_GLOSSY_COLOR = 15
+PASS_TRANSMISSION_DIRECT = 16
+PASS_TRANSMISSION_INDIRECT = 17
+PASS_TRANSMISSION_COLOR = 18
+PASS_VOLUME_DIRECT = 19
+PASS_VOLUME_INDIRECT = 20
+PASS_EMISSION = 21
+PASS_ENVIRONMENT = 22
+PASS_POSITION = 23
+PASS_UV = 24
+PASS_MIST = 25
+PASS_OBJECT_INDEX = 26
+PASS_MATERIAL_INDEX = 27
+PASS_COUNT = 28
 
 
 class LanternError(RuntimeError):
@@ -280,6 +298,9 @@ class RenderSettings(ctypes.Structure):
         ("caller_bytes", ctypes.c_ulonglong),
         ("sample_pattern", ctypes.c_int),
         ("denoise", ctypes.c_int),
+        ("mist_start", ctypes.c_float),
+        ("mist_depth", ctypes.c_float),
+        ("mist_falloff", ctypes.c_float),
     ]
 
 
@@ -381,6 +402,7 @@ def _declare(lib, layout=True):
         "lt_scene_add_image_file": ([scene_p, P(ImageFileDesc), P(c_int)], c_int),
         "lt_scene_end_image": ([scene_p, P(c_int)], c_int),
         "lt_scene_add_material": ([scene_p, P(ShaderProgram), P(c_int)], c_int),
+        "lt_scene_set_material_pass_index": ([scene_p, c_int, c_int], c_int),
         "lt_scene_add_mesh": ([scene_p, P(MeshDesc), P(c_int)], c_int),
         "lt_scene_add_instance": ([scene_p, P(InstanceDesc), P(c_int)], c_int),
         "lt_scene_add_light": ([scene_p, P(LightDesc)], c_int),
@@ -663,6 +685,11 @@ class Scene:
         _check(self._lib.lt_scene_add_material(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_material")
         return out.value
+
+    def set_material_pass_index(self, material, pass_index):
+        """Material.pass_index, for the Material Index pass."""
+        _check(self._lib.lt_scene_set_material_pass_index(self.handle, int(material), int(pass_index)),
+               "lt_scene_set_material_pass_index")
 
     def add_mesh(self, positions, triangles, corner_normals=None, corner_uvs=None,
                  material_slots=None, texspace_location=(0.0, 0.0, 0.0), texspace_size=(0.0, 0.0, 0.0),

@@ -32,7 +32,29 @@ PASSES = (
     ("Denoising Normal", core.PASS_DENOISING_NORMAL, 3, "XYZ", 'VECTOR', "lantern_denoising_store_passes"),
     ("Denoising Albedo", core.PASS_DENOISING_ALBEDO, 3, "RGB", 'COLOR', "lantern_denoising_store_passes"),
     ("Denoising Depth", core.PASS_DENOISING_DEPTH, 1, "Z", 'VALUE', "lantern_denoising_store_passes"),
+    # Cycles' data and light passes, under its names and view-layer toggles (docs/passes.md).
+    ("Mist", core.PASS_MIST, 1, "Z", 'VALUE', "use_pass_mist"),
+    ("Position", core.PASS_POSITION, 3, "XYZ", 'VECTOR', "use_pass_position"),
+    ("UV", core.PASS_UV, 3, "UVA", 'VECTOR', "use_pass_uv"),
+    ("IndexOB", core.PASS_OBJECT_INDEX, 1, "X", 'VALUE', "use_pass_object_index"),
+    ("IndexMA", core.PASS_MATERIAL_INDEX, 1, "X", 'VALUE', "use_pass_material_index"),
+    ("DiffDir", core.PASS_DIFFUSE_DIRECT, 3, "RGB", 'COLOR', "use_pass_diffuse_direct"),
+    ("DiffInd", core.PASS_DIFFUSE_INDIRECT, 3, "RGB", 'COLOR', "use_pass_diffuse_indirect"),
+    ("DiffCol", core.PASS_DIFFUSE_COLOR, 3, "RGB", 'COLOR', "use_pass_diffuse_color"),
+    ("GlossDir", core.PASS_GLOSSY_DIRECT, 3, "RGB", 'COLOR', "use_pass_glossy_direct"),
+    ("GlossInd", core.PASS_GLOSSY_INDIRECT, 3, "RGB", 'COLOR', "use_pass_glossy_indirect"),
+    ("GlossCol", core.PASS_GLOSSY_COLOR, 3, "RGB", 'COLOR', "use_pass_glossy_color"),
+    ("TransDir", core.PASS_TRANSMISSION_DIRECT, 3, "RGB", 'COLOR', "use_pass_transmission_direct"),
+    ("TransInd", core.PASS_TRANSMISSION_INDIRECT, 3, "RGB", 'COLOR', "use_pass_transmission_indirect"),
+    ("TransCol", core.PASS_TRANSMISSION_COLOR, 3, "RGB", 'COLOR', "use_pass_transmission_color"),
+    ("VolumeDir", core.PASS_VOLUME_DIRECT, 3, "RGB", 'COLOR', "cycles.use_pass_volume_direct"),
+    ("VolumeInd", core.PASS_VOLUME_INDIRECT, 3, "RGB", 'COLOR', "cycles.use_pass_volume_indirect"),
+    ("Emit", core.PASS_EMISSION, 3, "RGB", 'COLOR', "use_pass_emit"),
+    ("Env", core.PASS_ENVIRONMENT, 3, "RGB", 'COLOR', "use_pass_environment"),
 )
+
+# Cycles' World > Mist Pass falloff as the exponent its film applies (blender/sync.cpp).
+MIST_FALLOFF = {'QUADRATIC': 2.0, 'LINEAR': 1.0, 'INVERSE_QUADRATIC': 0.5}
 
 
 def _pass_enabled(scene, view_layer, flag):
@@ -40,6 +62,9 @@ def _pass_enabled(scene, view_layer, flag):
         return True
     if flag.startswith("scene."):
         return bool(getattr(scene.lantern, flag[len("scene."):]))
+    if flag.startswith("cycles."):
+        # The Volume passes' toggles live on the Cycles add-on's view-layer settings.
+        return bool(getattr(getattr(view_layer, "cycles", None), flag[len("cycles."):], False))
     return bool(getattr(view_layer, flag, False))
 
 
@@ -104,7 +129,16 @@ def render_settings(scene, width, height, border):
         volume_step=lt.volume_step,
         sample_pattern=core.enum_value("lt_sample_pattern", lt.sample_pattern),
         denoise=int(lt.use_denoising),
+        **mist_settings(scene.world),
     )
+
+
+def mist_settings(world):
+    """The Mist pass's settings from World > Mist Pass (Blender's defaults without a world)."""
+    if world is None:
+        return dict(mist_start=5.0, mist_depth=25.0, mist_falloff=2.0)
+    m = world.mist_settings
+    return dict(mist_start=m.start, mist_depth=m.depth, mist_falloff=MIST_FALLOFF.get(m.falloff, 2.0))
 
 
 # What the last render did (status and settings, and the BDPT strategy view when asked for):

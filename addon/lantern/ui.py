@@ -275,6 +275,50 @@ class LANTERN_VIEWLAYER_PT_passes(LanternButtonsPanel, Panel):
         col.prop(view_layer, "lantern_denoising_store_passes")
 
 
+class LANTERN_VIEWLAYER_PT_passes_data(LanternButtonsPanel, Panel):
+    bl_label = "Data"
+    bl_context = "view_layer"
+    bl_parent_id = "LANTERN_VIEWLAYER_PT_passes"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        view_layer = context.view_layer
+        col = layout.column(heading="Include", align=True)
+        col.prop(view_layer, "use_pass_position")
+        col.prop(view_layer, "use_pass_uv")
+        col.prop(view_layer, "use_pass_mist")
+        col = layout.column(heading="Indexes", align=True)
+        col.prop(view_layer, "use_pass_object_index")
+        col.prop(view_layer, "use_pass_material_index")
+
+
+class LANTERN_VIEWLAYER_PT_passes_light(LanternButtonsPanel, Panel):
+    bl_label = "Light"
+    bl_context = "view_layer"
+    bl_parent_id = "LANTERN_VIEWLAYER_PT_passes"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        view_layer = context.view_layer
+        for heading, kind in (("Diffuse", "diffuse"), ("Glossy", "glossy"), ("Transmission", "transmission")):
+            col = layout.column(heading=heading, align=True)
+            col.prop(view_layer, "use_pass_%s_direct" % kind, text="Direct")
+            col.prop(view_layer, "use_pass_%s_indirect" % kind, text="Indirect")
+            col.prop(view_layer, "use_pass_%s_color" % kind, text="Color")
+        cycles_view_layer = getattr(view_layer, "cycles", None)
+        if cycles_view_layer is not None:  # the Volume toggles are the Cycles add-on's
+            col = layout.column(heading="Volume", align=True)
+            col.prop(cycles_view_layer, "use_pass_volume_direct", text="Direct")
+            col.prop(cycles_view_layer, "use_pass_volume_indirect", text="Indirect")
+        col = layout.column(heading="Other", align=True)
+        col.prop(view_layer, "use_pass_emit", text="Emission")
+        col.prop(view_layer, "use_pass_environment")
+
+
 # ---- object, light, material, world ----------------------------------------------------------
 
 class LANTERN_OBJECT_PT_visibility(LanternButtonsPanel, Panel):
@@ -481,6 +525,8 @@ classes = (
     LANTERN_RENDER_PT_performance,
     LANTERN_RENDER_PT_performance_threads,
     LANTERN_VIEWLAYER_PT_passes,
+    LANTERN_VIEWLAYER_PT_passes_data,
+    LANTERN_VIEWLAYER_PT_passes_light,
     LANTERN_OBJECT_PT_visibility,
     LANTERN_LIGHT_PT_light,
     LANTERN_CAMERA_PT_panorama,

@@ -430,6 +430,9 @@ std::string Passes::first_non_finite() const {
   for (const auto& [name, v] : all)
     for (float x : *v)
       if (!std::isfinite(x)) return name;
+  for (int p = LT_PASS_DIFFUSE_DIRECT; p < LT_PASS_COUNT; ++p)
+    for (float x : pass(p))
+      if (!std::isfinite(x)) return "pass " + std::to_string(p);
   return "";
 }
 
@@ -441,10 +444,15 @@ Passes read_passes(lt_render* r, int width, int height) {
   std::vector<float>* bufs[] = {&p.combined,         &p.depth,          &p.normal, &p.albedo,
                                 &p.variance,         &p.sample_count,   &p.noisy,  &p.denoising_normal,
                                 &p.denoising_albedo, &p.denoising_depth};
-  static_assert(sizeof bufs / sizeof bufs[0] == LT_PASS_COUNT, "one buffer per pass");
+  static_assert(sizeof bufs / sizeof bufs[0] == LT_PASS_DIFFUSE_DIRECT, "one buffer per pass");
   for (int pass = 0; pass < LT_PASS_COUNT; ++pass) {
-    bufs[pass]->assign(n * lt_pass_channels(pass), 0.0f);
-    check(lt_render_read_pass(r, pass, bufs[pass]->data(), bufs[pass]->size()), "lt_render_read_pass");
+    std::vector<float>* buf = pass < LT_PASS_DIFFUSE_DIRECT ? bufs[pass] : &p.more[pass - LT_PASS_DIFFUSE_DIRECT];
+    buf->assign(n * lt_pass_channels(pass), 0.0f);
+    const int status = lt_render_read_pass(r, pass, buf->data(), buf->size());
+    if (pass >= LT_PASS_DIFFUSE_DIRECT && status == LT_ERROR_STATE)
+      buf->clear();  // a light or data pass the render does not keep
+    else
+      check(status, "lt_render_read_pass");
   }
   check(lt_render_poll(r, &p.status), "lt_render_poll");
   return p;

@@ -128,6 +128,9 @@ struct Passes {
   int width = 0, height = 0;
   std::vector<float> combined, depth, normal, albedo, variance, sample_count;
   std::vector<float> noisy, denoising_normal, denoising_albedo, denoising_depth;
+  // The light and data passes, from LT_PASS_DIFFUSE_DIRECT on.
+  std::vector<float> more[LT_PASS_COUNT - LT_PASS_DIFFUSE_DIRECT];
+  const std::vector<float>& pass(int p) const { return more[p - LT_PASS_DIFFUSE_DIRECT]; }
   lt_render_status status{};
   const float* rgba(int x, int y) const { return &combined[(size_t(y) * width + x) * 4]; }
   const float* var(int x, int y) const { return &variance[(size_t(y) * width + x) * 3]; }

@@ -60,10 +60,12 @@ TEST(ApiExr, WritesEveryPassAndReadsBackTheSameCombined) {
   ASSERT_TRUE(std::filesystem::exists(path));
 
   // Size: more than a header, less than the uncompressed channels (4 + 1 + 3 + 3 + 3 + 1 = 15
-  // floats per pixel) plus a generous header and line-offset table.
+  // floats per pixel, and the light and data passes: 13 RGB, Position, UV, Mist and the two
+  // indices, 48) plus a generous header and line-offset table.
+  const int kChannels = 15 + 48;
   const auto bytes = std::filesystem::file_size(path);
   EXPECT_GT(bytes, 500u);
-  EXPECT_LT(bytes, size_t(W) * H * 15 * 4 + 16384);
+  EXPECT_LT(bytes, size_t(W) * H * kChannels * 4 + 16384);
 
   Imf::InputFile file(path.c_str());
   const Imath::Box2i dw = file.header().dataWindow();
@@ -73,9 +75,12 @@ TEST(ApiExr, WritesEveryPassAndReadsBackTheSameCombined) {
   int count = 0;
   for (auto it = channels.begin(); it != channels.end(); ++it, ++count)
     EXPECT_EQ(it.channel().type, Imf::FLOAT) << it.name() << " is not 32-bit float";
-  EXPECT_EQ(count, 15);
-  for (const char* name : {"R", "G", "B", "A", "Depth.Z", "Normal.X", "Normal.Y", "Normal.Z", "Albedo.R", "Albedo.G",
-                           "Albedo.B", "Variance.R", "Variance.G", "Variance.B", "SampleCount.X"})
+  EXPECT_EQ(count, kChannels);
+  for (const char* name :
+       {"R",          "G",           "B",        "A",          "Depth.Z",    "Normal.X",   "Normal.Y",      "Normal.Z",
+        "Albedo.R",   "Albedo.G",    "Albedo.B", "Variance.R", "Variance.G", "Variance.B", "SampleCount.X", "DiffDir.R",
+        "GlossCol.B", "VolumeInd.G", "Emit.R",   "Env.B",      "Position.X", "UV.U",       "UV.A",          "Mist.Z",
+        "IndexOB.X",  "IndexMA.X"})
     EXPECT_NE(channels.findChannel(name), nullptr) << "missing channel " << name;
 
   const char* rgba[4] = {"R", "G", "B", "A"};

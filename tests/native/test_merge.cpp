@@ -94,7 +94,7 @@ void expect_merged_equals_full(const lt::ExrImage& merged, const lt::ExrImage& f
     for (size_t i = 0; i < fc.pixels.size(); ++i) {
       const double a = mc->pixels[i], b = fc.pixels[i];
       double scale = std::abs(b);
-      if (fc.name.rfind("Normal.", 0) == 0) scale = 1;
+      if (fc.name.rfind("Normal.", 0) == 0 || fc.name.rfind("Mist.", 0) == 0) scale = 1;  // signed; 1 - a mean
       if (fc.name.rfind("Variance.", 0) == 0) {
         const std::string c = fc.name.substr(9);
         const double mean = full.find(c)->pixels[i];

@@ -301,6 +301,8 @@ class MaterialExporter:
         elif program is not None:
             mat_id = core_call(self.core_scene, self.report, subject, "add_material", program)
             mat_id = -1 if mat_id is None else mat_id
+            if mat_id >= 0 and material.pass_index:
+                self.core_scene.set_material_pass_index(mat_id, material.pass_index)
         if mat_id < 0:
             volume, null_surface = None, False
         elif volume:

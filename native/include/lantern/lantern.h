@@ -34,8 +34,9 @@ extern "C" {
  * rows read in bands; lt_scene_set_world_program and the world map's size in lt_scene_stats;
  * 9: lt_render_settings.sample_pattern; 10: lt_camera_desc's lens and panorama fields;
  * 11: denoising (lt_render_settings.denoise, lt_render_status.denoised and denoise_seconds, the
- * Noisy Image and Denoising passes). */
-#define LT_ABI_VERSION 11
+ * Noisy Image and Denoising passes); 12: Cycles' light and data passes (LT_PASS_DIFFUSE_DIRECT
+ * on), lt_render_settings' mist fields, lt_scene_set_material_pass_index. */
+#define LT_ABI_VERSION 12
 
 enum lt_status {
   LT_OK = 0,
@@ -154,6 +155,8 @@ typedef struct lt_shader_program {
 } lt_shader_program;
 
 LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_program* program, int* out_id);
+/* Material.pass_index, for LT_PASS_MATERIAL_INDEX (kept by lt_scene_set_material). */
+LT_API int lt_scene_set_material_pass_index(lt_scene* scene, int material, int pass_index);
 
 /* A named per-corner attribute of a mesh, read by the Attribute, UV Map, Color Attribute, Tangent
  * and Normal Map nodes (kOpAttribute... in native/src/shading/inputs.h): the add-on gives each
@@ -472,6 +475,9 @@ typedef struct lt_render_settings {
    * Image and Denoising passes whatever `passes` says. lt_render_status.rel_error stays the noisy
    * image's estimate. Default 0. */
   int denoise;
+  /* The Mist pass, as Cycles (World > Mist Pass): start and depth in world units, falloff the
+   * exponent (Quadratic 2, Linear 1, Inverse Quadratic 0.5). Defaults 5, 25, 2 (Blender's). */
+  float mist_start, mist_depth, mist_falloff;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -532,7 +538,36 @@ enum lt_pass {
   LT_PASS_DENOISING_NORMAL = 7,
   LT_PASS_DENOISING_ALBEDO = 8,
   LT_PASS_DENOISING_DEPTH = 9,
-  LT_PASS_COUNT = 10
+  /* Cycles 3.4's light passes (RGB; docs/passes.md): the radiance split by the path's first
+   * scattering vertex, by closure kind (diffuse, glossy, transmission; a Glass BSDF's reflection is
+   * glossy) or a medium (volume); DIRECT: light reaching the camera through that vertex alone,
+   * INDIRECT: the rest. Direct and Indirect are read divided by their COLOR (the first hit's
+   * closure weights), as Cycles reads them, so (DIRECT + INDIRECT) x COLOR summed over the three
+   * kinds, plus VOLUME_*, EMISSION (emitters seen directly) and ENVIRONMENT (the world seen
+   * directly) is Combined's RGB. A Direct or Indirect pass keeps its Colour. */
+  LT_PASS_DIFFUSE_DIRECT = 10,
+  LT_PASS_DIFFUSE_INDIRECT = 11,
+  LT_PASS_DIFFUSE_COLOR = 12,
+  LT_PASS_GLOSSY_DIRECT = 13,
+  LT_PASS_GLOSSY_INDIRECT = 14,
+  LT_PASS_GLOSSY_COLOR = 15,
+  LT_PASS_TRANSMISSION_DIRECT = 16,
+  LT_PASS_TRANSMISSION_INDIRECT = 17,
+  LT_PASS_TRANSMISSION_COLOR = 18,
+  LT_PASS_VOLUME_DIRECT = 19,
+  LT_PASS_VOLUME_INDIRECT = 20,
+  LT_PASS_EMISSION = 21,
+  LT_PASS_ENVIRONMENT = 22,
+  /* Cycles' data passes of the surface the camera path first scatters from: POSITION (3, world,
+   * the pixel's first sample's, as Cycles' sample 0; 0 on the background), UV (3: u, v, 1; mean),
+   * MIST (1: lt_render_settings' mist; 1 on the background), OBJECT_INDEX and MATERIAL_INDEX (1:
+   * pass_index, the first sample's). */
+  LT_PASS_POSITION = 23,
+  LT_PASS_UV = 24,
+  LT_PASS_MIST = 25,
+  LT_PASS_OBJECT_INDEX = 26,
+  LT_PASS_MATERIAL_INDEX = 27,
+  LT_PASS_COUNT = 28
 };
 LT_API int lt_pass_channels(int pass);
 

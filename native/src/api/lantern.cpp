@@ -293,12 +293,22 @@ int lt_scene_add_material(lt_scene* scene, const lt_shader_program* program, int
   });
 }
 
+int lt_scene_set_material_pass_index(lt_scene* scene, int material, int pass_index) {
+  return guarded([&] {
+    require(scene, "lt_scene_set_material_pass_index: NULL argument");
+    require(material >= 0 && material < int(scene->scene.materials.size()),
+            "material " + std::to_string(material) + " does not exist");
+    scene->scene.materials[material].set_pass_index(float(pass_index));
+  });
+}
+
 int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program* program) {
   return guarded([&] {
     require(scene && program, "lt_scene_set_material: NULL argument");
     require(material >= 0 && material < int(scene->scene.materials.size()),
             "material " + std::to_string(material) + " does not exist");
     lt::Material m = to_material(scene, program);  // validated before anything changes
+    m.set_pass_index(scene->scene.materials[material].pass_index());
     begin_edit(scene);
     scene->scene.materials[material] = std::move(m);
   });
@@ -716,6 +726,9 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->caller_bytes = 0;
   s->sample_pattern = LT_PATTERN_SOBOL_OWEN;
   s->denoise = 0;
+  s->mist_start = 5;
+  s->mist_depth = 25;
+  s->mist_falloff = 2;
 }
 
 namespace {
@@ -778,6 +791,9 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     require(!s->adaptive || s->noise_target > 0, "adaptive sampling needs a noise target > 0");
     require(s->min_samples >= 1 && s->min_samples <= (1 << 24), "min samples must be in [1, 16777216]");
     require((s->passes & ~((1u << LT_PASS_COUNT) - 1)) == 0, "passes has bits beyond LT_PASS_COUNT");
+    require(std::isfinite(s->mist_start) && std::isfinite(s->mist_depth) && s->mist_depth >= 0 &&
+                std::isfinite(s->mist_falloff) && s->mist_falloff >= 0,
+            "mist start, depth and falloff must be finite, depth and falloff >= 0");
     require(s->sample_pattern == LT_PATTERN_SOBOL_OWEN || s->sample_pattern == LT_PATTERN_INDEPENDENT,
             "unknown sample pattern " + std::to_string(s->sample_pattern) +
                 "; valid: " + lt::abi_enum_names("lt_sample_pattern", "LT_PATTERN_"));
@@ -818,6 +834,9 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.volume_estimator = s->volume_estimator == LT_VOLUME_RAY_MARCHING ? lt::VolumeEstimator::RayMarching
                                                                         : lt::VolumeEstimator::Tracking;
     is.volume_step = s->volume_step;
+    is.mist_start = s->mist_start;
+    is.mist_depth = s->mist_depth;
+    is.mist_falloff = s->mist_falloff;
     is.strategy_depth = s->integrator == LT_INTEGRATOR_BIDIRECTIONAL ? s->strategy_view_depth : 0;
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);

@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -123,8 +125,10 @@ int pass_channels(Pass pass) {
       return 4;
     case Pass::Depth:
     case Pass::DenoisingDepth:
-      return 1;
     case Pass::SampleCount:
+    case Pass::Mist:
+    case Pass::ObjectIndex:
+    case Pass::MaterialIndex:
       return 1;
     case Pass::Count:
       return 0;
@@ -132,6 +136,35 @@ int pass_channels(Pass pass) {
       return 3;
   }
 }
+
+Pass light_pass_color(Pass p) {
+  switch (p) {
+    case Pass::DiffuseDirect:
+    case Pass::DiffuseIndirect:
+      return Pass::DiffuseColor;
+    case Pass::GlossyDirect:
+    case Pass::GlossyIndirect:
+      return Pass::GlossyColor;
+    case Pass::TransmissionDirect:
+    case Pass::TransmissionIndirect:
+      return Pass::TransmissionColor;
+    default:
+      return Pass::Count;
+  }
+}
+
+namespace {
+bool is_colour_pass(Pass p) {
+  return p == Pass::DiffuseColor || p == Pass::GlossyColor || p == Pass::TransmissionColor;
+}
+// The passes a layout keeps for these: a Direct or Indirect pass needs its Colour to be read.
+unsigned with_dependencies(unsigned passes) {
+  for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
+    if ((passes & pass_bit(Pass(p))) && light_pass_color(Pass(p)) != Pass::Count)
+      passes |= pass_bit(light_pass_color(Pass(p)));
+  return passes;
+}
+}  // namespace
 
 size_t FilmLayout::bytes_per_pixel() const {
   auto has = [&](Pass p) { return (passes & pass_bit(p)) != 0; };
@@ -144,6 +177,12 @@ size_t FilmLayout::bytes_per_pixel() const {
   if (squares) floats += 3;
   if (splats) floats += 6;
   floats += size_t(strategy_cells) * 6;
+  const unsigned kept = with_dependencies(passes);
+  for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
+    if (kept & pass_bit(Pass(p))) {
+      floats += pass_channels(Pass(p));
+      if (splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p))) floats += 3;
+    }
   return floats * sizeof(float);
 }
 
@@ -168,6 +207,13 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
   if (layout_.splats) {
     splat_.assign(3 * n, 0.0f);
     splat_half_.assign(3 * n, 0.0f);
+  }
+  layout_.passes = with_dependencies(layout_.passes);
+  for (int p = kFirstSummedPass; p < int(Pass::Count); ++p) {
+    if (!has(Pass(p))) continue;
+    sums_[p - kFirstSummedPass].assign(pass_channels(Pass(p)) * n, 0.0f);
+    if (layout_.splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p)))
+      light_splat_[p - kFirstSummedPass].assign(3 * n, 0.0f);
   }
   if (layout_.strategy_cells > 0) {
     strategies_.assign(n * layout_.strategy_cells * 3, 0.0f);
@@ -203,6 +249,23 @@ void Film::add(int x, int y, const SampleValue& s) {
     for (int k = 0; k < kFeatureChannels; ++k) sum[k] += f[k];
     if (half)
       for (int k = 0; k < kFeatureChannels; ++k) feature_half_[kFeatureChannels * i + k] += f[k];
+  }
+  for (int j = 0; j < kSummedPasses; ++j) {
+    std::vector<float>& a = sums_[j];
+    if (a.empty()) continue;
+    const Pass p = Pass(j + kFirstSummedPass);
+    if (j < kLightParts) {
+      for (int k = 0; k < 3; ++k) a[3 * i + k] += s.light[j][k];
+    } else if (p == Pass::UV) {
+      for (int k = 0; k < 3; ++k) a[3 * i + k] += s.uv[k];
+    } else if (p == Pass::Mist) {
+      a[i] += s.mist;
+    } else if (n == 1) {  // Position and the indices: the first sample's, as Cycles' sample 0
+      if (p == Pass::Position)
+        for (int k = 0; k < 3; ++k) a[3 * i + k] = s.position[k];
+      else
+        a[i] = p == Pass::ObjectIndex ? s.object_index : s.material_index;
+    }
   }
   alpha_[i] += s.alpha;
   if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
@@ -395,11 +458,103 @@ std::unique_lock<std::mutex> Film::lock_accumulators() const {
   return lock;
 }
 
+const char* exr_pass_name(Pass p) {
+  static const char* const kNames[] = {"DiffDir",  "DiffInd",  "DiffCol",  "GlossDir",  "GlossInd",  "GlossCol",
+                                       "TransDir", "TransInd", "TransCol", "VolumeDir", "VolumeInd", "Emit",
+                                       "Env",      "Position", "UV",       "Mist",      "IndexOB",   "IndexMA"};
+  static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(kSummedPasses), "a name per pass");
+  return int(p) >= kFirstSummedPass && p < Pass::Count ? kNames[int(p) - kFirstSummedPass] : nullptr;
+}
+
+const char* exr_channel_letters(Pass p) {
+  if (is_light_pass(p)) return "RGB";
+  switch (p) {
+    case Pass::Position:
+      return "XYZ";
+    case Pass::UV:
+      return "UVA";
+    case Pass::Mist:
+      return "Z";
+    case Pass::ObjectIndex:
+    case Pass::MaterialIndex:
+      return "X";
+    default:
+      return nullptr;
+  }
+}
+
+bool Film::has_light_passes() const {
+  for (int j = 0; j < kLightParts; ++j)
+    if (!sums_[j].empty()) return true;
+  return false;
+}
+
+// Cycles' safe_divide_even_color (util/math.h): a channel whose divisor is zero takes the others'
+// ratio, so that a colour with a zero channel still gives a grey light pass.
+void divide_even_color(const double* a, const double* b, float* o) {
+  double r[3];
+  for (int k = 0; k < 3; ++k) r[k] = b[k] != 0 ? a[k] / b[k] : 0.0;
+  const bool z[3] = {b[0] == 0, b[1] == 0, b[2] == 0};
+  if (z[0] && z[1])
+    r[0] = r[1] = r[2];
+  else if (z[0] && z[2])
+    r[0] = r[2] = r[1];
+  else if (z[1] && z[2])
+    r[1] = r[2] = r[0];
+  else if (z[0])
+    r[0] = 0.5 * (r[1] + r[2]);
+  else if (z[1])
+    r[1] = 0.5 * (r[0] + r[2]);
+  else if (z[2])
+    r[2] = 0.5 * (r[0] + r[1]);
+  // A ratio past float range (a splat over a denormal Colour) stays the largest float, never inf.
+  for (int k = 0; k < 3; ++k) o[k] = float(std::clamp(r[k], -double(FLT_MAX), double(FLT_MAX)));
+}
+
+void Film::read_summed(Pass pass, size_t i, float* o) const {
+  const int j = int(pass) - kFirstSummedPass, c = pass_channels(pass);
+  const std::vector<float>& a = sums_[j];
+  const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+  if (pass == Pass::Position || pass == Pass::ObjectIndex || pass == Pass::MaterialIndex) {
+    for (int k = 0; k < c; ++k) o[k] = a[c * i + k];
+    return;
+  }
+  if (pass == Pass::Mist) {
+    // Cycles accumulates 1 - mist and negates it when reading (film/data_passes.h).
+    o[0] = float(1.0 - a[i] * inv);
+    return;
+  }
+  double v[3];
+  for (int k = 0; k < c; ++k) v[k] = a[c * i + k] * inv;
+  if (is_light_pass(pass) && !light_splat_[j].empty() && light_paths_)
+    for (int k = 0; k < 3; ++k) v[k] += light_splat_[j][3 * i + k] / double(light_paths_);
+  const Pass colour = light_pass_color(pass);
+  if (colour == Pass::Count) {
+    for (int k = 0; k < c; ++k) o[k] = float(v[k]);
+    return;
+  }
+  // Direct and Indirect are divided by their Colour, as Cycles reads them (film/read.h), so that
+  // (Direct + Indirect) x Colour gives the light back.
+  const std::vector<float>& col = sums_[int(colour) - kFirstSummedPass];
+  const double b[3] = {col[3 * i] * inv, col[3 * i + 1] * inv, col[3 * i + 2] * inv};
+  divide_even_color(v, b, o);
+}
+
 bool Film::read_light_tracing(float* out) const {
   std::unique_lock<std::mutex> lock = lock_accumulators();
   if (!light_paths_ || splat_.empty()) return false;
   const double scale = 1.0 / double(light_paths_);
   for (size_t i = 0; i < splat_.size(); ++i) out[i] = float(splat_[i] * scale);
+  return true;
+}
+
+bool Film::read_light_tracing(Pass pass, float* out) const {
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  if (!is_light_pass(pass) || !light_paths_) return false;
+  const std::vector<float>& a = light_splat_[int(pass) - kFirstSummedPass];
+  if (a.empty()) return false;
+  const double scale = 1.0 / double(light_paths_);
+  for (size_t i = 0; i < a.size(); ++i) out[i] = float(a[i] * scale);
   return true;
 }
 
@@ -412,9 +567,35 @@ uint64_t Film::total_samples() const {
 
 namespace {
 const char* pass_name(Pass p) {
-  static const char* const kNames[] = {"Combined",         "Depth",          "Normal",      "Albedo",
-                                       "Variance",         "Sample Count",   "Noisy Image", "Denoising Normal",
-                                       "Denoising Albedo", "Denoising Depth"};
+  static const char* const kNames[] = {"Combined",
+                                       "Depth",
+                                       "Normal",
+                                       "Albedo",
+                                       "Variance",
+                                       "Sample Count",
+                                       "Noisy Image",
+                                       "Denoising Normal",
+                                       "Denoising Albedo",
+                                       "Denoising Depth",
+                                       "DiffDir",
+                                       "DiffInd",
+                                       "DiffCol",
+                                       "GlossDir",
+                                       "GlossInd",
+                                       "GlossCol",
+                                       "TransDir",
+                                       "TransInd",
+                                       "TransCol",
+                                       "VolumeDir",
+                                       "VolumeInd",
+                                       "Emit",
+                                       "Env",
+                                       "Position",
+                                       "UV",
+                                       "Mist",
+                                       "IndexOB",
+                                       "IndexMA"};
+  static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(Pass::Count), "a name per pass");
   return unsigned(p) < unsigned(Pass::Count) ? kNames[int(p)] : "?";
 }
 }  // namespace
@@ -481,6 +662,9 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
             o[0] = float(count_[i]);
             break;
           case Pass::Count:
+            break;
+          default:
+            read_summed(pass, i, o);
             break;
         }
       }

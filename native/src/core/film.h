@@ -33,6 +33,27 @@ class FilterSampler {
   float half_range_ = 0.5f;
 };
 
+// Cycles' light passes (kernel/film/light_passes.h), in lt_pass order from DiffuseDirect: what a
+// sample's radiance holds split by its path's first bounce (direct: the light reached from the
+// first scattering vertex; indirect: the rest; Emission and Environment: seen directly), and the
+// first hit's closure colours per kind. kLightSums: the light parts, which sum to the radiance.
+enum LightPart {
+  kDiffuseDirect,
+  kDiffuseIndirect,
+  kDiffuseColor,
+  kGlossyDirect,
+  kGlossyIndirect,
+  kGlossyColor,
+  kTransmissionDirect,
+  kTransmissionIndirect,
+  kTransmissionColor,
+  kVolumeDirect,
+  kVolumeIndirect,
+  kEmission,
+  kEnvironment,
+  kLightParts
+};
+
 struct SampleValue {
   Spectrum radiance{0.0f};
   float alpha = 0;
@@ -44,6 +65,13 @@ struct SampleValue {
   // by the render job from normal and depth when the film keeps them.
   Vec3 feature_normal{0.0f};
   float feature_distance = 0;
+  // Light passes (LightPart), written when IntegratorSettings::light_passes is set.
+  Spectrum light[kLightParts];
+  // Data passes of the camera ray's first hit, as Cycles' film_write_data_passes: world position,
+  // UV (u, v, 1 as Cycles' primitive_uv; 0 on the background), the Mist pass's coverage
+  // (1 - mist), object and material pass_index.
+  Vec3 position{0.0f}, uv{0.0f};
+  float mist = 0, object_index = 0, material_index = 0;
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
@@ -59,8 +87,39 @@ enum class Pass {
   DenoisingNormal = 7,
   DenoisingAlbedo = 8,
   DenoisingDepth = 9,
-  Count = 10
+  // Cycles' light passes (LightPart order) and data passes.
+  DiffuseDirect = 10,
+  DiffuseIndirect = 11,
+  DiffuseColor = 12,
+  GlossyDirect = 13,
+  GlossyIndirect = 14,
+  GlossyColor = 15,
+  TransmissionDirect = 16,
+  TransmissionIndirect = 17,
+  TransmissionColor = 18,
+  VolumeDirect = 19,
+  VolumeIndirect = 20,
+  Emission = 21,
+  Environment = 22,
+  Position = 23,
+  UV = 24,
+  Mist = 25,
+  ObjectIndex = 26,
+  MaterialIndex = 27,
+  Count = 28
 };
+constexpr int kFirstSummedPass = int(Pass::DiffuseDirect);
+constexpr int kSummedPasses = int(Pass::Count) - kFirstSummedPass;
+inline bool is_light_pass(Pass p) { return p >= Pass::DiffuseDirect && p <= Pass::Environment; }
+// The Colour pass a Direct or Indirect pass is divided by when read (Cycles' divide_type); Count: none.
+Pass light_pass_color(Pass p);
+// a / b per RGB channel as Cycles' safe_divide_even_color (util/math.h): a channel whose divisor
+// is zero takes the other channels' ratio.
+void divide_even_color(const double* a, const double* b, float* o);
+// The pass's channel names in Lantern's EXR files ("DiffDir.R", ...), Blender's pass name and
+// channel letters; nullptr for the passes the files do not hold.
+const char* exr_pass_name(Pass p);
+const char* exr_channel_letters(Pass p);
 int pass_channels(Pass pass);
 constexpr unsigned pass_bit(Pass p) { return 1u << unsigned(p); }
 constexpr unsigned kAllPasses = (1u << unsigned(Pass::Count)) - 1;
@@ -130,6 +189,13 @@ class Film {
     if (half)
       for (int k = 0; k < 3; ++k) splat_half_[3 * size_t(pixel) + k] += v[k];
   }
+  // A splat's part of a light pass (LightPart; not a Colour), when the film keeps it.
+  void add_light_splat(uint32_t pixel, int part, const Spectrum& v) {
+    std::vector<float>& a = light_splat_[part];
+    if (a.empty()) return;
+    for (int k = 0; k < 3; ++k) a[3 * size_t(pixel) + k] += v[k];
+  }
+  bool has_light_passes() const;
   // Light paths behind the published splats (0 without splats): what a merge weights them by.
   uint64_t published_light_paths() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -186,6 +252,8 @@ class Film {
   // The light-tracing (t = 1 splat) part of Combined, RGB per pixel; false when the render traced
   // no light paths (not bidirectional). Between passes, as read().
   bool read_light_tracing(float* out) const;
+  // The same for a light pass (not a Colour): its splats' part, undivided (merges need it apart).
+  bool read_light_tracing(Pass pass, float* out) const;
   uint64_t total_samples() const;
   // The half images (the rendering thread, once the last pass is done); needs the features.
   HalfImages half_images() const;
@@ -199,6 +267,7 @@ class Film {
 
  private:
   void resolve_combined(size_t i, float* o) const;
+  void read_summed(Pass pass, size_t i, float* o) const;  // a pass from DiffuseDirect on, pixel i
   // Pixel i's means of Combined RGB over half A, half B and all its samples (count >= 2), light
   // tracing's splats split the same way and normalised by each half's light paths.
   struct SplatScales {
@@ -222,6 +291,11 @@ class Film {
   std::vector<float> feature_, feature_half_, denoised_;
   std::vector<uint32_t> count_;
   std::vector<float> splat_, splat_half_;  // empty without splats
+  // The light and data passes (Pass::DiffuseDirect on): per pass a sum over samples (Position and
+  // the indices: the pixel's first sample's value, as Cycles writes them at sample 0), empty when
+  // not kept; light_splat_: the light passes' part of the splats (BDPT).
+  std::vector<float> sums_[kSummedPasses];
+  std::vector<float> light_splat_[kLightParts];
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;

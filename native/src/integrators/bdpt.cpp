@@ -193,7 +193,8 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   // Strategy s = 1 would have picked this light from the vertex before (mis_weight).
   const PathVertex& before = camera[t - 2];
   v.pick_nee = before.type == VertexType::Camera ? 0.0f : lights_.pmf_nee(before.p, nee_normal(before), v.light);
-  add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t, pixel_center_), 0, t);
+  add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t, pixel_center_), 0, t,
+      v.infinite && v.light == lights_.world_light());
 }
 
 // Volume emission along the segment before camera vertex `count` (media_transport.h): light that
@@ -389,6 +390,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     if (medium >= 0) {
       float pdf_dir;  // HG sampling is exact: beta *= p / pdf = 1
       if (!phase(v).sample(v.wo, sampler_.next_2d(), &wi, &pdf_dir) || !(pdf_dir > 0)) break;
+      if (mode == Mode::Radiance && count == 2) first_walk_.set_volume();
       visibility = kVisDiffuse;
       ray.o = mi.p;
     } else {
@@ -402,6 +404,12 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.delta = (bs.flags & kLobeSpecular) != 0;
       beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
       if (mode == Mode::Importance) beta *= shading_correction(v, -ray.d, wi);
+      if (s_.light_passes && mode == Mode::Radiance && count == 2) {
+        if (v.delta)
+          first_walk_.set_kind(flags_pass_kind(bs.flags));
+        else
+          first_walk_ = split_at(v, wi);
+      }
       if (!is_finite(beta) || is_black(beta)) break;
       if (!is_transparent(bs.flags, bs.eta)) visibility = visibility_of(bs.flags);
       if (media_ && !reflect_geo) cross_boundary(scene_, sp, wi, &stack);  // into / out of a medium
@@ -436,6 +444,8 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
       out_.depth = first.t;
       out_.normal = path[1].frame.n;
       out_.albedo = path[1].bsdf.albedo();
+      if (s_.light_passes) add_light_colors(&out_, path[1].bsdf, path[1].wo, path[1].beta);
+      if (s_.data_passes) write_data_passes(scene_, ctx_.camera, s_, path[1].sp, path[1].beta, &out_);
     }
   } else if (first.escaped) {
     out_.alpha = s_.transparent_background ? 0.0f : 1.0f;
@@ -588,6 +598,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls));
     if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
+    if (s_.light_passes && t == 2) first_connect_ = split_at(pt, ls.wi);
     return c * (kinds * mis_weight(light, camera, &sampled, 1, t, pixel_center_));
   }
   // s >= 2: join two surface vertices with a shadow ray.
@@ -603,6 +614,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   if (is_black(c)) return c;
   c *= transmittance(qs, pt);
   if (is_black(c)) return c;
+  if (s_.light_passes && t == 2) first_connect_ = split_at(pt, -w);
   return c * (kinds * mis_weight(light, camera, nullptr, s, t, pixel_center_));
 }
 
@@ -623,6 +635,18 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   if (!cam.project(lens, qs.p, ctx_.filter.radius(), &film, &dir, &dist)) return;
   Spectrum base = qs.beta * f(qs, -dir, Mode::Importance) * kinds;
   if (is_black(base)) return;
+  // Light passes: qs is the path's first bounce seen from the camera (towards -dir), lit from its
+  // predecessor on the light subpath (qs.wo).
+  FirstBounce first;
+  if (s_.light_passes) {
+    if (qs.type == VertexType::Medium) {
+      first.set_volume();
+    } else {
+      Spectrum k[3];
+      qs.bsdf.eval_kinds(qs.frame.to_local(-dir), qs.wo, k);
+      first.set_surface(k);
+    }
+  }
   PathVertex& z0 = endpoint(VertexType::Camera);
   z0.p = lens;
   base *= transmittance(qs, z0);
@@ -661,7 +685,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
       Spectrum v = base * (h * w);
       if (is_finite(v) && !is_black(v))
         splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v,
-                          strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1});
+                          strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1, s - 1, first});
     }
 }
 
@@ -718,6 +742,12 @@ class BdptIntegrator final : public Integrator {
     for (size_t i = 0; i < p.tiles.size(); ++i)
       for (const Splat& sp : p.tiles[i]) {
         film.add_splat(sp.pixel, sp.value, int(i & 1));
+        if (ctx_.settings.light_passes) {
+          Spectrum parts[kLightParts];
+          add_light_part(parts, sp.value, sp.bounces, sp.first, false);
+          for (int k = 0; k < kLightParts; ++k)
+            if (!is_black(parts[k])) film.add_light_splat(sp.pixel, k, parts[k]);
+        }
         if (sp.strategy >= 0) film.add_strategy_splat(sp.pixel, sp.strategy, sp.value);
       }
     // One light path per camera sample traced (fewer than the region's pixels when adaptive

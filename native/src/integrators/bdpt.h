@@ -208,8 +208,11 @@ class Bdpt {
   void splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, int s, std::vector<Splat>& splats);
 
   // Adds a strategy's weighted contribution to the sample and to the strategy view.
-  void add(const Spectrum& c, int s, int t) {
+  // Light passes: s + t - 2 scattering vertices; the first is camera[1] (t >= 2), whose split
+  // is the walk's sampled direction's (t >= 3) or the connection's (t = 2, set by connect()).
+  void add(const Spectrum& c, int s, int t, bool environment = false) {
     L_ += c;
+    if (s_.light_passes) add_light_part(out_.light, c, s + t - 2, t == 2 ? first_connect_ : first_walk_, environment);
     if (strategies_) {
       int cell = strategy_cell(s, t, s_.strategy_depth);
       if (cell >= 0) strategies_[cell] += c;
@@ -273,6 +276,19 @@ class Bdpt {
   SampleValue out_;
   Spectrum L_{0.0f};
   Spectrum* strategies_ = nullptr;
+  FirstBounce first_walk_, first_connect_;
+  // The split of a scattering vertex between its predecessor (v.wo) and direction `to`.
+  FirstBounce split_at(const PathVertex& v, const Vec3& to) const {
+    FirstBounce fb;
+    if (v.type == VertexType::Medium) {
+      fb.set_volume();
+    } else {
+      Spectrum kinds[3];
+      v.bsdf.eval_kinds(v.wo, v.frame.to_local(to), kinds);
+      fb.set_surface(kinds);
+    }
+    return fb;
+  }
 };
 
 }  // namespace lt

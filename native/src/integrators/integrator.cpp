@@ -34,3 +34,31 @@ const char* integrator_name(IntegratorType type) {
 }
 
 }  // namespace lt
+
+namespace lt {
+
+float mist_coverage(const Camera& camera, const IntegratorSettings& s, const Vec3& p, const Spectrum& beta) {
+  // Cycles' camera_distance: along the view axis for orthographic cameras, else from the camera.
+  const float d = camera.orthographic() ? std::abs(camera.depth(p)) : length(p - camera.position());
+  const float inv_depth = s.mist_depth > 0 ? 1 / s.mist_depth : 0.0f;  // Cycles' film.cpp
+  float mist = clamp((d - s.mist_start) * inv_depth, 0.0f, 1.0f);
+  if (s.mist_falloff == 2.0f)
+    mist *= mist;
+  else if (s.mist_falloff == 0.5f)
+    mist = std::sqrt(mist);
+  else if (s.mist_falloff != 1.0f)
+    mist = std::pow(mist, s.mist_falloff);
+  return (1 - mist) * (beta[0] + beta[1] + beta[2]) / 3;
+}
+
+void write_data_passes(const Scene& scene, const Camera& camera, const IntegratorSettings& s, const SurfacePoint& sp,
+                       const Spectrum& beta, SampleValue* out) {
+  out->position = sp.p;
+  const Mesh& mesh = scene.geometry.mesh(scene.geometry.instance(sp.instance).mesh);
+  out->uv = mesh.corner_uvs.empty() ? Vec3(0.0f) : Vec3(sp.uv.x, sp.uv.y, 1.0f);
+  out->object_index = scene.geometry.instance(sp.instance).pass_index;
+  out->material_index = sp.material >= 0 ? scene.material(sp.material).pass_index() : 0.0f;
+  out->mist += mist_coverage(camera, s, sp.p, beta);
+}
+
+}  // namespace lt

@@ -9,6 +9,7 @@
 
 #include "core/film.h"
 #include "core/sampling.h"
+#include "integrators/light_passes.h"
 #include "media/medium.h"
 #include "scene/scene.h"
 
@@ -36,7 +37,18 @@ struct IntegratorSettings {
   int volume_bounces = 0;
   VolumeEstimator volume_estimator = VolumeEstimator::Tracking;
   float volume_step = 0;
+  // Passes the film keeps that integrators fill: Cycles' light passes (SampleValue::light) and the
+  // data passes of the first hit (position, UV, mist, indices); Mist as Cycles' World > Mist Pass.
+  bool light_passes = false, data_passes = false;
+  float mist_start = 5, mist_depth = 25, mist_falloff = 2;
 };
+
+// The Mist pass's value for a sample whose camera path scatters first at p with throughput beta
+// (Cycles' film_write_data_passes: (1 - mist) x average throughput, mist from the camera distance).
+float mist_coverage(const Camera& camera, const IntegratorSettings& s, const Vec3& p, const Spectrum& beta);
+// The data passes of a first hit: position, UV, indices, mist.
+void write_data_passes(const Scene& scene, const Camera& camera, const IntegratorSettings& s, const SurfacePoint& sp,
+                       const Spectrum& beta, SampleValue* out);
 
 struct SampleStats {
   uint64_t rays = 0;
@@ -58,6 +70,10 @@ struct Splat {
   uint32_t pixel;
   Spectrum value;
   int32_t strategy = -1;
+  // Light passes: the path's scattering vertices (its light vertex's lobe next to the camera is
+  // its first bounce) and that vertex's split (light_passes.h).
+  int32_t bounces = 0;
+  FirstBounce first;
 };
 
 // The strategy view's grid: row = path depth d = s + t - 2, column = s (0 .. depth + 2 - 1).

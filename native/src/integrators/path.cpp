@@ -5,6 +5,7 @@
 // function and from surfaces with transmittance through invisible boundaries, MIS against
 // phase/BSDF sampling, and Cycles' volume bounce limit (0: single scattering). One template, so a
 // scene without media runs none of the media code (make_integrator picks kMedia = false for it).
+#include "integrators/light_passes.h"
 #include "integrators/media_transport.h"
 #include "integrators/path_state.h"
 
@@ -13,8 +14,8 @@ namespace lt {
 namespace {
 
 template <bool kMedia>
-SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraSample& cs, Sampler& sampler,
-                  SampleStats& stats) {
+SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSettings& s, const CameraSample& cs,
+                  Sampler& sampler, SampleStats& stats) {
   const Ray& camera_ray = cs.ray;
   SampleValue out;
   const LightSet& lights = scene.lights;
@@ -36,7 +37,20 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
   if (kMedia && scene.has_boundaries()) init_volume_stack(scene, camera_ray, &stack, stats);
   Bsdf bsdf;
 
-  auto add = [&](const Spectrum& c) { L += clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect); };
+  // Light passes (light_passes.h): the first scattering vertex's split, and at the vertex being
+  // lit, the split towards the light sampled (first vertex only).
+  FirstBounce first, nee_first;
+  // An emitter reached (environment: the world) and a next-event estimate from the current vertex.
+  auto add = [&](const Spectrum& c, bool environment = false) {
+    const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
+    L += v;
+    if (s.light_passes) add_light_part(out.light, v, b.total, first, environment);
+  };
+  auto add_nee = [&](const Spectrum& c) {
+    const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
+    L += v;
+    if (s.light_passes) add_light_part(out.light, v, b.total + 1, b.total == 0 ? nee_first : first, false);
+  };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
     if (prev_delta) return 1.0f;
     float light_pdf = lights.pmf_nee(prev_p, prev_n, light) * lights.pdf(scene, light, prev_p, dir, t);
@@ -67,7 +81,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
     if (is_black(T)) return;
     float light_pdf = pmf * ls.pdf;
     float w = ls.delta ? 1.0f : power_heuristic(light_pdf, scatter_pdf);
-    add(beta * fv * T * ls.radiance * (w / light_pdf));
+    add_nee(beta * fv * T * ls.radiance * (w / light_pdf));
   };
 
   for (;;) {
@@ -106,6 +120,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
       if (is_black(beta) || volume > s.volume_bounces || b.total > s.max_bounces) break;
       const Phase& phase = scene.media[medium].phase();
       const Vec3 wo = normalize(-ray.d);
+      if (b.total == 0) nee_first.set_volume();
       if (!lights.empty())
         next_event(mi.p, nullptr, Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf) {
           float p = phase.eval(wo, wi);
@@ -115,6 +130,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
       Vec3 wi;
       float pdf;
       if (!phase.sample(wo, sampler.next_2d(), &wi, &pdf) || !(pdf > 0)) break;
+      if (b.total == 0) first.set_volume();
       ++volume;
       ++b.total;
       visibility = kVisDiffuse;
@@ -133,7 +149,7 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
         if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
           ShadingContext wc = world_context(ray.d);
           describe_ray(b, visibility, &wc);
-          add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY));
+          add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY), true);
         }
         lights.escaped_suns(ray.d, visibility, [&](int i, const Spectrum& radiance) {
           add(beta * radiance * mis_emitter(i, ray.d, INFINITY));
@@ -182,16 +198,28 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
         out.normal = ns;
         out.albedo = bsdf.albedo();
       }
+      const Vec3 wo = frame.to_local(-ray.d);
+      // Colours and data passes at the surface a camera path first scatters from (Cycles writes
+      // them at every surface before the first bounce, transparent layers weighted by their
+      // opacity; the choice to pass a layer above has that expectation).
+      if (b.total == 0) {
+        if (s.light_passes) add_light_colors(&out, bsdf, wo, beta);
+        if (s.data_passes) write_data_passes(scene, camera, s, sp, beta, &out);
+      }
       if (bsdf.count() == 0) break;
       if (b.exceeded(s) || (kMedia && volume > s.volume_bounces)) break;
 
-      const Vec3 wo = frame.to_local(-ray.d);
       if (bsdf.has_non_delta() && !lights.empty())
         next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf) {
           Vec3 wi = frame.to_local(wi_world);
           Spectrum f = bsdf.eval(wo, wi, pdf);
           // The geometric normal decides which side the light is on; shading normals only shade.
           if ((dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
+          if (s.light_passes && b.total == 0) {
+            Spectrum kinds[3];
+            bsdf.eval_kinds(wo, wi, kinds);
+            nee_first.set_surface(kinds);
+          }
           return f * std::abs(wi.z);
         });
 
@@ -205,6 +233,15 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
       if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;  // shading normal would leak light
       beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
       if (!is_finite(beta)) break;
+      if (s.light_passes && b.total == 0) {
+        if (bs.flags & kLobeSpecular) {
+          first.set_kind(flags_pass_kind(bs.flags));
+        } else {
+          Spectrum kinds[3];
+          bsdf.eval_kinds(wo, bs.wi, kinds);
+          first.set_surface(kinds);
+        }
+      }
       if (kMedia && !reflect_geo) cross_boundary(scene, sp, wi, &stack);  // refraction into / out of a medium
 
       b.count(bs, &visibility);
@@ -231,7 +268,7 @@ class PathIntegrator final : public Integrator {
  public:
   using Integrator::Integrator;
   SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats, std::vector<Splat>&) const override {
-    return lt::trace<kMedia>(ctx_.scene, ctx_.settings, cs, sampler, stats);
+    return lt::trace<kMedia>(ctx_.scene, ctx_.camera, ctx_.settings, cs, sampler, stats);
   }
 };
 

@@ -176,6 +176,23 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
     job.film().read(pass, buf.data());
     add_channels(channels, buf, n, o.names);
   }
+  // The light and data passes the film keeps, under Blender's names (merge.cpp knows which are
+  // divided by a Colour and which hold the first sample's value).
+  for (int p = kFirstSummedPass; p < int(Pass::Count); ++p) {
+    if (!job.film().has(Pass(p))) continue;
+    std::vector<float> buf(n * pass_channels(Pass(p)));
+    job.film().read(Pass(p), buf.data());
+    std::vector<std::string> names;
+    for (const char* c = exr_channel_letters(Pass(p)); *c; ++c)
+      names.push_back(std::string(exr_pass_name(Pass(p))) + "." + *c);
+    add_channels(channels, buf, n, names);
+    // BDPT: the splats' part apart, as for Combined, so that merges stay exact (merge.cpp).
+    if (is_light_pass(Pass(p)) && job.film().read_light_tracing(Pass(p), buf.data()))
+      add_channels(channels, buf, n,
+                   {std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".R",
+                    std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".G",
+                    std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".B"});
+  }
   std::vector<float> light(n * 3);
   if (job.film().read_light_tracing(light.data()))
     add_channels(channels, light, n, {"LightTracing.R", "LightTracing.G", "LightTracing.B"});

@@ -4,11 +4,14 @@
 // camera sample traced, fewer with adaptive sampling or a cut pass), so the count-weighted mean of
 // the parts is the mean over all their samples, exactly up to float rounding.
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "core/error.h"
+#include "core/film.h"
 #include "io/exr.h"
 
 namespace lt {
@@ -74,7 +77,7 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
 
   // Every part must carry its sample counts, and agree with the first on what was rendered.
   std::vector<Range> ranges;
-  std::vector<long long> samples(parts.size()), light_paths(parts.size(), 0);
+  std::vector<long long> samples(parts.size()), light_paths(parts.size(), 0), first_sample(parts.size());
   for (size_t i = 0; i < parts.size(); ++i) {
     const ExrImage& img = parts[i];
     const std::string& path = paths[i];
@@ -86,6 +89,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
                             "header attributes and the SampleCount.X channel that Lantern writes); not merged");
     samples[i] = std::atoll(s->second.c_str());
     std::vector<Range> own = parse_ranges(r->second, i, path);
+    first_sample[i] = own.empty() ? 0 : own.front().begin;
+    for (const Range& x : own) first_sample[i] = std::min(first_sample[i], x.begin);
     long long total = 0;
     for (const Range& x : own) total += x.end - x.begin;
     if (samples[i] <= 0)
@@ -137,9 +142,21 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   long long total_samples = 0, total_light_paths = 0;
   for (long long s : samples) total_samples += s;
   for (long long l : light_paths) total_light_paths += l;
-  enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB };
+  // Divided: a light pass read divided by its Colour (film.h), merged as the mean of Direct x
+  // Colour divided by the merged Colour; with BDPT each light pass's splat part comes apart
+  // (LightTracing.<pass>), weighted by the light paths as Combined's; First: the pixel's first
+  // sample's value (Position and the indices), from the part with the lowest sample index.
+  enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB, Divided, First, SplitMean };
   std::vector<Kind> kind(nc);
   std::vector<int> rgb_index(nc, -1);
+  // Divided channels: the channels of their pass and of its Colour, in RGB order.
+  std::vector<std::array<int, 3>> self_k(nc, {-1, -1, -1}), colour_k(nc, {-1, -1, -1});
+  std::vector<int> split_k(nc, -1);  // a light pass's LightTracing.<pass> channel
+  auto channel_index = [&](const std::string& name) {
+    for (size_t k = 0; k < nc; ++k)
+      if (ref.channels[k].name == name) return int(k);
+    return -1;
+  };
   for (size_t k = 0; k < nc; ++k) {
     const std::string& name = ref.channels[k].name;
     kind[k] = name == "SampleCount.X"               ? Count
@@ -152,6 +169,25 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         kind[k] = CombinedRGB, rgb_index[k] = c;
       else if (kind[k] == Variance && name == std::string("Variance.") + "RGB"[c])
         rgb_index[k] = c;
+    for (int pass = kFirstSummedPass; pass < int(Pass::Count); ++pass) {
+      const std::string prefix = std::string(exr_pass_name(Pass(pass))) + ".";
+      if (name.rfind(prefix, 0) != 0) continue;
+      const Pass colour = light_pass_color(Pass(pass));
+      if (Pass(pass) == Pass::Position || Pass(pass) == Pass::ObjectIndex || Pass(pass) == Pass::MaterialIndex)
+        kind[k] = First;
+      split_k[k] = channel_index("LightTracing." + name);
+      if (split_k[k] >= 0 && colour == Pass::Count) kind[k] = SplitMean;
+      if (colour == Pass::Count) continue;
+      for (int c = 0; c < 3; ++c) {
+        self_k[k][c] = channel_index(prefix + "RGB"[c]);
+        colour_k[k][c] = channel_index(std::string(exr_pass_name(colour)) + "." + "RGB"[c]);
+        if (name == prefix + "RGB"[c]) rgb_index[k] = c;
+      }
+      if (colour_k[k][0] < 0 || colour_k[k][1] < 0 || colour_k[k][2] < 0 || rgb_index[k] < 0)
+        throw InvalidArgument(paths[0] + ": " + name + " without its " + exr_pass_name(colour) +
+                              " channels, which it is divided by; not merged");
+      kind[k] = Divided;
+    }
   }
   int light_k[3] = {-1, -1, -1};
   for (size_t k = 0; k < nc; ++k)
@@ -159,6 +195,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       if (ref.channels[k].name == std::string("LightTracing.") + "RGB"[c]) light_k[c] = int(k);
   std::vector<std::vector<double>> acc(nc, std::vector<double>(n, 0.0));
   std::vector<double> count(n, 0.0);
+  // First: the sample index its value came from, per pixel (the lowest wins).
+  std::vector<long long> first_from(n, std::numeric_limits<long long>::max());
   // Per pixel and colour channel: running count-weighted camera mean and squared deviations.
   std::vector<double> cam_mean(n * 3, 0.0), cam_ss(n * 3, 0.0);
   for (size_t p = 0; p < np; ++p) {
@@ -190,6 +228,24 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         case Light:
           for (size_t i = 0; i < n; ++i) a[i] += double(light_paths[p]) * in[i];
           break;
+        case Divided: {
+          // The camera samples' part: Direct x Colour less the splats' (none where the part's
+          // Colour is zero: camera samples there met no closure of the kind).
+          const float* col = img.channels[colour_k[k][rgb_index[k]]].pixels.data();
+          const float* lt = split_k[k] >= 0 ? img.channels[split_k[k]].pixels.data() : nullptr;
+          for (size_t i = 0; i < n; ++i)
+            if (col[i] != 0) a[i] += double(c_p[i]) * (double(in[i]) * col[i] - (lt ? lt[i] : 0.0));
+          break;
+        }
+        case SplitMean: {
+          const float* lt = img.channels[split_k[k]].pixels.data();
+          for (size_t i = 0; i < n; ++i) a[i] += double(c_p[i]) * (double(in[i]) - lt[i]);
+          break;
+        }
+        case First:
+          for (size_t i = 0; i < n; ++i)
+            if (c_p[i] > 0 && first_sample[p] < first_from[i]) a[i] = in[i];
+          break;
         case Variance:
         case CombinedRGB:
           break;  // below
@@ -207,7 +263,10 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         cam_ss[3 * i + c] += ss + delta * delta * before * cp / after;
       }
     }
-    for (size_t i = 0; i < n; ++i) count[i] += c_p[i];
+    for (size_t i = 0; i < n; ++i) {
+      count[i] += c_p[i];
+      if (c_p[i] > 0) first_from[i] = std::min(first_from[i], first_sample[p]);
+    }
   }
 
   std::vector<ExrChannel> out;
@@ -220,10 +279,27 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         case Mean:
           v = count[i] > 0 ? a[i] / count[i] : 0.0;
           break;
+        case SplitMean:
+          v = (count[i] > 0 ? a[i] / count[i] : 0.0) + acc[split_k[k]][i] / double(total_light_paths);
+          break;
         case Count:
         case Depth:
+        case First:
           v = a[i];
           break;
+        case Divided: {
+          if (!(count[i] > 0)) break;
+          double raw[3], colour[3];
+          float o[3];
+          for (int c = 0; c < 3; ++c) {
+            raw[c] = acc[self_k[k][c]][i] / count[i];
+            if (split_k[self_k[k][c]] >= 0) raw[c] += acc[split_k[self_k[k][c]]][i] / double(total_light_paths);
+            colour[c] = acc[colour_k[k][c]][i] / count[i];
+          }
+          divide_even_color(raw, colour, o);
+          v = o[rgb_index[k]];
+          break;
+        }
         case Light:
           v = a[i] / double(total_light_paths);
           break;

@@ -23,14 +23,25 @@ constexpr int kTile = 16;
 constexpr int kAdaptiveTile = 4;
 // Readers see a new image at most this often while rendering (publishing copies the film).
 constexpr double kPublishInterval = 0.25;
+
+// The integrator's settings with what the kept passes ask it to fill.
+IntegratorSettings with_passes(const RenderSettings& s) {
+  IntegratorSettings is = s.integrator_settings;
+  unsigned light = 0, data = 0;
+  for (int p = int(Pass::DiffuseDirect); p <= int(Pass::Environment); ++p) light |= pass_bit(Pass(p));
+  for (int p = int(Pass::Position); p <= int(Pass::MaterialIndex); ++p) data |= pass_bit(Pass(p));
+  is.light_passes = (s.passes & light) != 0;
+  is.data_passes = (s.passes & data) != 0;
+  return is;
+}
 }  // namespace
 
 RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
     : settings_(s),
       camera_(scene.camera, s.width, s.height),
       filter_(s.filter, s.filter_width),
-      integrator_(make_integrator(s.integrator, RenderContext{scene, camera_, filter_, s.integrator_settings, s.x0,
-                                                              s.y0, s.x1 - s.x0, s.y1 - s.y0})),
+      integrator_(make_integrator(
+          s.integrator, RenderContext{scene, camera_, filter_, with_passes(s), s.x0, s.y0, s.x1 - s.x0, s.y1 - s.y0})),
       film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
       active_(size_t(film_.width()) * film_.height(), 1) {
   active_pixels_.store(active_.size());

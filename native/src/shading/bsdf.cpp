@@ -1267,6 +1267,47 @@ Spectrum Bsdf::albedo() const {
   return vmin(vmax(a, Spectrum(0.0f)), Spectrum(1.0f));
 }
 
+PassKind lobe_pass_kind(const Lobe& lobe, bool transmit) {
+  switch (lobe.type) {
+    case LobeType::Diffuse:
+    case LobeType::PrincipledDiffuse:
+    case LobeType::Sheen:
+    case LobeType::DiffuseToon:
+    case LobeType::Translucent:
+      return PassKind::Diffuse;  // Cycles' CLOSURE_IS_BSDF_DIFFUSE range
+    case LobeType::Dielectric:
+    case LobeType::DielectricBeckmann:
+      return transmit ? PassKind::Transmission : PassKind::Glossy;
+    default:
+      return PassKind::Glossy;
+  }
+}
+
+void Bsdf::eval_kinds(const Vec3& wo, const Vec3& wi, Spectrum* out) const {
+  out[0] = out[1] = out[2] = Spectrum(0.0f);
+  const bool transmit = wo.z * wi.z < 0;
+  for (int k = 0; k < count_; ++k) {
+    if (lobe_is_delta(lobes_[k]) || lobes_[k].type == LobeType::Transparent) continue;
+    const Spectrum f = lobe_eval(lobes_[k], wo, wi) * bump_term(lobes_[k], wo, wi);
+    if (is_finite(f)) out[int(lobe_pass_kind(lobes_[k], transmit))] += f;
+  }
+}
+
+void Bsdf::kind_colors(const Vec3& wo, Spectrum* out) const {
+  out[0] = out[1] = out[2] = Spectrum(0.0f);
+  for (int k = 0; k < count_; ++k) {
+    const Lobe& l = lobes_[k];
+    if (l.type == LobeType::Transparent) continue;
+    if (lobe_is_glass(l.type)) {
+      const float fr = fresnel_dielectric(std::abs(wo.z), wo.z < 0 ? 1 / lobe_eta(l) : lobe_eta(l));
+      out[int(PassKind::Glossy)] += l.weight * fr;
+      out[int(PassKind::Transmission)] += l.weight * std::max(1e-4f, 1 - fr);
+    } else {
+      out[int(lobe_pass_kind(l, false))] += l.weight;
+    }
+  }
+}
+
 uint32_t Bsdf::flags() const {
   uint32_t f = 0;
   for (int k = 0; k < count_; ++k) f |= lobe_flags(lobes_[k]);

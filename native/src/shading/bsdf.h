@@ -161,6 +161,13 @@ class Bsdf {
   bool sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const;
   // Directional albedo estimate of the lobes' weights (for the Albedo pass and Russian roulette).
   Spectrum albedo() const;
+  // Cycles' light passes (kernel/film/light_passes.h) split a first bounce by closure kind:
+  // eval()'s f per PassKind into out[3] (its sum is eval()'s f), and the kinds' colours as
+  // Cycles' surface_shader_diffuse / glossy / transmission (sums of closure weights). Cycles 3.4
+  // builds a Glass BSDF from a reflection closure (glossy, weight x F(wo)) and a refraction one
+  // (transmission, weight x max(1e-4, 1 - F(wo))): glass lobes split the same way.
+  void eval_kinds(const Vec3& wo, const Vec3& wi, Spectrum* out) const;
+  void kind_colors(const Vec3& wo, Spectrum* out) const;
   // The summed weights of the Transparent lobes: what a shadow ray passes (Cycles'
   // shader_bsdf_transparency).
   Spectrum transparency() const;
@@ -186,6 +193,16 @@ class Bsdf {
   float bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const;
   Spectrum lobe_value(const Lobe& lobe, const Vec3& wo, const Vec3& wi, float* pdf) const;
 };
+
+// The kind a Cycles light pass files a closure under (PassKind order: diffuse, glossy,
+// transmission); glass lobes are glossy when wi stays on wo's side, transmission otherwise.
+enum class PassKind : uint8_t { Diffuse = 0, Glossy = 1, Transmission = 2 };
+PassKind lobe_pass_kind(const Lobe& lobe, bool transmit);
+// The kind of a sampled delta lobe from its flags.
+inline PassKind flags_pass_kind(uint32_t flags) {
+  if (flags & kLobeDiffuse) return PassKind::Diffuse;
+  return (flags & kLobeTransmission) ? PassKind::Transmission : PassKind::Glossy;
+}
 
 // ---- single-lobe routines, exposed for the chi-square tests ----------------------------------
 Spectrum lobe_eval(const Lobe& lobe, const Vec3& wo, const Vec3& wi);

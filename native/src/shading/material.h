@@ -36,9 +36,13 @@ class Material {
   // A rough scalar for how bright the emission is, for picking lights by power.
   float emission_power_estimate() const { return emission_estimate_; }
   const Program& program() const { return program_; }
+  // Material.pass_index, for the Material Index pass.
+  float pass_index() const { return pass_index_; }
+  void set_pass_index(float v) { pass_index_ = v; }
 
  private:
   Program program_;
+  float pass_index_ = 0;
   bool emissive_ = false;
   float emission_estimate_ = 0;
 };
