@@ -188,8 +188,7 @@ class Bsdf {
 // ---- single-lobe routines, exposed for the chi-square tests ----------------------------------
 Spectrum lobe_eval(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
 float lobe_pdf(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
-bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out,
-                 bool below_shading = false);
+bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out, bool below_shading = false);
 uint32_t lobe_flags(const Lobe& lobe);
 
 // GGX (Trowbridge-Reitz) microfacet distribution with visible-normal sampling (Heitz 2018);
