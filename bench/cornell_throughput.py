@@ -168,7 +168,6 @@ def make_scene(args):
     lt.samples = args.samples
     lt.seed = 0
     lt.integrator = "PATH"
-    lt.threads = args.threads
     # Equal bounce limits and clamping (build_scenes sets Cycles' to the unbiased reference).
     lt.max_bounces = c.max_bounces
     lt.diffuse_bounces = c.diffuse_bounces

@@ -246,8 +246,6 @@ def configure(scene, engine, samples, seed, threads=2, integrator="PATH"):
         for name, cycles_name in _BOUNCES.items():
             if hasattr(lt, name):
                 setattr(lt, name, getattr(scene.cycles, cycles_name))
-        if hasattr(lt, "threads"):
-            lt.threads = threads
     else:
         raise ValueError("unknown engine %r" % engine)
 

@@ -97,6 +97,25 @@ def frame_size(rd):
     return width, height, border
 
 
+def frame_seed(scene):
+    """The seed, hashed with the frame (and subframe) when Animated Seed is on (as Cycles)."""
+    lt = scene.lantern
+    seed = lt.seed & 0xFFFFFFFF
+    if not lt.use_animated_seed:
+        return seed
+    return _mix32(_mix32(seed ^ _mix32(scene.frame_current & 0xFFFFFFFF)) ^ int(scene.frame_subframe * 65536))
+
+
+def _mix32(x):
+    """A 32-bit integer hash (Wellons' lowbias32): nearby frames get unrelated seeds."""
+    x &= 0xFFFFFFFF
+    x ^= x >> 16
+    x = (x * 0x7FEB352D) & 0xFFFFFFFF
+    x ^= x >> 15
+    x = (x * 0x846CA68B) & 0xFFFFFFFF
+    return x ^ (x >> 16)
+
+
 def render_settings(scene, width, height, border):
     lt = scene.lantern
     cycles = getattr(scene, "cycles", None)
@@ -110,7 +129,7 @@ def render_settings(scene, width, height, border):
         filter_type, filter_width = default.filter, default.filter_width
     return dict(
         width=width, height=height, border=border,
-        samples=lt.samples, seed=lt.seed & 0xFFFFFFFF, sample_offset=lt.sample_offset,
+        samples=lt.samples, seed=frame_seed(scene), sample_offset=lt.sample_offset,
         time_limit=lt.time_limit, noise_target=lt.noise_target,
         adaptive=int(lt.adaptive and lt.noise_target > 0), min_samples=lt.min_samples,
         # The enum properties' identifiers are the core's names (properties.py).
@@ -119,7 +138,8 @@ def render_settings(scene, width, height, border):
         glossy_bounces=lt.glossy_bounces, transmission_bounces=lt.transmission_bounces,
         transparent_bounces=lt.transparent_bounces,
         clamp_direct=lt.clamp_direct, clamp_indirect=lt.clamp_indirect,
-        threads=lt.threads,
+        # Blender's Performance > Threads: Auto-detect resolves to the cores, or to `blender -t N`.
+        threads=scene.render.threads,
         filter=filter_type, filter_width=filter_width,
         transparent_background=int(scene.render.film_transparent),
         max_camera_length=lt.max_camera_length, max_light_length=lt.max_light_length,

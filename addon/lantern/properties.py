@@ -92,6 +92,12 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
                     "noise exactly)",
         default=0, min=0,
     )
+    use_animated_seed: BoolProperty(
+        name="Animated Seed",
+        description="Use a different seed for each frame, so that an animation's noise changes "
+                    "from frame to frame (as Cycles' Animated Seed: the seed is hashed with the frame)",
+        default=False,
+    )
     sample_offset: IntProperty(
         name="Sample Offset",
         description="Number of samples to skip when starting the render: a render of samples "
@@ -236,12 +242,6 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
         description="Maximum number of volume scattering bounces (Cycles' default 0 is single "
                     "scattering: direct light only inside volumes); more is brighter, more "
                     "accurate in dense media and slower",
-        default=0, min=0, max=1024,
-    )
-    threads: IntProperty(
-        name="Threads",
-        description="Number of render threads: 0 uses all cores; fewer leaves the machine "
-                    "responsive but renders slower",
         default=0, min=0, max=1024,
     )
 

@@ -139,7 +139,9 @@ class LANTERN_RENDER_PT_sampling_advanced(LanternButtonsPanel, Panel):
     def draw(self, context):
         col = _split(self.layout).column(align=True)
         col.prop(context.scene.lantern, "sample_pattern")
-        col.prop(context.scene.lantern, "seed")
+        row = col.row(align=True)
+        row.prop(context.scene.lantern, "seed")
+        row.prop(context.scene.lantern, "use_animated_seed", text="", icon='TIME')
         col.prop(context.scene.lantern, "sample_offset")
 
 
@@ -252,7 +254,13 @@ class LANTERN_RENDER_PT_performance_threads(LanternButtonsPanel, Panel):
     bl_parent_id = "LANTERN_RENDER_PT_performance"
 
     def draw(self, context):
-        _split(self.layout).prop(context.scene.lantern, "threads")
+        # Blender's own setting (as Cycles shows it), which `blender -t N` sets.
+        layout = _split(self.layout)
+        rd = context.scene.render
+        layout.prop(rd, "threads_mode")
+        sub = layout.column(align=True)
+        sub.enabled = rd.threads_mode == 'FIXED'
+        sub.prop(rd, "threads")
 
 
 # ---- view layer --------------------------------------------------------------------------------

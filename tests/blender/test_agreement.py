@@ -138,15 +138,9 @@ def test_alpha_mapped_leaf_cards_agree_with_cycles(integrator, scene_factory, ou
 # mean 0.978 of Cycles' with steep bumps; 0.999 with the same scene unbumped).
 BDPT_NORMAL_MAPS = pytest.mark.xfail(strict=True, reason="open: BDPT light vertices tilt bumped normals for "
                                      "the light's direction, not the viewer's")
-# A departure of under 0.1 % that the Sobol-Owen pattern's lower noise made visible (issue 14),
-# not from the pattern: normal_mapped's path-traced mean is 0.36280 with either pattern (three
-# seed pairs each) against Cycles' 0.36308 (0.9992 at 0.02 % standard error). Strict, so a fix
-# shows. (bsdf_zoo's sphere in tile column 4 was Multiscatter GGX, now in bsdf_zoo_departures.)
-PATH_NORMAL_MAPS = pytest.mark.xfail(strict=True, reason="open: path-traced normal map 0.08 % below Cycles")
 
 
-@pytest.mark.parametrize("integrator", [pytest.param("PATH", marks=PATH_NORMAL_MAPS),
-                                        pytest.param("BIDIRECTIONAL", marks=BDPT_NORMAL_MAPS)])
+@pytest.mark.parametrize("integrator", ["PATH", pytest.param("BIDIRECTIONAL", marks=BDPT_NORMAL_MAPS)])
 def test_normal_mapped_scene_agrees_with_cycles(integrator, scene_factory, outdir):
     """Tangent-space normal maps from an image (scenes: normal_mapped; MikkTSpace tangents of the
     active UV map, Normal Map into Principled) under a low sun: per tile and in the image mean."""

@@ -1329,6 +1329,44 @@ TEST(BsdfValues, CyclesClosedForms) {
   }
 }
 
+// Cycles' microfacet sampling keeps reflections below the shading normal (Bsdf::sample_below_shading):
+// a normal bent 30 degrees from a view 30 degrees above the surface sends about 2.4 % of GGX samples
+// there. Off (BDPT): none below. On (path tracing): flagged, eval() zero, and weighted by Cycles'
+// G1(wi) (with cos^2) alone, f |cos| / pdf = G1(wi).
+TEST(BsdfSampling, BelowShadingSamplesAreCyclesOnlyWhenAsked) {
+  const float tilt = 30 * kDeg, view = 30 * kDeg, alpha = 0.36f;
+  const Vec3 x(std::cos(tilt), 0, -std::sin(tilt)), n(std::sin(tilt), 0, std::cos(tilt));
+  const Vec3 view_dir(0, -std::cos(view), std::sin(view));
+  const Vec3 wo(dot(view_dir, x), view_dir.y, dot(view_dir, n));
+  for (bool on : {false, true}) {
+    Bsdf b;
+    b.add(glossy(alpha));
+    b.sample_below_shading(on);
+    Pcg32 rng(3, 9);
+    auto u01 = [&] { return float(rng.next_u32() >> 8) * 0x1p-24f; };
+    int below = 0, n_samples = 20000;
+    for (int k = 0; k < n_samples; ++k) {
+      BsdfSample s;
+      if (!b.sample(wo, u01(), Vec2{u01(), u01()}, &s)) continue;
+      if (s.wi.z >= 0) {
+        EXPECT_EQ(s.flags & kLobeBelowShading, 0u);
+        continue;
+      }
+      ++below;
+      ASSERT_NE(s.flags & kLobeBelowShading, 0u);
+      float pdf = -1;
+      EXPECT_TRUE(is_black(b.eval(wo, s.wi, &pdf)));
+      const double c2 = double(s.wi.z) * s.wi.z;
+      const double g1 = 2 / (1 + std::sqrt(1 + alpha * alpha * (1 - c2) / c2));
+      EXPECT_NEAR(s.f.x * std::abs(s.wi.z) / s.pdf, g1, 1e-4 * g1);
+    }
+    if (on)
+      EXPECT_GT(below, n_samples / 100);
+    else
+      EXPECT_EQ(below, 0);
+  }
+}
+
 }  // namespace
 }  // namespace lt
 

@@ -287,9 +287,10 @@ Spectrum principled_diffuse_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
 // ---- microfacet reflection (GGX / Beckmann glossy, SpecularGGX, glass's reflection) ------------
 // f = D G1(o) G1(i) / (4 cos_o cos_i) (Cycles' separable Smith G), pdf = D_o(m) / (4 o.m)
 // = G1(o) D / (4 cos_o). Both from the half vector of (o, i) so sample() and pdf() agree.
-float micro_reflect(const Vec3& o, const Vec3& i, const Micro& mf, float* pdf, float* cos_oh) {
+// below: also for i under the shading normal (Cycles' sampling extension, Bsdf::sample_below_shading).
+float micro_reflect(const Vec3& o, const Vec3& i, const Micro& mf, float* pdf, float* cos_oh, bool below = false) {
   *pdf = 0;
-  if (i.z <= 0 || o.z <= 0) return 0;
+  if ((i.z <= 0 && !(below && i.z < 0)) || o.z <= 0) return 0;
   Vec3 h = o + i;
   float len = length(h);
   if (!(len > 0)) return 0;
@@ -300,12 +301,12 @@ float micro_reflect(const Vec3& o, const Vec3& i, const Micro& mf, float* pdf, f
   return 0.25f * d * micro_g1_f(mf, o) * micro_g1_f(mf, i);
 }
 
-bool micro_sample_reflect(const Vec3& o, const Micro& mf, Vec2 u, Vec3* i) {
+bool micro_sample_reflect(const Vec3& o, const Micro& mf, Vec2 u, Vec3* i, bool below = false) {
   Vec3 m = micro_sample(mf, o, u);
   float c = dot(o, m);
   if (!(c > 0)) return false;
   *i = normalize(m * (2 * c) - o);
-  return i->z > 0 && is_finite(*i);
+  return (i->z > 0 || (below && i->z < 0)) && is_finite(*i);
 }
 
 // ---- microfacet refraction (Walter et al. 2007, eq. 21 without Fresnel and without 1/eta^2) ---
@@ -971,7 +972,7 @@ float lobe_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi) {
   return pdf;
 }
 
-bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out) {
+bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out, bool below_shading) {
   if (wo.z == 0 || !is_finite(wo)) return false;
   const bool flip = wo.z < 0;
   const Vec3 o = flip ? flip_z(wo) : wo;
@@ -1074,7 +1075,18 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
       case LobeType::GlossyGGX:
       case LobeType::SpecularGGX:
       case LobeType::GlossyBeckmann:
-        if (!micro_sample_reflect(o, lobe_micro(l), u, &s.wi)) return false;
+        if (!micro_sample_reflect(o, lobe_micro(l), u, &s.wi, below_shading)) return false;
+        if (s.wi.z < 0) {  // the sampling routine's f and pdf, which eval() does not have here
+          float cos_oh = 0;
+          const float v = micro_reflect(o, s.wi, lobe_micro(l), &s.pdf, &cos_oh, true);
+          s.f = l.weight * v;
+          if (l.type == LobeType::SpecularGGX) s.f *= fresnel_principled(l.f0, l.eta, cos_oh);
+          s.flags |= kLobeBelowShading;
+          if (flip) s.wi = flip_z(s.wi);
+          if (!sanitize(&s)) return false;
+          *out = s;
+          return true;
+        }
         break;
       case LobeType::Dielectric:
       case LobeType::DielectricBeckmann: {
@@ -1082,8 +1094,18 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         float eta = lobe_eta(l);
         float fr = fresnel_dielectric(o.z, eta);
         if (u_extra < fr) {
-          if (!micro_sample_reflect(o, mf, u, &s.wi)) return false;
+          if (!micro_sample_reflect(o, mf, u, &s.wi, below_shading)) return false;
           s.flags = kLobeGlossy | kLobeReflection;
+          if (s.wi.z < 0) {  // Cycles' glass reflects with its GGX reflection closure: as above
+            const float v = micro_reflect(o, s.wi, mf, &s.pdf, nullptr, true);
+            s.f = l.weight * (fr * v);
+            s.pdf *= fr;
+            s.flags |= kLobeBelowShading;
+            if (flip) s.wi = flip_z(s.wi);
+            if (!sanitize(&s)) return false;
+            *out = s;
+            return true;
+          }
         } else {
           if (!micro_sample_refract(o, mf, eta, u, &s.wi)) return false;
           s.flags = kLobeGlossy | kLobeTransmission;
@@ -1201,7 +1223,7 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
   if (chosen < 0) return false;
   float u_extra = clamp((u_lobe - cdf_chosen) / p[chosen], 0.0f, kOneMinusEpsilon);
   BsdfSample s;
-  if (!lobe_sample(lobes_[chosen], wo, u, u_extra, &s)) return false;
+  if (!lobe_sample(lobes_[chosen], wo, u, u_extra, &s, below_shading_)) return false;
   if (s.flags & kLobeSpecular) {
     s.pdf *= p[chosen];
   } else {

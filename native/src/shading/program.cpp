@@ -189,7 +189,14 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
       frame->smooth = m.ctx->N;
       if (!m.has_shading_normal) frame->n = m.ctx->N;
     }
-    if (m.has_shading_normal) frame->n = m.shading_normal;
+    if (m.has_shading_normal) {
+      frame->n = m.shading_normal;
+    } else if (bsdf && bsdf->count() > 0) {
+      // Cycles' closure nodes pass an unlinked Normal (sd->N) through ensure_valid_reflection too:
+      // a smooth-shaded silhouette's normal tilts so that its mirror direction leaves the surface.
+      const Vec3 valid = ensure_valid_reflection(m.ctx->Ng, m.ctx->I, frame->n);
+      if (is_finite(valid)) frame->n = valid;
+    }
     frame->tangent = m.shading_tangent;
   }
   return m.emitted;
