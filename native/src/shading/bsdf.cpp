@@ -1097,8 +1097,9 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
           if (!micro_sample_reflect(o, mf, u, &s.wi, below_shading)) return false;
           s.flags = kLobeGlossy | kLobeReflection;
           if (s.wi.z < 0) {  // Cycles' glass reflects with its GGX reflection closure: as above
-            const float v = micro_reflect(o, s.wi, mf, &s.pdf, nullptr, true);
-            s.f = l.weight * (fr * v);
+            float cos_oh = 1;
+            const float v = micro_reflect(o, s.wi, mf, &s.pdf, &cos_oh, true);
+            s.f = l.weight * glass_reflection_color(l, eta, cos_oh) * (fr * v);
             s.pdf *= fr;
             s.flags |= kLobeBelowShading;
             if (flip) s.wi = flip_z(s.wi);
