@@ -10,6 +10,7 @@ from gpu_extras.presets import draw_texture_2d
 from . import core
 from .export import export_scene
 from .export.camera import export_camera
+from .scene_sync import SceneSync
 from .viewport import ViewportSession, view_camera, with_camera_lens
 
 REDRAW_SECONDS = 0.05      # while a viewport refines, it is redrawn this often
@@ -405,6 +406,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
 
     def __init__(self):
         self.session = None
+        self._kept = None  # final renders with Persistent Data: the scene kept between frames
         self._texture = None
         self._texture_version = -1
 
@@ -414,12 +416,18 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         # (core.Scene / core.Render __del__) once nothing refers to them.
         try:
             session = self.session
+            self._close_kept()
         except (AttributeError, ReferenceError):
             return
         if session is not None:
             _REFINING.discard(session)
             _REFINING_ENGINES.pop(session, None)
             session.close()
+
+    def _close_kept(self):
+        if self._kept is not None:
+            self._kept.close()
+            self._kept = None
 
     def update_render_passes(self, scene=None, renderlayer=None):
         for name, _, channels, chan_id, kind, _ in enabled_passes(scene, renderlayer):
@@ -438,14 +446,26 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         def report(level, message):
             warnings.append(message)
             self.report(level, message)
+        camera = self.camera_override or depsgraph.scene_eval.camera
+        persistent = scene.render.use_persistent_data and not self.is_preview and camera is not None
         try:
-            core_scene = core.Scene()
             t0 = time.monotonic()
-            summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override)
-            if self.test_break():
-                return
-            self.update_stats("", "Building acceleration structures")
-            core_scene.commit()
+            if persistent:
+                # Persistent Data (as Cycles): the scene stays between frames; each frame applies
+                # the depsgraph's updates to it (scene_sync.py).
+                if self._kept is None:
+                    self._kept = SceneSync(report)
+                self._kept.report = report
+                self._kept.sync_scene(depsgraph, camera)
+                core_scene, summary = self._kept.scene, dict(self._kept.summary)
+            else:
+                self._close_kept()
+                core_scene = core.Scene()
+                summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override)
+                if self.test_break():
+                    return
+                self.update_stats("", "Building acceleration structures")
+                core_scene.commit()
             stats = core_scene.stats()
             summary.update(emissive_triangles=stats["emissive_triangles"],
                             emissive_objects=stats["emissive_instances"],
@@ -476,6 +496,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             rw, rh = render.region_size
             text = scene_report(summary, render.settings, warnings, st, rw * rh)
             LAST_RENDER["report"] = text
+            LAST_RENDER["scene_sync"] = dict(self._kept.counters) if persistent else None
             print(text)
             self.report({'INFO'}, text)
         except core.LanternError as e:
@@ -484,7 +505,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         finally:
             if render is not None:
                 render.close()
-            if core_scene is not None:
+            if core_scene is not None and not persistent:
                 core_scene.close()
 
     def _render_views(self, depsgraph, core_scene, settings, view_layer, border, report):

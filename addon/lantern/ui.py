@@ -263,6 +263,15 @@ class LANTERN_RENDER_PT_performance_threads(LanternButtonsPanel, Panel):
         sub.prop(rd, "threads")
 
 
+class LANTERN_RENDER_PT_performance_final_render(LanternButtonsPanel, Panel):
+    bl_label = "Final Render"
+    bl_parent_id = "LANTERN_RENDER_PT_performance"
+
+    def draw(self, context):
+        # Blender's own setting, as Cycles shows it: the scene stays between animation frames.
+        _split(self.layout).prop(context.scene.render, "use_persistent_data", text="Persistent Data")
+
+
 # ---- view layer --------------------------------------------------------------------------------
 
 class LANTERN_VIEWLAYER_PT_passes(LanternButtonsPanel, Panel):
@@ -532,6 +541,7 @@ classes = (
     LANTERN_RENDER_PT_film_pixel_filter,
     LANTERN_RENDER_PT_performance,
     LANTERN_RENDER_PT_performance_threads,
+    LANTERN_RENDER_PT_performance_final_render,
     LANTERN_VIEWLAYER_PT_passes,
     LANTERN_VIEWLAYER_PT_passes_data,
     LANTERN_VIEWLAYER_PT_passes_light,

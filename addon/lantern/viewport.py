@@ -13,11 +13,10 @@ Edits and what they cost (lantern.h, incremental edits):
 import time
 import weakref
 
-import bpy
 import numpy as np
 
 from . import core
-from .export import export_lights, export_scene, instance_key
+from .scene_sync import SceneSync
 
 # Progressive stages after each change: one sample at a reduced resolution, then the full
 # resolution up to the viewport's sample count. The reduction is the smallest of DIVIDERS (per
@@ -27,9 +26,6 @@ DIVIDERS = (2, 4, 8, 16)
 START_DIVIDER = 4
 START_SECONDS = 0.03
 HALF_FLOAT_MAX = 65504.0  # larger values would become Inf in the RGBA16F texture
-
-_GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
-_TRACED_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
 
 
 def view_camera(region_data, width, height):
@@ -95,15 +91,13 @@ def _same_camera(a, b):
 SESSIONS = weakref.WeakSet()
 
 
-class ViewportSession:
-    """One viewport's core scene and its progressive render. Not thread-bound: call from
-    view_update / view_draw (Blender's main thread)."""
+class ViewportSession(SceneSync):
+    """One viewport's core scene (kept by SceneSync) and its progressive render. Not
+    thread-bound: call from view_update / view_draw (Blender's main thread)."""
 
     def __init__(self, report):
+        super().__init__(report)
         SESSIONS.add(self)
-        self.report = report
-        self.scene = None
-        self.state = {}
         self.render = None
         self.stage = 0
         self.divider = START_DIVIDER
@@ -121,107 +115,16 @@ class ViewportSession:
         self._shown = None         # (render serial, samples done) the pixels come from
         self.changed_at = time.monotonic()
         self.first_image_seconds = None   # from the last change to the first image of it
-        # What each kind of update did (tests and benchmarks read these).
-        self.counters = dict(full_exports=0, transform_updates=0, material_updates=0,
-                             light_updates=0, restarts=0)
-
-    # -- scene ---------------------------------------------------------------------------------
+        self.counters["restarts"] = 0
 
     def sync(self, depsgraph):
         """Brings the core scene up to date with the depsgraph (view_update)."""
         try:
-            if self.scene is None or not self._incremental(depsgraph):
-                self._full_export(depsgraph)
+            self.sync_scene(depsgraph)
             self.error = None
         except core.LanternError as e:
             self.error = str(e)
             self.report({'ERROR'}, self.error)
-            self._close_scene()
-
-    def _full_export(self, depsgraph):
-        self._close_scene()
-        self.scene = core.Scene()
-        self.state = {}
-        export_scene(depsgraph, self.scene, self.report, state=self.state)
-        self.scene.commit()
-        self.counters["full_exports"] += 1
-        self.camera = None  # the new scene has none yet
-        self._changed()
-
-    def _incremental(self, depsgraph):
-        """Applies the depsgraph's updates in place; False when they need a new scene."""
-        transforms = lights = False
-        materials = []
-        for u in depsgraph.updates:
-            idb = u.id
-            if isinstance(idb, bpy.types.Object):
-                if u.is_updated_geometry and idb.type in _TRACED_TYPES | {'VOLUME'}:
-                    return False
-                # Any object update: compare every instance's matrix, and the set of instances
-                # (an object hidden, shown or added needs a new scene).
-                transforms = True
-                lights = lights or idb.type == 'LIGHT'
-            elif isinstance(idb, bpy.types.Material):
-                materials.append(idb)
-            elif isinstance(idb, bpy.types.Light):
-                lights = True
-            elif isinstance(idb, bpy.types.ShaderNodeTree):
-                # A node group (or an embedded tree) changed: re-translate every material.
-                materials.extend(m for m in bpy.data.materials if m.node_tree is not None)
-            elif isinstance(idb, (bpy.types.World, bpy.types.Image, bpy.types.Collection)
-                            + _GEOMETRY_TYPES):
-                return False
-        # Scene updates (render settings) need nothing here: update() restarts the render when
-        # the settings it is given change.
-        if not (transforms or lights or materials):
-            return True
-        moves = self._moved_instances(depsgraph) if transforms else []
-        if moves is None:
-            return False
-        if not (moves or lights or materials):
-            return True  # e.g. a selection change: nothing to render again
-        self._stop()
-        instances = self.state["instances"]
-        for key, core_id, matrix in moves:
-            self.scene.set_instance_transform(core_id, matrix)
-            instances[key] = (core_id, matrix)
-        if moves:
-            self.counters["transform_updates"] += 1
-        exporter = self.state["materials"]
-        for m in materials:
-            if m.original.as_pointer() in exporter.ids and not exporter.update(m):
-                return False
-        if materials:
-            self.counters["material_updates"] += 1
-        if lights:
-            self.scene.clear_lights()
-            export_lights(depsgraph, self.scene, self.report)
-            self.counters["light_updates"] += 1
-        self.scene.commit()
-        self._changed()
-        return True
-
-    def _moved_instances(self, depsgraph):
-        """[(key, core id, new matrix)] of the exported instances that moved, or None when the
-        set of instances changed (a new scene is needed)."""
-        instances = self.state["instances"]
-        seen = 0
-        moves = []
-        for inst in depsgraph.object_instances:
-            if not inst.show_self or inst.object.type not in _TRACED_TYPES:
-                continue
-            key = instance_key(inst)
-            entry = instances.get(key)
-            if entry is None:
-                if inst.object.type == 'MESH':
-                    return None  # an instance that was not exported
-                continue
-            seen += 1
-            core_id, old = entry
-            matrix = np.array(inst.matrix_world, dtype=np.float32)
-            if core_id is not None and not np.array_equal(matrix, old):
-                moves.append((key, core_id, matrix))
-        return moves if seen == len(instances) else None  # else: an exported instance is gone
 
     # -- view and render -----------------------------------------------------------------------
 
@@ -235,6 +138,9 @@ class ViewportSession:
             self.camera = camera
             self.size = (width, height)
             self._changed()
+
+    def _before_edit(self):
+        self._stop()
 
     def _changed(self):
         self.dirty = True
@@ -310,11 +216,13 @@ class ViewportSession:
             self.render = None
             self._shown = None
 
+    def _full_export(self, depsgraph, camera_object):
+        super()._full_export(depsgraph, camera_object)
+        self.camera = None  # the new scene has none yet
+
     def _close_scene(self):
         self._stop()
-        if self.scene is not None:
-            self.scene.close()
-            self.scene = None
+        super()._close_scene()
         self.dirty = True
 
     def close(self):

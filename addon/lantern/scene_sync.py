@@ -1,0 +1,152 @@
+"""One core scene kept up to date with a depsgraph: a full export first, then each depsgraph's
+updates applied as incremental edits. The viewport keeps one per view; final renders keep one
+between frames when the scene's Persistent Data is on (Render Properties > Performance, as Cycles),
+so that an animation whose frames only move objects, edit materials or change lights re-exports
+nothing (lantern.h, incremental edits).
+"""
+
+import bpy
+import numpy as np
+
+from . import core
+from .export import export_lights, export_scene, instance_key
+from .export.camera import camera_table, export_camera
+
+_GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
+_TRACED_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
+
+
+def _key(obj):
+    return None if obj is None else obj.original.as_pointer()
+
+
+class SceneSync:
+    def __init__(self, report):
+        self.report = report
+        self.scene = None
+        self.state = {}
+        self.camera_object = None  # final renders: the camera the scene was exported with
+        self.summary = {}          # export_scene's summary of the last full export
+        # What each kind of update did (tests and benchmarks read these).
+        self.counters = dict(full_exports=0, transform_updates=0, material_updates=0,
+                             light_updates=0)
+
+    def sync_scene(self, depsgraph, camera_object=None):
+        """Brings the core scene up to date with the depsgraph, committed. camera_object: the
+        render camera (final renders), exported with the scene; None: the caller sets the
+        camera (the viewport). Raises core.LanternError (the scene is then closed)."""
+        try:
+            if self.scene is None or _key(camera_object) != _key(self.camera_object) \
+                    or not self._incremental(depsgraph, camera_object):
+                self._full_export(depsgraph, camera_object)
+        except core.LanternError:
+            self._close_scene()
+            raise
+
+    def _before_edit(self):
+        """Called before the first edit of a committed scene (the viewport stops its render)."""
+
+    def _changed(self):
+        """Called after the scene changed."""
+
+    def _full_export(self, depsgraph, camera_object):
+        self._close_scene()
+        self.scene = core.Scene()
+        self.state = {}
+        self.camera_object = camera_object
+        self.summary = export_scene(depsgraph, self.scene, self.report, camera_object=camera_object,
+                                    state=self.state)
+        self.scene.commit()
+        self.counters["full_exports"] += 1
+        self._changed()
+
+    def _incremental(self, depsgraph, camera_object):
+        """Applies the depsgraph's updates in place; False when they need a new scene."""
+        transforms = lights = False
+        materials = []
+        for u in depsgraph.updates:
+            idb = u.id
+            if isinstance(idb, bpy.types.Object):
+                if u.is_updated_geometry and idb.type in _TRACED_TYPES | {'VOLUME'}:
+                    return False
+                # Any object update: compare every instance's matrix, and the set of instances
+                # (an object hidden, shown or added needs a new scene).
+                transforms = True
+                lights = lights or idb.type == 'LIGHT'
+            elif isinstance(idb, bpy.types.Material):
+                materials.append(idb)
+            elif isinstance(idb, bpy.types.Light):
+                lights = True
+            elif isinstance(idb, bpy.types.ShaderNodeTree):
+                # A node group (or an embedded tree) changed: re-translate every material.
+                materials.extend(m for m in bpy.data.materials if m.node_tree is not None)
+            elif isinstance(idb, (bpy.types.World, bpy.types.Image, bpy.types.Collection)
+                            + _GEOMETRY_TYPES):
+                return False
+        exporter = self.state["materials"]
+        if camera_object is not None:
+            # Texture Coordinate's Camera and Window read the camera: a moved camera
+            # re-translates the materials.
+            table = camera_table(depsgraph, camera_object)
+            if table != exporter.camera:
+                exporter.camera = table
+                materials = [m for m in bpy.data.materials if m.original.as_pointer() in exporter.ids]
+        # Scene updates (render settings) need nothing here: renders take their settings anew.
+        if not (transforms or lights or materials or camera_object is not None):
+            return True
+        moves = self._moved_instances(depsgraph) if transforms else []
+        if moves is None:
+            return False
+        if not (moves or lights or materials or camera_object is not None):
+            return True  # e.g. a selection change: nothing to render again
+        self._before_edit()
+        if camera_object is not None:
+            export_camera(depsgraph, self.scene, self.report, camera_object)
+        instances = self.state["instances"]
+        for key, core_id, matrix in moves:
+            self.scene.set_instance_transform(core_id, matrix)
+            instances[key] = (core_id, matrix)
+        if moves:
+            self.counters["transform_updates"] += 1
+        for m in materials:
+            if m.original.as_pointer() in exporter.ids and not exporter.update(m):
+                return False
+        if materials:
+            self.counters["material_updates"] += 1
+        if lights:
+            self.scene.clear_lights()
+            export_lights(depsgraph, self.scene, self.report)
+            self.counters["light_updates"] += 1
+        self.scene.commit()
+        self._changed()
+        return True
+
+    def _moved_instances(self, depsgraph):
+        """[(key, core id, new matrix)] of the exported instances that moved, or None when the
+        set of instances changed (a new scene is needed)."""
+        instances = self.state["instances"]
+        seen = 0
+        moves = []
+        for inst in depsgraph.object_instances:
+            if not inst.show_self or inst.object.type not in _TRACED_TYPES:
+                continue
+            key = instance_key(inst)
+            entry = instances.get(key)
+            if entry is None:
+                if inst.object.type == 'MESH':
+                    return None  # an instance that was not exported
+                continue
+            seen += 1
+            core_id, old = entry
+            matrix = np.array(inst.matrix_world, dtype=np.float32)
+            if core_id is not None and not np.array_equal(matrix, old):
+                moves.append((key, core_id, matrix))
+        return moves if seen == len(instances) else None  # else: an exported instance is gone
+
+    def _close_scene(self):
+        if self.scene is not None:
+            self.scene.close()
+            self.scene = None
+
+    def close(self):
+        self._close_scene()
