@@ -9,6 +9,7 @@ from gpu_extras.presets import draw_texture_2d
 
 from . import core
 from .export import export_scene
+from .export.motion import collect as collect_motion
 from .export.camera import export_camera
 from .viewport import ViewportSession, view_camera, with_camera_lens
 
@@ -387,7 +388,17 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         try:
             core_scene = core.Scene()
             t0 = time.monotonic()
-            summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override)
+            # Motion blur (final renders; previews and the viewport render without it, as Cycles'):
+            # the shutter's sub-frames sampled first, the scene exported at the shutter's centre,
+            # then the frame being rendered restored.
+            motion, restore = (None, None) if self.is_preview else \
+                collect_motion(self, depsgraph, self.camera_override, report)
+            try:
+                summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override,
+                                       motion=motion)
+            finally:
+                if restore is not None:
+                    restore()
             if self.test_break():
                 return
             self.update_stats("", "Building acceleration structures")
@@ -414,6 +425,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:
+                if summary.get("camera_motion"):
+                    report({'WARNING'}, "Multiview and stereo renders take each view's camera at the "
+                                        "shutter's centre: camera motion blur is off (objects still blur)")
                 render, st = self._render_views(depsgraph, core_scene, settings, view_layer, border, report)
             else:
                 render = core.Render(core_scene, settings)
