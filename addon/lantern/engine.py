@@ -249,6 +249,11 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
         lines.append(text)
     else:
         lines.append("media: none")
+    if "motion_instances" in summary:  # motion blur asked for (final renders)
+        lines.append("motion blur: %d moving object(s), %d deforming mesh(es), camera %s (counted by the core)"
+                     % (summary["motion_instances"], summary["motion_meshes"],
+                        "moving, %d steps" % summary["camera_motion_steps"] if summary["camera_motion_steps"]
+                        else "still"))
     if s.noise_target > 0 or s.time_limit > 0:
         halting = ["%d samples" % s.samples]
         if s.time_limit > 0:
@@ -408,6 +413,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                             emissive_objects=stats["emissive_instances"],
                             image_bytes=stats["image_bytes"], image_texels=stats["image_texels"],
                             byte_images=stats["byte_images"])
+            if motion is not None:
+                summary.update(motion_instances=stats["motion_instances"], motion_meshes=stats["motion_meshes"],
+                               camera_motion_steps=stats["camera_motion_steps"])
             if summary.get("world") == "nodes":
                 summary["world"] = ("nodes, sampling map %dx%d" % (stats["world_map_width"], stats["world_map_height"])
                                     if stats["world_map_width"] else "nodes, constant")
