@@ -1629,19 +1629,21 @@ def build_motion_blur(scene, blur=True):
     defaults: 3 motion steps per object): a box translating 0.8 m a frame, a box spinning 120
     degrees a frame about its vertical axis (60 degrees between motion steps: a linear blend of
     the matrices would shrink it by up to 13 %), a grid bulging by an animated shape key
-    (deformation blur) and a camera panning 8 degrees a frame (a 6-pixel streak), under an area light and a dim world. blur=False:
-    the same scene with motion blur off (bench/)."""
+    (deformation blur) and a camera panning 8 degrees a frame (a 6-pixel streak), under an area
+    light and a dim world. blur=False: the same scene with motion blur off (bench/)."""
     set_world(scene, (0.05, 0.05, 0.05), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
     assign(floor, diffuse("FloorGrey", (0.6, 0.6, 0.6)))
     wall = add_object(scene, "Wall", mesh_plane("Wall", 10.0, 4.0), (0, 2.0, 2.0), (90, 0, 0))
     assign(wall, diffuse("WallWhite", WHITE))
-    mover = add_object(scene, "Translating", mesh_box("Translating", (0.5, 0.5, 0.5)), (-1.2, 0.0, 0.0))
+    mover = add_object(scene, "Translating", mesh_box("Translating", (0.5, 0.5, 0.5)),
+                       (-1.2, 0.0, 0.0))
     assign(mover, diffuse("MoverRed", RED))
     _keyframes(mover, "location", [(-1.6, 0.0, 0.0), (0.0, 0.0, 0.0)])
     spinner = add_object(scene, "Rotating", mesh_box("Rotating", (1.0, 0.25, 0.6)), (1.0, 0.6, 0.0))
     assign(spinner, diffuse("SpinnerGreen", GREEN))
-    _keyframes(spinner, "rotation_euler", [(0.0, 0.0, math.radians(-120.0)), (0.0, 0.0, math.radians(120.0))])
+    _keyframes(spinner, "rotation_euler",
+               [(0.0, 0.0, math.radians(-120.0)), (0.0, 0.0, math.radians(120.0))])
     bm = _bmesh_with_uvs()
     bmesh.ops.create_grid(bm, x_segments=12, y_segments=12, size=0.5, calc_uvs=True)
     grid = add_object(scene, "Deforming", _smooth(_mesh("Deforming", bm), True), (0.0, 1.2, 1.6), (70, 0, 0))

@@ -3,7 +3,6 @@ core counts it in its render report), that a scene without motion pays nothing, 
 Agreement with Cycles is in test_agreement.py (scene motion_blur)."""
 import re
 
-import bpy
 import numpy as np
 
 import build_scenes
@@ -13,8 +12,8 @@ from lantern import engine
 
 def _motion_line():
     report = engine.LAST_RENDER.get("report", "")
-    m = re.search(r"motion blur: (\d+) moving object\(s\), (\d+) deforming mesh\(es\), camera (still|moving, \d+ steps)",
-                  report)
+    m = re.search(r"motion blur: (\d+) moving object\(s\), (\d+) deforming mesh\(es\), "
+                  r"camera (still|moving, \d+ steps)", report)
     return (int(m.group(1)), int(m.group(2)), m.group(3)) if m else None, report
 
 

@@ -32,7 +32,7 @@ void embree_error(void*, RTCError code, const char* message) {
 
 }  // namespace
 
-Geometry::Geometry() {
+Geometry::Geometry() : generation_(next_motion_generation()) {
   device_ = rtcNewDevice(nullptr);
   if (!device_) throw std::runtime_error("could not create the Embree device");
   rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
@@ -126,7 +126,8 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
     }
   for (Vec3& cn : mesh.corner_normals) cn = normalize(cn);
   if (mesh.corner_normals.empty()) mesh.motion_corner_normals.clear();
-  for (Vec3& cn : mesh.motion_corner_normals) cn = is_finite(cn) && length_squared(cn) > 0 ? normalize(cn) : Vec3(0, 0, 1);
+  for (Vec3& cn : mesh.motion_corner_normals)
+    cn = is_finite(cn) && length_squared(cn) > 0 ? normalize(cn) : Vec3(0, 0, 1);
   if (kept == 0) {
     if (n == 0) warnings.push_back("mesh " + std::to_string(id) + " has no triangles");
     meshes_.push_back(std::move(mesh));
@@ -163,6 +164,12 @@ bool keeps_area(const Instance& inst) {
   return false;
 }
 const Transform kIdentity;
+bool same_rotation(const std::vector<DecomposedTransform>& steps) {
+  for (const DecomposedTransform& d : steps)
+    for (int k = 0; k < 4; ++k)
+      if (std::abs(d.q[k] - steps[0].q[k]) > 1e-7f) return false;
+  return true;
+}
 
 void set_transform(Instance& inst, const Transform& xf) { static_cast<Pose&>(inst) = Pose::of(xf); }
 }  // namespace
@@ -193,6 +200,7 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
 
 void Geometry::set_instance_transform(int instance, const Transform& xf) {
   set_transform(instances_.at(size_t(instance)), xf);
+  generation_ = next_motion_generation();
   top_dirty_ = true;
 }
 
@@ -225,7 +233,13 @@ void Geometry::build_top() {
     const bool flat = !invertible(inst.xf);
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, flat ? baked_scene(int(i)) : m.rtc);
-    if (!inst.motion.empty()) {
+    if (!inst.motion.empty() && same_rotation(inst.motion_decomposed)) {
+      // No rotation changes: interpolating the matrices linearly is Cycles' interpolation (M =
+      // T + R S is linear in T and S), and Embree traverses it faster than quaternion motion.
+      rtcSetGeometryTimeStepCount(g, unsigned(inst.motion.size()));
+      for (size_t s = 0; s < inst.motion.size(); ++s)
+        rtcSetGeometryTransform(g, unsigned(s), RTC_FORMAT_FLOAT3X4_ROW_MAJOR, inst.motion[s].m);
+    } else if (!inst.motion.empty()) {
       // Cycles' instance motion on Embree (bvh/embree.cpp): one quaternion decomposition a step.
       rtcSetGeometryTimeStepCount(g, unsigned(inst.motion.size()));
       for (size_t s = 0; s < inst.motion_decomposed.size(); ++s) {
@@ -370,14 +384,28 @@ void Geometry::object_corners(const Mesh& m, int prim, float time, Vec3* p0, Vec
 Pose Geometry::pose(int instance, float time) const {
   const Instance& inst = instances_[size_t(instance)];
   if (inst.motion.empty()) return inst;
-  return Pose::of(interpolate_motion(inst.motion_decomposed, time));
+  // A hit's surface and then its shading ask for the same pose: the last one is kept per thread
+  // (a pure function of its key, so renders stay deterministic).
+  thread_local struct {
+    uint64_t generation = 0;
+    int instance = -1;
+    float time = -1;
+    Pose pose;
+  } last;
+  if (last.generation != generation_ || last.instance != instance || last.time != time) {
+    last.pose = Pose::of(interpolate_motion(inst.motion_decomposed, time));
+    last.generation = generation_;
+    last.instance = instance;
+    last.time = time;
+  }
+  return last.pose;
 }
 
 void Geometry::triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2, float time) const {
   const Instance& inst = instances_[instance];
   const Mesh& m = meshes_[inst.mesh];
   object_corners(m, prim, time, p0, p1, p2);
-  const Transform xf = inst.motion.empty() ? inst.xf : interpolate_motion(inst.motion_decomposed, time);
+  const Transform xf = inst.motion.empty() ? inst.xf : pose(instance, time).xf;
   *p0 = xf.point(*p0);
   *p1 = xf.point(*p1);
   *p2 = xf.point(*p2);
@@ -407,7 +435,7 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
   // At the hit's time: a moving instance's transform, a deforming mesh's corners and normals.
   Vec3 p0, p1, p2;
   object_corners(m, t, hit.time, &p0, &p1, &p2);
-  const Pose pose = inst.motion.empty() ? Pose(inst) : Pose::of(interpolate_motion(inst.motion_decomposed, hit.time));
+  const Pose pose = inst.motion.empty() ? Pose(inst) : this->pose(hit.instance, hit.time);
   const float b1 = hit.u, b2 = hit.v, b0 = 1 - b1 - b2;
   // Interpolate in object space, transform once.
   sp.po = p0 * b0 + p1 * b1 + p2 * b2;

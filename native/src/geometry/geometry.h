@@ -162,6 +162,7 @@ class Geometry {
   bool committed_ = false, top_dirty_ = false;
   uint64_t mesh_builds_ = 0, top_builds_ = 0;
   size_t motion_instances_ = 0, motion_meshes_ = 0;
+  uint64_t generation_;  // pose()'s per-thread cache key: new for each geometry and edit
   void build_top();
   // steps sets of positions (vertex_count each, step by step): Embree's vertex motion.
   RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices,

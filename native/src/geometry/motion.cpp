@@ -1,5 +1,7 @@
 #include "geometry/motion.h"
 
+#include <atomic>
+
 namespace lt {
 
 namespace {
@@ -36,25 +38,26 @@ void quaternion_from_columns(const Vec3& c0, const Vec3& c1, const Vec3& c2, flo
   for (int i = 0; i < 4; ++i) q[i] /= l;
 }
 
-// Cycles' quat_interpolate: slerp, linear (normalised) when the two nearly coincide.
-void slerp(const float a[4], const float b[4], float t, float out[4]) {
-  const float c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
-  if (c > 0.9995f) {
+// Cycles' quat_interpolate: slerp from a towards b (a.theta, a.q_perp precomputed), linear
+// (normalised) when the two nearly coincide.
+void slerp(const DecomposedTransform& a, const DecomposedTransform& b, float t, float out[4]) {
+  if (a.theta == 0) {
     float l = 0;
-    for (int i = 0; i < 4; ++i) l += sqr(out[i] = (1 - t) * a[i] + t * b[i]);
+    for (int i = 0; i < 4; ++i) l += sqr(out[i] = (1 - t) * a.q[i] + t * b.q[i]);
     l = std::sqrt(l);
     for (int i = 0; i < 4; ++i) out[i] /= l;
     return;
   }
-  const float theta = std::acos(clamp(c, -1.0f, 1.0f)) * t;
-  float perp[4], l = 0;
-  for (int i = 0; i < 4; ++i) l += sqr(perp[i] = b[i] - a[i] * c);
-  l = std::sqrt(l);
-  const float ct = std::cos(theta), st = std::sin(theta);
-  for (int i = 0; i < 4; ++i) out[i] = a[i] * ct + perp[i] / l * st;
+  const float ct = std::cos(a.theta * t), st = std::sin(a.theta * t);
+  for (int i = 0; i < 4; ++i) out[i] = a.q[i] * ct + a.q_perp[i] * st;
 }
 
 }  // namespace
+
+uint64_t next_motion_generation() {
+  static std::atomic<uint64_t> counter{0};
+  return ++counter;
+}
 
 Pose Pose::of(const Transform& xf) {
   Pose p;
@@ -115,10 +118,21 @@ std::vector<DecomposedTransform> decompose_motion(const std::vector<Transform>& 
   std::vector<DecomposedTransform> d(steps.size());
   for (size_t i = 0; i < steps.size(); ++i) {
     d[i] = decompose(steps[i]);
-    if (i > 0 && d[i - 1].q[0] * d[i].q[0] + d[i - 1].q[1] * d[i].q[1] + d[i - 1].q[2] * d[i].q[2] +
-                         d[i - 1].q[3] * d[i].q[3] <
-                     0)
+    if (i > 0 &&
+        d[i - 1].q[0] * d[i].q[0] + d[i - 1].q[1] * d[i].q[1] + d[i - 1].q[2] * d[i].q[2] + d[i - 1].q[3] * d[i].q[3] <
+            0)
       for (float& c : d[i].q) c = -c;
+  }
+  for (size_t i = 0; i + 1 < d.size(); ++i) {
+    const float* a = d[i].q;
+    const float* b = d[i + 1].q;
+    const float c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+    if (c > 0.9995f) continue;  // linear: theta stays 0
+    float l = 0;
+    for (int k = 0; k < 4; ++k) l += sqr(d[i].q_perp[k] = b[k] - a[k] * c);
+    l = std::sqrt(l);
+    for (float& p : d[i].q_perp) p /= l;
+    d[i].theta = std::acos(clamp(c, -1.0f, 1.0f));
   }
   return d;
 }
@@ -129,7 +143,7 @@ Transform interpolate_motion(const std::vector<DecomposedTransform>& steps, floa
   motion_step(int(steps.size()), time, &step, &t);
   const DecomposedTransform &a = steps[size_t(step)], &b = steps[size_t(step) + 1];
   DecomposedTransform d;
-  slerp(a.q, b.q, t, d.q);
+  slerp(a, b, t, d.q);
   d.translation = lerp(t, a.translation, b.translation);
   for (int i = 0; i < 3; ++i) {
     d.scale[i] = (1 - t) * a.scale[i] + t * b.scale[i];

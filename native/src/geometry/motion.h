@@ -37,6 +37,11 @@ struct DecomposedTransform {
   Vec3 translation{0.0f};
   float scale[3] = {1, 1, 1};
   float skew[3] = {0, 0, 0};  // xy, xz, yz
+  // Towards the next step (decompose_motion): the angle between the quaternions and the unit
+  // quaternion perpendicular to q in their plane, so that slerp needs one sine and cosine
+  // (Cycles' quat_interpolate, with the precomputation its comment suggests).
+  float theta = 0;
+  float q_perp[4] = {0, 0, 0, 0};
 };
 
 DecomposedTransform decompose(const Transform& m);
@@ -45,6 +50,10 @@ Transform recompose(const DecomposedTransform& d);
 std::vector<DecomposedTransform> decompose_motion(const std::vector<Transform>& steps);
 // The transform at time (0 .. 1, clamped) between equally spaced steps (at least 2).
 Transform interpolate_motion(const std::vector<DecomposedTransform>& steps, float time);
+// A process-wide unique number (never 0), for per-thread caches keyed by an object's contents:
+// an object's address may be reused by a later one, its number never is.
+uint64_t next_motion_generation();
+
 // The step below time and the weight of the one above it, for n equally spaced steps.
 inline void motion_step(int n, float time, int* step, float* t) {
   const int max_step = n - 1;

@@ -454,7 +454,8 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   // cross it to infinity); a subpath from the scene's bounding disk would cross a finite stretch.
   if (l.infinite() && scene_.has_world_volume()) return 0;
   EmissionSample e;
-  if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e, time_) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0)) return 0;
+  if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e, time_) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
+    return 0;
   PathVertex& y0 = path[0];
   y0 = PathVertex();
   y0.type = VertexType::Light;
@@ -573,7 +574,8 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     int li = lights_.pick_nee(pt.p, nee_normal(pt), sampler_.next_1d(), &pmf);
     Vec2 u = sampler_.next_2d();
     LightSample ls;
-    if (li < 0 || !(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls, time_) || !(ls.pdf > 0) || is_black(ls.radiance))
+    if (li < 0 || !(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls, time_) || !(ls.pdf > 0) ||
+        is_black(ls.radiance))
       return Spectrum(0.0f);
     const Light& l = lights_.light(li);
     PathVertex& sampled = endpoint(VertexType::Light);

@@ -52,7 +52,8 @@ SampleValue trace(const Scene& scene, const IntegratorSettings& s, const CameraS
     int li = lights.pick_nee(p, sp ? side : Vec3(0.0f), sampler.next_1d(), &pmf);
     Vec2 u = sampler.next_2d();
     LightSample ls;
-    if (li < 0 || !(pmf > 0) || !lights.sample(scene, li, p, u, &ls, time) || !(ls.pdf > 0) || is_black(ls.radiance)) return;
+    if (li < 0 || !(pmf > 0) || !lights.sample(scene, li, p, u, &ls, time) || !(ls.pdf > 0) || is_black(ls.radiance))
+      return;
     float scatter_pdf;
     Spectrum fv = f(ls.wi, &scatter_pdf);
     if (is_black(fv)) return;

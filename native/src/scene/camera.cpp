@@ -44,7 +44,24 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : d_(desc), width_
   }
   centre_ = basis_of(desc.xf);
   if (desc.motion.size() >= 2) motion_ = decompose_motion(desc.motion);
+  generation_ = next_motion_generation();
   d_.motion.clear();  // the decomposed steps are kept
+}
+
+// BDPT asks for the camera at its sample's time for every connection and MIS weight: the last
+// basis is kept per thread (a pure function of its key, so renders stay deterministic).
+Camera::Basis Camera::moving_basis(float time) const {
+  thread_local struct {
+    uint64_t generation = 0;
+    float time = -1;
+    Basis basis;
+  } last;
+  if (last.generation != generation_ || last.time != time) {
+    last.basis = basis_of(interpolate_motion(motion_, time));
+    last.generation = generation_;
+    last.time = time;
+  }
+  return last.basis;
 }
 
 Camera::Basis Camera::basis_of(const Transform& xf) {

@@ -113,15 +113,17 @@ class Camera {
   };
   static Basis basis_of(const Transform& xf);
   // At a shutter time: the centre's, or interpolated between the motion steps.
-  Basis basis(float time) const { return motion_.empty() ? centre_ : basis_of(interpolate_motion(motion_, time)); }
+  Basis basis(float time) const { return motion_.empty() ? centre_ : moving_basis(time); }
+  Basis moving_basis(float time) const;
 
   CameraDesc d_;
   int width_ = 1, height_ = 1;
   float x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // view plane at unit distance (or ortho plane)
   float pixel_area_ = 1;
-  float fisheye_w_ = 36, fisheye_h_ = 24;   // the equisolid's sensor, fitted to the frame
+  float fisheye_w_ = 36, fisheye_h_ = 24;  // the equisolid's sensor, fitted to the frame
   Basis centre_;
   std::vector<DecomposedTransform> motion_;
+  uint64_t generation_ = 0;  // moving_basis()'s per-thread cache key (copies share the contents)
 };
 
 }  // namespace lt

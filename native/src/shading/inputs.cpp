@@ -366,8 +366,7 @@ void displacement(const Instr& in, Machine& m) {
   const float h = (m.f(in.in[0]) - m.f(in.in[1])) * m.f(in.in[2]);
   const Vec3 n = normal_or_default(m, in.in[3]);
   Vec3 d = n * h;
-  if (in.param[0] == 0 && c.instance)
-    d = c.pose.xf.vector(normalized_or_zero(c.pose.normal_to_object(n)) * h);
+  if (in.param[0] == 0 && c.instance) d = c.pose.xf.vector(normalized_or_zero(c.pose.normal_to_object(n)) * h);
   m.set(in.out[0], d);
 }
 

@@ -109,9 +109,8 @@ inline Ray shadow_ray(const Vec3& origin, const LightSample& ls, float time) {
     r.time = time;
     return r;
   }
-  return spawn_ray_to(origin,
-                      ls.on_surface ? offset_ray_origin(ls.p, dot(ls.n, origin - ls.p) >= 0 ? ls.n : -ls.n) : ls.p,
-                      time);
+  return spawn_ray_to(
+      origin, ls.on_surface ? offset_ray_origin(ls.p, dot(ls.n, origin - ls.p) >= 0 ? ls.n : -ls.n) : ls.p, time);
 }
 
 // Infinite lights (sun, world) emit from a disk perpendicular to the direction over the scene's

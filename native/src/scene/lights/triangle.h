@@ -96,8 +96,8 @@ inline bool triangle_light_sample_emission(const Scene& scene, const Light& l, V
 }
 
 // n: the normal of the side the direction leaves from.
-inline void triangle_light_pdf_emission(const Scene& scene, const Light& l, const Vec3& n, const Vec3& dir,
-                                        float time, float* pdf_pos, float* pdf_dir) {
+inline void triangle_light_pdf_emission(const Scene& scene, const Light& l, const Vec3& n, const Vec3& dir, float time,
+                                        float* pdf_pos, float* pdf_dir) {
   Vec3 p0, p1, p2;
   float area = l.area;
   if (scene.geometry.has_motion()) triangle_light_corners(scene, l, time, &p0, &p1, &p2, &area);
