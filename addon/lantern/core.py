@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 12
+ABI_VERSION = 13
 
 # lt_status
 OK = 0
@@ -183,6 +183,9 @@ class MeshDesc(ctypes.Structure):
         ("texspace_size", ctypes.c_float * 3),
         ("attributes", ctypes.POINTER(MeshAttribute)),
         ("attribute_count", ctypes.c_int),
+        ("motion_positions", _f_p),
+        ("motion_corner_normals", _f_p),
+        ("motion_step_count", ctypes.c_int),
     ]
 
 
@@ -200,6 +203,8 @@ class InstanceDesc(ctypes.Structure):
         ("attribute_ids", _i_p),
         ("attribute_values", _f_p),
         ("attribute_count", ctypes.c_int),
+        ("motion_transforms", _f_p),
+        ("motion_step_count", ctypes.c_int),
     ]
 
 
@@ -248,6 +253,8 @@ class CameraDesc(ctypes.Structure):
         ("latitude_max", ctypes.c_float),
         ("longitude_min", ctypes.c_float),
         ("longitude_max", ctypes.c_float),
+        ("motion_transforms", _f_p),
+        ("motion_step_count", ctypes.c_int),
     ]
 
 
@@ -352,6 +359,9 @@ class SceneStats(ctypes.Structure):
         ("byte_images", ctypes.c_uint64),
         ("world_map_width", ctypes.c_uint64),
         ("world_map_height", ctypes.c_uint64),
+        ("motion_instances", ctypes.c_uint64),
+        ("motion_meshes", ctypes.c_uint64),
+        ("camera_motion_steps", ctypes.c_uint64),
     ]
 
 
@@ -618,6 +628,19 @@ def _transform(m):
     return (ctypes.c_float * 12)(*a.reshape(-1).tolist())
 
 
+def _motion(desc, motion):
+    """Sets desc's motion_transforms and motion_step_count from a sequence of transforms (3x4 or
+    4x4 each; None or empty: no motion); returns the array the pointer refers to."""
+    if motion is None or len(motion) == 0:
+        return None
+    a = np.asarray(motion, dtype=np.float32)
+    if a.ndim != 3 or a.shape[1:] not in ((4, 4), (3, 4)):
+        raise ValueError("motion: expected transforms of 3x4 or 4x4, got %s" % (a.shape,))
+    a = np.ascontiguousarray(a[:, :3, :4])
+    desc.motion_transforms, desc.motion_step_count = _fptr(a), a.shape[0]
+    return a
+
+
 # ---- scene --------------------------------------------------------------------------------------
 
 class Scene:
@@ -693,8 +716,10 @@ class Scene:
 
     def add_mesh(self, positions, triangles, corner_normals=None, corner_uvs=None,
                  material_slots=None, texspace_location=(0.0, 0.0, 0.0), texspace_size=(0.0, 0.0, 0.0),
-                 attributes=()):
-        """attributes: (id, components, per-corner values) for the mesh's named attributes."""
+                 attributes=(), motion_positions=None, motion_corner_normals=None):
+        """attributes: (id, components, per-corner values) for the mesh's named attributes;
+        motion_positions (and motion_corner_normals): a deforming mesh's positions (and corner
+        normals) at each motion step, step by step."""
         pos = _f32(positions, "positions", 3)
         tri = _i32(triangles, "triangles")
         if tri.size % 3:
@@ -714,15 +739,28 @@ class Scene:
             table = (MeshAttribute * len(attrs))(*[MeshAttribute(i, n, _fptr(v), v.size) for i, n, v in attrs])
             d.attributes = table
             d.attribute_count = len(attrs)
+        if motion_positions is not None:
+            mpos = _f32(motion_positions, "motion positions")
+            steps = mpos.size // max(pos.size, 1)
+            if mpos.size != steps * pos.size:
+                raise ValueError("motion positions: %d values for %d vertices" % (mpos.size, pos.size // 3))
+            d.motion_positions, d.motion_step_count = _fptr(mpos), steps
+            if motion_corner_normals is not None and nrm is not None:
+                mnrm = _f32(motion_corner_normals, "motion corner normals")
+                if mnrm.size != steps * nrm.size:
+                    raise ValueError("motion corner normals: %d values for %d steps of %d triangles"
+                                     % (mnrm.size, steps, ntri))
+                d.motion_corner_normals = _fptr(mnrm)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_mesh(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_mesh")
         return out.value
 
     def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL, color=(1.0, 1.0, 1.0, 1.0),
-                     pass_index=0, random_id=0, attributes=()):
+                     pass_index=0, random_id=0, attributes=(), motion=None):
         """color: Object.color; random_id: the uint32 Cycles hashes into Object Info's Random;
-        attributes: (id, 4 floats) of the object's attributes."""
+        attributes: (id, 4 floats) of the object's attributes; motion: the transforms (3x4 or 4x4
+        each) at the motion steps over the shutter."""
         mats = _i32(list(materials), "materials") if len(materials) else None
         d = InstanceDesc(int(mesh), _transform(transform), _iptr(mats),
                          0 if mats is None else mats.size, int(visibility))
@@ -733,6 +771,7 @@ class Scene:
             ids = _i32([int(i) for i, _ in attributes], "attribute ids")
             values = _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values")
             d.attribute_ids, d.attribute_values, d.attribute_count = _iptr(ids), _fptr(values), len(attributes)
+        motion_keep = _motion(d, motion)  # noqa: F841 (kept alive for the call)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_instance(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_instance")
@@ -757,7 +796,8 @@ class Scene:
                    aperture_blades=0, aperture_rotation=0.0, aperture_ratio=1.0,
                    panorama_type=PANORAMA_FISHEYE_EQUISOLID, fisheye_fov=3.14159265,
                    fisheye_lens=10.5, latitude_min=-1.57079633, latitude_max=1.57079633,
-                   longitude_min=-3.14159265, longitude_max=3.14159265):
+                   longitude_min=-3.14159265, longitude_max=3.14159265, motion=None):
+        """motion: the camera's transforms at its motion steps over the shutter."""
         d = CameraDesc()
         d.type = int(type)
         d.transform = _transform(transform)
@@ -771,6 +811,7 @@ class Scene:
         d.fisheye_fov, d.fisheye_lens = fisheye_fov, fisheye_lens
         d.latitude_min, d.latitude_max = latitude_min, latitude_max
         d.longitude_min, d.longitude_max = longitude_min, longitude_max
+        motion_keep = _motion(d, motion)  # noqa: F841 (kept alive for the call)
         _check(self._lib.lt_scene_set_camera(self.handle, ctypes.byref(d)), "lt_scene_set_camera")
 
     def set_world(self, color=(0.0, 0.0, 0.0), strength=1.0, image=-1, rotation_z=0.0,

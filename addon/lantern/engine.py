@@ -9,6 +9,7 @@ from gpu_extras.presets import draw_texture_2d
 
 from . import core
 from .export import export_scene
+from .export.motion import collect as collect_motion
 from .export.camera import export_camera
 from .scene_sync import SceneSync
 from .viewport import ViewportSession, view_camera, with_camera_lens
@@ -303,6 +304,11 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
         lines.append(text)
     else:
         lines.append("media: none")
+    if "motion_instances" in summary:  # motion blur asked for (final renders)
+        lines.append("motion blur: %d moving object(s), %d deforming mesh(es), camera %s (counted by the core)"
+                     % (summary["motion_instances"], summary["motion_meshes"],
+                        "moving, %d steps" % summary["camera_motion_steps"] if summary["camera_motion_steps"]
+                        else "still"))
     if s.noise_target > 0 or s.time_limit > 0:
         halting = ["%d samples" % s.samples]
         if s.time_limit > 0:
@@ -447,7 +453,10 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             warnings.append(message)
             self.report(level, message)
         camera = self.camera_override or depsgraph.scene_eval.camera
-        persistent = scene.render.use_persistent_data and not self.is_preview and camera is not None
+        # Motion blur samples sub-frames with frame_set, which a kept scene would take for edits:
+        # with it, every frame is exported anew.
+        persistent = (scene.render.use_persistent_data and not self.is_preview and camera is not None
+                      and not scene.render.use_motion_blur)
         try:
             t0 = time.monotonic()
             if persistent:
@@ -461,7 +470,17 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             else:
                 self._close_kept()
                 core_scene = core.Scene()
-                summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override)
+                # Motion blur (final renders; previews and the viewport render without it, as
+                # Cycles'): the shutter's sub-frames sampled first, the scene exported at the
+                # shutter's centre, then the frame being rendered restored.
+                motion, restore = (None, None) if self.is_preview else \
+                    collect_motion(self, depsgraph, self.camera_override, report)
+                try:
+                    summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override,
+                                           motion=motion)
+                finally:
+                    if restore is not None:
+                        restore()
                 if self.test_break():
                     return
                 self.update_stats("", "Building acceleration structures")
@@ -471,6 +490,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                             emissive_objects=stats["emissive_instances"],
                             image_bytes=stats["image_bytes"], image_texels=stats["image_texels"],
                             byte_images=stats["byte_images"])
+            if motion is not None:
+                summary.update(motion_instances=stats["motion_instances"], motion_meshes=stats["motion_meshes"],
+                               camera_motion_steps=stats["camera_motion_steps"])
             if summary.get("world") == "nodes":
                 summary["world"] = ("nodes, sampling map %dx%d" % (stats["world_map_width"], stats["world_map_height"])
                                     if stats["world_map_width"] else "nodes, constant")
@@ -488,6 +510,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:
+                if summary.get("camera_motion"):
+                    report({'WARNING'}, "Multiview and stereo renders take each view's camera at the "
+                                        "shutter's centre: camera motion blur is off (objects still blur)")
                 render, st = self._render_views(depsgraph, core_scene, settings, view_layer, border, report)
             else:
                 render = core.Render(core_scene, settings)

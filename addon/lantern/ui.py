@@ -198,6 +198,55 @@ class LANTERN_RENDER_PT_volumes(LanternButtonsPanel, Panel):
         sub.prop(settings, "volume_step", text="Step Size")
 
 
+class LANTERN_RENDER_PT_motion_blur(LanternButtonsPanel, Panel):
+    """Blender's and Cycles' motion blur settings, which Lantern renders as Cycles (final renders
+    only; export/motion.py)."""
+    bl_label = "Motion Blur"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.render, "use_motion_blur", text="")
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        rd = context.scene.render
+        layout.active = rd.use_motion_blur
+        col = layout.column()
+        cscene = getattr(context.scene, "cycles", None)
+        if cscene is not None and hasattr(cscene, "motion_blur_position"):
+            col.prop(cscene, "motion_blur_position", text="Position")
+        col.prop(rd, "motion_blur_shutter")
+        col.label(text="Rolling shutter and shutter curves are not supported", icon='INFO')
+
+
+class LANTERN_OBJECT_PT_motion_blur(LanternButtonsPanel, Panel):
+    """Cycles' per-object motion blur settings (the Cycles add-on's obj.cycles)."""
+    bl_label = "Motion Blur"
+    bl_context = "object"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        ob = context.object
+        return super().poll(context) and ob is not None and getattr(ob, "cycles", None) is not None and \
+            ob.type in {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'CAMERA'}
+
+    def draw_header(self, context):
+        self.layout.active = context.scene.render.use_motion_blur
+        self.layout.prop(context.object.cycles, "use_motion_blur", text="")
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        cob = context.object.cycles
+        layout.active = context.scene.render.use_motion_blur and cob.use_motion_blur
+        col = layout.column()
+        col.prop(cob, "motion_steps", text="Steps")
+        if context.object.type != 'CAMERA':
+            col.prop(cob, "use_deform_motion", text="Deformation")
+
+
 class LANTERN_RENDER_PT_film(LanternButtonsPanel, Panel):
     bl_label = "Film"
     bl_options = {'DEFAULT_CLOSED'}
@@ -536,6 +585,7 @@ classes = (
     LANTERN_RENDER_PT_light_paths_max_bounces,
     LANTERN_RENDER_PT_light_paths_clamping,
     LANTERN_RENDER_PT_volumes,
+    LANTERN_RENDER_PT_motion_blur,
     LANTERN_RENDER_PT_film,
     LANTERN_RENDER_PT_film_transparency,
     LANTERN_RENDER_PT_film_pixel_filter,
@@ -546,6 +596,7 @@ classes = (
     LANTERN_VIEWLAYER_PT_passes_data,
     LANTERN_VIEWLAYER_PT_passes_light,
     LANTERN_OBJECT_PT_visibility,
+    LANTERN_OBJECT_PT_motion_blur,
     LANTERN_LIGHT_PT_light,
     LANTERN_CAMERA_PT_panorama,
     LANTERN_MATERIAL_PT_surface,

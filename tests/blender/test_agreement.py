@@ -34,9 +34,11 @@ import render_utils as ru
 # light_path_world (Is Camera Ray mixing a grey backdrop and a warm light), procedural_world
 # (Gradient and Noise textures of the direction).
 WORLD_SCENES = ["hdri_world", "light_path_world", "procedural_world"]
-# cornell_dof: depth of field (a focus object, 6 blades, anamorphic; issue 15).
+# cornell_dof: depth of field (a focus object, 6 blades, anamorphic; issue 15). motion_blur: a
+# translating and a rotating box, a deforming grid and a panning camera over a shutter of 1 frame
+# (issue 15; tests/blender/test_motion_blur.py checks its export).
 PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "sun_world",
-               "textured", "instanced", "cornell_dof"] + WORLD_SCENES
+               "textured", "instanced", "cornell_dof", "motion_blur"] + WORLD_SCENES
 # Issue 15's panoramic cameras, one small render each (path tracing: BIDIRECTIONAL does not
 # connect to panoramas, tests/native/test_bdpt.cpp checks it agrees with path tracing there).
 PANORAMA_SCENES = ["pano_equirectangular", "pano_fisheye_equidistant", "pano_fisheye_equisolid"]
@@ -292,10 +294,12 @@ def student_t_upper(p, dof):
 # volume, a VDB grid by delta and ratio tracking); door_slabs: Cycles' per-kind bounce limits on
 # walls of two lobe kinds (issue 12, item 4)
 BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "door",
-               "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud", "cornell_dof"] + WORLD_SCENES
+               "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud", "cornell_dof",
+               "motion_blur"] + WORLD_SCENES
 # Scenes without media whose path-traced image mean is known within MEAN_POWER at their samples:
 # BDPT's image mean must equal PATH's there too (the door scenes' path tracing is too noisy).
-BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "cornell_dof"]
+BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "cornell_dof",
+                "motion_blur"]
 # Open discrepancy, measured and not yet explained: on world_fog (a delta point light inside a World
 # volume) BDPT's image mean is 0.3-0.5 % below Cycles' (0.9949 at 0.10 % standard error in this
 # test; 0.9971 +- 0.0006 with the lamp out of frame), while every internal check agrees (light

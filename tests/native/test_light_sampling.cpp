@@ -177,7 +177,7 @@ std::vector<LightCase> make_cases() {
     Instance inst;
     inst.mesh = mesh;
     inst.materials = {0};
-    c.scene->geometry.add_instance(inst);
+    c.scene->geometry.add_instance(inst, c.scene->warnings);
     c.scene->commit();
     c.light = c.scene->lights.triangle_light(0, 0);
     c.pole = normalize(Vec3(0.13f, 0.23f, 1.27f));

@@ -42,24 +42,27 @@ def export_lights(depsgraph, core_scene, report):
     return lights
 
 
-def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
+def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, motion=None):
     """Fills core_scene (not committed) from the depsgraph; returns a summary dict.
 
     report(level_set, message) receives warnings, like RenderEngine.report. camera_object
     overrides the scene camera (RenderEngine.camera_override); None with state given: no camera
     (the viewport sets its own). state, a dict, receives what viewport updates need: the
     material exporter and each mesh instance's (core instance id, matrix) by instance_key.
+    motion: what moves over the shutter (export/motion.py's collect), None without motion blur.
     """
     report = _deduplicating(report)
     summary = {}
+    if motion is not None:
+        motion.report = report
     if state is None or camera_object is not None:
-        summary["camera"] = export_camera(depsgraph, core_scene, report, camera_object)
+        summary["camera"] = export_camera(depsgraph, core_scene, report, camera_object, motion=motion)
 
     images = ImageExporter(core_scene, report)
     materials = MaterialExporter(core_scene, report, images)
     if state is None or camera_object is not None:
         materials.camera = camera_table(depsgraph, camera_object)
-    meshes = MeshExporter(depsgraph, core_scene, report, materials)
+    meshes = MeshExporter(depsgraph, core_scene, report, materials, motion)
     try:
         summary["world"] = export_world(depsgraph, core_scene, report, images, camera=materials.camera)
     except core.LanternError as e:  # a value the core refuses (not finite): no world, the render goes on
@@ -93,11 +96,14 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
             if inst.is_instance and inst.parent is not None and inst.parent.type in CONVERTIBLE_TYPES:
                 has_mesh_instance.add(inst.parent.original.as_pointer())
             random_id = inst.random_id if inst.is_instance else None
-            instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, random_id=random_id), matrix)
+            instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, random_id=random_id,
+                                                                    key=instance_key(inst),
+                                                                    deform=not inst.is_instance), matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
                 instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False,
-                                                                        random_id=inst.random_id), matrix)
+                                                                        random_id=inst.random_id,
+                                                                        key=instance_key(inst)), matrix)
             else:
                 deferred.append((obj, matrix, instance_key(inst)))
         elif t == 'LIGHT':
@@ -113,7 +119,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
     for obj, matrix, key in deferred:
         if obj.original.as_pointer() not in has_mesh_instance:
             # e.g. a curve without bevel
-            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False), matrix)
+            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key), matrix)
     if state is not None:
         state.update(materials=materials, instances=instances)
 
@@ -125,4 +131,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None):
                    material_media=materials.media, world_media=world_media,
                    emissive_media=materials.emissive_media,
                    media=volumes + materials.media + world_media)
+    if motion is not None:
+        summary.update(moving_objects=motion.moving_instances, deforming_meshes=motion.deforming_meshes,
+                       camera_motion=motion.camera_moves)
     return summary

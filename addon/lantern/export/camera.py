@@ -37,10 +37,11 @@ def focus_distance(depsgraph, camera_object, matrix=None):
     return abs(view_axis.dot(m.col[3].to_3d() - target_matrix.col[3].to_3d()))
 
 
-def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None, shift_x=None):
+def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None, shift_x=None, motion=None):
     """Sets the render camera (camera_object, else the scene's); returns its name. matrix and
     shift_x, when given, replace the object's (a stereo or multiview view's, from
-    RenderEngine.camera_model_matrix and camera_shift_x)."""
+    RenderEngine.camera_model_matrix and camera_shift_x). motion: export/motion.py's Motion (the
+    camera's transforms over the shutter), or None."""
     scene = depsgraph.scene
     obj = camera_object or scene.camera
     if obj is None:
@@ -52,6 +53,8 @@ def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None
         transform=np.array(obj.matrix_world if matrix is None else matrix, dtype=np.float32),
         pixel_aspect=rd.pixel_aspect_y / rd.pixel_aspect_x,
     )
+    if motion is not None and matrix is None:
+        kw["motion"] = motion.camera(kw["transform"])
     if obj.type != 'CAMERA':
         # Blender allows any object as the scene camera: render with a default camera's lens.
         report({'WARNING'}, "Scene camera '%s' is not a camera object: using a default "

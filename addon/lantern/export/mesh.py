@@ -214,8 +214,9 @@ def open_edge_count(triangles):
 class MeshExporter:
     """Adds geometry once per distinct evaluated datablock and an instance per object instance."""
 
-    def __init__(self, depsgraph, core_scene, report, materials):
+    def __init__(self, depsgraph, core_scene, report, materials, motion=None):
         self.depsgraph = depsgraph
+        self.motion = motion  # export/motion.py's Motion, or None
         self.core_scene = core_scene
         self.report = report
         self.materials = materials
@@ -229,7 +230,7 @@ class MeshExporter:
         # Converted geometry depends on the object's own modifiers: one per object.
         return (obj.type, obj.original.as_pointer())
 
-    def _mesh_id(self, obj, warn_empty=True):
+    def _mesh_id(self, obj, warn_empty=True, deform=False):
         key = self._geometry_key(obj)
         if key in self.mesh_ids:
             return self.mesh_ids[key]
@@ -247,6 +248,10 @@ class MeshExporter:
                 if warn_empty:
                     self.report({'WARNING'}, "Object '%s' has no faces, skipped" % obj.name)
             else:
+                if deform and self.motion is not None and obj.type == 'MESH':
+                    d = self.motion.deformation(obj, arrays)
+                    if d is not None:
+                        arrays.update(motion_positions=d[0], motion_corner_normals=d[1])
                 # Degenerate or non-finite triangles are dropped by the core (reported by name).
                 mesh_id = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_mesh", **arrays)
                 if arrays["triangles"].size and self.materials.media:
@@ -266,19 +271,21 @@ class MeshExporter:
             mats = list(getattr(data, "materials", [])) if data is not None else []
         return [self.materials.export(m) for m in mats]
 
-    def export_instance(self, obj, matrix_world, warn_empty=True, random_id=None):
+    def export_instance(self, obj, matrix_world, warn_empty=True, random_id=None, key=None, deform=False):
         """obj: an evaluated object of a mesh or convertible type; random_id: the depsgraph
-        instance's (None for an object that is no instance). Returns the core instance id, or None
-        when the object has no geometry."""
+        instance's (None for an object that is no instance); key: its instance_key, for motion
+        blur; deform: whether its mesh may deform over the shutter (an object, not an instance).
+        Returns the core instance id, or None when the object has no geometry."""
         problem = transform_problem(matrix_world)
         if problem is not None:
             self.report({'WARNING'}, "Object '%s' left out: %s" % (obj.name, problem))
             return None
         # Materials first: the mesh exports the attributes their programs read.
         material_ids = self._material_ids(obj)
-        mesh_id = self._mesh_id(obj, warn_empty)
+        mesh_id = self._mesh_id(obj, warn_empty, deform)
         if mesh_id is None:
             return None
+        motion = self.motion.transforms(key, matrix_world, obj.name) if self.motion is not None else None
         if np.linalg.det(np.asarray(matrix_world, dtype=np.float64)[:3, :3]) == 0:
             self.report({'WARNING'}, "Object '%s' has zero scale on an axis: rendered as the flat shape it "
                         "becomes (Cycles 3.4 renders such objects black)" % obj.name)
@@ -288,7 +295,7 @@ class MeshExporter:
         instance = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_instance",
                              mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
                              pass_index=obj.pass_index, random_id=random_id,
-                             attributes=object_values(obj, self.materials.attributes.object_keys()))
+                             attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion)
         if instance is not None:
             self.instance_count += 1
         return instance

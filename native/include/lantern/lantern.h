@@ -35,8 +35,9 @@ extern "C" {
  * 9: lt_render_settings.sample_pattern; 10: lt_camera_desc's lens and panorama fields;
  * 11: denoising (lt_render_settings.denoise, lt_render_status.denoised and denoise_seconds, the
  * Noisy Image and Denoising passes); 12: Cycles' light and data passes (LT_PASS_DIFFUSE_DIRECT
- * on), lt_render_settings' mist fields, lt_scene_set_material_pass_index. */
-#define LT_ABI_VERSION 12
+ * on), lt_render_settings' mist fields, lt_scene_set_material_pass_index; 13: motion blur (motion
+ * steps of lt_mesh_desc, lt_instance_desc and lt_camera_desc; motion counts in lt_scene_stats). */
+#define LT_ABI_VERSION 13
 
 enum lt_status {
   LT_OK = 0,
@@ -186,6 +187,13 @@ typedef struct lt_mesh_desc {
   float texspace_size[3];
   const lt_mesh_attribute* attributes; /* may be NULL when attribute_count is 0 */
   int attribute_count;
+  /* Deformation motion blur: motion_step_count (0: none, else 2 to 129, odd) sets of positions
+   * equally spaced over the shutter, 3 * vertex_count finite floats each, the centre one equal to
+   * positions; and, when corner_normals is given, as many sets of corner normals (NULL: the
+   * centre's at every time). Same triangles at every step. */
+  const float* motion_positions;
+  const float* motion_corner_normals;
+  int motion_step_count;
 } lt_mesh_desc;
 LT_API int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* desc, int* out_id);
 
@@ -216,6 +224,12 @@ typedef struct lt_instance_desc {
   const int* attribute_ids;
   const float* attribute_values;
   int attribute_count;
+  /* Transform motion blur: motion_step_count (0: none, else 2 to 129, odd) transforms of 12 floats
+   * equally spaced over the shutter, the centre one equal to transform; interpolated as Cycles
+   * (translation and scale linearly, rotation by quaternion slerp). Steps that are not finite or
+   * not invertible leave the instance without motion (a warning). */
+  const float* motion_transforms;
+  int motion_step_count;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 
@@ -269,6 +283,10 @@ typedef struct lt_camera_desc {
   int panorama_type;
   float fisheye_fov, fisheye_lens;
   float latitude_min, latitude_max, longitude_min, longitude_max;
+  /* Camera motion blur: motion_step_count (0: none, else 2 to 129, odd) transforms as
+   * lt_instance_desc's, the centre one equal to transform. */
+  const float* motion_transforms;
+  int motion_step_count;
 } lt_camera_desc;
 LT_API int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* desc);
 
@@ -389,6 +407,9 @@ typedef struct lt_scene_stats {
   uint64_t image_texels;                      /* and their texels, all images */
   uint64_t byte_images;                       /* images stored at 8 bits per channel */
   uint64_t world_map_width, world_map_height; /* the world's sampling map (0 x 0: none, a constant world) */
+  /* Motion blur: instances that move, meshes that deform, the camera's motion steps (0: still). A
+   * scene with none of them renders exactly as without motion blur. */
+  uint64_t motion_instances, motion_meshes, camera_motion_steps;
 } lt_scene_stats;
 LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);
 

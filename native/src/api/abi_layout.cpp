@@ -84,6 +84,9 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_mesh_desc, texspace_size),
     LT_FIELD(lt_mesh_desc, attributes),
     LT_FIELD(lt_mesh_desc, attribute_count),
+    LT_FIELD(lt_mesh_desc, motion_positions),
+    LT_FIELD(lt_mesh_desc, motion_corner_normals),
+    LT_FIELD(lt_mesh_desc, motion_step_count),
     LT_STRUCT(lt_mesh_attribute),
     LT_FIELD(lt_mesh_attribute, id),
     LT_FIELD(lt_mesh_attribute, components),
@@ -108,6 +111,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_instance_desc, attribute_ids),
     LT_FIELD(lt_instance_desc, attribute_values),
     LT_FIELD(lt_instance_desc, attribute_count),
+    LT_FIELD(lt_instance_desc, motion_transforms),
+    LT_FIELD(lt_instance_desc, motion_step_count),
 
     LT_CONST(lt_light_type, LT_LIGHT_POINT),
     LT_CONST(lt_light_type, LT_LIGHT_SPOT),
@@ -165,6 +170,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_camera_desc, latitude_max),
     LT_FIELD(lt_camera_desc, longitude_min),
     LT_FIELD(lt_camera_desc, longitude_max),
+    LT_FIELD(lt_camera_desc, motion_transforms),
+    LT_FIELD(lt_camera_desc, motion_step_count),
 
     LT_STRUCT(lt_world_desc),
     LT_FIELD(lt_world_desc, color),
@@ -200,6 +207,9 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_scene_stats, byte_images),
     LT_FIELD(lt_scene_stats, world_map_width),
     LT_FIELD(lt_scene_stats, world_map_height),
+    LT_FIELD(lt_scene_stats, motion_instances),
+    LT_FIELD(lt_scene_stats, motion_meshes),
+    LT_FIELD(lt_scene_stats, camera_motion_steps),
 
     LT_CONST(lt_integrator, LT_INTEGRATOR_PATH),
     LT_CONST(lt_integrator, LT_INTEGRATOR_BIDIRECTIONAL),

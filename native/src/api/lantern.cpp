@@ -73,6 +73,22 @@ lt::Transform to_transform(const float* m, const char* what) {
   return t;
 }
 
+// Motion blur steps (lt_mesh_desc, lt_instance_desc, lt_camera_desc): 0, or an odd count from 3 to
+// 129 (Cycles' 2^steps + 1 with steps 1 to 7; Embree's RTC_MAX_TIME_STEP_COUNT), so that the
+// centre step is the shutter's centre.
+void require_motion_steps(int count, const void* data, const std::string& what) {
+  require(count == 0 || (count >= 3 && count <= 129 && count % 2 == 1),
+          what + ": " + std::to_string(count) + " motion steps; expected 0 or an odd count from 3 to 129");
+  require(count == 0 || data, what + ": motion steps are NULL");
+}
+
+// The steps of 12 floats each, copied as given (non-finite ones are caught where they are used).
+std::vector<lt::Transform> motion_transforms(const float* m, int count) {
+  std::vector<lt::Transform> steps(static_cast<size_t>(count));
+  for (int i = 0; i < count; ++i) std::memcpy(steps[size_t(i)].m, m + 12 * i, sizeof(steps[size_t(i)].m));
+  return steps;
+}
+
 lt::VolumeCoefficients to_volume(const lt_volume_desc* d) {
   require(d != nullptr, "volume description is NULL");
   require(d->node >= LT_VOLUME_PRINCIPLED && d->node <= LT_VOLUME_EMISSION,
@@ -373,6 +389,23 @@ int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* d, int* out_id) {
       attr.values.assign(a.values, a.values + n);
       m.attributes.push_back(std::move(attr));
     }
+    require_motion_steps(d->motion_step_count, d->motion_positions, "mesh");
+    if (d->motion_step_count > 0) {
+      const size_t n = 3 * size_t(d->vertex_count) * size_t(d->motion_step_count);
+      require(finite_array(d->motion_positions, n), "mesh motion positions must be finite");
+      m.motion_steps = d->motion_step_count;
+      m.motion_positions.resize(n / 3);
+      for (size_t i = 0; i < n / 3; ++i)
+        m.motion_positions[i] =
+            lt::Vec3(d->motion_positions[3 * i], d->motion_positions[3 * i + 1], d->motion_positions[3 * i + 2]);
+      if (d->motion_corner_normals && !m.corner_normals.empty()) {
+        const size_t nc = corners * size_t(d->motion_step_count);
+        m.motion_corner_normals.resize(nc);
+        for (size_t c = 0; c < nc; ++c)
+          m.motion_corner_normals[c] = lt::Vec3(d->motion_corner_normals[3 * c], d->motion_corner_normals[3 * c + 1],
+                                                d->motion_corner_normals[3 * c + 2]);
+      }
+    }
     const lt::Vec3 loc(d->texspace_location[0], d->texspace_location[1], d->texspace_location[2]);
     const lt::Vec3 size(d->texspace_size[0], d->texspace_size[1], d->texspace_size[2]);
     if (lt::is_finite(loc) && lt::is_finite(size) && size.x > 0 && size.y > 0 && size.z > 0) {
@@ -433,7 +466,9 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
       std::copy(d->attribute_values + 4 * i, d->attribute_values + 4 * i + 4, a.value);
       inst.attributes.push_back(a);
     }
-    *out_id = scene->scene.geometry.add_instance(std::move(inst));
+    require_motion_steps(d->motion_step_count, d->motion_transforms, "instance");
+    if (finite) inst.motion = motion_transforms(d->motion_transforms, d->motion_step_count);
+    *out_id = scene->scene.geometry.add_instance(std::move(inst), scene->scene.warnings);
     if (!finite)
       scene->scene.warnings.push_back("instance " + std::to_string(*out_id) + " has a non-finite transform; left out");
   });
@@ -528,6 +563,9 @@ int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out) {
     }
     out->world_map_width = uint64_t(scene->scene.world.map_width());
     out->world_map_height = uint64_t(scene->scene.world.map_height());
+    out->motion_instances = scene->scene.geometry.motion_instances();
+    out->motion_meshes = scene->scene.geometry.motion_meshes();
+    out->camera_motion_steps = scene->scene.camera.motion.size();
   });
 }
 
@@ -589,6 +627,16 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     c.clip_start = d->clip_start;
     c.clip_end = d->clip_end;
     c.pixel_aspect = d->pixel_aspect;
+    require_motion_steps(d->motion_step_count, d->motion_transforms, "camera");
+    c.motion = motion_transforms(d->motion_transforms, d->motion_step_count);
+    for (const lt::Transform& m : c.motion)
+      if (!finite_array(m.m, 12) || !(std::abs(m.determinant()) > 1e-30f)) {
+        scene->scene.warnings.push_back(
+            "a camera motion step's transform is not finite or is singular: the camera renders without motion "
+            "blur");
+        c.motion.clear();
+        break;
+      }
     const float reach =
         c.orthographic ? 0.5f * c.ortho_scale * (1 + std::max(std::abs(c.shift_x), std::abs(c.shift_y))) : 0;
     if (!lt::within_traceable_range(c.xf.point(lt::Vec3(0.0f))) || !(reach <= lt::kTraceableRange))

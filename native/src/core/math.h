@@ -156,6 +156,9 @@ Transform affine_inverse(const Transform& t);
 struct Ray {
   Vec3 o, d;
   float tmin = 0, tmax = INFINITY;
+  // Motion blur: the time in the shutter (0 to 1) of the camera sample the ray belongs to; the
+  // shutter's centre in a scene without motion.
+  float time = 0.5f;
 };
 
 }  // namespace lt

@@ -32,7 +32,7 @@ void embree_error(void*, RTCError code, const char* message) {
 
 }  // namespace
 
-Geometry::Geometry() {
+Geometry::Geometry() : generation_(next_motion_generation()) {
   device_ = rtcNewDevice(nullptr);
   if (!device_) throw std::runtime_error("could not create the Embree device");
   rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
@@ -47,16 +47,24 @@ Geometry::~Geometry() {
   rtcReleaseDevice(device_);
 }
 
-// One Embree scene holding one triangle geometry (not committed: commit() or the caller does).
-RTCScene Geometry::triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices) const {
+// One Embree scene holding one triangle geometry (not committed: commit() or the caller does),
+// with `steps` vertex buffers for deformation motion (Embree interpolates them linearly, as
+// Cycles' motion triangles).
+RTCScene Geometry::triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices,
+                                  int steps) const {
   RTCScene scene = rtcNewScene(device_);
   RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-  float* v = static_cast<float*>(
-      rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), positions.size()));
-  for (size_t i = 0; i < positions.size(); ++i) {
-    v[3 * i] = positions[i].x;
-    v[3 * i + 1] = positions[i].y;
-    v[3 * i + 2] = positions[i].z;
+  const size_t n = positions.size() / size_t(steps);
+  if (steps > 1) rtcSetGeometryTimeStepCount(g, unsigned(steps));
+  for (int s = 0; s < steps; ++s) {
+    float* v = static_cast<float*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, unsigned(s), RTC_FORMAT_FLOAT3, 3 * sizeof(float), n));
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3& p = positions[size_t(s) * n + i];
+      v[3 * i] = p.x;
+      v[3 * i + 1] = p.y;
+      v[3 * i + 2] = p.z;
+    }
   }
   unsigned* idx = static_cast<unsigned*>(
       rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), indices.size() / 3));
@@ -86,6 +94,8 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
         mesh.indices[3 * kept + c] = mesh.indices[3 * t + c];
         if (!mesh.corner_normals.empty()) mesh.corner_normals[3 * kept + c] = mesh.corner_normals[3 * t + c];
         if (!mesh.corner_uvs.empty()) mesh.corner_uvs[3 * kept + c] = mesh.corner_uvs[3 * t + c];
+        for (int s = 0; s < mesh.motion_steps && !mesh.motion_corner_normals.empty(); ++s)
+          mesh.motion_corner_normals[3 * (s * n + kept) + c] = mesh.motion_corner_normals[3 * (s * n + t) + c];
         for (MeshAttribute& a : mesh.attributes)
           std::copy_n(&a.values[(3 * t + c) * a.components], a.components, &a.values[(3 * kept + c) * a.components]);
       }
@@ -98,6 +108,11 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
                        " degenerate or non-finite triangle(s)");
     mesh.indices.resize(3 * kept);
     if (!mesh.corner_normals.empty()) mesh.corner_normals.resize(3 * kept);
+    if (!mesh.motion_corner_normals.empty()) {  // the steps' kept normals, packed
+      for (int s = 1; s < mesh.motion_steps; ++s)
+        std::copy_n(&mesh.motion_corner_normals[3 * s * n], 3 * kept, &mesh.motion_corner_normals[3 * s * kept]);
+      mesh.motion_corner_normals.resize(3 * kept * size_t(mesh.motion_steps));
+    }
     if (!mesh.corner_uvs.empty()) mesh.corner_uvs.resize(3 * kept);
     for (MeshAttribute& a : mesh.attributes) a.values.resize(3 * kept * a.components);
     if (!mesh.slots.empty()) mesh.slots.resize(kept);
@@ -110,6 +125,9 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
       break;
     }
   for (Vec3& cn : mesh.corner_normals) cn = normalize(cn);
+  if (mesh.corner_normals.empty()) mesh.motion_corner_normals.clear();
+  for (Vec3& cn : mesh.motion_corner_normals)
+    cn = is_finite(cn) && length_squared(cn) > 0 ? normalize(cn) : Vec3(0, 0, 1);
   if (kept == 0) {
     if (n == 0) warnings.push_back("mesh " + std::to_string(id) + " has no triangles");
     meshes_.push_back(std::move(mesh));
@@ -119,7 +137,12 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
   for (Vec3& p : mesh.positions)
     if (!is_finite(p)) p = Vec3(0.0f);
 
-  mesh.rtc = triangle_scene(mesh.positions, mesh.indices);
+  if (mesh.motion_steps > 1) {
+    ++motion_meshes_;
+    mesh.rtc = triangle_scene(mesh.motion_positions, mesh.indices, mesh.motion_steps);
+  } else {
+    mesh.rtc = triangle_scene(mesh.positions, mesh.indices);
+  }
   meshes_.push_back(std::move(mesh));
   return id;
 }
@@ -141,25 +164,33 @@ bool keeps_area(const Instance& inst) {
   return false;
 }
 const Transform kIdentity;
-
-void set_transform(Instance& inst, const Transform& xf) {
-  inst.xf = xf;
-  inst.flipped = xf.determinant() < 0;
-  // Rows of the cofactor matrix, sign-corrected so that normals keep facing outwards.
-  for (int r = 0; r < 3; ++r) {
-    Vec3 e(r == 0, r == 1, r == 2);
-    Vec3 row = xf.normal(e);  // column r of the normal matrix
-    inst.normal_rows[0][r] = row.x;
-    inst.normal_rows[1][r] = row.y;
-    inst.normal_rows[2][r] = row.z;
-  }
+bool same_rotation(const std::vector<DecomposedTransform>& steps) {
+  for (const DecomposedTransform& d : steps)
+    for (int k = 0; k < 4; ++k)
+      if (std::abs(d.q[k] - steps[0].q[k]) > 1e-7f) return false;
+  return true;
 }
+
+void set_transform(Instance& inst, const Transform& xf) { static_cast<Pose&>(inst) = Pose::of(xf); }
 }  // namespace
 
-int Geometry::add_instance(Instance inst) {
+int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
   if (committed_) throw StateError("the scene is committed; instances can no longer be added");
   const int id = int(instances_.size());
   set_transform(inst, inst.xf);
+  if (!inst.motion.empty()) {
+    bool usable = inst.motion.size() >= 2 && finite_transform(inst.xf) && invertible(inst.xf);
+    for (const Transform& m : inst.motion) usable = usable && finite_transform(m) && invertible(m);
+    if (usable) {
+      inst.motion_decomposed = decompose_motion(inst.motion);
+      ++motion_instances_;
+    } else {
+      warnings.push_back("instance " + std::to_string(id) +
+                         ": a motion step's transform is not finite or not invertible; rendered without motion "
+                         "blur at its centre transform");
+      inst.motion.clear();
+    }
+  }
   instances_.push_back(inst);
   baked_.emplace_back();
   instance_visibility_.push_back(inst.visibility & 31u);
@@ -169,6 +200,7 @@ int Geometry::add_instance(Instance inst) {
 
 void Geometry::set_instance_transform(int instance, const Transform& xf) {
   set_transform(instances_.at(size_t(instance)), xf);
+  generation_ = next_motion_generation();
   top_dirty_ = true;
 }
 
@@ -201,12 +233,40 @@ void Geometry::build_top() {
     const bool flat = !invertible(inst.xf);
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, flat ? baked_scene(int(i)) : m.rtc);
-    // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout; the baked copy is in world space.
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, (flat ? kIdentity : inst.xf).m);
+    if (!inst.motion.empty() && same_rotation(inst.motion_decomposed)) {
+      // No rotation changes: interpolating the matrices linearly is Cycles' interpolation (M =
+      // T + R S is linear in T and S), and Embree traverses it faster than quaternion motion.
+      rtcSetGeometryTimeStepCount(g, unsigned(inst.motion.size()));
+      for (size_t s = 0; s < inst.motion.size(); ++s)
+        rtcSetGeometryTransform(g, unsigned(s), RTC_FORMAT_FLOAT3X4_ROW_MAJOR, inst.motion[s].m);
+    } else if (!inst.motion.empty()) {
+      // Cycles' instance motion on Embree (bvh/embree.cpp): one quaternion decomposition a step.
+      rtcSetGeometryTimeStepCount(g, unsigned(inst.motion.size()));
+      for (size_t s = 0; s < inst.motion_decomposed.size(); ++s) {
+        const DecomposedTransform& d = inst.motion_decomposed[s];
+        RTCQuaternionDecomposition q;
+        rtcInitQuaternionDecomposition(&q);
+        rtcQuaternionDecompositionSetQuaternion(&q, d.q[3], d.q[0], d.q[1], d.q[2]);
+        rtcQuaternionDecompositionSetScale(&q, d.scale[0], d.scale[1], d.scale[2]);
+        rtcQuaternionDecompositionSetSkew(&q, d.skew[0], d.skew[1], d.skew[2]);
+        rtcQuaternionDecompositionSetTranslation(&q, d.translation.x, d.translation.y, d.translation.z);
+        rtcSetGeometryTransformQuaternion(g, unsigned(s), &q);
+      }
+    } else {
+      // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout; the baked copy is in world space.
+      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, (flat ? kIdentity : inst.xf).m);
+    }
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(top_, g, unsigned(i));
     rtcReleaseGeometry(g);
-    for (const Vec3& p : m.positions) bounds_.extend(inst.xf.point(p));
+    // Bounds over the motion steps' vertices (between steps the motion stays near them).
+    const std::vector<Vec3>& ps = m.motion_steps > 1 ? m.motion_positions : m.positions;
+    if (inst.motion.empty()) {
+      for (const Vec3& p : ps) bounds_.extend(inst.xf.point(p));
+    } else {
+      for (const Transform& xf : inst.motion)
+        for (const Vec3& p : ps) bounds_.extend(xf.point(p));
+    }
   }
   rtcCommitScene(top_);
   ++top_builds_;
@@ -263,7 +323,7 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   rh.ray.tfar = ray.tmax;
   rh.ray.mask = 0xffffffffu;
   rh.ray.flags = 0;
-  rh.ray.time = 0;
+  rh.ray.time = ray.time;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(top_, &c.ctx, &rh);
@@ -273,6 +333,7 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   hit->primitive = int(rh.hit.primID);
   hit->u = rh.hit.u;
   hit->v = rh.hit.v;
+  hit->time = ray.time;
   return true;
 }
 
@@ -296,17 +357,58 @@ bool Geometry::occluded(const Ray& ray) const {
   r.tfar = ray.tmax;
   r.mask = 0xffffffffu;
   r.flags = 0;
-  r.time = 0;
+  r.time = ray.time;
   rtcOccluded1(top_, &c.ctx, &r);
   return r.tfar < 0;  // Embree sets tfar to -inf on a hit
 }
 
-void Geometry::triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2) const {
+void Geometry::object_corners(const Mesh& m, int prim, float time, Vec3* p0, Vec3* p1, Vec3* p2) const {
+  const uint32_t* idx = &m.indices[3 * size_t(prim)];
+  if (m.motion_steps < 2) {
+    *p0 = m.positions[idx[0]];
+    *p1 = m.positions[idx[1]];
+    *p2 = m.positions[idx[2]];
+    return;
+  }
+  int step;
+  float t;
+  motion_step(m.motion_steps, time, &step, &t);
+  const size_t n = m.positions.size();
+  const Vec3* a = &m.motion_positions[size_t(step) * n];
+  const Vec3* b = a + n;
+  *p0 = lerp(t, a[idx[0]], b[idx[0]]);
+  *p1 = lerp(t, a[idx[1]], b[idx[1]]);
+  *p2 = lerp(t, a[idx[2]], b[idx[2]]);
+}
+
+Pose Geometry::pose(int instance, float time) const {
+  const Instance& inst = instances_[size_t(instance)];
+  if (inst.motion.empty()) return inst;
+  // A hit's surface and then its shading ask for the same pose: the last one is kept per thread
+  // (a pure function of its key, so renders stay deterministic).
+  thread_local struct {
+    uint64_t generation = 0;
+    int instance = -1;
+    float time = -1;
+    Pose pose;
+  } last;
+  if (last.generation != generation_ || last.instance != instance || last.time != time) {
+    last.pose = Pose::of(interpolate_motion(inst.motion_decomposed, time));
+    last.generation = generation_;
+    last.instance = instance;
+    last.time = time;
+  }
+  return last.pose;
+}
+
+void Geometry::triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2, float time) const {
   const Instance& inst = instances_[instance];
   const Mesh& m = meshes_[inst.mesh];
-  *p0 = inst.xf.point(m.positions[m.indices[3 * prim]]);
-  *p1 = inst.xf.point(m.positions[m.indices[3 * prim + 1]]);
-  *p2 = inst.xf.point(m.positions[m.indices[3 * prim + 2]]);
+  object_corners(m, prim, time, p0, p1, p2);
+  const Transform xf = inst.motion.empty() ? inst.xf : pose(instance, time).xf;
+  *p0 = xf.point(*p0);
+  *p1 = xf.point(*p1);
+  *p2 = xf.point(*p2);
 }
 
 bool Mesh::interpolate(int id, int t, float b1, float b2, float out[4], int* components) const {
@@ -330,20 +432,31 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
   const Instance& inst = instances_[hit.instance];
   const Mesh& m = meshes_[inst.mesh];
   const int t = hit.primitive;
-  const Vec3& p0 = m.positions[m.indices[3 * t]];
-  const Vec3& p1 = m.positions[m.indices[3 * t + 1]];
-  const Vec3& p2 = m.positions[m.indices[3 * t + 2]];
+  // At the hit's time: a moving instance's transform, a deforming mesh's corners and normals.
+  Vec3 p0, p1, p2;
+  object_corners(m, t, hit.time, &p0, &p1, &p2);
+  const Pose pose = inst.motion.empty() ? Pose(inst) : this->pose(hit.instance, hit.time);
   const float b1 = hit.u, b2 = hit.v, b0 = 1 - b1 - b2;
   // Interpolate in object space, transform once.
   sp.po = p0 * b0 + p1 * b1 + p2 * b2;
-  sp.p = inst.xf.point(sp.po);
+  sp.p = pose.xf.point(sp.po);
+  sp.time = hit.time;
   sp.bary = {b1, b2};
   const Vec3 g = (sp.po - m.texspace_location) / (2.0f * m.texspace_size);
   sp.generated = Vec3(g.x + 0.5f, g.y + 0.5f, g.z + 0.5f);
-  sp.ng = normalize(inst.normal_to_world(cross(p1 - p0, p2 - p0)));
+  sp.ng = normalize(pose.normal_to_world(cross(p1 - p0, p2 - p0)));
   if (!m.corner_normals.empty()) {
-    Vec3 ns = m.corner_normals[3 * t] * b0 + m.corner_normals[3 * t + 1] * b1 + m.corner_normals[3 * t + 2] * b2;
-    ns = normalize(inst.normal_to_world(ns));
+    const Vec3* cn = &m.corner_normals[3 * size_t(t)];
+    Vec3 ns = cn[0] * b0 + cn[1] * b1 + cn[2] * b2;
+    if (!m.motion_corner_normals.empty()) {  // the steps' normals, interpolated as the positions
+      int step;
+      float u;
+      motion_step(m.motion_steps, hit.time, &step, &u);
+      const Vec3* a = &m.motion_corner_normals[3 * (size_t(step) * m.triangle_count() + size_t(t))];
+      const Vec3* b = a + 3 * m.triangle_count();
+      ns = lerp(u, a[0], b[0]) * b0 + lerp(u, a[1], b[1]) * b1 + lerp(u, a[2], b[2]) * b2;
+    }
+    ns = normalize(pose.normal_to_world(ns));
     sp.ns = is_finite(ns) ? ns : sp.ng;
     if (dot(sp.ns, sp.ng) < 0) sp.ns = -sp.ns;  // keep the shading normal on the geometric side
   } else {

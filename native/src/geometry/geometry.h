@@ -10,6 +10,7 @@
 
 #include "core/math.h"
 #include "geometry/hit.h"
+#include "geometry/motion.h"
 
 namespace lt {
 
@@ -31,6 +32,11 @@ struct Mesh {
   // Texture space (Blender's texspace_location and texspace_size): Generated = (p - loc) / (2 size) + 0.5.
   Vec3 texspace_location{0.0f}, texspace_size{1.0f};
   std::vector<MeshAttribute> attributes;
+  // Deformation motion blur: motion_steps (0, or 2 to 129) sets of positions, equally spaced over
+  // the shutter (vertex_count each, step by step), and of corner normals when the mesh has them.
+  // positions stays the centre step's.
+  int motion_steps = 0;
+  std::vector<Vec3> motion_positions, motion_corner_normals;
   RTCScene rtc = nullptr;
   size_t triangle_count() const { return indices.size() / 3; }
   const MeshAttribute* attribute(int id) const {
@@ -49,12 +55,11 @@ struct InstanceAttribute {
   float value[4] = {0, 0, 0, 0};
 };
 
-struct Instance {
+// xf (the Pose) is the transform at the shutter's centre (time 0.5).
+struct Instance : Pose {
   int mesh = -1;
-  Transform xf;
   std::vector<int> materials;  // material id per slot
   unsigned visibility = 31;
-  bool flipped = false;  // negative determinant: winding flips the geometric normal
   // Object Info: Object.color, pass_index, and Cycles' random number of the instance.
   float color[4] = {1, 1, 1, 1};
   float pass_index = 0, random = 0;
@@ -64,17 +69,11 @@ struct Instance {
       if (a.id == id) return &a;
     return nullptr;
   }
-  Vec3 normal_rows[3];  // inverse transpose of the linear part (up to scale), for normals
-  Vec3 normal_to_world(const Vec3& n) const {
-    return {dot(normal_rows[0], n), dot(normal_rows[1], n), dot(normal_rows[2], n)};
-  }
-  // The inverse of normal_to_world up to scale: the linear part's transpose.
-  Vec3 normal_to_object(const Vec3& n) const {
-    const float* m = xf.m;
-    return {m[0] * n.x + m[4] * n.y + m[8] * n.z, m[1] * n.x + m[5] * n.y + m[9] * n.z,
-            m[2] * n.x + m[6] * n.y + m[10] * n.z};
-  }
   int material_for(int slot) const { return slot >= 0 && slot < int(materials.size()) ? materials[slot] : -1; }
+  // Transform motion blur: 0, or 2 to 129 transforms equally spaced over the shutter (time 0 to
+  // 1), the centre one xf; decomposed for interpolation (geometry/motion.h).
+  std::vector<Transform> motion;
+  std::vector<DecomposedTransform> motion_decomposed;
 };
 
 struct Bounds {
@@ -101,9 +100,12 @@ class Geometry {
   Geometry(const Geometry&) = delete;
   Geometry& operator=(const Geometry&) = delete;
 
-  // Takes a validated mesh (see api/): drops degenerate triangles and reports them in warnings.
+  // Takes a validated mesh (see api/): drops degenerate triangles (at the centre step) and
+  // reports them in warnings.
   int add_mesh(Mesh mesh, std::vector<std::string>& warnings);
-  int add_instance(Instance instance);
+  // An instance with motion whose transforms are not all finite and invertible (Embree's
+  // instances need an inverse at every step) keeps its centre transform, with a warning.
+  int add_instance(Instance instance, std::vector<std::string>& warnings);
   // Moves an instance (also after commit): the next commit rebuilds only the top-level BVH over
   // the meshes' existing BVHs.
   void set_instance_transform(int instance, const Transform& xf);
@@ -120,15 +122,25 @@ class Geometry {
   bool intersect(const Ray& ray, unsigned visibility, Hit* hit) const;
   // Any hit among instances that cast shadows.
   bool occluded(const Ray& ray) const;
+  // The hit's surface at the hit's time.
   SurfacePoint surface(const Hit& hit) const;
+  // The instance's transform at time (0 .. 1 over the shutter).
+  Pose pose(int instance, float time) const;
+  // Whether anything moves or deforms (the render then draws a time per camera sample), and how
+  // many instances and meshes do.
+  bool has_motion() const { return motion_instances_ > 0 || motion_meshes_ > 0; }
+  size_t motion_instances() const { return motion_instances_; }
+  size_t motion_meshes() const { return motion_meshes_; }
 
   size_t mesh_count() const { return meshes_.size(); }
   size_t instance_count() const { return instances_.size(); }
   const Mesh& mesh(int i) const { return meshes_[i]; }
   const Instance& instance(int i) const { return instances_[i]; }
   Bounds bounds() const { return bounds_; }
-  // World-space triangle corners of an instance's triangle.
-  void triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2) const;
+  // Object-space corners of a mesh's triangle at time (a deforming mesh's interpolated).
+  void object_corners(const Mesh& m, int prim, float time, Vec3* p0, Vec3* p1, Vec3* p2) const;
+  // World-space triangle corners of an instance's triangle at time (0 .. 1 over the shutter).
+  void triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2, float time = 0.5f) const;
 
  private:
   RTCDevice device_ = nullptr;
@@ -149,8 +161,12 @@ class Geometry {
   bool partial_visibility_ = false;
   bool committed_ = false, top_dirty_ = false;
   uint64_t mesh_builds_ = 0, top_builds_ = 0;
+  size_t motion_instances_ = 0, motion_meshes_ = 0;
+  uint64_t generation_;  // pose()'s per-thread cache key: new for each geometry and edit
   void build_top();
-  RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices) const;
+  // steps sets of positions (vertex_count each, step by step): Embree's vertex motion.
+  RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices,
+                          int steps = 1) const;
   RTCScene baked_scene(int instance);
 };
 

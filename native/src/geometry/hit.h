@@ -14,6 +14,7 @@ struct Hit {
   int instance = -1;
   int primitive = -1;
   float u = 0, v = 0;  // barycentrics of vertices 1 and 2
+  float time = 0.5f;   // the ray's (motion blur)
   bool valid() const { return instance >= 0; }
 };
 
@@ -28,6 +29,7 @@ struct SurfacePoint {
   Vec3 generated;  // po in the mesh's texture space (Cycles' Generated coordinates)
   int material = -1;
   int instance = -1, primitive = -1;
+  float time = 0.5f;  // the ray's (motion blur): the shutter time the point was found at
 };
 
 // Offsets a ray origin off a surface along the geometric normal by an amount that scales with the
@@ -58,8 +60,9 @@ inline Vec3 spawn_origin(const SurfacePoint& sp, const Vec3& d) {
 // and ending just short of it (pbrt-v4's SpawnRayTo). Aiming from an offset origin at the unmoved
 // target tilts the ray by the offset; at grazing angles it then meets the target's surface well
 // before its end (an emitter 10 cm from a ceiling lit none of it).
-inline Ray spawn_ray_to(const Vec3& from, const Vec3& to) {
+inline Ray spawn_ray_to(const Vec3& from, const Vec3& to, float time) {
   Ray r;
+  r.time = time;
   r.o = from;
   Vec3 d = to - from;
   float dist = length(d);

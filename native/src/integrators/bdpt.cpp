@@ -52,6 +52,7 @@ Bdpt::Bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, S
       lights_(ctx.scene.lights),
       s_(ctx.settings),
       cs_(cs),
+      time_(cs.ray.time),
       sampler_(sampler),
       stats_(stats),
       scratch_(thread_scratch()),
@@ -464,7 +465,8 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   // cross it to infinity); a subpath from the scene's bounding disk would cross a finite stretch.
   if (l.infinite() && scene_.has_world_volume()) return 0;
   EmissionSample e;
-  if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0)) return 0;
+  if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e, time_) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
+    return 0;
   PathVertex& y0 = path[0];
   y0 = PathVertex();
   y0.type = VertexType::Light;
@@ -486,7 +488,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
                           path, nullptr);
   // An infinite light's vertex is a direction: its density is the direction's (pbrt 3, 16.3.2);
   // y1's is the disk's (pdf_light handles it).
-  if (y0.infinite) y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY);
+  if (y0.infinite) y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY, time_);
   // Strategy s = 1 would have picked this light from y1 with the light tree (mis_weight).
   y0.pick_nee = count >= 2 ? lights_.pmf_nee(path[1].p, nee_normal(path[1]), li) : 0.0f;
   return count;
@@ -583,7 +585,8 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     int li = lights_.pick_nee(pt.p, nee_normal(pt), sampler_.next_1d(), &pmf);
     Vec2 u = sampler_.next_2d();
     LightSample ls;
-    if (li < 0 || !(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance))
+    if (li < 0 || !(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls, time_) || !(ls.pdf > 0) ||
+        is_black(ls.radiance))
       return Spectrum(0.0f);
     const Light& l = lights_.light(li);
     PathVertex& sampled = endpoint(VertexType::Light);
@@ -595,7 +598,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     sampled.beta = ls.radiance / (pmf * ls.pdf);
     Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance) * sampled.beta * cos_at(pt, ls.wi);
     if (is_black(c)) return c;
-    c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls));
+    c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls, time_));
     if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
     if (s_.light_passes && t == 2) first_connect_ = split_at(pt, ls.wi);
@@ -628,11 +631,11 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   if (!cam.connectable()) return;
   // A point on the lens, uniform over the aperture as the camera's rays sample it (pbrt-v4's
   // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were.
-  const Vec3 lens = cam.has_lens() ? cam.lens_point(sampler_.next_2d()) : cam.position();
+  const Vec3 lens = cam.has_lens() ? cam.lens_point(sampler_.next_2d(), time_) : cam.position(time_);
   Vec2 film;
   Vec3 dir;
   float dist;
-  if (!cam.project(lens, qs.p, ctx_.filter.radius(), &film, &dir, &dist)) return;
+  if (!cam.project(lens, qs.p, ctx_.filter.radius(), &film, &dir, &dist, time_)) return;
   Spectrum base = qs.beta * f(qs, -dir, Mode::Importance) * kinds;
   if (is_black(base)) return;
   // Light passes: qs is the path's first bounce seen from the camera (towards -dir), lit from its
@@ -651,7 +654,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   z0.p = lens;
   base *= transmittance(qs, z0);
   if (is_black(base)) return;
-  float c = dot(dir, cam.forward());
+  float c = dot(dir, cam.forward(time_));
   // Pixel j's importance is W_j = h_j(x) / (a A_lens cos^4) (a: view-plane area of a pixel,
   // A_lens the aperture's area, 1 for a pinhole), the lens point's density 1 / A_lens; with the
   // geometry term cos * cos_qs / d^2 the contribution is h_j cos_qs / (a cos^3 d^2), cos and d

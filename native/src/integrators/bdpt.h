@@ -52,9 +52,9 @@ class Bdpt {
     Vec2 film;
     Vec3 dir;
     float dist;
-    if (!ctx_.camera.project(o, p, ctx_.filter.radius() + 1, &film, &dir, &dist)) return 0;
+    if (!ctx_.camera.project(o, p, ctx_.filter.radius() + 1, &film, &dir, &dist, time_)) return 0;
     float h = ctx_.filter.pdf(film.x - pixel.x) * ctx_.filter.pdf(film.y - pixel.y);
-    float c = dot(dir, ctx_.camera.forward());
+    float c = dot(dir, ctx_.camera.forward(time_));
     return h / (film_area_ * c * c * c);
   }
   float bsdf_pdf(const PathVertex& v, const Vec3& to_prev, const Vec3& to_next) const {
@@ -88,7 +88,7 @@ class Bdpt {
       p = 1 / (kPi * lights_.scene_radius() * lights_.scene_radius());
     } else {
       float pdf_pos, pdf_dir;
-      lights_.pdf_emission(scene_, v.light, v.p, v.n, w, &pdf_pos, &pdf_dir);
+      lights_.pdf_emission(scene_, v.light, v.p, v.n, w, &pdf_pos, &pdf_dir, time_);
       p = pdf_dir / d2;
     }
     if (to.on_surface()) p *= std::abs(dot(to.n, w));
@@ -100,10 +100,10 @@ class Bdpt {
     float pmf = lights_.pmf(v.light);
     if (v.infinite) {
       Vec3 w = normalize(v.p - to.p);
-      return pmf * lights_.pdf(scene_, v.light, to.p, w, INFINITY);
+      return pmf * lights_.pdf(scene_, v.light, to.p, w, INFINITY, time_);
     }
     float pdf_pos, pdf_dir;
-    lights_.pdf_emission(scene_, v.light, v.p, v.n, normalize(to.p - v.p), &pdf_pos, &pdf_dir);
+    lights_.pdf_emission(scene_, v.light, v.p, v.n, normalize(to.p - v.p), &pdf_pos, &pdf_dir, time_);
     return pmf * pdf_pos;
   }
   // The normal the light tree weighs at a vertex for next-event estimation: the geometric one at
@@ -138,13 +138,14 @@ class Bdpt {
   // the media's transmittances (through invisible boundaries), 0 if a surface is in the way.
   Spectrum transmittance(const PathVertex& a, const PathVertex& b) const {
     Ray r;
+    r.time = time_;
     Vec3 d = b.p - a.p;
     float dist = length(d);
     if (!(dist > 0)) return Spectrum(0.0f);
     r.d = d / dist;
     r.o = a.type == VertexType::Surface ? spawn_origin(a.sp, r.d) : a.p;
     r.tmin = 0;
-    if (!b.infinite) r = spawn_ray_to(r.o, b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p);
+    if (!b.infinite) r = spawn_ray_to(r.o, b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p, time_);
     return transmittance(a, r);
   }
   // The same along a shadow ray leaving a: a's volume stack is the side a was reached from.
@@ -267,6 +268,8 @@ class Bdpt {
   const LightSet& lights_;
   const IntegratorSettings& s_;
   const CameraSample& cs_;
+  // The sample's shutter time (motion blur): both subpaths, their connections and the camera.
+  const float time_;
   Sampler& sampler_;
   SampleStats& stats_;
   BdptScratch& scratch_;

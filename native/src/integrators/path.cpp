@@ -17,6 +17,7 @@ template <bool kMedia>
 SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSettings& s, const CameraSample& cs,
                   Sampler& sampler, SampleStats& stats) {
   const Ray& camera_ray = cs.ray;
+  const float time = camera_ray.time;  // the whole path's (motion blur)
   SampleValue out;
   const LightSet& lights = scene.lights;
   const VolumeEstimator est = s.volume_estimator;
@@ -56,7 +57,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
     if (prev_delta || (prev_below && light == lights.world_light() && !scene.world.has_map())) return 1.0f;
-    float light_pdf = lights.pmf_nee(prev_p, prev_n, light) * lights.pdf(scene, light, prev_p, dir, t);
+    float light_pdf = lights.pmf_nee(prev_p, prev_n, light) * lights.pdf(scene, light, prev_p, dir, t, time);
     return power_heuristic(prev_pdf, light_pdf);
   };
   // NEE from p (a medium point when sp is null): one light picked by the light tree at p, MIS-weighted
@@ -68,11 +69,12 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     int li = lights.pick_nee(p, sp ? side : Vec3(0.0f), sampler.next_1d(), &pmf);
     Vec2 u = sampler.next_2d();
     LightSample ls;
-    if (li < 0 || !(pmf > 0) || !lights.sample(scene, li, p, u, &ls) || !(ls.pdf > 0) || is_black(ls.radiance)) return;
+    if (li < 0 || !(pmf > 0) || !lights.sample(scene, li, p, u, &ls, time) || !(ls.pdf > 0) || is_black(ls.radiance))
+      return;
     float scatter_pdf;
     Spectrum fv = f(ls.wi, &scatter_pdf);
     if (is_black(fv)) return;
-    const Ray shadow = shadow_ray(sp ? spawn_origin(*sp, ls.wi) : p, ls);
+    const Ray shadow = shadow_ray(sp ? spawn_origin(*sp, ls.wi) : p, ls, time);
     Spectrum T(1.0f);
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;

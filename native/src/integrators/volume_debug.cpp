@@ -81,7 +81,7 @@ class VolumeDebugIntegrator final : public Integrator {
     float fx = std::min(cs.film.x - col * hw, float(hw)) * w_ / float(hw);
     float fy = std::min(cs.film.y - top * hh, float(hh)) * h_ / float(hh);
     Ray ray;
-    if (!ctx_.camera.generate(fx, fy, cs.lens, &ray)) {
+    if (!ctx_.camera.generate(fx, fy, cs.lens, &ray, cs.ray.time)) {
       SampleValue none;  // nothing seen there: black and opaque, as render.cpp
       none.alpha = 1;
       return none;

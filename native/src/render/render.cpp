@@ -43,7 +43,8 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
       integrator_(make_integrator(
           s.integrator, RenderContext{scene, camera_, filter_, with_passes(s), s.x0, s.y0, s.x1 - s.x0, s.y1 - s.y0})),
       film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
-      active_(size_t(film_.width()) * film_.height(), 1) {
+      active_(size_t(film_.width()) * film_.height(), 1),
+      motion_(scene.geometry.has_motion() || camera_.has_motion()) {
   active_pixels_.store(active_.size());
   film_.set_labels(integrator_->film_labels());
   camera_x_ = normalize(scene.camera.xf.column(0));
@@ -150,7 +151,12 @@ void RenderJob::render_pass(int sample_index) {
             cs.film = {fx + 0.5f + ox, fy + 0.5f + oy};
             // A lens sample only for a camera with an aperture: a pinhole's renders stay as they were.
             if (camera_.has_lens()) cs.lens = sampler.next_2d();
-            if (!camera_.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray)) {
+            // Motion blur: one shutter time per camera sample (Cycles' PRNG_TIME, uniform over the
+            // shutter as its default shutter curve), drawn only when something moves so that
+            // other scenes keep their numbers; the whole path, shadow rays and BDPT's light
+            // subpath of this sample happen at it.
+            const float time = motion_ ? sampler.next_1d() : 0.5f;
+            if (!camera_.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray, time)) {
               // The film sees nothing there (outside a fisheye's circle): black and opaque, as Cycles.
               // No light path is traced for it; it still counts as one, harmlessly: only panoramas
               // have such samples, and BDPT splats nothing for them (Camera::connectable).

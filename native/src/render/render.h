@@ -118,6 +118,7 @@ class RenderJob {
   // Samples traced in the current pass, of them in half B (BDPT: one light path each).
   std::atomic<uint64_t> pass_samples_{0}, pass_samples_half_{0};
   std::vector<uint8_t> active_;  // per pixel of the region: still sampling
+  bool motion_ = false;          // something moves: each camera sample draws a shutter time
   std::chrono::steady_clock::time_point start_;
   std::atomic<double> finished_elapsed_{-1};
   // Written without allocating (the failure may be an allocation's).

@@ -42,10 +42,31 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : d_(desc), width_
     fisheye_w_ = horizontal ? size : size * xr / yr;
     fisheye_h_ = horizontal ? size * yr / xr : size;
   }
-  origin_ = desc.xf.point(Vec3(0.0f));
-  right_ = normalize(desc.xf.vector(Vec3(1, 0, 0)));
-  up_ = normalize(desc.xf.vector(Vec3(0, 1, 0)));
-  forward_neg_ = normalize(desc.xf.vector(Vec3(0, 0, 1)));
+  centre_ = basis_of(desc.xf);
+  if (desc.motion.size() >= 2) motion_ = decompose_motion(desc.motion);
+  generation_ = next_motion_generation();
+  d_.motion.clear();  // the decomposed steps are kept
+}
+
+// BDPT asks for the camera at its sample's time for every connection and MIS weight: the last
+// basis is kept per thread (a pure function of its key, so renders stay deterministic).
+Camera::Basis Camera::moving_basis(float time) const {
+  thread_local struct {
+    uint64_t generation = 0;
+    float time = -1;
+    Basis basis;
+  } last;
+  if (last.generation != generation_ || last.time != time) {
+    last.basis = basis_of(interpolate_motion(motion_, time));
+    last.generation = generation_;
+    last.time = time;
+  }
+  return last.basis;
+}
+
+Camera::Basis Camera::basis_of(const Transform& xf) {
+  return {xf.point(Vec3(0.0f)), normalize(xf.vector(Vec3(1, 0, 0))), normalize(xf.vector(Vec3(0, 1, 0))),
+          normalize(xf.vector(Vec3(0, 0, 1)))};
 }
 
 // Uniform over the aperture: the disk by Shirley and Chiu's concentric map, or a regular polygon
@@ -80,10 +101,11 @@ float Camera::lens_area() const {
   return shape * r * r / d_.aperture_ratio;
 }
 
-Vec3 Camera::lens_point(Vec2 u) const {
-  if (!has_lens()) return origin_;
+Vec3 Camera::lens_point(Vec2 u, float time) const {
+  const Basis b = basis(time);
+  if (!has_lens()) return b.origin;
   const Vec2 l = aperture_offset(u);
-  return origin_ + right_ * l.x + up_ * l.y;
+  return b.origin + b.right * l.x + b.up * l.y;
 }
 
 Vec3 Camera::panorama_direction(float x, float y) const {
@@ -116,8 +138,10 @@ Vec3 Camera::panorama_direction(float x, float y) const {
   return {a / r * s, b / r * s, -std::cos(theta)};
 }
 
-bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r) const {
+bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
   const Vec2 pp = plane_point(x, y);
+  const Basis b = basis(time);
+  r->time = time;
   if (d_.panorama) {
     Vec3 d = panorama_direction(x, y);
     if (is_zero(d)) return false;
@@ -133,21 +157,21 @@ bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r) const {
       o = u * l.x + v * l.y;
       d = normalize(d * d_.focus_distance - o);
     }
-    r->o = origin_ + to_world(o);
-    r->d = normalize(to_world(d));
+    r->o = b.origin + b.to_world(o);
+    r->d = normalize(b.to_world(d));
     r->tmin = d_.clip_start;
     r->tmax = d_.clip_end;
     return true;
   }
   if (d_.orthographic) {
-    r->o = origin_ + right_ * pp.x + up_ * pp.y;
-    r->d = -forward_neg_;
+    r->o = b.origin + b.right * pp.x + b.up * pp.y;
+    r->d = -b.forward_neg;
     if (has_lens()) {
       // Cycles' orthographic depth of field: every ray aims at the focus point on the view axis
       // (camera_sample_orthographic), so only the focus plane stays sharp.
       const Vec2 l = aperture_offset(u_lens);
-      r->o = r->o + right_ * l.x + up_ * l.y;
-      r->d = normalize(to_world(Vec3(-l.x, -l.y, -d_.focus_distance)));
+      r->o = r->o + b.right * l.x + b.up * l.y;
+      r->d = normalize(b.to_world(Vec3(-l.x, -l.y, -d_.focus_distance)));
     }
     r->tmin = d_.clip_start;
     r->tmax = d_.clip_end;
@@ -160,11 +184,11 @@ bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r) const {
     // point on the plane in focus, seen from a point on the lens.
     const Vec2 l = aperture_offset(u_lens);
     const Vec3 lens(l.x, l.y, 0.0f);
-    r->o = origin_ + to_world(lens);
-    r->d = normalize(to_world(local * d_.focus_distance - lens));
+    r->o = b.origin + b.to_world(lens);
+    r->d = normalize(b.to_world(local * d_.focus_distance - lens));
   } else {
-    r->o = origin_;
-    r->d = (right_ * pp.x + up_ * pp.y - forward_neg_) * (1.0f / len);
+    r->o = b.origin;
+    r->d = (b.right * pp.x + b.up * pp.y - b.forward_neg) * (1.0f / len);
   }
   // Clipping planes are perpendicular to the axis, as in Cycles (with a lens, Cycles keeps the
   // pinhole ray's range along the lens ray: 1 / cos of the pinhole ray).
@@ -173,19 +197,21 @@ bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r) const {
   return true;
 }
 
-bool Camera::project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance) const {
+bool Camera::project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance,
+                     float time) const {
   if (!connectable()) return false;
+  const Basis b = basis(time);
   Vec3 v = p - o;
-  float z = -dot(v, forward_neg_);
+  float z = -dot(v, b.forward_neg);
   if (!(z > 0)) return false;
   float dist = length(v);
-  float px = dot(v, right_) / z, py = dot(v, up_) / z;
+  float px = dot(v, b.right) / z, py = dot(v, b.up) / z;
   if (has_lens()) {
     // The ray from o through p meets the plane in focus at the pinhole ray of film position
     // (px, py) (Camera::generate); its clipping range along the ray is the pinhole ray's.
-    const Vec3 l = o - origin_;
-    px += dot(l, right_) / d_.focus_distance;
-    py += dot(l, up_) / d_.focus_distance;
+    const Vec3 l = o - b.origin;
+    px += dot(l, b.right) / d_.focus_distance;
+    py += dot(l, b.up) / d_.focus_distance;
     const float len = std::sqrt(px * px + py * py + 1);
     if (dist < d_.clip_start * len || dist > d_.clip_end * len) return false;
   } else if (z < d_.clip_start || z > d_.clip_end) {
@@ -210,15 +236,17 @@ void Camera::differentials(float x, float y, float* dP, float* dD) const {
     return;
   }
   const float sx = (x1_ - x0_) / width_, sy = (y1_ - y0_) / height_;  // a pixel on the view plane
+  // The footprint's size does not depend on where the camera is: the centre's axes.
+  const Vec3 &right = centre_.right, &up = centre_.up, &forward_neg = centre_.forward_neg;
   if (d_.orthographic) {
-    *dP = 0.5f * (length(right_ * sx) + length(up_ * sy));
+    *dP = 0.5f * (length(right * sx) + length(up * sy));
     *dD = 0;
     return;
   }
   const Vec2 pp = plane_point(x, y);
-  const Vec3 d = right_ * pp.x + up_ * pp.y - forward_neg_, n = normalize(d);
+  const Vec3 d = right * pp.x + up * pp.y - forward_neg, n = normalize(d);
   *dP = 0;
-  *dD = 0.5f * (length(normalize(d + right_ * sx) - n) + length(normalize(d + up_ * sy) - n));
+  *dD = 0.5f * (length(normalize(d + right * sx) - n) + length(normalize(d + up * sy) - n));
 }
 
 }  // namespace lt

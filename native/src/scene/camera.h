@@ -4,8 +4,11 @@
 // (equirectangular, fisheye equidistant and equisolid; kernel/camera/camera.h and projection.h).
 #pragma once
 
+#include <vector>
+
 #include "core/math.h"
 #include "core/sampling.h"
+#include "geometry/motion.h"
 
 namespace lt {
 
@@ -32,6 +35,9 @@ struct CameraDesc {
   PanoramaType panorama_type = PanoramaType::FisheyeEquisolid;
   float fisheye_fov = kPi, fisheye_lens = 10.5f;
   float latitude_min = -0.5f * kPi, latitude_max = 0.5f * kPi, longitude_min = -kPi, longitude_max = kPi;
+  // Motion blur: 0, or 2 to 129 transforms equally spaced over the shutter, the centre one xf
+  // (Cycles interpolates them as objects', kernel/camera/camera.h); the lens stays as it is.
+  std::vector<Transform> motion;
 };
 
 // Cycles' aperture radius from Blender's F-stop (blender/camera.cpp): the focal length in metres
@@ -46,25 +52,30 @@ class Camera {
   // The ray through the film position (x, y) in pixels of the full frame, y up from the bottom,
   // from the lens point u_lens picks (ignored by a pinhole: has_lens()). False where the film
   // sees nothing (outside a fisheye's circle): Cycles leaves such samples black and opaque.
-  bool generate(float x, float y, Vec2 u_lens, Ray* ray) const;
+  // time: the shutter time of the sample (motion blur), which the ray carries.
+  bool generate(float x, float y, Vec2 u_lens, Ray* ray, float time = 0.5f) const;
   // The pinhole's ray (no lens) through (x, y); false as generate.
   bool generate(float x, float y, Ray* ray) const { return generate(x, y, Vec2{0.5f, 0.5f}, ray); }
+  // Whether the camera moves over the shutter.
+  bool has_motion() const { return !motion_.empty(); }
   // Cycles' compact ray differentials there (camera_sample_perspective / _orthographic /
   // _panorama, without depth of field): the footprint's size at the camera (dP) and its growth
   // per unit distance (dD: the angle between neighbouring pixels' rays).
   void differentials(float x, float y, float* dP, float* dD) const;
   // Blender's Z depth of a world point: the distance along the viewing axis, or from the camera
-  // for a panorama (Cycles' camera_z_depth).
-  float depth(const Vec3& p) const { return d_.panorama ? length(p - origin_) : -dot(p - origin_, forward_neg_); }
-  Vec3 position() const { return origin_; }
-  Vec3 forward() const { return -forward_neg_; }
+  // for a panorama (Cycles' camera_z_depth), from the camera at the shutter's centre (as Cycles).
+  float depth(const Vec3& p) const {
+    return d_.panorama ? length(p - centre_.origin) : -dot(p - centre_.origin, centre_.forward_neg);
+  }
+  Vec3 position(float time = 0.5f) const { return basis(time).origin; }
+  Vec3 forward(float time = 0.5f) const { return -basis(time).forward_neg; }
   bool orthographic() const { return d_.orthographic; }
   bool panorama() const { return d_.panorama; }
   // A thin lens with an aperture: camera rays start on it and draw a lens sample (one next_2d).
   bool has_lens() const { return d_.aperture_radius > 0; }
   // The point on the lens for the sample u (world space; the camera's position without a lens).
   // Uniform over the aperture's shape, whose area lens_area() is.
-  Vec3 lens_point(Vec2 u) const;
+  Vec3 lens_point(Vec2 u, float time = 0.5f) const;
   float lens_area() const;
   int width() const { return width_; }  // the film: the full frame in pixels
   int height() const { return height_; }
@@ -77,7 +88,8 @@ class Camera {
   // full-frame film position (pixels, y up) of the camera ray from o that passes through p, the
   // unit direction from o to p and the distance. False if the camera is not connectable, or p is
   // behind the camera, outside the ray's clipping range or off the film (margin included).
-  bool project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance) const;
+  bool project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance,
+               float time = 0.5f) const;
   // The view-plane area of one pixel at unit distance, a: a camera ray from any lens point in the
   // direction making angle theta with the view axis has solid-angle density
   // pixel_density / (a cos^3 theta) (pbrt 3, section 16.1.1; the same with a lens, pbrt-v4's
@@ -94,14 +106,24 @@ class Camera {
   // A panorama's direction in camera space (x right, y up, -z forward) at film position (x, y);
   // zero where the projection sees nothing.
   Vec3 panorama_direction(float x, float y) const;
-  Vec3 to_world(const Vec3& local) const { return right_ * local.x + up_ * local.y + forward_neg_ * local.z; }
+  // The camera's position and axes (forward_neg: local +Z; the camera looks down -Z).
+  struct Basis {
+    Vec3 origin, right, up, forward_neg;
+    Vec3 to_world(const Vec3& local) const { return right * local.x + up * local.y + forward_neg * local.z; }
+  };
+  static Basis basis_of(const Transform& xf);
+  // At a shutter time: the centre's, or interpolated between the motion steps.
+  Basis basis(float time) const { return motion_.empty() ? centre_ : moving_basis(time); }
+  Basis moving_basis(float time) const;
 
   CameraDesc d_;
   int width_ = 1, height_ = 1;
   float x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // view plane at unit distance (or ortho plane)
   float pixel_area_ = 1;
-  float fisheye_w_ = 36, fisheye_h_ = 24;   // the equisolid's sensor, fitted to the frame
-  Vec3 origin_, right_, up_, forward_neg_;  // forward_neg_: local +Z (the camera looks down -Z)
+  float fisheye_w_ = 36, fisheye_h_ = 24;  // the equisolid's sensor, fitted to the frame
+  Basis centre_;
+  std::vector<DecomposedTransform> motion_;
+  uint64_t generation_ = 0;  // moving_basis()'s per-thread cache key (copies share the contents)
 };
 
 }  // namespace lt

@@ -149,7 +149,7 @@ void tangent(const Instr& in, Machine& m) {
     const Vec3 g = c.generated - Vec3(0.5f);
     t = in.param[1] == 0 ? Vec3(0.0f, -g.z, g.y) : in.param[1] == 1 ? Vec3(-g.z, 0.0f, g.x) : Vec3(-g.y, g.x, 0.0f);
   }
-  if (c.instance) t = normalized_or_zero(c.instance->normal_to_world(t));
+  if (c.instance) t = normalized_or_zero(c.pose.normal_to_world(t));
   const Vec3 r = cross(c.N, normalize(cross(t, c.N)));
   m.set(in.out[0], is_finite(r) ? r : Vec3(0.0f));
 }
@@ -176,17 +176,17 @@ void normal_map(const Instr& in, Machine& m) {
       const Vec3* cn = &mesh.corner_normals[3 * size_t(c.primitive)];
       normal = cn[0] * (1 - c.bary.x - c.bary.y) + cn[1] * c.bary.x + cn[2] * c.bary.y;
     } else {
-      normal = normalized_or_zero(c.instance->normal_to_object(c.backfacing ? -c.Ng : c.Ng));
+      normal = normalized_or_zero(c.pose.normal_to_object(c.backfacing ? -c.Ng : c.Ng));
     }
     const Vec3 B = sign * cross(normal, tangent);
     N = normalized_or_zero(color.x * tangent + color.y * B + color.z * normal);
-    N = normalized_or_zero(c.instance->normal_to_world(N));
+    N = normalized_or_zero(c.pose.normal_to_world(N));
   } else {
     if (space == 3 || space == 4) {  // Blender's convention: Y and Z flipped
       color.y = -color.y;
       color.z = -color.z;
     }
-    N = (space == 1 || space == 3) && c.instance ? normalized_or_zero(c.instance->normal_to_world(color))
+    N = (space == 1 || space == 3) && c.instance ? normalized_or_zero(c.pose.normal_to_world(color))
                                                  : normalized_or_zero(color);
   }
   if (c.backfacing) N = -N;
@@ -244,7 +244,7 @@ void image_box(const Instr& in, Machine& m) {
   const bool unassociate = in.param[1] != 0;
   float blend;
   std::memcpy(&blend, &in.param[3], 4);
-  const Vec3 signed_N = c.instance ? normalized_or_zero(c.instance->normal_to_object(c.N)) : c.N;
+  const Vec3 signed_N = c.instance ? normalized_or_zero(c.pose.normal_to_object(c.N)) : c.N;
   Vec3 N(std::abs(signed_N.x), std::abs(signed_N.y), std::abs(signed_N.z));
   const float sum = N.x + N.y + N.z;
   N = sum > 0 ? N / sum : Vec3(1.0f, 0.0f, 0.0f);
@@ -366,8 +366,7 @@ void displacement(const Instr& in, Machine& m) {
   const float h = (m.f(in.in[0]) - m.f(in.in[1])) * m.f(in.in[2]);
   const Vec3 n = normal_or_default(m, in.in[3]);
   Vec3 d = n * h;
-  if (in.param[0] == 0 && c.instance)
-    d = c.instance->xf.vector(normalized_or_zero(c.instance->normal_to_object(n)) * h);
+  if (in.param[0] == 0 && c.instance) d = c.pose.xf.vector(normalized_or_zero(c.pose.normal_to_object(n)) * h);
   m.set(in.out[0], d);
 }
 
@@ -379,7 +378,7 @@ void vector_displacement(const Instr& in, Machine& m) {
   Vec3 d = (m.v(in.in[0]) - Vec3(mid)) * m.f(in.in[2]);
   const uint32_t space = in.param[0];
   if (space == 0) {
-    const Vec3 normal = c.instance ? normalized_or_zero(c.instance->normal_to_object(c.N)) : c.N;
+    const Vec3 normal = c.instance ? normalized_or_zero(c.pose.normal_to_object(c.N)) : c.N;
     float t[4];
     Vec3 tangent;
     float sign = 1;
@@ -390,13 +389,13 @@ void vector_displacement(const Instr& in, Machine& m) {
       // No UV map: Cycles' normalize(sd->dPdu), the triangle's first edge in world space (Cycles
       // mixes it with the object-space normal as is), reversed on a back face.
       const uint32_t* tri = &c.mesh->indices[3 * size_t(c.primitive)];
-      tangent = normalized_or_zero(c.instance->xf.vector(c.mesh->positions[tri[1]] - c.mesh->positions[tri[0]]));
+      tangent = normalized_or_zero(c.pose.xf.vector(c.mesh->positions[tri[1]] - c.mesh->positions[tri[0]]));
       if (c.backfacing) tangent = -tangent;
     }
     const Vec3 bitangent = normalized_or_zero(cross(normal, tangent)) * sign;
     d = tangent * d.x + normal * d.y + bitangent * d.z;
   }
-  if (space != 2 && c.instance) d = c.instance->xf.vector(d);
+  if (space != 2 && c.instance) d = c.pose.xf.vector(d);
   m.set(in.out[0], d);
 }
 

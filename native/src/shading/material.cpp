@@ -32,6 +32,7 @@ ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp,
   c.ray_length = t;
   c.mesh = &geometry.mesh(inst.mesh);
   c.instance = &inst;
+  c.pose = geometry.pose(sp.instance, sp.time);
   set_shading_normal(&c, c.N);
   c.primitive = sp.primitive;
   return c;
@@ -39,10 +40,10 @@ ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp,
 
 void set_shading_normal(ShadingContext* c, const Vec3& n) {
   c->N = n;
-  const Instance& inst = *c->instance;
-  c->object_N = normalize(inst.normal_to_object(n));
+  const Pose& pose = c->pose;
+  c->object_N = normalize(pose.normal_to_object(n));
   // Cycles' primitive_tangent: a tangent around the generated Z axis, made normal to N.
-  const Vec3 around = inst.normal_to_world(Vec3(-(c->generated.y - 0.5f), c->generated.x - 0.5f, 0.0f));
+  const Vec3 around = pose.normal_to_world(Vec3(-(c->generated.y - 0.5f), c->generated.x - 0.5f, 0.0f));
   const Vec3 tangent = cross(n, normalize(cross(around, n)));
   c->tangent = is_finite(tangent) ? tangent : Vec3(0.0f);
 }
@@ -51,11 +52,13 @@ void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float f
   ctx->footprint = footprint;
   const Instance& inst = geometry.instance(sp.instance);
   const Mesh& mesh = geometry.mesh(inst.mesh);
-  const uint32_t* tri = &mesh.indices[3 * size_t(sp.primitive)];
-  // The triangle's edges in world space: a move dP in its plane changes the barycentrics of
-  // vertices 1 and 2 by the solution of dP = e1 db1 + e2 db2 (least squares, exact in the plane).
-  const Vec3 p0 = inst.xf.point(mesh.positions[tri[0]]);
-  const Vec3 e1 = inst.xf.point(mesh.positions[tri[1]]) - p0, e2 = inst.xf.point(mesh.positions[tri[2]]) - p0;
+  // The triangle's edges in world space (at the point's time): a move dP in its plane changes the
+  // barycentrics of vertices 1 and 2 by the solution of dP = e1 db1 + e2 db2 (least squares,
+  // exact in the plane).
+  Vec3 q[3], w[3];
+  geometry.object_corners(mesh, sp.primitive, sp.time, &q[0], &q[1], &q[2]);
+  geometry.triangle(sp.instance, sp.primitive, &w[0], &w[1], &w[2], sp.time);
+  const Vec3 e1 = w[1] - w[0], e2 = w[2] - w[0];
   const float a11 = dot(e1, e1), a12 = dot(e1, e2), a22 = dot(e2, e2), det = a11 * a22 - a12 * a12;
   Vec3 dirs[2];
   orthonormals(ctx->Ng, &dirs[0], &dirs[1]);
@@ -66,8 +69,7 @@ void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float f
     const float r1 = dot(o.P, e1), r2 = dot(o.P, e2);
     o.bary = det != 0 ? Vec2{(a22 * r1 - a12 * r2) / det, (a11 * r2 - a12 * r1) / det} : Vec2{0, 0};
     // Object space: the same move through the inverse transform, i.e. barycentrics in object space.
-    const Vec3 q0 = mesh.positions[tri[0]];
-    o.object_P = (mesh.positions[tri[1]] - q0) * o.bary.x + (mesh.positions[tri[2]] - q0) * o.bary.y;
+    o.object_P = (q[1] - q[0]) * o.bary.x + (q[2] - q[0]) * o.bary.y;
     o.generated = o.object_P / size;
     if (!mesh.corner_uvs.empty()) {
       const Vec2* uv = &mesh.corner_uvs[3 * size_t(sp.primitive)];

@@ -19,6 +19,7 @@
 
 #include "core/math.h"
 #include "core/sampling.h"
+#include "geometry/motion.h"
 
 namespace lt {
 
@@ -59,6 +60,7 @@ struct ShadingContext {
   } offset[2];
   const Mesh* mesh = nullptr;
   const Instance* instance = nullptr;
+  Pose pose;  // the instance's transform at the ray's time (motion blur); identity without an instance
   int primitive = -1;
   // Light Path: the ray that reached this point and the bounces before it.
   bool camera_ray = true, shadow_ray = false, diffuse_ray = false, glossy_ray = false, singular_ray = false;

@@ -100,16 +100,17 @@ struct LampHit {
 };
 
 // The shadow ray from `origin` (already offset off its surface) to a sampled light: to infinity for
-// sun and world, else to the light point, moved off an emissive surface towards the origin.
-inline Ray shadow_ray(const Vec3& origin, const LightSample& ls) {
+// sun and world, else to the light point (at the sample's time), moved off an emissive surface towards the origin.
+inline Ray shadow_ray(const Vec3& origin, const LightSample& ls, float time) {
   if (std::isinf(ls.distance)) {
     Ray r;
     r.o = origin;
     r.d = ls.wi;
+    r.time = time;
     return r;
   }
-  return spawn_ray_to(origin,
-                      ls.on_surface ? offset_ray_origin(ls.p, dot(ls.n, origin - ls.p) >= 0 ? ls.n : -ls.n) : ls.p);
+  return spawn_ray_to(
+      origin, ls.on_surface ? offset_ray_origin(ls.p, dot(ls.n, origin - ls.p) >= 0 ? ls.n : -ls.n) : ls.p, time);
 }
 
 // Infinite lights (sun, world) emit from a disk perpendicular to the direction over the scene's

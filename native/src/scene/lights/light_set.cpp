@@ -52,6 +52,21 @@ LightBounds bounds_of(const Light& l, const Geometry& geometry) {
       b.phi = 2 * power;  // power: the emission estimate x area x pi; both sides emit
       b.w = normalize(cross(p1 - p0, p2 - p0));
       b.cos_o = 1;
+      const Instance& inst = geometry.instance(l.instance);
+      const int steps = std::max(int(inst.motion.size()), geometry.mesh(inst.mesh).motion_steps);
+      if (steps > 1) {
+        // A moving emitter: its box over the motion steps (at and between them, by linearity
+        // of each step's motion up to the rotation's arc, widened below), facing any way.
+        Bounds box;
+        for (int k = 0; k < steps; ++k) {
+          geometry.triangle(l.instance, l.primitive, &p0, &p1, &p2, float(k) / float(steps - 1));
+          for (const Vec3* q : {&p0, &p1, &p2}) box.extend(*q);
+        }
+        const Vec3 margin = (box.hi - box.lo) * 0.5f;
+        b.box.extend(box.lo - margin);
+        b.box.extend(box.hi + margin);
+        b.cos_o = -1;
+      }
       b.cos_e = 0;
       b.two_sided = true;
       break;
@@ -178,7 +193,7 @@ int LightSet::triangle_light(int instance, int primitive) const {
   return it != triangle_index_.end() && it->first == key ? it->second : -1;
 }
 
-bool LightSet::sample(const Scene& scene, int i, const Vec3& p, Vec2 u, LightSample* s) const {
+bool LightSet::sample(const Scene& scene, int i, const Vec3& p, Vec2 u, LightSample* s, float time) const {
   const Light& l = lights_[i];
   switch (l.type) {
     case LightType::Point:
@@ -189,14 +204,14 @@ bool LightSet::sample(const Scene& scene, int i, const Vec3& p, Vec2 u, LightSam
     case LightType::Sun:
       return sun_sample(l, u, s);
     case LightType::Triangle:
-      return triangle_light_sample(scene, l, p, u, s);
+      return triangle_light_sample(scene, l, p, u, time, s);
     case LightType::World:
       return world_sample(scene.world, u, s);
   }
   return false;
 }
 
-float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, float t) const {
+float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, float t, float time) const {
   const Light& l = lights_[i];
   switch (l.type) {
     case LightType::Point:
@@ -207,16 +222,17 @@ float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, fl
     case LightType::Sun:
       return sun_pdf(l, wi);
     case LightType::Triangle:
-      return triangle_light_pdf(scene, l, wi, t);
+      return triangle_light_pdf(scene, l, wi, t, time);
     case LightType::World:
       return world_pdf(scene.world, wi);
   }
   return 0;
 }
 
-bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, EmissionSample* e) const {
+bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, EmissionSample* e, float time) const {
   const Light& l = lights_[i];
   e->delta_pos = e->delta_dir = false;
+  e->ray.time = time;
   switch (l.type) {
     case LightType::Point:
     case LightType::Spot:
@@ -224,7 +240,7 @@ bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, Emis
     case LightType::Area:
       return area_lamp_sample_emission(l, up, ud, e);
     case LightType::Triangle:
-      return triangle_light_sample_emission(scene, l, up, ud, e);
+      return triangle_light_sample_emission(scene, l, up, ud, time, e);
     case LightType::Sun:
       return sun_sample_emission(l, scene_center_, scene_radius_, up, ud, e);
     case LightType::World:
@@ -234,7 +250,7 @@ bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, Emis
 }
 
 void LightSet::pdf_emission(const Scene& scene, int i, const Vec3& origin, const Vec3& n, const Vec3& dir,
-                            float* pdf_pos, float* pdf_dir) const {
+                            float* pdf_pos, float* pdf_dir, float time) const {
   const Light& l = lights_[i];
   switch (l.type) {
     case LightType::Point:
@@ -243,7 +259,7 @@ void LightSet::pdf_emission(const Scene& scene, int i, const Vec3& origin, const
     case LightType::Area:
       return area_lamp_pdf_emission(l, dir, pdf_pos, pdf_dir);
     case LightType::Triangle:
-      return triangle_light_pdf_emission(l, n, dir, pdf_pos, pdf_dir);
+      return triangle_light_pdf_emission(scene, l, n, dir, time, pdf_pos, pdf_dir);
     case LightType::Sun:
     case LightType::World:
       *pdf_pos = scene_disk_pdf(scene_radius_);

@@ -47,16 +47,19 @@ class LightSet {
   int triangle_light(int instance, int primitive) const;
   int world_light() const { return world_light_; }
 
-  bool sample(const Scene& scene, int light, const Vec3& p, Vec2 u, LightSample* out) const;
+  // time: the sample's shutter time (motion blur: emissive triangles move; lamps do not, as in
+  // Cycles 3.4).
+  bool sample(const Scene& scene, int light, const Vec3& p, Vec2 u, LightSample* out, float time = 0.5f) const;
   // Solid-angle pdf that sample() picks direction wi from p for this light (selection excluded);
   // for area-like lights the point at distance t along wi.
-  float pdf(const Scene& scene, int light, const Vec3& p, const Vec3& wi, float t) const;
+  float pdf(const Scene& scene, int light, const Vec3& p, const Vec3& wi, float t, float time = 0.5f) const;
 
   // Emission sampling for light subpaths, and its densities for a given origin (normal n) and
   // direction. Infinite lights emit from the scene's disk (emit_from_scene_disk).
-  bool sample_emission(const Scene& scene, int light, Vec2 u_pos, Vec2 u_dir, EmissionSample* out) const;
+  bool sample_emission(const Scene& scene, int light, Vec2 u_pos, Vec2 u_dir, EmissionSample* out,
+                       float time = 0.5f) const;
   void pdf_emission(const Scene& scene, int light, const Vec3& origin, const Vec3& n, const Vec3& dir, float* pdf_pos,
-                    float* pdf_dir) const;
+                    float* pdf_dir, float time = 0.5f) const;
   float scene_radius() const { return scene_radius_; }
   Vec3 scene_center() const { return scene_center_; }
 

@@ -1,0 +1,260 @@
+"""Motion blur: the depsgraph sampled at the shutter's sub-frames, as Cycles 3.4 does
+(blender/object.cpp, BlenderSync::sync_motion): object and camera transforms at their motion steps,
+and deforming meshes' vertices. Only what actually moves is sent to the core, so a scene without
+motion renders exactly as with motion blur off.
+
+Cycles' conventions followed: the shutter (Render > Motion Blur > Shutter, in frames) opens around
+the frame (CENTER), from it (START) or up to it (END), scene.cycles.motion_blur_position; an
+object's steps are 2^motion_steps + 1 (object_motion_steps), equally spaced over the shutter, the
+middle one at the shutter's centre; obj.cycles.use_motion_blur and use_deform_motion switch them
+per object (and the instancer's, for instances). An object missing at a step keeps its centre
+transform there (Object::update_motion); one missing at the centre is not rendered. Lights do not
+move (Cycles 3.4 has no light motion); Volume objects are rendered at the shutter's centre.
+"""
+
+import numpy as np
+
+# Blender's frame range (MAXFRAME): sub-frames beyond it cannot be evaluated.
+MAX_FRAME = 1048574
+_MESH_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
+
+
+def _cycles(idblock):
+    return getattr(idblock, "cycles", None)
+
+
+def object_motion_steps(obj, parent=None):
+    """Cycles' object_motion_steps: 0 without motion blur, else 2^steps + 1 (steps 1 to 7)."""
+    settings = _cycles(obj)
+    if settings is None:
+        return 3  # without the Cycles add-on: Cycles' defaults (on, 1 step)
+    if not settings.use_motion_blur:
+        return 0
+    steps = max(1, settings.motion_steps)
+    if parent is not None and parent != obj:
+        ps = _cycles(parent)
+        if ps is not None:
+            if not ps.use_motion_blur:
+                return 0
+            steps = max(steps, ps.motion_steps)
+    return min((2 << (min(steps, 7) - 1)) + 1, 129)
+
+
+def _uses_deform(obj, parent=None):
+    settings = _cycles(obj)
+    use = settings is None or settings.use_deform_motion
+    if parent is not None and parent != obj:
+        ps = _cycles(parent)
+        use = use and (ps is None or ps.use_deform_motion)
+    return use
+
+
+def relative_time(step, steps):
+    """Cycles' motion_time: -1 (shutter open) to 1 (shutter closed)."""
+    return 2.0 * step / (steps - 1) - 1.0
+
+
+def _shutter_curve_flat(rd):
+    """Whether the shutter curve (Render > Motion Blur > Shutter Curve) is constant, as Blender's
+    default: Lantern opens the shutter uniformly."""
+    try:
+        curve = rd.motion_blur_shutter_curve
+        curve.initialize()
+        values = [curve.evaluate(curve.curves[0], x / 16.0) for x in range(17)]
+    except (AttributeError, IndexError, RuntimeError):
+        return True
+    return max(values) - min(values) <= 1e-4 * max(1.0, abs(max(values)))
+
+
+def _key(inst):
+    if inst.is_instance:
+        return (inst.object.original.as_pointer(), inst.parent.original.as_pointer(), tuple(inst.persistent_id))
+    return (inst.object.original.as_pointer(),)
+
+
+def _vertices(obj):
+    mesh = obj.data
+    if mesh is None or not hasattr(mesh, "vertices"):
+        return None
+    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    return co
+
+
+class Motion:
+    """What moves over the shutter, sampled by collect(); the exporters ask transforms() and
+    deformation() at the shutter's centre."""
+
+    def __init__(self, report):
+        self.report = report
+        self.steps = {}        # instance key -> motion steps
+        self.matrices = {}     # instance key -> {step: 4x4 float32}
+        self.deform = {}       # object pointer -> motion steps (deform motion enabled, a mesh)
+        self.centre_co = {}    # object pointer -> vertex positions at the centre
+        self.positions = {}    # object pointer -> {step: arrays of mesh_arrays} (only when they move)
+        self.camera_steps = 0
+        self.camera_matrices = {}
+        self.moving_instances = self.deforming_meshes = 0
+        self.camera_moves = False
+
+    def transforms(self, key, centre, name):
+        """The instance's transforms at its motion steps, or None when it does not move."""
+        steps = self.steps.get(key, 0)
+        mats = self.matrices.get(key)
+        if steps < 3 or not mats:
+            return None
+        centre = np.asarray(centre, dtype=np.float32)
+        out = []
+        missing = False
+        for s in range(steps):
+            m = mats.get(s)
+            if m is None and s != steps // 2:
+                missing = True
+            out.append(centre if m is None else m)
+        if missing:
+            self.report({'WARNING'}, "Object '%s' does not exist at every motion step: its transform at the "
+                                     "shutter's centre is used where it is missing (as Cycles)" % name)
+        if all(np.array_equal(m, centre) for m in out):
+            return None
+        self.moving_instances += 1
+        return np.stack(out)
+
+    def deformation(self, obj, centre_arrays):
+        """(motion_positions, motion_corner_normals or None) of a deforming object, or None."""
+        ptr = obj.original.as_pointer()
+        steps = self.deform.get(ptr, 0)
+        at = self.positions.get(ptr)
+        if steps < 3 or not at:
+            return None
+        tris = centre_arrays["triangles"]
+        positions, normals = [], []
+        for s in range(steps):
+            # A step not recorded had the centre's vertices.
+            a = at.get(s, centre_arrays)
+            if a["positions"].shape != centre_arrays["positions"].shape or \
+                    not np.array_equal(a["triangles"], tris):
+                self.report({'WARNING'}, "Object '%s': its mesh's topology changes over the shutter; "
+                                         "deformation motion blur is off for it (its transform still "
+                                         "moves), as Cycles" % obj.name)
+                return None
+            positions.append(a["positions"])
+            normals.append(a["corner_normals"])
+        self.deforming_meshes += 1
+        has_normals = centre_arrays["corner_normals"] is not None and all(n is not None for n in normals)
+        return np.concatenate(positions), (np.concatenate(normals) if has_normals else None)
+
+    def camera(self, centre):
+        if self.camera_steps < 3 or not self.camera_matrices:
+            return None
+        centre = np.asarray(centre, dtype=np.float32)
+        out = [self.camera_matrices.get(s, centre) for s in range(self.camera_steps)]
+        if all(np.array_equal(m, centre) for m in out):
+            return None
+        self.camera_moves = True
+        return np.stack(out)
+
+
+def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
+    """Records, at relative time rel, the matrices and vertices of what has a step there."""
+    for inst in depsgraph.object_instances:
+        if not inst.show_self:
+            continue
+        obj = inst.object
+        key = _key(inst)
+        steps = motion.steps.get(key, 0)
+        if steps >= 3:
+            s = round((rel + 1.0) * 0.5 * (steps - 1))
+            if abs(relative_time(s, steps) - rel) < 1e-6:
+                motion.matrices.setdefault(key, {})[s] = np.array(inst.matrix_world, dtype=np.float32)
+        if inst.is_instance:
+            continue
+        ptr = obj.original.as_pointer()
+        dsteps = motion.deform.get(ptr, 0)
+        if dsteps >= 3:
+            s = round((rel + 1.0) * 0.5 * (dsteps - 1))
+            if abs(relative_time(s, dsteps) - rel) < 1e-6:
+                co = _vertices(obj)
+                centre = motion.centre_co.get(ptr)
+                if co is not None and (centre is None or not np.array_equal(co, centre)):
+                    arrays = mesh_arrays(obj.data)
+                    if arrays is not None:
+                        motion.positions.setdefault(ptr, {})[s] = arrays
+    if camera_object is not None and motion.camera_steps >= 3:
+        s = round((rel + 1.0) * 0.5 * (motion.camera_steps - 1))
+        if abs(relative_time(s, motion.camera_steps) - rel) < 1e-6:
+            cam = camera_object.evaluated_get(depsgraph)
+            motion.camera_matrices[s] = np.array(cam.matrix_world, dtype=np.float32)
+
+
+def collect(engine, depsgraph, camera_object, report):
+    """Samples the shutter's sub-frames (RenderEngine.frame_set) when the scene asks for motion
+    blur; leaves the depsgraph at the shutter's centre. Returns (Motion or None, restore): call
+    restore() once the scene is exported to return to the frame being rendered."""
+    from .mesh import mesh_arrays
+    scene = depsgraph.scene
+    rd = scene.render
+    frame, subframe = scene.frame_current, scene.frame_subframe
+
+    def restore():
+        engine.frame_set(frame, subframe)
+
+    if not rd.use_motion_blur or not getattr(depsgraph.view_layer, "use_motion_blur", True):
+        return None, lambda: None
+    shutter = float(rd.motion_blur_shutter)
+    if not shutter > 0:
+        return None, lambda: None  # a closed shutter: nothing blurs (Cycles' shutter 0)
+    settings = _cycles(scene)
+    position = getattr(settings, "motion_blur_position", 'CENTER')
+    if getattr(settings, "rolling_shutter_type", 'NONE') != 'NONE':
+        report({'WARNING'}, "Rolling shutter is not supported by Lantern: the whole frame is exposed "
+                            "over the same shutter interval")
+    if not _shutter_curve_flat(rd):
+        report({'WARNING'}, "The shutter curve is not supported by Lantern: the shutter opens and "
+                            "closes instantly (Blender's default flat curve)")
+    delta = {'START': 0.5 * shutter, 'END': -0.5 * shutter}.get(position, 0.0)
+    centre_time = frame + subframe + delta
+    if abs(centre_time) + 0.5 * shutter > MAX_FRAME:
+        report({'WARNING'}, "Motion blur off: the shutter of %g frames reaches beyond Blender's frame "
+                            "range (+-%d)" % (shutter, MAX_FRAME))
+        return None, lambda: None
+
+    def go(time):
+        f = int(np.floor(time))
+        engine.frame_set(f, time - f)
+
+    motion = Motion(report)
+    if delta != 0.0:
+        go(centre_time)
+    camera = camera_object or scene.camera
+    if camera is not None:
+        motion.camera_steps = object_motion_steps(camera, camera)
+    times = set()
+    for inst in depsgraph.object_instances:
+        if not inst.show_self or inst.object.type not in _MESH_TYPES:
+            continue
+        obj = inst.object
+        parent = inst.parent if inst.is_instance else None
+        steps = object_motion_steps(obj.original, parent.original if parent is not None else None)
+        if steps < 3:
+            continue
+        motion.steps[_key(inst)] = steps
+        times.update(relative_time(s, steps) for s in range(steps))
+        if not inst.is_instance and obj.type == 'MESH' and _uses_deform(obj.original):
+            co = _vertices(obj)
+            if co is not None:
+                motion.deform[obj.original.as_pointer()] = steps
+                motion.centre_co[obj.original.as_pointer()] = co
+    if motion.camera_steps >= 3:
+        times.update(relative_time(s, motion.camera_steps) for s in range(motion.camera_steps))
+    times.discard(0.0)
+    if not times:
+        if delta != 0.0:
+            return motion, restore
+        return motion, lambda: None
+    try:
+        for rel in sorted(times):
+            go(centre_time + rel * 0.5 * shutter)
+            _sample(depsgraph, motion, rel, camera, mesh_arrays)
+    finally:
+        go(centre_time)
+    return motion, restore

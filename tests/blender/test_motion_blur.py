@@ -1,0 +1,99 @@
+"""Issue 15's motion blur in the add-on (export/motion.py): what the scene sends to the core (the
+core counts it in its render report), that a scene without motion pays nothing, and bad input.
+Agreement with Cycles is in test_agreement.py (scene motion_blur)."""
+import re
+
+import numpy as np
+
+import build_scenes
+import render_utils as ru
+from lantern import engine
+
+
+def _motion_line():
+    report = engine.LAST_RENDER.get("report", "")
+    m = re.search(r"motion blur: (\d+) moving object\(s\), (\d+) deforming mesh\(es\), "
+                  r"camera (still|moving, \d+ steps)", report)
+    return (int(m.group(1)), int(m.group(2)), m.group(3)) if m else None, report
+
+
+def test_moving_scene_sends_its_motion_and_restores_the_frame(scene_factory):
+    """The translating and rotating boxes move, the grid deforms, the camera pans (3 steps each,
+    Cycles' default of 1 motion step); the floor, the wall and the light stay still; the frame
+    being rendered is restored after sampling the shutter, for each shutter position."""
+    scene = scene_factory("motion_blur", resolution=(24, 16))
+    for position in ("CENTER", "START", "END"):
+        scene.cycles.motion_blur_position = position
+        out = ru.render(scene, ru.LANTERN, 2, seed=0)
+        assert np.isfinite(out.combined).all()
+        line, report = _motion_line()
+        assert line == (2, 1, "moving, 3 steps"), report
+        assert (scene.frame_current, scene.frame_subframe) == (1, 0.0)
+    # Cycles' 2^steps + 1 time steps; an object with motion blur off does not move.
+    scene.camera.cycles.motion_steps = 2
+    scene.objects["Rotating"].cycles.use_motion_blur = False
+    scene.objects["Deforming"].cycles.use_deform_motion = False
+    ru.render(scene, ru.LANTERN, 1, seed=0)
+    line, report = _motion_line()
+    assert line == (1, 0, "moving, 5 steps"), report
+
+
+def test_scene_without_motion_sends_none_and_renders_the_same_bits(scene_factory):
+    """Motion blur on, nothing moving: the core gets no motion (counted) and the image is
+    bit-identical to the render with motion blur off (no time is drawn: the samples' random
+    numbers are unchanged)."""
+    scene = scene_factory("cornell_area", resolution=(24, 24))
+    off = ru.render(scene, ru.LANTERN, 4, seed=3).combined
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 0.5
+    on = ru.render(scene, ru.LANTERN, 4, seed=3).combined
+    line, report = _motion_line()
+    assert line == (0, 0, "still"), report
+    assert np.array_equal(off, on)
+
+
+def test_bad_shutters_and_changing_topology_are_defined(scene_factory):
+    """A closed shutter (0) renders without motion; a shutter of 1000 frames samples frames 500
+    away (as Cycles; the keys hold their values there), finite; a mesh whose topology changes
+    over the shutter (a Build modifier adding faces) gets no deformation blur, with a warning;
+    an object that appears mid-shutter keeps its centre transform where it is missing, with a
+    warning; one that exists only off-centre is not rendered (Cycles' rules)."""
+    scene = scene_factory("motion_blur", resolution=(24, 16))
+    scene.render.motion_blur_shutter = 0.0
+    assert np.isfinite(ru.render(scene, ru.LANTERN, 1, seed=0).combined).all()
+    assert _motion_line()[0] is None
+    scene.render.motion_blur_shutter = 1000.0
+    assert np.isfinite(ru.render(scene, ru.LANTERN, 1, seed=0).combined).all()
+    line, report = _motion_line()
+    assert line is not None and line[0] == 2, report
+    scene.render.motion_blur_shutter = 1.0
+    # Faces appear one frame at a time: the Build modifier changes the topology every frame.
+    grid = scene.objects["Deforming"]
+    build = grid.modifiers.new("Build", 'BUILD')
+    build.frame_start, build.frame_duration = 0.0, 3.0
+    # Appears at the centre (hidden before it), and one visible only before the centre.
+    late = build_scenes.add_object(scene, "Late", build_scenes.mesh_box("Late", (0.3, 0.3, 0.3)), (0.5, -1, 0))
+    early = build_scenes.add_object(scene, "Early", build_scenes.mesh_box("Early", (0.3, 0.3, 0.3)), (-0.5, -1, 0))
+    for obj, hidden in ((late, (True, False)), (early, (False, True))):
+        for frame, value in zip((0.0, 1.0), hidden):
+            obj.hide_render = value
+            obj.keyframe_insert("hide_render", frame=frame)
+        obj.location.x += 0.2
+        obj.keyframe_insert("location", frame=2)
+    out = ru.render(scene, ru.LANTERN, 1, seed=0)
+    assert np.isfinite(out.combined).all()
+    line, report = _motion_line()
+    assert "Object 'Deforming': its mesh's topology changes over the shutter" in report, report
+    assert "Object 'Late' does not exist at every motion step" in report, report
+    assert "Early" not in report, report
+    assert line is not None and line[1] == 0, report
+
+
+def test_viewport_ignores_motion_blur_as_cycles(scene_factory):
+    """The viewport's export (export_scene without a render engine's frame_set, as viewport.py
+    calls it) sends no motion, as Cycles' viewport renders none, and changes no frame."""
+    scene = scene_factory("motion_blur", resolution=(24, 16))
+    summary, reports = ru.export(scene)
+    stats = summary["stats"]
+    assert (stats["motion_instances"], stats["motion_meshes"], stats["camera_motion_steps"]) == (0, 0, 0)
+    assert (scene.frame_current, scene.frame_subframe) == (1, 0.0)

@@ -1,0 +1,302 @@
+// Motion blur: Cycles' transform interpolation (translation and scale linear, rotation by
+// quaternion slerp), Embree's instance and vertex motion agreeing with it, camera motion, the
+// ABI's motion steps, and determinism across thread counts with motion.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "geometry/geometry.h"
+#include "geometry/motion.h"
+#include "scene/camera.h"
+#include "scene_builders.h"
+
+using namespace lt;
+
+namespace {
+
+Transform rot_z(float radians, float s = 1, Vec3 t = Vec3(0.0f)) {
+  const float c = std::cos(radians), n = std::sin(radians);
+  Transform m;
+  const float v[12] = {c * s, -n * s, 0, t.x, n * s, c * s, 0, t.y, 0, 0, s, t.z};
+  std::copy(v, v + 12, m.m);
+  return m;
+}
+
+void expect_near(const Transform& a, const Transform& b, float tol, const std::string& what) {
+  for (int i = 0; i < 12; ++i) EXPECT_NEAR(a.m[i], b.m[i], tol) << what << ", element " << i;
+}
+
+// A strip 2 long along +x, 0.1 wide, in the z = 0 plane.
+Mesh strip() {
+  Mesh m;
+  m.positions = {Vec3(0, -0.05f, 0), Vec3(2, -0.05f, 0), Vec3(2, 0.05f, 0), Vec3(0, 0.05f, 0)};
+  m.indices = {0, 1, 2, 0, 2, 3};
+  return m;
+}
+
+bool hit_down(const Geometry& g, float x, float y, float time, Hit* hit) {
+  Ray r;
+  r.o = Vec3(x, y, 1);
+  r.d = Vec3(0, 0, -1);
+  r.time = time;
+  return g.intersect(r, 31u, hit);
+}
+
+constexpr float kDeg = float(kPi / 180);
+
+}  // namespace
+
+TEST(Motion, DecompositionRoundTripsRotationScaleAndMirror) {
+  // Blender's loc/rot/scale (rotation about a tilted axis, non-uniform scale), and a mirror.
+  Transform tilt;  // 0.3 radians about x
+  tilt.m[5] = tilt.m[10] = std::cos(0.3f);
+  tilt.m[6] = -std::sin(0.3f);
+  tilt.m[9] = std::sin(0.3f);
+  Transform m = lt::compose(rot_z(0.7f), tilt);
+  for (int i = 0; i < 3; ++i) {
+    m.m[4 * i + 0] *= 1.5f;
+    m.m[4 * i + 2] *= 0.4f;
+  }
+  m.m[3] = 1, m.m[7] = -2, m.m[11] = 3;
+  expect_near(recompose(decompose(m)), m, 1e-5f, "scaled");
+  Transform mirror = m;
+  for (int i = 0; i < 3; ++i) mirror.m[4 * i + 1] = -mirror.m[4 * i + 1];
+  expect_near(recompose(decompose(mirror)), mirror, 1e-5f, "mirrored");
+}
+
+// Between two steps the rotation turns at constant speed and the scale stays (a linear blend of
+// the matrices would shrink the object by cos(angle / 2) half-way).
+TEST(Motion, InterpolationSlerpsRotationAndLerpsTheRest) {
+  const std::vector<Transform> steps = {rot_z(0, 2, Vec3(0, 0, 0)), rot_z(45 * kDeg, 2, Vec3(1, 0, 0)),
+                                        rot_z(90 * kDeg, 2, Vec3(2, 2, 0))};
+  const std::vector<DecomposedTransform> d = decompose_motion(steps);
+  expect_near(interpolate_motion(d, 0.25f), rot_z(22.5f * kDeg, 2, Vec3(0.5f, 0, 0)), 1e-5f, "time 0.25");
+  expect_near(interpolate_motion(d, 0.75f), rot_z(67.5f * kDeg, 2, Vec3(1.5f, 1, 0)), 1e-5f, "time 0.75");
+  expect_near(interpolate_motion(d, 0.0f), steps[0], 1e-6f, "time 0");
+  expect_near(interpolate_motion(d, 1.0f), steps[2], 1e-5f, "time 1");
+  // The shorter arc, whatever the quaternions' signs: -170 to +170 degrees turns through 180.
+  const std::vector<DecomposedTransform> wrap =
+      decompose_motion({rot_z(-170 * kDeg), rot_z(180 * kDeg), rot_z(170 * kDeg)});
+  expect_near(interpolate_motion(wrap, 0.25f), rot_z(-175 * kDeg), 1e-5f, "across +-180 degrees");
+}
+
+// Embree's instance motion traverses the object where the shading interpolation puts it: a ray at
+// time 0 and at time 1 sees the rotating strip in different places, and at a quarter of the
+// shutter the strip has its full length (slerp), which a linear blend of the matrices would not
+// reach.
+TEST(Motion, InstanceMotionHitsWhereTheInterpolatedTransformIs) {
+  Geometry g;
+  std::vector<std::string> warnings;
+  Instance inst;
+  inst.mesh = g.add_mesh(strip(), warnings);
+  inst.xf = rot_z(45 * kDeg);
+  inst.motion = {rot_z(0), rot_z(45 * kDeg), rot_z(90 * kDeg)};
+  g.add_instance(inst, warnings);
+  g.commit();
+  EXPECT_TRUE(warnings.empty());
+  EXPECT_EQ(g.motion_instances(), 1u);
+  EXPECT_TRUE(g.has_motion());
+  Hit h;
+  EXPECT_TRUE(hit_down(g, 1.9f, 0, 0.0f, &h));
+  EXPECT_FALSE(hit_down(g, 1.9f, 0, 1.0f, &h));
+  EXPECT_TRUE(hit_down(g, 0, 1.9f, 1.0f, &h));
+  EXPECT_FALSE(hit_down(g, 0, 1.9f, 0.0f, &h));
+  const float a = 22.5f * kDeg, r = 1.95f;  // beyond 2 cos(22.5 deg) = 1.85
+  ASSERT_TRUE(hit_down(g, r * std::cos(a), r * std::sin(a), 0.25f, &h));
+  const SurfacePoint sp = g.surface(h);
+  EXPECT_NEAR(sp.p.x, r * std::cos(a), 1e-3f);
+  EXPECT_NEAR(sp.p.y, r * std::sin(a), 1e-3f);
+  EXPECT_NEAR(std::abs(sp.ng.z), 1.0f, 1e-5f);
+  EXPECT_EQ(sp.time, 0.25f);
+  expect_near(g.pose(0, 0.25f).xf, rot_z(a), 1e-5f, "pose at 0.25");
+  Vec3 p0, p1, p2;
+  g.triangle(0, 0, &p0, &p1, &p2, 1.0f);
+  EXPECT_NEAR(p1.y, 2.0f, 1e-5f);  // corner (2, -0.05) turned by 90 degrees
+  EXPECT_NEAR(p1.x, 0.05f, 1e-5f);
+}
+
+// Vertex motion: a quad rising from z = 0 to z = 1 over the shutter.
+TEST(Motion, DeformingMeshHitsAtTheRaysTime) {
+  Geometry g;
+  std::vector<std::string> warnings;
+  Mesh m;
+  const Vec3 corners[4] = {Vec3(-1, -1, 0), Vec3(1, -1, 0), Vec3(1, 1, 0), Vec3(-1, 1, 0)};
+  m.positions.assign(corners, corners + 4);
+  m.indices = {0, 1, 2, 0, 2, 3};
+  m.motion_steps = 3;
+  for (float z : {0.0f, 0.5f, 1.0f})
+    for (const Vec3& c : corners) m.motion_positions.push_back(c + Vec3(0, 0, z));
+  Instance inst;
+  inst.mesh = g.add_mesh(std::move(m), warnings);
+  g.add_instance(inst, warnings);
+  g.commit();
+  EXPECT_EQ(g.motion_meshes(), 1u);
+  for (float time : {0.0f, 0.25f, 0.5f, 0.9f, 1.0f}) {
+    Ray r;
+    r.o = Vec3(0.3f, 0.2f, 2);
+    r.d = Vec3(0, 0, -1);
+    r.time = time;
+    Hit h;
+    ASSERT_TRUE(g.intersect(r, 31u, &h)) << time;
+    EXPECT_NEAR(h.t, 2 - time, 1e-5f) << time;
+    EXPECT_NEAR(g.surface(h).p.z, time, 1e-5f) << time;
+  }
+}
+
+TEST(Motion, CameraMovesWithTheSamplesTime) {
+  CameraDesc d;
+  Transform left, centre, right;
+  left.m[3] = -1, right.m[3] = 1;
+  d.xf = centre;
+  d.motion = {left, centre, right};
+  Camera cam(d, 32, 32);
+  EXPECT_TRUE(cam.has_motion());
+  for (float time : {0.0f, 0.25f, 0.5f, 1.0f}) {
+    Ray r;
+    ASSERT_TRUE(cam.generate(16, 16, Vec2{0.5f, 0.5f}, &r, time));
+    EXPECT_NEAR(r.o.x, 2 * time - 1, 1e-6f);
+    EXPECT_EQ(r.time, time);
+    EXPECT_NEAR(cam.position(time).x, 2 * time - 1, 1e-6f);
+  }
+  Vec2 film;
+  Vec3 dir;
+  float dist;
+  ASSERT_TRUE(cam.project(cam.position(1.0f), Vec3(1, 0, -5), 0, &film, &dir, &dist, 1.0f));
+  EXPECT_NEAR(film.x, 16, 1e-3f);  // straight ahead of the camera at time 1
+}
+
+namespace {
+
+using namespace lt_test;
+
+// A moving box, a rising quad and a panning camera over a floor, under an area light and an
+// emissive quad that moves; `motion` false: the same scene at the shutter's centre.
+ScenePtr moving_scene(bool motion) {
+  ScenePtr sp = new_scene();
+  lt_scene* s = sp.get();
+  add_object(s, plane(20, 20), add_diffuse(s, {0.7f, 0.6f, 0.5f}));
+  const Xform centre = translate({0, 0, 0});
+  const std::vector<Xform> box_steps = {translate({-0.8f, 0, 0}), centre, translate({0.8f, 0, 0})};
+  std::vector<float> flat;
+  for (const Xform& x : box_steps) flat.insert(flat.end(), x.begin(), x.end());
+  MeshData b = box({-0.4f, -0.4f, 0}, {0.4f, 0.4f, 0.8f});
+  lt_instance_desc d{};
+  const int mat = add_diffuse(s, {0.2f, 0.5f, 0.8f});
+  d.mesh = add_mesh(s, b);
+  std::copy(centre.begin(), centre.end(), d.transform);
+  d.materials = &mat;
+  d.material_count = 1;
+  d.visibility = LT_VISIBLE_ALL;
+  if (motion) d.motion_transforms = flat.data(), d.motion_step_count = 3;
+  int id;
+  check(lt_scene_add_instance(s, &d, &id), "instance");
+  MeshData q = plane(1, 1);
+  std::vector<float> steps;
+  for (float z : {0.2f, 0.6f, 1.0f})
+    for (size_t i = 0; i < q.positions.size(); ++i) steps.push_back(q.positions[i] + (i % 3 == 2 ? z : 0.0f));
+  for (size_t i = 2; i < q.positions.size(); i += 3) q.positions[i] += 0.6f;
+  lt_mesh_desc md = q.desc();
+  if (motion) md.motion_positions = steps.data(), md.motion_step_count = 3;
+  int mesh;
+  check(lt_scene_add_mesh(s, &md, &mesh), "mesh");
+  add_instance(s, mesh, add_emission(s, {1, 0.8f, 0.6f}, 4), translate({1.2f, 0.5f, 0}));
+  add_light(s, area_light(LT_AREA_RECTANGLE, 1, 0.5f, look_at({0, -1, 3}, {0, 0, 0}), 300));
+  set_world(s, {0.2f, 0.3f, 0.5f}, 0.3f);
+  lt_camera_desc c = perspective_camera(look_at({0.5f, -5, 2.5f}, {0, 0, 0.5f}), 35);
+  const std::vector<Xform> cam = {look_at({0.3f, -5, 2.5f}, {0, 0, 0.5f}), look_at({0.5f, -5, 2.5f}, {0, 0, 0.5f}),
+                                  look_at({0.7f, -5, 2.5f}, {0, 0, 0.5f})};
+  std::vector<float> cflat;
+  for (const Xform& x : cam) cflat.insert(cflat.end(), x.begin(), x.end());
+  if (motion) c.motion_transforms = cflat.data(), c.motion_step_count = 3;
+  set_camera(s, c);
+  check(lt_scene_commit(s), "commit");
+  return sp;
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+}  // namespace
+
+TEST(Motion, ThreadCountDoesNotChangeABitWithMotion) {
+  ScenePtr still = moving_scene(false), moving = moving_scene(true);
+  lt_scene_stats st{};
+  check(lt_scene_get_stats(moving.get(), &st), "stats");
+  EXPECT_EQ(st.motion_instances, 1u);
+  EXPECT_EQ(st.motion_meshes, 1u);
+  EXPECT_EQ(st.camera_motion_steps, 3u);
+  check(lt_scene_get_stats(still.get(), &st), "stats");
+  EXPECT_EQ(st.motion_instances + st.motion_meshes + st.camera_motion_steps, 0u);
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    lt_render_settings rs = render_settings(48, 32, 4, 7);
+    rs.integrator = integrator;
+    rs.threads = 1;
+    Passes one = render(moving.get(), rs);
+    rs.threads = 2;
+    Passes two = render(moving.get(), rs);
+    Passes centre = render(still.get(), rs);
+    ASSERT_EQ(one.first_non_finite(), "");
+    const std::string what = "integrator " + std::to_string(integrator);
+    EXPECT_TRUE(same_bits(one.combined, two.combined)) << what << ": 1 vs 2 threads";
+    EXPECT_EQ(one.status.rays, two.status.rays) << what;
+    EXPECT_FALSE(same_bits(one.combined, centre.combined)) << what << ": motion changes nothing";
+  }
+}
+
+TEST(Motion, BadMotionStepsAreRefusedOrLeftStill) {
+  ScenePtr sp = new_scene();
+  lt_scene* s = sp.get();
+  const int mat = add_diffuse(s, {0.5f, 0.5f, 0.5f});
+  MeshData b = box({0, 0, 0}, {1, 1, 1});
+  const int mesh = add_mesh(s, b);
+  std::vector<float> steps(12 * 131, 0.0f);
+  for (int k = 0; k < 131; ++k) steps[12 * k] = steps[12 * k + 5] = steps[12 * k + 10] = 1;
+  lt_instance_desc d{};
+  d.mesh = mesh;
+  d.transform[0] = d.transform[5] = d.transform[10] = 1;
+  d.materials = &mat;
+  d.material_count = 1;
+  d.motion_transforms = steps.data();
+  int id;
+  for (int count : {-1, 1, 2, 4, 131}) {
+    d.motion_step_count = count;
+    EXPECT_EQ(lt_scene_add_instance(s, &d, &id), LT_ERROR_INVALID_ARGUMENT) << count;
+    EXPECT_NE(std::string(lt_last_error()).find("motion steps"), std::string::npos) << lt_last_error();
+  }
+  d.motion_step_count = 3;
+  d.motion_transforms = nullptr;
+  EXPECT_EQ(lt_scene_add_instance(s, &d, &id), LT_ERROR_INVALID_ARGUMENT);
+  // A step scaled to nothing or not finite: the instance stays at its centre transform.
+  d.motion_transforms = steps.data();
+  steps[0] = steps[5] = steps[10] = 0;
+  const int before = lt_scene_warning_count(s);
+  EXPECT_EQ(lt_scene_add_instance(s, &d, &id), LT_OK);
+  steps[0] = steps[5] = steps[10] = 1;
+  steps[3] = NAN;
+  EXPECT_EQ(lt_scene_add_instance(s, &d, &id), LT_OK);
+  EXPECT_EQ(lt_scene_warning_count(s), before + 2);
+  // 129 steps (Cycles' 7 motion steps) are accepted.
+  steps[3] = 0;
+  d.motion_step_count = 129;
+  EXPECT_EQ(lt_scene_add_instance(s, &d, &id), LT_OK);
+  // Deforming positions must be finite.
+  MeshData q = plane(1, 1);
+  std::vector<float> mp(3 * q.positions.size(), 0.0f);
+  mp[4] = INFINITY;
+  lt_mesh_desc md = q.desc();
+  md.motion_positions = mp.data();
+  md.motion_step_count = 3;
+  int m2;
+  EXPECT_EQ(lt_scene_add_mesh(s, &md, &m2), LT_ERROR_INVALID_ARGUMENT);
+  set_camera(s, perspective_camera(look_at({3, -5, 2}, {0.5f, 0.5f, 0.5f})));
+  check(lt_scene_commit(s), "commit");
+  lt_scene_stats st{};
+  check(lt_scene_get_stats(s, &st), "stats");
+  EXPECT_EQ(st.motion_instances, 1u);  // the 129-step one
+  lt_render_settings rs = render_settings(16, 16, 2, 1);
+  Passes p = render(s, rs);
+  EXPECT_EQ(p.first_non_finite(), "");
+}
