@@ -77,8 +77,24 @@ enum class LobeType : uint8_t {
   // the node's Color (saturated), the extra factor of every bounce after the first. f is Cycles'
   // estimate: exact single scattering plus one random walk seeded from the direction pair.
   MultiGGX,
+  // Hair lobes (shading/bsdf_hair.cpp), on curves: hair_tangent is the curve's direction in the
+  // local frame (+Z the normal from the curve's axis). They are neither reflection nor
+  // transmission by hemisphere: a sample's flags say which side of +Z it left on.
+  // Principled Hair BSDF (Chiang et al. 2016 as Cycles 3.4's bsdf_hair_principled.h):
+  // hair_sigma = absorption, hair_roughness = v and hair_radial = s (already mapped to variance and
+  // logistic scale), hair_m0 = the R lobe's variance (Coat), hair_tilt = cuticle angle alpha,
+  // eta = IOR. h comes from wo, as Cycles' from sd->I.
+  PrincipledHair,
+  // Hair BSDF (Cycles' bsdf_hair.h), Reflection and Transmission: hair_roughness = Roughness U,
+  // hair_radial = Roughness V (both clamped to [0.001, 1]), hair_tilt = the node's offset
+  // negated (Cycles' bsdf->offset).
+  HairReflection,
+  HairTransmission,
 };
-constexpr int kLobeTypeCount = int(LobeType::MultiGGX) + 1;
+constexpr int kLobeTypeCount = int(LobeType::HairTransmission) + 1;
+inline bool lobe_is_hair(LobeType t) {
+  return t == LobeType::PrincipledHair || t == LobeType::HairReflection || t == LobeType::HairTransmission;
+}
 // The glass lobes, which reflect or refract with the relative IOR eta (integrators count their
 // bounces by the branch sampled). Translucent transmits without crossing an IOR; Cycles counts it
 // as a transmission bounce with diffuse ray visibility (integrator/path_state.h).
@@ -102,6 +118,10 @@ struct Lobe {
   float toon_size = 0;      // DiffuseToon, GlossyToon: Size
   float toon_smooth = 0;    // DiffuseToon, GlossyToon: Smooth
   Spectrum ms_color{1.0f};  // MultiGGX: the colour of each bounce after the first
+  // Hair lobes (see LobeType): unit tangent in the local frame and the fibre's parameters.
+  Vec3 hair_tangent{1.0f, 0.0f, 0.0f};
+  Spectrum hair_sigma{0.0f};
+  float hair_roughness = 0.3f, hair_radial = 0.3f, hair_m0 = 0.3f, hair_tilt = 0;
 };
 
 struct BsdfSample {
@@ -175,6 +195,9 @@ class Bsdf {
 };
 
 // ---- single-lobe routines, exposed for the chi-square tests ----------------------------------
+// Hair lobes (bsdf_hair.cpp): f (cosine excluded) with the lobe's weight, its pdf; a direction.
+Spectrum hair_eval(const Lobe& lobe, const Vec3& wo, const Vec3& wi, float* pdf);
+bool hair_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, Vec3* wi);
 Spectrum lobe_eval(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
 float lobe_pdf(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
 bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out);

@@ -386,6 +386,8 @@ void vector_displacement(const Instr& in, Machine& m) {
     if (fetch_attribute(c, 0, int(in.param[1]), t) == 4) {
       tangent = Vec3(t[0], t[1], t[2]);
       sign = t[3];
+    } else if (c.mesh && c.instance && !c.mesh->is_triangles()) {
+      tangent = normalized_or_zero(c.dpdu);  // curves: Cycles' dPdu, the curve's tangent
     } else if (c.mesh && c.instance) {
       // No UV map: Cycles' normalize(sd->dPdu), the triangle's first edge in world space (Cycles
       // mixes it with the object-space normal as is), reversed on a back face.

@@ -65,6 +65,10 @@ struct ShadingContext {
   bool reflection_ray = false, transmission_ray = false;
   float ray_length = 0;
   int ray_depth = 0, diffuse_depth = 0, glossy_depth = 0, transparent_depth = 0, transmission_depth = 0;
+  // Curves and points (mesh->kind): the curve (point) index and the curve's tangent dP/du in
+  // world space (Cycles' sd->dPdu; zero elsewhere). Hair Info and the hair closures read them.
+  int curve = -1;
+  Vec3 dpdu{0.0f};
 };
 
 // The machine an instruction runs on: read inputs, write outputs.
