@@ -26,6 +26,19 @@ void visibility_filter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// Curves and spheres are entered, never left: a hit where the ray leaves the tube (the normal
+// along the ray) comes from a ray that started inside it, off the same strand (hair's
+// transmission); Cycles skips the strand it starts on the same way (its self-intersection test).
+void front_face_filter(const RTCFilterFunctionNArguments* args) {
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const float d = RTCRayN_dir_x(args->ray, args->N, i) * RTCHitN_Ng_x(args->hit, args->N, i) +
+                    RTCRayN_dir_y(args->ray, args->N, i) * RTCHitN_Ng_y(args->hit, args->N, i) +
+                    RTCRayN_dir_z(args->ray, args->N, i) * RTCHitN_Ng_z(args->hit, args->N, i);
+    if (d > 0) args->valid[i] = 0;
+  }
+}
+
 void embree_error(void*, RTCError code, const char* message) {
   std::fprintf(stderr, "lantern: embree error %d: %s\n", int(code), message ? message : "");
 }
@@ -248,6 +261,8 @@ RTCScene Geometry::curve_scene(const Mesh& m) const {
   if (curves)
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, c.segments.data(), 0, sizeof(uint32_t),
                                c.segments.size());
+  rtcSetGeometryIntersectFilterFunction(g, front_face_filter);
+  rtcSetGeometryOccludedFilterFunction(g, front_face_filter);
   rtcCommitGeometry(g);
   rtcAttachGeometryByID(scene, g, 0);
   rtcReleaseGeometry(g);

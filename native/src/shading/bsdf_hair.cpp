@@ -7,7 +7,7 @@
 // logistic azimuthal Np, R, TT, TRT and a residual TRRT+ lobe, the cuticle tilt alpha shifting
 // the first three. Its h (the offset across the fibre) comes from wo, as Cycles' from sd->I.
 // Hair BSDF: Cycles' older Marschner-style reflection and transmission (kernel/closure/bsdf_hair.h),
-// whose value equals its pdf.
+// whose value is its (approximate) pdf.
 //
 // Cycles' closures return f cos; Lantern's f excludes the cosine (the integrator multiplies
 // |wi.z|), so each value here is divided by |wi.z|.
@@ -68,6 +68,28 @@ float longitudinal(float sin_i, float cos_i, float sin_o, float cos_o, float v) 
   const float inv_v = 1 / v, cos_arg = cos_i * cos_o * inv_v, sin_arg = sin_i * sin_o * inv_v;
   if (v <= 0.1f) return std::exp(log_bessel_I0(cos_arg) - sin_arg - inv_v + 0.6931f + std::log(0.5f * inv_v));
   return std::exp(-sin_arg) * bessel_I0(cos_arg) / (std::sinh(inv_v) * 2 * v);
+}
+// The same Mp with an accurate I0 (Cycles' series stops after 10 terms, a few percent low near
+// its switch to the asymptotic form at 12): the density d'Eon's sampling draws exactly, for pdfs.
+float longitudinal_exact(float sin_i, float cos_i, float sin_o, float cos_o, float v) {
+  const double x = double(cos_i) * cos_o / v, b = double(sin_i) * sin_o / v;
+  const double log_i0 = x < 500 ? std::log(std::cyl_bessel_i(0.0, x))
+                                : x - 0.5 * std::log(2 * M_PI * x) + std::log1p(1 / (8 * x) + 9 / (128 * x * x));
+  return float(std::exp(log_i0 - b - 1 / double(v) - std::log(double(v)) - std::log1p(-std::exp(-2 / double(v)))));
+}
+// The density over solid angle of the elevation principled_sample draws for a lobe: theta' from
+// Mp cos theta', then theta' + delta, folded back over the pole (sin kept, |cos|). Each theta'
+// that lands on theta_i adds Mp(theta') cos theta'; the solid angle divides by cos theta_i.
+float tilted_density(float sin_i, float cos_i, float sin_o, float cos_o, float v, float delta) {
+  if (!(cos_i > 0)) return 0;
+  const float e = std::asin(clamp(sin_i, -1.0f, 1.0f));
+  float sum = 0;
+  for (float t : {e - delta, kPi - e - delta, -kPi - e - delta}) {
+    if (std::abs(t) > 0.5f * kPi) continue;
+    const float c = std::cos(t);
+    sum += longitudinal_exact(std::sin(t), c, sin_o, cos_o, v) * c;
+  }
+  return sum / cos_i;
 }
 // sin and cos of theta_i tilted by the cuticle angle for R (2 alpha), TT (-alpha), TRT (-4 alpha).
 void alpha_angles(float sin_i, float cos_i, float alpha, float out[6]) {
@@ -134,9 +156,10 @@ void hair_out(const Lobe& l, const HairFrame& f, const Vec3& wo, HairOut* o) {
 }
 
 // F = sum of Ap Mp Np (Cycles' f cos) and the density of principled_sample: the lobe choice by
-// ap_energy times each lobe's Mp (sampled with variance v, also for R) and Np. The two differ
-// only for R when Coat > 0: Cycles 3.4 evaluates R with the coat's roughness but samples it with
-// v and returns F's own weights as the pdf, which biases it; here the pdf is the true density.
+// ap_energy times each lobe's Mp (sampled with variance v, also for R) and Np. Cycles 3.4 returns
+// F's own energy weights as the pdf, which is not the density it samples when the R lobe has the
+// coat's roughness or the cuticle tilts the lobes; the ratio f / pdf then biases it by a few
+// percent. Here the pdf is the density, so the estimate of F is unbiased.
 Spectrum principled_eval(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf) {
   *pdf = 0;
   HairFrame f;
@@ -153,14 +176,13 @@ Spectrum principled_eval(const Lobe& l, const Vec3& wo, const Vec3& wi, float* p
   for (int p = 0; p < 3; ++p) {
     const float vp = p == 0 ? v : p == 1 ? 0.25f * v : 4 * v;
     const float np = trimmed_logistic(wrap_angle(phi - delta_phi(p, o.gamma_o, o.gamma_t)), l.hair_radial);
-    const float mp_sample = longitudinal(ang[2 * p], ang[2 * p + 1], o.sin_o, o.cos_o, vp);
-    const float mp = p == 0 ? longitudinal(ang[0], ang[1], o.sin_o, o.cos_o, l.hair_m0) : mp_sample;
+    const float mp = longitudinal(ang[2 * p], ang[2 * p + 1], o.sin_o, o.cos_o, p == 0 ? l.hair_m0 : vp);
     F += o.ap[p] * (mp * np);
-    p_total += o.ap_energy[p] * mp_sample * np;
+    const float delta = p == 0 ? -2 * l.hair_tilt : p == 1 ? l.hair_tilt : 4 * l.hair_tilt;
+    p_total += o.ap_energy[p] * tilted_density(sin_i, cos_i, o.sin_o, o.cos_o, vp, delta) * np;
   }
-  const float mp = longitudinal(sin_i, cos_i, o.sin_o, o.cos_o, 4 * v);
-  F += o.ap[3] * (mp * (0.5f * kInvPi));
-  p_total += o.ap_energy[3] * mp * (0.5f * kInvPi);
+  F += o.ap[3] * (longitudinal(sin_i, cos_i, o.sin_o, o.cos_o, 4 * v) * (0.5f * kInvPi));
+  p_total += o.ap_energy[3] * longitudinal_exact(sin_i, cos_i, o.sin_o, o.cos_o, 4 * v) * (0.5f * kInvPi);
   *pdf = p_total;
   return F;
 }
@@ -222,29 +244,34 @@ float old_theta_pdf(const Lobe& l, const OldHair& h) {
   const float t = (h.theta_i + h.theta_r) * 0.5f - l.hair_tilt, r1 = l.hair_roughness;
   return r1 / (2 * (t * t + r1 * r1) * (h.a - h.b) * std::cos(h.theta_i));
 }
-// The value (= pdf) of Cycles' hair reflection and transmission.
-float old_hair_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi) {
+// Cycles' hair reflection and transmission: the value (Cycles' eval, which it also calls its
+// pdf) and the density old_hair_sample draws. They differ only for transmission: Cycles samples
+// the azimuth on |pi - phi| <= pi/2 but evaluates it on all of [0, pi] (more than 1 in all);
+// here the azimuth is sampled over the whole range, with the same Cauchy shape renormalised.
+float old_hair_value(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf) {
+  *pdf = 0;
   const bool reflect = l.type == LobeType::HairReflection;
   if ((wi.z >= 0) != reflect || (reflect && wi.z == 0)) return 0;
   const OldHair h = old_hair_angles(l, wo, wi);
   if (!h.ok) return 0;
-  const float r2 = l.hair_radial;
-  float phi_pdf;
+  const float r2 = l.hair_radial, theta_pdf = old_theta_pdf(l, h);
+  float value;
   if (reflect) {
     if (h.cos_phi < 0) return 0;
     float phi = safe_acos(h.cos_phi) / r2;
     phi = std::abs(phi) < kPi ? phi : kPi;
-    phi_pdf = std::cos(phi * 0.5f) * 0.25f / r2;
+    value = std::cos(phi * 0.5f) * 0.25f / r2 * theta_pdf;
+    *pdf = value;
   } else {
-    const float c = 2 * std::atan(0.5f * kPi / r2), p = kPi - safe_acos(h.cos_phi);
-    phi_pdf = r2 / (c * (p * p + r2 * r2));
+    const float p = kPi - safe_acos(h.cos_phi), cauchy = r2 / (p * p + r2 * r2);
+    value = cauchy / (2 * std::atan(0.5f * kPi / r2)) * theta_pdf;
+    *pdf = cauchy / (2 * std::atan(kPi / r2)) * theta_pdf;
   }
-  const float pdf = phi_pdf * old_theta_pdf(l, h);
-  return std::isfinite(pdf) && pdf > 0 ? pdf : 0.0f;
+  if (!(std::isfinite(value) && value > 0 && std::isfinite(*pdf))) *pdf = value = 0;
+  return value;
 }
-// Cycles' sampling of theta; the azimuth sampled from the density old_hair_pdf evaluates (Cycles'
-// reflection sampler draws phi = 2 r2 asin(1 - 2 u) but states the pdf for r2 = 1; the
-// density here is the one eval uses, so that sample and eval agree).
+// Cycles' sampling of theta; the azimuth sampled from the density old_hair_value states.
+// (Cycles' reflection sampler draws phi = 2 r2 asin(1 - 2 u) but states its pdf for r2 = 1.)
 bool old_hair_sample(const Lobe& l, const Vec3& wo, Vec2 u, Vec3* wi) {
   const Vec3& T = l.hair_tangent;
   const float iz = dot(T, wo);
@@ -257,12 +284,11 @@ bool old_hair_sample(const Lobe& l, const Vec3& wo, Vec2 u, Vec3* wi) {
   const float theta_i = 2 * (t + l.hair_tilt) - theta_r;
   float phi;
   if (l.type == LobeType::HairReflection) {
-    // Density cos(phi / (2 r2)) / (4 r2) on |phi| <= pi r2, kept where eval is (|phi| <= pi/2).
+    // Density cos(phi / (2 r2)) / (4 r2) on |phi| <= pi r2, kept where the value is (|phi| <= pi/2).
     phi = 2 * r2 * safe_asin(1 - 2 * u.y);
     if (std::abs(phi) > 0.5f * kPi) return false;
   } else {
-    const float c = 2 * std::atan(0.5f * kPi / r2);
-    phi = r2 * std::tan(c * (u.y - 0.5f)) + kPi;
+    phi = r2 * std::tan(2 * std::atan(kPi / r2) * (u.y - 0.5f)) + kPi;
   }
   const float ct = std::cos(theta_i), st = std::sin(theta_i);
   *wi = locy * (std::cos(phi) * ct) - locx * (std::sin(phi) * ct) + T * st;
@@ -279,8 +305,7 @@ Spectrum hair_eval(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf) {
     const Spectrum F = principled_eval(l, wo, wi, pdf);
     return l.weight * F / std::abs(wi.z);
   }
-  *pdf = old_hair_pdf(l, wo, wi);
-  return l.weight * (*pdf / std::abs(wi.z));
+  return l.weight * (old_hair_value(l, wo, wi, pdf) / std::abs(wi.z));
 }
 
 bool hair_sample(const Lobe& l, const Vec3& wo, Vec2 u, float u_extra, Vec3* wi) {

@@ -121,7 +121,8 @@ struct Instr {
 // opcodes, with each instruction's operands in emission order):
 //   0-31     shaders.h: closures (Shader nodes) and closure weights
 //   32-63    inputs.h: nodes that read the shading point (Texture Coordinate, Geometry...), images
-//   64-191   nodes_math.h: Math, Vector Math, Mix, colour, converters
+//   64-191   nodes_math.h: Math, Vector Math, Mix, colour, converters (but 100-107: inputs.h's
+//            curve and point inputs, Hair Info)
 //   192-319  textures.h: procedural textures
 constexpr uint32_t kFamilyShadersBegin = 0;
 constexpr uint32_t kFamilyInputsBegin = 32;
