@@ -86,7 +86,7 @@ constexpr uint32_t kFamilyCurveInputsBegin = 100, kFamilyCurveInputsEnd = 108;
 enum CurveInputOp : uint32_t {
   // Hair Info (Cycles' svm_node_hair_info and its curve attributes): out: is strand f,
   // intercept f, length f, thickness f, tangent normal v, random f.
-  kOpHairInfo = kFamilyCurveInputsBegin,
+  kOpHairInfo = 100,  // kFamilyCurveInputsBegin
 };
 
 }  // namespace lt
