@@ -1629,18 +1629,23 @@ def hair_material(name, melanin=0.5, redness=0.3, roughness=0.3, radial=0.3, ran
     return mat
 
 
-def build_hair_ball(scene, strands=600, children=4):
+def build_hair_ball(scene, strands=600, children=4, principled=True):
     """A sphere with particle hair (Principled Hair BSDF, melanin) under an area light, above a
     grey floor: `strands` parents, each replaced by `children` interpolated children as Cycles
     renders them, 2^3 + 1 keys per strand, radius 5 mm at the root tapering to 0 (Close Tip).
-    Cycles' curve shape is 3D curves (THICK), as Lantern's."""
+    Cycles' curve shape is 3D curves (THICK), as Lantern's. principled=False: a Diffuse BSDF on
+    the strands instead (the curves' geometry and export alone)."""
     scene.cycles_curves.shape = "THICK"
     floor = add_object(scene, "Floor", mesh_plane("Floor", 6.0))
     assign(floor, diffuse("Floor", (0.5, 0.5, 0.5)))
     ball = add_object(scene, "Ball", mesh_sphere("Ball", 0.5, segments=32, rings=16), location=(0, 0, 0.6))
-    assign(ball, diffuse("Scalp", (0.3, 0.2, 0.15)), hair_material("Hair"))
+    assign(ball, diffuse("Scalp", (0.3, 0.2, 0.15)),
+           hair_material("Hair") if principled else diffuse("HairDiffuse", (0.6, 0.4, 0.3)))
     ball.modifiers.new("Hair", "PARTICLE_SYSTEM")
-    s = ball.particle_systems[0].settings
+    psys = ball.particle_systems[0]
+    psys.seed = 1  # a new system draws a random seed: fix it so that every build has the same strands
+    psys.child_seed = 2
+    s = psys.settings
     s.type = "HAIR"
     s.count = strands
     s.hair_length = 0.35
@@ -1694,6 +1699,7 @@ def build_point_cloud(scene):
 
 SCENES = {
     "hair_ball": (build_hair_ball, (96, 96), 128),
+    "hair_ball_diffuse": (lambda scene: build_hair_ball(scene, principled=False), (96, 96), 128),
     "point_cloud": (build_point_cloud, (96, 96), 128),
     "lamps500": (build_lamps500, (160, 120), 64),
     "cornell_area": (build_cornell_area, (96, 96), 128),

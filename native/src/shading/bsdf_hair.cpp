@@ -155,6 +155,12 @@ void hair_out(const Lobe& l, const HairFrame& f, const Vec3& wo, HairOut* o) {
   for (int p = 0; p < 4; ++p) o->ap_energy[p] = total > 0 ? o->ap_energy[p] / total : 0.0f;
 }
 
+// The share of uniform-sphere samples in principled_sample: F, whose tilted Mp lacks the
+// Jacobian, is not proportional to the d'Eon sampling density where the untilted angle nears the
+// fibre's axis (F / pdf grows like 1 / cos theta', a variance without bound: fireflies in hair);
+// a defensive mixture (Hesterberg 1995) bounds it.
+constexpr float kDefensive = 0.05f;
+
 // F = sum of Ap Mp Np (Cycles' f cos) and the density of principled_sample: the lobe choice by
 // ap_energy times each lobe's Mp (sampled with variance v, also for R) and Np. Cycles 3.4 returns
 // F's own energy weights as the pdf, which is not the density it samples when the R lobe has the
@@ -183,7 +189,7 @@ Spectrum principled_eval(const Lobe& l, const Vec3& wo, const Vec3& wi, float* p
   }
   F += o.ap[3] * (longitudinal(sin_i, cos_i, o.sin_o, o.cos_o, 4 * v) * (0.5f * kInvPi));
   p_total += o.ap_energy[3] * longitudinal_exact(sin_i, cos_i, o.sin_o, o.cos_o, 4 * v) * (0.5f * kInvPi);
-  *pdf = p_total;
+  *pdf = kDefensive * (0.25f * kInvPi) + (1 - kDefensive) * p_total;
   return F;
 }
 
@@ -192,9 +198,13 @@ bool principled_sample(const Lobe& l, const Vec3& wo, Vec2 u, float u_extra, Vec
   if (!hair_frame(l, wo, &f)) return false;
   HairOut o;
   hair_out(l, f, wo, &o);
+  if (u_extra < kDefensive) {
+    *wi = sample_uniform_sphere(u);
+    return true;
+  }
   // u_extra picks the lobe; what is left of it, rescaled, is the azimuthal sample.
   int p = 0;
-  float ux = u_extra;
+  float ux = (u_extra - kDefensive) / (1 - kDefensive);
   for (; p < 3; ++p) {
     if (ux < o.ap_energy[p]) break;
     ux -= o.ap_energy[p];
