@@ -354,6 +354,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.p = sp.p;
       v.n = backface ? -sp.ng : sp.ng;
       v.frame = local_frame(sf, v.n);
+      v.bsdf.set_light_is_wo(mode == Mode::Importance);
       if (length_squared(v.frame.n - facing_normal(smooth_n, v.n)) > 0)
         v.bsdf.set_bump(v.frame.to_local(smooth_n), mode == Mode::Importance);
       v.wo = v.frame.to_local(-ray.d);

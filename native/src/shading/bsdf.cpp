@@ -1154,22 +1154,28 @@ float Bsdf::bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const {
   return -g * g * g + g * g + g;
 }
 
+Spectrum Bsdf::lobe_value(const Lobe& lobe, const Vec3& wo, const Vec3& wi, float* pdf) const {
+  if (adjoint_ && lobe_is_hair(lobe.type)) {
+    *pdf = lobe_pdf(lobe, wo, wi);
+    return lobe_eval(lobe, wi, wo);
+  }
+  return lobe_eval_pdf(lobe, wo, wi, pdf);
+}
+
 Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf) const {
   Spectrum f(0.0f);
   float p_total = 0;
   float p[kMaxLobes];
-  if (!pdf) {
-    for (int k = 0; k < count_; ++k)
-      f += lobe_eval(lobes_[k], wo, wi) * bump_term(lobes_[k], wo, wi);  // zero for delta lobes
-  } else if (selection_probabilities(*this, wo, p)) {
+  float pk;
+  if (pdf && selection_probabilities(*this, wo, p)) {
     for (int k = 0; k < count_; ++k) {
       if (lobe_is_delta(lobes_[k])) continue;
-      float pk;
-      f += lobe_eval_pdf(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
+      f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
       p_total += p[k] * pk;
     }
   } else {
-    for (int k = 0; k < count_; ++k) f += lobe_eval(lobes_[k], wo, wi) * bump_term(lobes_[k], wo, wi);
+    for (int k = 0; k < count_; ++k)
+      f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);  // zero for delta lobes
   }
   if (!is_finite(f)) f = Spectrum(0.0f);
   if (pdf) *pdf = std::isfinite(p_total) ? p_total : 0.0f;
@@ -1207,11 +1213,12 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
     // Mixture pdf of the direction (one-sample MIS over the lobes' strategies) and the sum of
     // every non-delta lobe's value, so that MIS against light sampling sees one consistent pdf.
     float pdf = p[chosen] * s.pdf;
+    if (adjoint_ && lobe_is_hair(lobes_[chosen].type)) s.f = lobe_eval(lobes_[chosen], s.wi, wo);
     s.f *= bump_term(lobes_[chosen], wo, s.wi);
     for (int k = 0; k < count_; ++k) {
       if (k == chosen || lobe_is_delta(lobes_[k])) continue;
       float pk;
-      s.f += lobe_eval_pdf(lobes_[k], wo, s.wi, &pk) * bump_term(lobes_[k], wo, s.wi);
+      s.f += lobe_value(lobes_[k], wo, s.wi, &pk) * bump_term(lobes_[k], wo, s.wi);
       pdf += p[k] * pk;
     }
     s.pdf = pdf;

@@ -141,6 +141,7 @@ class Bsdf {
     count_ = 0;
     overflowed_ = false;
     bumped_ = false;
+    adjoint_ = false;
   }
   // The interpolated normal (local frame) when a Normal input bent the shading normal: Cycles 3.4
   // then scales its diffuse closures by bump_shadowing_term (kernel/closure/bsdf.h), which darkens
@@ -151,6 +152,10 @@ class Bsdf {
     smooth_ = smooth_local;
     light_is_wo_ = light_is_wo;
   }
+  // Light transport (BDPT's light subpaths): the light arrives along wo. The hair lobes are not
+  // reciprocal (Cycles computes them with sd->I, the direction towards the camera), so there f is
+  // evaluated with wi as the camera side; pdfs stay the sampling densities given wo.
+  void set_light_is_wo(bool light_is_wo) { adjoint_ = light_is_wo; }
   // Adds a lobe; lobes whose weight is zero are dropped, lobes past kMaxLobes merge into nothing
   // and are reported through overflowed().
   void add(const Lobe& lobe);
@@ -189,7 +194,9 @@ class Bsdf {
   Lobe lobes_[kMaxLobes];
   int count_ = 0;
   bool overflowed_ = false;
-  bool bumped_ = false, light_is_wo_ = false;
+  bool bumped_ = false, light_is_wo_ = false, adjoint_ = false;
+  // One lobe's f and pdf as eval() sums them (the hair lobes' f swapped under adjoint_).
+  Spectrum lobe_value(const Lobe& lobe, const Vec3& wo, const Vec3& wi, float* pdf) const;
   Vec3 smooth_{0.0f, 0.0f, 1.0f};
   float bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const;
 };
