@@ -44,8 +44,8 @@ TEST(Curves, RayHitsStrandWhereExpected) {
   const SurfacePoint sp = s.g.surface(hit);
   EXPECT_NEAR(sp.p.x, 0.3f, 1e-4f);
   EXPECT_NEAR(sp.p.z, 0.1f, 1e-3f);
-  EXPECT_NEAR(sp.ng.z, 1.0f, 1e-3f);                       // from the axis to the hit
-  EXPECT_GT(normalize(sp.dpdu).x, 0.999f);                 // along the strand
+  EXPECT_NEAR(sp.ng.z, 1.0f, 1e-3f);        // from the axis to the hit
+  EXPECT_GT(normalize(sp.dpdu).x, 0.999f);  // along the strand
   EXPECT_EQ(sp.curve, 0);
   // A ray passing beside the strand (1.5 radii off its axis) misses it; so does one past its end.
   EXPECT_FALSE(s.g.intersect(ray({0.3f, 0.15f, 5.0f}, {0, 0, -1}), 31, &hit));
@@ -73,8 +73,8 @@ TEST(Curves, BadStrandsAreDroppedWithWarnings) {
   m.kind = GeometryKind::Curves;
   const float nan = std::nanf("");
   // Curves: good, NaN, zero length, zero radius, one point.
-  m.curves.cps = {0, 0, 0, 0.1f, 1, 0, 0, 0.1f,  0, 1, 0, 0.1f, nan, 1, 0, 0.1f, 0, 2, 0, 0.1f, 0, 2, 0, 0.1f,
-                  0, 3, 0, 0,    1, 3, 0, 0,     5, 5, 5, 1};
+  m.curves.cps = {0, 0,    0, 0.1f, 1, 0,    0, 0.1f, 0, 1, 0, 0.1f, nan, 1, 0, 0.1f, 0, 2,
+                  0, 0.1f, 0, 2,    0, 0.1f, 0, 3,    0, 0, 1, 3,    0,   0, 5, 5,    5, 1};
   m.curves.random = {0, 0, 0, 0, 0};
   g.add_curves(std::move(m), {0, 2, 4, 6, 8, 9}, w);
   ASSERT_EQ(g.mesh(0).curves.curve_count(), 1u);

@@ -184,7 +184,9 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
     }
     c.cps.resize(4 * kept);
     c.random.resize(kept);
-    if (dropped) warnings.push_back(name + ": dropped " + std::to_string(dropped) + " point(s) with a non-finite position or zero radius");
+    if (dropped)
+      warnings.push_back(name + ": dropped " + std::to_string(dropped) +
+                         " point(s) with a non-finite position or zero radius");
   } else {
     // Curves: keys with the end points duplicated, segments, cumulative key distances.
     std::vector<float> cps;
@@ -237,13 +239,16 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
     c.random = std::move(random);
     mesh.slots = std::move(slots);
     if (bad) warnings.push_back(name + ": dropped " + std::to_string(bad) + " curve(s) with non-finite positions");
-    if (short_curves) warnings.push_back(name + ": dropped " + std::to_string(short_curves) + " curve(s) of fewer than 2 points");
+    if (short_curves)
+      warnings.push_back(name + ": dropped " + std::to_string(short_curves) + " curve(s) of fewer than 2 points");
     if (flat)
       warnings.push_back(name + ": dropped " + std::to_string(flat) + " curve(s) of zero length or zero radius");
     kept = c.curve_count();
   }
-  if (kept == 0) warnings.push_back(name + " has nothing to render");
-  else mesh.rtc = curve_scene(mesh);
+  if (kept == 0)
+    warnings.push_back(name + " has nothing to render");
+  else
+    mesh.rtc = curve_scene(mesh);
   meshes_.push_back(std::move(mesh));
   return id;
 }

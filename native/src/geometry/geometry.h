@@ -33,10 +33,10 @@ struct CurveData {
   // x, y, z, radius per control point, object space. Curves: each curve's keys with the first and
   // last duplicated (Catmull-Rom needs a point beyond each end; Cycles' bvh/embree.cpp does the same).
   std::vector<float> cps;
-  std::vector<uint32_t> segments;    // curves: the first control point of each segment (Embree's index buffer)
+  std::vector<uint32_t> segments;       // curves: the first control point of each segment (Embree's index buffer)
   std::vector<uint32_t> first_segment;  // curves: each curve's first segment, then the segment count
-  std::vector<float> arc;     // curves: distance along the keys from the curve's root, per control point
-  std::vector<float> random;  // per curve (points: per point): Cycles' hash_uint2_to_float(index, 0)
+  std::vector<float> arc;               // curves: distance along the keys from the curve's root, per control point
+  std::vector<float> random;            // per curve (points: per point): Cycles' hash_uint2_to_float(index, 0)
   size_t curve_count() const { return first_segment.empty() ? 0 : first_segment.size() - 1; }
   int curve_of_segment(uint32_t segment) const;  // binary search over first_segment
   Vec3 point(size_t cp) const { return {cps[4 * cp], cps[4 * cp + 1], cps[4 * cp + 2]}; }

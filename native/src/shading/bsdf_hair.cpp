@@ -224,8 +224,8 @@ bool principled_sample(const Lobe& l, const Vec3& wo, Vec2 u, float u_extra, Vec
     sin_i = ang[2 * p];
     cos_i = ang[2 * p + 1];
   }
-  const float phi = p < 3 ? delta_phi(p, o.gamma_o, o.gamma_t) + sample_trimmed_logistic(u_phi, l.hair_radial)
-                          : 2 * kPi * u_phi;
+  const float phi =
+      p < 3 ? delta_phi(p, o.gamma_o, o.gamma_t) + sample_trimmed_logistic(u_phi, l.hair_radial) : 2 * kPi * u_phi;
   const float phi_i = o.phi_o + phi;
   *wi = f.x * sin_i + f.y * (cos_i * std::cos(phi_i)) + f.z * (cos_i * std::sin(phi_i));
   return is_finite(*wi);

@@ -60,7 +60,8 @@ void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float f
     // parametrisation to differentiate; Cycles' curves have no dPdv either).
     Vec3 dirs[2];
     orthonormals(ctx->Ng, &dirs[0], &dirs[1]);
-    for (int k = 0; k < 2; ++k) ctx->offset[k] = ShadingContext::Offset{dirs[k] * footprint, Vec3(0.0f), Vec3(0.0f), {0, 0}, {0, 0}};
+    for (int k = 0; k < 2; ++k)
+      ctx->offset[k] = ShadingContext::Offset{dirs[k] * footprint, Vec3(0.0f), Vec3(0.0f), {0, 0}, {0, 0}};
     return;
   }
   const uint32_t* tri = &mesh.indices[3 * size_t(sp.primitive)];
