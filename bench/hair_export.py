@@ -4,7 +4,6 @@ children), rendered with 1 sample by each engine in one run; prints each engine'
 
     LANTERN_LIBRARY=build/liblantern.so blender -b --factory-startup --python bench/hair_export.py -- 100000
 """
-import re
 import sys
 import time
 
@@ -20,8 +19,6 @@ build_scenes.reset_file()
 scene = build_scenes.new_scene("hair_bench", (64, 64), 1)
 build_scenes.build_hair_ball(scene, strands=strands // 4, children=4, principled=True)
 seconds = {}
-logs = []
-handler = lambda *a: None  # noqa: E731
 for engine in (ru.LANTERN, ru.CYCLES):
     t0 = time.perf_counter()
     ru.render(scene, engine, 1, seed=0)
