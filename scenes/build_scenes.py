@@ -1675,7 +1675,94 @@ def build_motion_blur(scene, blur=True):
     scene.cycles.motion_blur_position = "CENTER"
 
 
+# ----------------------------------------------------------------------------------------------
+# Curves and points (issue 15)
+# ----------------------------------------------------------------------------------------------
+def hair_material(name, melanin=0.5, redness=0.3, roughness=0.3, radial=0.3, random_color=0.2,
+                  random_roughness=0.1):
+    mat, nt, out = _material(name)
+    hair = nt.nodes.new("ShaderNodeBsdfHairPrincipled")
+    hair.parametrization = "MELANIN"
+    for key, value in (("Melanin", melanin), ("Melanin Redness", redness), ("Roughness", roughness),
+                       ("Radial Roughness", radial), ("Random Color", random_color),
+                       ("Random Roughness", random_roughness)):
+        hair.inputs[key].default_value = value
+    nt.links.new(hair.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def build_hair_ball(scene, strands=600, children=4, principled=True):
+    """A sphere with particle hair (Principled Hair BSDF, melanin) under an area light, above a
+    grey floor: `strands` parents, each replaced by `children` interpolated children as Cycles
+    renders them, 2^3 + 1 keys per strand, radius 5 mm at the root tapering to 0 (Close Tip).
+    Cycles' curve shape is 3D curves (THICK), as Lantern's. principled=False: a Diffuse BSDF on
+    the strands instead (the curves' geometry and export alone)."""
+    scene.cycles_curves.shape = "THICK"
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 6.0))
+    assign(floor, diffuse("Floor", (0.5, 0.5, 0.5)))
+    ball = add_object(scene, "Ball", mesh_sphere("Ball", 0.5, segments=32, rings=16), location=(0, 0, 0.6))
+    assign(ball, diffuse("Scalp", (0.3, 0.2, 0.15)),
+           hair_material("Hair") if principled else diffuse("HairDiffuse", (0.6, 0.4, 0.3)))
+    ball.modifiers.new("Hair", "PARTICLE_SYSTEM")
+    psys = ball.particle_systems[0]
+    psys.seed = 1  # a new system draws a random seed: fix it so that every build has the same strands
+    psys.child_seed = 2
+    s = psys.settings
+    s.type = "HAIR"
+    s.count = strands
+    s.hair_length = 0.35
+    s.render_step = 3
+    s.display_step = 2
+    s.material = 2
+    s.root_radius = 1.0
+    s.tip_radius = 0.0
+    s.radius_scale = 0.01
+    s.shape = 0.0
+    s.use_close_tip = True
+    s.child_type = "INTERPOLATED" if children else "NONE"
+    s.rendered_child_count = children
+    s.child_nbr = min(children, 4)
+    s.child_length = 0.9
+    s.roughness_2 = 0.05
+    add_light(scene, "AreaLight", "AREA", 300.0, (0.8, -0.6, 2.6), rotation=(20, 15, 0), shape="SQUARE", size=1.0)
+    set_world(scene, (0.05, 0.06, 0.08), 1.0)
+    add_camera(scene, (0.0, -3.0, 1.2), (0.0, 0.0, 0.6), lens=50.0)
+
+
+def build_point_cloud(scene):
+    """Points from geometry nodes (Mesh to Points on an icosphere's vertices, radius 6 cm, then
+    Set Material): they reach the depsgraph as POINTCLOUD geometry, rendered as spheres. A glossy
+    and a diffuse material on two clouds, under an area light above a floor."""
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 6.0))
+    assign(floor, diffuse("Floor", (0.5, 0.5, 0.5)))
+    bm = bmesh.new()
+    bmesh.ops.create_icosphere(bm, subdivisions=2, radius=0.6)
+    for k, (mat, x) in enumerate(((diffuse("Points", (0.7, 0.3, 0.2)), -0.7),
+                                  (glossy("PointsGlossy", (0.8, 0.8, 0.8), 0.3), 0.7))):
+        obj = add_object(scene, "Cloud%d" % k, _mesh("Cloud%d" % k, bm.copy()), location=(x, 0, 0.7))
+        tree = bpy.data.node_groups.new("ToPoints%d" % k, "GeometryNodeTree")
+        tree.inputs.new("NodeSocketGeometry", "Geometry")
+        tree.outputs.new("NodeSocketGeometry", "Geometry")
+        gin = tree.nodes.new("NodeGroupInput")
+        gout = tree.nodes.new("NodeGroupOutput")
+        to_points = tree.nodes.new("GeometryNodeMeshToPoints")
+        to_points.inputs["Radius"].default_value = 0.06
+        set_mat = tree.nodes.new("GeometryNodeSetMaterial")
+        set_mat.inputs["Material"].default_value = mat
+        tree.links.new(gin.outputs[0], to_points.inputs["Mesh"])
+        tree.links.new(to_points.outputs[0], set_mat.inputs["Geometry"])
+        tree.links.new(set_mat.outputs[0], gout.inputs[0])
+        obj.modifiers.new("Points", "NODES").node_group = tree
+    bm.free()
+    add_light(scene, "AreaLight", "AREA", 200.0, (0.5, -0.8, 2.5), rotation=(20, 10, 0), shape="SQUARE", size=1.0)
+    set_world(scene, (0.05, 0.06, 0.08), 1.0)
+    add_camera(scene, (0.0, -3.2, 1.4), (0.0, 0.0, 0.6), lens=45.0)
+
+
 SCENES = {
+    "hair_ball": (build_hair_ball, (96, 96), 128),
+    "hair_ball_diffuse": (lambda scene: build_hair_ball(scene, principled=False), (96, 96), 128),
+    "point_cloud": (build_point_cloud, (96, 96), 128),
     "lamps500": (build_lamps500, (160, 120), 64),
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),

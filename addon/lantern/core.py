@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 13
+ABI_VERSION = 14
 
 # lt_status
 OK = 0
@@ -186,6 +186,17 @@ class MeshDesc(ctypes.Structure):
         ("motion_positions", _f_p),
         ("motion_corner_normals", _f_p),
         ("motion_step_count", ctypes.c_int),
+    ]
+
+
+class CurvesDesc(ctypes.Structure):
+    _c_name_ = "lt_curves_desc"
+    _fields_ = [
+        ("points", _f_p),
+        ("point_count", ctypes.c_uint32),
+        ("curve_offsets", ctypes.POINTER(ctypes.c_uint32)),
+        ("curve_count", ctypes.c_uint32),
+        ("material_slots", _i_p),
     ]
 
 
@@ -414,6 +425,7 @@ def _declare(lib, layout=True):
         "lt_scene_add_material": ([scene_p, P(ShaderProgram), P(c_int)], c_int),
         "lt_scene_set_material_pass_index": ([scene_p, c_int, c_int], c_int),
         "lt_scene_add_mesh": ([scene_p, P(MeshDesc), P(c_int)], c_int),
+        "lt_scene_add_curves": ([scene_p, P(CurvesDesc), P(c_int)], c_int),
         "lt_scene_add_instance": ([scene_p, P(InstanceDesc), P(c_int)], c_int),
         "lt_scene_add_light": ([scene_p, P(LightDesc)], c_int),
         "lt_scene_set_camera": ([scene_p, P(CameraDesc)], c_int),
@@ -754,6 +766,26 @@ class Scene:
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_mesh(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_mesh")
+        return out.value
+
+    def add_curves(self, points, curve_offsets=None, material_slots=None):
+        """Hair or a point cloud: points (n, 4) of x, y, z, radius (object space); curve_offsets
+        (curves + 1, uint32) into them, or None for a point cloud; material_slots per curve."""
+        pts = _f32(points, "curve points", 4)
+        offs = None
+        ncurves = 0
+        if curve_offsets is not None:
+            offs = np.ascontiguousarray(curve_offsets, dtype=np.uint32)
+            ncurves = max(offs.size - 1, 0)
+        mat = None if material_slots is None else _i32(material_slots, "curve material slots")
+        if mat is not None and mat.size != ncurves:
+            raise ValueError("curve material slots: %d values for %d curves" % (mat.size, ncurves))
+        d = CurvesDesc(_fptr(pts), pts.size // 4,
+                       None if offs is None else offs.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)),
+                       ncurves, _iptr(mat))
+        out = ctypes.c_int(-1)
+        _check(self._lib.lt_scene_add_curves(self.handle, ctypes.byref(d), ctypes.byref(out)),
+               "lt_scene_add_curves")
         return out.value
 
     def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL, color=(1.0, 1.0, 1.0, 1.0),

@@ -4,6 +4,7 @@ import numpy as np
 
 from .. import core
 from .camera import camera_table, export_camera
+from .hair import hair_systems, warn_curve_shape
 from .light import export_light
 from .material import ImageExporter, MaterialExporter
 from .mesh import CONVERTIBLE_TYPES, MeshExporter
@@ -83,11 +84,19 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     deferred = []
     instances = {}  # instance_key -> (core instance id or None for no geometry, matrix)
     has_mesh_instance = set()
+    hair = 0
     for inst in depsgraph.object_instances:
-        if not inst.show_self:  # e.g. a particle emitter set not to render itself
-            continue
         obj = inst.object
         t = obj.type
+        if t == 'MESH' and inst.show_particles and hair_systems(obj):
+            if not hair:
+                warn_curve_shape(depsgraph, report)
+            matrix = np.array(inst.matrix_world, dtype=np.float32)
+            key = instance_key(inst) + ('hair',)
+            instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR'), matrix)
+            hair += 1
+        if not inst.show_self:  # e.g. a particle emitter set not to render itself
+            continue
         if t in _IGNORED_TYPES:
             continue
         # The iterator reuses its matrix: copy it now.
@@ -112,6 +121,13 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                 light_kinds[obj.data.type] = light_kinds.get(obj.data.type, 0) + 1
         elif t == 'VOLUME':
             volumes += export_volume(obj, matrix, core_scene, report, materials)
+        elif t in ('CURVES', 'POINTCLOUD'):
+            if t == 'CURVES' and not hair:
+                warn_curve_shape(depsgraph, report)
+            hair += t == 'CURVES'
+            random_id = inst.random_id if inst.is_instance else None
+            instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id),
+                                             matrix)
         elif t not in skipped_types:
             skipped_types.add(t)
             report({'WARNING'}, "Objects of type %s are not supported yet, skipped (e.g. '%s')"
@@ -127,7 +143,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()
                                                             if v is not None),
                    image_files=images.from_files,
-                   lights=lights, light_kinds=light_kinds, volumes=volumes,
+                   lights=lights, light_kinds=light_kinds, volumes=volumes, hair=hair,
                    material_media=materials.media, world_media=world_media,
                    emissive_media=materials.emissive_media,
                    media=volumes + materials.media + world_media)

@@ -300,6 +300,42 @@ class MeshExporter:
             self.instance_count += 1
         return instance
 
+    def export_curves_instance(self, obj, matrix_world, kind, random_id=None):
+        """Curves or spheres of obj as an instance: kind 'HAIR' (the object's particle hair),
+        'CURVES' (a Curves object) or 'POINTCLOUD'. Returns the core instance id or None."""
+        from .hair import curves_arrays, particle_hair_arrays, pointcloud_arrays
+        problem = transform_problem(matrix_world)
+        if problem is not None:
+            self.report({'WARNING'}, "Object '%s' left out: %s" % (obj.name, problem))
+            return None
+        material_ids = self._material_ids(obj)
+        key = (kind, obj.original.as_pointer() if kind == 'HAIR' else self._geometry_key(obj))
+        subject = "Object '%s'%s" % (obj.name, " (particle hair)" if kind == 'HAIR' else "")
+        if key not in self.mesh_ids:
+            if kind == 'HAIR':
+                arrays = particle_hair_arrays(obj, self.report)
+                args = arrays and (arrays[0], arrays[1], arrays[2])
+            elif kind == 'CURVES':
+                arrays = curves_arrays(obj.data)
+                args = arrays and (arrays[0], arrays[1], None)
+            else:
+                points = pointcloud_arrays(obj.data)
+                args = None if points is None else (points, None, None)
+            self.mesh_ids[key] = None if args is None else core_call(self.core_scene, self.report, subject,
+                                                                     "add_curves", *args)
+        mesh_id = self.mesh_ids[key]
+        if mesh_id is None:
+            return None
+        if random_id is None:
+            random_id = object_random_id(obj.name)
+        instance = core_call(self.core_scene, self.report, subject, "add_instance",
+                             mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
+                             pass_index=obj.pass_index, random_id=random_id,
+                             attributes=object_values(obj, self.materials.attributes.object_keys()))
+        if instance is not None:
+            self.instance_count += 1
+        return instance
+
     def _check_closed(self, obj, material_ids):
         """Warns when a mesh carrying a volume material is open: the volume stack enters a medium
         where a ray crosses one of its faces from the front and leaves it only where a ray crosses

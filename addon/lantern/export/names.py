@@ -9,7 +9,7 @@ from .. import core
 
 FLT_MAX = float(np.finfo(np.float32).max)
 
-_CORE_SUBJECT = re.compile(r"^(?:mesh|light|instance|material node) \d+(?::\s*|\s+)")
+_CORE_SUBJECT = re.compile(r"^(?:mesh|curves|points|light|instance|material node) \d+(?::\s*|\s+)")
 
 
 def without_core_index(message):

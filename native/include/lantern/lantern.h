@@ -36,8 +36,9 @@ extern "C" {
  * 11: denoising (lt_render_settings.denoise, lt_render_status.denoised and denoise_seconds, the
  * Noisy Image and Denoising passes); 12: Cycles' light and data passes (LT_PASS_DIFFUSE_DIRECT
  * on), lt_render_settings' mist fields, lt_scene_set_material_pass_index; 13: motion blur (motion
- * steps of lt_mesh_desc, lt_instance_desc and lt_camera_desc; motion counts in lt_scene_stats). */
-#define LT_ABI_VERSION 13
+ * steps of lt_mesh_desc, lt_instance_desc and lt_camera_desc; motion counts in lt_scene_stats);
+ * 14: curves and points (lt_curves_desc, lt_scene_add_curves). */
+#define LT_ABI_VERSION 14
 
 enum lt_status {
   LT_OK = 0,
@@ -196,6 +197,22 @@ typedef struct lt_mesh_desc {
   int motion_step_count;
 } lt_mesh_desc;
 LT_API int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* desc, int* out_id);
+
+/* Curves (hair) or a point cloud, object space; the id is a mesh id for lt_scene_add_instance.
+ * points: x, y, z, radius per point. curve_offsets: curve_count + 1 ascending indices into the
+ * points (curve k has points [offsets[k], offsets[k + 1])); NULL with curve_count 0: a point
+ * cloud (spheres). Curves render as Cycles' thick (3D) curves: round Catmull-Rom splines through
+ * the points, the radius interpolated the same way. material_slots: one per curve (NULL: slot 0).
+ * Curves of fewer than 2 points, of zero length or radius, or with a non-finite point, and points
+ * of zero radius or non-finite positions are dropped with a warning; negative radii become 0. */
+typedef struct lt_curves_desc {
+  const float* points;
+  uint32_t point_count;
+  const uint32_t* curve_offsets;
+  uint32_t curve_count;
+  const int* material_slots;
+} lt_curves_desc;
+LT_API int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* desc, int* out_id);
 
 /* Ray visibility flags (Cycles' Object > Visibility > Ray Visibility). */
 enum lt_visibility {

@@ -22,6 +22,7 @@
 #include "scene/scene.h"
 #include "shading/inputs.h"
 #include "shading/shaders.h"
+#include "shading/textures.h"
 
 namespace {
 
@@ -425,6 +426,47 @@ int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* d, int* out_id) {
       }
     }
     *out_id = scene->scene.geometry.add_mesh(std::move(m), scene->scene.warnings);
+  });
+}
+
+int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* d, int* out_id) {
+  return guarded([&] {
+    require(scene && d && out_id, "lt_scene_add_curves: NULL argument");
+    scene->scene.require_editable();
+    require(d->point_count <= (1u << 30) && d->curve_count < (1u << 30), "curves are too large");
+    require(d->point_count == 0 || d->points, "curve points are NULL");
+    require(d->curve_count == 0 || d->curve_offsets, "curve offsets are NULL");
+    lt::Mesh m;
+    m.kind = d->curve_count ? lt::GeometryKind::Curves : lt::GeometryKind::Points;
+    m.curves.cps.assign(d->points, d->points + size_t(d->point_count) * 4);
+    std::vector<uint32_t> offsets;
+    if (d->curve_count) {
+      offsets.assign(d->curve_offsets, d->curve_offsets + d->curve_count + 1);
+      require(offsets.front() == 0 && offsets.back() == d->point_count,
+              "curve offsets must start at 0 and end at the point count");
+      for (size_t k = 0; k + 1 < offsets.size(); ++k)
+        require(offsets[k] <= offsets[k + 1], "curve offsets must not decrease (curve " + std::to_string(k) + ")");
+      if (d->material_slots) {
+        m.slots.assign(d->material_slots, d->material_slots + d->curve_count);
+        for (int& s : m.slots) s = s < 0 ? 0 : s;
+      }
+    }
+    // Cycles' Random of a curve or point: hash_uint2_to_float(index, 0).
+    const size_t n = d->curve_count ? d->curve_count : d->point_count;
+    m.curves.random.resize(n);
+    for (size_t k = 0; k < n; ++k) m.curves.random[k] = float(lt::tex::hash_uint2(uint32_t(k), 0)) / float(0xFFFFFFFFu);
+    // Blender's automatic texture space: the bounds of the points.
+    lt::Bounds b;
+    for (size_t k = 0; k < d->point_count; ++k) {
+      const lt::Vec3 p = m.curves.point(k);
+      if (lt::is_finite(p)) b.extend(p);
+    }
+    if (!b.empty()) {
+      m.texspace_location = (b.lo + b.hi) * 0.5f;
+      m.texspace_size = (b.hi - b.lo) * 0.5f;
+      for (int k = 0; k < 3; ++k) m.texspace_size[k] = std::max(m.texspace_size[k], 1e-5f);
+    }
+    *out_id = scene->scene.geometry.add_curves(std::move(m), offsets, scene->scene.warnings);
   });
 }
 

@@ -26,6 +26,19 @@ void visibility_filter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// Curves and spheres are entered, never left: a hit where the ray leaves the tube (the normal
+// along the ray) comes from a ray that started inside it, off the same strand (hair's
+// transmission); Cycles skips the strand it starts on the same way (its self-intersection test).
+void front_face_filter(const RTCFilterFunctionNArguments* args) {
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const float d = RTCRayN_dir_x(args->ray, args->N, i) * RTCHitN_Ng_x(args->hit, args->N, i) +
+                    RTCRayN_dir_y(args->ray, args->N, i) * RTCHitN_Ng_y(args->hit, args->N, i) +
+                    RTCRayN_dir_z(args->ray, args->N, i) * RTCHitN_Ng_z(args->hit, args->N, i);
+    if (d > 0) args->valid[i] = 0;
+  }
+}
+
 void embree_error(void*, RTCError code, const char* message) {
   std::fprintf(stderr, "lantern: embree error %d: %s\n", int(code), message ? message : "");
 }
@@ -147,6 +160,143 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
   return id;
 }
 
+int CurveData::curve_of_segment(uint32_t segment) const {
+  auto it = std::upper_bound(first_segment.begin(), first_segment.end(), segment);
+  return int(it - first_segment.begin()) - 1;
+}
+
+void catmull_rom(const CurveData& c, uint32_t i, float u, Vec3* p, Vec3* dp, float* radius) {
+  const float u2 = u * u, u3 = u2 * u;
+  // Uniform Catmull-Rom basis (tension 1/2) and its derivative.
+  const float b[4] = {0.5f * (-u3 + 2 * u2 - u), 0.5f * (3 * u3 - 5 * u2 + 2), 0.5f * (-3 * u3 + 4 * u2 + u),
+                      0.5f * (u3 - u2)};
+  const float d[4] = {0.5f * (-3 * u2 + 4 * u - 1), 0.5f * (9 * u2 - 10 * u), 0.5f * (-9 * u2 + 8 * u + 1),
+                      0.5f * (3 * u2 - 2 * u)};
+  Vec3 P(0.0f), D(0.0f);
+  float r = 0;
+  for (int k = 0; k < 4; ++k) {
+    P += c.point(i + k) * b[k];
+    D += c.point(i + k) * d[k];
+    r += c.radius(i + k) * b[k];
+  }
+  if (p) *p = P;
+  if (dp) *dp = D;
+  if (radius) *radius = std::max(r, 0.0f);
+}
+
+int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::vector<std::string>& warnings) {
+  if (committed_) throw StateError("the scene is committed; curves can no longer be added");
+  const int id = int(meshes_.size());
+  CurveData& c = mesh.curves;
+  const std::string name = std::string(mesh.kind == GeometryKind::Curves ? "curves " : "points ") + std::to_string(id);
+  for (size_t i = 0; i < c.cps.size(); i += 4) {
+    float& r = c.cps[i + 3];
+    if (!(r >= 0) || !std::isfinite(r)) r = 0;
+  }
+  size_t dropped = 0, kept = 0;
+  if (mesh.kind == GeometryKind::Points) {
+    // Spheres: drop the non-finite and the radius-0 ones (nothing to hit).
+    for (size_t i = 0; i < c.cps.size() / 4; ++i) {
+      if (!is_finite(c.point(i)) || !(c.radius(i) > 0)) {
+        ++dropped;
+        continue;
+      }
+      std::copy_n(&c.cps[4 * i], 4, &c.cps[4 * kept]);
+      c.random[kept] = c.random[i];
+      ++kept;
+    }
+    c.cps.resize(4 * kept);
+    c.random.resize(kept);
+    if (dropped)
+      warnings.push_back(name + ": dropped " + std::to_string(dropped) +
+                         " point(s) with a non-finite position or zero radius");
+  } else {
+    // Curves: keys with the end points duplicated, segments, cumulative key distances.
+    std::vector<float> cps;
+    cps.reserve(c.cps.size() + 8 * (offsets.size() - 1));
+    std::vector<float> random;
+    std::vector<int> slots;
+    c.first_segment.clear();
+    c.segments.clear();
+    c.arc.clear();
+    size_t bad = 0, short_curves = 0, flat = 0;
+    for (size_t k = 0; k + 1 < offsets.size(); ++k) {
+      const uint32_t a = offsets[k], e = offsets[k + 1];
+      bool finite = true, thick = false;
+      float len = 0;
+      for (uint32_t i = a; i < e; ++i) {
+        finite = finite && is_finite(c.point(i));
+        thick = thick || c.radius(i) > 0;
+        if (i > a) len += length(c.point(i) - c.point(i - 1));
+      }
+      if (e - a < 2) {
+        ++short_curves;
+        continue;
+      }
+      if (!finite || !std::isfinite(len)) {
+        ++bad;
+        continue;
+      }
+      if (!(len > 0) || !thick) {
+        ++flat;
+        continue;
+      }
+      c.first_segment.push_back(uint32_t(c.segments.size()));
+      const uint32_t base = uint32_t(cps.size() / 4);
+      cps.insert(cps.end(), &c.cps[4 * a], &c.cps[4 * a + 4]);
+      c.arc.push_back(0);
+      float s = 0;
+      for (uint32_t i = a; i < e; ++i) {
+        if (i > a) s += length(c.point(i) - c.point(i - 1));
+        cps.insert(cps.end(), &c.cps[4 * i], &c.cps[4 * i + 4]);
+        c.arc.push_back(s);
+      }
+      cps.insert(cps.end(), &c.cps[4 * (e - 1)], &c.cps[4 * e]);
+      c.arc.push_back(s);
+      for (uint32_t j = 0; j + 1 < e - a; ++j) c.segments.push_back(base + j);
+      random.push_back(c.random[k]);
+      slots.push_back(mesh.slots.empty() ? 0 : mesh.slots[k]);
+    }
+    c.first_segment.push_back(uint32_t(c.segments.size()));
+    c.cps = std::move(cps);
+    c.random = std::move(random);
+    mesh.slots = std::move(slots);
+    if (bad) warnings.push_back(name + ": dropped " + std::to_string(bad) + " curve(s) with non-finite positions");
+    if (short_curves)
+      warnings.push_back(name + ": dropped " + std::to_string(short_curves) + " curve(s) of fewer than 2 points");
+    if (flat)
+      warnings.push_back(name + ": dropped " + std::to_string(flat) + " curve(s) of zero length or zero radius");
+    kept = c.curve_count();
+  }
+  if (kept == 0)
+    warnings.push_back(name + " has nothing to render");
+  else
+    mesh.rtc = curve_scene(mesh);
+  meshes_.push_back(std::move(mesh));
+  return id;
+}
+
+// Embree reads the control points and segments from the mesh's own arrays (no copy): a Mesh's
+// vectors keep their storage when the mesh moves into meshes_.
+RTCScene Geometry::curve_scene(const Mesh& m) const {
+  RTCScene scene = rtcNewScene(device_);
+  const CurveData& c = m.curves;
+  const bool curves = m.kind == GeometryKind::Curves;
+  RTCGeometry g =
+      rtcNewGeometry(device_, curves ? RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE : RTC_GEOMETRY_TYPE_SPHERE_POINT);
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, c.cps.data(), 0, 4 * sizeof(float),
+                             c.cps.size() / 4);
+  if (curves)
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, c.segments.data(), 0, sizeof(uint32_t),
+                               c.segments.size());
+  rtcSetGeometryIntersectFilterFunction(g, front_face_filter);
+  rtcSetGeometryOccludedFilterFunction(g, front_face_filter);
+  rtcCommitGeometry(g);
+  rtcAttachGeometryByID(scene, g, 0);
+  rtcReleaseGeometry(g);
+  return scene;
+}
+
 namespace {
 bool finite_transform(const Transform& xf) {
   bool finite = std::isfinite(xf.determinant());
@@ -231,6 +381,7 @@ void Geometry::build_top() {
     const Mesh& m = meshes_[inst.mesh];
     if (!m.rtc || !finite_transform(inst.xf) || !keeps_area(inst)) continue;
     const bool flat = !invertible(inst.xf);
+    if (flat && !m.is_triangles()) continue;  // curves and spheres of a flattened object: left out
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, flat ? baked_scene(int(i)) : m.rtc);
     if (!inst.motion.empty() && same_rotation(inst.motion_decomposed)) {
@@ -259,13 +410,17 @@ void Geometry::build_top() {
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(top_, g, unsigned(i));
     rtcReleaseGeometry(g);
-    // Bounds over the motion steps' vertices (between steps the motion stays near them).
+    // Bounds over the motion steps' vertices (between steps the motion stays near them), and
+    // the curves' and points' keys grown by their radius.
     const std::vector<Vec3>& ps = m.motion_steps > 1 ? m.motion_positions : m.positions;
-    if (inst.motion.empty()) {
-      for (const Vec3& p : ps) bounds_.extend(inst.xf.point(p));
-    } else {
-      for (const Transform& xf : inst.motion)
-        for (const Vec3& p : ps) bounds_.extend(xf.point(p));
+    const std::vector<Transform> still{inst.xf};
+    for (const Transform& xf : inst.motion.empty() ? still : inst.motion) {
+      for (const Vec3& p : ps) bounds_.extend(xf.point(p));
+      for (size_t k = 0; k < m.curves.cps.size() / 4; ++k) {
+        const float r = m.curves.radius(k);
+        bounds_.extend(xf.point(m.curves.point(k) - Vec3(r)));
+        bounds_.extend(xf.point(m.curves.point(k) + Vec3(r)));
+      }
     }
   }
   rtcCommitScene(top_);
@@ -334,6 +489,7 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   hit->u = rh.hit.u;
   hit->v = rh.hit.v;
   hit->time = ray.time;
+  hit->p = ray.o + ray.d * rh.ray.tfar;
   return true;
 }
 
@@ -427,10 +583,48 @@ bool Mesh::interpolate(int id, int t, float b1, float b2, float out[4], int* com
   return true;
 }
 
+// Cycles' curve_shader_setup and point_shader_setup (thick curves, spheres): the normal points
+// from the curve's centre line at u (the sphere's centre) to the hit.
+SurfacePoint Geometry::curve_surface(const Hit& hit, const Instance& inst, const Mesh& m) const {
+  SurfacePoint sp;
+  const CurveData& c = m.curves;
+  Vec3 centre, dp(0.0f);
+  float r;
+  int slot = 0;
+  if (m.kind == GeometryKind::Curves) {
+    const uint32_t seg = uint32_t(hit.primitive);
+    catmull_rom(c, c.segments[seg], hit.u, &centre, &dp, &r);
+    const int curve = c.curve_of_segment(seg);
+    slot = m.slots.empty() ? 0 : m.slots[size_t(curve)];
+    sp.curve = curve;
+    sp.bary = {hit.u, 0};
+  } else {
+    centre = c.point(size_t(hit.primitive));
+    r = c.radius(size_t(hit.primitive));
+    sp.curve = hit.primitive;
+  }
+  const Vec3 centre_w = inst.xf.point(centre);
+  sp.p = hit.p;
+  Vec3 n = normalize(sp.p - centre_w);
+  if (!is_finite(n)) n = Vec3(0, 0, 1);
+  sp.ng = sp.ns = n;
+  sp.dpdu = inst.xf.vector(dp);
+  // Object space: the centre plus the radius along the normal (no inverse transform per hit).
+  const Vec3 no = inst.normal_to_object(n);
+  sp.po = length_squared(no) > 0 ? centre + normalize(no) * r : centre;
+  const Vec3 g = (sp.po - m.texspace_location) / (2.0f * m.texspace_size);
+  sp.generated = Vec3(g.x + 0.5f, g.y + 0.5f, g.z + 0.5f);
+  sp.material = inst.material_for(slot);
+  sp.instance = hit.instance;
+  sp.primitive = hit.primitive;
+  return sp;
+}
+
 SurfacePoint Geometry::surface(const Hit& hit) const {
   SurfacePoint sp;
   const Instance& inst = instances_[hit.instance];
   const Mesh& m = meshes_[inst.mesh];
+  if (!m.is_triangles()) return curve_surface(hit, inst, m);
   const int t = hit.primitive;
   // At the hit's time: a moving instance's transform, a deforming mesh's corners and normals.
   Vec3 p0, p1, p2;

@@ -23,6 +23,30 @@ struct MeshAttribute {
 };
 constexpr int kMaxAttributeId = 1 << 16;
 
+// What a Mesh holds: triangles, or (Cycles' thick hair and point clouds) Embree round curves and
+// spheres (docs/architecture.md, "Curves and points").
+enum class GeometryKind : uint8_t { Triangles, Curves, Points };
+
+// Curves: uniform Catmull-Rom splines of varying radius (RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE,
+// what Cycles 3.4 builds for its 3D curve shape); points: spheres (RTC_GEOMETRY_TYPE_SPHERE_POINT).
+// 4 + 4 + 4 bytes per control point (cps, arc) and 4 per segment besides Embree's BVH.
+struct CurveData {
+  // x, y, z, radius per control point, object space. Curves: each curve's keys with the first and
+  // last duplicated (Catmull-Rom needs a point beyond each end; Cycles' bvh/embree.cpp does the same).
+  std::vector<float> cps;
+  std::vector<uint32_t> segments;       // curves: the first control point of each segment (Embree's index buffer)
+  std::vector<uint32_t> first_segment;  // curves: each curve's first segment, then the segment count
+  std::vector<float> arc;               // curves: distance along the keys from the curve's root, per control point
+  std::vector<float> random;            // per curve (points: per point): Cycles' hash_uint2_to_float(index, 0)
+  size_t curve_count() const { return first_segment.empty() ? 0 : first_segment.size() - 1; }
+  int curve_of_segment(uint32_t segment) const;  // binary search over first_segment
+  Vec3 point(size_t cp) const { return {cps[4 * cp], cps[4 * cp + 1], cps[4 * cp + 2]}; }
+  float radius(size_t cp) const { return cps[4 * cp + 3]; }
+};
+// The Catmull-Rom point at u in [0, 1] of the segment starting at control point i, its
+// derivative and radius (Embree's and Cycles' uniform basis).
+void catmull_rom(const CurveData& c, uint32_t i, float u, Vec3* p, Vec3* dp, float* radius);
+
 struct Mesh {
   std::vector<Vec3> positions;
   std::vector<uint32_t> indices;     // 3 per triangle
@@ -38,7 +62,10 @@ struct Mesh {
   int motion_steps = 0;
   std::vector<Vec3> motion_positions, motion_corner_normals;
   RTCScene rtc = nullptr;
+  GeometryKind kind = GeometryKind::Triangles;
+  CurveData curves;  // kind Curves or Points; slots then hold one slot per curve
   size_t triangle_count() const { return indices.size() / 3; }
+  bool is_triangles() const { return kind == GeometryKind::Triangles; }
   const MeshAttribute* attribute(int id) const {
     for (const MeshAttribute& a : attributes)
       if (a.id == id) return &a;
@@ -106,6 +133,11 @@ class Geometry {
   // An instance with motion whose transforms are not all finite and invertible (Embree's
   // instances need an inverse at every step) keeps its centre transform, with a warning.
   int add_instance(Instance instance, std::vector<std::string>& warnings);
+  // Takes curves or points (mesh.kind, mesh.curves filled but for first_segment, arc and the
+  // duplicated end points: given the keys and, per curve, offsets into them in `offsets`).
+  // Curves with a non-finite key or fewer than 2 keys, and non-finite or zero-radius points, are
+  // dropped and counted in warnings; negative or non-finite radii become 0.
+  int add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::vector<std::string>& warnings);
   // Moves an instance (also after commit): the next commit rebuilds only the top-level BVH over
   // the meshes' existing BVHs.
   void set_instance_transform(int instance, const Transform& xf);
@@ -167,6 +199,8 @@ class Geometry {
   // steps sets of positions (vertex_count each, step by step): Embree's vertex motion.
   RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices,
                           int steps = 1) const;
+  RTCScene curve_scene(const Mesh& mesh) const;
+  SurfacePoint curve_surface(const Hit& hit, const Instance& inst, const Mesh& m) const;
   RTCScene baked_scene(int instance);
 };
 

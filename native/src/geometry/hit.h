@@ -13,8 +13,9 @@ struct Hit {
   float t = INFINITY;
   int instance = -1;
   int primitive = -1;
-  float u = 0, v = 0;  // barycentrics of vertices 1 and 2
+  float u = 0, v = 0;  // barycentrics of vertices 1 and 2; curves: the segment's parameter u
   float time = 0.5f;   // the ray's (motion blur)
+  Vec3 p{0.0f};        // world position (ray origin + t direction): curves and points shade from it
   bool valid() const { return instance >= 0; }
 };
 
@@ -30,6 +31,10 @@ struct SurfacePoint {
   int material = -1;
   int instance = -1, primitive = -1;
   float time = 0.5f;  // the ray's (motion blur): the shutter time the point was found at
+  // Curves and points (primitive: the segment or the point): the curve (point) index, and the
+  // curve's tangent dP/du in world space (zero on points and triangles).
+  int curve = -1;
+  Vec3 dpdu{0.0f};
 };
 
 // Offsets a ray origin off a surface along the geometric normal by an amount that scales with the

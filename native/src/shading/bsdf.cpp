@@ -131,6 +131,9 @@ bool lobe_is_delta(const Lobe& l) {
     case LobeType::Translucent:
     case LobeType::DiffuseToon:
     case LobeType::GlossyToon:
+    case LobeType::PrincipledHair:
+    case LobeType::HairReflection:
+    case LobeType::HairTransmission:
       return false;
     case LobeType::GlossyGGX:
     case LobeType::SpecularGGX:
@@ -718,6 +721,9 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
     case LobeType::GlossyToon:
       return l.weight * toon_eval(l, mirror_dir(o), i, pdf);
     case LobeType::Transparent:
+    case LobeType::PrincipledHair:  // hair_eval, without the mirrored frame
+    case LobeType::HairReflection:
+    case LobeType::HairTransmission:
       break;
   }
   return Spectrum(0.0f);
@@ -943,6 +949,10 @@ uint32_t lobe_flags(const Lobe& l) {
       return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection | kLobeTransmission;
     case LobeType::Transparent:
       return kLobeSpecular | kLobeTransmission;
+    case LobeType::PrincipledHair:
+    case LobeType::HairReflection:
+    case LobeType::HairTransmission:
+      return kLobeGlossy | kLobeReflection | kLobeTransmission;
   }
   return 0;
 }
@@ -953,6 +963,11 @@ Spectrum lobe_eval_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf
   *pdf_out = 0;
   if (wo.z == 0 || lobe_is_delta(l)) return Spectrum(0.0f);
   float pdf;
+  if (lobe_is_hair(l.type)) {  // a fibre has no inside: no mirrored frame
+    Spectrum f = hair_eval(l, wo, wi, &pdf);
+    *pdf_out = std::isfinite(pdf) && pdf > 0 ? pdf : 0.0f;
+    return is_finite(f) ? vmax(f, Spectrum(0.0f)) : Spectrum(0.0f);
+  }
   Lobe tmp;
   Spectrum f =
       wo.z > 0 ? eval_upper(l, wo, wi, &pdf) : eval_upper(lobe_from_below(l, &tmp), flip_z(wo), flip_z(wi), &pdf);
@@ -974,6 +989,15 @@ float lobe_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi) {
 
 bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out, bool below_shading) {
   if (wo.z == 0 || !is_finite(wo)) return false;
+  if (lobe_is_hair(lobe.type)) {
+    BsdfSample s;
+    if (!hair_sample(lobe, wo, u, u_extra, &s.wi)) return false;
+    s.f = lobe_eval_pdf(lobe, wo, s.wi, &s.pdf);
+    s.flags = kLobeGlossy | (s.wi.z > 0 ? kLobeReflection : kLobeTransmission);
+    if (!sanitize(&s)) return false;
+    *out = s;
+    return true;
+  }
   const bool flip = wo.z < 0;
   const Vec3 o = flip ? flip_z(wo) : wo;
   Lobe tmp;
@@ -1115,6 +1139,9 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         break;
       }
       case LobeType::Transparent:
+      case LobeType::PrincipledHair:  // sampled above
+      case LobeType::HairReflection:
+      case LobeType::HairTransmission:
         return false;
     }
     // f and pdf from the evaluation path, so that sample() and pdf() agree to the last bit.
@@ -1167,8 +1194,11 @@ float Bsdf::bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const {
 }
 
 namespace {
-// Lobes whose f is not symmetric in (wo, wi): Cycles' Toon closures make f cos(wi) the ramp.
-inline bool lobe_reciprocal(const Lobe& l) { return l.type != LobeType::DiffuseToon && l.type != LobeType::GlossyToon; }
+// Lobes whose f is not symmetric in (wo, wi): Cycles' Toon closures make f cos(wi) the ramp, and
+// its hair closures are computed with sd->I, the direction towards the camera.
+inline bool lobe_reciprocal(const Lobe& l) {
+  return l.type != LobeType::DiffuseToon && l.type != LobeType::GlossyToon && !lobe_is_hair(l.type);
+}
 }  // namespace
 
 // A lobe's f for the transport set (the adjoint under set_light_is_wo) and its pdf of sampling wi.

@@ -80,8 +80,24 @@ enum class LobeType : uint8_t {
   // the node's Color (saturated), the extra factor of every bounce after the first. f is Cycles'
   // estimate: exact single scattering plus one random walk seeded from the direction pair.
   MultiGGX,
+  // Hair lobes (shading/bsdf_hair.cpp), on curves: hair_tangent is the curve's direction in the
+  // local frame (+Z the normal from the curve's axis). They are neither reflection nor
+  // transmission by hemisphere: a sample's flags say which side of +Z it left on.
+  // Principled Hair BSDF (Chiang et al. 2016 as Cycles 3.4's bsdf_hair_principled.h):
+  // hair_sigma = absorption, hair_roughness = v and hair_radial = s (already mapped to variance and
+  // logistic scale), hair_m0 = the R lobe's variance (Coat), hair_tilt = cuticle angle alpha,
+  // eta = IOR. h comes from wo, as Cycles' from sd->I.
+  PrincipledHair,
+  // Hair BSDF (Cycles' bsdf_hair.h), Reflection and Transmission: hair_roughness = Roughness U,
+  // hair_radial = Roughness V (both clamped to [0.001, 1]), hair_tilt = the node's offset
+  // negated (Cycles' bsdf->offset).
+  HairReflection,
+  HairTransmission,
 };
-constexpr int kLobeTypeCount = int(LobeType::MultiGGX) + 1;
+constexpr int kLobeTypeCount = int(LobeType::HairTransmission) + 1;
+inline bool lobe_is_hair(LobeType t) {
+  return t == LobeType::PrincipledHair || t == LobeType::HairReflection || t == LobeType::HairTransmission;
+}
 // The glass lobes, which reflect or refract with the relative IOR eta (integrators count their
 // bounces by the branch sampled). Translucent transmits without crossing an IOR; Cycles counts it
 // as a transmission bounce with diffuse ray visibility (integrator/path_state.h).
@@ -111,6 +127,10 @@ struct Lobe {
   // fresnel_principled (mix(1, base, Specular Tint)). Both white for the Glass BSDF node.
   Spectrum refraction_tint{1.0f};
   Spectrum glass_f0{1.0f};
+  // Hair lobes (see LobeType): unit tangent in the local frame and the fibre's parameters.
+  Vec3 hair_tangent{1.0f, 0.0f, 0.0f};
+  Spectrum hair_sigma{0.0f};
+  float hair_roughness = 0.3f, hair_radial = 0.3f, hair_m0 = 0.3f, hair_tilt = 0;
 };
 
 struct BsdfSample {
@@ -135,8 +155,9 @@ class Bsdf {
   }
   // Light transport (BDPT's light subpaths): the light arrives along wo, so eval() and sample()
   // give the adjoint BSDF f(wi, wo) (Veach 1997, sec. 3.7.6). It differs from f(wo, wi) for the
-  // Toon lobes only, which Cycles divides by the light's cosine (f cos = the ramp); the others
-  // are reciprocal as Lantern writes them. Pdfs stay those of sampling wi from wo. clear() resets.
+  // Toon lobes, which Cycles divides by the light's cosine (f cos = the ramp), and the hair lobes,
+  // which Cycles computes with sd->I (towards the camera); the others are reciprocal as Lantern
+  // writes them. Pdfs stay those of sampling wi from wo. clear() resets.
   void set_light_is_wo(bool light_is_wo) { light_is_wo_ = light_is_wo; }
   // The interpolated normal (local frame) when a Normal input bent the shading normal: Cycles 3.4
   // then scales its diffuse closures by bump_shadowing_term (kernel/closure/bsdf.h), which darkens
@@ -216,6 +237,9 @@ inline PassKind flags_pass_kind(uint32_t flags) {
 }
 
 // ---- single-lobe routines, exposed for the chi-square tests ----------------------------------
+// Hair lobes (bsdf_hair.cpp): f (cosine excluded) with the lobe's weight, its pdf; a direction.
+Spectrum hair_eval(const Lobe& lobe, const Vec3& wo, const Vec3& wi, float* pdf);
+bool hair_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, Vec3* wi);
 Spectrum lobe_eval(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
 float lobe_pdf(const Lobe& lobe, const Vec3& wo, const Vec3& wi);
 bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSample* out, bool below_shading = false);

@@ -385,6 +385,8 @@ void vector_displacement(const Instr& in, Machine& m) {
     if (fetch_attribute(c, 0, int(in.param[1]), t) == 4) {
       tangent = Vec3(t[0], t[1], t[2]);
       sign = t[3];
+    } else if (c.mesh && c.instance && !c.mesh->is_triangles()) {
+      tangent = normalized_or_zero(c.dpdu);  // curves: Cycles' dPdu, the curve's tangent
     } else if (c.mesh && c.instance) {
       // No UV map: Cycles' normalize(sd->dPdu), the triangle's first edge in world space (Cycles
       // mixes it with the object-space normal as is), reversed on a back face.
@@ -399,14 +401,52 @@ void vector_displacement(const Instr& in, Machine& m) {
   m.set(in.out[0], d);
 }
 
+const OpSignature kCurveSignatures[] = {
+    {"", "ffffvf", "", false},  // hair info
+};
+
+// Hair Info on curves: the key attributes Cycles interpolates linearly over a segment (intercept
+// from the distance along the keys, as Cycles' particle and Curves export), the thickness
+// (twice the radius between the keys), the view direction made normal to the curve.
+void hair_info(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  float strand = 0, intercept = 0, len = 0, thickness = 0, random = 0;
+  Vec3 tangent_normal(0.0f);
+  if (c.mesh && c.mesh->kind == GeometryKind::Curves && c.curve >= 0 && c.primitive >= 0) {
+    const CurveData& d = c.mesh->curves;
+    const uint32_t i = d.segments[size_t(c.primitive)] + 1;  // the segment's first key
+    const uint32_t last = d.segments[d.first_segment[size_t(c.curve) + 1] - 1] + 2;
+    const float u = c.bary.x;
+    strand = 1;
+    len = d.arc[last];
+    intercept = len > 0 ? (d.arc[i] * (1 - u) + d.arc[i + 1] * u) / len : 0.0f;
+    thickness = 2 * (d.radius(i) * (1 - u) + d.radius(i + 1) * u);
+    random = d.random[size_t(c.curve)];
+    const float l2 = length_squared(c.dpdu);
+    if (l2 > 0) tangent_normal = normalized_or_zero(c.I - c.dpdu * (dot(c.dpdu, c.I) / l2));
+  }
+  m.set(in.out[0], strand);
+  m.set(in.out[1], intercept);
+  m.set(in.out[2], len);
+  m.set(in.out[3], thickness);
+  m.set(in.out[4], tangent_normal);
+  m.set(in.out[5], random);
+}
+
 }  // namespace
 
 const OpSignature* inputs_family_signature(uint32_t op) {
+  if (op >= kFamilyCurveInputsBegin && op < kFamilyCurveInputsEnd)
+    return op == kOpHairInfo ? &kCurveSignatures[0] : nullptr;
   if (op < kOpTexCoord || op > kOpEnvironment) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
 void exec_inputs_family(const Instr& in, Machine& m) {
+  if (in.op == kOpHairInfo) {
+    hair_info(in, m);
+    return;
+  }
   if (in.op == kOpToFloat) {
     const Vec3 v = m.v(in.in[0]);
     m.set(in.out[0],

@@ -81,4 +81,12 @@ enum InputOp : uint32_t {
   kOpEnvironment,
 };
 
+// Curve and point inputs: numbers 100-107 (program.cpp hands them to this family).
+constexpr uint32_t kFamilyCurveInputsBegin = 100, kFamilyCurveInputsEnd = 108;
+enum CurveInputOp : uint32_t {
+  // Hair Info (Cycles' svm_node_hair_info and its curve attributes): out: is strand f,
+  // intercept f, length f, thickness f, tangent normal v, random f.
+  kOpHairInfo = 100,  // kFamilyCurveInputsBegin
+};
+
 }  // namespace lt

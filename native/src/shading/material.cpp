@@ -35,6 +35,10 @@ ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp,
   c.pose = geometry.pose(sp.instance, sp.time);
   set_shading_normal(&c, c.N);
   c.primitive = sp.primitive;
+  c.curve = sp.curve;
+  c.dpdu = sp.dpdu;
+  // Cycles' primitive_tangent on curves: the curve's direction.
+  if (sp.curve >= 0 && length_squared(sp.dpdu) > 0) c.tangent = normalize(sp.dpdu);
   return c;
 }
 
@@ -52,6 +56,15 @@ void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float f
   ctx->footprint = footprint;
   const Instance& inst = geometry.instance(sp.instance);
   const Mesh& mesh = geometry.mesh(inst.mesh);
+  if (!mesh.is_triangles()) {
+    // Curves and points: the footprint moves P in the tangent plane; the rest stays (no
+    // parametrisation to differentiate; Cycles' curves have no dPdv either).
+    Vec3 dirs[2];
+    orthonormals(ctx->Ng, &dirs[0], &dirs[1]);
+    for (int k = 0; k < 2; ++k)
+      ctx->offset[k] = ShadingContext::Offset{dirs[k] * footprint, Vec3(0.0f), Vec3(0.0f), {0, 0}, {0, 0}};
+    return;
+  }
   // The triangle's edges in world space (at the point's time): a move dP in its plane changes the
   // barycentrics of vertices 1 and 2 by the solution of dP = e1 db1 + e2 db2 (least squares,
   // exact in the plane).

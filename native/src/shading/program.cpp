@@ -13,6 +13,7 @@ namespace lt {
 namespace {
 
 const OpSignature* signature_of(uint32_t op) {
+  if (op >= kFamilyCurveInputsBegin && op < kFamilyCurveInputsEnd) return inputs_family_signature(op);
   if (op < kFamilyInputsBegin) return shaders_family_signature(op);
   if (op < kFamilyMathBegin) return inputs_family_signature(op);
   if (op < kFamilyTexturesBegin) return math_family_signature(op);
@@ -21,7 +22,9 @@ const OpSignature* signature_of(uint32_t op) {
 }
 
 void execute(const Instr& in, Machine& m) {
-  if (in.op < kFamilyInputsBegin)
+  if (in.op >= kFamilyCurveInputsBegin && in.op < kFamilyCurveInputsEnd)
+    exec_inputs_family(in, m);
+  else if (in.op < kFamilyInputsBegin)
     exec_shaders_family(in, m);
   else if (in.op < kFamilyMathBegin)
     exec_inputs_family(in, m);

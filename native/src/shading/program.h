@@ -67,6 +67,10 @@ struct ShadingContext {
   bool reflection_ray = false, transmission_ray = false;
   float ray_length = 0;
   int ray_depth = 0, diffuse_depth = 0, glossy_depth = 0, transparent_depth = 0, transmission_depth = 0;
+  // Curves and points (mesh->kind): the curve (point) index and the curve's tangent dP/du in
+  // world space (Cycles' sd->dPdu; zero elsewhere). Hair Info and the hair closures read them.
+  int curve = -1;
+  Vec3 dpdu{0.0f};
 };
 
 // The machine an instruction runs on: read inputs, write outputs.
@@ -119,7 +123,8 @@ struct Instr {
 // opcodes, with each instruction's operands in emission order):
 //   0-31     shaders.h: closures (Shader nodes) and closure weights
 //   32-63    inputs.h: nodes that read the shading point (Texture Coordinate, Geometry...), images
-//   64-191   nodes_math.h: Math, Vector Math, Mix, colour, converters
+//   64-191   nodes_math.h: Math, Vector Math, Mix, colour, converters (but 100-107: inputs.h's
+//            curve and point inputs, Hair Info)
 //   192-319  textures.h: procedural textures
 constexpr uint32_t kFamilyShadersBegin = 0;
 constexpr uint32_t kFamilyInputsBegin = 32;

@@ -1,6 +1,8 @@
 #include "shading/shaders.h"
 
+#include "geometry/geometry.h"
 #include "shading/bsdf.h"
+#include "shading/material.h"
 
 namespace lt {
 
@@ -176,9 +178,118 @@ const OpSignature kSignatures[] = {
     {"vvvff", "", "i", false},                        // toon
 };
 
+const OpSignature kHairSignatures[] = {
+    {"vvffvvffffffff", "", "ii", false},  // principled hair
+    {"vvfffv", "", "i", false},           // hair bsdf
+};
+
+// The hair lobes' tangent T (world, unit) in the local frame the integrator will build from the
+// machine's normal and tangent (local_frame), which T becomes unless a closure set one before.
+void take_hair_tangent(Machine& m, const Vec3& T, Lobe* l) {
+  if (is_black(m.shading_tangent)) m.shading_tangent = T;
+  const Vec3 n = m.has_shading_normal ? facing_normal(m.shading_normal, m.ctx->Ng) : m.ctx->N;
+  const Frame f(n, m.shading_tangent);
+  l->hair_tangent = normalize(f.to_local(T));
+}
+
+// The curve's direction (Cycles' sd->dPdu), else the shading point's tangent.
+Vec3 hair_direction(const Machine& m) {
+  if (length_squared(m.ctx->dpdu) > 0) return normalize(m.ctx->dpdu);
+  return is_black(m.ctx->tangent) ? Frame(m.ctx->N).s : m.ctx->tangent;
+}
+
+// Cycles' Random of a curve (ATTR_STD_CURVE_RANDOM).
+float curve_random(const ShadingContext& c) {
+  if (!c.mesh || c.mesh->kind != GeometryKind::Curves || c.curve < 0) return -1;
+  return c.mesh->curves.random[size_t(c.curve)];
+}
+
+// Chiang et al.'s roughness maps (Cycles' bsdf_principled_hair_setup): v from the longitudinal
+// roughness (and the coat's R), s from the azimuthal.
+float hair_variance(float r) {
+  const float r2 = r * r, r20 = std::pow(r, 20.0f);
+  return (0.726f * r + 0.812f * r2 + 3.7f * r20) * (0.726f * r + 0.812f * r2 + 3.7f * r20);
+}
+float hair_scale(float r) { return (0.265f * r + 1.194f * r * r + 5.372f * std::pow(r, 22.0f)) * 0.626657069f; }
+float hair_albedo_scale(float x) {
+  return (((((0.245f * x) + 5.574f) * x - 10.73f) * x + 2.532f) * x - 0.215f) * x + 5.969f;
+}
+Spectrum sigma_from_reflectance(const Spectrum& c, float radial) {
+  Spectrum s;
+  for (int k = 0; k < 3; ++k) {
+    const float v = std::log(std::max(c[k], 1e-30f)) / hair_albedo_scale(radial);
+    s[k] = v * v;
+  }
+  return s;
+}
+
+// Cycles 3.4 svm_node_closure_bsdf, CLOSURE_BSDF_HAIR_PRINCIPLED_ID.
+void principled_hair(const Instr& in, Machine& m, const Vec3& weight) {
+  Lobe l;
+  l.type = LobeType::PrincipledHair;
+  l.weight = weight;
+  float random = curve_random(*m.ctx);
+  if (in.param[1] != 0 || random < 0) random = m.f(in.in[13]);
+  const float factor_rough = 1 + 2 * (random - 0.5f) * m.f(in.in[12]);
+  const float roughness = m.f(in.in[6]) * factor_rough, radial = m.f(in.in[7]) * factor_rough;
+  const float m0 = 1 - unit(m.f(in.in[8]));
+  const float v = clamp(std::isfinite(roughness) ? roughness : 0.0f, 0.001f, 1.0f);
+  const float s = clamp(std::isfinite(radial) ? radial : 0.0f, 0.001f, 1.0f);
+  l.hair_roughness = hair_variance(v);
+  l.hair_radial = hair_scale(s);
+  l.hair_m0 = hair_variance(clamp(m0 * v, 0.001f, 1.0f));
+  l.hair_tilt = std::isfinite(m.f(in.in[10])) ? m.f(in.in[10]) : 0.0f;
+  const float ior = m.f(in.in[9]);
+  l.eta = std::isfinite(ior) && ior > 1e-5f ? ior : 1e-5f;
+  switch (in.param[0]) {
+    case kHairAbsorption:
+      l.hair_sigma = non_negative(m.v(in.in[5]));
+      break;
+    case kHairMelanin: {
+      float melanin = m.f(in.in[2]) * (1 + 2 * (random - 0.5f) * unit(m.f(in.in[11])));
+      melanin = -std::log(std::max(1 - (std::isfinite(melanin) ? melanin : 0.0f), 0.0001f));
+      const float redness = std::isfinite(m.f(in.in[3])) ? m.f(in.in[3]) : 0.0f;
+      const float eu = melanin * (1 - redness), pheo = melanin * redness;
+      // Melanin absorption (Bitterli's remapping, as Cycles'), plus the optional tint.
+      l.hair_sigma = Spectrum(0.506f, 0.841f, 1.653f) * eu + Spectrum(0.343f, 0.733f, 1.924f) * pheo +
+                     sigma_from_reflectance(non_negative(m.v(in.in[4])), radial);
+      break;
+    }
+    default:
+      l.hair_sigma = sigma_from_reflectance(non_negative(m.v(in.in[1])), radial);
+      break;
+  }
+  l.hair_sigma = non_negative(l.hair_sigma);
+  take_hair_tangent(m, hair_direction(m), &l);
+  m.bsdf->add(l);
+}
+
+// Cycles 3.4 svm_node_closure_bsdf, CLOSURE_BSDF_HAIR_REFLECTION_ID and _TRANSMISSION_ID. Off
+// curves Cycles takes the surface's dPdv and no offset; Lantern takes its tangent.
+void hair_bsdf(const Instr& in, Machine& m, const Vec3& weight) {
+  Lobe l;
+  l.type = in.param[0] == 1 ? LobeType::HairTransmission : LobeType::HairReflection;
+  l.weight = weight * non_negative(m.v(in.in[1]));
+  const float ru = m.f(in.in[3]), rv = m.f(in.in[4]);
+  l.hair_roughness = clamp(std::isfinite(ru) ? ru : 0.0f, 0.001f, 1.0f);
+  l.hair_radial = clamp(std::isfinite(rv) ? rv : 0.0f, 0.001f, 1.0f);
+  const float offset = m.f(in.in[2]);
+  l.hair_tilt = std::isfinite(offset) ? -offset : 0.0f;
+  Vec3 T = m.v(in.in[5]);
+  if (!(length_squared(T) > 0) || !is_finite(T)) {
+    T = hair_direction(m);
+    if (length_squared(m.ctx->dpdu) == 0) l.hair_tilt = 0;
+  } else {
+    T = normalize(T);
+  }
+  take_hair_tangent(m, T, &l);
+  m.bsdf->add(l);
+}
+
 }  // namespace
 
 const OpSignature* shaders_family_signature(uint32_t op) {
+  if (op >= kOpPrincipledHair && op <= kOpHairBsdf) return &kHairSignatures[op - kOpPrincipledHair];
   if (op < kOpEmission || op > kOpToon) return nullptr;
   return &kSignatures[op - kOpEmission];
 }
@@ -206,6 +317,11 @@ void exec_shaders_family(const Instr& in, Machine& m) {
     return;
   }
   if (!m.bsdf) return;
+  if (in.op == kOpPrincipledHair || in.op == kOpHairBsdf) {
+    if (!m.ctx) return;  // folding constants: hair closures need the shading point
+    in.op == kOpPrincipledHair ? principled_hair(in, m, weight) : hair_bsdf(in, m, weight);
+    return;
+  }
   Lobe l;
   switch (in.op) {
     case kOpDiffuse:

@@ -28,6 +28,20 @@ enum ShaderOp : uint32_t {
   kOpToon,         // in: weight v, normal v, color v, size f, smooth f; param: component (0 diffuse, 1 glossy)
 };
 
+// Hair closures (numbers 20-27 of the family): lobes on curves (bsdf_hair.cpp).
+enum HairShaderOp : uint32_t {
+  // in: weight v, color v, melanin f, melanin redness f, tint v, absorption coefficient v,
+  // roughness f, radial roughness f, coat f, ior f, offset f, random color f, random roughness f,
+  // random f; params: parametrization (kHairReflectance, kHairMelanin, kHairAbsorption), random
+  // linked (0: the curve's Random, as Cycles' ATTR_STD_CURVE_RANDOM, on curves)
+  kOpPrincipledHair = kFamilyShadersBegin + 20,
+  // in: weight v, color v, offset f, roughness u f, roughness v f, tangent v (zero: unlinked);
+  // param: component (0 reflection, 1 transmission)
+  kOpHairBsdf,
+};
+// Principled Hair parametrizations, as Cycles' NodePrincipledHairParametrization.
+enum HairParametrization : uint32_t { kHairReflectance = 0, kHairMelanin = 1, kHairAbsorption = 2 };
+
 // Glossy, Glass and Principled distributions (the param), as the node's enum.
 enum Distribution : uint32_t {
   kDistSharp = 0,

@@ -167,3 +167,9 @@ def environment_texture(c, node, want):
     outputs = c.emit(ops.ENVIRONMENT, [vec], [("Color", 3), ("Alpha", 1)], params=[image_id, 0, projection])
     c.on_read(outputs["Alpha"], len(c.code) - 2)
     return outputs
+
+
+@register('HAIR_INFO')
+def hair_info(c, node, want):
+    return c.emit(ops.HAIR_INFO, [], [("Is Strand", 1), ("Intercept", 1), ("Length", 1), ("Thickness", 1),
+                                      ("Tangent Normal", 3), ("Random", 1)])

@@ -14,6 +14,12 @@ ANISOTROPIC = 9
 VELVET = 10
 TRANSLUCENT = 11
 TOON = 12
+# hair closures (shaders.h, numbers 20-27)
+PRINCIPLED_HAIR = 20
+HAIR_BSDF = 21
+HAIR_REFLECTANCE = 0
+HAIR_MELANIN = 1
+HAIR_ABSORPTION = 2
 
 # inputs.h
 TEX_COORD = 32
@@ -37,6 +43,9 @@ SET_NORMAL = 49
 DISPLACEMENT = 50
 VECTOR_DISPLACEMENT = 51
 ENVIRONMENT = 52
+
+# curve and point inputs (inputs.h, numbers 100-107)
+HAIR_INFO = 100
 
 # Distribution params (shaders.h)
 DIST_SHARP = 0

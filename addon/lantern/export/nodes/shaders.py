@@ -146,3 +146,28 @@ def principled(c, node, weight):
     operands.append(c.normal(inp.get("Clearcoat Normal")))
     operands.append(c.normal(inp.get("Tangent")))
     c.closure(ops.PRINCIPLED, operands, params=[_distribution(c, node), 0])
+
+
+_HAIR_PARAMETRIZATIONS = {'COLOR': ops.HAIR_REFLECTANCE, 'MELANIN': ops.HAIR_MELANIN,
+                          'ABSORPTION': ops.HAIR_ABSORPTION}
+
+
+@register_shader('BSDF_HAIR_PRINCIPLED')
+def principled_hair(c, node, weight):
+    i = node.inputs
+    random = i["Random"]
+    c.closure(ops.PRINCIPLED_HAIR,
+              [weight, c.color(i["Color"]), c.float(i["Melanin"]), c.float(i["Melanin Redness"]),
+               c.color(i["Tint"]), c.vector(i["Absorption Coefficient"]), c.float(i["Roughness"]),
+               c.float(i["Radial Roughness"]), c.float(i["Coat"]), c.float(i["IOR"]), c.float(i["Offset"]),
+               c.float(i["Random Color"]), c.float(i["Random Roughness"]), c.float(random)],
+              params=[_HAIR_PARAMETRIZATIONS.get(node.parametrization, ops.HAIR_REFLECTANCE),
+                      1 if c.linked(random) else 0])
+
+
+@register_shader('BSDF_HAIR')
+def hair(c, node, weight):
+    i = node.inputs
+    c.closure(ops.HAIR_BSDF, [weight, c.color(i["Color"]), c.float(i["Offset"]), c.float(i["RoughnessU"]),
+                              c.float(i["RoughnessV"]), c.normal(i.get("Tangent"))],
+              params=[1 if node.component == 'Transmission' else 0])

@@ -1,0 +1,116 @@
+"""Curves and point clouds: particle hair (as Cycles 3.4's blender/curves.cpp builds it), Curves
+objects and point clouds, into the core's round Catmull-Rom curves and spheres
+(lt_scene_add_curves)."""
+
+import numpy as np
+
+# Cycles' radii when a Curves object or point cloud has no radius attribute.
+CURVES_DEFAULT_RADIUS = 0.005
+POINTS_DEFAULT_RADIUS = 0.01
+
+
+def hair_systems(obj):
+    """The particle systems Cycles renders as hair: Hair type, rendered as Path."""
+    return [p for p in getattr(obj, "particle_systems", ())
+            if p.settings.type == 'HAIR' and p.settings.render_type == 'PATH']
+
+
+def _shape_radius(shape, root, tip, time):
+    """Cycles' shaperadius: root to tip along time in [0, 1], bent by shape in [-1, 1]."""
+    r = 1.0 - time
+    if shape < 0.0:
+        r = np.power(r, 1.0 + shape)
+    elif shape > 0.0:
+        r = np.power(r, 1.0 / (1.0 - shape))
+    return r * (root - tip) + tip
+
+
+def particle_hair_arrays(obj, report):
+    """(points (n, 4), offsets, slots) of the object's hair systems, object space, or None.
+
+    As Cycles: children replace their parents when the system has any; each strand has
+    2^render_step + 1 keys (plus kink_extra_steps for spiral kinks) from ParticleSystem.co_hair in
+    world space, brought into object space; radius from the settings' root and tip radius times
+    radius_scale / 2 along the distance travelled, 0 at the tip with Close Tip.
+    """
+    inverse = np.linalg.inv(np.array(obj.matrix_world, dtype=np.float64))
+    points, offsets, slots = [], [0], []
+    n_slots = max(len(obj.material_slots), 1)
+    for psys in hair_systems(obj):
+        s = psys.settings
+        total = len(psys.particles)
+        children = len(psys.child_particles) if s.child_type != 'NONE' else 0
+        first = total if children else 0
+        steps = (1 << s.render_step) + 1
+        if s.kink == 'SPIRAL':
+            steps += s.kink_extra_steps
+        count = total + children - first
+        if count <= 0:
+            continue
+        co = np.empty((count, steps, 3), dtype=np.float64)
+        co_hair = psys.co_hair
+        for k in range(count):
+            row = co[k]
+            for j in range(steps):
+                row[j] = co_hair(obj, particle_no=first + k, step=j)
+        co = co @ inverse[:3, :3].T + inverse[:3, 3]
+        seg = np.linalg.norm(np.diff(co, axis=1), axis=2)
+        time = np.concatenate([np.zeros((count, 1)), np.cumsum(seg, axis=1)], axis=1)
+        length = time[:, -1:]
+        with np.errstate(invalid='ignore', divide='ignore'):
+            t = np.where(length > 0, time / np.where(length > 0, length, 1.0), 0.0)
+        scale = s.radius_scale * 0.5
+        radius = _shape_radius(s.shape, scale * s.root_radius, scale * s.tip_radius, np.clip(t, 0.0, 1.0))
+        if s.use_close_tip:
+            radius[:, -1] = 0.0
+        pts = np.concatenate([co, radius[:, :, None]], axis=2).reshape(-1, 4)
+        points.append(pts.astype(np.float32))
+        base = offsets[-1]
+        offsets.extend(base + steps * np.arange(1, count + 1))
+        slots.append(np.full(count, min(max(s.material - 1, 0), n_slots - 1), dtype=np.int32))
+    if not points:
+        return None
+    return np.concatenate(points), np.asarray(offsets, dtype=np.uint32), np.concatenate(slots)
+
+
+def _attribute(data, name, n, components):
+    a = data.attributes.get(name)
+    if a is None or len(a.data) != n:
+        return None
+    prop = "vector" if components == 3 else "value"
+    values = np.empty(n * components, dtype=np.float32)
+    a.data.foreach_get(prop, values)
+    return values.reshape(n, components) if components > 1 else values
+
+
+def curves_arrays(curves):
+    """(points, offsets) of a Curves datablock (Blender 3.4's hair curves), or None."""
+    n = len(curves.points)
+    if n == 0 or len(curves.curves) == 0:
+        return None
+    pos = _attribute(curves, "position", n, 3)
+    radius = _attribute(curves, "radius", n, 1)
+    if radius is None:
+        radius = np.full(n, CURVES_DEFAULT_RADIUS, dtype=np.float32)
+    offsets = np.empty(len(curves.curves) + 1, dtype=np.int32)
+    curves.curve_offset_data.foreach_get("value", offsets)
+    return np.column_stack([pos, radius]).astype(np.float32), offsets.astype(np.uint32)
+
+
+def pointcloud_arrays(cloud):
+    n = len(cloud.points)
+    if n == 0:
+        return None
+    pos = _attribute(cloud, "position", n, 3)
+    radius = _attribute(cloud, "radius", n, 1)
+    if radius is None:
+        radius = np.full(n, POINTS_DEFAULT_RADIUS, dtype=np.float32)
+    return np.column_stack([pos, radius]).astype(np.float32)
+
+
+def warn_curve_shape(depsgraph, report):
+    """Lantern renders Cycles' 3D curves; a scene set to ribbons renders differently in Cycles."""
+    settings = getattr(depsgraph.scene_eval, "cycles_curves", None)
+    if settings is not None and getattr(settings, "shape", 'THICK') != 'THICK':
+        report({'WARNING'}, "Curves render as 3D curves (Cycles' Curves > Shape is Rounded Ribbons: "
+               "Cycles renders them flat)")
