@@ -1033,6 +1033,26 @@ def build_normal_mapped(scene):
     add_camera(scene, (0, -4.0, 1.8), (0, 0.2, 0.4), lens=40.0)
 
 
+def build_tilted_metal(scene):
+    """Rough metal whose normal is bent by a constant Normal Map colour (tilts of 0, 30 and 60
+    degrees, roughness 0.6) on three flat tiles under a white World: Cycles' GGX sampling keeps
+    reflections below the bent normal that its evaluation has not (1.2 % at 30 degrees), and it
+    does not light-sample a constant World (Bsdf::sample_below_shading)."""
+    set_world(scene, (1.0, 1.0, 1.0), 1.0)
+    for k, tilt in enumerate((0.0, 30.0, 60.0)):
+        mat = principled("Tilted%d" % k, (0.8, 0.8, 0.8), 0.6, metallic=1.0)
+        nt = mat.node_tree
+        nm = nt.nodes.new("ShaderNodeNormalMap")
+        rgb = nt.nodes.new("ShaderNodeRGB")
+        t = math.radians(tilt)
+        rgb.outputs[0].default_value = (0.5 + 0.5 * math.sin(t), 0.5, 0.5 + 0.5 * math.cos(t), 1.0)
+        nt.links.new(rgb.outputs[0], nm.inputs["Color"])
+        nt.links.new(nm.outputs[0], nt.nodes["Principled BSDF"].inputs["Normal"])
+        tile = add_object(scene, "Tile%d" % k, mesh_plane("Tile%d" % k, 1.2), ((k - 1) * 1.3, 0.0, 0.0))
+        assign(tile, mat)
+    add_camera(scene, (0.0, -3.4, 2.0), (0.0, 0.0, 0.0), lens=35.0)
+
+
 def build_displaced(scene):
     """The Material Output's Displacement as bump (Cycles 3.4's default method): a height image
     through a Displacement node on a rough ground (UV) and a smooth sphere (Object coordinates),
@@ -1782,6 +1802,7 @@ SCENES = {
     "procedural_world": (build_procedural_world, (96, 64), 128),
     "instanced": (build_instanced, (96, 96), 128),
     "normal_mapped": (build_normal_mapped, (96, 96), 128),
+    "tilted_metal": (build_tilted_metal, (96, 48), 128),
     "displaced": (build_displaced, (96, 96), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
