@@ -467,6 +467,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                 self._kept.report = report
                 self._kept.sync_scene(depsgraph, camera)
                 core_scene, summary = self._kept.scene, dict(self._kept.summary)
+                motion = None
             else:
                 self._close_kept()
                 core_scene = core.Scene()

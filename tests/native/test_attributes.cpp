@@ -144,6 +144,7 @@ TEST(Attributes, NormalMapInTangentSpace) {
   r.ctx.mesh = &m;
   r.ctx.instance = &inst;
   r.ctx.primitive = 0;
+  r.ctx.pose = Pose::of(inst.xf);  // the normal map reads the instance's pose at the ray's time
   r.ctx.N = r.ctx.Ng = Vec3(0, 0, 1);
   // (1, 0.5, 0.5) -> (1, 0, 0) in tangent space: the tangent.
   auto o = r.exec(kOpNormalMap, {{1.0f}, {1.0f, 0.5f, 0.5f}}, {0, 0});
@@ -181,6 +182,7 @@ TEST(Attributes, TangentNode) {
   r.ctx.mesh = &m;
   r.ctx.instance = &inst;
   r.ctx.primitive = 0;
+  r.ctx.pose = Pose::of(inst.xf);
   r.ctx.N = Vec3(0, 0, 1);
   // UV map: the stored tangent made normal to N.
   auto o = r.exec(kOpTangent, {}, {1, 2, 2});

@@ -24,7 +24,7 @@ struct StrandScene {
     g.add_curves(std::move(m), {0, 4}, warnings);
     Instance inst;
     inst.mesh = 0;
-    g.add_instance(inst);
+    g.add_instance(inst, warnings);
     g.commit();
   }
 };
@@ -101,11 +101,11 @@ TEST(Curves, BadStrandsAreDroppedWithWarnings) {
   g.add_curves(std::move(big), {0, uint32_t(n)}, w);
   Instance i0, i1, i2;
   i0.mesh = 0;
-  g.add_instance(i0);
+  g.add_instance(i0, w);
   i1.mesh = 1;
   i2.mesh = 2;
-  g.add_instance(i1);
-  g.add_instance(i2);
+  g.add_instance(i1, w);
+  g.add_instance(i2, w);
   g.commit();
   Hit hit;
   EXPECT_TRUE(g.intersect(ray({4.0f, 5.0f, 3.0f}, {0, 0, -1}), 31, &hit));
