@@ -774,7 +774,7 @@ TEST(ApiBadInput, CancelAfterSomeSamplesKeepsAConsistentImage) {
     // Reading while rendering gives a finite image.
     Passes live = read_passes(r, 400, 300);
     ASSERT_EQ(live.first_non_finite(), "");
-  } while (st.samples_done < 2 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(20));
+  } while (st.samples_done < 2 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60));
   ASSERT_GE(st.samples_done, 2);
   EXPECT_EQ(st.state, LT_STATE_RUNNING);
   EXPECT_GT(st.rays, 0u);

@@ -241,7 +241,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
       if (!is_finite(beta)) break;
       if (s.light_passes && b.total == 0) {
-        if (bs.flags & kLobeSpecular) {
+        if (bs.flags & (kLobeSpecular | kLobeBelowShading)) {  // the sampled lobe's alone: eval() has none
           first.set_kind(flags_pass_kind(bs.flags));
         } else {
           Spectrum kinds[3];
