@@ -10,6 +10,7 @@
 
 #include "chi2.h"
 #include "cycles_ggx_reference.h"
+#include "lobe_albedo.h"
 #include "program_builder.h"
 #include "shading/bsdf.h"
 #include "shading/image.h"
@@ -721,24 +722,8 @@ TEST(BsdfSanity, Reciprocity) {
     }
 }
 
-// Directional albedo by Monte Carlo with each lobe's own sampling: mean of f |cos| / pdf with
-// failed samples counting zero.
-struct Estimate {
-  double mean, se;
-};
-Estimate albedo(const Lobe& l, const Vec3& wo, int n, uint32_t seed) {
-  Sampler rng(seed, 1, 0);
-  double sum = 0, sum2 = 0;
-  for (int k = 0; k < n; ++k) {
-    BsdfSample s;
-    double v = 0;
-    if (lobe_sample(l, wo, rng.next_2d(), rng.next_1d(), &s)) v = max_component(s.f) * std::abs(s.wi.z) / s.pdf;
-    sum += v;
-    sum2 += v * v;
-  }
-  double mean = sum / n;
-  return {mean, std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n)};
-}
+using test::Estimate;
+Estimate albedo(const Lobe& l, const Vec3& wo, int n, uint32_t seed) { return test::lobe_albedo(l, wo, n, seed); }
 
 TEST(BsdfSanity, EnergyConservation) {
   const int n = 100000;

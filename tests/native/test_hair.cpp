@@ -7,6 +7,7 @@
 
 #include "chi2.h"
 #include "geometry/geometry.h"
+#include "lobe_albedo.h"
 #include "shading/bsdf.h"
 
 namespace lt {
@@ -203,18 +204,9 @@ TEST(HairLobes, WhiteFurnace) {
   const int n = 200000;
   uint32_t seed = 7200;
   auto albedo = [&](const Lobe& l, const Vec3& wo, double* se) {
-    Sampler rng(++seed, 3, 0);
-    double sum = 0, sum2 = 0;
-    for (int k = 0; k < n; ++k) {
-      BsdfSample s;
-      double v = 0;
-      if (lobe_sample(l, wo, rng.next_2d(), rng.next_1d(), &s)) v = max_component(s.f) * std::abs(s.wi.z) / s.pdf;
-      sum += v;
-      sum2 += v * v;
-    }
-    const double mean = sum / n;
-    *se = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n);
-    return mean;
+    const test::Estimate e = test::lobe_albedo(l, wo, n, ++seed, 3);
+    *se = e.se;
+    return e.mean;
   };
   for (float z : {0.95f, 0.6f, 0.2f}) {
     const Vec3 wo = normalize(Vec3(0.4f, std::sqrt(1 - z * z), z));
