@@ -873,6 +873,28 @@ def build_wide_sun(scene):
     add_camera(scene, (0, -3.5, 1.6), (0, 0, 0.4), lens=40.0)
 
 
+def build_ray_visibility(scene):
+    """Objects and lamps with Cycles' ray visibility flags as users set them: a sphere seen only by
+    camera and shadow rays, a white card lighting the scene that the camera does not see, a box
+    that casts no shadow, and an area lamp hidden from glossy rays (Cycles also leaves it out of
+    the glossy closures' light samples), over a rough Principled ground under a 3-degree sun."""
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 12.0))
+    assign(ground, principled("Ground", (0.6, 0.6, 0.6), 0.35))
+    hidden = add_object(scene, "Hidden", mesh_sphere("Hidden", 0.45), (-0.8, 0.3, 0.45),
+                        diffuse=False, glossy=False, transmission=False)
+    assign(hidden, principled("HiddenMat", (0.8, 0.3, 0.2), 0.3))
+    card = add_object(scene, "Card", mesh_plane("Card", 1.6), (0.2, 1.4, 0.8), rotation=(80, 0, 0),
+                      camera=False)
+    assign(card, diffuse("CardMat", (0.9, 0.9, 0.9)))
+    box = add_object(scene, "NoShadow", mesh_box("NoShadow", (0.5, 0.5, 0.5)), (0.9, 0.1, 0.0), rotation=(0, 0, 30),
+                     shadow=False)
+    assign(box, principled("BoxMat", (0.2, 0.5, 0.8), 0.25))
+    lamp = add_light(scene, "Lamp", "AREA", 60.0, (0.5, -0.8, 2.2), rotation=(20, 0, 0), size=0.6)
+    lamp.visible_glossy = False
+    add_light(scene, "Sun", "SUN", 2.0, (0, 0, 5), rotation=(50, 0, -30), angle=math.radians(3.0))
+    add_camera(scene, (0, -3.6, 1.7), (0, 0.4, 0.35), lens=38.0)
+
+
 def build_metal_box(scene):
     """A closed 4 x 4 x 3 m box of rough (0.2) copper-coloured Principled metal with the camera and
     a small point light inside, 8 bounces of every kind (issue 18: rough metal after several
@@ -1810,6 +1832,7 @@ SCENES = {
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
     "gltf_pbr": (build_gltf_pbr, (80, 80), 256),
     "wide_sun": (build_wide_sun, (64, 48), 128),
+    "ray_visibility": (build_ray_visibility, (96, 64), 256),
     "bsdf_zoo": (build_bsdf_zoo, (128, 80), 128),
     "bsdf_zoo_departures": (lambda scene: build_bsdf_zoo(scene, departures=True), (128, 80), 128),
     "bsdf_zoo_departures_sun": (lambda scene: build_bsdf_zoo(scene, departures=True, sun_only=True, hidden=True),

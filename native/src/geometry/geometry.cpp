@@ -493,14 +493,14 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   return true;
 }
 
-bool Geometry::occluded(const Ray& ray) const {
+bool Geometry::occluded(const Ray& ray, unsigned visibility) const {
   if (!traceable(ray)) return true;
   VisibilityContext c;
   rtcInitIntersectContext(&c.ctx);
   if (partial_visibility_) {
     c.ctx.filter = visibility_filter;
     c.visibility = instance_visibility_.data();
-    c.mask = 16u;  // LT_VISIBLE_SHADOW
+    c.mask = visibility;
   }
   RTCRay r;
   r.org_x = ray.o.x;

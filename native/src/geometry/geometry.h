@@ -152,8 +152,9 @@ class Geometry {
   // Closest hit among instances visible to rays of the given visibility bit. A ray outside
   // kTraceableRange (or with a NaN direction or extent) hits nothing and is occluded.
   bool intersect(const Ray& ray, unsigned visibility, Hit* hit) const;
-  // Any hit among instances that cast shadows.
-  bool occluded(const Ray& ray) const;
+  // Any hit among instances visible to rays of the given visibility bit (default: those that cast
+  // shadows).
+  bool occluded(const Ray& ray, unsigned visibility = 16u) const;
   // The hit's surface at the hit's time.
   SurfacePoint surface(const Hit& hit) const;
   // The instance's transform at time (0 .. 1 over the shutter).
@@ -168,6 +169,10 @@ class Geometry {
   size_t instance_count() const { return instances_.size(); }
   const Mesh& mesh(int i) const { return meshes_[i]; }
   const Instance& instance(int i) const { return instances_[i]; }
+  // The ray kinds (lt_visibility bits) that see an instance.
+  unsigned instance_visibility(int i) const {
+    return i >= 0 && size_t(i) < instance_visibility_.size() ? instance_visibility_[size_t(i)] : 31u;
+  }
   Bounds bounds() const { return bounds_; }
   // Object-space corners of a mesh's triangle at time (a deforming mesh's interpolated).
   void object_corners(const Mesh& m, int prim, float time, Vec3* p0, Vec3* p1, Vec3* p2) const;

@@ -22,8 +22,6 @@ namespace lt {
 
 namespace {
 
-constexpr unsigned kVisLightRay = kVisDiffuse | kVisGlossy | kVisTransmission;
-
 // The bounce kind of a surface vertex: its lobes' (path_state.h), or Mixed if they differ or a
 // dielectric may reflect or refract there; the path tracer's count then depends on the lobe it
 // samples (kind_limit_factor).
@@ -235,7 +233,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     if (count >= 2)
       path[count - 2].pdf_rev = path[count - 1].delta ? 0.0f : pdf(path[count - 1], &v, path[count - 2], pixel_center_);
   };
-  unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisLightRay;
+  // A light subpath's first segment is the path tracer's last, which its shadow rays trace: surfaces
+  // that cast shadows stop it, and one that indirect rays do not see ends the subpath there.
+  unsigned visibility = mode == Mode::Radiance ? kVisCamera : kVisShadow;
   int count = 1, bounces = 0, nulls = 0, transparent = 0;
   // Bump's ray footprint: along camera subpaths Cycles' compact differential (the camera's dP, then
   // its dD per unit of path length); a light subpath's vertex takes the one a camera ray reaching
@@ -272,6 +272,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
           v.light = h.light;
           v.p = ray.o + ray.d * h.t;
           v.n = h.n;
+          v.vis = scene_.light_visibility(h.light);
           v.beta = medium >= 0 ? beta_before : beta;  // the segment before the collision (exact for grey media)
           v.pdf_fwd = density_of(count, v);
           reverse_density(count, v);
@@ -287,6 +288,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
             v.type = VertexType::Light;
             v.infinite = true;
             v.light = light;
+            v.vis = scene_.light_visibility(light);
             v.p = prev.p + ray.d;
             v.beta = beta;
             v.pdf_fwd = density_of(count, v);
@@ -344,6 +346,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     v.stack = stack;
     v.beta = beta;
     v.pdf_rev = 0;
+    v.vis = medium >= 0 ? kVisAll : scene_.geometry.instance_visibility(sp.instance);
+    if (mode == Mode::Importance && !(v.vis & kVisLightRay)) break;
     if (medium >= 0) {
       v.type = VertexType::Medium;
       v.p = mi.p;
@@ -403,7 +407,12 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       const bool reflect_geo = dot(wi, v.n) > 0;
       if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;
       v.delta = (bs.flags & kLobeSpecular) != 0;
-      beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
+      Spectrum fv = bs.f;
+      // The light subpath's first bounce leaves out the lobes its light excludes (excluded_kinds).
+      if (mode == Mode::Importance && count == 2 && excluded_kinds(path[0].vis))
+        fv = v.delta ? ((1u << int(flags_pass_kind(bs.flags))) & excluded_kinds(path[0].vis) ? Spectrum(0.0f) : fv)
+                     : v.bsdf.eval(v.wo, bs.wi, nullptr, excluded_kinds(path[0].vis));
+      beta *= fv * (std::abs(bs.wi.z) / bs.pdf);
       if (mode == Mode::Importance) beta *= shading_correction(v, -ray.d, wi);
       if (s_.light_passes && mode == Mode::Radiance && count == 2) {
         if (v.delta)
@@ -471,6 +480,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   y0 = PathVertex();
   y0.type = VertexType::Light;
   y0.light = li;
+  y0.vis = scene_.light_visibility(li);
   y0.infinite = l.infinite();
   y0.delta_direction = e.delta_dir;
   y0.p = e.ray.o;
@@ -551,9 +561,17 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   const float pick_power = light_end.light >= 0 ? lights_.pmf(light_end.light) : 0.0f;
   const double lambda = pick_power > 0 ? double(light_end.pick_nee) / pick_power : 1.0;
   auto ratio = [&](double r, int s2) { return s == 1 ? r / lambda : (s2 == 1 ? r * lambda : r); };
+  // Ray visibility: a strategy whose walk would reach a vertex with a ray kind that does not see it
+  // cannot sample the path, nor can any strategy moving further vertices across. The light walk
+  // reaches light[1] through surfaces that cast no shadow (random_walk) and its other vertices
+  // with rays of kind kVisLightRay; the camera walk reaches its first vertex with a camera ray and
+  // the others with the scattering vertex's kind (taken as any of kVisLightRay: exact for objects
+  // seen by all of diffuse, glossy and transmission rays or by none).
   double sum = 0, r = 1;
   for (int i = t - 1; i > 0; --i) {
     const PathVertex& c = C(i);
+    const int as_light = s + t - 1 - i;  // its index on the light side
+    if (as_light > 0 && !((c.vis & kVisLightRay) && (as_light > 1 || (c.vis & kVisShadow)))) break;
     r *= remap0(c.pdf_rev) / remap0(c.pdf_fwd);
     if (!c.delta && !C(i - 1).delta && exists(s + t - i, i)) sum += heuristic(float(ratio(r, s + t - i)));
   }
@@ -561,6 +579,7 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   r = 1;
   for (int i = s - 1; i >= 0; --i) {
     const PathVertex& l = L(i);
+    if (!(l.vis & (t == 1 && i == s - 1 ? kVisCamera : kVisLightRay))) break;
     r *= remap0(l.pdf_rev) / remap0(l.pdf_fwd);
     bool delta_light_vertex = i > 0 ? L(i - 1).delta : is_delta_light(l);
     if (!l.delta && !delta_light_vertex && exists(i, s + t - i)) sum += heuristic(float(ratio(r, i)));
@@ -591,14 +610,16 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     const Light& l = lights_.light(li);
     PathVertex& sampled = endpoint(VertexType::Light);
     sampled.light = li;
+    sampled.vis = scene_.light_visibility(li);
     sampled.pick_nee = pmf;
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
     sampled.n = ls.n;
     sampled.beta = ls.radiance / (pmf * ls.pdf);
-    Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance) * sampled.beta * cos_at(pt, ls.wi);
+    Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis)) * sampled.beta * cos_at(pt, ls.wi);
     if (is_black(c)) return c;
-    c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls, time_));
+    c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls, time_),
+                       kVisShadow);
     if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
     if (s_.light_passes && t == 2) first_connect_ = split_at(pt, ls.wi);
@@ -611,11 +632,12 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   float d2 = length_squared(d);
   if (!(d2 > 0)) return Spectrum(0.0f);
   Vec3 w = d / std::sqrt(d2);  // from the light vertex towards the camera vertex
-  Spectrum c = qs.beta * f(qs, w, Mode::Importance) * f(pt, -w, Mode::Radiance) * pt.beta;
+  Spectrum c = qs.beta * f(qs, w, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) *
+              f(pt, -w, Mode::Radiance) * pt.beta;
   if (is_black(c)) return c;
   c *= cos_at(qs, w) * cos_at(pt, w) / d2;
   if (is_black(c)) return c;
-  c *= transmittance(qs, pt);
+  c *= transmittance(qs, pt, kVisLightRay);  // the camera walk's kind of ray
   if (is_black(c)) return c;
   if (s_.light_passes && t == 2) first_connect_ = split_at(pt, -w);
   return c * (kinds * mis_weight(light, camera, nullptr, s, t, pixel_center_));
@@ -628,7 +650,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   const float kinds = kind_limit_factor(light, camera, s, 1);
   if (!(kinds > 0)) return;
   const Camera& cam = ctx_.camera;
-  if (!cam.connectable()) return;
+  if (!cam.connectable() || !(qs.vis & kVisCamera)) return;  // a camera ray would pass through qs
   // A point on the lens, uniform over the aperture as the camera's rays sample it (pbrt-v4's
   // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were.
   const Vec3 lens = cam.has_lens() ? cam.lens_point(sampler_.next_2d(), time_) : cam.position(time_);
@@ -636,7 +658,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   Vec3 dir;
   float dist;
   if (!cam.project(lens, qs.p, ctx_.filter.radius(), &film, &dir, &dist, time_)) return;
-  Spectrum base = qs.beta * f(qs, -dir, Mode::Importance) * kinds;
+  Spectrum base = qs.beta * f(qs, -dir, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) * kinds;
   if (is_black(base)) return;
   // Light passes: qs is the path's first bounce seen from the camera (towards -dir), lit from its
   // predecessor on the light subpath (qs.wo).
@@ -652,7 +674,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   }
   PathVertex& z0 = endpoint(VertexType::Camera);
   z0.p = lens;
-  base *= transmittance(qs, z0);
+  base *= transmittance(qs, z0, kVisCamera);
   if (is_black(base)) return;
   float c = dot(dir, cam.forward(time_));
   // Pixel j's importance is W_j = h_j(x) / (a A_lens cos^4) (a: view-plane area of a pixel,

@@ -12,6 +12,9 @@
 
 namespace lt {
 
+// The kinds of ray a light subpath's segments and BDPT's connections stand for: any indirect ray.
+constexpr unsigned kVisLightRay = kVisDiffuse | kVisGlossy | kVisTransmission;
+
 // Per-thread scratch, allocated once and reused: no heap allocation per sample.
 struct BdptScratch {
   std::vector<PathVertex> camera, light;  // the subpaths
@@ -115,12 +118,13 @@ class Bdpt {
 
   // ---- scattering ----------------------------------------------------------------------------
   // BSDF towards `to` at a vertex, with pbrt's shading-normal correction for importance transport.
-  Spectrum f(const PathVertex& v, const Vec3& to_world, Mode mode) const {
+  // excluded: lobes the light the path ends on leaves out (excluded_kinds; at the vertex next to it).
+  Spectrum f(const PathVertex& v, const Vec3& to_world, Mode mode, unsigned excluded = 0) const {
     if (v.type == VertexType::Medium) return Spectrum(phase(v).eval(v.wo, to_world));
     if (v.type != VertexType::Surface) return Spectrum(0.0f);
     Vec3 wi = v.frame.to_local(to_world);
     if ((dot(to_world, v.n) > 0) != (wi.z > 0)) return Spectrum(0.0f);  // shading normal would leak
-    Spectrum r = v.bsdf.eval(v.wo, wi, nullptr);
+    Spectrum r = v.bsdf.eval(v.wo, wi, nullptr, excluded);
     if (mode == Mode::Importance) r *= shading_correction(v, v.frame.to_world(v.wo), to_world);
     return r;
   }
@@ -136,7 +140,7 @@ class Bdpt {
   }
   // Transmittance of the segment from a to b: 0 or 1 without media; with media the product of
   // the media's transmittances (through invisible boundaries), 0 if a surface is in the way.
-  Spectrum transmittance(const PathVertex& a, const PathVertex& b) const {
+  Spectrum transmittance(const PathVertex& a, const PathVertex& b, unsigned visibility) const {
     Ray r;
     r.time = time_;
     Vec3 d = b.p - a.p;
@@ -146,18 +150,19 @@ class Bdpt {
     r.o = a.type == VertexType::Surface ? spawn_origin(a.sp, r.d) : a.p;
     r.tmin = 0;
     if (!b.infinite) r = spawn_ray_to(r.o, b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p, time_);
-    return transmittance(a, r);
+    return transmittance(a, r, visibility);
   }
-  // The same along a shadow ray leaving a: a's volume stack is the side a was reached from.
-  Spectrum transmittance(const PathVertex& a, const Ray& r) const {
+  // The same along a ray leaving a: a's volume stack is the side a was reached from. `visibility`:
+  // the kind of ray the segment stands for (shadow rays for s = 1, as the path tracer's).
+  Spectrum transmittance(const PathVertex& a, const Ray& r, unsigned visibility) const {
     if (media_) {
       VolumeStack stack = a.stack;
       if (a.type == VertexType::Surface) leave_surface(scene_, a.sp, a.n, r.d, &stack);
       return shadow_transmittance(scene_, stack, r, sampler_, s_.volume_estimator, s_.volume_step, stats_,
-                                  s_.transparent_bounces);
+                                  s_.transparent_bounces, visibility);
     }
     return shadow_transmittance(scene_, VolumeStack{}, r, sampler_, s_.volume_estimator, s_.volume_step, stats_,
-                                s_.transparent_bounces);
+                                s_.transparent_bounces, visibility);
   }
   // Cycles' compact footprint of a camera ray from the camera's centre to p (bump on light
   // subpaths).
@@ -202,6 +207,7 @@ class Bdpt {
     v.beta = Spectrum(1.0f);
     v.pdf_fwd = v.pdf_rev = 0;
     v.pick_nee = 0;
+    v.vis = kVisAll;
     v.n = Vec3(0.0f);
     return v;
   }

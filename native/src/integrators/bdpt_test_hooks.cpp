@@ -16,7 +16,7 @@ std::vector<float> Bdpt::weight_sums() {
     for (int s = 2; s <= ns; ++s) {
       if (s + t - 2 > max_depth()) break;
       PathVertex &qs = light[s - 1], &pt = camera[t - 1];
-      if (!scatters(pt) || !scatters(qs) || is_black(transmittance(qs, pt))) continue;
+      if (!scatters(pt) || !scatters(qs) || is_black(transmittance(qs, pt, kVisLightRay))) continue;
       if (is_black(f(qs, normalize(pt.p - qs.p), Mode::Importance)) ||
           is_black(f(pt, normalize(qs.p - pt.p), Mode::Radiance)))
         continue;

@@ -145,17 +145,17 @@ int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, f
 }
 
 Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sampler& sampler, VolumeEstimator est,
-                              float step, SampleStats& stats, int max_transparent) {
+                              float step, SampleStats& stats, int max_transparent, unsigned visibility) {
   if (!scene.has_media() && !scene.has_transparent_shadows()) {
     ++stats.rays;
-    return scene.geometry.occluded(ray) ? Spectrum(0.0f) : Spectrum(1.0f);
+    return scene.geometry.occluded(ray, visibility) ? Spectrum(0.0f) : Spectrum(1.0f);
   }
   Spectrum T(1.0f);
   Bsdf bsdf;
   for (int crossings = 0, transparent = 0;;) {
     Hit hit;
     ++stats.rays;
-    bool found = scene.geometry.intersect(ray, kVisShadow, &hit);
+    bool found = scene.geometry.intersect(ray, visibility, &hit);
     T *= media_transmittance(scene, stack, ray, ray.tmin, found ? hit.t : ray.tmax, sampler, est, step);
     if (!found || is_black(T)) return T;
     SurfacePoint sp = scene.geometry.surface(hit);

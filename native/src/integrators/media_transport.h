@@ -4,6 +4,7 @@
 #pragma once
 
 #include "integrators/integrator.h"
+#include "integrators/path_state.h"
 #include "media/volume_stack.h"
 
 namespace lt {
@@ -57,8 +58,9 @@ Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray&
 // (updating a copy of the stack), media and transparent surfaces (the weights of their Transparent
 // lobes, Cycles' transparent shadows; more than max_transparent of them block, as Cycles'
 // transparent bounce limit); 0 if an opaque surface is in the way. A scene with neither media nor
-// transparent materials asks Embree for any hit.
+// transparent materials asks Embree for any hit. Surfaces seen by rays of kind `visibility` are in
+// the way (BDPT's connections also stand for camera and indirect rays).
 Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sampler& sampler, VolumeEstimator est,
-                              float step, SampleStats& stats, int max_transparent);
+                              float step, SampleStats& stats, int max_transparent, unsigned visibility = kVisShadow);
 
 }  // namespace lt

@@ -72,7 +72,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (li < 0 || !(pmf > 0) || !lights.sample(scene, li, p, u, &ls, time) || !(ls.pdf > 0) || is_black(ls.radiance))
       return;
     float scatter_pdf;
-    Spectrum fv = f(ls.wi, &scatter_pdf);
+    Spectrum fv = f(ls.wi, &scatter_pdf, excluded_kinds(scene.light_visibility(li)));
     if (is_black(fv)) return;
     const Ray shadow = shadow_ray(sp ? spawn_origin(*sp, ls.wi) : p, ls, time);
     Spectrum T(1.0f);
@@ -127,7 +127,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       const Vec3 wo = normalize(-ray.d);
       if (b.total == 0) nee_first.set_volume();
       if (!lights.empty())
-        next_event(mi.p, nullptr, Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf) {
+        next_event(mi.p, nullptr, Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf, unsigned) {
           float p = phase.eval(wo, wi);
           *pdf = p;
           return Spectrum(p);
@@ -217,14 +217,16 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       if (b.exceeded(s) || (kMedia && volume > s.volume_bounces)) break;
 
       if (bsdf.has_non_delta() && !lights.empty())
-        next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf) {
+        next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf, unsigned excluded) {
           Vec3 wi = frame.to_local(wi_world);
-          Spectrum f = bsdf.eval(wo, wi, pdf);
+          Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
           // The geometric normal decides which side the light is on; shading normals only shade.
           if ((dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
           if (s.light_passes && b.total == 0) {
             Spectrum kinds[3];
             bsdf.eval_kinds(wo, wi, kinds);
+            for (int k = 0; k < 3; ++k)
+              if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
             nee_first.set_surface(kinds);
           }
           return f * std::abs(wi.z);

@@ -15,6 +15,14 @@ namespace lt {
 constexpr unsigned kVisCamera = 1, kVisDiffuse = 2, kVisGlossy = 4, kVisTransmission = 8, kVisShadow = 16;
 constexpr unsigned kVisAll = 31;
 
+// The lobes (bits 1 << PassKind) a light hidden from some kinds of ray leaves out of its light
+// samples, as Cycles' SHADER_EXCLUDE_DIFFUSE / _GLOSSY / _TRANSMIT (surface_shader.h).
+inline unsigned excluded_kinds(unsigned light_visibility) {
+  return (light_visibility & kVisDiffuse ? 0u : 1u << int(PassKind::Diffuse)) |
+         (light_visibility & kVisGlossy ? 0u : 1u << int(PassKind::Glossy)) |
+         (light_visibility & kVisTransmission ? 0u : 1u << int(PassKind::Transmission));
+}
+
 // The visibility flag of a ray leaving a lobe of these flags.
 inline unsigned visibility_of(uint32_t lobe) {
   if (lobe & kLobeTransmission) return kVisTransmission;

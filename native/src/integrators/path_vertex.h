@@ -41,6 +41,9 @@ struct PathVertex {
   SurfacePoint sp;
   Bsdf bsdf;
   int medium = -1;    // Medium vertices: the medium whose phase function scatters
+  // The ray kinds (path_state.h's kVis bits) that can reach the vertex: its object's or light's
+  // ray visibility; every kind for medium and camera vertices (see Bdpt::mis_weight).
+  unsigned vis = kVisAll;
   VolumeStack stack;  // scenes with media: the media around the vertex on the side it was reached from
 
   bool on_surface() const { return n.x != 0 || n.y != 0 || n.z != 0; }

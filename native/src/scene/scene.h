@@ -65,6 +65,11 @@ class Scene {
   // Mesh lights found by the last commit.
   uint64_t emissive_triangles() const { return emissive_triangles_; }
   uint64_t emissive_instances() const { return emissive_instances_; }
+  // The ray kinds that see light li: an emissive triangle's object's, a lamp's own.
+  unsigned light_visibility(int li) const {
+    const Light& l = lights.light(li);
+    return l.type == LightType::Triangle ? geometry.instance_visibility(l.instance) : l.visibility;
+  }
   const Material& material(int id) const {
     return id >= 0 && id < int(materials.size()) ? materials[id] : default_material;
   }

@@ -1208,22 +1208,26 @@ Spectrum Bsdf::lobe_value(const Lobe& l, const Vec3& wo, const Vec3& wi, float* 
   return lobe_eval(l, wi, wo);
 }
 
-Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf) const {
+Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf, unsigned excluded) const {
   Spectrum f(0.0f);
   float p_total = 0;
   float p[kMaxLobes];
   float pk;
+  const bool transmit = wo.z * wi.z < 0;
+  auto skip = [&](const Lobe& l) { return excluded && (excluded & (1u << int(lobe_pass_kind(l, transmit)))); };
   if (!pdf) {
     for (int k = 0; k < count_; ++k)
-      f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);  // zero for delta lobes
+      if (!skip(lobes_[k]))
+        f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);  // zero for delta lobes
   } else if (selection_probabilities(*this, wo, p)) {
     for (int k = 0; k < count_; ++k) {
-      if (lobe_is_delta(lobes_[k])) continue;
+      if (lobe_is_delta(lobes_[k]) || skip(lobes_[k])) continue;
       f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
       p_total += p[k] * pk;
     }
   } else {
-    for (int k = 0; k < count_; ++k) f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
+    for (int k = 0; k < count_; ++k)
+      if (!skip(lobes_[k])) f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
   }
   if (!is_finite(f)) f = Spectrum(0.0f);
   if (pdf) *pdf = std::isfinite(p_total) ? p_total : 0.0f;

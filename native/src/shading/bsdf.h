@@ -183,7 +183,9 @@ class Bsdf {
   bool overflowed() const { return overflowed_; }
 
   // Sum of the non-delta lobes' f, and (pdf not null) the mixture pdf of sampling wi with sample().
-  Spectrum eval(const Vec3& wo, const Vec3& wi, float* pdf) const;
+  // excluded: bits 1 << PassKind of lobes left out of both (a light hidden from that kind of ray;
+  // Cycles' _surface_shader_exclude).
+  Spectrum eval(const Vec3& wo, const Vec3& wi, float* pdf, unsigned excluded = 0) const;
   // The mixture pdf alone: eval()'s *pdf to the last bit, without evaluating f.
   float pdf(const Vec3& wo, const Vec3& wi) const;
   // Picks a lobe with probability proportional to its weight's estimate (the weight's average,
