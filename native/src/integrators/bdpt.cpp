@@ -633,7 +633,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   if (!(d2 > 0)) return Spectrum(0.0f);
   Vec3 w = d / std::sqrt(d2);  // from the light vertex towards the camera vertex
   Spectrum c = qs.beta * f(qs, w, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) *
-              f(pt, -w, Mode::Radiance) * pt.beta;
+               f(pt, -w, Mode::Radiance) * pt.beta;
   if (is_black(c)) return c;
   c *= cos_at(qs, w) * cos_at(pt, w) / d2;
   if (is_black(c)) return c;

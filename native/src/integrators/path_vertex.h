@@ -40,7 +40,7 @@ struct PathVertex {
   Vec3 wo;      // direction towards the predecessor: local (surfaces), world (media)
   SurfacePoint sp;
   Bsdf bsdf;
-  int medium = -1;    // Medium vertices: the medium whose phase function scatters
+  int medium = -1;  // Medium vertices: the medium whose phase function scatters
   // The ray kinds (path_state.h's kVis bits) that can reach the vertex: its object's or light's
   // ray visibility; every kind for medium and camera vertices (see Bdpt::mis_weight).
   unsigned vis = kVisAll;
