@@ -118,7 +118,7 @@ def main():
     t_rendered = time.monotonic()
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
     # Cryptomatte manifests as the specification puts them beside CryptoObject00.R, ...
-    attributes = cryptomatte.metadata(summary.get("cryptomatte", {}), "", crypto["cryptomatte"])
+    attributes = engine.cryptomatte.metadata(summary.get("cryptomatte", {}), "", crypto["cryptomatte"])
     attributes.update({"lantern/scene": scene_identity(args.scene_id, frame), "lantern/frame": str(frame),
                        "lantern/blend": bpy.data.filepath})
     render.write_exr(args.out, attributes)
