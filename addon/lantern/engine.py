@@ -464,7 +464,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         for name, _, channels, chan_id, kind, _ in enabled_passes(scene, renderlayer):
             self.register_pass(scene, renderlayer, name, channels, chan_id, kind)
         for name, _, _ in cryptomatte_passes(renderlayer):
-            self.register_pass(scene, renderlayer, name, 4, "RGBA", 'COLOR')
+            self.register_pass(scene, renderlayer, name, 4, "rgba", 'COLOR')  # as Cycles (engine.py)
 
     def render(self, depsgraph):
         scene = depsgraph.scene
