@@ -117,7 +117,7 @@ def main():
                          % (st.samples_done, args.samples, st.state))
     t_rendered = time.monotonic()
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    # Cryptomatte manifests as the specification puts them beside CryptoObject00.R, ...
+    # Cryptomatte manifests as the specification puts them beside CryptoObject00.r, ...
     attributes = engine.cryptomatte.metadata(summary.get("cryptomatte", {}), "", crypto["cryptomatte"])
     attributes.update({"lantern/scene": scene_identity(args.scene_id, frame), "lantern/frame": str(frame),
                        "lantern/blend": bpy.data.filepath})

@@ -163,8 +163,8 @@ std::vector<std::map<uint32_t, float>> coverage(const lt::ExrImage& img, const s
     std::snprintf(prefix, sizeof prefix, "%s%02d.", type.c_str(), layer);
     const lt::ExrChannel* ch[4];
     for (int c = 0; c < 4; ++c) {
-      ch[c] = img.find(std::string(prefix) + "RGBA"[c]);
-      if (!ch[c]) ADD_FAILURE() << "no channel " << prefix << "RGBA"[c];
+      ch[c] = img.find(std::string(prefix) + "rgba"[c]);
+      if (!ch[c]) ADD_FAILURE() << "no channel " << prefix << "rgba"[c];
       if (!ch[c]) return out;
     }
     for (size_t i = 0; i < out.size(); ++i)
@@ -211,12 +211,19 @@ TEST(Cryptomatte, RenderedLayersNameTheObjectsAndCoverThePixel) {
             LT_ERROR_INVALID_ARGUMENT);
   EXPECT_EQ(lt_render_read_cryptomatte_rows(r.get(), LT_CRYPTOMATTE_OBJECT, 0, 0, kH, layer.data(), 5),
             LT_ERROR_INVALID_ARGUMENT);
-  // Off: refused, not zeros.
-  lt_render_settings off = crypto_settings(0, 1);
+  // A type not kept: refused, not zeros. Combined is the same bits with or without Cryptomatte
+  // (it draws no random number).
+  lt_render_settings off = crypto_settings(0, 16);
   off.cryptomatte = LT_CRYPTOMATTE_MATERIAL;
   RenderPtr r2 = render(s.get(), off);
   EXPECT_EQ(lt_render_read_cryptomatte_rows(r2.get(), LT_CRYPTOMATTE_OBJECT, 0, 0, kH, layer.data(), layer.size()),
             LT_ERROR_STATE);
+  off.cryptomatte = 0;
+  RenderPtr r3 = render(s.get(), off);
+  std::vector<float> on_rgba(kW * kH * 4), off_rgba(kW * kH * 4);
+  check(lt_render_read_pass(r.get(), LT_PASS_COMBINED, on_rgba.data(), on_rgba.size()), "read Combined");
+  check(lt_render_read_pass(r3.get(), LT_PASS_COMBINED, off_rgba.data(), off_rgba.size()), "read Combined");
+  EXPECT_EQ(std::memcmp(on_rgba.data(), off_rgba.data(), on_rgba.size() * sizeof(float)), 0);
 }
 
 TEST(Cryptomatte, SplitPartsMergeIntoTheFullRender) {

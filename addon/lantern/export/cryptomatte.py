@@ -45,7 +45,7 @@ def metadata(manifests, layer_prefix, kept):
     """The specification's keys for each kept type (an lt_cryptomatte bit mask): cryptomatte/<the
     first 7 hex digits of the hash of the layer's name>/name, hash, conversion, manifest (JSON of
     name -> 8 hex digits), as Cycles stamps them (layer_prefix "ViewLayer." in Blender's render
-    result; "" in Lantern's own EXR parts, whose channels are CryptoObject00.R, ...)."""
+    result; "" in Lantern's own EXR parts, whose channels are CryptoObject00.r, ...)."""
     out = {}
     for prefix, bit, _ in TYPES:
         if not kept & bit:

@@ -193,7 +193,7 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
                     std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".G",
                     std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".B"});
   }
-  // Cryptomatte layers under Cycles' pass names (CryptoObject00.R = id, .G = coverage, ...); the
+  // Cryptomatte layers under Cycles' pass names (CryptoObject00.r = id, .g = coverage, ...); the
   // manifests come from the caller's attributes (cryptomatte/<key>/..., the specification's).
   for (int t = 0; t < kCryptoTypes; ++t) {
     if (!job.film().has_cryptomatte(t)) continue;
@@ -202,9 +202,10 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
       job.film().read_cryptomatte_rows(t, layer, 0, h, buf.data());
       char prefix[32];
       std::snprintf(prefix, sizeof prefix, "%s%02d.", cryptomatte_type_name(t), layer);
+      // Lower case, as the specification and Blender name them.
       add_channels(channels, buf, n,
-                   {std::string(prefix) + "R", std::string(prefix) + "G", std::string(prefix) + "B",
-                    std::string(prefix) + "A"});
+                   {std::string(prefix) + "r", std::string(prefix) + "g", std::string(prefix) + "b",
+                    std::string(prefix) + "a"});
     }
   }
   std::vector<float> light(n * 3);

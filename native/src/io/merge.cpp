@@ -157,7 +157,7 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   // Colour divided by the merged Colour; with BDPT each light pass's splat part comes apart
   // (LightTracing.<pass>), weighted by the light paths as Combined's; First: the pixel's first
   // sample's value (Position and the indices), from the part with the lowest sample index.
-  // Crypto: a Cryptomatte layer's channel (CryptoObject00.R, ...), merged per type below.
+  // Crypto: a Cryptomatte layer's channel (CryptoObject00.r, ...), merged per type below.
   enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB, Divided, First, SplitMean, Crypto };
   std::vector<Kind> kind(nc);
   std::vector<int> rgb_index(nc, -1);
@@ -201,14 +201,14 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       kind[k] = Divided;
     }
   }
-  // Cryptomatte: per type, its layers' channels (R, G, B, A = id, coverage, id, coverage).
+  // Cryptomatte: per type, its layers' channels (r, g, b, a = id, coverage, id, coverage).
   std::vector<std::array<int, 4>> crypto_k[kCryptoTypes];
   for (int t = 0; t < kCryptoTypes; ++t)
     for (int layer = 0;; ++layer) {
       char prefix[32];
       std::snprintf(prefix, sizeof prefix, "%s%02d.", cryptomatte_type_name(t), layer);
       std::array<int, 4> ks;
-      for (int c = 0; c < 4; ++c) ks[c] = channel_index(std::string(prefix) + "RGBA"[c]);
+      for (int c = 0; c < 4; ++c) ks[c] = channel_index(std::string(prefix) + "rgba"[c]);
       if (ks[0] < 0 || ks[1] < 0 || ks[2] < 0 || ks[3] < 0) break;
       for (int c = 0; c < 4; ++c) kind[ks[c]] = Crypto;
       crypto_k[t].push_back(ks);
