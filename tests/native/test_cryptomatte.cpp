@@ -193,9 +193,9 @@ TEST(Cryptomatte, RenderedLayersNameTheObjectsAndCoverThePixel) {
         if (!same || o == 0) continue;
         interior += type == LT_CRYPTOMATTE_OBJECT;
         const int k = int(o);
-        const uint32_t want = type == LT_CRYPTOMATTE_OBJECT ? object_hash[k]
+        const uint32_t want = type == LT_CRYPTOMATTE_OBJECT  ? object_hash[k]
                               : type == LT_CRYPTOMATTE_ASSET ? hash(k == 3 ? "Right" : "Rig")
-                                                              : hash(k == 2 ? "Grey" : "Red");
+                                                             : hash(k == 2 ? "Grey" : "Red");
         const float* p = &layer[4 * (y * kW + x)];
         EXPECT_EQ(bits(p[0]), bits(lt::cryptomatte_id(want))) << type << " at " << x << "," << y;
         EXPECT_NEAR(p[1], 1.0f, 1e-6f);

@@ -320,9 +320,7 @@ int lt_scene_set_material_pass_index(lt_scene* scene, int material, int pass_ind
   });
 }
 
-uint32_t lt_cryptomatte_hash(const char* bytes, size_t length) {
-  return bytes ? lt::murmur3_32(bytes, length, 0) : 0u;
-}
+uint32_t lt_cryptomatte_hash(const char* bytes, size_t length) { return bytes ? lt::murmur3_32(bytes, length, 0) : 0u; }
 
 int lt_scene_set_material_cryptomatte(lt_scene* scene, int material, uint32_t hash) {
   return guarded([&] {
@@ -1078,8 +1076,8 @@ int lt_render_read_cryptomatte_rows(lt_render* render, int type, int layer, int 
   return guarded([&] {
     require(render && out, "lt_render_read_cryptomatte_rows: NULL argument");
     require(type == LT_CRYPTOMATTE_OBJECT || type == LT_CRYPTOMATTE_MATERIAL || type == LT_CRYPTOMATTE_ASSET,
-            "unknown Cryptomatte type " + std::to_string(type) + "; valid: " +
-                lt::abi_enum_names("lt_cryptomatte", "LT_CRYPTOMATTE_"));
+            "unknown Cryptomatte type " + std::to_string(type) +
+                "; valid: " + lt::abi_enum_names("lt_cryptomatte", "LT_CRYPTOMATTE_"));
     const auto& film = render->job->film();
     require(rows >= 0 && y0 >= 0 && y0 <= film.height() - rows,
             "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) + " are not within the " +
@@ -1087,7 +1085,7 @@ int lt_render_read_cryptomatte_rows(lt_render* render, int type, int layer, int 
     const size_t need = size_t(film.width()) * rows * 4;
     require(float_count == need, "Cryptomatte buffer holds " + std::to_string(float_count) + " floats; " +
                                      std::to_string(need) + " are needed");
-    film.read_cryptomatte_rows(type == LT_CRYPTOMATTE_OBJECT ? lt::kCryptoObject
+    film.read_cryptomatte_rows(type == LT_CRYPTOMATTE_OBJECT     ? lt::kCryptoObject
                                : type == LT_CRYPTOMATTE_MATERIAL ? lt::kCryptoMaterial
                                                                  : lt::kCryptoAsset,
                                layer, y0, rows, out);

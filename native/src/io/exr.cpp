@@ -203,9 +203,9 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
       char prefix[32];
       std::snprintf(prefix, sizeof prefix, "%s%02d.", cryptomatte_type_name(t), layer);
       // Lower case, as the specification and Blender name them.
-      add_channels(channels, buf, n,
-                   {std::string(prefix) + "r", std::string(prefix) + "g", std::string(prefix) + "b",
-                    std::string(prefix) + "a"});
+      add_channels(
+          channels, buf, n,
+          {std::string(prefix) + "r", std::string(prefix) + "g", std::string(prefix) + "b", std::string(prefix) + "a"});
     }
   }
   std::vector<float> light(n * 3);
