@@ -213,15 +213,19 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       for (int c = 0; c < 4; ++c) kind[ks[c]] = Crypto;
       crypto_k[t].push_back(ks);
     }
-  // Per type and pixel, every id the parts kept with its coverage times the part's sample count.
-  std::vector<std::vector<std::pair<float, double>>> crypto_acc[kCryptoTypes];
-  for (int t = 0; t < kCryptoTypes; ++t)
-    if (!crypto_k[t].empty()) crypto_acc[t].resize(n);
+  // Per type and pixel, up to twice a part's slots of (id, coverage x the part's sample count),
+  // the sums of the ids' weights (an id past them is dropped as the film drops one: the merge is
+  // exact while a pixel's parts name no more ids than that, and its output keeps half of them).
+  std::vector<float> crypto_acc[kCryptoTypes];
+  auto crypto_capacity = [&](int t) { return 4 * int(crypto_k[t].size()); };
+  for (int t = 0; t < kCryptoTypes; ++t) crypto_acc[t].assign(2 * size_t(crypto_capacity(t)) * n, 0.0f);
   int light_k[3] = {-1, -1, -1};
   for (size_t k = 0; k < nc; ++k)
     for (int c = 0; c < 3; ++c)
       if (ref.channels[k].name == std::string("LightTracing.") + "RGB"[c]) light_k[c] = int(k);
-  std::vector<std::vector<double>> acc(nc, std::vector<double>(n, 0.0));
+  std::vector<std::vector<double>> acc(nc);
+  for (size_t k = 0; k < nc; ++k)
+    if (kind[k] != Crypto) acc[k].assign(n, 0.0);
   std::vector<double> count(n, 0.0);
   // First: the sample index its value came from, per pixel (the lowest wins).
   std::vector<long long> first_from(n, std::numeric_limits<long long>::max());
@@ -286,15 +290,10 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         for (int pair = 0; pair < 2; ++pair) {
           const float* id = img.channels[ks[2 * pair]].pixels.data();
           const float* cov = img.channels[ks[2 * pair + 1]].pixels.data();
-          for (size_t i = 0; i < n; ++i) {
-            if (id[i] == 0.0f || !(c_p[i] > 0)) continue;
-            auto& e = crypto_acc[t][i];
-            auto it = std::find_if(e.begin(), e.end(), [&](const auto& x) { return x.first == id[i]; });
-            if (it == e.end())
-              e.emplace_back(id[i], double(c_p[i]) * cov[i]);
-            else
-              it->second += double(c_p[i]) * cov[i];
-          }
+          const int cap = crypto_capacity(t);
+          for (size_t i = 0; i < n; ++i)
+            if (id[i] != 0.0f && c_p[i] > 0)
+              cryptomatte_add(&crypto_acc[t][2 * size_t(cap) * i], cap, id[i], c_p[i] * cov[i]);
         }
     for (int c = 0; c < 3; ++c) {
       if (!rgb[c]) continue;
@@ -321,24 +320,23 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
     if (!slots) continue;
     for (const std::array<int, 4>& ks : crypto_k[t])
       for (int k : ks) crypto_out[k].assign(n, 0.0f);
-    std::vector<float> ids, pairs(2 * size_t(slots));
-    std::vector<double> weights;
+    const int cap = crypto_capacity(t);
+    std::vector<float> ids(cap), pairs(2 * size_t(slots));
+    std::vector<double> weights(cap);
     for (size_t i = 0; i < n; ++i) {
-      ids.clear();
-      weights.clear();
-      for (const auto& [id, w] : crypto_acc[t][i]) {
-        ids.push_back(id);
-        weights.push_back(count[i] > 0 ? w / count[i] : 0.0);
+      const float* e = &crypto_acc[t][2 * size_t(cap) * i];
+      for (int j = 0; j < cap; ++j) {
+        ids[j] = e[2 * j];
+        weights[j] = count[i] > 0 ? e[2 * j + 1] / count[i] : 0.0;
       }
-      cryptomatte_top(ids.data(), weights.data(), int(ids.size()), slots, pairs.data());
+      cryptomatte_top(ids.data(), weights.data(), cap, slots, pairs.data());
       for (int s = 0; s < slots; ++s) {
         const std::array<int, 4>& ks = crypto_k[t][s / 2];
         crypto_out[ks[2 * (s % 2)]][i] = pairs[2 * s];
         crypto_out[ks[2 * (s % 2) + 1]][i] = pairs[2 * s + 1];
       }
     }
-    crypto_acc[t].clear();
-    crypto_acc[t].shrink_to_fit();
+    std::vector<float>().swap(crypto_acc[t]);
   }
 
   std::vector<ExrChannel> out;
