@@ -96,10 +96,12 @@ def main():
     # layer enables: default scenes render at the same cost as before them.
     wanted = engine.pass_settings(engine.enabled_passes(scene, bpy.context.view_layer), 0)["passes"]
     settings["passes"] = ((1 << core.PASS_DIFFUSE_DIRECT) - 1) | wanted
+    crypto, _ = engine.cryptomatte_settings(bpy.context.view_layer, 0)
+    settings.update(crypto)
     warnings = []
     core_scene = core.Scene()
-    export_scene(bpy.context.evaluated_depsgraph_get(), core_scene,
-                 lambda level, msg: warnings.append(msg))
+    summary = export_scene(bpy.context.evaluated_depsgraph_get(), core_scene,
+                           lambda level, msg: warnings.append(msg))
     t_exported = time.monotonic()
     core_scene.commit()
     t_built = time.monotonic()
@@ -115,8 +117,11 @@ def main():
                          % (st.samples_done, args.samples, st.state))
     t_rendered = time.monotonic()
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    render.write_exr(args.out, {"lantern/scene": scene_identity(args.scene_id, frame), "lantern/frame": str(frame),
-                                "lantern/blend": bpy.data.filepath})
+    # Cryptomatte manifests as the specification puts them beside CryptoObject00.r, ...
+    attributes = engine.cryptomatte.metadata(summary.get("cryptomatte", {}), "", crypto["cryptomatte"])
+    attributes.update({"lantern/scene": scene_identity(args.scene_id, frame), "lantern/frame": str(frame),
+                       "lantern/blend": bpy.data.filepath})
+    render.write_exr(args.out, attributes)
     render.close()
     core_scene.close()
     print("lantern task: frame %d samples [%d, %d) -> %s" % (frame, args.offset,

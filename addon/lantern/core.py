@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 14
+ABI_VERSION = 15
 
 # lt_status
 OK = 0
@@ -95,6 +95,8 @@ PASS_MIST = 25
 PASS_OBJECT_INDEX = 26
 PASS_MATERIAL_INDEX = 27
 PASS_COUNT = 28
+# lt_cryptomatte (bits of lt_render_settings.cryptomatte)
+CRYPTOMATTE_OBJECT, CRYPTOMATTE_MATERIAL, CRYPTOMATTE_ASSET = 1, 2, 4
 
 
 class LanternError(RuntimeError):
@@ -216,6 +218,8 @@ class InstanceDesc(ctypes.Structure):
         ("attribute_count", ctypes.c_int),
         ("motion_transforms", _f_p),
         ("motion_step_count", ctypes.c_int),
+        ("cryptomatte_object", ctypes.c_uint32),
+        ("cryptomatte_asset", ctypes.c_uint32),
     ]
 
 
@@ -319,6 +323,8 @@ class RenderSettings(ctypes.Structure):
         ("mist_start", ctypes.c_float),
         ("mist_depth", ctypes.c_float),
         ("mist_falloff", ctypes.c_float),
+        ("cryptomatte", ctypes.c_uint),
+        ("cryptomatte_levels", ctypes.c_int),
     ]
 
 
@@ -424,6 +430,8 @@ def _declare(lib, layout=True):
         "lt_scene_end_image": ([scene_p, P(c_int)], c_int),
         "lt_scene_add_material": ([scene_p, P(ShaderProgram), P(c_int)], c_int),
         "lt_scene_set_material_pass_index": ([scene_p, c_int, c_int], c_int),
+        "lt_cryptomatte_hash": ([c_char_p, ctypes.c_size_t], ctypes.c_uint32),
+        "lt_scene_set_material_cryptomatte": ([scene_p, c_int, ctypes.c_uint32], c_int),
         "lt_scene_add_mesh": ([scene_p, P(MeshDesc), P(c_int)], c_int),
         "lt_scene_add_curves": ([scene_p, P(CurvesDesc), P(c_int)], c_int),
         "lt_scene_add_instance": ([scene_p, P(InstanceDesc), P(c_int)], c_int),
@@ -448,6 +456,7 @@ def _declare(lib, layout=True):
         "lt_pass_channels": ([c_int], c_int),
         "lt_render_read_pass": ([render_p, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_pass_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_cryptomatte_rows": ([render_p, c_int, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid_rows": ([render_p, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid": ([render_p, _f_p, ctypes.c_size_t, ctypes.POINTER(c_int),
                                           ctypes.POINTER(c_int)], c_int),
@@ -609,6 +618,12 @@ def pass_channels(pass_id):
     return n
 
 
+def cryptomatte_hash(name):
+    """MurmurHash3_x86_32 (seed 0) of a name's UTF-8 bytes: its Cryptomatte hash (lantern.h)."""
+    b = name.encode("utf-8")
+    return int(lib().lt_cryptomatte_hash(b, len(b)))
+
+
 # ---- numpy helpers ------------------------------------------------------------------------------
 
 def _f32(a, what, size_multiple=1):
@@ -721,6 +736,11 @@ class Scene:
                "lt_scene_add_material")
         return out.value
 
+    def set_material_cryptomatte(self, material, name_hash):
+        """The material's Cryptomatte hash (cryptomatte_hash of Material.name)."""
+        _check(self._lib.lt_scene_set_material_cryptomatte(self.handle, int(material), int(name_hash) & 0xFFFFFFFF),
+               "lt_scene_set_material_cryptomatte")
+
     def set_material_pass_index(self, material, pass_index):
         """Material.pass_index, for the Material Index pass."""
         _check(self._lib.lt_scene_set_material_pass_index(self.handle, int(material), int(pass_index)),
@@ -789,16 +809,18 @@ class Scene:
         return out.value
 
     def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL, color=(1.0, 1.0, 1.0, 1.0),
-                     pass_index=0, random_id=0, attributes=(), motion=None):
+                     pass_index=0, random_id=0, attributes=(), motion=None, cryptomatte=(0, 0)):
         """color: Object.color; random_id: the uint32 Cycles hashes into Object Info's Random;
         attributes: (id, 4 floats) of the object's attributes; motion: the transforms (3x4 or 4x4
-        each) at the motion steps over the shutter."""
+        each) at the motion steps over the shutter; cryptomatte: the object's and its asset's
+        name hashes (cryptomatte_hash)."""
         mats = _i32(list(materials), "materials") if len(materials) else None
         d = InstanceDesc(int(mesh), _transform(transform), _iptr(mats),
                          0 if mats is None else mats.size, int(visibility))
         d.color[:] = [float(c) for c in (tuple(color) + (1.0,) * 4)[:4]]
         d.pass_index = int(pass_index)
         d.random_id = int(random_id) & 0xFFFFFFFF
+        d.cryptomatte_object, d.cryptomatte_asset = (int(h) & 0xFFFFFFFF for h in cryptomatte)
         if attributes:
             ids = _i32([int(i) for i, _ in attributes], "attribute ids")
             values = _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values")
@@ -1067,6 +1089,16 @@ class Render:
             raise ValueError("read_pass_rows needs a contiguous float32 array of %d floats" % n)
         _check(self._lib.lt_render_read_pass_rows(self.handle, int(pass_id), int(y0), int(rows), _fptr(out),
                                                   out.size), "lt_render_read_pass_rows")
+        return out
+
+    def read_cryptomatte_rows(self, type_bit, layer, y0, rows, out):
+        """Fills `out` (float32 contiguous, width*rows*4) with rows [y0, y0 + rows) of Cryptomatte
+        layer `layer` (CryptoObject00, 01, ...) of the type (CRYPTOMATTE_*) and returns it."""
+        n = self.region_size[0] * rows * 4
+        if out.dtype != np.float32 or not out.flags["C_CONTIGUOUS"] or out.size != n:
+            raise ValueError("read_cryptomatte_rows needs a contiguous float32 array of %d floats" % n)
+        _check(self._lib.lt_render_read_cryptomatte_rows(self.handle, int(type_bit), int(layer), int(y0), int(rows),
+                                                         _fptr(out), out.size), "lt_render_read_cryptomatte_rows")
         return out
 
     def strategy_grid_size(self):

@@ -9,6 +9,7 @@ from gpu_extras.presets import draw_texture_2d
 
 from . import core
 from .export import export_scene
+from .export import cryptomatte
 from .export.motion import collect as collect_motion
 from .export.camera import export_camera
 from .scene_sync import SceneSync
@@ -72,6 +73,23 @@ def _pass_enabled(scene, view_layer, flag):
 
 def enabled_passes(scene, view_layer):
     return [p for p in PASSES if _pass_enabled(scene, view_layer, p[5])]
+
+
+def cryptomatte_passes(view_layer):
+    """Cycles' Cryptomatte passes the view layer enables: (Blender pass name, lt_cryptomatte bit,
+    layer), CryptoObject00, CryptoObject01, ... with ceil(Levels / 2) layers per type."""
+    layers = (view_layer.pass_cryptomatte_depth + 1) // 2
+    return [("%s%02d" % (prefix, k), bit, k) for prefix, bit, flag in cryptomatte.TYPES
+            if getattr(view_layer, flag, False) for k in range(layers)]
+
+
+def cryptomatte_settings(view_layer, pixels):
+    """lt_render_settings' Cryptomatte fields, and the bytes Blender's passes of it hold."""
+    passes = cryptomatte_passes(view_layer)
+    bits = 0
+    for _, bit, _ in passes:
+        bits |= bit
+    return dict(cryptomatte=bits, cryptomatte_levels=view_layer.pass_cryptomatte_depth), pixels * 16 * len(passes)
 
 
 def pass_settings(passes, pixels):
@@ -363,15 +381,16 @@ class _PassWriter:
 
     BAND_PIXELS = 1 << 16  # 1 MiB of RGBA floats a band
 
-    def __init__(self, engine, render, layer, view, passes):
+    def __init__(self, engine, render, layer, view, passes, crypto=()):
         self.engine, self.render, self.layer, self.view = engine, render, layer, view
         self.passes = [(name, pass_id, channels) for name, pass_id, channels, _, _, _ in passes]
+        self.crypto = list(crypto)  # cryptomatte_passes(): (name, lt_cryptomatte bit, layer)
         width, height = render.region_size
         self.rows = max(1, min(height, self.BAND_PIXELS // max(width, 1)))
         # One buffer for every pass (Blender copies out of it), and one for padding channels.
         core_floats = max(core.pass_channels(p) for _, p, _ in self.passes)
         self.buffer = np.empty(width * self.rows * core_floats, dtype=np.float32)
-        self.pad = np.zeros(width * self.rows * max(c for _, _, c in self.passes), dtype=np.float32)
+        self.pad = np.zeros(width * self.rows * max(4, max(c for _, _, c in self.passes)), dtype=np.float32)
 
     def write(self, only=None):
         width, height = self.render.region_size
@@ -397,6 +416,11 @@ class _PassWriter:
                         out = buf.reshape(-1, bc)
                     # rect is (pixels, channels): Blender 3.4 takes a 2-D array here, not a flat one.
                     bpass.rect.foreach_set(out)
+                for name, bit, k in self.crypto if only is None else ():
+                    bpass = layer.passes.find_by_name(name, self.view)
+                    if bpass is not None:
+                        buf = self.render.read_cryptomatte_rows(bit, k, y0, rows, self.pad[:width * rows * 4])
+                        bpass.rect.foreach_set(buf.reshape(-1, 4))
             finally:
                 # Never cancel=True: that would drop the (partial) image.
                 self.engine.end_result(result)
@@ -415,6 +439,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         self._kept = None  # final renders with Persistent Data: the scene kept between frames
         self._texture = None
         self._texture_version = -1
+        self._cryptomatte = {}  # the last export's Cryptomatte manifests (export/cryptomatte.py)
 
     def __del__(self):
         # Blender frees a viewport's engine when the shading mode changes or the view closes.
@@ -438,6 +463,8 @@ class LanternRenderEngine(bpy.types.RenderEngine):
     def update_render_passes(self, scene=None, renderlayer=None):
         for name, _, channels, chan_id, kind, _ in enabled_passes(scene, renderlayer):
             self.register_pass(scene, renderlayer, name, channels, chan_id, kind)
+        for name, _, _ in cryptomatte_passes(renderlayer):
+            self.register_pass(scene, renderlayer, name, 4, "rgba", 'COLOR')  # as Cycles (engine.py)
 
     def render(self, depsgraph):
         scene = depsgraph.scene
@@ -487,6 +514,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                 self.update_stats("", "Building acceleration structures")
                 core_scene.commit()
             stats = core_scene.stats()
+            self._cryptomatte = summary.pop("cryptomatte", {})
             summary.update(emissive_triangles=stats["emissive_triangles"],
                             emissive_objects=stats["emissive_instances"],
                             image_bytes=stats["image_bytes"], image_texels=stats["image_texels"],
@@ -508,6 +536,8 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             settings = render_settings(scene, width, height, border)
             region = ((border[1] - border[0]) * (border[3] - border[2])) if any(border) else width * height
             settings.update(pass_settings(enabled_passes(scene, view_layer), region))
+            crypto, crypto_bytes = cryptomatte_settings(view_layer, region)
+            settings.update(crypto, caller_bytes=settings["caller_bytes"] + crypto_bytes)
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:
@@ -591,7 +621,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                 raise core.LanternError(
                     "Render result is %dx%d but Lantern renders %dx%d (border %s)"
                     % (result.resolution_x, result.resolution_y, rw, rh, border))
-            writer = _PassWriter(self, render, view_layer.name, view, passes)
+            writer = _PassWriter(self, render, view_layer.name, view, passes, cryptomatte_passes(view_layer))
             cancelled = self._poll_loop(render, writer)
             try:
                 render.wait()
@@ -606,8 +636,11 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if cancelled or st.state == core.STATE_FAILED:
                 break
         metadata = render_metadata(st, render.settings)
-        # Stamp data goes on the render's result, not on a band.
-        for key, value in metadata.items():
+        # Stamp data goes on the render's result, not on a band. Cryptomatte's as Cycles stamps it
+        # (blender/session.cpp), so that the Cryptomatte node's Render source finds the manifests.
+        crypto = cryptomatte.metadata(getattr(self, "_cryptomatte", {}), view_layer.name + ".",
+                                      render.settings.cryptomatte)
+        for key, value in list(metadata.items()) + list(crypto.items()):
             result.stamp_data_add_field(key, value)
         LAST_RENDER.clear()
         LAST_RENDER.update(stats=st, settings=render.settings, metadata=metadata,

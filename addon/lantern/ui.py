@@ -385,6 +385,25 @@ class LANTERN_VIEWLAYER_PT_passes_light(LanternButtonsPanel, Panel):
         col.prop(view_layer, "use_pass_environment")
 
 
+class LANTERN_VIEWLAYER_PT_passes_crypto(LanternButtonsPanel, Panel):
+    """Cycles' View Layer > Passes > Cryptomatte (properties_view_layer.py's ViewLayerCryptomattePanel)."""
+    bl_label = "Cryptomatte"
+    bl_context = "view_layer"
+    bl_parent_id = "LANTERN_VIEWLAYER_PT_passes"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        view_layer = context.view_layer
+        col = layout.column(heading="Include", align=True)
+        col.prop(view_layer, "use_pass_cryptomatte_object", text="Object")
+        col.prop(view_layer, "use_pass_cryptomatte_material", text="Material")
+        col.prop(view_layer, "use_pass_cryptomatte_asset", text="Asset")
+        col = layout.column()
+        col.prop(view_layer, "pass_cryptomatte_depth", text="Levels")
+
+
 # ---- object, light, material, world ----------------------------------------------------------
 
 class LANTERN_OBJECT_PT_visibility(LanternButtonsPanel, Panel):
@@ -595,6 +614,7 @@ classes = (
     LANTERN_VIEWLAYER_PT_passes,
     LANTERN_VIEWLAYER_PT_passes_data,
     LANTERN_VIEWLAYER_PT_passes_light,
+    LANTERN_VIEWLAYER_PT_passes_crypto,
     LANTERN_OBJECT_PT_visibility,
     LANTERN_OBJECT_PT_motion_blur,
     LANTERN_LIGHT_PT_light,

@@ -146,7 +146,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                    lights=lights, light_kinds=light_kinds, volumes=volumes, hair=hair,
                    material_media=materials.media, world_media=world_media,
                    emissive_media=materials.emissive_media,
-                   media=volumes + materials.media + world_media)
+                   media=volumes + materials.media + world_media,
+                   cryptomatte=materials.cryptomatte.manifests)
     if motion is not None:
         summary.update(moving_objects=motion.moving_instances, deforming_meshes=motion.deforming_meshes,
                        camera_motion=motion.camera_moves)

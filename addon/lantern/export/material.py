@@ -7,6 +7,7 @@ import bpy
 
 from .. import core
 from . import nodes
+from .cryptomatte import Names
 from .names import core_call, is_finite
 from .nodes.attributes import AttributeRegistry
 
@@ -281,6 +282,7 @@ class MaterialExporter:
         self.media = 0  # materials with a Volume output
         self.emissive_media = 0  # of those, volumes that emit
         self.attributes = AttributeRegistry()  # names the programs read (export/mesh.py exports them)
+        self.cryptomatte = Names()  # the Cryptomatte names of materials and (export/mesh.py) objects
 
     # -- public --------------------------------------------------------------------------------
 
@@ -303,6 +305,8 @@ class MaterialExporter:
             mat_id = -1 if mat_id is None else mat_id
             if mat_id >= 0 and material.pass_index:
                 self.core_scene.set_material_pass_index(mat_id, material.pass_index)
+            if mat_id >= 0:
+                self.core_scene.set_material_cryptomatte(mat_id, self.cryptomatte.material(material))
         if mat_id < 0:
             volume, null_surface = None, False
         elif volume:

@@ -295,7 +295,8 @@ class MeshExporter:
         instance = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_instance",
                              mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
                              pass_index=obj.pass_index, random_id=random_id,
-                             attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion)
+                             attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion,
+                             cryptomatte=self.materials.cryptomatte.instance(obj))
         if instance is not None:
             self.instance_count += 1
         return instance
@@ -331,7 +332,8 @@ class MeshExporter:
         instance = core_call(self.core_scene, self.report, subject, "add_instance",
                              mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
                              pass_index=obj.pass_index, random_id=random_id,
-                             attributes=object_values(obj, self.materials.attributes.object_keys()))
+                             attributes=object_values(obj, self.materials.attributes.object_keys()),
+                             cryptomatte=self.materials.cryptomatte.instance(obj))
         if instance is not None:
             self.instance_count += 1
         return instance

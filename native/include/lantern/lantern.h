@@ -37,8 +37,10 @@ extern "C" {
  * Noisy Image and Denoising passes); 12: Cycles' light and data passes (LT_PASS_DIFFUSE_DIRECT
  * on), lt_render_settings' mist fields, lt_scene_set_material_pass_index; 13: motion blur (motion
  * steps of lt_mesh_desc, lt_instance_desc and lt_camera_desc; motion counts in lt_scene_stats);
- * 14: curves and points (lt_curves_desc, lt_scene_add_curves). */
-#define LT_ABI_VERSION 14
+ * 14: curves and points (lt_curves_desc, lt_scene_add_curves); 15: Cryptomatte
+ * (lt_cryptomatte_hash, lt_instance_desc's and lt_scene_set_material_cryptomatte's name hashes,
+ * lt_render_settings.cryptomatte and cryptomatte_levels, lt_render_read_cryptomatte_rows). */
+#define LT_ABI_VERSION 15
 
 enum lt_status {
   LT_OK = 0,
@@ -160,6 +162,13 @@ LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_program* progr
 /* Material.pass_index, for LT_PASS_MATERIAL_INDEX (kept by lt_scene_set_material). */
 LT_API int lt_scene_set_material_pass_index(lt_scene* scene, int material, int pass_index);
 
+/* Cryptomatte (docs/passes.md): MurmurHash3_x86_32 (seed 0) of `length` bytes (a name in UTF-8),
+ * the hash the Cryptomatte specification and Cycles give names. The core takes a name's hash and
+ * writes the id the specification makes of it (uint32_to_float32). Hash 0 stands for no id. */
+LT_API uint32_t lt_cryptomatte_hash(const char* bytes, size_t length);
+/* The material's Cryptomatte hash (of Material.name; kept by lt_scene_set_material). */
+LT_API int lt_scene_set_material_cryptomatte(lt_scene* scene, int material, uint32_t hash);
+
 /* A named per-corner attribute of a mesh, read by the Attribute, UV Map, Color Attribute, Tangent
  * and Normal Map nodes (kOpAttribute... in native/src/shading/inputs.h): the add-on gives each
  * name a small id per scene (0 <= id < 65536, each id at most once per mesh). components 1 to 4
@@ -247,6 +256,9 @@ typedef struct lt_instance_desc {
    * not invertible leave the instance without motion (a warning). */
   const float* motion_transforms;
   int motion_step_count;
+  /* Cryptomatte: lt_cryptomatte_hash of the object's name and of its asset's (the top-most
+   * parent's name); 0: none. */
+  uint32_t cryptomatte_object, cryptomatte_asset;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 
@@ -516,6 +528,11 @@ typedef struct lt_render_settings {
   /* The Mist pass, as Cycles (World > Mist Pass): start and depth in world units, falloff the
    * exponent (Quadratic 2, Linear 1, Inverse Quadratic 0.5). Defaults 5, 25, 2 (Blender's). */
   float mist_start, mist_depth, mist_falloff;
+  /* Cryptomatte (Cycles' View Layer > Passes > Cryptomatte): the types kept (lt_cryptomatte bits;
+   * default 0, nothing kept) and Blender's Levels (pass_cryptomatte_depth, 1 to 16, default 6):
+   * ceil(levels / 2) layers of two (id, coverage) pairs each per type. */
+  unsigned cryptomatte;
+  int cryptomatte_levels;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -626,6 +643,15 @@ LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t fl
 /* The same for grid rows [y0, y0 + rows) only (width*rows*3 floats; the size from the call above
  * with out == NULL), read through a few rows' buffer. Added without an ABI version bump (still 7). */
 LT_API int lt_render_read_strategy_grid_rows(lt_render* render, int y0, int rows, float* out, size_t float_count);
+
+/* A Cryptomatte layer of rows [y0, y0 + rows) (Cycles' CryptoObject00, CryptoObject01, ...):
+ * width*rows*4 floats, per pixel id, coverage, id, coverage, the pixel's ids sorted by coverage
+ * (the mean over its samples of the first hit's throughput), largest first; id 0 and coverage 0
+ * in unused slots. type: one lt_cryptomatte bit the render keeps; layer < ceil(levels / 2). As
+ * lt_render_read_pass_rows for when it can be read. */
+enum lt_cryptomatte { LT_CRYPTOMATTE_OBJECT = 1, LT_CRYPTOMATTE_MATERIAL = 2, LT_CRYPTOMATTE_ASSET = 4 };
+LT_API int lt_render_read_cryptomatte_rows(lt_render* render, int type, int layer, int y0, int rows, float* out,
+                                           size_t float_count);
 
 LT_API void lt_render_destroy(lt_render* render);
 

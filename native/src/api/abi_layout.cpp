@@ -119,6 +119,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_instance_desc, attribute_count),
     LT_FIELD(lt_instance_desc, motion_transforms),
     LT_FIELD(lt_instance_desc, motion_step_count),
+    LT_FIELD(lt_instance_desc, cryptomatte_object),
+    LT_FIELD(lt_instance_desc, cryptomatte_asset),
 
     LT_CONST(lt_light_type, LT_LIGHT_POINT),
     LT_CONST(lt_light_type, LT_LIGHT_SPOT),
@@ -269,6 +271,11 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_settings, mist_start),
     LT_FIELD(lt_render_settings, mist_depth),
     LT_FIELD(lt_render_settings, mist_falloff),
+    LT_FIELD(lt_render_settings, cryptomatte),
+    LT_FIELD(lt_render_settings, cryptomatte_levels),
+    LT_CONST(lt_cryptomatte, LT_CRYPTOMATTE_OBJECT),
+    LT_CONST(lt_cryptomatte, LT_CRYPTOMATTE_MATERIAL),
+    LT_CONST(lt_cryptomatte, LT_CRYPTOMATTE_ASSET),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),

@@ -10,6 +10,7 @@
 
 #include "api/abi_layout.h"
 #include "api/handles.h"
+#include "core/cryptomatte.h"
 #include "core/error.h"
 #include "io/exr.h"
 #include "io/image_file.h"
@@ -319,6 +320,17 @@ int lt_scene_set_material_pass_index(lt_scene* scene, int material, int pass_ind
   });
 }
 
+uint32_t lt_cryptomatte_hash(const char* bytes, size_t length) { return bytes ? lt::murmur3_32(bytes, length, 0) : 0u; }
+
+int lt_scene_set_material_cryptomatte(lt_scene* scene, int material, uint32_t hash) {
+  return guarded([&] {
+    require(scene, "lt_scene_set_material_cryptomatte: NULL argument");
+    require(material >= 0 && material < int(scene->scene.materials.size()),
+            "material " + std::to_string(material) + " does not exist");
+    scene->scene.materials[material].set_crypto_id(hash ? lt::cryptomatte_id(hash) : 0.0f);
+  });
+}
+
 int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program* program) {
   return guarded([&] {
     require(scene && program, "lt_scene_set_material: NULL argument");
@@ -326,6 +338,7 @@ int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program
             "material " + std::to_string(material) + " does not exist");
     lt::Material m = to_material(scene, program);  // validated before anything changes
     m.set_pass_index(scene->scene.materials[material].pass_index());
+    m.set_crypto_id(scene->scene.materials[material].crypto_id());
     begin_edit(scene);
     scene->scene.materials[material] = std::move(m);
   });
@@ -496,6 +509,8 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
     inst.pass_index = float(d->pass_index);
     // Cycles' object random number (scene/object.cpp): the id over 0xFFFFFFFF, in floats.
     inst.random = float(d->random_id) * (1.0f / float(0xFFFFFFFFu));
+    inst.crypto_object = d->cryptomatte_object ? lt::cryptomatte_id(d->cryptomatte_object) : 0.0f;
+    inst.crypto_asset = d->cryptomatte_asset ? lt::cryptomatte_id(d->cryptomatte_asset) : 0.0f;
     require(d->attribute_count >= 0 && (d->attribute_count == 0 || (d->attribute_ids && d->attribute_values)),
             "instance attributes are NULL or their count negative");
     require(finite_array(d->attribute_values, 4 * size_t(d->attribute_count)),
@@ -819,6 +834,8 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->mist_start = 5;
   s->mist_depth = 25;
   s->mist_falloff = 2;
+  s->cryptomatte = 0;
+  s->cryptomatte_levels = 6;
 }
 
 namespace {
@@ -884,6 +901,9 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     require(std::isfinite(s->mist_start) && std::isfinite(s->mist_depth) && s->mist_depth >= 0 &&
                 std::isfinite(s->mist_falloff) && s->mist_falloff >= 0,
             "mist start, depth and falloff must be finite, depth and falloff >= 0");
+    require((s->cryptomatte & ~unsigned(LT_CRYPTOMATTE_OBJECT | LT_CRYPTOMATTE_MATERIAL | LT_CRYPTOMATTE_ASSET)) == 0,
+            "cryptomatte has bits beyond LT_CRYPTOMATTE_ASSET");
+    require(s->cryptomatte_levels >= 1 && s->cryptomatte_levels <= 16, "cryptomatte levels must be in [1, 16]");
     require(s->sample_pattern == LT_PATTERN_SOBOL_OWEN || s->sample_pattern == LT_PATTERN_INDEPENDENT,
             "unknown sample pattern " + std::to_string(s->sample_pattern) +
                 "; valid: " + lt::abi_enum_names("lt_sample_pattern", "LT_PATTERN_"));
@@ -938,6 +958,8 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.passes = s->passes;
     rs.pattern = lt::SamplePattern(s->sample_pattern);
     rs.denoise = s->denoise != 0;
+    rs.cryptomatte = s->cryptomatte;  // lt_cryptomatte's bits are 1 << CryptomatteType
+    rs.cryptomatte_levels = s->cryptomatte_levels;
     // Refuse before allocating, with what it would take, rather than fail (or be killed) later.
     const lt::MemoryEstimate need = lt::RenderJob::estimate_bytes(rs);
     const double total = double(need.total()) + double(s->caller_bytes);
@@ -1046,6 +1068,27 @@ int lt_render_read_pass_rows(lt_render* render, int pass, int y0, int rows, floa
   return guarded([&] {
     require(rows >= 0, "lt_render_read_pass_rows: negative row count");
     read_pass_rows(render, pass, y0, rows, out, float_count);
+  });
+}
+
+int lt_render_read_cryptomatte_rows(lt_render* render, int type, int layer, int y0, int rows, float* out,
+                                    size_t float_count) {
+  return guarded([&] {
+    require(render && out, "lt_render_read_cryptomatte_rows: NULL argument");
+    require(type == LT_CRYPTOMATTE_OBJECT || type == LT_CRYPTOMATTE_MATERIAL || type == LT_CRYPTOMATTE_ASSET,
+            "unknown Cryptomatte type " + std::to_string(type) +
+                "; valid: " + lt::abi_enum_names("lt_cryptomatte", "LT_CRYPTOMATTE_"));
+    const auto& film = render->job->film();
+    require(rows >= 0 && y0 >= 0 && y0 <= film.height() - rows,
+            "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) + " are not within the " +
+                std::to_string(film.height()) + " rows of the render region");
+    const size_t need = size_t(film.width()) * rows * 4;
+    require(float_count == need, "Cryptomatte buffer holds " + std::to_string(float_count) + " floats; " +
+                                     std::to_string(need) + " are needed");
+    film.read_cryptomatte_rows(type == LT_CRYPTOMATTE_OBJECT     ? lt::kCryptoObject
+                               : type == LT_CRYPTOMATTE_MATERIAL ? lt::kCryptoMaterial
+                                                                 : lt::kCryptoAsset,
+                               layer, y0, rows, out);
   });
 }
 

@@ -177,6 +177,8 @@ size_t FilmLayout::bytes_per_pixel() const {
   if (squares) floats += 3;
   if (splats) floats += 6;
   floats += size_t(strategy_cells) * 6;
+  for (int t = 0; t < kCryptoTypes; ++t)
+    if ((cryptomatte >> t) & 1u) floats += 2 * size_t(cryptomatte_slots());
   const unsigned kept = with_dependencies(passes);
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
     if (kept & pass_bit(Pass(p))) {
@@ -215,6 +217,8 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
     if (layout_.splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p)))
       light_splat_[p - kFirstSummedPass].assign(3 * n, 0.0f);
   }
+  for (int t = 0; t < kCryptoTypes; ++t)
+    if (has_cryptomatte(t)) crypto_[t].assign(2 * size_t(layout_.cryptomatte_slots()) * n, 0.0f);
   if (layout_.strategy_cells > 0) {
     strategies_.assign(n * layout_.strategy_cells * 3, 0.0f);
     strategy_splats_.assign(strategies_.size(), 0.0f);
@@ -267,6 +271,11 @@ void Film::add(int x, int y, const SampleValue& s) {
         a[i] = p == Pass::ObjectIndex ? s.object_index : s.material_index;
     }
   }
+  for (int t = 0; t < kCryptoTypes; ++t)
+    if (!crypto_[t].empty()) {
+      const int slots = layout_.cryptomatte_slots();
+      cryptomatte_add(&crypto_[t][2 * slots * i], slots, s.crypto_id[t], s.crypto_weight);
+    }
   alpha_[i] += s.alpha;
   if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
   count_[i] = n;
@@ -538,6 +547,36 @@ void Film::read_summed(Pass pass, size_t i, float* o) const {
   const std::vector<float>& col = sums_[int(colour) - kFirstSummedPass];
   const double b[3] = {col[3 * i] * inv, col[3 * i + 1] * inv, col[3 * i + 2] * inv};
   divide_even_color(v, b, o);
+}
+
+void Film::read_cryptomatte_rows(int type, int layer, int y0, int rows, float* out) const {
+  if (type < 0 || type >= kCryptoTypes || !has_cryptomatte(type))
+    throw StateError(std::string("this render does not keep the ") + cryptomatte_type_name(type) +
+                     " passes (not enabled when it started)");
+  const int slots = layout_.cryptomatte_slots();
+  if (layer < 0 || 2 * layer >= slots)
+    throw InvalidArgument("Cryptomatte layer " + std::to_string(layer) + " is not within the render's " +
+                          std::to_string(slots / 2) + " layers");
+  if (y0 < 0 || rows < 0 || y0 > height_ - rows)
+    throw InvalidArgument("rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                          " are not within the film's " + std::to_string(height_) + " rows");
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  const size_t first = size_t(y0) * width_, n = size_t(rows) * width_;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<float> pairs(2 * size_t(slots));
+    for (size_t j = r.begin(); j < r.end(); ++j) {
+      const size_t i = first + j;
+      std::copy_n(&crypto_[type][2 * slots * i], 2 * slots, pairs.data());
+      cryptomatte_sort(pairs.data(), slots);
+      // Weights are sums over the samples: their mean is the coverage (Cycles' film_get_pass_pixel_cryptomatte).
+      const float inv = count_[i] ? 1.0f / float(count_[i]) : 0.0f;
+      float* o = out + 4 * j;
+      o[0] = pairs[4 * layer];
+      o[1] = pairs[4 * layer + 1] * inv;
+      o[2] = pairs[4 * layer + 2];
+      o[3] = pairs[4 * layer + 3] * inv;
+    }
+  });
 }
 
 bool Film::read_light_tracing(float* out) const {

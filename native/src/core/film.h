@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/cryptomatte.h"
 #include "core/math.h"
 
 namespace lt {
@@ -72,6 +73,11 @@ struct SampleValue {
   // (1 - mist), object and material pass_index.
   Vec3 position{0.0f}, uv{0.0f};
   float mist = 0, object_index = 0, material_index = 0;
+  // Cryptomatte (CryptomatteType order): the first hit's object, material and asset ids
+  // (cryptomatte_id; 0: none) and its weight, the throughput's average there (Cycles' matte_weight
+  // without the transparency factor: Lantern chooses to pass a transparent layer or not).
+  float crypto_id[kCryptoTypes] = {0, 0, 0};
+  float crypto_weight = 0;
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
@@ -146,6 +152,11 @@ struct FilmLayout {
   bool squares = true;
   bool splats = false;
   int strategy_cells = 0;
+  // Cryptomatte: the types kept (bit 1 << CryptomatteType) and Blender's Levels; each type keeps
+  // 2 x cryptomatte_layers(levels) (id, weight) slots per pixel.
+  unsigned cryptomatte = 0;
+  int cryptomatte_levels = 6;
+  int cryptomatte_slots() const { return cryptomatte ? 2 * cryptomatte_layers(cryptomatte_levels) : 0; }
   // Bytes per pixel of the accumulators and the published image.
   size_t bytes_per_pixel() const;
 };
@@ -249,6 +260,12 @@ class Film {
   // The same for rows [y0, y0 + rows) only (rows bottom to top): width*rows*channels floats, so
   // that a reader copies a frame through a band-sized buffer.
   void read_rows(Pass pass, int y0, int rows, float* out, bool labels = true) const;
+  // A Cryptomatte layer (CryptoObject00, 01, ...) of rows [y0, y0 + rows): per pixel id, coverage,
+  // id, coverage (the pixel's slots 2 layer and 2 layer + 1 once sorted by weight, largest first;
+  // coverage: the weight's mean over the pixel's samples), as Cycles' passes. Between passes, as
+  // read(); StateError for a type the film does not keep.
+  void read_cryptomatte_rows(int type, int layer, int y0, int rows, float* out) const;
+  bool has_cryptomatte(int type) const { return (layout_.cryptomatte >> type) & 1u; }
   // The light-tracing (t = 1 splat) part of Combined, RGB per pixel; false when the render traced
   // no light paths (not bidirectional). Between passes, as read().
   bool read_light_tracing(float* out) const;
@@ -296,6 +313,8 @@ class Film {
   // not kept; light_splat_: the light passes' part of the splats (BDPT).
   std::vector<float> sums_[kSummedPasses];
   std::vector<float> light_splat_[kLightParts];
+  // Cryptomatte: per kept type, FilmLayout::cryptomatte_slots() (id, weight sum) pairs per pixel.
+  std::vector<float> crypto_[kCryptoTypes];
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;

@@ -90,6 +90,8 @@ struct Instance : Pose {
   // Object Info: Object.color, pass_index, and Cycles' random number of the instance.
   float color[4] = {1, 1, 1, 1};
   float pass_index = 0, random = 0;
+  // Cryptomatte ids (cryptomatte_id of the object's and its asset's name hashes; 0: none).
+  float crypto_object = 0, crypto_asset = 0;
   std::vector<InstanceAttribute> attributes;
   const InstanceAttribute* attribute(int id) const {
     for (const InstanceAttribute& a : attributes)

@@ -56,8 +56,13 @@ void write_data_passes(const Scene& scene, const Camera& camera, const Integrato
   out->position = sp.p;
   const Mesh& mesh = scene.geometry.mesh(scene.geometry.instance(sp.instance).mesh);
   out->uv = mesh.corner_uvs.empty() ? Vec3(0.0f) : Vec3(sp.uv.x, sp.uv.y, 1.0f);
-  out->object_index = scene.geometry.instance(sp.instance).pass_index;
+  const Instance& inst = scene.geometry.instance(sp.instance);
+  out->object_index = inst.pass_index;
   out->material_index = sp.material >= 0 ? scene.material(sp.material).pass_index() : 0.0f;
+  out->crypto_id[kCryptoObject] = inst.crypto_object;
+  out->crypto_id[kCryptoMaterial] = sp.material >= 0 ? scene.material(sp.material).crypto_id() : 0.0f;
+  out->crypto_id[kCryptoAsset] = inst.crypto_asset;
+  out->crypto_weight = (beta[0] + beta[1] + beta[2]) / 3;
   out->mist += mist_coverage(camera, s, sp.p, beta);
 }
 

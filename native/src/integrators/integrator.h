@@ -38,7 +38,8 @@ struct IntegratorSettings {
   VolumeEstimator volume_estimator = VolumeEstimator::Tracking;
   float volume_step = 0;
   // Passes the film keeps that integrators fill: Cycles' light passes (SampleValue::light) and the
-  // data passes of the first hit (position, UV, mist, indices); Mist as Cycles' World > Mist Pass.
+  // data passes of the first hit (position, UV, mist, indices, Cryptomatte ids); Mist as Cycles'
+  // World > Mist Pass.
   bool light_passes = false, data_passes = false;
   float mist_start = 5, mist_depth = 25, mist_falloff = 2;
 };
@@ -46,7 +47,7 @@ struct IntegratorSettings {
 // The Mist pass's value for a sample whose camera path scatters first at p with throughput beta
 // (Cycles' film_write_data_passes: (1 - mist) x average throughput, mist from the camera distance).
 float mist_coverage(const Camera& camera, const IntegratorSettings& s, const Vec3& p, const Spectrum& beta);
-// The data passes of a first hit: position, UV, indices, mist.
+// The data passes of a first hit: position, UV, indices, mist, Cryptomatte ids and weight.
 void write_data_passes(const Scene& scene, const Camera& camera, const IntegratorSettings& s, const SurfacePoint& sp,
                        const Spectrum& beta, SampleValue* out);
 

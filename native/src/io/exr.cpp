@@ -193,6 +193,21 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
                     std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".G",
                     std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".B"});
   }
+  // Cryptomatte layers under Cycles' pass names (CryptoObject00.r = id, .g = coverage, ...); the
+  // manifests come from the caller's attributes (cryptomatte/<key>/..., the specification's).
+  for (int t = 0; t < kCryptoTypes; ++t) {
+    if (!job.film().has_cryptomatte(t)) continue;
+    std::vector<float> buf(n * 4);
+    for (int layer = 0; 2 * layer < job.film().layout().cryptomatte_slots(); ++layer) {
+      job.film().read_cryptomatte_rows(t, layer, 0, h, buf.data());
+      char prefix[32];
+      std::snprintf(prefix, sizeof prefix, "%s%02d.", cryptomatte_type_name(t), layer);
+      // Lower case, as the specification and Blender name them.
+      add_channels(
+          channels, buf, n,
+          {std::string(prefix) + "r", std::string(prefix) + "g", std::string(prefix) + "b", std::string(prefix) + "a"});
+    }
+  }
   std::vector<float> light(n * 3);
   if (job.film().read_light_tracing(light.data()))
     add_channels(channels, light, n, {"LightTracing.R", "LightTracing.G", "LightTracing.B"});

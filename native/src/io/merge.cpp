@@ -5,11 +5,13 @@
 // the parts is the mean over all their samples, exactly up to float rounding.
 #include <algorithm>
 #include <array>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <sstream>
 
+#include "core/cryptomatte.h"
 #include "core/error.h"
 #include "core/film.h"
 #include "io/exr.h"
@@ -115,6 +117,15 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         throw InvalidArgument(std::string(key + 8) + " differs: " + paths[0] + " has " + va + ", " + path + " has " +
                               vb + "; parts of different renders cannot be merged");
     }
+    // Cryptomatte manifests name the ids: parts of one scene carry the same ones.
+    for (const ExrImage* a : {&ref, &img})
+      for (const auto& [key, value] : a->attributes) {
+        if (key.rfind("cryptomatte/", 0) != 0) continue;
+        auto x = ref.attributes.find(key), y = img.attributes.find(key);
+        if (x == ref.attributes.end() || y == img.attributes.end() || x->second != y->second)
+          throw InvalidArgument(key + " differs between " + paths[0] + " and " + path +
+                                "; parts with different Cryptomatte manifests cannot be merged");
+      }
     if (img.width != ref.width || img.height != ref.height)
       throw InvalidArgument("resolution differs: " + paths[0] + " is " + std::to_string(ref.width) + "x" +
                             std::to_string(ref.height) + ", " + path + " is " + std::to_string(img.width) + "x" +
@@ -146,7 +157,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   // Colour divided by the merged Colour; with BDPT each light pass's splat part comes apart
   // (LightTracing.<pass>), weighted by the light paths as Combined's; First: the pixel's first
   // sample's value (Position and the indices), from the part with the lowest sample index.
-  enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB, Divided, First, SplitMean };
+  // Crypto: a Cryptomatte layer's channel (CryptoObject00.r, ...), merged per type below.
+  enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB, Divided, First, SplitMean, Crypto };
   std::vector<Kind> kind(nc);
   std::vector<int> rgb_index(nc, -1);
   // Divided channels: the channels of their pass and of its Colour, in RGB order.
@@ -189,11 +201,31 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       kind[k] = Divided;
     }
   }
+  // Cryptomatte: per type, its layers' channels (r, g, b, a = id, coverage, id, coverage).
+  std::vector<std::array<int, 4>> crypto_k[kCryptoTypes];
+  for (int t = 0; t < kCryptoTypes; ++t)
+    for (int layer = 0;; ++layer) {
+      char prefix[32];
+      std::snprintf(prefix, sizeof prefix, "%s%02d.", cryptomatte_type_name(t), layer);
+      std::array<int, 4> ks;
+      for (int c = 0; c < 4; ++c) ks[c] = channel_index(std::string(prefix) + "rgba"[c]);
+      if (ks[0] < 0 || ks[1] < 0 || ks[2] < 0 || ks[3] < 0) break;
+      for (int c = 0; c < 4; ++c) kind[ks[c]] = Crypto;
+      crypto_k[t].push_back(ks);
+    }
+  // Per type and pixel, up to twice a part's slots of (id, coverage x the part's sample count),
+  // the sums of the ids' weights (an id past them is dropped as the film drops one: the merge is
+  // exact while a pixel's parts name no more ids than that, and its output keeps half of them).
+  std::vector<float> crypto_acc[kCryptoTypes];
+  auto crypto_capacity = [&](int t) { return 4 * int(crypto_k[t].size()); };
+  for (int t = 0; t < kCryptoTypes; ++t) crypto_acc[t].assign(2 * size_t(crypto_capacity(t)) * n, 0.0f);
   int light_k[3] = {-1, -1, -1};
   for (size_t k = 0; k < nc; ++k)
     for (int c = 0; c < 3; ++c)
       if (ref.channels[k].name == std::string("LightTracing.") + "RGB"[c]) light_k[c] = int(k);
-  std::vector<std::vector<double>> acc(nc, std::vector<double>(n, 0.0));
+  std::vector<std::vector<double>> acc(nc);
+  for (size_t k = 0; k < nc; ++k)
+    if (kind[k] != Crypto) acc[k].assign(n, 0.0);
   std::vector<double> count(n, 0.0);
   // First: the sample index its value came from, per pixel (the lowest wins).
   std::vector<long long> first_from(n, std::numeric_limits<long long>::max());
@@ -248,9 +280,21 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
           break;
         case Variance:
         case CombinedRGB:
+        case Crypto:
           break;  // below
       }
     }
+    // Cryptomatte: coverage is a mean over the part's samples, so c_p x coverage sums its weights.
+    for (int t = 0; t < kCryptoTypes; ++t)
+      for (const std::array<int, 4>& ks : crypto_k[t])
+        for (int pair = 0; pair < 2; ++pair) {
+          const float* id = img.channels[ks[2 * pair]].pixels.data();
+          const float* cov = img.channels[ks[2 * pair + 1]].pixels.data();
+          const int cap = crypto_capacity(t);
+          for (size_t i = 0; i < n; ++i)
+            if (id[i] != 0.0f && c_p[i] > 0)
+              cryptomatte_add(&crypto_acc[t][2 * size_t(cap) * i], cap, id[i], c_p[i] * cov[i]);
+        }
     for (int c = 0; c < 3; ++c) {
       if (!rgb[c]) continue;
       for (size_t i = 0; i < n; ++i) {
@@ -269,8 +313,38 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
     }
   }
 
+  // Cryptomatte: per pixel the ids of largest merged coverage, as many as a part's slots.
+  std::vector<std::vector<float>> crypto_out(nc);
+  for (int t = 0; t < kCryptoTypes; ++t) {
+    const int slots = 2 * int(crypto_k[t].size());
+    if (!slots) continue;
+    for (const std::array<int, 4>& ks : crypto_k[t])
+      for (int k : ks) crypto_out[k].assign(n, 0.0f);
+    const int cap = crypto_capacity(t);
+    std::vector<float> ids(cap), pairs(2 * size_t(slots));
+    std::vector<double> weights(cap);
+    for (size_t i = 0; i < n; ++i) {
+      const float* e = &crypto_acc[t][2 * size_t(cap) * i];
+      for (int j = 0; j < cap; ++j) {
+        ids[j] = e[2 * j];
+        weights[j] = count[i] > 0 ? e[2 * j + 1] / count[i] : 0.0;
+      }
+      cryptomatte_top(ids.data(), weights.data(), cap, slots, pairs.data());
+      for (int s = 0; s < slots; ++s) {
+        const std::array<int, 4>& ks = crypto_k[t][s / 2];
+        crypto_out[ks[2 * (s % 2)]][i] = pairs[2 * s];
+        crypto_out[ks[2 * (s % 2) + 1]][i] = pairs[2 * s + 1];
+      }
+    }
+    std::vector<float>().swap(crypto_acc[t]);
+  }
+
   std::vector<ExrChannel> out;
   for (size_t k = 0; k < nc; ++k) {
+    if (kind[k] == Crypto) {
+      out.push_back({ref.channels[k].name, std::move(crypto_out[k])});
+      continue;
+    }
     ExrChannel oc{ref.channels[k].name, std::vector<float>(n)};
     const double* a = acc[k].data();
     for (size_t i = 0; i < n; ++i) {
@@ -309,6 +383,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
           if (light) v += acc[light_k[c]][i] / double(total_light_paths);
           break;
         }
+        case Crypto:
+          break;  // above
         case Variance: {
           const int c = rgb_index[k];
           v = c >= 0 && count[i] > 1 ? cam_ss[3 * i + c] / ((count[i] - 1) * count[i]) : 0.0;

@@ -31,7 +31,7 @@ IntegratorSettings with_passes(const RenderSettings& s) {
   for (int p = int(Pass::DiffuseDirect); p <= int(Pass::Environment); ++p) light |= pass_bit(Pass(p));
   for (int p = int(Pass::Position); p <= int(Pass::MaterialIndex); ++p) data |= pass_bit(Pass(p));
   is.light_passes = (s.passes & light) != 0;
-  is.data_passes = (s.passes & data) != 0;
+  is.data_passes = (s.passes & data) != 0 || s.cryptomatte != 0;
   return is;
 }
 }  // namespace
@@ -58,6 +58,8 @@ FilmLayout RenderJob::film_layout(const RenderSettings& s) {
   if (s.denoise) l.passes |= kDenoisingFeatures | pass_bit(Pass::NoisyImage);
   l.squares = (s.passes & pass_bit(Pass::Variance)) || s.adaptive;
   l.splats = s.integrator == IntegratorType::Bidirectional;
+  l.cryptomatte = s.cryptomatte;
+  l.cryptomatte_levels = s.cryptomatte_levels;
   const int depth = s.integrator_settings.strategy_depth;
   if (l.splats && depth > 0) l.strategy_cells = depth * strategy_columns(depth);
   return l;

@@ -39,6 +39,9 @@ struct RenderSettings {
   // Denoise Combined once rendering stops (denoise/nfor.h; not after a cancel, nor with fewer
   // than 2 passes); the film then keeps the features and Noisy Image.
   bool denoise = false;
+  // Cryptomatte types kept (bits 1 << CryptomatteType) and Blender's Levels (FilmLayout).
+  unsigned cryptomatte = 0;
+  int cryptomatte_levels = 6;
 };
 
 // The film and per-pixel buffers a render allocates, in bytes (RenderJob::estimate_bytes).

@@ -39,10 +39,13 @@ class Material {
   // Material.pass_index, for the Material Index pass.
   float pass_index() const { return pass_index_; }
   void set_pass_index(float v) { pass_index_ = v; }
+  // Cryptomatte id of the material's name (cryptomatte_id; 0: none).
+  float crypto_id() const { return crypto_id_; }
+  void set_crypto_id(float v) { crypto_id_ = v; }
 
  private:
   Program program_;
-  float pass_index_ = 0;
+  float pass_index_ = 0, crypto_id_ = 0;
   bool emissive_ = false;
   float emission_estimate_ = 0;
 };
