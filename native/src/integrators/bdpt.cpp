@@ -468,6 +468,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   float pmf, u_remapped;
   int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
   Vec2 up = sampler_.next_2d(), ud = sampler_.next_2d();
+  if (li < 0) return 0;
   const Light& l = lights_.light(li);
   if (l.faces_receiver()) return 0;
   // Light arriving from infinity through a World volume is gone (as for s = 0 and s = 1, which
@@ -572,6 +573,8 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     const PathVertex& c = C(i);
     const int as_light = s + t - 1 - i;  // its index on the light side
     if (as_light > 0 && !((c.vis & kVisLightRay) && (as_light > 1 || (c.vis & kVisShadow)))) break;
+    // A light nothing picks (a constant World, LightSet::build) ends only strategy s = 0's paths.
+    if (as_light == 0 && !(c.light >= 0 && lights_.pmf(c.light) > 0)) break;
     r *= remap0(c.pdf_rev) / remap0(c.pdf_fwd);
     if (!c.delta && !C(i - 1).delta && exists(s + t - i, i)) sum += heuristic(float(ratio(r, s + t - i)));
   }

@@ -30,9 +30,6 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
   float prev_pdf = 0;
   bool prev_delta = true;
-  // The last direction was sampled below the shading normal (kLobeBelowShading): no light sampling
-  // reaches it, and Cycles does not light-sample a constant world, so there it is weighted 1 alone.
-  bool prev_below = false;
   Vec3 prev_p = ray.o, prev_n(0.0f);  // prev_n: the geometric normal there (zero in a medium)
   float t_prev = 0;                   // distance from prev_p to ray.o (the ray crossed invisible boundaries)
   // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
@@ -56,7 +53,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (s.light_passes) add_light_part(out.light, v, b.total + 1, b.total == 0 ? nee_first : first, false);
   };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
-    if (prev_delta || (prev_below && light == lights.world_light() && !scene.world.has_map())) return 1.0f;
+    if (prev_delta) return 1.0f;
     float light_pdf = lights.pmf_nee(prev_p, prev_n, light) * lights.pdf(scene, light, prev_p, dir, t, time);
     return power_heuristic(prev_pdf, light_pdf);
   };
@@ -141,7 +138,6 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       visibility = kVisDiffuse;
       prev_pdf = pdf;
       prev_delta = false;
-      prev_below = false;
       prev_p = mi.p;
       prev_n = Vec3(0.0f);
       t_prev = 0;
@@ -256,7 +252,6 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       b.count(bs, &visibility);
       prev_pdf = bs.pdf;
       prev_delta = (bs.flags & kLobeSpecular) != 0;
-      prev_below = (bs.flags & kLobeBelowShading) != 0;
       prev_p = sp.p;
       prev_n = ng;
       t_prev = 0;

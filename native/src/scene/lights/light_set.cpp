@@ -111,7 +111,10 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Bounds
         p *= kPi * scene_radius_ * scene_radius_;
         break;
       case LightType::World: {
-        const float mean = world->mean();
+        // As Cycles (its World sampling Auto skips a world without spatial variation): a constant
+        // World is never picked, only reached by escaping rays, which then weigh it 1. For a
+        // constant sky BSDF sampling alone is the better estimator and saves a shadow ray a bounce.
+        const float mean = world->has_map() ? world->mean() : 0.0f;
         p = mean * 4 * kPi * kPi * scene_radius_ * scene_radius_;
         world_light_ = int(i);
         break;
@@ -162,7 +165,7 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Bounds
 }
 
 int LightSet::pick_nee(const Vec3& p, const Vec3& n, float u, float* pmf) const {
-  if (!tree_used_) return distribution_.sample_discrete(u, pmf);
+  if (!tree_used_) return pick(u, pmf, nullptr);
   if (u < tree_share_) {
     float tree_pmf;
     const int light = tree_.sample(p, n, std::min(u / tree_share_, kOneMinusEpsilon), &tree_pmf);
@@ -184,6 +187,7 @@ float LightSet::pmf_nee(const Vec3& p, const Vec3& n, int light) const {
 }
 
 int LightSet::pick(float u, float* pmf, float* u_remapped) const {
+  if (!(distribution_.integral() > 0)) return -1;  // nothing to pick (a constant World alone)
   return distribution_.sample_discrete(u, pmf, u_remapped);
 }
 

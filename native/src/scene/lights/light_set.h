@@ -35,9 +35,10 @@ class LightSet {
   const Light& light(int i) const { return lights_[i]; }
   bool empty() const { return lights_.empty(); }
 
-  // Picks a light with probability proportional to its estimated power (light subpaths).
+  // Picks a light with probability proportional to its estimated power (light subpaths); -1 if
+  // none has any (a constant World is never picked: LightSet::build).
   int pick(float u, float* pmf, float* u_remapped) const;
-  float pmf(int light) const { return distribution_.discrete_pmf(light); }
+  float pmf(int light) const { return distribution_.integral() > 0 ? distribution_.discrete_pmf(light) : 0.0f; }
   // Picks a light for next-event estimation at p (n: the geometric normal at a surface, either
   // side, or zero in a medium): -1 if none can reach p. pmf_nee is exactly the probability it
   // picks `light` there (for MIS against the BSDF or phase function, and BDPT's weights).
