@@ -2,7 +2,9 @@
 // and the denoised Cornell box over a range of sample counts, with each render's time (denoising
 // included) so that equal-time rows can be compared; and the denoiser's time per megapixel on 2
 // threads. Run: build/bench/denoise_bench [reference samples, default 2048]
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <vector>
@@ -45,6 +47,31 @@ int main(int argc, char** argv) {
     std::printf("%8d %12.5f %14.5f %10.2f %10.3f %12.3f\n", spp, noisy, denoised, noisy / denoised,
                 p.status.elapsed_seconds, p.status.denoise_seconds);
   }
+  // The image mean's shift (the test Denoise.KeepsTheMeanWithinTheNoise, over six seeds): the
+  // denoised minus the noisy image's mean, in units of the noisy mean's standard error
+  // sqrt(sum_p var_p) / N, per channel, 64x64 at 16 samples.
+  std::printf("mean shift (denoised - noisy) / standard error, 64x64, 16 samples:\n");
+  double worst = 0;
+  for (unsigned seed = 11; seed < 17; ++seed) {
+    lt_render_settings d = render_settings(64, 64, 16, seed);
+    d.threads = 2;
+    d.denoise = 1;
+    const Passes p = render(s.get(), d);
+    std::printf("  seed %u:", seed);
+    for (int c = 0; c < 3; ++c) {
+      double noisy = 0, denoised = 0, var = 0;
+      for (size_t i = 0; i < 64 * 64; ++i) {
+        noisy += p.noisy[4 * i + c];
+        denoised += p.combined[4 * i + c];
+        var += p.variance[3 * i + c];
+      }
+      const double z = (denoised - noisy) / std::sqrt(var);
+      worst = std::max(worst, std::abs(z));
+      std::printf(" %+.2f", z);
+    }
+    std::printf("\n");
+  }
+  std::printf("  largest |shift|: %.2f standard errors\n", worst);
   // Time per megapixel: a 1024 x 512 render of 4 samples, denoised on 2 threads.
   lt_render_settings big = render_settings(1024, 512, 4, 3);
   big.threads = 2;
