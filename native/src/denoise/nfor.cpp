@@ -275,9 +275,10 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
       for (int ty = 0; ty < th; ++ty) {
         const int qy = y0 + ty + dy;
         float* wt = weight + size_t(ty) * kTile;
-        std::fill(wt, wt + kTile, 0.0f);  // neighbours outside the image or lanes past the tile: 0
-        if (qy < 0 || qy >= h) continue;
         const int ilo = std::max(x0, -dx) - x0, ihi = std::min(x1, w - dx) - x0;
+        // Neighbours outside the image and lanes past the tile: weight 0.
+        if (qy < 0 || qy >= h || ilo > 0 || ihi < kTile) std::fill(wt, wt + kTile, 0.0f);
+        if (qy < 0 || qy >= h) continue;
         const float* ps = &s.psum[g][size_t(ty) * kTile];
         for (int i = ilo; i < ihi; ++i) wt[i] = exp_neg(std::max(0.0f, ps[i] * inv_patch));
       }
@@ -301,18 +302,19 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
       const int ilo = std::max(x0, -dx) - x0, ihi = std::min(x1, w - dx) - x0;
       if (ilo >= ihi) continue;
       const ptrdiff_t row = ptrdiff_t(y) * w + x0, qrow = ptrdiff_t(qy) * w + dx + x0;
+      const bool partial = ilo > 0 || ihi < kTile;  // lanes outside: zero (else all are written)
       for (int k = 0; k < kFeatureChannels; ++k) {
         const float* fe = pl.feature[k].data();
-        std::fill(xr[k], xr[k] + kTile, 0.0f);
+        if (partial) std::fill(xr[k], xr[k] + kTile, 0.0f);
         for (int i = ilo; i < ihi; ++i) xr[k][i] = fe[qrow + i] - fe[row + i];
       }
       for (int j = 0; j < 2; ++j) {
         const float* wsrc = &s.weight[1 - j][size_t(oi) * tn + o];
-        std::fill(wa[0], wa[0] + kTile, 0.0f);
+        if (partial) std::fill(wa[0], wa[0] + kTile, 0.0f);
         for (int i = ilo; i < ihi; ++i) wa[0][i] = wsrc[i] * valid[qrow + i];
         for (int c = 0; c < 3; ++c) {
           const float* yq = pl.color[j][c].data() + qrow;
-          std::fill(yr[c], yr[c] + kTile, 0.0f);
+          if (partial) std::fill(yr[c], yr[c] + kTile, 0.0f);
           for (int i = ilo; i < ihi; ++i) yr[c][i] = yq[i];
         }
         for (int k = 0; k < kFeatureChannels; ++k)
@@ -360,10 +362,11 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
       const int ilo = std::max(x0, -dx) - x0, ihi = std::min(x1, w - dx) - x0;
       if (ilo >= ihi) continue;
       const ptrdiff_t row = ptrdiff_t(y) * w + x0, qrow = ptrdiff_t(qy) * w + dx + x0;
+      const bool partial = ilo > 0 || ihi < kTile;  // lanes outside: zero (else all are written)
       const size_t o = size_t(ty) * kTile;
       for (int k = 0; k < kFeatureChannels; ++k) {
         const float* fe = pl.feature[k].data();
-        std::fill(xr[k], xr[k] + kTile, 0.0f);
+        if (partial) std::fill(xr[k], xr[k] + kTile, 0.0f);
         for (int i = ilo; i < ihi; ++i) xr[k][i] = (fe[qrow + i] - fe[row + i]) * valid[qrow + i];
       }
       for (int j = 0; j < 2; ++j) {
