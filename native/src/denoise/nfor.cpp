@@ -64,9 +64,6 @@ Planes prepare(const HalfImages& in) {
     }
   for (auto& f : pl.feature) f.assign(n, 0.0f);
   pl.valid.assign(n, 0.0f);
-  std::vector<float> raw_var[2][3];
-  for (int j = 0; j < 2; ++j)
-    for (int c = 0; c < 3; ++c) raw_var[j][c].assign(n, 0.0f);
   // Sanitise: a pixel with any non-finite input is left out (valid 0, values 0), so it cannot spread.
   tbb::parallel_for(0, h, [&](int y) {
     for (size_t i = size_t(y) * w; i < size_t(y + 1) * w; ++i) {
@@ -77,10 +74,7 @@ Planes prepare(const HalfImages& in) {
       if (!ok) continue;
       pl.valid[i] = 1;
       for (int j = 0; j < 2; ++j)
-        for (int c = 0; c < 3; ++c) {
-          pl.color[j][c][i] = in.color[j][3 * i + c];
-          raw_var[j][c][i] = std::max(0.0f, in.variance[j][3 * i + c]);
-        }
+        for (int c = 0; c < 3; ++c) pl.color[j][c][i] = in.color[j][3 * i + c];
       for (int k = 0; k < kFeatureChannels; ++k)
         pl.feature[k][i] = 0.5f * (in.feature[0][kFeatureChannels * i + k] + in.feature[1][kFeatureChannels * i + k]);
     }
@@ -96,7 +90,7 @@ Planes prepare(const HalfImages& in) {
           if (pl.valid[q] == 0) continue;
           count += 1;
           for (int j = 0; j < 2; ++j)
-            for (int c = 0; c < 3; ++c) sum[j][c] += raw_var[j][c][q];
+            for (int c = 0; c < 3; ++c) sum[j][c] += std::max(0.0f, in.variance[j][3 * q + c]);  // finite: valid
         }
       const size_t i = size_t(y) * w + x;
       if (count > 0)
