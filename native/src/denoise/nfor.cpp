@@ -17,7 +17,7 @@ namespace {
 
 constexpr int kDims = 1 + kFeatureChannels;      // the regression's intercept and features
 constexpr int kPairs = kDims * (kDims + 1) / 2;  // entries of the symmetric normal matrix
-constexpr int kTile = 32;                        // output pixels per task side (accumulators stay in L2)
+constexpr int kTile = 32;                        // pixels per task side (a row's sums stay in L1)
 // Ridge added to the features' diagonal, relative to the weight sum: keeps the normal equations
 // solvable where a feature is constant over the window (a flat wall's normal).
 constexpr double kRidge = 1e-3;
@@ -126,10 +126,10 @@ struct Sums {
 
 // A task's buffers, reused across its tiles; per-pixel arrays are tile-local (ty * kTile + tx).
 struct Scratch {
-  std::vector<float> term[2], vsum[2], psum[2];
-  std::vector<float> weight[2];  // per offset and pixel: the NL-means weight of guide g
-  std::vector<float> acc[2][kPairs], rhs[2][kDims * 3];
-  std::vector<float> coef[2][kDims * 3];  // each half's fit per pixel: coefficient d, channel c at d*3+c
+  std::vector<float> term[2], vsum[2], psum[2];          // an offset's distance terms and patch sums
+  std::vector<float> weight[2];                          // per offset and pixel: the NL-means weight of guide g
+  std::vector<float> acc[2][kPairs], rhs[2][kDims * 3];  // a row's normal equations per half
+  std::vector<float> coef[2][kDims * 3];                 // each half's fit per pixel: coefficient d, channel c at d*3+c
 };
 
 // The packed index of the symmetric normal matrix's entry (a, b), a <= b (the order in which the
