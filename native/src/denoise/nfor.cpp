@@ -17,7 +17,7 @@ namespace {
 
 constexpr int kDims = 1 + kFeatureChannels;      // the regression's intercept and features
 constexpr int kPairs = kDims * (kDims + 1) / 2;  // entries of the symmetric normal matrix
-constexpr int kTile = 32;                        // output pixels per task side (accumulators stay in L2)
+constexpr int kTile = 32;                        // pixels per task side (a row's sums stay in L1)
 // Ridge added to the features' diagonal, relative to the weight sum: keeps the normal equations
 // solvable where a feature is constant over the window (a flat wall's normal).
 constexpr double kRidge = 1e-3;
@@ -64,9 +64,6 @@ Planes prepare(const HalfImages& in) {
     }
   for (auto& f : pl.feature) f.assign(n, 0.0f);
   pl.valid.assign(n, 0.0f);
-  std::vector<float> raw_var[2][3];
-  for (int j = 0; j < 2; ++j)
-    for (int c = 0; c < 3; ++c) raw_var[j][c].assign(n, 0.0f);
   // Sanitise: a pixel with any non-finite input is left out (valid 0, values 0), so it cannot spread.
   tbb::parallel_for(0, h, [&](int y) {
     for (size_t i = size_t(y) * w; i < size_t(y + 1) * w; ++i) {
@@ -77,10 +74,7 @@ Planes prepare(const HalfImages& in) {
       if (!ok) continue;
       pl.valid[i] = 1;
       for (int j = 0; j < 2; ++j)
-        for (int c = 0; c < 3; ++c) {
-          pl.color[j][c][i] = in.color[j][3 * i + c];
-          raw_var[j][c][i] = std::max(0.0f, in.variance[j][3 * i + c]);
-        }
+        for (int c = 0; c < 3; ++c) pl.color[j][c][i] = in.color[j][3 * i + c];
       for (int k = 0; k < kFeatureChannels; ++k)
         pl.feature[k][i] = 0.5f * (in.feature[0][kFeatureChannels * i + k] + in.feature[1][kFeatureChannels * i + k]);
     }
@@ -96,7 +90,7 @@ Planes prepare(const HalfImages& in) {
           if (pl.valid[q] == 0) continue;
           count += 1;
           for (int j = 0; j < 2; ++j)
-            for (int c = 0; c < 3; ++c) sum[j][c] += raw_var[j][c][q];
+            for (int c = 0; c < 3; ++c) sum[j][c] += std::max(0.0f, in.variance[j][3 * q + c]);  // finite: valid
         }
       const size_t i = size_t(y) * w + x;
       if (count > 0)
@@ -124,191 +118,317 @@ Planes prepare(const HalfImages& in) {
   return pl;
 }
 
-// A task's buffers, reused across its tiles.
-struct Scratch {
-  std::vector<float> term[2], hsum[2], weight[2], x[kDims];
-  std::vector<float> acc[2][kPairs], rhs[2][kDims * 3];
+// The reconstruction's sums per pixel, over the whole image: for each half j, the weighted fits
+// that reach the pixel (RGB) and their weights. Tiles add into them in a fixed order (denoise()).
+struct Sums {
+  std::vector<float> value[2][3], weight[2];
 };
 
-// Solves (A + ridge) b = r for the intercept b_0 per colour channel (Cholesky, double); false if
-// A is not positive definite.
-bool solve_intercept(const double* a_packed, const double* r, double ridge, double* out) {
-  double a[kDims][kDims], l[kDims][kDims] = {};
-  for (int i = 0, k = 0; i < kDims; ++i)
-    for (int j = i; j < kDims; ++j, ++k) a[i][j] = a[j][i] = a_packed[k];
-  for (int i = 1; i < kDims; ++i) a[i][i] += ridge;
+// A task's buffers, reused across its tiles; per-pixel arrays are tile-local (ty * kTile + tx).
+struct Scratch {
+  std::vector<float> term[2], vsum[2], psum[2];          // an offset's distance terms and patch sums
+  std::vector<float> weight[2];                          // per offset and pixel: the NL-means weight of guide g
+  std::vector<float> acc[2][kPairs], rhs[2][kDims * 3];  // a row's normal equations per half
+  std::vector<float> coef[2][kDims * 3];                 // each half's fit per pixel: coefficient d, channel c at d*3+c
+};
+
+// The packed index of the symmetric normal matrix's entry (a, b), a <= b (the order in which the
+// tile accumulates them).
+constexpr int packed(int a, int b) { return a * kDims - a * (a - 1) / 2 + (b - a); }
+
+// Each lane's first-order fit for a row of kTile pixels: (A + ridge) b = r by Cholesky in double,
+// vectorised across the lanes (a lane that fails takes the zeroth-order fit). Inputs: the packed
+// normal matrices and right-hand sides (r[d * 3 + c]); output b[d * 3 + c], coefficient d of
+// channel c, and has[i] = 0 where a lane has no valid neighbour (no fit at all).
+inline void solve_row(const float* const* a_in, const float* const* r_in, float* const* out, float* has) {
+  alignas(32) double l[kPairs][kTile], inv[kDims][kTile], y[kDims][kTile], b[kDims][kTile], ok[kTile], wsum[kTile];
+  auto L = [&](int i, int j) -> double* { return l[packed(j, i)]; };  // lower factor L(i, j), j <= i
+  for (int i = 0; i < kTile; ++i) {
+    wsum[i] = a_in[0][i];
+    ok[i] = wsum[i] > 0 ? 1.0 : 0.0;
+  }
   for (int j = 0; j < kDims; ++j) {
-    double d = a[j][j];
-    for (int k = 0; k < j; ++k) d -= l[j][k] * l[j][k];
-    if (!(d > 0)) return false;
-    l[j][j] = std::sqrt(d);
-    for (int i = j + 1; i < kDims; ++i) {
-      double s = a[i][j];
-      for (int k = 0; k < j; ++k) s -= l[i][k] * l[j][k];
-      l[i][j] = s / l[j][j];
+    double* ljj = L(j, j);
+    for (int i = 0; i < kTile; ++i) {
+      // Ridge on the features' diagonal, relative to the weight sum.
+      double d = double(a_in[packed(j, j)][i]) + (j > 0 ? kRidge * wsum[i] : 0.0);
+      for (int k = 0; k < j; ++k) d -= L(j, k)[i] * L(j, k)[i];
+      ok[i] = d > 0 ? ok[i] : 0.0;
+      ljj[i] = std::sqrt(d > 0 ? d : 1.0);
+      inv[j][i] = 1.0 / ljj[i];
+    }
+    for (int m = j + 1; m < kDims; ++m) {
+      double* lmj = L(m, j);
+      for (int i = 0; i < kTile; ++i) {
+        double sum = a_in[packed(j, m)][i];
+        for (int k = 0; k < j; ++k) sum -= L(m, k)[i] * L(j, k)[i];
+        lmj[i] = sum * inv[j][i];
+      }
     }
   }
   for (int c = 0; c < 3; ++c) {
-    double y[kDims], b[kDims];
-    for (int i = 0; i < kDims; ++i) {
-      double s = r[i * 3 + c];
-      for (int k = 0; k < i; ++k) s -= l[i][k] * y[k];
-      y[i] = s / l[i][i];
+    for (int m = 0; m < kDims; ++m)
+      for (int i = 0; i < kTile; ++i) {
+        double sum = r_in[m * 3 + c][i];
+        for (int k = 0; k < m; ++k) sum -= L(m, k)[i] * y[k][i];
+        y[m][i] = sum * inv[m][i];
+      }
+    for (int m = kDims - 1; m >= 0; --m)
+      for (int i = 0; i < kTile; ++i) {
+        double sum = y[m][i];
+        for (int k = m + 1; k < kDims; ++k) sum -= L(k, m)[i] * b[k][i];
+        b[m][i] = sum * inv[m][i];
+      }
+    // A fit whose value at the pixel is negative (a non-negative image) or not finite fails.
+    for (int i = 0; i < kTile; ++i) {
+      bool fine = b[0][i] >= 0;
+      for (int m = 0; m < kDims; ++m) fine = fine && std::isfinite(b[m][i]);
+      ok[i] = fine ? ok[i] : 0.0;
     }
-    for (int i = kDims - 1; i >= 0; --i) {
-      double s = y[i];
-      for (int k = i + 1; k < kDims; ++k) s -= l[k][i] * b[k];
-      b[i] = s / l[i][i];
-    }
-    out[c] = b[0];
+    for (int m = 0; m < kDims; ++m)
+      for (int i = 0; i < kTile; ++i) out[m * 3 + c][i] = float(b[m][i]);
   }
-  return std::isfinite(out[0]) && std::isfinite(out[1]) && std::isfinite(out[2]);
+  for (int i = 0; i < kTile; ++i) {
+    has[i] = wsum[i] > 0 ? 1.0f : 0.0f;
+    if (ok[i] != 0 || !(wsum[i] > 0)) continue;
+    for (int m = 0; m < kDims * 3; ++m) out[m][i] = m < 3 ? float(r_in[m][i] / wsum[i]) : 0.0f;
+  }
 }
 
-// Denoises the tile [x0, x1) x [y0, y1) into out (RGB of the whole image).
-void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int y0, int y1, Scratch& s, float* out) {
+// Denoises the tile [x0, x1) x [y0, y1): fits each pixel's regressions and adds each fit, evaluated
+// at every neighbour of its window, into sums (which reach the window's radius beyond the tile).
+// Also compiled for AVX2 + FMA, used where the CPU has them (the same bits on every thread).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int y0, int y1, Scratch& s, Sums& sums) {
   const int w = pl.w, h = pl.h, f = p.patch, r = p.window;
   const int tw = x1 - x0, th = y1 - y0, ew = tw + 2 * f, eh = th + 2 * f;
-  const size_t tn = size_t(tw) * th;
+  const size_t tn = size_t(kTile) * th;  // tile-local arrays: rows of kTile (the lanes past tw unused)
+  const int side = 2 * r + 1, offsets = side * side;
   const float k2 = p.k * p.k;
   for (int g = 0; g < 2; ++g) {
-    s.term[g].assign(size_t(ew) * eh, 0.0f);
-    s.hsum[g].assign(size_t(tw) * eh, 0.0f);
-    s.weight[g].assign(tn, 0.0f);
-    for (auto& a : s.acc[g]) a.assign(tn, 0.0f);
-    for (auto& a : s.rhs[g]) a.assign(tn, 0.0f);
+    s.term[g].resize(size_t(ew) * eh);
+    s.vsum[g].resize(size_t(ew) * th);
+    s.psum[g].resize(tn);
+    s.weight[g].resize(size_t(offsets) * tn);
+    for (auto& a : s.acc[g]) a.resize(kTile);
+    for (auto& a : s.rhs[g]) a.resize(kTile);
+    for (auto& a : s.coef[g]) a.resize(tn);
   }
-  for (auto& a : s.x) a.assign(tn, 0.0f);
   const float* valid = pl.valid.data();
-  for (int dy = -r; dy <= r; ++dy)
-    for (int dx = -r; dx <= r; ++dx) {
-      // NL-means per-pixel distances of the offset on each guide half g, over the tile and its
-      // patch margin (Rousselle et al. 2012, eq. 5: variance-cancelled, normalised by the noise):
-      //   d_c(p, q) = ((u_p - u_q)^2 - (v_p + min(v_p, v_q))) / (eps + k^2 (v_p + v_q)).
-      for (int ey = 0; ey < eh; ++ey) {
-        const int y = y0 - f + ey, qy = y + dy;
-        float* t0 = &s.term[0][size_t(ey) * ew];
-        float* t1 = &s.term[1][size_t(ey) * ew];
-        std::fill(t0, t0 + ew, 0.0f);
-        std::fill(t1, t1 + ew, 0.0f);
-        if (y < 0 || y >= h || qy < 0 || qy >= h) continue;
-        const int lo = std::max({x0 - f, 0, -dx}), hi = std::min({x1 + f, w, w - dx});
-        const ptrdiff_t row = ptrdiff_t(y) * w, qrow = ptrdiff_t(qy) * w + dx;  // qrow + x >= 0
-        for (int g = 0; g < 2; ++g) {
-          float* t = g ? t1 : t0;
-          for (int c = 0; c < 3; ++c) {
-            const float* u = pl.color[g][c].data();
-            const float* v = pl.var[g][c].data();
-            for (int x = lo; x < hi; ++x) {
-              const float up = u[row + x], uq = u[qrow + x], vp = v[row + x], vq = v[qrow + x];
-              const float d = up - uq;
-              t[x - (x0 - f)] += (d * d - (vp + std::min(vp, vq))) / (1e-10f + k2 * (vp + vq));
-            }
-          }
-          for (int x = lo; x < hi; ++x) t[x - (x0 - f)] *= valid[row + x] * valid[qrow + x] * (1.0f / 3.0f);
-        }
-      }
-      // The patch's mean distance: a box filter, rows then columns.
-      const float inv_patch = 1.0f / float((2 * f + 1) * (2 * f + 1));
+  const float inv_patch = 1.0f / float((2 * f + 1) * (2 * f + 1));
+  for (int oi = 0; oi < offsets; ++oi) {
+    const int dy = oi / side - r, dx = oi % side - r;
+    // NL-means per-pixel distances of the offset on each guide half g, over the tile and its
+    // patch margin (Rousselle et al. 2012, eq. 5: variance-cancelled, normalised by the noise):
+    //   d_c(p, q) = ((u_p - u_q)^2 - (v_p + min(v_p, v_q))) / (eps + k^2 (v_p + v_q)).
+    for (int ey = 0; ey < eh; ++ey) {
+      const int y = y0 - f + ey, qy = y + dy;
+      float* t0 = &s.term[0][size_t(ey) * ew];
+      float* t1 = &s.term[1][size_t(ey) * ew];
+      std::fill(t0, t0 + ew, 0.0f);
+      std::fill(t1, t1 + ew, 0.0f);
+      if (y < 0 || y >= h || qy < 0 || qy >= h) continue;
+      const int lo = std::max({x0 - f, 0, -dx}), hi = std::min({x1 + f, w, w - dx});
+      // Extended index e = x - (x0 - f) over [lo, hi); image indices row + e and qrow + e (>= 0).
+      const ptrdiff_t row = ptrdiff_t(y) * w + x0 - f, qrow = row + ptrdiff_t(dy) * w + dx;
+      const int elo = lo - (x0 - f), ehi = hi - (x0 - f);
       for (int g = 0; g < 2; ++g) {
-        for (int ey = 0; ey < eh; ++ey) {
-          const float* t = &s.term[g][size_t(ey) * ew];
-          float* o = &s.hsum[g][size_t(ey) * tw];
-          for (int x = 0; x < tw; ++x) {
-            float sum = 0;
-            for (int j = 0; j <= 2 * f; ++j) sum += t[x + j];
-            o[x] = sum;
+        float* t = g ? t1 : t0;
+        for (int c = 0; c < 3; ++c) {
+          const float* u = pl.color[g][c].data();
+          const float* v = pl.var[g][c].data();
+          for (int e = elo; e < ehi; ++e) {
+            const float up = u[row + e], uq = u[qrow + e], vp = v[row + e], vq = v[qrow + e];
+            const float d = up - uq;
+            t[e] += (d * d - (vp + std::min(vp, vq))) / (1e-10f + k2 * (vp + vq));
           }
         }
+        for (int e = elo; e < ehi; ++e) t[e] *= valid[row + e] * valid[qrow + e] * (1.0f / 3.0f);
+      }
+    }
+    // The patch's sum: a box filter, columns then rows (contiguous loops).
+    for (int g = 0; g < 2; ++g) {
+      float* vs = s.vsum[g].data();
+      std::copy(s.term[g].begin(), s.term[g].begin() + size_t(ew) * th, vs);
+      for (int j = 1; j <= 2 * f; ++j) {
+        const float* t = &s.term[g][size_t(j) * ew];
+        for (size_t e = 0; e < size_t(ew) * th; ++e) vs[e] += t[e];
       }
       for (int ty = 0; ty < th; ++ty) {
-        const int y = y0 + ty, qy = y + dy;
+        float* o = &s.psum[g][size_t(ty) * kTile];
+        const float* v = &vs[size_t(ty) * ew];
+        std::copy(v, v + tw, o);
+        for (int j = 1; j <= 2 * f; ++j)
+          for (int i = 0; i < tw; ++i) o[i] += v[i + j];
+      }
+    }
+    for (int g = 0; g < 2; ++g) {
+      float* weight = &s.weight[g][size_t(oi) * tn];
+      for (int ty = 0; ty < th; ++ty) {
+        const int qy = y0 + ty + dy;
+        float* wt = weight + size_t(ty) * kTile;
+        const int ilo = std::max(x0, -dx) - x0, ihi = std::min(x1, w - dx) - x0;
+        // Neighbours outside the image and lanes past the tile: weight 0.
+        if (qy < 0 || qy >= h || ilo > 0 || ihi < kTile) std::fill(wt, wt + kTile, 0.0f);
         if (qy < 0 || qy >= h) continue;
-        const int lo = std::max(x0, -dx), hi = std::min(x1, w - dx);
-        if (lo >= hi) continue;
-        // Tile-local index i = x - x0 over [lo, hi); image index row + x0 + i (qrow + x0 + i >= 0).
-        const ptrdiff_t row = ptrdiff_t(y) * w + x0, qrow = ptrdiff_t(qy) * w + dx + x0;
-        const size_t o = size_t(ty) * tw;
-        const int ilo = lo - x0, ihi = hi - x0;
-        for (int g = 0; g < 2; ++g) {
-          float* wt = &s.weight[g][o];
-          const float* hs = &s.hsum[g][o];
-          for (int i = ilo; i < ihi; ++i) {
-            float sum = 0;
-            for (int j = 0; j <= 2 * f; ++j) sum += hs[size_t(j) * tw + i];
-            wt[i] = valid[qrow + i] * exp_neg(std::max(0.0f, sum * inv_patch));
-          }
-        }
-        // The regression's design row: 1 and the features' differences from the centre's.
-        for (int k = 0; k < kFeatureChannels; ++k) {
-          const float* fe = pl.feature[k].data();
-          float* xk = &s.x[1 + k][o];
-          for (int i = ilo; i < ihi; ++i) xk[i] = fe[qrow + i] - fe[row + i];
-        }
-        // Half j is filtered with the weights of guide 1 - j (cross-filtering).
-        for (int j = 0; j < 2; ++j) {
-          const float* wt = &s.weight[1 - j][o];
-          for (int a = 0, pair = 0; a < kDims; ++a) {
-            for (int b = a; b < kDims; ++b, ++pair) {
-              float* acc = &s.acc[j][pair][o];
-              if (a == 0 && b == 0) {
-                for (int i = ilo; i < ihi; ++i) acc[i] += wt[i];
-              } else if (a == 0) {
-                const float* xb = &s.x[b][o];
-                for (int i = ilo; i < ihi; ++i) acc[i] += wt[i] * xb[i];
-              } else {
-                const float *xa = &s.x[a][o], *xb = &s.x[b][o];
-                for (int i = ilo; i < ihi; ++i) acc[i] += wt[i] * xa[i] * xb[i];
-              }
-            }
-            for (int c = 0; c < 3; ++c) {
-              float* rhs = &s.rhs[j][a * 3 + c][o];
-              const float* yq = pl.color[j][c].data();
-              if (a == 0) {
-                for (int i = ilo; i < ihi; ++i) rhs[i] += wt[i] * yq[qrow + i];
-              } else {
-                const float* xa = &s.x[a][o];
-                for (int i = ilo; i < ihi; ++i) rhs[i] += wt[i] * xa[i] * yq[qrow + i];
-              }
-            }
-          }
-        }
+        const float* ps = &s.psum[g][size_t(ty) * kTile];
+        for (int i = ilo; i < ihi; ++i) wt[i] = exp_neg(std::max(0.0f, ps[i] * inv_patch));
       }
     }
-  // Per pixel: each half's intercept (the regression's value at the pixel), then their mean.
-  for (int ty = 0; ty < th; ++ty)
-    for (int tx = 0; tx < tw; ++tx) {
-      const size_t t = size_t(ty) * tw + tx, i = size_t(y0 + ty) * w + (x0 + tx);
-      double result[3] = {0, 0, 0};
+  }
+  // Half j's normal equations with the weights of guide 1 - j (cross-filtering), a row of pixels
+  // at a time over all offsets (its sums stay in the L1 cache), kTile lanes wide (fixed-length
+  // loops; lanes outside the image or the tile have weight 0). The design row: 1 and the
+  // features' differences from the pixel's.
+  alignas(32) float xr[kFeatureChannels][kTile], wa[kDims][kTile], yr[3][kTile];
+  for (int ty = 0; ty < th; ++ty) {
+    const int y = y0 + ty;
+    const size_t o = size_t(ty) * kTile;
+    for (int j = 0; j < 2; ++j) {
+      for (auto& a : s.acc[j]) std::fill(a.begin(), a.end(), 0.0f);
+      for (auto& a : s.rhs[j]) std::fill(a.begin(), a.end(), 0.0f);
+    }
+    for (int oi = 0; oi < offsets; ++oi) {
+      const int dy = oi / side - r, dx = oi % side - r, qy = y + dy;
+      if (qy < 0 || qy >= h) continue;
+      const int ilo = std::max(x0, -dx) - x0, ihi = std::min(x1, w - dx) - x0;
+      if (ilo >= ihi) continue;
+      const ptrdiff_t row = ptrdiff_t(y) * w + x0, qrow = ptrdiff_t(qy) * w + dx + x0;
+      const bool partial = ilo > 0 || ihi < kTile;  // lanes outside: zero (else all are written)
+      for (int k = 0; k < kFeatureChannels; ++k) {
+        const float* fe = pl.feature[k].data();
+        if (partial) std::fill(xr[k], xr[k] + kTile, 0.0f);
+        for (int i = ilo; i < ihi; ++i) xr[k][i] = fe[qrow + i] - fe[row + i];
+      }
       for (int j = 0; j < 2; ++j) {
-        double a[kPairs], rv[kDims * 3], b[3];
-        for (int q = 0; q < kPairs; ++q) a[q] = s.acc[j][q][t];
-        for (int q = 0; q < kDims * 3; ++q) rv[q] = s.rhs[j][q][t];
-        const double wsum = a[0];
-        if (!(wsum > 0)) continue;  // no valid neighbour at all: 0
-        // The first-order fit; where it fails or extrapolates below zero (a non-negative image),
-        // the zeroth-order one: the NL-means weighted mean.
-        if (!solve_intercept(a, rv, kRidge * wsum, b) || b[0] < 0 || b[1] < 0 || b[2] < 0)
-          for (int c = 0; c < 3; ++c) b[c] = rv[c] / wsum;
-        for (int c = 0; c < 3; ++c) result[c] += 0.5 * b[c];
+        const float* wsrc = &s.weight[1 - j][size_t(oi) * tn + o];
+        if (partial) std::fill(wa[0], wa[0] + kTile, 0.0f);
+        for (int i = ilo; i < ihi; ++i) wa[0][i] = wsrc[i] * valid[qrow + i];
+        for (int c = 0; c < 3; ++c) {
+          const float* yq = pl.color[j][c].data() + qrow;
+          if (partial) std::fill(yr[c], yr[c] + kTile, 0.0f);
+          for (int i = ilo; i < ihi; ++i) yr[c][i] = yq[i];
+        }
+        for (int k = 0; k < kFeatureChannels; ++k)
+          for (int i = 0; i < kTile; ++i) wa[1 + k][i] = wa[0][i] * xr[k][i];
+        for (int a = 0, pair = 0; a < kDims; ++a) {
+          for (int b = a; b < kDims; ++b, ++pair) {
+            float* __restrict acc = s.acc[j][pair].data();
+            if (b == 0) {
+              for (int i = 0; i < kTile; ++i) acc[i] += wa[0][i];
+            } else {
+              for (int i = 0; i < kTile; ++i) acc[i] += wa[a][i] * xr[b - 1][i];
+            }
+          }
+          for (int c = 0; c < 3; ++c) {
+            float* __restrict rhs = s.rhs[j][a * 3 + c].data();
+            for (int i = 0; i < kTile; ++i) rhs[i] += wa[a][i] * yr[c][i];
+          }
+        }
       }
-      for (int c = 0; c < 3; ++c) out[3 * i + c] = std::isfinite(float(result[c])) ? float(result[c]) : 0.0f;
     }
+    // The row's fits per half (solve_row: where a fit fails, the zeroth-order one). A pixel without
+    // any valid neighbour has no fit: its weights are set to 0 for the reconstruction.
+    alignas(32) float has[kTile];
+    for (int j = 0; j < 2; ++j) {
+      const float* a[kPairs];
+      const float* rv[kDims * 3];
+      float* b[kDims * 3];
+      for (int q = 0; q < kPairs; ++q) a[q] = s.acc[j][q].data();
+      for (int q = 0; q < kDims * 3; ++q) rv[q] = s.rhs[j][q].data(), b[q] = &s.coef[j][q][o];
+      solve_row(a, rv, b, has);
+      for (int i = 0; i < tw; ++i)
+        if (has[i] == 0)
+          for (int oi = 0; oi < offsets; ++oi) s.weight[1 - j][size_t(oi) * tn + o + i] = 0;
+    }
+  }
+  // Collaborative reconstruction (NFOR, sec. 4.2): every pixel's fit, evaluated at each neighbour
+  // q of its window, adds into q's sums with the pixel's NL-means weight for q. At an invalid q
+  // (features not known) the fit's value at the pixel.
+  alignas(32) float fit[kTile];
+  for (int oi = 0; oi < offsets; ++oi) {
+    const int dy = oi / side - r, dx = oi % side - r;
+    for (int ty = 0; ty < th; ++ty) {
+      const int y = y0 + ty, qy = y + dy;
+      if (qy < 0 || qy >= h) continue;
+      const int ilo = std::max(x0, -dx) - x0, ihi = std::min(x1, w - dx) - x0;
+      if (ilo >= ihi) continue;
+      const ptrdiff_t row = ptrdiff_t(y) * w + x0, qrow = ptrdiff_t(qy) * w + dx + x0;
+      const bool partial = ilo > 0 || ihi < kTile;  // lanes outside: zero (else all are written)
+      const size_t o = size_t(ty) * kTile;
+      for (int k = 0; k < kFeatureChannels; ++k) {
+        const float* fe = pl.feature[k].data();
+        if (partial) std::fill(xr[k], xr[k] + kTile, 0.0f);
+        for (int i = ilo; i < ihi; ++i) xr[k][i] = (fe[qrow + i] - fe[row + i]) * valid[qrow + i];
+      }
+      for (int j = 0; j < 2; ++j) {
+        const float* wt = &s.weight[1 - j][size_t(oi) * tn + o];
+        float* sw = sums.weight[j].data() + qrow;
+        for (int i = ilo; i < ihi; ++i) sw[i] += wt[i];
+        for (int c = 0; c < 3; ++c) {
+          const float* b[kDims];
+          for (int d = 0; d < kDims; ++d) b[d] = &s.coef[j][d * 3 + c][o];
+          for (int i = 0; i < kTile; ++i) {
+            float v = b[0][i];
+            for (int k = 0; k < kFeatureChannels; ++k) v += b[1 + k][i] * xr[k][i];
+            fit[i] = v;
+          }
+          float* sv = sums.value[j][c].data() + qrow;
+          for (int i = ilo; i < ihi; ++i) sv[i] += wt[i] * fit[i];
+        }
+      }
+    }
+  }
 }
 
 }  // namespace
 
 std::vector<float> denoise(const HalfImages& in, const DenoiseParams& params) {
   const Planes pl = prepare(in);
-  std::vector<float> out(3 * size_t(in.width) * in.height, 0.0f);
+  const int w = in.width, h = in.height;
+  const size_t n = size_t(w) * h;
+  DenoiseParams p = params;
+  // A tile's sums reach the window's radius beyond it: tiles two apart never share a pixel.
+  p.window = std::min(p.window, kTile - 1);
+  Sums sums;
+  for (int j = 0; j < 2; ++j) {
+    for (auto& v : sums.value[j]) v.assign(n, 0.0f);
+    sums.weight[j].assign(n, 0.0f);
+  }
   tbb::enumerable_thread_specific<Scratch> scratch;
-  const int tiles_x = (in.width + kTile - 1) / kTile, tiles_y = (in.height + kTile - 1) / kTile;
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
-    Scratch& s = scratch.local();
-    for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
-      for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx)
-        denoise_tile(pl, params, tx * kTile, std::min(in.width, (tx + 1) * kTile), ty * kTile,
-                     std::min(in.height, (ty + 1) * kTile), s, out.data());
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  // Four rounds, one per tile parity (tx % 2, ty % 2): within a round no two tiles add into the
+  // same pixel, and every pixel's sums are added in the same order for any thread count.
+  for (int round = 0; round < 4; ++round) {
+    const int px = round % 2, py = round / 2;
+    const int nx = (tiles_x - px + 1) / 2, ny = (tiles_y - py + 1) / 2;
+    if (nx <= 0 || ny <= 0) continue;
+    tbb::parallel_for(tbb::blocked_range2d<int>(0, ny, 1, 0, nx, 1), [&](const tbb::blocked_range2d<int>& r) {
+      Scratch& s = scratch.local();
+      for (int iy = r.rows().begin(); iy < r.rows().end(); ++iy)
+        for (int ix = r.cols().begin(); ix < r.cols().end(); ++ix) {
+          const int tx = 2 * ix + px, ty = 2 * iy + py;
+          denoise_tile(pl, p, tx * kTile, std::min(w, (tx + 1) * kTile), ty * kTile, std::min(h, (ty + 1) * kTile), s,
+                       sums);
+        }
+    });
+  }
+  // Each half's reconstruction, then their mean (one half alone where the other has no weight).
+  std::vector<float> out(3 * n, 0.0f);
+  tbb::parallel_for(0, h, [&](int y) {
+    for (size_t i = size_t(y) * w; i < size_t(y + 1) * w; ++i)
+      for (int c = 0; c < 3; ++c) {
+        double sum = 0, halves = 0;
+        for (int j = 0; j < 2; ++j)
+          if (sums.weight[j][i] > 0) {
+            sum += double(sums.value[j][c][i]) / sums.weight[j][i];
+            halves += 1;
+          }
+        const float v = halves > 0 ? float(sum / halves) : 0.0f;
+        out[3 * i + c] = std::isfinite(v) ? std::max(0.0f, v) : 0.0f;
+      }
   });
   return out;
 }

@@ -1,7 +1,8 @@
 // A feature-guided denoiser after NFOR (Bitterli et al. 2016, "Nonlinearly Weighted First-order
 // Regression for Denoising Monte Carlo Renderings"), simplified as docs/denoise.md says: each half
-// image of the film is reconstructed by a first-order regression on the denoising features
-// (camera-space normal, albedo, distance) in a window around each pixel, weighted by NL-means
+// image of the film is reconstructed by first-order regressions on the denoising features
+// (camera-space normal, albedo, distance) in a window around each pixel, each fit evaluated over
+// its whole window and the overlapping fits averaged (NFOR's collaborative reconstruction), weighted by NL-means
 // weights computed on the *other* half (cross-filtering: the weights are independent of the noise
 // they average), and the two reconstructions are averaged. The NL-means distance is normalised by
 // each pixel's own variance estimate (from the halves' difference), so the filter's strength
@@ -15,19 +16,20 @@
 namespace lt {
 
 struct DenoiseParams {
-  // Search window radius: (2 window + 1)^2 neighbours (NFOR: 9; 5 measured as good on the Cornell
-  // box at 1.7x less time, bench/denoise.cpp).
-  int window = 5;
+  // Search window radius: (2 window + 1)^2 neighbours (NFOR: 9). With the collaborative
+  // reconstruction (each fit evaluated over its whole window) 3 measured better than the per-pixel
+  // fit with 5 on the Cornell box, at 2.5x less work (bench/denoise.cpp, docs/denoise.md).
+  int window = 3;
   int patch = 3;  // NL-means patch radius (NFOR: 3)
   // NL-means bandwidth in units of the noise (Rousselle et al. 2012, eq. 6; NFOR's k = 0.5 and
   // 1.0 candidates, of which this is the smaller: detail first).
   float k = 0.5f;
 };
 
-// The denoised RGB (on the calling TBB arena's threads), width*height*3 floats (rows as the film's). Deterministic for
-// any thread count (every output pixel is computed by one task from the inputs alone, in a fixed order); finite for any
-// input: pixels that are not valid or hold a non-finite value take no part as neighbours and are reconstructed from
-// their valid neighbours (0 when they have none).
+// The denoised RGB (on the calling TBB arena's threads), width*height*3 floats (rows as the film's), non-negative.
+// Deterministic for any thread count (each pixel's sums are added in a fixed order: tiles in four rounds by parity, a
+// tile's additions in a fixed order); finite for any input: pixels that are not valid or hold a non-finite value take
+// no part as neighbours and are reconstructed from their valid neighbours (0 when they have none).
 std::vector<float> denoise(const HalfImages& in, const DenoiseParams& params = DenoiseParams());
 
 }  // namespace lt

@@ -73,8 +73,9 @@ MemoryEstimate RenderJob::estimate_bytes(const RenderSettings& s) {
   if (s.adaptive) m.other += pixels * 8;  // update_active's per-pixel variances
   if (s.integrator == IntegratorType::Bidirectional)
     m.other += pixels * sizeof(Splat);  // a pass's splats: about one per camera sample
-  // Denoising: the half images, the denoiser's planes and its output (denoise/nfor.cpp).
-  if (s.denoise) m.other += pixels * (2 * (3 + 3 + kFeatureChannels) + 1 + 12 + 6 + kFeatureChannels + 1 + 6) * 4;
+  // Denoising: the half images, the denoiser's planes, its reconstruction sums (2 x RGB + weight)
+  // and its output (denoise/nfor.cpp).
+  if (s.denoise) m.other += pixels * (2 * (3 + 3 + kFeatureChannels) + 1 + 12 + kFeatureChannels + 1 + 8 + 6) * 4;
   return m;
 }
 
