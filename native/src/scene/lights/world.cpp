@@ -41,7 +41,8 @@ void World::build(const std::vector<std::unique_ptr<Image>>& images) {
   if (!program_) return;
   Spectrum constant;
   if (program_->constant_emission(images, &constant)) {
-    // No table for a constant world (it is sampled uniformly).
+    // No table for a constant world: the light set never picks it (LightSet::build); on its own it
+    // samples uniformly.
     program_.reset();
     color_ = constant;
     mean_ = average(abs(color_));

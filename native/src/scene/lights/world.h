@@ -40,7 +40,7 @@ class World {
   // As light sampling sees it (Light Path flags of world_context).
   Spectrum radiance(const Vec3& dir) const { return radiance(world_context(dir)); }
   bool black() const { return !program_ && is_black(color_); }
-  // Whether a sampling map is used (false: constant, sampled uniformly over the sphere).
+  // Whether a sampling map is used (false: constant, never light-sampled by the integrators).
   bool has_map() const { return program_ != nullptr; }
   int map_width() const { return map_w_; }
   int map_height() const { return map_h_; }
