@@ -16,6 +16,7 @@ Bound: |Lantern - Cycles| <= 1e-3 |Cycles| + a small absolute term (float roundi
 import math
 import os
 
+import bmesh
 import bpy
 import numpy as np
 from mathutils import Matrix
@@ -178,7 +179,8 @@ def view_scene(build, negate=False, shape="plane", displacement=None):
     object (and the object tilted back), so Object coordinates vary along all three axes over the
     image. "sphere": a smooth UV sphere of radius 1 filling most of a perspective view;
     "ellipsoid": that sphere scaled unevenly, "scaled": scaled by 0.8 (object and world lengths
-    differ). `build(nt,
+    differ); "points": a geometry-nodes point cloud (Mesh to Points on a 5 x 5 grid, radius 0.3)
+    scaled unevenly and turned, under that camera. `build(nt,
     coords)` returns the socket shown (coords: Texture Coordinate's Object output); `displacement`,
     when given, the same way the socket linked into the Material Output's Displacement."""
     bs.reset_file()
@@ -189,7 +191,16 @@ def view_scene(build, negate=False, shape="plane", displacement=None):
     c.max_bounces = 0
     c.film_exposure = 1.0
     scene.render.film_transparent = True  # alpha marks what the object covers
-    if shape in ("sphere", "ellipsoid", "scaled"):
+    if shape == "points":
+        bs.add_camera(scene, (0.3, -3.2, 1.1), (0, 0, 0), lens=50.0)
+        grid = bs.mesh_plane("points", 2.4, matrix=Matrix.Rotation(1.2, 4, "X"))
+        bm = bmesh.new()
+        bm.from_mesh(grid)
+        bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=3, use_grid_fill=True)
+        bm.to_mesh(grid)
+        bm.free()
+        obj = bs.add_object(scene, "points", grid, rotation=(0.3, 0.2, 0.5), scale=(1.0, 0.7, 1.25))
+    elif shape in ("sphere", "ellipsoid", "scaled"):
         bs.add_camera(scene, (0.3, -3.2, 1.1), (0, 0, 0), lens=50.0)
         obj = bs.add_object(scene, "sphere", bs.mesh_sphere("sphere", 1.0), rotation=(0.3, 0.2, 0.5),
                             scale={"ellipsoid": (1.0, 0.7, 1.25), "scaled": (0.8, 0.8, 0.8)}.get(shape, (1, 1, 1)))
@@ -221,6 +232,18 @@ def view_scene(build, negate=False, shape="plane", displacement=None):
     if displacement is not None:
         nt.links.new(displacement(nt, coords), out.inputs["Displacement"])
     bs.assign(obj, mat)
+    if shape == "points":
+        tree = bpy.data.node_groups.new("ToPoints", "GeometryNodeTree")
+        tree.inputs.new("NodeSocketGeometry", "Geometry")
+        tree.outputs.new("NodeSocketGeometry", "Geometry")
+        to_points = tree.nodes.new("GeometryNodeMeshToPoints")
+        to_points.inputs["Radius"].default_value = 0.3
+        set_mat = tree.nodes.new("GeometryNodeSetMaterial")
+        set_mat.inputs["Material"].default_value = mat
+        tree.links.new(tree.nodes.new("NodeGroupInput").outputs[0], to_points.inputs["Mesh"])
+        tree.links.new(to_points.outputs[0], set_mat.inputs["Geometry"])
+        tree.links.new(set_mat.outputs[0], tree.nodes.new("NodeGroupOutput").inputs[0])
+        obj.modifiers.new("Points", "NODES").node_group = tree
     return scene
 
 

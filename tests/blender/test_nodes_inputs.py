@@ -31,6 +31,14 @@ def test_geometry(output, outdir):
                  flat=output == "Backfacing", shape="sphere")
 
 
+@pytest.mark.parametrize("output", ["Position", "Radius", "Random"])
+def test_point_info(output, outdir):
+    """Point Info on a point cloud scaled unevenly (Cycles' world-space centre, its radius through
+    the object's transform, the per-point random number)."""
+    compare_view(_output("ShaderNodePointInfo", output), "point_info_" + output, outdir, shape="points",
+                 flat=output == "Radius")  # one radius for all points
+
+
 @pytest.mark.parametrize("ior", [1.45, 0.6, 3.0])
 def test_fresnel(ior, outdir):
     compare_view(_output("ShaderNodeFresnel", "Fac", IOR=ior), "fresnel_%g" % ior, outdir, shape="sphere")

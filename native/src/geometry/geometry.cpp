@@ -341,6 +341,7 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
       inst.motion.clear();
     }
   }
+  ++meshes_[size_t(inst.mesh)].users;
   instances_.push_back(inst);
   baked_.emplace_back();
   instance_visibility_.push_back(inst.visibility & 31u);

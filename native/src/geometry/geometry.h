@@ -61,6 +61,7 @@ struct Mesh {
   // positions stays the centre step's.
   int motion_steps = 0;
   std::vector<Vec3> motion_positions, motion_corner_normals;
+  int users = 0;  // instances of the mesh (Cycles applies a single user's transform to its geometry)
   RTCScene rtc = nullptr;
   GeometryKind kind = GeometryKind::Triangles;
   CurveData curves;  // kind Curves or Points; slots then hold one slot per curve

@@ -403,6 +403,7 @@ void vector_displacement(const Instr& in, Machine& m) {
 
 const OpSignature kCurveSignatures[] = {
     {"", "ffffvf", "", false},  // hair info
+    {"", "vff", "", false},     // point info
 };
 
 // Hair Info on curves: the key attributes Cycles interpolates linearly over a segment (intercept
@@ -433,11 +434,37 @@ void hair_info(const Instr& in, Machine& m) {
   m.set(in.out[5], random);
 }
 
+// Point Info on points (zero elsewhere, as Cycles).
+void point_info(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  Vec3 centre(0.0f);
+  float radius = 0, random = 0;
+  if (c.mesh && c.mesh->kind == GeometryKind::Points && c.primitive >= 0) {
+    const CurveData& d = c.mesh->curves;
+    const size_t i = size_t(c.primitive);
+    centre = d.point(i);
+    radius = d.radius(i);
+    if (c.instance) {
+      centre = c.pose.xf.point(centre);
+      // Cycles applies the transform of a point cloud only one still object uses to its points,
+      // scaling radii by cbrt |det| (PointCloud::apply_transform); others go through the object's
+      // transform in point_radius.
+      radius = c.mesh->users == 1 && c.instance->motion.empty()
+                   ? radius * std::cbrt(std::abs(c.pose.xf.determinant()))
+                   : length(c.pose.xf.vector(Vec3(radius / std::sqrt(3.0f))));
+    }
+    random = i < d.random.size() ? d.random[i] : 0.0f;
+  }
+  m.set(in.out[0], centre);
+  m.set(in.out[1], radius);
+  m.set(in.out[2], random);
+}
+
 }  // namespace
 
 const OpSignature* inputs_family_signature(uint32_t op) {
   if (op >= kFamilyCurveInputsBegin && op < kFamilyCurveInputsEnd)
-    return op == kOpHairInfo ? &kCurveSignatures[0] : nullptr;
+    return op == kOpHairInfo ? &kCurveSignatures[0] : (op == kOpPointInfo ? &kCurveSignatures[1] : nullptr);
   if (op < kOpTexCoord || op > kOpEnvironment) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
@@ -445,6 +472,10 @@ const OpSignature* inputs_family_signature(uint32_t op) {
 void exec_inputs_family(const Instr& in, Machine& m) {
   if (in.op == kOpHairInfo) {
     hair_info(in, m);
+    return;
+  }
+  if (in.op == kOpPointInfo) {
+    point_info(in, m);
     return;
   }
   if (in.op == kOpToFloat) {

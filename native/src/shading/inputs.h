@@ -87,6 +87,9 @@ enum CurveInputOp : uint32_t {
   // Hair Info (Cycles' svm_node_hair_info and its curve attributes): out: is strand f,
   // intercept f, length f, thickness f, tangent normal v, random f.
   kOpHairInfo = 100,  // kFamilyCurveInputsBegin
+  // Point Info (svm_node_point_info, geom/point.h): out: world-space centre v, radius f (the
+  // object-space radius through the transform as Cycles' point_radius), random f.
+  kOpPointInfo = 104,
 };
 
 }  // namespace lt

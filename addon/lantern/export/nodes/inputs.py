@@ -173,3 +173,8 @@ def environment_texture(c, node, want):
 def hair_info(c, node, want):
     return c.emit(ops.HAIR_INFO, [], [("Is Strand", 1), ("Intercept", 1), ("Length", 1), ("Thickness", 1),
                                       ("Tangent Normal", 3), ("Random", 1)])
+
+
+@register('POINT_INFO')
+def point_info(c, node, want):
+    return c.emit(ops.POINT_INFO, [], [("Position", 3), ("Radius", 1), ("Random", 1)])

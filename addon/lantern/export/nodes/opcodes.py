@@ -46,6 +46,7 @@ ENVIRONMENT = 52
 
 # curve and point inputs (inputs.h, numbers 100-107)
 HAIR_INFO = 100
+POINT_INFO = 104
 
 # Distribution params (shaders.h)
 DIST_SHARP = 0
