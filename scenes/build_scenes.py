@@ -370,6 +370,45 @@ def build_leaf_cards(scene):
     add_camera(scene, (0.4, -3.5, 1.3), (0, 0.2, 0.4), lens=40.0)
 
 
+def _mix_with(name, node_type, fac, color):
+    """Mix Shader of a Diffuse BSDF (fac 0) and a `node_type` shader (fac 1)."""
+    mat, nt, out = _material(name)
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    mix.inputs["Fac"].default_value = fac
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    d.inputs["Color"].default_value = (*color, 1.0)
+    nt.links.new(d.outputs[0], mix.inputs[1])
+    nt.links.new(nt.nodes.new(node_type).outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def build_holdout(scene):
+    """Issue 16's holdout: on a ground under an area light and a sky, a sphere of Mix Shader
+    (Diffuse, Holdout 0.4), a cube that is a holdout object (Object.is_holdout), a sphere of Mix
+    (Diffuse, Transparent 0.5) in a holdout collection (LayerCollection.holdout), and a card of
+    Holdout alone, which casts its shadow (a Holdout closure is opaque to shadow rays)."""
+    set_world(scene, (0.3, 0.45, 0.7), 0.8)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 8.0))
+    assign(ground, diffuse("Ground", WHITE))
+    assign(add_object(scene, "HoldoutMix", mesh_sphere("HoldoutMix", 0.5), (-1.1, 0, 0.5)),
+           _mix_with("HoldoutMix", "ShaderNodeHoldout", 0.4, RED))
+    cube = add_object(scene, "HoldoutCube", mesh_box("HoldoutCube", (0.8, 0.8, 0.8)), (0.1, 0.3, 0), (0, 0, 20))
+    assign(cube, diffuse("Cube", GREEN))
+    cube.is_holdout = True
+    held = bpy.data.collections.new("Held")
+    scene.collection.children.link(held)
+    glass_ball = add_object(scene, "HeldBall", mesh_sphere("HeldBall", 0.45), (1.2, -0.2, 0.45), collection=held)
+    assign(glass_ball, _mix_with("HeldBall", "ShaderNodeBsdfTransparent", 0.5, WHITE))
+    scene.view_layers[0].layer_collection.children["Held"].holdout = True
+    card = add_object(scene, "HoldoutCard", mesh_plane("HoldoutCard", 0.6), (-0.3, -1.0, 0.8), (70, 0, 10))
+    mat, nt, out = _material("HoldoutCard")
+    nt.links.new(nt.nodes.new("ShaderNodeHoldout").outputs[0], out.inputs["Surface"])
+    assign(card, mat)
+    add_light(scene, "Area", "AREA", 400.0, (0.5, -1.0, 3.0), size=1.5)
+    add_camera(scene, (0.0, -4.5, 2.2), (0.0, 0.0, 0.5), lens=35.0)
+
+
 def checker_pixels(size=64, squares=8):
     """sRGB-encoded colour checker: warm/cool squares, brightness ramping along U."""
     y, x = np.mgrid[0:size, 0:size]
@@ -1808,6 +1847,7 @@ SCENES = {
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
+    "holdout": (build_holdout, (64, 48), 128),
     "gltf_pbr": (build_gltf_pbr, (80, 80), 256),
     "wide_sun": (build_wide_sun, (64, 48), 128),
     "bsdf_zoo": (build_bsdf_zoo, (128, 80), 128),

@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 14
+ABI_VERSION = 15
 
 # lt_status
 OK = 0
@@ -216,6 +216,7 @@ class InstanceDesc(ctypes.Structure):
         ("attribute_count", ctypes.c_int),
         ("motion_transforms", _f_p),
         ("motion_step_count", ctypes.c_int),
+        ("holdout", ctypes.c_int),
     ]
 
 
@@ -789,8 +790,9 @@ class Scene:
         return out.value
 
     def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL, color=(1.0, 1.0, 1.0, 1.0),
-                     pass_index=0, random_id=0, attributes=(), motion=None):
+                     pass_index=0, random_id=0, attributes=(), motion=None, holdout=False):
         """color: Object.color; random_id: the uint32 Cycles hashes into Object Info's Random;
+        holdout: a holdout object (Object.holdout_get);
         attributes: (id, 4 floats) of the object's attributes; motion: the transforms (3x4 or 4x4
         each) at the motion steps over the shutter."""
         mats = _i32(list(materials), "materials") if len(materials) else None
@@ -799,6 +801,7 @@ class Scene:
         d.color[:] = [float(c) for c in (tuple(color) + (1.0,) * 4)[:4]]
         d.pass_index = int(pass_index)
         d.random_id = int(random_id) & 0xFFFFFFFF
+        d.holdout = int(bool(holdout))
         if attributes:
             ids = _i32([int(i) for i, _ in attributes], "attribute ids")
             values = _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values")

@@ -33,6 +33,13 @@ def instance_key(inst):
     return (inst.object.original.as_pointer(),)
 
 
+def holdout_of(inst, view_layer):
+    """Cycles' holdout object (blender/object.cpp): an instance takes its instancer's, an object
+    its own flag or its holdout collection's (Object.holdout_get)."""
+    owner = inst.parent if inst.is_instance and inst.parent is not None else inst.object
+    return bool(owner.holdout_get(view_layer=view_layer))
+
+
 def export_lights(depsgraph, core_scene, report):
     """Adds every light object instance; returns how many were added."""
     lights = 0
@@ -85,15 +92,20 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     instances = {}  # instance_key -> (core instance id or None for no geometry, matrix)
     has_mesh_instance = set()
     hair = 0
+    holdouts = {}  # instance_key -> holdout, for viewport updates
+    view_layer = depsgraph.view_layer_eval
     for inst in depsgraph.object_instances:
         obj = inst.object
         t = obj.type
+        holdout = holdout_of(inst, view_layer)
+        if holdout:
+            holdouts[instance_key(inst)] = True
         if t == 'MESH' and inst.show_particles and hair_systems(obj):
             if not hair:
                 warn_curve_shape(depsgraph, report)
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             key = instance_key(inst) + ('hair',)
-            instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR'), matrix)
+            instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR', holdout=holdout), matrix)
             hair += 1
         if not inst.show_self:  # e.g. a particle emitter set not to render itself
             continue
@@ -107,14 +119,16 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             random_id = inst.random_id if inst.is_instance else None
             instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, random_id=random_id,
                                                                     key=instance_key(inst),
-                                                                    deform=not inst.is_instance), matrix)
+                                                                    deform=not inst.is_instance,
+                                                                    holdout=holdout), matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
                 instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False,
                                                                         random_id=inst.random_id,
-                                                                        key=instance_key(inst)), matrix)
+                                                                        key=instance_key(inst),
+                                                                        holdout=holdout), matrix)
             else:
-                deferred.append((obj, matrix, instance_key(inst)))
+                deferred.append((obj, matrix, instance_key(inst), holdout))
         elif t == 'LIGHT':
             if export_light(obj, matrix, core_scene, report):
                 lights += 1
@@ -126,18 +140,19 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                 warn_curve_shape(depsgraph, report)
             hair += t == 'CURVES'
             random_id = inst.random_id if inst.is_instance else None
-            instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id),
-                                             matrix)
+            instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id,
+                                                                           holdout=holdout), matrix)
         elif t not in skipped_types:
             skipped_types.add(t)
             report({'WARNING'}, "Objects of type %s are not supported yet, skipped (e.g. '%s')"
                    % (t, obj.name))
-    for obj, matrix, key in deferred:
+    for obj, matrix, key, holdout in deferred:
         if obj.original.as_pointer() not in has_mesh_instance:
             # e.g. a curve without bevel
-            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key), matrix)
+            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key, holdout=holdout),
+                              matrix)
     if state is not None:
-        state.update(materials=materials, instances=instances)
+        state.update(materials=materials, instances=instances, holdouts=holdouts)
 
     summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()

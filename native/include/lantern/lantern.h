@@ -37,8 +37,8 @@ extern "C" {
  * Noisy Image and Denoising passes); 12: Cycles' light and data passes (LT_PASS_DIFFUSE_DIRECT
  * on), lt_render_settings' mist fields, lt_scene_set_material_pass_index; 13: motion blur (motion
  * steps of lt_mesh_desc, lt_instance_desc and lt_camera_desc; motion counts in lt_scene_stats);
- * 14: curves and points (lt_curves_desc, lt_scene_add_curves). */
-#define LT_ABI_VERSION 14
+ * 14: curves and points (lt_curves_desc, lt_scene_add_curves); 15: lt_instance_desc.holdout. */
+#define LT_ABI_VERSION 15
 
 enum lt_status {
   LT_OK = 0,
@@ -247,6 +247,9 @@ typedef struct lt_instance_desc {
    * not invertible leave the instance without motion (a warning). */
   const float* motion_transforms;
   int motion_step_count;
+  /* Nonzero: a holdout object (Object.holdout_get: its own flag or a holdout collection's), which
+   * camera rays see as Cycles does: transparent film where it covers, its Transparent closures kept. */
+  int holdout;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 

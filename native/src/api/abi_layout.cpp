@@ -119,6 +119,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_instance_desc, attribute_count),
     LT_FIELD(lt_instance_desc, motion_transforms),
     LT_FIELD(lt_instance_desc, motion_step_count),
+    LT_FIELD(lt_instance_desc, holdout),
 
     LT_CONST(lt_light_type, LT_LIGHT_POINT),
     LT_CONST(lt_light_type, LT_LIGHT_SPOT),

@@ -491,6 +491,7 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
       inst.materials.push_back(m);
     }
     inst.visibility = d->visibility & LT_VISIBLE_ALL;
+    inst.holdout = d->holdout != 0;
     require(finite_array(d->color, 4), "instance colour must be finite");
     std::copy(d->color, d->color + 4, inst.color);
     inst.pass_index = float(d->pass_index);

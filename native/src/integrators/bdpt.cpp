@@ -280,7 +280,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       }
       if (!found && medium < 0) {
         bool background = count == 1;
-        if (background && first) first->escaped = true;
+        if (background && first && s_.transparent_background) first->transparent += average(beta);
         if (!(background && s_.transparent_background)) {
           auto reach = [&](int light, const Spectrum& le) {
             v = PathVertex();
@@ -327,6 +327,11 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       const float footprint_here = mode == Mode::Radiance ? footprint + ctx.ray_length * cs_.dD : light_footprint(sp.p);
       if (material.uses_bump()) add_differentials(scene_.geometry, sp, footprint_here, &ctx);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
+      // Holdout on the camera's side of the path (light subpaths see surfaces as they are; their
+      // t = 1 splats onto holdout objects are dropped in splat_t1).
+      if (mode == Mode::Radiance && count == 1 && first &&
+          !hold_out(scene_.geometry.instance(sp.instance).holdout, &v.bsdf, &le, beta, &first->transparent))
+        break;
       if (!is_black(sf.smooth)) smooth_n = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
       // A transparent pass makes no vertex (connections see the surface through
       // shadow_transmittance); an emitting surface stays a vertex.
@@ -439,8 +444,8 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   FirstSegment first;
   const int count = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, z0.stack, path, &first);
   // The data passes, from the first vertex (Cycles': none behind a medium vertex).
+  out_.alpha = 1 - first.transparent;
   if (count >= 2) {
-    out_.alpha = 1;
     if (path[1].type == VertexType::Surface) {
       out_.depth = first.t;
       out_.normal = path[1].frame.n;
@@ -448,8 +453,6 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
       if (s_.light_passes) add_light_colors(&out_, path[1].bsdf, path[1].wo, path[1].beta);
       if (s_.data_passes) write_data_passes(scene_, ctx_.camera, s_, path[1].sp, path[1].beta, &out_);
     }
-  } else if (first.escaped) {
-    out_.alpha = s_.transparent_background ? 0.0f : 1.0f;
   }
   return count;
 }
@@ -625,6 +628,9 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
                     std::vector<Splat>& splats) {
   const PathVertex& qs = light[s - 1];
   if (!scatters(qs)) return;
+  // The camera sees a holdout object as its Transparent lobes alone (hold_out), which no
+  // connection reaches: light it reflects never splats.
+  if (qs.type == VertexType::Surface && scene_.geometry.instance(qs.sp.instance).holdout) return;
   const float kinds = kind_limit_factor(light, camera, s, 1);
   if (!(kinds > 0)) return;
   const Camera& cam = ctx_.camera;

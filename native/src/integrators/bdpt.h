@@ -174,8 +174,8 @@ class Bdpt {
   // How the camera ray's first segment ended, for the data passes: escaped to the background, or
   // at the first vertex, t along the last ray (as the path tracer's depth).
   struct FirstSegment {
-    bool escaped = false;
     float t = 1e30f;
+    float transparent = 0;  // of the film (1 - alpha): held out, or escaped to a transparent film
   };
   int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeStack stack, std::vector<PathVertex>& path,
                   FirstSegment* first);

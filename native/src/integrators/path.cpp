@@ -23,6 +23,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   const VolumeEstimator est = s.volume_estimator;
   const float step = s.volume_step;
   Spectrum L(0.0f), beta(1.0f);
+  float transparent = 0;  // of the film, 1 - alpha (Cycles accumulates it so; hold_out)
   Ray ray = camera_ray;
   unsigned visibility = kVisCamera;
   Bounces b;
@@ -121,7 +122,6 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
 
     if (medium >= 0) {
       // A real collision: beta already holds sigma_s T / pdf (medium.h).
-      if (b.from_camera()) out.alpha = 1;
       if (is_black(beta) || volume > s.volume_bounces || b.total > s.max_bounces) break;
       const Phase& phase = scene.media[medium].phase();
       const Vec3 wo = normalize(-ray.d);
@@ -151,7 +151,10 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       ray.tmax = INFINITY;
     } else if (!found) {
       bool background = b.from_camera();
-      if (!(background && s.transparent_background)) {
+      // Film > Transparent: the camera ray, through transparent passes too, ends transparent.
+      const bool transparent_background = b.total == 0 && s.transparent_background;
+      if (transparent_background) transparent += average(beta);
+      if (!transparent_background) {
         if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
           ShadingContext wc = world_context(ray.d);
           describe_ray(b, visibility, &wc);
@@ -161,7 +164,6 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
           add(beta * radiance * mis_emitter(i, ray.d, INFINITY));
         });
       }
-      if (background && out.alpha == 0) out.alpha = s.transparent_background ? 0.0f : 1.0f;
       break;
     } else {
       SurfacePoint sp = scene.geometry.surface(hit);
@@ -179,13 +181,14 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       const Material& material = scene.material(sp.material);
       if (material.uses_bump()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
       Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
+      if (b.total == 0 && !hold_out(scene.geometry.instance(sp.instance).holdout, &bsdf, &emitted, beta, &transparent))
+        break;
       bsdf.sample_below_shading(true);
       if (!is_black(sf.smooth)) ctx.N = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
       const Frame frame = local_frame(sf, ng);
       const Vec3 ns = frame.n;
       if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
       if (b.from_camera()) {
-        out.alpha = 1;
         out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
       }
       if (!is_black(emitted)) {
@@ -268,6 +271,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (!russian_roulette(b.total, &beta, sampler)) break;
   }
   out.radiance = L;
+  out.alpha = 1 - transparent;
   return out;
 }
 

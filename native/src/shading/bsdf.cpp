@@ -1283,6 +1283,13 @@ Spectrum Bsdf::transparency() const {
   return t;
 }
 
+void Bsdf::keep_transparent() {
+  int kept = 0;
+  for (int i = 0; i < count_; ++i)
+    if (lobes_[i].type == LobeType::Transparent) lobes_[kept++] = lobes_[i];
+  count_ = kept;
+}
+
 bool Bsdf::pass_transparent(float u, Spectrum* beta) {
   float through = 0, rest = 0;
   for (int i = 0; i < count_; ++i)

@@ -184,7 +184,7 @@ class Program {
   bool uses_bump() const { return uses_bump_; }
   // The program sets the shading normal (a displacement's bump): Program::run keeps room for it.
   bool sets_normal() const { return sets_normal_; }
-  // Whether the program may give a Transparent lobe (Transparent, Holdout, Principled Alpha): then
+  // Whether the program may give a Transparent lobe (Transparent, Principled Alpha): then
   // shadow rays look at it (Cycles' transparent shadows).
   bool may_be_transparent() const;
   // Whether the program is emission closures with constant inputs only (a constant world): then

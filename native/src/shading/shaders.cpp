@@ -381,9 +381,8 @@ void exec_shaders_family(const Instr& in, Machine& m) {
       l.weight = weight * non_negative(m.v(in.in[1]));
       break;
     case kOpHoldout:
-      l.type = LobeType::Transparent;
-      l.weight = weight;
-      break;
+      m.bsdf->add_holdout(weight);
+      return;
     default:
       return;
   }

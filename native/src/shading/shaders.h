@@ -20,7 +20,7 @@ enum ShaderOp : uint32_t {
   // emission strength f, alpha f, clearcoat normal v, tangent v; params: distribution, subsurface method
   kOpPrincipled,
   kOpMixWeights,  // in: weight v, fac f; out: weight * (1 - fac) v, weight * fac v (fac clamped to [0, 1])
-  kOpHoldout,     // in: weight v (Holdout: rendered as Transparent until holdout passes exist)
+  kOpHoldout,     // in: weight v (no lobe: Bsdf::add_holdout; opaque to shadow rays, as Cycles')
   // in: weight v, normal v, color v, roughness f, anisotropy f, rotation f, tangent v; param: distribution
   kOpAnisotropic,
   kOpVelvet,       // in: weight v, normal v, color v, sigma f
