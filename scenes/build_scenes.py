@@ -386,8 +386,9 @@ def _mix_with(name, node_type, fac, color):
 def build_holdout(scene):
     """Issue 16's holdout: on a ground under an area light and a sky, a sphere of Mix Shader
     (Diffuse, Holdout 0.4), a cube that is a holdout object (Object.is_holdout), a sphere of Mix
-    (Diffuse, Transparent 0.5) in a holdout collection (LayerCollection.holdout), and a card of
-    Holdout alone, which casts its shadow (a Holdout closure is opaque to shadow rays)."""
+    (Diffuse, Transparent 0.5) in a holdout collection (LayerCollection.holdout), a card of
+    Holdout alone, which casts its shadow (a Holdout closure is opaque to shadow rays), and a card
+    of Mix (Diffuse, Transparent 0.5) against the sky."""
     set_world(scene, (0.3, 0.45, 0.7), 0.8)
     ground = add_object(scene, "Ground", mesh_plane("Ground", 8.0))
     assign(ground, diffuse("Ground", WHITE))
@@ -405,6 +406,9 @@ def build_holdout(scene):
     mat, nt, out = _material("HoldoutCard")
     nt.links.new(nt.nodes.new("ShaderNodeHoldout").outputs[0], out.inputs["Surface"])
     assign(card, mat)
+    # Against the sky: with Film > Transparent the sky behind a transparent surface is transparent.
+    see_through = add_object(scene, "SeeThrough", mesh_plane("SeeThrough", 0.8), (0.3, 2.5, 1.75), (90, 0, 0))
+    assign(see_through, _mix_with("SeeThrough", "ShaderNodeBsdfTransparent", 0.5, WHITE))
     add_light(scene, "Area", "AREA", 400.0, (0.5, -1.0, 3.0), size=1.5)
     add_camera(scene, (0.0, -4.5, 2.2), (0.0, 0.0, 0.5), lens=35.0)
 

@@ -11,17 +11,17 @@ namespace {
 
 using namespace lt_test;
 
-// Seen from above (orthographic, 4 x 2 m): on the left a diffuse plane that is a holdout object,
+// Seen from above (3.6 x 1.8 m): on the left a diffuse plane that is a holdout object,
 // on the right a plane of Mix Shader (Holdout 0.3, Diffuse 0.7); an area light over both, and,
 // for the volumetric integrator, a fog box out of view (so that its media code runs).
 ScenePtr holdout_scene(bool fog) {
   ScenePtr s = new_scene();
   set_world(s.get(), {0.2f, 0.3f, 0.4f}, 1);
-  const int mesh = add_mesh(s.get(), plane(2, 2));
+  const int mesh = add_mesh(s.get(), plane(3, 4));  // past the frame's edges: no background
   const int white = add_diffuse(s.get(), {0.8f, 0.8f, 0.8f});
   lt_instance_desc d{};
   d.mesh = mesh;
-  const Xform left = translate({-1, 0, 0});
+  const Xform left = translate({-1.5f, 0, 0});
   std::copy(left.begin(), left.end(), d.transform);
   d.materials = &white;
   d.material_count = 1;
@@ -33,10 +33,11 @@ ScenePtr holdout_scene(bool fog) {
   auto w = p.mix(p.one(), 0.7f);
   p.emit(lt::kOpHoldout, {w.first}, {});
   p.diffuse(w.second, {0.8f, 0.8f, 0.8f});
-  add_instance(s.get(), mesh, add_material(s.get(), p), translate({1, 0, 0}));
+  add_instance(s.get(), mesh, add_material(s.get(), p), translate({1.5f, 0, 0}));
   add_light(s.get(), area_light(LT_AREA_SQUARE, 3, 3, translate({0, 0, 2}), 200));
   if (fog) add_object(s.get(), box({40, 40, 0}, {41, 41, 1}), add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, 1)));
-  set_camera(s.get(), orthographic_camera(look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0}), 4));
+  // A perspective camera: BDPT connects light vertices to it (t = 1), not to an orthographic one.
+  set_camera(s.get(), perspective_camera(look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0})));
   check(lt_scene_commit(s.get()), "lt_scene_commit");
   return s;
 }
