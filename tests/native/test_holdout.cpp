@@ -35,7 +35,8 @@ ScenePtr holdout_scene(bool fog) {
   p.diffuse(w.second, {0.8f, 0.8f, 0.8f});
   add_instance(s.get(), mesh, add_material(s.get(), p), translate({1.5f, 0, 0}));
   add_light(s.get(), area_light(LT_AREA_SQUARE, 3, 3, translate({0, 0, 2}), 200));
-  if (fog) add_object(s.get(), box({40, 40, 0}, {41, 41, 1}), add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, 1)));
+  if (fog)
+    add_object(s.get(), box({40, 40, 0}, {41, 41, 1}), add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, 1)));
   // A perspective camera: BDPT connects light vertices to it (t = 1), not to an orthographic one.
   set_camera(s.get(), perspective_camera(look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0})));
   check(lt_scene_commit(s.get()), "lt_scene_commit");
