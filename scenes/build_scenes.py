@@ -413,6 +413,26 @@ def build_holdout(scene):
     add_camera(scene, (0.0, -4.5, 2.2), (0.0, 0.0, 0.5), lens=35.0)
 
 
+def build_light_groups(scene):
+    """Issue 16's light groups: a floor, a diffuse sphere and a glossy box lit by an area light
+    (group "key"), a point light and an emissive ball (group "fill") and a world in no group
+    (view layer light groups "key" and "fill"; Cycles writes Combined_key and Combined_fill)."""
+    set_world(scene, (0.2, 0.25, 0.3), 0.5)
+    assign(add_object(scene, "Floor", mesh_plane("Floor", 8.0)), diffuse("Floor", WHITE))
+    assign(add_object(scene, "Ball", mesh_sphere("Ball", 0.5), (-0.6, 0.2, 0.5)), diffuse("Ball", RED))
+    assign(add_object(scene, "Box", mesh_box("Box", (0.7, 0.7, 0.7)), (0.7, 0.3, 0), (0, 0, 25)),
+           glossy("Box", (0.8, 0.8, 0.8), 0.3))
+    glow = add_object(scene, "Glow", mesh_sphere("Glow", 0.15), (0.1, -0.8, 0.15))
+    assign(glow, emission("Glow", (1.0, 0.6, 0.3), 6.0))
+    key = add_light(scene, "Key", "AREA", 300.0, (-1.0, -1.5, 3.0), rotation=(30, 0, -20), size=1.0)
+    fill = add_light(scene, "Fill", "POINT", 150.0, (2.0, -1.0, 1.5), radius=0.1)
+    for name in ("key", "fill"):
+        scene.view_layers[0].lightgroups.add(name=name)
+    key.lightgroup = "key"
+    fill.lightgroup = glow.lightgroup = "fill"
+    add_camera(scene, (0.0, -4.5, 2.0), (0.0, 0.0, 0.4), lens=35.0)
+
+
 def checker_pixels(size=64, squares=8):
     """sRGB-encoded colour checker: warm/cool squares, brightness ramping along U."""
     y, x = np.mgrid[0:size, 0:size]
@@ -1852,6 +1872,7 @@ SCENES = {
     "layered_material": (build_layered_material, (96, 64), 128),
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
     "holdout": (build_holdout, (64, 48), 128),
+    "light_groups": (build_light_groups, (80, 60), 128),
     "gltf_pbr": (build_gltf_pbr, (80, 80), 256),
     "wide_sun": (build_wide_sun, (64, 48), 128),
     "bsdf_zoo": (build_bsdf_zoo, (128, 80), 128),

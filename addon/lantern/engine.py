@@ -70,18 +70,30 @@ def _pass_enabled(scene, view_layer, flag):
     return bool(getattr(view_layer, flag, False))
 
 
+def lightgroup_passes(view_layer):
+    """Cycles' light group passes, one per view-layer light group: Combined_<name>, RGB
+    (docs/passes.md), read as pass core.LIGHTGROUP_PASS + the group's index."""
+    return [("Combined_%s" % g.name, core.LIGHTGROUP_PASS + i, 3, "RGB", 'COLOR', None)
+            for i, g in enumerate(getattr(view_layer, "lightgroups", ()))]
+
+
 def enabled_passes(scene, view_layer):
-    return [p for p in PASSES if _pass_enabled(scene, view_layer, p[5])]
+    return [p for p in PASSES if _pass_enabled(scene, view_layer, p[5])] + lightgroup_passes(view_layer)
 
 
 def pass_settings(passes, pixels):
-    """The render settings for these passes: the core keeps only them (lt_render_settings.passes),
-    and counts what Blender holds besides (caller_bytes) in its memory check: the render result's
-    passes (_PassWriter's band buffers and band results are a few MiB)."""
+    """The render settings for these passes: the core keeps only them (lt_render_settings.passes
+    and the light groups' names), and counts what Blender holds besides (caller_bytes) in its
+    memory check: the render result's passes (_PassWriter's band buffers and band results are a
+    few MiB)."""
     mask = 0
+    lightgroups = []
     for p in passes:
-        mask |= 1 << p[1]
-    return dict(passes=mask, caller_bytes=pixels * sum(p[2] for p in passes) * 4)
+        if p[1] >= core.LIGHTGROUP_PASS:
+            lightgroups.append(p[0][len("Combined_"):])
+        else:
+            mask |= 1 << p[1]
+    return dict(passes=mask, lightgroups=lightgroups, caller_bytes=pixels * sum(p[2] for p in passes) * 4)
 
 
 def frame_size(rd):

@@ -131,3 +131,19 @@ def test_light_passes_recombine_in_blender(light_runs):
         total = total + (r[kind + "Dir"][..., :3] + r[kind + "Ind"][..., :3]) * r[kind + "Col"][..., :3]
     combined = r.combined[..., :3]
     assert np.allclose(total, combined, rtol=1e-4, atol=1e-6), np.abs(total - combined).max()
+
+
+def test_light_groups_agree_with_cycles(scene_factory, outdir):
+    """Light groups (scenes: light_groups, view layer groups "key" and "fill", the world in none):
+    Combined_key and Combined_fill by test_agreement.py's rule, each pass as an image."""
+    runs = {}
+    for engine in (ru.CYCLES, ru.LANTERN):
+        for seed in (0, 1):
+            scene = scene_factory("light_groups")
+            runs.setdefault(engine, []).append(ru.render(scene, engine, 128, seed=seed))
+    for name in ("Combined_key", "Combined_fill"):
+        assert name in runs[ru.LANTERN][0], "Lantern wrote no %s (has %s)" % (name, sorted(runs[ru.LANTERN][0]))
+        lantern = [r[name][..., :3] for r in runs[ru.LANTERN]]
+        cycles = [r[name][..., :3] for r in runs[ru.CYCLES]]
+        report, _ = ru.agreement_report("light_groups_" + name, lantern, cycles, outdir, 16, 1e-5)
+        assert report == "", report

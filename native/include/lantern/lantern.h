@@ -37,7 +37,8 @@ extern "C" {
  * Noisy Image and Denoising passes); 12: Cycles' light and data passes (LT_PASS_DIFFUSE_DIRECT
  * on), lt_render_settings' mist fields, lt_scene_set_material_pass_index; 13: motion blur (motion
  * steps of lt_mesh_desc, lt_instance_desc and lt_camera_desc; motion counts in lt_scene_stats);
- * 14: curves and points (lt_curves_desc, lt_scene_add_curves); 15: lt_instance_desc.holdout. */
+ * 14: curves and points (lt_curves_desc, lt_scene_add_curves); 15: lt_instance_desc.holdout; light
+ * groups (the lightgroup fields, lt_scene_set_world_lightgroup, lt_render_read_lightgroup_rows). */
 #define LT_ABI_VERSION 15
 
 enum lt_status {
@@ -250,6 +251,9 @@ typedef struct lt_instance_desc {
   /* Nonzero: a holdout object (Object.holdout_get: its own flag or a holdout collection's), which
    * camera rays see as Cycles does: transparent film where it covers, its Transparent closures kept. */
   int holdout;
+  /* The light group of its emission: 0 none, k > 0 the render's light group k - 1
+   * (lt_render_settings.lightgroup_count); the same in lt_light_desc. */
+  int lightgroup;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 
@@ -266,6 +270,7 @@ typedef struct lt_light_desc {
   float size_x, size_y;
   float angle; /* sun: angular diameter, radians */
   unsigned visibility;
+  int lightgroup; /* 0 none, k > 0 light group k - 1 (lt_instance_desc.lightgroup) */
 } lt_light_desc;
 LT_API int lt_scene_add_light(lt_scene* scene, const lt_light_desc* desc);
 
@@ -331,6 +336,8 @@ LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
  * 1024 x 512; at most 8192 wide). visibility: LT_VISIBLE_CAMERA, whether camera rays see it. */
 LT_API int lt_scene_set_world_program(lt_scene* scene, const lt_shader_program* program, int map_resolution,
                                       unsigned visibility);
+/* The world's light group: 0 none, k > 0 light group k - 1 (lt_instance_desc.lightgroup). */
+LT_API int lt_scene_set_world_lightgroup(lt_scene* scene, int lightgroup);
 
 /* ---- volumes (docs/volumes.md) ---------------------------------------------------------------
  * A volume is a list of components, each a volume shader node with Cycles' formulas: Principled
@@ -519,6 +526,12 @@ typedef struct lt_render_settings {
   /* The Mist pass, as Cycles (World > Mist Pass): start and depth in world units, falloff the
    * exponent (Quadratic 2, Linear 1, Inverse Quadratic 0.5). Defaults 5, 25, 2 (Blender's). */
   float mist_start, mist_depth, mist_falloff;
+  /* Light groups (Cycles' Combined_<name> passes): how many (0 to 1024; default 0: none, and no
+   * cost) and their names (lightgroup_count strings, the EXR channels' "Combined_<name>.R"). Each
+   * is the radiance from the emitters of that group (lightgroup fields); the groups sum to
+   * Combined's RGB where every emitter is in one. */
+  int lightgroup_count;
+  const char* const* lightgroup_names;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -629,6 +642,10 @@ LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t fl
 /* The same for grid rows [y0, y0 + rows) only (width*rows*3 floats; the size from the call above
  * with out == NULL), read through a few rows' buffer. Added without an ABI version bump (still 7). */
 LT_API int lt_render_read_strategy_grid_rows(lt_render* render, int y0, int rows, float* out, size_t float_count);
+/* Rows [y0, y0 + rows) of light group `group`'s pass (RGB, width*rows*3 floats; as
+ * lt_render_read_pass_rows, read between passes while rendering). */
+LT_API int lt_render_read_lightgroup_rows(lt_render* render, int group, int y0, int rows, float* out,
+                                          size_t float_count);
 
 LT_API void lt_render_destroy(lt_render* render);
 

@@ -120,6 +120,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_instance_desc, motion_transforms),
     LT_FIELD(lt_instance_desc, motion_step_count),
     LT_FIELD(lt_instance_desc, holdout),
+    LT_FIELD(lt_instance_desc, lightgroup),
 
     LT_CONST(lt_light_type, LT_LIGHT_POINT),
     LT_CONST(lt_light_type, LT_LIGHT_SPOT),
@@ -141,6 +142,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_light_desc, size_y),
     LT_FIELD(lt_light_desc, angle),
     LT_FIELD(lt_light_desc, visibility),
+    LT_FIELD(lt_light_desc, lightgroup),
 
     LT_CONST(lt_camera_type, LT_CAMERA_PERSPECTIVE),
     LT_CONST(lt_camera_type, LT_CAMERA_ORTHOGRAPHIC),
@@ -270,6 +272,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_settings, mist_start),
     LT_FIELD(lt_render_settings, mist_depth),
     LT_FIELD(lt_render_settings, mist_falloff),
+    LT_FIELD(lt_render_settings, lightgroup_count),
+    LT_FIELD(lt_render_settings, lightgroup_names),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),

@@ -28,6 +28,8 @@ namespace {
 
 using lt::InvalidArgument;
 
+constexpr int kMaxLightgroups = 1024;  // lt_render_settings.lightgroup_count
+
 template <class F>
 int guarded(F f) {
   try {
@@ -492,6 +494,8 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
     }
     inst.visibility = d->visibility & LT_VISIBLE_ALL;
     inst.holdout = d->holdout != 0;
+    require(d->lightgroup >= 0 && d->lightgroup <= kMaxLightgroups, "instance light group out of range");
+    inst.lightgroup = d->lightgroup - 1;
     require(finite_array(d->color, 4), "instance colour must be finite");
     std::copy(d->color, d->color + 4, inst.color);
     inst.pass_index = float(d->pass_index);
@@ -567,6 +571,8 @@ int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
         break;
     }
     l.visibility = d->visibility & LT_VISIBLE_ALL;
+    require(d->lightgroup >= 0 && d->lightgroup <= kMaxLightgroups, name + ": light group out of range");
+    l.lightgroup = d->lightgroup - 1;
     scene->scene.lamp_lights.push_back(l);
   });
 }
@@ -726,6 +732,15 @@ int lt_scene_set_world_program(lt_scene* scene, const lt_shader_program* p, int 
     w.set_program(std::move(program), map_resolution);
     w.camera_visible = (visibility & LT_VISIBLE_CAMERA) != 0;
     scene->scene.world_set = true;
+  });
+}
+
+int lt_scene_set_world_lightgroup(lt_scene* scene, int lightgroup) {
+  return guarded([&] {
+    require(scene != nullptr, "lt_scene_set_world_lightgroup: NULL scene");
+    require(lightgroup >= 0 && lightgroup <= kMaxLightgroups, "world light group out of range");
+    begin_edit(scene);
+    scene->scene.world.lightgroup = lightgroup - 1;
   });
 }
 
@@ -929,6 +944,14 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.mist_depth = s->mist_depth;
     is.mist_falloff = s->mist_falloff;
     is.strategy_depth = s->integrator == LT_INTEGRATOR_BIDIRECTIONAL ? s->strategy_view_depth : 0;
+    require(s->lightgroup_count >= 0 && s->lightgroup_count <= kMaxLightgroups &&
+                (s->lightgroup_count == 0 || s->lightgroup_names),
+            "light group count out of range (0 to 1024) or their names NULL");
+    for (int g = 0; g < s->lightgroup_count; ++g) {
+      require(s->lightgroup_names[g] != nullptr, "light group " + std::to_string(g) + " has no name");
+      rs.lightgroup_names.emplace_back(s->lightgroup_names[g]);
+    }
+    is.lightgroups = s->lightgroup_count;
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;
@@ -1038,6 +1061,20 @@ void read_strategy_rows(lt_render* render, int y0, int rows, float* out, size_t 
   job.film().read_strategy_grid(columns, depth, out, y0, rows);
 }
 }  // namespace
+
+int lt_render_read_lightgroup_rows(lt_render* render, int group, int y0, int rows, float* out, size_t float_count) {
+  return guarded([&] {
+    require(render && out, "lt_render_read_lightgroup_rows: NULL argument");
+    const auto& film = render->job->film();
+    require(rows >= 0 && y0 >= 0 && y0 <= film.height() - rows,
+            "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) + " are not within the " +
+                std::to_string(film.height()) + " rows of the render region");
+    const size_t need = size_t(film.width()) * rows * 3;
+    require(float_count == need, "light group buffer holds " + std::to_string(float_count) + " floats; " +
+                                     std::to_string(need) + " are needed");
+    film.read_lightgroup_rows(group, y0, rows, out);
+  });
+}
 
 int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count) {
   return guarded([&] { read_pass_rows(render, pass, 0, -1, out, float_count); });

@@ -177,6 +177,7 @@ size_t FilmLayout::bytes_per_pixel() const {
   if (squares) floats += 3;
   if (splats) floats += 6;
   floats += size_t(strategy_cells) * 6;
+  floats += size_t(lightgroups) * (splats ? 6 : 3);
   const unsigned kept = with_dependencies(passes);
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
     if (kept & pass_bit(Pass(p))) {
@@ -214,6 +215,10 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
     sums_[p - kFirstSummedPass].assign(pass_channels(Pass(p)) * n, 0.0f);
     if (layout_.splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p)))
       light_splat_[p - kFirstSummedPass].assign(3 * n, 0.0f);
+  }
+  if (layout_.lightgroups > 0) {
+    lightgroup_.assign(size_t(layout_.lightgroups) * 3 * n, 0.0f);
+    if (layout_.splats) lightgroup_splat_.assign(lightgroup_.size(), 0.0f);
   }
   if (layout_.strategy_cells > 0) {
     strategies_.assign(n * layout_.strategy_cells * 3, 0.0f);
@@ -266,6 +271,11 @@ void Film::add(int x, int y, const SampleValue& s) {
       else
         a[i] = p == Pass::ObjectIndex ? s.object_index : s.material_index;
     }
+  }
+  if (!lightgroup_.empty() && s.lightgroups) {
+    float* g = &lightgroup_[size_t(layout_.lightgroups) * 3 * i];
+    for (int j = 0; j < layout_.lightgroups; ++j)
+      for (int k = 0; k < 3; ++k) g[3 * j + k] += s.lightgroups[j][k];
   }
   alpha_[i] += s.alpha;
   if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
@@ -555,6 +565,34 @@ bool Film::read_light_tracing(Pass pass, float* out) const {
   if (a.empty()) return false;
   const double scale = 1.0 / double(light_paths_);
   for (size_t i = 0; i < a.size(); ++i) out[i] = float(a[i] * scale);
+  return true;
+}
+
+void Film::read_lightgroup_rows(int group, int y0, int rows, float* out) const {
+  if (group < 0 || group >= layout_.lightgroups)
+    throw InvalidArgument("light group " + std::to_string(group) + " is not one of the render's " +
+                          std::to_string(layout_.lightgroups));
+  if (y0 < 0 || rows < 0 || y0 > height_ - rows)
+    throw InvalidArgument("rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                          " are not within the film's " + std::to_string(height_) + " rows");
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  const size_t first = size_t(y0) * width_, n = size_t(rows) * width_, g = size_t(layout_.lightgroups);
+  const double per_path = light_paths_ && !lightgroup_splat_.empty() ? 1.0 / double(light_paths_) : 0.0;
+  for (size_t j = 0; j < n; ++j) {
+    const size_t i = first + j, at = (i * g + size_t(group)) * 3;
+    const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+    for (int k = 0; k < 3; ++k)
+      out[3 * j + k] = float(lightgroup_[at + k] * inv + (per_path > 0 ? lightgroup_splat_[at + k] * per_path : 0.0));
+  }
+}
+
+bool Film::read_lightgroup_light_tracing(int group, float* out) const {
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  if (lightgroup_splat_.empty() || !light_paths_ || group < 0 || group >= layout_.lightgroups) return false;
+  const size_t n = size_t(width_) * height_, g = size_t(layout_.lightgroups);
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k)
+      out[3 * i + k] = float(lightgroup_splat_[(i * g + size_t(group)) * 3 + k] / double(light_paths_));
   return true;
 }
 

@@ -72,6 +72,13 @@ struct SampleValue {
   // (1 - mist), object and material pass_index.
   Vec3 position{0.0f}, uv{0.0f};
   float mist = 0, object_index = 0, material_index = 0;
+  // Light groups (Cycles' Combined_<group>): the radiance per group of the emitter each
+  // contribution comes from, into a buffer of FilmLayout::lightgroups the render job zeroes
+  // (CameraSample::lightgroups); null when the film keeps none.
+  Spectrum* lightgroups = nullptr;
+  void add_lightgroup(int group, const Spectrum& c) {
+    if (lightgroups && group >= 0) lightgroups[group] += c;
+  }
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
@@ -146,6 +153,7 @@ struct FilmLayout {
   bool squares = true;
   bool splats = false;
   int strategy_cells = 0;
+  int lightgroups = 0;  // light group passes (Combined_<group>), RGB each
   // Bytes per pixel of the accumulators and the published image.
   size_t bytes_per_pixel() const;
 };
@@ -196,6 +204,16 @@ class Film {
     for (int k = 0; k < 3; ++k) a[3 * size_t(pixel) + k] += v[k];
   }
   bool has_light_passes() const;
+  // Light groups: a splat's part (BDPT), and the group's pass, RGB per pixel as read_rows (the
+  // mean over samples plus the splats over the light paths); light_tracing: the splats' part alone
+  // (false without splats).
+  int lightgroups() const { return layout_.lightgroups; }
+  void add_lightgroup_splat(uint32_t pixel, int group, const Spectrum& v) {
+    if (lightgroup_splat_.empty() || group < 0) return;
+    for (int k = 0; k < 3; ++k) lightgroup_splat_[(size_t(pixel) * layout_.lightgroups + group) * 3 + k] += v[k];
+  }
+  void read_lightgroup_rows(int group, int y0, int rows, float* out) const;
+  bool read_lightgroup_light_tracing(int group, float* out) const;
   // Light paths behind the published splats (0 without splats): what a merge weights them by.
   uint64_t published_light_paths() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -296,6 +314,7 @@ class Film {
   // not kept; light_splat_: the light passes' part of the splats (BDPT).
   std::vector<float> sums_[kSummedPasses];
   std::vector<float> light_splat_[kLightParts];
+  std::vector<float> lightgroup_, lightgroup_splat_;  // per pixel, per group, RGB sums
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;

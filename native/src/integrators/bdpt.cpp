@@ -183,7 +183,7 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   PathVertex& v = camera[t - 1];
   if (v.type == VertexType::Surface && v.light < 0) {
     // Emission no light sampler knows: s = 0 alone finds it, with no MIS partner.
-    if (!is_black(le)) add(v.beta * le, 0, t);
+    if (!is_black(le)) add(v.beta * le, 0, t, scene_.geometry.instance(v.sp.instance).lightgroup);
     return;
   }
   if (t - 2 > max_depth() || is_black(le)) return;
@@ -194,7 +194,7 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   // Strategy s = 1 would have picked this light from the vertex before (mis_weight).
   const PathVertex& before = camera[t - 2];
   v.pick_nee = before.type == VertexType::Camera ? 0.0f : lights_.pmf_nee(before.p, nee_normal(before), v.light);
-  add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t, pixel_center_), 0, t,
+  add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t, pixel_center_), 0, t, lights_.lightgroup(v.light),
       v.infinite && v.light == lights_.world_light());
 }
 
@@ -209,7 +209,7 @@ void Bdpt::media_emission_reached(std::vector<PathVertex>& camera, int count, co
   const float kinds_within = kind_limit_factor(camera, camera, 0, count + 1);
   if (!(kinds_within > 0)) return;
   Spectrum le = media_emission(scene_, stack, ray, ray.tmin, t_end, sampler_, s_.volume_estimator, s_.volume_step);
-  if (!is_black(le)) add(beta * le * kinds_within, 0, count + 1);
+  if (!is_black(le)) add(beta * le * kinds_within, 0, count + 1, -1);
 }
 
 // Extends `path` from vertex 0 by sampling the BSDFs and phase functions (pbrt-v4's RandomWalk),
@@ -594,6 +594,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     const Light& l = lights_.light(li);
     PathVertex& sampled = endpoint(VertexType::Light);
     sampled.light = li;
+    connect_group_ = lights_.lightgroup(li);
     sampled.pick_nee = pmf;
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
@@ -694,12 +695,14 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
       Spectrum v = base * (h * w);
       if (is_finite(v) && !is_black(v))
         splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v,
-                          strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1, s - 1, first});
+                          strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1, s - 1, first,
+                          lights_.lightgroup(light[0].light)});
     }
 }
 
 SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   strategies_ = strategies;
+  out_.lightgroups = cs_.lightgroups;
   const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
   std::vector<PathVertex>& camera = scratch_.camera;
   std::vector<PathVertex>& light = scratch_.light;
@@ -716,8 +719,9 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   for (int t = 2; t <= nt; ++t)
     for (int s = 1; s <= s_max; ++s) {
       if (s + t - 2 > max_depth()) break;
+      connect_group_ = lights_.lightgroup(light[0].light);  // s = 1: connect() sets its sample's
       Spectrum c = connect(light, camera, s, t);
-      if (!is_black(c)) add(c, s, t);
+      if (!is_black(c)) add(c, s, t, connect_group_);
     }
   for (int s = 2; s <= ns; ++s)
     if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
@@ -751,6 +755,7 @@ class BdptIntegrator final : public Integrator {
     for (size_t i = 0; i < p.tiles.size(); ++i)
       for (const Splat& sp : p.tiles[i]) {
         film.add_splat(sp.pixel, sp.value, int(i & 1));
+        film.add_lightgroup_splat(sp.pixel, sp.lightgroup, sp.value);
         if (ctx_.settings.light_passes) {
           Spectrum parts[kLightParts];
           add_light_part(parts, sp.value, sp.bounces, sp.first, false);

@@ -41,6 +41,7 @@ struct IntegratorSettings {
   // data passes of the first hit (position, UV, mist, indices); Mist as Cycles' World > Mist Pass.
   bool light_passes = false, data_passes = false;
   float mist_start = 5, mist_depth = 25, mist_falloff = 2;
+  int lightgroups = 0;  // light group passes the film keeps (SampleValue::lightgroups)
 };
 
 // The Mist pass's value for a sample whose camera path scatters first at p with throughput beta
@@ -60,8 +61,9 @@ struct CameraSample {
   Ray ray;
   Vec2 film;
   Vec2 pixel_center;
-  float dP = 0, dD = 0;   // the ray's compact differentials (Camera::differentials), for bump
-  Vec2 lens{0.5f, 0.5f};  // the lens sample the ray was generated with (Camera::generate)
+  float dP = 0, dD = 0;             // the ray's compact differentials (Camera::differentials), for bump
+  Vec2 lens{0.5f, 0.5f};            // the lens sample the ray was generated with (Camera::generate)
+  Spectrum* lightgroups = nullptr;  // the sample's light group buffer, zeroed (SampleValue::lightgroups)
 };
 
 // A light-tracing contribution to a pixel of the render region (BDPT's t = 1), and its cell in
@@ -74,6 +76,7 @@ struct Splat {
   // its first bounce) and that vertex's split (light_passes.h).
   int32_t bounces = 0;
   FirstBounce first;
+  int32_t lightgroup = -1;  // its light's group
 };
 
 // The strategy view's grid: row = path depth d = s + t - 2, column = s (0 .. depth + 2 - 1).

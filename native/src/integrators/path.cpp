@@ -19,6 +19,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   const Ray& camera_ray = cs.ray;
   const float time = camera_ray.time;  // the whole path's (motion blur)
   SampleValue out;
+  out.lightgroups = cs.lightgroups;
   const LightSet& lights = scene.lights;
   const VolumeEstimator est = s.volume_estimator;
   const float step = s.volume_step;
@@ -45,15 +46,18 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   // Light passes (light_passes.h): the first scattering vertex's split, and at the vertex being
   // lit, the split towards the light sampled (first vertex only).
   FirstBounce first, nee_first;
-  // An emitter reached (environment: the world) and a next-event estimate from the current vertex.
-  auto add = [&](const Spectrum& c, bool environment = false) {
+  // An emitter of light group `group` reached (environment: the world) and a next-event estimate
+  // from the current vertex.
+  auto add = [&](const Spectrum& c, int group, bool environment = false) {
     const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
     L += v;
+    out.add_lightgroup(group, v);
     if (s.light_passes) add_light_part(out.light, v, b.total, first, environment);
   };
-  auto add_nee = [&](const Spectrum& c) {
+  auto add_nee = [&](const Spectrum& c, int group) {
     const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
     L += v;
+    out.add_lightgroup(group, v);
     if (s.light_passes) add_light_part(out.light, v, b.total + 1, b.total == 0 ? nee_first : first, false);
   };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
@@ -87,7 +91,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (is_black(T)) return;
     float light_pdf = pmf * ls.pdf;
     float w = ls.delta ? 1.0f : power_heuristic(light_pdf, scatter_pdf);
-    add_nee(beta * fv * T * ls.radiance * (w / light_pdf));
+    add_nee(beta * fv * T * ls.radiance * (w / light_pdf), lights.lightgroup(li));
   };
 
   for (;;) {
@@ -105,7 +109,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     // Volume emission along the whole segment (closed form; before the free flight decides where
     // the path goes on, as Cycles 3.4 does).
     if (kMedia && scene.has_emissive_media() && stack.size > 0)
-      add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step));
+      add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step), -1);
     if constexpr (kMedia)
       medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
     const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;
@@ -115,7 +119,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       Ray r = ray;
       r.tmax = t_seg;
       lights.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
-        add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t));
+        add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t),
+            lights.lightgroup(h.light));
       });
     }
     if (kMedia && !is_finite(beta)) break;  // free-flight weights
@@ -158,10 +163,11 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
           ShadingContext wc = world_context(ray.d);
           describe_ray(b, visibility, &wc);
-          add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY), true);
+          add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY),
+              lights.lightgroup(lights.world_light()), true);
         }
         lights.escaped_suns(ray.d, visibility, [&](int i, const Spectrum& radiance) {
-          add(beta * radiance * mis_emitter(i, ray.d, INFINITY));
+          add(beta * radiance * mis_emitter(i, ray.d, INFINITY), lights.lightgroup(i));
         });
       }
       break;
@@ -194,7 +200,9 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       if (!is_black(emitted)) {
         int li = lights.triangle_light(sp.instance, sp.primitive);
         add(beta * emitted *
-            (li >= 0 ? mis_emitter(li, ray.d, kMedia || t_prev > 0 ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
+                (li >= 0 ? mis_emitter(li, ray.d, kMedia || t_prev > 0 ? t_prev + hit.t * length(ray.d) : hit.t)
+                         : 1.0f),
+            scene.geometry.instance(sp.instance).lightgroup);
       }
       // A transparent pass continues the line as an invisible boundary does: the MIS state stays
       // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.

@@ -193,6 +193,16 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
                     std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".G",
                     std::string("LightTracing.") + exr_pass_name(Pass(p)) + ".B"});
   }
+  // Light groups as Cycles names them (Combined_<name>), their splats' part apart (BDPT).
+  for (int g = 0; g < job.film().lightgroups(); ++g) {
+    const std::string name = "Combined_" + job.settings().lightgroup_names[size_t(g)];
+    std::vector<float> buf(n * 3);
+    job.film().read_lightgroup_rows(g, 0, h, buf.data());
+    add_channels(channels, buf, n, {name + ".R", name + ".G", name + ".B"});
+    if (job.film().read_lightgroup_light_tracing(g, buf.data()))
+      add_channels(channels, buf, n,
+                   {"LightTracing." + name + ".R", "LightTracing." + name + ".G", "LightTracing." + name + ".B"});
+  }
   std::vector<float> light(n * 3);
   if (job.film().read_light_tracing(light.data()))
     add_channels(channels, light, n, {"LightTracing.R", "LightTracing.G", "LightTracing.B"});

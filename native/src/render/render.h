@@ -36,6 +36,8 @@ struct RenderSettings {
   bool adaptive = false;
   int min_samples = 16;
   unsigned passes = kAllPasses;  // what the film keeps (FilmLayout::passes)
+  // Light groups' names (integrator_settings.lightgroups of them): EXR channels Combined_<name>.
+  std::vector<std::string> lightgroup_names;
   // Denoise Combined once rendering stops (denoise/nfor.h; not after a cancel, nor with fewer
   // than 2 passes); the film then keeps the features and Noisy Image.
   bool denoise = false;
