@@ -287,4 +287,15 @@ TEST(MergeLightPaths, AdaptivePartsAreWeightedByTheLightPathsTraced) {
       ASSERT_NEAR(xm[i], want, 1e-5 * std::abs(want) + 1e-30) << ch << " pixel " << i;
     }
   }
+  // A light group likewise: its camera part by the pixel's samples, its splat part by light paths.
+  const auto &ca = pa.find("SampleCount.X")->pixels, &cb = pb.find("SampleCount.X")->pixels;
+  const auto &ga = pa.find("Combined_lamp.R")->pixels, &gb = pb.find("Combined_lamp.R")->pixels;
+  const auto &sa = pa.find("LightTracing.Combined_lamp.R")->pixels,
+             &sb = pb.find("LightTracing.Combined_lamp.R")->pixels;
+  const auto& gm = m.find("Combined_lamp.R")->pixels;
+  for (size_t i = 0; i < gm.size(); ++i) {
+    const double want = (ca[i] * (double(ga[i]) - sa[i]) + cb[i] * (double(gb[i]) - sb[i])) / (ca[i] + cb[i]) +
+                        (la * sa[i] + lb * sb[i]) / (la + lb);
+    ASSERT_NEAR(gm[i], want, 1e-5 * std::abs(want) + 1e-7) << "Combined_lamp.R pixel " << i;
+  }
 }
