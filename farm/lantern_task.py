@@ -96,7 +96,8 @@ def main():
     # layer enables: default scenes render at the same cost as before them.
     wanted = engine.pass_settings(engine.enabled_passes(scene, bpy.context.view_layer), 0)
     settings["passes"] = ((1 << core.PASS_DIFFUSE_DIRECT) - 1) | wanted["passes"]
-    settings["lightgroups"] = wanted["lightgroups"]
+    settings["lightgroups"], settings["aovs"] = wanted["lightgroups"], wanted["aovs"]
+    settings["pass_alpha_threshold"] = bpy.context.view_layer.pass_alpha_threshold
     warnings = []
     core_scene = core.Scene()
     export_scene(bpy.context.evaluated_depsgraph_get(), core_scene,

@@ -433,6 +433,42 @@ def build_light_groups(scene):
     add_camera(scene, (0.0, -4.5, 2.0), (0.0, 0.0, 0.4), lens=35.0)
 
 
+def _aov_material(name, color, transparent=0.0):
+    """A Diffuse BSDF of `color` (mixed with a Transparent BSDF of weight `transparent`) with three
+    AOV Outputs: "paint" the constant colour, "coords" Texture Coordinate's Generated, "mask" the
+    constant value 0.25."""
+    mat = _mix_with(name, "ShaderNodeBsdfTransparent", transparent, color)
+    nt = mat.node_tree
+    coords = nt.nodes.new("ShaderNodeTexCoord")
+    for aov_name, source in (("paint", None), ("coords", coords.outputs["Generated"]), ("mask", 0.25)):
+        aov = nt.nodes.new("ShaderNodeOutputAOV")
+        aov.name = aov_name  # Blender 3.4 keeps the AOV's name in the node's
+        if source is None:
+            aov.inputs["Color"].default_value = (*color, 1.0)
+        elif isinstance(source, float):
+            aov.inputs["Value"].default_value = source
+        else:
+            nt.links.new(source, aov.inputs["Color"])
+    return mat
+
+
+def build_aovs(scene):
+    """Issue 16's shader AOVs: view layer AOVs "paint" and "coords" (colours) and "mask" (a value),
+    written by a ground, a sphere and a card of alpha 0.3 (Mix Shader of Diffuse and Transparent
+    0.7) in front of the sphere (the camera path writes at the card and, when it passes it,
+    behind; Alpha Threshold 0.5)."""
+    set_world(scene, (0.3, 0.35, 0.4), 1.0)
+    for name, kind in (("paint", 'COLOR'), ("coords", 'COLOR'), ("mask", 'VALUE')):
+        aov = scene.view_layers[0].aovs.add()
+        aov.name, aov.type = name, kind
+    assign(add_object(scene, "Ground", mesh_plane("Ground", 6.0)), _aov_material("Ground", WHITE))
+    assign(add_object(scene, "Ball", mesh_sphere("Ball", 0.6), (0.0, 0.3, 0.6)), _aov_material("Ball", RED))
+    card = add_object(scene, "Card", mesh_plane("Card", 0.9), (0.3, -0.8, 0.7), (80, 0, 0))
+    assign(card, _aov_material("Card", GREEN, transparent=0.7))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(40, 0, 30))
+    add_camera(scene, (0.0, -3.5, 1.6), (0.0, 0.0, 0.5), lens=40.0)
+
+
 def checker_pixels(size=64, squares=8):
     """sRGB-encoded colour checker: warm/cool squares, brightness ramping along U."""
     y, x = np.mgrid[0:size, 0:size]
@@ -1873,6 +1909,7 @@ SCENES = {
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
     "holdout": (build_holdout, (64, 48), 128),
     "light_groups": (build_light_groups, (80, 60), 128),
+    "aovs": (build_aovs, (64, 48), 64),
     "gltf_pbr": (build_gltf_pbr, (80, 80), 256),
     "wide_sun": (build_wide_sun, (64, 48), 128),
     "bsdf_zoo": (build_bsdf_zoo, (128, 80), 128),

@@ -324,6 +324,10 @@ class RenderSettings(ctypes.Structure):
         ("mist_falloff", ctypes.c_float),
         ("lightgroup_count", ctypes.c_int),
         ("lightgroup_names", ctypes.POINTER(ctypes.c_char_p)),
+        ("aov_count", ctypes.c_int),
+        ("aov_names", ctypes.POINTER(ctypes.c_char_p)),
+        ("aov_colors", _i_p),
+        ("pass_alpha_threshold", ctypes.c_float),
     ]
 
 
@@ -456,6 +460,7 @@ def _declare(lib, layout=True):
         "lt_render_read_pass_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid_rows": ([render_p, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_lightgroup_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_aov_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid": ([render_p, _f_p, ctypes.c_size_t, ctypes.POINTER(c_int),
                                           ctypes.POINTER(c_int)], c_int),
         "lt_render_destroy": ([render_p], None),
@@ -484,7 +489,7 @@ def check_layout(entries, path, structs=STRUCTS, constants=None):
     {NAME: value} declared here for lantern.h's LT_NAME (default: this module's)."""
     if constants is None:
         constants = {k: v for k, v in globals().items()
-                     if k.isupper() and type(v) is int and k not in ("ABI_VERSION", "LIGHTGROUP_PASS")}
+                     if k.isupper() and type(v) is int and k not in ("ABI_VERSION", "LIGHTGROUP_PASS", "AOV_PASS")}
     sizes, fields, values = {}, {}, {}
     for t, f, value, size in entries:
         if f is None:
@@ -610,12 +615,20 @@ def _check(status, what):
         raise LanternError("%s failed (%s): %s" % (what, kind, msg or "no message"), status, msg)
 
 
-# Light group g's pass reads as pass id LIGHTGROUP_PASS + g (Render.read_pass_rows): RGB. The add-on's
-# own number, not one of lantern.h's constants (check_layout leaves it out).
+# Light group g's pass reads as pass id LIGHTGROUP_PASS + g (Render.read_pass_rows): RGB; shader
+# AOV i as AOV_PASS + 2 i + (1 for a colour): RGBA or one value. The add-on's own numbers, not
+# lantern.h's constants (check_layout leaves them out).
 LIGHTGROUP_PASS = 1 << 16
+AOV_PASS = 1 << 20
+
+
+def aov_pass(index, colour):
+    return AOV_PASS + 2 * index + int(bool(colour))
 
 
 def pass_channels(pass_id):
+    if pass_id >= AOV_PASS:
+        return 4 if pass_id & 1 else 1
     if pass_id >= LIGHTGROUP_PASS:
         return 3
     n = lib().lt_pass_channels(int(pass_id))
@@ -1031,6 +1044,10 @@ class Render:
                 elif k == "lightgroups":  # the light groups' names
                     self._lightgroup_names = (ctypes.c_char_p * max(1, len(v)))(*[n.encode("utf-8") for n in v])
                     s.lightgroup_count, s.lightgroup_names = len(v), self._lightgroup_names
+                elif k == "aovs":  # [(name, is colour)] of the shader AOVs
+                    self._aov_names = (ctypes.c_char_p * max(1, len(v)))(*[n.encode("utf-8") for n, _ in v])
+                    self._aov_colors = np.array([int(bool(c)) for _, c in v] or [0], dtype=np.int32)
+                    s.aov_count, s.aov_names, s.aov_colors = len(v), self._aov_names, _iptr(self._aov_colors)
                 else:
                     setattr(s, k, v)
             settings = s
@@ -1091,6 +1108,10 @@ class Render:
         n = self.region_size[0] * rows * pass_channels(pass_id)
         if out.dtype != np.float32 or not out.flags["C_CONTIGUOUS"] or out.size != n:
             raise ValueError("read_pass_rows needs a contiguous float32 array of %d floats" % n)
+        if pass_id >= AOV_PASS:
+            _check(self._lib.lt_render_read_aov_rows(self.handle, int((pass_id - AOV_PASS) >> 1), int(y0), int(rows),
+                                                     _fptr(out), out.size), "lt_render_read_aov_rows")
+            return out
         if pass_id >= LIGHTGROUP_PASS:
             _check(self._lib.lt_render_read_lightgroup_rows(self.handle, int(pass_id - LIGHTGROUP_PASS), int(y0),
                                                             int(rows), _fptr(out), out.size),

@@ -77,8 +77,18 @@ def lightgroup_passes(view_layer):
             for i, g in enumerate(getattr(view_layer, "lightgroups", ()))]
 
 
+def aov_passes(view_layer):
+    """Cycles' shader AOV passes, one per valid view-layer AOV under its name: a colour's RGBA (the
+    colour and the fraction of samples that wrote it), a value's X (docs/passes.md)."""
+    aovs = [a for a in getattr(view_layer, "aovs", ()) if a.is_valid]
+    return [(a.name, core.aov_pass(i, a.type == 'COLOR'), 4 if a.type == 'COLOR' else 1,
+             "RGBA" if a.type == 'COLOR' else "X", 'COLOR' if a.type == 'COLOR' else 'VALUE', None)
+            for i, a in enumerate(aovs)]
+
+
 def enabled_passes(scene, view_layer):
-    return [p for p in PASSES if _pass_enabled(scene, view_layer, p[5])] + lightgroup_passes(view_layer)
+    return ([p for p in PASSES if _pass_enabled(scene, view_layer, p[5])] + lightgroup_passes(view_layer)
+            + aov_passes(view_layer))
 
 
 def pass_settings(passes, pixels):
@@ -87,13 +97,15 @@ def pass_settings(passes, pixels):
     memory check: the render result's passes (_PassWriter's band buffers and band results are a
     few MiB)."""
     mask = 0
-    lightgroups = []
+    lightgroups, aovs = [], []
     for p in passes:
-        if p[1] >= core.LIGHTGROUP_PASS:
+        if p[1] >= core.AOV_PASS:
+            aovs.append((p[0], p[1] & 1))
+        elif p[1] >= core.LIGHTGROUP_PASS:
             lightgroups.append(p[0][len("Combined_"):])
         else:
             mask |= 1 << p[1]
-    return dict(passes=mask, lightgroups=lightgroups, caller_bytes=pixels * sum(p[2] for p in passes) * 4)
+    return dict(passes=mask, lightgroups=lightgroups, aovs=aovs, caller_bytes=pixels * sum(p[2] for p in passes) * 4)
 
 
 def frame_size(rd):
@@ -520,6 +532,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             settings = render_settings(scene, width, height, border)
             region = ((border[1] - border[0]) * (border[3] - border[2])) if any(border) else width * height
             settings.update(pass_settings(enabled_passes(scene, view_layer), region))
+            settings["pass_alpha_threshold"] = view_layer.pass_alpha_threshold  # where AOVs are written
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:

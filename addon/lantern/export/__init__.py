@@ -46,6 +46,13 @@ def lightgroup_indices(view_layer):
     return {g.name: i + 1 for i, g in enumerate(view_layer.lightgroups)}
 
 
+def aov_indices(view_layer):
+    """{name: (index, colour)} of the view layer's valid AOVs, in the order of the render's AOV
+    passes (engine.aov_passes)."""
+    aovs = [a for a in view_layer.aovs if a.is_valid]
+    return {a.name: (i, a.type == 'COLOR') for i, a in enumerate(aovs)}
+
+
 def lightgroup_of(inst, groups):
     """The core's light group of an object instance's emission (an instance takes its instancer's,
     as holdout_of)."""
@@ -94,6 +101,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=1)
         summary["world"] = "none (left out)"
     groups = lightgroup_indices(depsgraph.view_layer_eval)
+    materials.aovs = aov_indices(depsgraph.view_layer_eval)
     world = depsgraph.scene_eval.world
     if world is not None and groups.get(world.lightgroup, 0):
         core_scene.set_world_lightgroup(groups[world.lightgroup])

@@ -38,7 +38,8 @@ extern "C" {
  * on), lt_render_settings' mist fields, lt_scene_set_material_pass_index; 13: motion blur (motion
  * steps of lt_mesh_desc, lt_instance_desc and lt_camera_desc; motion counts in lt_scene_stats);
  * 14: curves and points (lt_curves_desc, lt_scene_add_curves); 15: lt_instance_desc.holdout; light
- * groups (the lightgroup fields, lt_scene_set_world_lightgroup, lt_render_read_lightgroup_rows). */
+ * groups (the lightgroup fields, lt_scene_set_world_lightgroup, lt_render_read_lightgroup_rows);
+ * shader AOVs (lt_render_settings.aov_*, pass_alpha_threshold, lt_render_read_aov_rows). */
 #define LT_ABI_VERSION 15
 
 enum lt_status {
@@ -532,6 +533,16 @@ typedef struct lt_render_settings {
    * Combined's RGB where every emitter is in one. */
   int lightgroup_count;
   const char* const* lightgroup_names;
+  /* Shader AOVs (Cycles' AOV Output node, view_layer.aovs): how many (0 to 1024; default 0), their
+   * names and aov_colors[i] != 0 for a colour AOV (RGBA: the colour and the fraction of samples
+   * that wrote it), else a value (1 channel). A program's AOV instruction writes AOV `index` of
+   * these. EXR channels "<name>.R/G/B/A" or "<name>.X". */
+  int aov_count;
+  const char* const* aov_names;
+  const int* aov_colors;
+  /* Cycles' View Layer > Passes > Alpha Threshold: AOVs are written at the surfaces a camera path
+   * meets through transparent passes up to the first whose alpha reaches it. Default 0.5. */
+  float pass_alpha_threshold;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -646,6 +657,9 @@ LT_API int lt_render_read_strategy_grid_rows(lt_render* render, int y0, int rows
  * lt_render_read_pass_rows, read between passes while rendering). */
 LT_API int lt_render_read_lightgroup_rows(lt_render* render, int group, int y0, int rows, float* out,
                                           size_t float_count);
+/* Rows [y0, y0 + rows) of shader AOV `index` (width*rows*4 floats for a colour AOV, *1 for a
+ * value; as lt_render_read_pass_rows). */
+LT_API int lt_render_read_aov_rows(lt_render* render, int index, int y0, int rows, float* out, size_t float_count);
 
 LT_API void lt_render_destroy(lt_render* render);
 

@@ -274,6 +274,10 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_settings, mist_falloff),
     LT_FIELD(lt_render_settings, lightgroup_count),
     LT_FIELD(lt_render_settings, lightgroup_names),
+    LT_FIELD(lt_render_settings, aov_count),
+    LT_FIELD(lt_render_settings, aov_names),
+    LT_FIELD(lt_render_settings, aov_colors),
+    LT_FIELD(lt_render_settings, pass_alpha_threshold),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),

@@ -835,6 +835,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->mist_start = 5;
   s->mist_depth = 25;
   s->mist_falloff = 2;
+  s->pass_alpha_threshold = 0.5f;
 }
 
 namespace {
@@ -952,6 +953,17 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
       rs.lightgroup_names.emplace_back(s->lightgroup_names[g]);
     }
     is.lightgroups = s->lightgroup_count;
+    require(
+        s->aov_count >= 0 && s->aov_count <= kMaxLightgroups && (s->aov_count == 0 || (s->aov_names && s->aov_colors)),
+        "AOV count out of range (0 to 1024) or their names or types NULL");
+    for (int a = 0; a < s->aov_count; ++a) {
+      require(s->aov_names[a] != nullptr, "AOV " + std::to_string(a) + " has no name");
+      rs.aov_names.emplace_back(s->aov_names[a]);
+      rs.aov_colors.push_back(s->aov_colors[a] != 0);
+    }
+    is.aovs = s->aov_count;
+    require(std::isfinite(s->pass_alpha_threshold), "pass alpha threshold must be finite");
+    is.pass_alpha_threshold = s->pass_alpha_threshold;
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;
@@ -1073,6 +1085,24 @@ int lt_render_read_lightgroup_rows(lt_render* render, int group, int y0, int row
     require(float_count == need, "light group buffer holds " + std::to_string(float_count) + " floats; " +
                                      std::to_string(need) + " are needed");
     film.read_lightgroup_rows(group, y0, rows, out);
+  });
+}
+
+int lt_render_read_aov_rows(lt_render* render, int index, int y0, int rows, float* out, size_t float_count) {
+  return guarded([&] {
+    require(render && out, "lt_render_read_aov_rows: NULL argument");
+    const auto& job = *render->job;
+    const auto& film = job.film();
+    require(index >= 0 && index < film.aovs(),
+            "AOV " + std::to_string(index) + " is not one of the render's " + std::to_string(film.aovs()));
+    require(rows >= 0 && y0 >= 0 && y0 <= film.height() - rows,
+            "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) + " are not within the " +
+                std::to_string(film.height()) + " rows of the render region");
+    const int channels = job.settings().aov_colors[size_t(index)] ? 4 : 1;
+    const size_t need = size_t(film.width()) * rows * channels;
+    require(float_count == need,
+            "AOV buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) + " are needed");
+    film.read_aov_rows(index, channels, y0, rows, out);
   });
 }
 

@@ -177,7 +177,7 @@ size_t FilmLayout::bytes_per_pixel() const {
   if (squares) floats += 3;
   if (splats) floats += 6;
   floats += size_t(strategy_cells) * 6;
-  floats += size_t(lightgroups) * (splats ? 6 : 3);
+  floats += size_t(lightgroups) * (splats ? 6 : 3) + size_t(aovs) * 4;
   const unsigned kept = with_dependencies(passes);
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
     if (kept & pass_bit(Pass(p))) {
@@ -220,6 +220,7 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
     lightgroup_.assign(size_t(layout_.lightgroups) * 3 * n, 0.0f);
     if (layout_.splats) lightgroup_splat_.assign(lightgroup_.size(), 0.0f);
   }
+  if (layout_.aovs > 0) aov_.assign(size_t(layout_.aovs) * 4 * n, 0.0f);
   if (layout_.strategy_cells > 0) {
     strategies_.assign(n * layout_.strategy_cells * 3, 0.0f);
     strategy_splats_.assign(strategies_.size(), 0.0f);
@@ -276,6 +277,10 @@ void Film::add(int x, int y, const SampleValue& s) {
     float* g = &lightgroup_[size_t(layout_.lightgroups) * 3 * i];
     for (int j = 0; j < layout_.lightgroups; ++j)
       for (int k = 0; k < 3; ++k) g[3 * j + k] += s.lightgroups[j][k];
+  }
+  if (!aov_.empty() && s.aovs) {
+    float* a = &aov_[size_t(layout_.aovs) * 4 * i];
+    for (int j = 0; j < 4 * layout_.aovs; ++j) a[j] += s.aovs[j];
   }
   alpha_[i] += s.alpha;
   if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
@@ -583,6 +588,23 @@ void Film::read_lightgroup_rows(int group, int y0, int rows, float* out) const {
     const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
     for (int k = 0; k < 3; ++k)
       out[3 * j + k] = float(lightgroup_[at + k] * inv + (per_path > 0 ? lightgroup_splat_[at + k] * per_path : 0.0));
+  }
+}
+
+void Film::read_aov_rows(int index, int channels, int y0, int rows, float* out) const {
+  if (index < 0 || index >= layout_.aovs || channels < 1 || channels > 4)
+    throw InvalidArgument("AOV " + std::to_string(index) + " is not one of the render's " +
+                          std::to_string(layout_.aovs));
+  if (y0 < 0 || rows < 0 || y0 > height_ - rows)
+    throw InvalidArgument("rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                          " are not within the film's " + std::to_string(height_) + " rows");
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  const size_t first = size_t(y0) * width_, n = size_t(rows) * width_, per = size_t(layout_.aovs) * 4;
+  for (size_t j = 0; j < n; ++j) {
+    const size_t i = first + j;
+    const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+    for (int k = 0; k < channels; ++k)
+      out[size_t(channels) * j + k] = float(aov_[i * per + 4 * size_t(index) + k] * inv);
   }
 }
 

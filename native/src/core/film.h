@@ -79,6 +79,9 @@ struct SampleValue {
   void add_lightgroup(int group, const Spectrum& c) {
     if (lightgroups && group >= 0) lightgroups[group] += c;
   }
+  // Shader AOVs: 4 floats per AOV of FilmLayout::aovs (ShadingContext::aovs), zeroed by the render
+  // job (CameraSample::aovs); null when the film keeps none.
+  float* aovs = nullptr;
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
@@ -154,6 +157,7 @@ struct FilmLayout {
   bool splats = false;
   int strategy_cells = 0;
   int lightgroups = 0;  // light group passes (Combined_<group>), RGB each
+  int aovs = 0;         // shader AOV passes, 4 floats each
   // Bytes per pixel of the accumulators and the published image.
   size_t bytes_per_pixel() const;
 };
@@ -213,6 +217,10 @@ class Film {
     for (int k = 0; k < 3; ++k) lightgroup_splat_[(size_t(pixel) * layout_.lightgroups + group) * 3 + k] += v[k];
   }
   void read_lightgroup_rows(int group, int y0, int rows, float* out) const;
+  // Shader AOV `index`: the mean over samples of its first `channels` floats (1: a value, 4: a
+  // colour and its coverage), rows as read_rows.
+  int aovs() const { return layout_.aovs; }
+  void read_aov_rows(int index, int channels, int y0, int rows, float* out) const;
   bool read_lightgroup_light_tracing(int group, float* out) const;
   // Light paths behind the published splats (0 without splats): what a merge weights them by.
   uint64_t published_light_paths() const {
@@ -315,6 +323,7 @@ class Film {
   std::vector<float> sums_[kSummedPasses];
   std::vector<float> light_splat_[kLightParts];
   std::vector<float> lightgroup_, lightgroup_splat_;  // per pixel, per group, RGB sums
+  std::vector<float> aov_;                            // per pixel, per AOV, 4 sums
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;

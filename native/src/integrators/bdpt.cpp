@@ -322,11 +322,15 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
       ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
       ctx.ray_depth = bounces;
+      const bool aovs_here = mode == Mode::Radiance && count == 1 && first && !first->aovs_done && cs_.aovs;
+      if (aovs_here) write_aovs_at(&ctx, cs_.aovs, s_);
       sf.n = smooth_n = ctx.N;
       const Material& material = scene_.material(sp.material);
       const float footprint_here = mode == Mode::Radiance ? footprint + ctx.ray_length * cs_.dD : light_footprint(sp.p);
       if (material.uses_bump()) add_differentials(scene_.geometry, sp, footprint_here, &ctx);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
+      if (aovs_here)
+        first->aovs_done = single_pass_done(material.may_be_transparent(), v.bsdf, s_.pass_alpha_threshold);
       // Holdout on the camera's side of the path (light subpaths see surfaces as they are; their
       // t = 1 splats onto holdout objects are dropped in splat_t1).
       if (mode == Mode::Radiance && count == 1 && first &&
@@ -335,7 +339,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (!is_black(sf.smooth)) smooth_n = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
       // A transparent pass makes no vertex (connections see the surface through
       // shadow_transmittance); an emitting surface stays a vertex.
-      if (is_black(le) && material.may_be_transparent() && v.bsdf.pass_transparent(sampler_.next_1d(), &beta)) {
+      if (is_black(le) && material.may_be_transparent() &&
+          v.bsdf.pass_transparent(sampler_.next_1d(), &beta,
+                                  mode == Mode::Radiance && count == 1 && transparent == 0)) {
         if (++transparent > s_.transparent_bounces || !pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
         footprint = footprint_here;
         continue;
@@ -703,6 +709,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
 SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   strategies_ = strategies;
   out_.lightgroups = cs_.lightgroups;
+  out_.aovs = cs_.aovs;
   const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
   std::vector<PathVertex>& camera = scratch_.camera;
   std::vector<PathVertex>& light = scratch_.light;

@@ -175,7 +175,8 @@ class Bdpt {
   // at the first vertex, t along the last ray (as the path tracer's depth).
   struct FirstSegment {
     float t = 1e30f;
-    float transparent = 0;  // of the film (1 - alpha): held out, or escaped to a transparent film
+    float transparent = 0;   // of the film (1 - alpha): held out, or escaped to a transparent film
+    bool aovs_done = false;  // single_pass_done
   };
   int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeStack stack, std::vector<PathVertex>& path,
                   FirstSegment* first);

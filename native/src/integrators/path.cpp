@@ -20,6 +20,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   const float time = camera_ray.time;  // the whole path's (motion blur)
   SampleValue out;
   out.lightgroups = cs.lightgroups;
+  out.aovs = cs.aovs;
+  bool aovs_done = !cs.aovs;  // Cycles' PATH_RAY_SINGLE_PASS_DONE (single_pass_done)
   const LightSet& lights = scene.lights;
   const VolumeEstimator est = s.volume_estimator;
   const float step = s.volume_step;
@@ -181,12 +183,15 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       }
       ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
       describe_ray(b, visibility, &ctx);
+      if (b.total == 0 && !aovs_done) write_aovs_at(&ctx, cs.aovs, s);
       const float footprint_here = footprint + ctx.ray_length * cs.dD;
       const Vec3 ng = ctx.Ng;
       ShadingFrame sf{ctx.N};
       const Material& material = scene.material(sp.material);
       if (material.uses_bump()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
       Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
+      if (b.total == 0 && !aovs_done)
+        aovs_done = single_pass_done(material.may_be_transparent(), bsdf, s.pass_alpha_threshold);
       if (b.total == 0 && !hold_out(scene.geometry.instance(sp.instance).holdout, &bsdf, &emitted, beta, &transparent))
         break;
       bsdf.sample_below_shading(true);
@@ -206,7 +211,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       }
       // A transparent pass continues the line as an invisible boundary does: the MIS state stays
       // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.
-      if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta)) {
+      if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta, b.from_camera())) {
         if (++b.transparent > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
         t_prev += hit.t * length(ray.d);
         footprint = footprint_here;

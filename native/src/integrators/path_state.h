@@ -117,6 +117,18 @@ inline bool hold_out(bool object, Bsdf* bsdf, Spectrum* emitted, const Spectrum&
   return !(w[0] == 1 && w[1] == 1 && w[2] == 1);
 }
 
+// Cycles' PATH_RAY_SINGLE_PASS_DONE (film/data_passes.h): a camera path writes its AOVs (and Cycles
+// its data passes) at each surface it reaches through transparent passes until one that is not
+// transparent or whose alpha (1 - transparency, averaged) reaches the threshold (0: any surface).
+inline bool single_pass_done(bool may_be_transparent, const Bsdf& bsdf, float threshold) {
+  return !may_be_transparent || threshold == 0 || 1 - average(bsdf.transparency()) >= threshold;
+}
+// Points a camera path's shading context at the sample's AOVs where Cycles writes them.
+inline void write_aovs_at(ShadingContext* ctx, float* aovs, const IntegratorSettings& s) {
+  ctx->aovs = aovs;
+  ctx->aov_count = aovs ? s.aovs : 0;
+}
+
 // Russian roulette once the path has had a chance to gather light (unbiased: divide by q), on the
 // throughput relative to the path's start (`start`: the largest component of its initial beta),
 // so a light subpath, whose beta carries the emitted power, is ended by the albedos it meets as a

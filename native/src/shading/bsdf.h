@@ -206,8 +206,11 @@ class Bsdf {
   Spectrum transparency() const;
   // Transparency as a choice (the Transparent lobes' share p of the lobes' average weights): with
   // probability p the ray passes straight on and beta is scaled by transparency() / p (returns
-  // true); else the Transparent lobes are removed and beta is scaled by 1 / (1 - p).
-  bool pass_transparent(float u, Spectrum* beta);
+  // true); else the Transparent lobes are removed and beta is scaled by 1 / (1 - p). `defensive`
+  // (a camera ray's first surface): each lobe's share is at least 1/8 of the sum, Cycles'
+  // defensive sampling (surface_shader_prepare_closures), so that what depends on the choice
+  // (shader AOVs behind the surface) has Cycles' expectation.
+  bool pass_transparent(float u, Spectrum* beta, bool defensive = false);
   // Holdout closures make no lobe: their summed weight (Cycles' CLOSURE_HOLDOUT_ID), which a
   // camera path turns into transparency of the film (integrators/path_state.h, hold_out).
   void add_holdout(const Spectrum& w) { holdout_ += w; }

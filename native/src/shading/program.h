@@ -71,6 +71,10 @@ struct ShadingContext {
   // world space (Cycles' sd->dPdu; zero elsewhere). Hair Info and the hair closures read them.
   int curve = -1;
   Vec3 dpdu{0.0f};
+  // Cycles' AOV Output: where this point's program adds its AOV values (4 floats per AOV, of
+  // aov_count), set only where Cycles writes them (a camera path before its first opaque surface).
+  float* aovs = nullptr;
+  int aov_count = 0;
 };
 
 // The machine an instruction runs on: read inputs, write outputs.

@@ -26,6 +26,10 @@ enum ShaderOp : uint32_t {
   kOpVelvet,       // in: weight v, normal v, color v, sigma f
   kOpTranslucent,  // in: weight v, normal v, color v
   kOpToon,         // in: weight v, normal v, color v, size f, smooth f; param: component (0 diffuse, 1 glossy)
+  // AOV Output (no closure): adds to AOV `index` of ShadingContext::aovs, when set: a value (its
+  // first float), or a colour and 1 (Cycles' film_write_aov_pass_value / _color).
+  kOpAovValue,  // in: value f; param: index
+  kOpAovColor,  // in: color v; param: index
 };
 
 // Hair closures (numbers 20-27 of the family): lobes on curves (bsdf_hair.cpp).
