@@ -112,6 +112,9 @@ TEST(Lightgroups, AnUngroupedEmitterIsInNone) {
   std::vector<float> buf(size_t(rs.width) * rs.height * 3);
   EXPECT_EQ(lt_render_read_lightgroup_rows(r.get(), 0, 0, rs.height, buf.data(), buf.size()),
             LT_ERROR_INVALID_ARGUMENT);
+  // ...and its Combined is the same bits: light groups draw no random number.
+  const Passes plain = read_passes(r.get(), rs.width, rs.height);
+  EXPECT_EQ(plain.combined, g.passes.combined);
 }
 
 }  // namespace
