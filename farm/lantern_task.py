@@ -94,8 +94,10 @@ def main():
     settings.update(samples=args.samples, sample_offset=args.offset)
     # Every pass before the light and data passes (parts need them to merge), and those the view
     # layer enables: default scenes render at the same cost as before them.
-    wanted = engine.pass_settings(engine.enabled_passes(scene, bpy.context.view_layer), 0)["passes"]
-    settings["passes"] = ((1 << core.PASS_DIFFUSE_DIRECT) - 1) | wanted
+    wanted = engine.pass_settings(engine.enabled_passes(scene, bpy.context.view_layer), 0)
+    settings["passes"] = ((1 << core.PASS_DIFFUSE_DIRECT) - 1) | wanted["passes"]
+    settings["lightgroups"], settings["aovs"] = wanted["lightgroups"], wanted["aovs"]
+    settings["pass_alpha_threshold"] = bpy.context.view_layer.pass_alpha_threshold
     crypto, _ = engine.cryptomatte_settings(bpy.context.view_layer, 0)
     settings.update(crypto)
     warnings = []

@@ -370,6 +370,105 @@ def build_leaf_cards(scene):
     add_camera(scene, (0.4, -3.5, 1.3), (0, 0.2, 0.4), lens=40.0)
 
 
+def _mix_with(name, node_type, fac, color):
+    """Mix Shader of a Diffuse BSDF (fac 0) and a `node_type` shader (fac 1)."""
+    mat, nt, out = _material(name)
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    mix.inputs["Fac"].default_value = fac
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    d.inputs["Color"].default_value = (*color, 1.0)
+    nt.links.new(d.outputs[0], mix.inputs[1])
+    nt.links.new(nt.nodes.new(node_type).outputs[0], mix.inputs[2])
+    nt.links.new(mix.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def build_holdout(scene):
+    """Issue 16's holdout: on a ground under an area light and a sky, a sphere of Mix Shader
+    (Diffuse, Holdout 0.4), a cube that is a holdout object (Object.is_holdout), a sphere of Mix
+    (Diffuse, Transparent 0.5) in a holdout collection (LayerCollection.holdout), a card of
+    Holdout alone, which casts its shadow (a Holdout closure is opaque to shadow rays), and a card
+    of Mix (Diffuse, Transparent 0.5) against the sky."""
+    set_world(scene, (0.3, 0.45, 0.7), 0.8)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 8.0))
+    assign(ground, diffuse("Ground", WHITE))
+    assign(add_object(scene, "HoldoutMix", mesh_sphere("HoldoutMix", 0.5), (-1.1, 0, 0.5)),
+           _mix_with("HoldoutMix", "ShaderNodeHoldout", 0.4, RED))
+    cube = add_object(scene, "HoldoutCube", mesh_box("HoldoutCube", (0.8, 0.8, 0.8)), (0.1, 0.3, 0), (0, 0, 20))
+    assign(cube, diffuse("Cube", GREEN))
+    cube.is_holdout = True
+    held = bpy.data.collections.new("Held")
+    scene.collection.children.link(held)
+    glass_ball = add_object(scene, "HeldBall", mesh_sphere("HeldBall", 0.45), (1.2, -0.2, 0.45), collection=held)
+    assign(glass_ball, _mix_with("HeldBall", "ShaderNodeBsdfTransparent", 0.5, WHITE))
+    scene.view_layers[0].layer_collection.children["Held"].holdout = True
+    card = add_object(scene, "HoldoutCard", mesh_plane("HoldoutCard", 0.6), (-0.3, -1.0, 0.8), (70, 0, 10))
+    mat, nt, out = _material("HoldoutCard")
+    nt.links.new(nt.nodes.new("ShaderNodeHoldout").outputs[0], out.inputs["Surface"])
+    assign(card, mat)
+    # Against the sky: with Film > Transparent the sky behind a transparent surface is transparent.
+    see_through = add_object(scene, "SeeThrough", mesh_plane("SeeThrough", 0.8), (0.3, 2.5, 1.75), (90, 0, 0))
+    assign(see_through, _mix_with("SeeThrough", "ShaderNodeBsdfTransparent", 0.5, WHITE))
+    add_light(scene, "Area", "AREA", 400.0, (0.5, -1.0, 3.0), size=1.5)
+    add_camera(scene, (0.0, -4.5, 2.2), (0.0, 0.0, 0.5), lens=35.0)
+
+
+def build_light_groups(scene):
+    """Issue 16's light groups: a floor, a diffuse sphere and a glossy box lit by an area light
+    (group "key"), a point light and an emissive ball (group "fill") and a world in no group
+    (view layer light groups "key" and "fill"; Cycles writes Combined_key and Combined_fill)."""
+    set_world(scene, (0.2, 0.25, 0.3), 0.5)
+    assign(add_object(scene, "Floor", mesh_plane("Floor", 8.0)), diffuse("Floor", WHITE))
+    assign(add_object(scene, "Ball", mesh_sphere("Ball", 0.5), (-0.6, 0.2, 0.5)), diffuse("Ball", RED))
+    assign(add_object(scene, "Box", mesh_box("Box", (0.7, 0.7, 0.7)), (0.7, 0.3, 0), (0, 0, 25)),
+           glossy("Box", (0.8, 0.8, 0.8), 0.3))
+    glow = add_object(scene, "Glow", mesh_sphere("Glow", 0.15), (0.1, -0.8, 0.15))
+    assign(glow, emission("Glow", (1.0, 0.6, 0.3), 6.0))
+    key = add_light(scene, "Key", "AREA", 300.0, (-1.0, -1.5, 3.0), rotation=(30, 0, -20), size=1.0)
+    fill = add_light(scene, "Fill", "POINT", 150.0, (2.0, -1.0, 1.5), radius=0.1)
+    for name in ("key", "fill"):
+        scene.view_layers[0].lightgroups.add(name=name)
+    key.lightgroup = "key"
+    fill.lightgroup = glow.lightgroup = "fill"
+    add_camera(scene, (0.0, -4.5, 2.0), (0.0, 0.0, 0.4), lens=35.0)
+
+
+def _aov_material(name, color, transparent=0.0):
+    """A Diffuse BSDF of `color` (mixed with a Transparent BSDF of weight `transparent`) with three
+    AOV Outputs: "paint" the constant colour, "coords" Texture Coordinate's Generated, "mask" the
+    constant value 0.25."""
+    mat = _mix_with(name, "ShaderNodeBsdfTransparent", transparent, color)
+    nt = mat.node_tree
+    coords = nt.nodes.new("ShaderNodeTexCoord")
+    for aov_name, source in (("paint", None), ("coords", coords.outputs["Generated"]), ("mask", 0.25)):
+        aov = nt.nodes.new("ShaderNodeOutputAOV")
+        aov.name = aov_name  # Blender 3.4 keeps the AOV's name in the node's
+        if source is None:
+            aov.inputs["Color"].default_value = (*color, 1.0)
+        elif isinstance(source, float):
+            aov.inputs["Value"].default_value = source
+        else:
+            nt.links.new(source, aov.inputs["Color"])
+    return mat
+
+
+def build_aovs(scene):
+    """Issue 16's shader AOVs: view layer AOVs "paint" and "coords" (colours) and "mask" (a value),
+    written by a ground, a sphere and a card of alpha 0.3 (Mix Shader of Diffuse and Transparent
+    0.7) in front of the sphere (the camera path writes at the card and, when it passes it,
+    behind; Alpha Threshold 0.5)."""
+    set_world(scene, (0.3, 0.35, 0.4), 1.0)
+    for name, kind in (("paint", 'COLOR'), ("coords", 'COLOR'), ("mask", 'VALUE')):
+        aov = scene.view_layers[0].aovs.add()
+        aov.name, aov.type = name, kind
+    assign(add_object(scene, "Ground", mesh_plane("Ground", 6.0)), _aov_material("Ground", WHITE))
+    assign(add_object(scene, "Ball", mesh_sphere("Ball", 0.6), (0.0, 0.3, 0.6)), _aov_material("Ball", RED))
+    card = add_object(scene, "Card", mesh_plane("Card", 0.9), (0.3, -0.8, 0.7), (80, 0, 0))
+    assign(card, _aov_material("Card", GREEN, transparent=0.7))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(40, 0, 30))
+    add_camera(scene, (0.0, -3.5, 1.6), (0.0, 0.0, 0.5), lens=40.0)
+
+
 def checker_pixels(size=64, squares=8):
     """sRGB-encoded colour checker: warm/cool squares, brightness ramping along U."""
     y, x = np.mgrid[0:size, 0:size]
@@ -1830,6 +1929,9 @@ SCENES = {
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
+    "holdout": (build_holdout, (64, 48), 128),
+    "light_groups": (build_light_groups, (80, 60), 128),
+    "aovs": (build_aovs, (64, 48), 64),
     "gltf_pbr": (build_gltf_pbr, (80, 80), 256),
     "wide_sun": (build_wide_sun, (64, 48), 128),
     "ray_visibility": (build_ray_visibility, (96, 64), 256),

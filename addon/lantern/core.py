@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 15
+ABI_VERSION = 16
 
 # lt_status
 OK = 0
@@ -220,6 +220,8 @@ class InstanceDesc(ctypes.Structure):
         ("motion_step_count", ctypes.c_int),
         ("cryptomatte_object", ctypes.c_uint32),
         ("cryptomatte_asset", ctypes.c_uint32),
+        ("holdout", ctypes.c_int),
+        ("lightgroup", ctypes.c_int),
     ]
 
 
@@ -237,6 +239,7 @@ class LightDesc(ctypes.Structure):
         ("size_y", ctypes.c_float),
         ("angle", ctypes.c_float),
         ("visibility", ctypes.c_uint),
+        ("lightgroup", ctypes.c_int),
     ]
 
 
@@ -325,6 +328,12 @@ class RenderSettings(ctypes.Structure):
         ("mist_falloff", ctypes.c_float),
         ("cryptomatte", ctypes.c_uint),
         ("cryptomatte_levels", ctypes.c_int),
+        ("lightgroup_count", ctypes.c_int),
+        ("lightgroup_names", ctypes.POINTER(ctypes.c_char_p)),
+        ("aov_count", ctypes.c_int),
+        ("aov_names", ctypes.POINTER(ctypes.c_char_p)),
+        ("aov_colors", _i_p),
+        ("pass_alpha_threshold", ctypes.c_float),
     ]
 
 
@@ -439,6 +448,7 @@ def _declare(lib, layout=True):
         "lt_scene_set_camera": ([scene_p, P(CameraDesc)], c_int),
         "lt_scene_set_world": ([scene_p, P(WorldDesc)], c_int),
         "lt_scene_set_world_program": ([scene_p, P(ShaderProgram), c_int, ctypes.c_uint], c_int),
+        "lt_scene_set_world_lightgroup": ([scene_p, c_int], c_int),
         "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int, c_int], c_int),
         "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc), c_int], c_int),
         "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, ctypes.c_float, P(VolumeDesc),
@@ -458,6 +468,8 @@ def _declare(lib, layout=True):
         "lt_render_read_pass_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_cryptomatte_rows": ([render_p, c_int, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid_rows": ([render_p, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_lightgroup_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
+        "lt_render_read_aov_rows": ([render_p, c_int, c_int, c_int, _f_p, ctypes.c_size_t], c_int),
         "lt_render_read_strategy_grid": ([render_p, _f_p, ctypes.c_size_t, ctypes.POINTER(c_int),
                                           ctypes.POINTER(c_int)], c_int),
         "lt_render_destroy": ([render_p], None),
@@ -485,7 +497,8 @@ def check_layout(entries, path, structs=STRUCTS, constants=None):
     (type, field, value, size)); raises LanternError listing every difference. constants: the
     {NAME: value} declared here for lantern.h's LT_NAME (default: this module's)."""
     if constants is None:
-        constants = {k: v for k, v in globals().items() if k.isupper() and type(v) is int and k != "ABI_VERSION"}
+        constants = {k: v for k, v in globals().items()
+                     if k.isupper() and type(v) is int and k not in ("ABI_VERSION", "LIGHTGROUP_PASS", "AOV_PASS")}
     sizes, fields, values = {}, {}, {}
     for t, f, value, size in entries:
         if f is None:
@@ -611,7 +624,22 @@ def _check(status, what):
         raise LanternError("%s failed (%s): %s" % (what, kind, msg or "no message"), status, msg)
 
 
+# Light group g's pass reads as pass id LIGHTGROUP_PASS + g (Render.read_pass_rows): RGB; shader
+# AOV i as AOV_PASS + 2 i + (1 for a colour): RGBA or one value. The add-on's own numbers, not
+# lantern.h's constants (check_layout leaves them out).
+LIGHTGROUP_PASS = 1 << 16
+AOV_PASS = 1 << 20
+
+
+def aov_pass(index, colour):
+    return AOV_PASS + 2 * index + int(bool(colour))
+
+
 def pass_channels(pass_id):
+    if pass_id >= AOV_PASS:
+        return 4 if pass_id & 1 else 1
+    if pass_id >= LIGHTGROUP_PASS:
+        return 3
     n = lib().lt_pass_channels(int(pass_id))
     if n <= 0:
         raise LanternError("unknown pass %r" % (pass_id,))
@@ -809,8 +837,10 @@ class Scene:
         return out.value
 
     def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL, color=(1.0, 1.0, 1.0, 1.0),
-                     pass_index=0, random_id=0, attributes=(), motion=None, cryptomatte=(0, 0)):
+                     pass_index=0, random_id=0, attributes=(), motion=None, cryptomatte=(0, 0), holdout=False,
+                     lightgroup=0):
         """color: Object.color; random_id: the uint32 Cycles hashes into Object Info's Random;
+        holdout: a holdout object (Object.holdout_get); lightgroup: 0 none, k the light group k - 1;
         attributes: (id, 4 floats) of the object's attributes; motion: the transforms (3x4 or 4x4
         each) at the motion steps over the shutter; cryptomatte: the object's and its asset's
         name hashes (cryptomatte_hash)."""
@@ -821,6 +851,8 @@ class Scene:
         d.pass_index = int(pass_index)
         d.random_id = int(random_id) & 0xFFFFFFFF
         d.cryptomatte_object, d.cryptomatte_asset = (int(h) & 0xFFFFFFFF for h in cryptomatte)
+        d.holdout = int(bool(holdout))
+        d.lightgroup = int(lightgroup)
         if attributes:
             ids = _i32([int(i) for i, _ in attributes], "attribute ids")
             values = _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values")
@@ -832,7 +864,7 @@ class Scene:
         return out.value
 
     def add_light(self, type, color, transform, radius=0.0, spot_size=0.0, spot_blend=0.0,
-                  shape=AREA_SQUARE, size_x=0.0, size_y=0.0, angle=0.0, visibility=VISIBLE_ALL):
+                  shape=AREA_SQUARE, size_x=0.0, size_y=0.0, angle=0.0, visibility=VISIBLE_ALL, lightgroup=0):
         d = LightDesc()
         d.type = int(type)
         d.color[:] = [float(c) for c in color[:3]]
@@ -840,6 +872,7 @@ class Scene:
         d.radius, d.spot_size, d.spot_blend = radius, spot_size, spot_blend
         d.shape, d.size_x, d.size_y, d.angle = int(shape), size_x, size_y, angle
         d.visibility = int(visibility)
+        d.lightgroup = int(lightgroup)
         _check(self._lib.lt_scene_add_light(self.handle, ctypes.byref(d)), "lt_scene_add_light")
         return True
 
@@ -881,6 +914,10 @@ class Scene:
         d, _keep = _program(program)
         _check(self._lib.lt_scene_set_world_program(self.handle, ctypes.byref(d), int(map_resolution),
                                                     int(visibility)), "lt_scene_set_world_program")
+
+    def set_world_lightgroup(self, lightgroup):
+        """0: none; k: light group k - 1."""
+        _check(self._lib.lt_scene_set_world_lightgroup(self.handle, int(lightgroup)), "lt_scene_set_world_lightgroup")
 
     @staticmethod
     def _volume_descs(components):
@@ -1027,6 +1064,13 @@ class Render:
             for k, v in settings.items():
                 if k == "border":
                     s.border[:] = [int(x) for x in v]
+                elif k == "lightgroups":  # the light groups' names
+                    self._lightgroup_names = (ctypes.c_char_p * max(1, len(v)))(*[n.encode("utf-8") for n in v])
+                    s.lightgroup_count, s.lightgroup_names = len(v), self._lightgroup_names
+                elif k == "aovs":  # [(name, is colour)] of the shader AOVs
+                    self._aov_names = (ctypes.c_char_p * max(1, len(v)))(*[n.encode("utf-8") for n, _ in v])
+                    self._aov_colors = np.array([int(bool(c)) for _, c in v] or [0], dtype=np.int32)
+                    s.aov_count, s.aov_names, s.aov_colors = len(v), self._aov_names, _iptr(self._aov_colors)
                 else:
                     setattr(s, k, v)
             settings = s
@@ -1087,6 +1131,15 @@ class Render:
         n = self.region_size[0] * rows * pass_channels(pass_id)
         if out.dtype != np.float32 or not out.flags["C_CONTIGUOUS"] or out.size != n:
             raise ValueError("read_pass_rows needs a contiguous float32 array of %d floats" % n)
+        if pass_id >= AOV_PASS:
+            _check(self._lib.lt_render_read_aov_rows(self.handle, int((pass_id - AOV_PASS) >> 1), int(y0), int(rows),
+                                                     _fptr(out), out.size), "lt_render_read_aov_rows")
+            return out
+        if pass_id >= LIGHTGROUP_PASS:
+            _check(self._lib.lt_render_read_lightgroup_rows(self.handle, int(pass_id - LIGHTGROUP_PASS), int(y0),
+                                                            int(rows), _fptr(out), out.size),
+                   "lt_render_read_lightgroup_rows")
+            return out
         _check(self._lib.lt_render_read_pass_rows(self.handle, int(pass_id), int(y0), int(rows), _fptr(out),
                                                   out.size), "lt_render_read_pass_rows")
         return out

@@ -71,8 +71,25 @@ def _pass_enabled(scene, view_layer, flag):
     return bool(getattr(view_layer, flag, False))
 
 
+def lightgroup_passes(view_layer):
+    """Cycles' light group passes, one per view-layer light group: Combined_<name>, RGB
+    (docs/passes.md), read as pass core.LIGHTGROUP_PASS + the group's index."""
+    return [("Combined_%s" % g.name, core.LIGHTGROUP_PASS + i, 3, "RGB", 'COLOR', None)
+            for i, g in enumerate(getattr(view_layer, "lightgroups", ()))]
+
+
+def aov_passes(view_layer):
+    """Cycles' shader AOV passes, one per valid view-layer AOV under its name: a colour's RGBA (the
+    colour and the fraction of samples that wrote it), a value's X (docs/passes.md)."""
+    aovs = [a for a in getattr(view_layer, "aovs", ()) if a.is_valid]
+    return [(a.name, core.aov_pass(i, a.type == 'COLOR'), 4 if a.type == 'COLOR' else 1,
+             "RGBA" if a.type == 'COLOR' else "X", 'COLOR' if a.type == 'COLOR' else 'VALUE', None)
+            for i, a in enumerate(aovs)]
+
+
 def enabled_passes(scene, view_layer):
-    return [p for p in PASSES if _pass_enabled(scene, view_layer, p[5])]
+    return ([p for p in PASSES if _pass_enabled(scene, view_layer, p[5])] + lightgroup_passes(view_layer)
+            + aov_passes(view_layer))
 
 
 def cryptomatte_passes(view_layer):
@@ -93,13 +110,20 @@ def cryptomatte_settings(view_layer, pixels):
 
 
 def pass_settings(passes, pixels):
-    """The render settings for these passes: the core keeps only them (lt_render_settings.passes),
-    and counts what Blender holds besides (caller_bytes) in its memory check: the render result's
-    passes (_PassWriter's band buffers and band results are a few MiB)."""
+    """The render settings for these passes: the core keeps only them (lt_render_settings.passes
+    and the light groups' names), and counts what Blender holds besides (caller_bytes) in its
+    memory check: the render result's passes (_PassWriter's band buffers and band results are a
+    few MiB)."""
     mask = 0
+    lightgroups, aovs = [], []
     for p in passes:
-        mask |= 1 << p[1]
-    return dict(passes=mask, caller_bytes=pixels * sum(p[2] for p in passes) * 4)
+        if p[1] >= core.AOV_PASS:
+            aovs.append((p[0], p[1] & 1))
+        elif p[1] >= core.LIGHTGROUP_PASS:
+            lightgroups.append(p[0][len("Combined_"):])
+        else:
+            mask |= 1 << p[1]
+    return dict(passes=mask, lightgroups=lightgroups, aovs=aovs, caller_bytes=pixels * sum(p[2] for p in passes) * 4)
 
 
 def frame_size(rd):
@@ -538,6 +562,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             settings.update(pass_settings(enabled_passes(scene, view_layer), region))
             crypto, crypto_bytes = cryptomatte_settings(view_layer, region)
             settings.update(crypto, caller_bytes=settings["caller_bytes"] + crypto_bytes)
+            settings["pass_alpha_threshold"] = view_layer.pass_alpha_threshold  # where AOVs are written
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:

@@ -9,7 +9,7 @@ import bpy
 import numpy as np
 
 from . import core
-from .export import export_lights, export_scene, instance_key
+from .export import export_lights, export_scene, holdout_of, instance_key, lightgroup_indices, lightgroup_of
 from .export.camera import camera_table, export_camera
 
 _GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
@@ -125,6 +125,9 @@ class SceneSync:
         """[(key, core id, new matrix)] of the exported instances that moved, or None when the
         set of instances changed (a new scene is needed)."""
         instances = self.state["instances"]
+        flags = self.state.get("flags", {})
+        view_layer = depsgraph.view_layer_eval
+        groups = lightgroup_indices(view_layer)
         seen = 0
         moves = []
         for inst in depsgraph.object_instances:
@@ -137,6 +140,8 @@ class SceneSync:
                     return None  # an instance that was not exported
                 continue
             seen += 1
+            if (holdout_of(inst, view_layer), lightgroup_of(inst, groups)) != flags.get(key, (False, 0)):
+                return None  # holdout or light group changed: the instance is added anew
             core_id, old = entry
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             if core_id is not None and not np.array_equal(matrix, old):

@@ -131,3 +131,43 @@ def test_light_passes_recombine_in_blender(light_runs):
         total = total + (r[kind + "Dir"][..., :3] + r[kind + "Ind"][..., :3]) * r[kind + "Col"][..., :3]
     combined = r.combined[..., :3]
     assert np.allclose(total, combined, rtol=1e-4, atol=1e-6), np.abs(total - combined).max()
+
+
+def test_light_groups_agree_with_cycles(scene_factory, outdir):
+    """Light groups (scenes: light_groups, view layer groups "key" and "fill", the world in none):
+    Combined_key and Combined_fill by test_agreement.py's rule, each pass as an image."""
+    runs = {}
+    for engine in (ru.CYCLES, ru.LANTERN):
+        for seed in (0, 1):
+            scene = scene_factory("light_groups")
+            runs.setdefault(engine, []).append(ru.render(scene, engine, 128, seed=seed))
+    for name in ("Combined_key", "Combined_fill"):
+        assert name in runs[ru.LANTERN][0], "Lantern wrote no %s (has %s)" % (name, sorted(runs[ru.LANTERN][0]))
+        lantern = [r[name][..., :3] for r in runs[ru.LANTERN]]
+        cycles = [r[name][..., :3] for r in runs[ru.CYCLES]]
+        report, _ = ru.agreement_report("light_groups_" + name, lantern, cycles, outdir, 16, 1e-5)
+        assert report == "", report
+
+
+def test_shader_aovs_agree_with_cycles(scene_factory, outdir):
+    """Shader AOVs (scenes: aovs; AOV Output of a constant colour, of Texture Coordinate's Generated
+    and of a constant value, through a card of alpha 0.3): each AOV, as an image, by
+    test_agreement.py's rule; a colour AOV's alpha (the share of samples that wrote it) too.
+    Behind a transparent surface the expectation is the chance the path passes it (Cycles picks
+    the Transparent closure by its sample weight): the card is a Mix Shader, whose choice both
+    engines make alike (docs/passes.md). A Gaussian filter of width 0.01 px, as for the data passes:
+    the pixels' coverage of the silhouettes, which the two engines' filter tables give to within
+    some 0.1 %, is then the same; what is left to sample is the choice at the card."""
+    runs = {}
+    for engine in (ru.CYCLES, ru.LANTERN):
+        for seed in (0, 1):
+            scene = scene_factory("aovs")
+            scene.cycles.pixel_filter_type = 'GAUSSIAN'
+            scene.cycles.filter_width = 0.01
+            runs.setdefault(engine, []).append(ru.render(scene, engine, 64, seed=seed))
+    for name, channels in (("paint", [0, 1, 2]), ("paint", [3, 3, 3]), ("coords", [0, 1, 2]), ("mask", [0, 0, 0])):
+        assert name in runs[ru.LANTERN][0], "Lantern wrote no %s (has %s)" % (name, sorted(runs[ru.LANTERN][0]))
+        lantern = [r[name][..., channels] for r in runs[ru.LANTERN]]
+        cycles = [r[name][..., channels] for r in runs[ru.CYCLES]]
+        report, _ = ru.agreement_report("aovs_%s_%d" % (name, channels[0]), lantern, cycles, outdir, 16, 1e-5)
+        assert report == "", report

@@ -38,8 +38,11 @@ ScenePtr merge_scene(bool media) {
     check(lt_scene_set_material_volume(s.get(), vm, &d, 1, 1), "set_material_volume");
     add_object(s.get(), icosphere(0.4f, 2), vm, translate({0.1f, -0.9f, 0.6f}));
   }
-  add_light(s.get(), area_light(LT_AREA_SQUARE, 0.5f, 0.5f, look_at({0, -1, 2.5f}, {0, 0, 0}), 200));
+  lt_light_desc light = area_light(LT_AREA_SQUARE, 0.5f, 0.5f, look_at({0, -1, 2.5f}, {0, 0, 0}), 200);
+  light.lightgroup = 1;  // light groups (settings_for): the lamp's and the world's
+  add_light(s.get(), light);
   set_world(s.get(), {0.05f, 0.06f, 0.08f}, 1);
+  check(lt_scene_set_world_lightgroup(s.get(), 2), "set_world_lightgroup");
   set_camera(s.get(), perspective_camera(look_at({0, -4, 2}, {0, 0, 0.4f}), 35));
   check(lt_scene_commit(s.get()), "commit");
   return s;
@@ -50,6 +53,9 @@ lt_render_settings settings_for(int integrator, int offset, int samples) {
   rs.integrator = integrator;
   rs.sample_offset = offset;
   rs.volume_bounces = 2;
+  static const char* const kGroups[] = {"lamp", "world"};
+  rs.lightgroup_count = 2;
+  rs.lightgroup_names = kGroups;
   return rs;
 }
 
@@ -129,6 +135,8 @@ TEST_P(MergeExactness, SplitPartsMergeIntoTheFullRender) {
   EXPECT_EQ(m.attributes.at("lantern/sample_ranges"), "0-128");
   for (float v : m.find("SampleCount.X")->pixels) ASSERT_EQ(v, 128.0f);
   if (integrator == LT_INTEGRATOR_BIDIRECTIONAL) EXPECT_NE(f.find("LightTracing.R"), nullptr);
+  EXPECT_NE(f.find("Combined_lamp.R"), nullptr);  // light groups, their splats apart with BDPT
+  EXPECT_EQ(f.find("LightTracing.Combined_world.B") != nullptr, integrator == LT_INTEGRATOR_BIDIRECTIONAL);
 
   // The part is a different estimate (so the equality above says something), and the offset
   // matters: [64, 128) is not [0, 64) again.
@@ -278,5 +286,16 @@ TEST(MergeLightPaths, AdaptivePartsAreWeightedByTheLightPathsTraced) {
       const double want = (la * xa[i] + lb * xb[i]) / (la + lb);
       ASSERT_NEAR(xm[i], want, 1e-5 * std::abs(want) + 1e-30) << ch << " pixel " << i;
     }
+  }
+  // A light group likewise: its camera part by the pixel's samples, its splat part by light paths.
+  const auto &ca = pa.find("SampleCount.X")->pixels, &cb = pb.find("SampleCount.X")->pixels;
+  const auto &ga = pa.find("Combined_lamp.R")->pixels, &gb = pb.find("Combined_lamp.R")->pixels;
+  const auto &sa = pa.find("LightTracing.Combined_lamp.R")->pixels,
+             &sb = pb.find("LightTracing.Combined_lamp.R")->pixels;
+  const auto& gm = m.find("Combined_lamp.R")->pixels;
+  for (size_t i = 0; i < gm.size(); ++i) {
+    const double want = (ca[i] * (double(ga[i]) - sa[i]) + cb[i] * (double(gb[i]) - sb[i])) / (ca[i] + cb[i]) +
+                        (la * sa[i] + lb * sb[i]) / (la + lb);
+    ASSERT_NEAR(gm[i], want, 1e-5 * std::abs(want) + 1e-7) << "Combined_lamp.R pixel " << i;
   }
 }

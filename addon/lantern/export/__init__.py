@@ -33,13 +33,41 @@ def instance_key(inst):
     return (inst.object.original.as_pointer(),)
 
 
+def holdout_of(inst, view_layer):
+    """Cycles' holdout object (blender/object.cpp): an instance takes its instancer's, an object
+    its own flag or its holdout collection's (Object.holdout_get)."""
+    owner = inst.parent if inst.is_instance and inst.parent is not None else inst.object
+    return bool(owner.holdout_get(view_layer=view_layer))
+
+
+def lightgroup_indices(view_layer):
+    """{name: k} of the view layer's light groups, k = 1 + the group's index (the core's 0 is none):
+    an emitter naming a group the view layer does not list is in none, as in Cycles."""
+    return {g.name: i + 1 for i, g in enumerate(view_layer.lightgroups)}
+
+
+def aov_indices(view_layer):
+    """{name: (index, colour)} of the view layer's valid AOVs, in the order of the render's AOV
+    passes (engine.aov_passes)."""
+    aovs = [a for a in view_layer.aovs if a.is_valid]
+    return {a.name: (i, a.type == 'COLOR') for i, a in enumerate(aovs)}
+
+
+def lightgroup_of(inst, groups):
+    """The core's light group of an object instance's emission (an instance takes its instancer's,
+    as holdout_of)."""
+    owner = inst.parent if inst.is_instance and inst.parent is not None else inst.object
+    return groups.get(owner.lightgroup, 0)
+
+
 def export_lights(depsgraph, core_scene, report):
     """Adds every light object instance; returns how many were added."""
     lights = 0
+    groups = lightgroup_indices(depsgraph.view_layer_eval)
     for inst in depsgraph.object_instances:
         if inst.show_self and inst.object.type == 'LIGHT':
             lights += export_light(inst.object, np.array(inst.matrix_world, dtype=np.float32),
-                                   core_scene, report)
+                                   core_scene, report, lightgroup_of(inst, groups))
     return lights
 
 
@@ -72,6 +100,11 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
         report({'WARNING'}, "World '%s' left out: %s" % (depsgraph.scene_eval.world.name, e.detail))
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=1)
         summary["world"] = "none (left out)"
+    groups = lightgroup_indices(depsgraph.view_layer_eval)
+    materials.aovs = aov_indices(depsgraph.view_layer_eval)
+    world = depsgraph.scene_eval.world
+    if world is not None and groups.get(world.lightgroup, 0):
+        core_scene.set_world_lightgroup(groups[world.lightgroup])
     for w in core_scene.take_warnings():
         report({'WARNING'}, w)
     world_media = export_world_volume(depsgraph, core_scene, report)
@@ -85,15 +118,22 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     instances = {}  # instance_key -> (core instance id or None for no geometry, matrix)
     has_mesh_instance = set()
     hair = 0
+    flags = {}  # instance_key -> (holdout, light group) where not (False, 0), for viewport updates
+    view_layer = depsgraph.view_layer_eval
     for inst in depsgraph.object_instances:
         obj = inst.object
         t = obj.type
+        holdout = holdout_of(inst, view_layer)
+        lightgroup = lightgroup_of(inst, groups)
+        if holdout or lightgroup:
+            flags[instance_key(inst)] = (holdout, lightgroup)
         if t == 'MESH' and inst.show_particles and hair_systems(obj):
             if not hair:
                 warn_curve_shape(depsgraph, report)
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             key = instance_key(inst) + ('hair',)
-            instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR'), matrix)
+            instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR', holdout=holdout,
+                                                                 lightgroup=lightgroup), matrix)
             hair += 1
         if not inst.show_self:  # e.g. a particle emitter set not to render itself
             continue
@@ -107,16 +147,19 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             random_id = inst.random_id if inst.is_instance else None
             instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, random_id=random_id,
                                                                     key=instance_key(inst),
-                                                                    deform=not inst.is_instance), matrix)
+                                                                    deform=not inst.is_instance,
+                                                                    holdout=holdout, lightgroup=lightgroup), matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
                 instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False,
                                                                         random_id=inst.random_id,
-                                                                        key=instance_key(inst)), matrix)
+                                                                        key=instance_key(inst),
+                                                                        holdout=holdout, lightgroup=lightgroup),
+                                                 matrix)
             else:
-                deferred.append((obj, matrix, instance_key(inst)))
+                deferred.append((obj, matrix, instance_key(inst), holdout, lightgroup))
         elif t == 'LIGHT':
-            if export_light(obj, matrix, core_scene, report):
+            if export_light(obj, matrix, core_scene, report, lightgroup):
                 lights += 1
                 light_kinds[obj.data.type] = light_kinds.get(obj.data.type, 0) + 1
         elif t == 'VOLUME':
@@ -126,18 +169,20 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                 warn_curve_shape(depsgraph, report)
             hair += t == 'CURVES'
             random_id = inst.random_id if inst.is_instance else None
-            instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id),
+            instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id,
+                                                                           holdout=holdout, lightgroup=lightgroup),
                                              matrix)
         elif t not in skipped_types:
             skipped_types.add(t)
             report({'WARNING'}, "Objects of type %s are not supported yet, skipped (e.g. '%s')"
                    % (t, obj.name))
-    for obj, matrix, key in deferred:
+    for obj, matrix, key, holdout, lightgroup in deferred:
         if obj.original.as_pointer() not in has_mesh_instance:
             # e.g. a curve without bevel
-            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key), matrix)
+            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key, holdout=holdout,
+                                                     lightgroup=lightgroup), matrix)
     if state is not None:
-        state.update(materials=materials, instances=instances)
+        state.update(materials=materials, instances=instances, flags=flags)
 
     summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()

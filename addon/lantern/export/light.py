@@ -58,8 +58,9 @@ def _has_default_nodes(light):
     return True
 
 
-def export_light(obj, matrix_world, core_scene, report):
-    """Adds the light of an (evaluated) light object instance at matrix_world."""
+def export_light(obj, matrix_world, core_scene, report, lightgroup=0):
+    """Adds the light of an (evaluated) light object instance at matrix_world; lightgroup: the core's
+    (export.lightgroup_of)."""
     light = obj.data
     kind = _TYPES.get(light.type)
     if kind is None:
@@ -80,7 +81,7 @@ def export_light(obj, matrix_world, core_scene, report):
     if bad:
         report({'WARNING'}, "%s left out: %s not finite" % (subject, ", ".join(bad)))
         return False
-    kw = dict(type=kind, color=color, transform=matrix_world, visibility=visibility_bits(obj))
+    kw = dict(type=kind, color=color, transform=matrix_world, visibility=visibility_bits(obj), lightgroup=lightgroup)
     if light.type in {'POINT', 'SPOT'}:
         kw["radius"] = light.shadow_soft_size
     if light.type == 'SPOT':

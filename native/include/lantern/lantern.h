@@ -39,8 +39,10 @@ extern "C" {
  * steps of lt_mesh_desc, lt_instance_desc and lt_camera_desc; motion counts in lt_scene_stats);
  * 14: curves and points (lt_curves_desc, lt_scene_add_curves); 15: Cryptomatte
  * (lt_cryptomatte_hash, lt_instance_desc's and lt_scene_set_material_cryptomatte's name hashes,
- * lt_render_settings.cryptomatte and cryptomatte_levels, lt_render_read_cryptomatte_rows). */
-#define LT_ABI_VERSION 15
+ * lt_render_settings.cryptomatte and cryptomatte_levels, lt_render_read_cryptomatte_rows); 16:
+ * lt_instance_desc.holdout; light groups (the lightgroup fields, lt_scene_set_world_lightgroup,
+ * lt_render_read_lightgroup_rows); shader AOVs (lt_render_settings.aov_*, pass_alpha_threshold, lt_render_read_aov_rows). */
+#define LT_ABI_VERSION 16
 
 enum lt_status {
   LT_OK = 0,
@@ -259,6 +261,12 @@ typedef struct lt_instance_desc {
   /* Cryptomatte: lt_cryptomatte_hash of the object's name and of its asset's (the top-most
    * parent's name); 0: none. */
   uint32_t cryptomatte_object, cryptomatte_asset;
+  /* Nonzero: a holdout object (Object.holdout_get: its own flag or a holdout collection's), which
+   * camera rays see as Cycles does: transparent film where it covers, its Transparent closures kept. */
+  int holdout;
+  /* The light group of its emission: 0 none, k > 0 the render's light group k - 1
+   * (lt_render_settings.lightgroup_count); the same in lt_light_desc. */
+  int lightgroup;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 
@@ -275,6 +283,7 @@ typedef struct lt_light_desc {
   float size_x, size_y;
   float angle; /* sun: angular diameter, radians */
   unsigned visibility;
+  int lightgroup; /* 0 none, k > 0 light group k - 1 (lt_instance_desc.lightgroup) */
 } lt_light_desc;
 LT_API int lt_scene_add_light(lt_scene* scene, const lt_light_desc* desc);
 
@@ -340,6 +349,8 @@ LT_API int lt_scene_set_world(lt_scene* scene, const lt_world_desc* desc);
  * 1024 x 512; at most 8192 wide). visibility: LT_VISIBLE_CAMERA, whether camera rays see it. */
 LT_API int lt_scene_set_world_program(lt_scene* scene, const lt_shader_program* program, int map_resolution,
                                       unsigned visibility);
+/* The world's light group: 0 none, k > 0 light group k - 1 (lt_instance_desc.lightgroup). */
+LT_API int lt_scene_set_world_lightgroup(lt_scene* scene, int lightgroup);
 
 /* ---- volumes (docs/volumes.md) ---------------------------------------------------------------
  * A volume is a list of components, each a volume shader node with Cycles' formulas: Principled
@@ -533,6 +544,22 @@ typedef struct lt_render_settings {
    * ceil(levels / 2) layers of two (id, coverage) pairs each per type. */
   unsigned cryptomatte;
   int cryptomatte_levels;
+  /* Light groups (Cycles' Combined_<name> passes): how many (0 to 1024; default 0: none, and no
+   * cost) and their names (lightgroup_count strings, the EXR channels' "Combined_<name>.R"). Each
+   * is the radiance from the emitters of that group (lightgroup fields); the groups sum to
+   * Combined's RGB where every emitter is in one. */
+  int lightgroup_count;
+  const char* const* lightgroup_names;
+  /* Shader AOVs (Cycles' AOV Output node, view_layer.aovs): how many (0 to 1024; default 0), their
+   * names and aov_colors[i] != 0 for a colour AOV (RGBA: the colour and the fraction of samples
+   * that wrote it), else a value (1 channel). A program's AOV instruction writes AOV `index` of
+   * these. EXR channels "<name>.R/G/B/A" or "<name>.X". */
+  int aov_count;
+  const char* const* aov_names;
+  const int* aov_colors;
+  /* Cycles' View Layer > Passes > Alpha Threshold: AOVs are written at the surfaces a camera path
+   * meets through transparent passes up to the first whose alpha reaches it. Default 0.5. */
+  float pass_alpha_threshold;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -643,6 +670,13 @@ LT_API int lt_render_read_strategy_grid(lt_render* render, float* out, size_t fl
 /* The same for grid rows [y0, y0 + rows) only (width*rows*3 floats; the size from the call above
  * with out == NULL), read through a few rows' buffer. Added without an ABI version bump (still 7). */
 LT_API int lt_render_read_strategy_grid_rows(lt_render* render, int y0, int rows, float* out, size_t float_count);
+/* Rows [y0, y0 + rows) of light group `group`'s pass (RGB, width*rows*3 floats; as
+ * lt_render_read_pass_rows, read between passes while rendering). */
+LT_API int lt_render_read_lightgroup_rows(lt_render* render, int group, int y0, int rows, float* out,
+                                          size_t float_count);
+/* Rows [y0, y0 + rows) of shader AOV `index` (width*rows*4 floats for a colour AOV, *1 for a
+ * value; as lt_render_read_pass_rows). */
+LT_API int lt_render_read_aov_rows(lt_render* render, int index, int y0, int rows, float* out, size_t float_count);
 
 /* A Cryptomatte layer of rows [y0, y0 + rows) (Cycles' CryptoObject00, CryptoObject01, ...):
  * width*rows*4 floats, per pixel id, coverage, id, coverage, the pixel's ids sorted by coverage

@@ -121,6 +121,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_instance_desc, motion_step_count),
     LT_FIELD(lt_instance_desc, cryptomatte_object),
     LT_FIELD(lt_instance_desc, cryptomatte_asset),
+    LT_FIELD(lt_instance_desc, holdout),
+    LT_FIELD(lt_instance_desc, lightgroup),
 
     LT_CONST(lt_light_type, LT_LIGHT_POINT),
     LT_CONST(lt_light_type, LT_LIGHT_SPOT),
@@ -142,6 +144,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_light_desc, size_y),
     LT_FIELD(lt_light_desc, angle),
     LT_FIELD(lt_light_desc, visibility),
+    LT_FIELD(lt_light_desc, lightgroup),
 
     LT_CONST(lt_camera_type, LT_CAMERA_PERSPECTIVE),
     LT_CONST(lt_camera_type, LT_CAMERA_ORTHOGRAPHIC),
@@ -276,6 +279,12 @@ const lt_abi_entry kLayout[] = {
     LT_CONST(lt_cryptomatte, LT_CRYPTOMATTE_OBJECT),
     LT_CONST(lt_cryptomatte, LT_CRYPTOMATTE_MATERIAL),
     LT_CONST(lt_cryptomatte, LT_CRYPTOMATTE_ASSET),
+    LT_FIELD(lt_render_settings, lightgroup_count),
+    LT_FIELD(lt_render_settings, lightgroup_names),
+    LT_FIELD(lt_render_settings, aov_count),
+    LT_FIELD(lt_render_settings, aov_names),
+    LT_FIELD(lt_render_settings, aov_colors),
+    LT_FIELD(lt_render_settings, pass_alpha_threshold),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),

@@ -29,6 +29,8 @@ namespace {
 
 using lt::InvalidArgument;
 
+constexpr int kMaxLightgroups = 1024;  // lt_render_settings.lightgroup_count
+
 template <class F>
 int guarded(F f) {
   try {
@@ -504,6 +506,9 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
       inst.materials.push_back(m);
     }
     inst.visibility = d->visibility & LT_VISIBLE_ALL;
+    inst.holdout = d->holdout != 0;
+    require(d->lightgroup >= 0 && d->lightgroup <= kMaxLightgroups, "instance light group out of range");
+    inst.lightgroup = d->lightgroup - 1;
     require(finite_array(d->color, 4), "instance colour must be finite");
     std::copy(d->color, d->color + 4, inst.color);
     inst.pass_index = float(d->pass_index);
@@ -581,6 +586,8 @@ int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
         break;
     }
     l.visibility = d->visibility & LT_VISIBLE_ALL;
+    require(d->lightgroup >= 0 && d->lightgroup <= kMaxLightgroups, name + ": light group out of range");
+    l.lightgroup = d->lightgroup - 1;
     scene->scene.lamp_lights.push_back(l);
   });
 }
@@ -743,6 +750,15 @@ int lt_scene_set_world_program(lt_scene* scene, const lt_shader_program* p, int 
   });
 }
 
+int lt_scene_set_world_lightgroup(lt_scene* scene, int lightgroup) {
+  return guarded([&] {
+    require(scene != nullptr, "lt_scene_set_world_lightgroup: NULL scene");
+    require(lightgroup >= 0 && lightgroup <= kMaxLightgroups, "world light group out of range");
+    begin_edit(scene);
+    scene->scene.world.lightgroup = lightgroup - 1;
+  });
+}
+
 int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* d, int count, int null_surface) {
   return guarded([&] {
     require(scene && d, "lt_scene_set_material_volume: NULL argument");
@@ -836,6 +852,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->mist_falloff = 2;
   s->cryptomatte = 0;
   s->cryptomatte_levels = 6;
+  s->pass_alpha_threshold = 0.5f;
 }
 
 namespace {
@@ -948,6 +965,25 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.mist_depth = s->mist_depth;
     is.mist_falloff = s->mist_falloff;
     is.strategy_depth = s->integrator == LT_INTEGRATOR_BIDIRECTIONAL ? s->strategy_view_depth : 0;
+    require(s->lightgroup_count >= 0 && s->lightgroup_count <= kMaxLightgroups &&
+                (s->lightgroup_count == 0 || s->lightgroup_names),
+            "light group count out of range (0 to 1024) or their names NULL");
+    for (int g = 0; g < s->lightgroup_count; ++g) {
+      require(s->lightgroup_names[g] != nullptr, "light group " + std::to_string(g) + " has no name");
+      rs.lightgroup_names.emplace_back(s->lightgroup_names[g]);
+    }
+    is.lightgroups = s->lightgroup_count;
+    require(
+        s->aov_count >= 0 && s->aov_count <= kMaxLightgroups && (s->aov_count == 0 || (s->aov_names && s->aov_colors)),
+        "AOV count out of range (0 to 1024) or their names or types NULL");
+    for (int a = 0; a < s->aov_count; ++a) {
+      require(s->aov_names[a] != nullptr, "AOV " + std::to_string(a) + " has no name");
+      rs.aov_names.emplace_back(s->aov_names[a]);
+      rs.aov_colors.push_back(s->aov_colors[a] != 0);
+    }
+    is.aovs = s->aov_count;
+    require(std::isfinite(s->pass_alpha_threshold), "pass alpha threshold must be finite");
+    is.pass_alpha_threshold = s->pass_alpha_threshold;
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;
@@ -1059,6 +1095,38 @@ void read_strategy_rows(lt_render* render, int y0, int rows, float* out, size_t 
   job.film().read_strategy_grid(columns, depth, out, y0, rows);
 }
 }  // namespace
+
+int lt_render_read_lightgroup_rows(lt_render* render, int group, int y0, int rows, float* out, size_t float_count) {
+  return guarded([&] {
+    require(render && out, "lt_render_read_lightgroup_rows: NULL argument");
+    const auto& film = render->job->film();
+    require(rows >= 0 && y0 >= 0 && y0 <= film.height() - rows,
+            "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) + " are not within the " +
+                std::to_string(film.height()) + " rows of the render region");
+    const size_t need = size_t(film.width()) * rows * 3;
+    require(float_count == need, "light group buffer holds " + std::to_string(float_count) + " floats; " +
+                                     std::to_string(need) + " are needed");
+    film.read_lightgroup_rows(group, y0, rows, out);
+  });
+}
+
+int lt_render_read_aov_rows(lt_render* render, int index, int y0, int rows, float* out, size_t float_count) {
+  return guarded([&] {
+    require(render && out, "lt_render_read_aov_rows: NULL argument");
+    const auto& job = *render->job;
+    const auto& film = job.film();
+    require(index >= 0 && index < film.aovs(),
+            "AOV " + std::to_string(index) + " is not one of the render's " + std::to_string(film.aovs()));
+    require(rows >= 0 && y0 >= 0 && y0 <= film.height() - rows,
+            "rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) + " are not within the " +
+                std::to_string(film.height()) + " rows of the render region");
+    const int channels = job.settings().aov_colors[size_t(index)] ? 4 : 1;
+    const size_t need = size_t(film.width()) * rows * channels;
+    require(float_count == need,
+            "AOV buffer holds " + std::to_string(float_count) + " floats; " + std::to_string(need) + " are needed");
+    film.read_aov_rows(index, channels, y0, rows, out);
+  });
+}
 
 int lt_render_read_pass(lt_render* render, int pass, float* out, size_t float_count) {
   return guarded([&] { read_pass_rows(render, pass, 0, -1, out, float_count); });

@@ -179,6 +179,7 @@ size_t FilmLayout::bytes_per_pixel() const {
   floats += size_t(strategy_cells) * 6;
   for (int t = 0; t < kCryptoTypes; ++t)
     if ((cryptomatte >> t) & 1u) floats += 2 * size_t(cryptomatte_slots());
+  floats += size_t(lightgroups) * (splats ? 6 : 3) + size_t(aovs) * 4;
   const unsigned kept = with_dependencies(passes);
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
     if (kept & pass_bit(Pass(p))) {
@@ -219,6 +220,11 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
   }
   for (int t = 0; t < kCryptoTypes; ++t)
     if (has_cryptomatte(t)) crypto_[t].assign(2 * size_t(layout_.cryptomatte_slots()) * n, 0.0f);
+  if (layout_.lightgroups > 0) {
+    lightgroup_.assign(size_t(layout_.lightgroups) * 3 * n, 0.0f);
+    if (layout_.splats) lightgroup_splat_.assign(lightgroup_.size(), 0.0f);
+  }
+  if (layout_.aovs > 0) aov_.assign(size_t(layout_.aovs) * 4 * n, 0.0f);
   if (layout_.strategy_cells > 0) {
     strategies_.assign(n * layout_.strategy_cells * 3, 0.0f);
     strategy_splats_.assign(strategies_.size(), 0.0f);
@@ -276,6 +282,15 @@ void Film::add(int x, int y, const SampleValue& s) {
       const int slots = layout_.cryptomatte_slots();
       cryptomatte_add(&crypto_[t][2 * slots * i], slots, s.crypto_id[t], s.crypto_weight);
     }
+  if (!lightgroup_.empty() && s.lightgroups) {
+    float* g = &lightgroup_[size_t(layout_.lightgroups) * 3 * i];
+    for (int j = 0; j < layout_.lightgroups; ++j)
+      for (int k = 0; k < 3; ++k) g[3 * j + k] += s.lightgroups[j][k];
+  }
+  if (!aov_.empty() && s.aovs) {
+    float* a = &aov_[size_t(layout_.aovs) * 4 * i];
+    for (int j = 0; j < 4 * layout_.aovs; ++j) a[j] += s.aovs[j];
+  }
   alpha_[i] += s.alpha;
   if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
   count_[i] = n;
@@ -594,6 +609,51 @@ bool Film::read_light_tracing(Pass pass, float* out) const {
   if (a.empty()) return false;
   const double scale = 1.0 / double(light_paths_);
   for (size_t i = 0; i < a.size(); ++i) out[i] = float(a[i] * scale);
+  return true;
+}
+
+void Film::read_lightgroup_rows(int group, int y0, int rows, float* out) const {
+  if (group < 0 || group >= layout_.lightgroups)
+    throw InvalidArgument("light group " + std::to_string(group) + " is not one of the render's " +
+                          std::to_string(layout_.lightgroups));
+  if (y0 < 0 || rows < 0 || y0 > height_ - rows)
+    throw InvalidArgument("rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                          " are not within the film's " + std::to_string(height_) + " rows");
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  const size_t first = size_t(y0) * width_, n = size_t(rows) * width_, g = size_t(layout_.lightgroups);
+  const double per_path = light_paths_ && !lightgroup_splat_.empty() ? 1.0 / double(light_paths_) : 0.0;
+  for (size_t j = 0; j < n; ++j) {
+    const size_t i = first + j, at = (i * g + size_t(group)) * 3;
+    const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+    for (int k = 0; k < 3; ++k)
+      out[3 * j + k] = float(lightgroup_[at + k] * inv + (per_path > 0 ? lightgroup_splat_[at + k] * per_path : 0.0));
+  }
+}
+
+void Film::read_aov_rows(int index, int channels, int y0, int rows, float* out) const {
+  if (index < 0 || index >= layout_.aovs || channels < 1 || channels > 4)
+    throw InvalidArgument("AOV " + std::to_string(index) + " is not one of the render's " +
+                          std::to_string(layout_.aovs));
+  if (y0 < 0 || rows < 0 || y0 > height_ - rows)
+    throw InvalidArgument("rows " + std::to_string(y0) + " to " + std::to_string(y0 + rows) +
+                          " are not within the film's " + std::to_string(height_) + " rows");
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  const size_t first = size_t(y0) * width_, n = size_t(rows) * width_, per = size_t(layout_.aovs) * 4;
+  for (size_t j = 0; j < n; ++j) {
+    const size_t i = first + j;
+    const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+    for (int k = 0; k < channels; ++k)
+      out[size_t(channels) * j + k] = float(aov_[i * per + 4 * size_t(index) + k] * inv);
+  }
+}
+
+bool Film::read_lightgroup_light_tracing(int group, float* out) const {
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  if (lightgroup_splat_.empty() || !light_paths_ || group < 0 || group >= layout_.lightgroups) return false;
+  const size_t n = size_t(width_) * height_, g = size_t(layout_.lightgroups);
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k)
+      out[3 * i + k] = float(lightgroup_splat_[(i * g + size_t(group)) * 3 + k] / double(light_paths_));
   return true;
 }
 

@@ -78,6 +78,16 @@ struct SampleValue {
   // without the transparency factor: Lantern chooses to pass a transparent layer or not).
   float crypto_id[kCryptoTypes] = {0, 0, 0};
   float crypto_weight = 0;
+  // Light groups (Cycles' Combined_<group>): the radiance per group of the emitter each
+  // contribution comes from, into a buffer of FilmLayout::lightgroups the render job zeroes
+  // (CameraSample::lightgroups); null when the film keeps none.
+  Spectrum* lightgroups = nullptr;
+  void add_lightgroup(int group, const Spectrum& c) {
+    if (lightgroups && group >= 0) lightgroups[group] += c;
+  }
+  // Shader AOVs: 4 floats per AOV of FilmLayout::aovs (ShadingContext::aovs), zeroed by the render
+  // job (CameraSample::aovs); null when the film keeps none.
+  float* aovs = nullptr;
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
@@ -157,6 +167,8 @@ struct FilmLayout {
   unsigned cryptomatte = 0;
   int cryptomatte_levels = 6;
   int cryptomatte_slots() const { return cryptomatte ? 2 * cryptomatte_layers(cryptomatte_levels) : 0; }
+  int lightgroups = 0;  // light group passes (Combined_<group>), RGB each
+  int aovs = 0;         // shader AOV passes, 4 floats each
   // Bytes per pixel of the accumulators and the published image.
   size_t bytes_per_pixel() const;
 };
@@ -207,6 +219,20 @@ class Film {
     for (int k = 0; k < 3; ++k) a[3 * size_t(pixel) + k] += v[k];
   }
   bool has_light_passes() const;
+  // Light groups: a splat's part (BDPT), and the group's pass, RGB per pixel as read_rows (the
+  // mean over samples plus the splats over the light paths); light_tracing: the splats' part alone
+  // (false without splats).
+  int lightgroups() const { return layout_.lightgroups; }
+  void add_lightgroup_splat(uint32_t pixel, int group, const Spectrum& v) {
+    if (lightgroup_splat_.empty() || group < 0) return;
+    for (int k = 0; k < 3; ++k) lightgroup_splat_[(size_t(pixel) * layout_.lightgroups + group) * 3 + k] += v[k];
+  }
+  void read_lightgroup_rows(int group, int y0, int rows, float* out) const;
+  // Shader AOV `index`: the mean over samples of its first `channels` floats (1: a value, 4: a
+  // colour and its coverage), rows as read_rows.
+  int aovs() const { return layout_.aovs; }
+  void read_aov_rows(int index, int channels, int y0, int rows, float* out) const;
+  bool read_lightgroup_light_tracing(int group, float* out) const;
   // Light paths behind the published splats (0 without splats): what a merge weights them by.
   uint64_t published_light_paths() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -315,6 +341,8 @@ class Film {
   std::vector<float> light_splat_[kLightParts];
   // Cryptomatte: per kept type, FilmLayout::cryptomatte_slots() (id, weight sum) pairs per pixel.
   std::vector<float> crypto_[kCryptoTypes];
+  std::vector<float> lightgroup_, lightgroup_splat_;  // per pixel, per group, RGB sums
+  std::vector<float> aov_;                            // per pixel, per AOV, 4 sums
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;

@@ -88,6 +88,8 @@ struct Instance : Pose {
   int mesh = -1;
   std::vector<int> materials;  // material id per slot
   unsigned visibility = 31;
+  bool holdout = false;  // camera rays see it as Cycles' holdout objects (integrators/path_state.h)
+  int lightgroup = -1;   // the light group of its emission (-1: none)
   // Object Info: Object.color, pass_index, and Cycles' random number of the instance.
   float color[4] = {1, 1, 1, 1};
   float pass_index = 0, random = 0;

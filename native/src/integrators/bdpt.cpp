@@ -181,7 +181,7 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   PathVertex& v = camera[t - 1];
   if (v.type == VertexType::Surface && v.light < 0) {
     // Emission no light sampler knows: s = 0 alone finds it, with no MIS partner.
-    if (!is_black(le)) add(v.beta * le, 0, t);
+    if (!is_black(le)) add(v.beta * le, 0, t, scene_.geometry.instance(v.sp.instance).lightgroup);
     return;
   }
   if (t - 2 > max_depth() || is_black(le)) return;
@@ -192,7 +192,7 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   // Strategy s = 1 would have picked this light from the vertex before (mis_weight).
   const PathVertex& before = camera[t - 2];
   v.pick_nee = before.type == VertexType::Camera ? 0.0f : lights_.pmf_nee(before.p, nee_normal(before), v.light);
-  add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t, pixel_center_), 0, t,
+  add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t, pixel_center_), 0, t, lights_.lightgroup(v.light),
       v.infinite && v.light == lights_.world_light());
 }
 
@@ -207,7 +207,7 @@ void Bdpt::media_emission_reached(std::vector<PathVertex>& camera, int count, co
   const float kinds_within = kind_limit_factor(camera, camera, 0, count + 1);
   if (!(kinds_within > 0)) return;
   Spectrum le = media_emission(scene_, stack, ray, ray.tmin, t_end, sampler_, s_.volume_estimator, s_.volume_step);
-  if (!is_black(le)) add(beta * le * kinds_within, 0, count + 1);
+  if (!is_black(le)) add(beta * le * kinds_within, 0, count + 1, -1);
 }
 
 // Extends `path` from vertex 0 by sampling the BSDFs and phase functions (pbrt-v4's RandomWalk),
@@ -281,7 +281,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       }
       if (!found && medium < 0) {
         bool background = count == 1;
-        if (background && first) first->escaped = true;
+        if (background && first && s_.transparent_background) first->transparent += average(beta);
         if (!(background && s_.transparent_background)) {
           auto reach = [&](int light, const Spectrum& le) {
             v = PathVertex();
@@ -324,15 +324,26 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       ShadingContext ctx = shading_context(scene_.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
       ctx.camera_ray = mode == Mode::Radiance && visibility == kVisCamera;
       ctx.ray_depth = bounces;
+      const bool aovs_here = mode == Mode::Radiance && count == 1 && first && !first->aovs_done && cs_.aovs;
+      if (aovs_here) write_aovs_at(&ctx, cs_.aovs, s_);
       sf.n = smooth_n = ctx.N;
       const Material& material = scene_.material(sp.material);
       const float footprint_here = mode == Mode::Radiance ? footprint + ctx.ray_length * cs_.dD : light_footprint(sp.p);
       if (material.uses_bump()) add_differentials(scene_.geometry, sp, footprint_here, &ctx);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
+      if (aovs_here)
+        first->aovs_done = single_pass_done(material.may_be_transparent(), v.bsdf, s_.pass_alpha_threshold);
+      // Holdout on the camera's side of the path (light subpaths see surfaces as they are; their
+      // t = 1 splats onto holdout objects are dropped in splat_t1).
+      if (mode == Mode::Radiance && count == 1 && first &&
+          !hold_out(scene_.geometry.instance(sp.instance).holdout, &v.bsdf, &le, beta, &first->transparent))
+        break;
       if (!is_black(sf.smooth)) smooth_n = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
       // A transparent pass makes no vertex (connections see the surface through
       // shadow_transmittance); an emitting surface stays a vertex.
-      if (is_black(le) && material.may_be_transparent() && v.bsdf.pass_transparent(sampler_.next_1d(), &beta)) {
+      if (is_black(le) && material.may_be_transparent() &&
+          v.bsdf.pass_transparent(sampler_.next_1d(), &beta,
+                                  mode == Mode::Radiance && count == 1 && transparent == 0)) {
         if (++transparent > s_.transparent_bounces || !pass_boundary(scene_, sp, hit.t, &ray, &stack, &nulls)) break;
         footprint = footprint_here;
         continue;
@@ -448,8 +459,8 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   FirstSegment first;
   const int count = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, z0.stack, path, &first);
   // The data passes, from the first vertex (Cycles': none behind a medium vertex).
+  out_.alpha = 1 - first.transparent;
   if (count >= 2) {
-    out_.alpha = 1;
     if (path[1].type == VertexType::Surface) {
       out_.depth = first.t;
       out_.normal = path[1].frame.n;
@@ -457,8 +468,6 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
       if (s_.light_passes) add_light_colors(&out_, path[1].bsdf, path[1].wo, path[1].beta);
       if (s_.data_passes) write_data_passes(scene_, ctx_.camera, s_, path[1].sp, path[1].beta, &out_);
     }
-  } else if (first.escaped) {
-    out_.alpha = s_.transparent_background ? 0.0f : 1.0f;
   }
   return count;
 }
@@ -614,6 +623,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     PathVertex& sampled = endpoint(VertexType::Light);
     sampled.light = li;
     sampled.vis = scene_.light_visibility(li);
+    connect_group_ = lights_.lightgroup(li);
     sampled.pick_nee = pmf;
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
@@ -650,6 +660,9 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
                     std::vector<Splat>& splats) {
   const PathVertex& qs = light[s - 1];
   if (!scatters(qs)) return;
+  // The camera sees a holdout object as its Transparent lobes alone (hold_out), which no
+  // connection reaches: light it reflects never splats.
+  if (qs.type == VertexType::Surface && scene_.geometry.instance(qs.sp.instance).holdout) return;
   const float kinds = kind_limit_factor(light, camera, s, 1);
   if (!(kinds > 0)) return;
   const Camera& cam = ctx_.camera;
@@ -713,12 +726,15 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
       Spectrum v = base * (h * w);
       if (is_finite(v) && !is_black(v))
         splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v,
-                          strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1, s - 1, first});
+                          strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1, s - 1, first,
+                          lights_.lightgroup(light[0].light)});
     }
 }
 
 SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   strategies_ = strategies;
+  out_.lightgroups = cs_.lightgroups;
+  out_.aovs = cs_.aovs;
   const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
   std::vector<PathVertex>& camera = scratch_.camera;
   std::vector<PathVertex>& light = scratch_.light;
@@ -735,8 +751,9 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   for (int t = 2; t <= nt; ++t)
     for (int s = 1; s <= s_max; ++s) {
       if (s + t - 2 > max_depth()) break;
+      connect_group_ = lights_.lightgroup(light[0].light);  // s = 1: connect() sets its sample's
       Spectrum c = connect(light, camera, s, t);
-      if (!is_black(c)) add(c, s, t);
+      if (!is_black(c)) add(c, s, t, connect_group_);
     }
   for (int s = 2; s <= ns; ++s)
     if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
@@ -770,6 +787,7 @@ class BdptIntegrator final : public Integrator {
     for (size_t i = 0; i < p.tiles.size(); ++i)
       for (const Splat& sp : p.tiles[i]) {
         film.add_splat(sp.pixel, sp.value, int(i & 1));
+        film.add_lightgroup_splat(sp.pixel, sp.lightgroup, sp.value);
         if (ctx_.settings.light_passes) {
           Spectrum parts[kLightParts];
           add_light_part(parts, sp.value, sp.bounces, sp.first, false);

@@ -179,8 +179,9 @@ class Bdpt {
   // How the camera ray's first segment ended, for the data passes: escaped to the background, or
   // at the first vertex, t along the last ray (as the path tracer's depth).
   struct FirstSegment {
-    bool escaped = false;
     float t = 1e30f;
+    float transparent = 0;   // of the film (1 - alpha): held out, or escaped to a transparent film
+    bool aovs_done = false;  // single_pass_done
   };
   int random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeStack stack, std::vector<PathVertex>& path,
                   FirstSegment* first);
@@ -217,8 +218,9 @@ class Bdpt {
   // Adds a strategy's weighted contribution to the sample and to the strategy view.
   // Light passes: s + t - 2 scattering vertices; the first is camera[1] (t >= 2), whose split
   // is the walk's sampled direction's (t >= 3) or the connection's (t = 2, set by connect()).
-  void add(const Spectrum& c, int s, int t, bool environment = false) {
+  void add(const Spectrum& c, int s, int t, int group, bool environment = false) {
     L_ += c;
+    out_.add_lightgroup(group, c);
     if (s_.light_passes) add_light_part(out_.light, c, s + t - 2, t == 2 ? first_connect_ : first_walk_, environment);
     if (strategies_) {
       int cell = strategy_cell(s, t, s_.strategy_depth);
@@ -285,6 +287,7 @@ class Bdpt {
   SampleValue out_;
   Spectrum L_{0.0f};
   Spectrum* strategies_ = nullptr;
+  int connect_group_ = -1;  // the light group of connect()'s light endpoint
   FirstBounce first_walk_, first_connect_;
   // The split of a scattering vertex between its predecessor (v.wo) and direction `to`.
   FirstBounce split_at(const PathVertex& v, const Vec3& to) const {

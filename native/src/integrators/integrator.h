@@ -42,6 +42,11 @@ struct IntegratorSettings {
   // World > Mist Pass.
   bool light_passes = false, data_passes = false;
   float mist_start = 5, mist_depth = 25, mist_falloff = 2;
+  int lightgroups = 0;  // light group passes the film keeps (SampleValue::lightgroups)
+  int aovs = 0;         // shader AOVs the film keeps (SampleValue::aovs)
+  // Cycles' pass alpha threshold: the camera path writes AOVs at the surfaces it reaches through
+  // transparent passes up to the first whose alpha reaches it (single_pass_done).
+  float pass_alpha_threshold = 0.5f;
 };
 
 // The Mist pass's value for a sample whose camera path scatters first at p with throughput beta
@@ -61,8 +66,10 @@ struct CameraSample {
   Ray ray;
   Vec2 film;
   Vec2 pixel_center;
-  float dP = 0, dD = 0;   // the ray's compact differentials (Camera::differentials), for bump
-  Vec2 lens{0.5f, 0.5f};  // the lens sample the ray was generated with (Camera::generate)
+  float dP = 0, dD = 0;             // the ray's compact differentials (Camera::differentials), for bump
+  Vec2 lens{0.5f, 0.5f};            // the lens sample the ray was generated with (Camera::generate)
+  Spectrum* lightgroups = nullptr;  // the sample's light group buffer, zeroed (SampleValue::lightgroups)
+  float* aovs = nullptr;            // its AOV buffer, zeroed (SampleValue::aovs)
 };
 
 // A light-tracing contribution to a pixel of the render region (BDPT's t = 1), and its cell in
@@ -75,6 +82,7 @@ struct Splat {
   // its first bounce) and that vertex's split (light_passes.h).
   int32_t bounces = 0;
   FirstBounce first;
+  int32_t lightgroup = -1;  // its light's group
 };
 
 // The strategy view's grid: row = path depth d = s + t - 2, column = s (0 .. depth + 2 - 1).

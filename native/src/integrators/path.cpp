@@ -19,10 +19,14 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   const Ray& camera_ray = cs.ray;
   const float time = camera_ray.time;  // the whole path's (motion blur)
   SampleValue out;
+  out.lightgroups = cs.lightgroups;
+  out.aovs = cs.aovs;
+  bool aovs_done = !cs.aovs;  // Cycles' PATH_RAY_SINGLE_PASS_DONE (single_pass_done)
   const LightSet& lights = scene.lights;
   const VolumeEstimator est = s.volume_estimator;
   const float step = s.volume_step;
   Spectrum L(0.0f), beta(1.0f);
+  float transparent = 0;  // of the film, 1 - alpha (Cycles accumulates it so; hold_out)
   Ray ray = camera_ray;
   unsigned visibility = kVisCamera;
   Bounces b;
@@ -41,15 +45,18 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   // Light passes (light_passes.h): the first scattering vertex's split, and at the vertex being
   // lit, the split towards the light sampled (first vertex only).
   FirstBounce first, nee_first;
-  // An emitter reached (environment: the world) and a next-event estimate from the current vertex.
-  auto add = [&](const Spectrum& c, bool environment = false) {
+  // An emitter of light group `group` reached (environment: the world) and a next-event estimate
+  // from the current vertex.
+  auto add = [&](const Spectrum& c, int group, bool environment = false) {
     const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
     L += v;
+    out.add_lightgroup(group, v);
     if (s.light_passes) add_light_part(out.light, v, b.total, first, environment);
   };
-  auto add_nee = [&](const Spectrum& c) {
+  auto add_nee = [&](const Spectrum& c, int group) {
     const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
     L += v;
+    out.add_lightgroup(group, v);
     if (s.light_passes) add_light_part(out.light, v, b.total + 1, b.total == 0 ? nee_first : first, false);
   };
   auto mis_emitter = [&](int light, const Vec3& dir, float t) {
@@ -83,7 +90,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (is_black(T)) return;
     float light_pdf = pmf * ls.pdf;
     float w = ls.delta ? 1.0f : power_heuristic(light_pdf, scatter_pdf);
-    add_nee(beta * fv * T * ls.radiance * (w / light_pdf));
+    add_nee(beta * fv * T * ls.radiance * (w / light_pdf), lights.lightgroup(li));
   };
 
   for (;;) {
@@ -101,7 +108,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     // Volume emission along the whole segment (closed form; before the free flight decides where
     // the path goes on, as Cycles 3.4 does).
     if (kMedia && scene.has_emissive_media() && stack.size > 0)
-      add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step));
+      add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step), -1);
     if constexpr (kMedia)
       medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
     const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;
@@ -111,14 +118,14 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       Ray r = ray;
       r.tmax = t_seg;
       lights.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
-        add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t));
+        add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t),
+            lights.lightgroup(h.light));
       });
     }
     if (kMedia && !is_finite(beta)) break;  // free-flight weights
 
     if (medium >= 0) {
       // A real collision: beta already holds sigma_s T / pdf (medium.h).
-      if (b.from_camera()) out.alpha = 1;
       if (is_black(beta) || volume > s.volume_bounces || b.total > s.max_bounces) break;
       const Phase& phase = scene.media[medium].phase();
       const Vec3 wo = normalize(-ray.d);
@@ -147,17 +154,20 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       ray.tmax = INFINITY;
     } else if (!found) {
       bool background = b.from_camera();
-      if (!(background && s.transparent_background)) {
+      // Film > Transparent: the camera ray, through transparent passes too, ends transparent.
+      const bool transparent_background = b.total == 0 && s.transparent_background;
+      if (transparent_background) transparent += average(beta);
+      if (!transparent_background) {
         if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
           ShadingContext wc = world_context(ray.d);
           describe_ray(b, visibility, &wc);
-          add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY), true);
+          add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY),
+              lights.lightgroup(lights.world_light()), true);
         }
         lights.escaped_suns(ray.d, visibility, [&](int i, const Spectrum& radiance) {
-          add(beta * radiance * mis_emitter(i, ray.d, INFINITY));
+          add(beta * radiance * mis_emitter(i, ray.d, INFINITY), lights.lightgroup(i));
         });
       }
-      if (background && out.alpha == 0) out.alpha = s.transparent_background ? 0.0f : 1.0f;
       break;
     } else {
       SurfacePoint sp = scene.geometry.surface(hit);
@@ -169,29 +179,35 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       }
       ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
       describe_ray(b, visibility, &ctx);
+      if (b.total == 0 && !aovs_done) write_aovs_at(&ctx, cs.aovs, s);
       const float footprint_here = footprint + ctx.ray_length * cs.dD;
       const Vec3 ng = ctx.Ng;
       ShadingFrame sf{ctx.N};
       const Material& material = scene.material(sp.material);
       if (material.uses_bump()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
       Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
+      if (b.total == 0 && !aovs_done)
+        aovs_done = single_pass_done(material.may_be_transparent(), bsdf, s.pass_alpha_threshold);
+      if (b.total == 0 && !hold_out(scene.geometry.instance(sp.instance).holdout, &bsdf, &emitted, beta, &transparent))
+        break;
       bsdf.sample_below_shading(true);
       if (!is_black(sf.smooth)) ctx.N = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
       const Frame frame = local_frame(sf, ng);
       const Vec3 ns = frame.n;
       if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
       if (b.from_camera()) {
-        out.alpha = 1;
         out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
       }
       if (!is_black(emitted)) {
         int li = lights.triangle_light(sp.instance, sp.primitive);
         add(beta * emitted *
-            (li >= 0 ? mis_emitter(li, ray.d, kMedia || t_prev > 0 ? t_prev + hit.t * length(ray.d) : hit.t) : 1.0f));
+                (li >= 0 ? mis_emitter(li, ray.d, kMedia || t_prev > 0 ? t_prev + hit.t * length(ray.d) : hit.t)
+                         : 1.0f),
+            scene.geometry.instance(sp.instance).lightgroup);
       }
       // A transparent pass continues the line as an invisible boundary does: the MIS state stays
       // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.
-      if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta)) {
+      if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta, b.from_camera())) {
         if (++b.transparent > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
         t_prev += hit.t * length(ray.d);
         footprint = footprint_here;
@@ -265,6 +281,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (!russian_roulette(b.total, &beta, sampler)) break;
   }
   out.radiance = L;
+  out.alpha = 1 - transparent;
   return out;
 }
 

@@ -106,6 +106,37 @@ inline void describe_ray(const Bounces& b, unsigned visibility, ShadingContext* 
   c->transmission_depth = b.transmission;
 }
 
+// Cycles' integrate_surface_holdout (integrator/shade_surface.h): at a surface that a camera path
+// reaches through transparent passes only (Cycles' PATH_RAY_TRANSPARENT_BACKGROUND; with Film >
+// Transparent or not), the holdout weight times the throughput becomes transparency of the film
+// (alpha = 1 - transparency; the RGB gets nothing for it). The weight is the Holdout closures'
+// sum, or on a holdout object 1 - its transparency, its other closures and its emission dropped.
+// Elsewhere a Holdout closure is nothing (black, opaque) and a holdout object renders as usual.
+// Returns false where the weight is 1: the path ends there.
+inline bool hold_out(bool object, Bsdf* bsdf, Spectrum* emitted, const Spectrum& beta, float* transparent) {
+  Spectrum w = bsdf->holdout();
+  if (object) {
+    w = Spectrum(1.0f) - bsdf->transparency();
+    bsdf->keep_transparent();
+    *emitted = Spectrum(0.0f);
+  }
+  if (is_black(w)) return true;
+  *transparent += average(w * beta);
+  return !(w[0] == 1 && w[1] == 1 && w[2] == 1);
+}
+
+// Cycles' PATH_RAY_SINGLE_PASS_DONE (film/data_passes.h): a camera path writes its AOVs (and Cycles
+// its data passes) at each surface it reaches through transparent passes until one that is not
+// transparent or whose alpha (1 - transparency, averaged) reaches the threshold (0: any surface).
+inline bool single_pass_done(bool may_be_transparent, const Bsdf& bsdf, float threshold) {
+  return !may_be_transparent || threshold == 0 || 1 - average(bsdf.transparency()) >= threshold;
+}
+// Points a camera path's shading context at the sample's AOVs where Cycles writes them.
+inline void write_aovs_at(ShadingContext* ctx, float* aovs, const IntegratorSettings& s) {
+  ctx->aovs = aovs;
+  ctx->aov_count = aovs ? s.aovs : 0;
+}
+
 // Russian roulette once the path has had a chance to gather light (unbiased: divide by q), on the
 // throughput relative to the path's start (`start`: the largest component of its initial beta),
 // so a light subpath, whose beta carries the emitted power, is ended by the albedos it meets as a

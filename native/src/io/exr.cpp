@@ -208,6 +208,27 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
           {std::string(prefix) + "r", std::string(prefix) + "g", std::string(prefix) + "b", std::string(prefix) + "a"});
     }
   }
+  // Light groups as Cycles names them (Combined_<name>), their splats' part apart (BDPT).
+  for (int g = 0; g < job.film().lightgroups(); ++g) {
+    const std::string name = "Combined_" + job.settings().lightgroup_names[size_t(g)];
+    std::vector<float> buf(n * 3);
+    job.film().read_lightgroup_rows(g, 0, h, buf.data());
+    add_channels(channels, buf, n, {name + ".R", name + ".G", name + ".B"});
+    if (job.film().read_lightgroup_light_tracing(g, buf.data()))
+      add_channels(channels, buf, n,
+                   {"LightTracing." + name + ".R", "LightTracing." + name + ".G", "LightTracing." + name + ".B"});
+  }
+  // Shader AOVs: a colour's RGBA, a value's X (Blender's channels for them).
+  for (int a = 0; a < job.film().aovs(); ++a) {
+    const std::string& name = job.settings().aov_names[size_t(a)];
+    const bool colour = job.settings().aov_colors[size_t(a)];
+    std::vector<float> buf(n * (colour ? 4 : 1));
+    job.film().read_aov_rows(a, colour ? 4 : 1, 0, h, buf.data());
+    if (colour)
+      add_channels(channels, buf, n, {name + ".R", name + ".G", name + ".B", name + ".A"});
+    else
+      add_channels(channels, buf, n, {name + ".X"});
+  }
   std::vector<float> light(n * 3);
   if (job.film().read_light_tracing(light.data()))
     add_channels(channels, light, n, {"LightTracing.R", "LightTracing.G", "LightTracing.B"});

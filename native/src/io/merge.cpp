@@ -200,6 +200,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
                               " channels, which it is divided by; not merged");
       kind[k] = Divided;
     }
+    // Any other mean with its splats' part apart (light groups' Combined_<name>): as a light pass.
+    if (kind[k] == Mean && (split_k[k] = channel_index("LightTracing." + name)) >= 0) kind[k] = SplitMean;
   }
   // Cryptomatte: per type, its layers' channels (r, g, b, a = id, coverage, id, coverage).
   std::vector<std::array<int, 4>> crypto_k[kCryptoTypes];

@@ -60,6 +60,8 @@ FilmLayout RenderJob::film_layout(const RenderSettings& s) {
   l.splats = s.integrator == IntegratorType::Bidirectional;
   l.cryptomatte = s.cryptomatte;
   l.cryptomatte_levels = s.cryptomatte_levels;
+  l.lightgroups = s.integrator_settings.lightgroups;
+  l.aovs = s.integrator_settings.aovs;
   const int depth = s.integrator_settings.strategy_depth;
   if (l.splats && depth > 0) l.strategy_cells = depth * strategy_columns(depth);
   return l;
@@ -132,6 +134,9 @@ void RenderJob::render_pass(int sample_index) {
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
     SampleStats stats;
     uint64_t nans = 0, traced = 0, traced_half = 0;
+    const int groups = film_.lightgroups(), aov_floats = 4 * film_.aovs();
+    std::vector<Spectrum> lightgroups;
+    std::vector<float> aovs;
     for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
       for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) {
         if (cancel_.load(std::memory_order_relaxed) || (may_cut && past_deadline())) break;
@@ -169,6 +174,14 @@ void RenderJob::render_pass(int sample_index) {
               continue;
             }
             camera_.differentials(cs.film.x, cs.film.y, &cs.dP, &cs.dD);
+            if (groups > 0) {  // light groups: a zeroed buffer per sample (nothing when there are none)
+              lightgroups.assign(size_t(groups), Spectrum(0.0f));
+              cs.lightgroups = lightgroups.data();
+            }
+            if (aov_floats > 0) {
+              aovs.assign(size_t(aov_floats), 0.0f);
+              cs.aovs = aovs.data();
+            }
             size_t splat_mark = splats.size();
             SampleValue v = integrator_->trace(cs, sampler, stats, splats);
             if (!is_finite(v.radiance) || !std::isfinite(v.alpha) || !is_finite(v.albedo) || !is_finite(v.normal)) {

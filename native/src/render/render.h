@@ -36,6 +36,12 @@ struct RenderSettings {
   bool adaptive = false;
   int min_samples = 16;
   unsigned passes = kAllPasses;  // what the film keeps (FilmLayout::passes)
+  // Light groups' names (integrator_settings.lightgroups of them): EXR channels Combined_<name>.
+  std::vector<std::string> lightgroup_names;
+  // Shader AOVs (integrator_settings.aovs of them): names and whether each is a colour (RGBA) or a
+  // value; EXR channels <name>.R/G/B/A or <name>.X.
+  std::vector<std::string> aov_names;
+  std::vector<bool> aov_colors;
   // Denoise Combined once rendering stops (denoise/nfor.h; not after a cancel, nor with fewer
   // than 2 passes); the film then keeps the features and Noisy Image.
   bool denoise = false;

@@ -39,6 +39,7 @@ void Scene::commit() {
   if (world_set && !world.black()) {
     Light w;
     w.type = LightType::World;
+    w.lightgroup = world.lightgroup;
     all.push_back(w);
   }
   // Bounded global media are Volume objects, unbounded ones World volumes.

@@ -1287,10 +1287,20 @@ Spectrum Bsdf::transparency() const {
   return t;
 }
 
-bool Bsdf::pass_transparent(float u, Spectrum* beta) {
+void Bsdf::keep_transparent() {
+  int kept = 0;
+  for (int i = 0; i < count_; ++i)
+    if (lobes_[i].type == LobeType::Transparent) lobes_[kept++] = lobes_[i];
+  count_ = kept;
+}
+
+bool Bsdf::pass_transparent(float u, Spectrum* beta, bool defensive) {
+  float sum = 0;
+  for (int i = 0; i < count_; ++i) sum += std::abs(average(lobes_[i].weight));
+  const float floor = defensive && count_ > 1 ? 0.125f * sum : 0.0f;
   float through = 0, rest = 0;
   for (int i = 0; i < count_; ++i)
-    (lobes_[i].type == LobeType::Transparent ? through : rest) += average(lobes_[i].weight);
+    (lobes_[i].type == LobeType::Transparent ? through : rest) += std::max(std::abs(average(lobes_[i].weight)), floor);
   if (!(through > 0)) return false;
   const float p = rest > 0 ? through / (through + rest) : 1.0f;
   if (u < p) {

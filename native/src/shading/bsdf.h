@@ -148,6 +148,7 @@ class Bsdf {
  public:
   void clear() {
     count_ = 0;
+    holdout_ = Spectrum(0.0f);
     overflowed_ = false;
     bumped_ = false;
     light_is_wo_ = false;
@@ -207,8 +208,18 @@ class Bsdf {
   Spectrum transparency() const;
   // Transparency as a choice (the Transparent lobes' share p of the lobes' average weights): with
   // probability p the ray passes straight on and beta is scaled by transparency() / p (returns
-  // true); else the Transparent lobes are removed and beta is scaled by 1 / (1 - p).
-  bool pass_transparent(float u, Spectrum* beta);
+  // true); else the Transparent lobes are removed and beta is scaled by 1 / (1 - p). `defensive`
+  // (a camera ray's first surface): each lobe's share is at least 1/8 of the sum, Cycles'
+  // defensive sampling (surface_shader_prepare_closures), so that what depends on the choice
+  // (shader AOVs behind the surface) has Cycles' expectation.
+  bool pass_transparent(float u, Spectrum* beta, bool defensive = false);
+  // Holdout closures make no lobe: their summed weight (Cycles' CLOSURE_HOLDOUT_ID), which a
+  // camera path turns into transparency of the film (integrators/path_state.h, hold_out).
+  void add_holdout(const Spectrum& w) { holdout_ += w; }
+  const Spectrum& holdout() const { return holdout_; }
+  // A holdout object seen by the camera keeps only its Transparent lobes (Cycles'
+  // surface_shader_apply_holdout).
+  void keep_transparent();
   uint32_t flags() const;  // union of lobe flags
   bool has_non_delta() const;
   // The probabilities with which sample() picks each lobe for this wo; false if none can be.
@@ -221,6 +232,7 @@ class Bsdf {
  private:
   Lobe lobes_[kMaxLobes];
   int count_ = 0;
+  Spectrum holdout_{0.0f};
   bool overflowed_ = false;
   bool bumped_ = false, light_is_wo_ = false, below_shading_ = false;
   Vec3 smooth_{0.0f, 0.0f, 1.0f};

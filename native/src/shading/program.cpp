@@ -215,7 +215,6 @@ bool Program::may_be_transparent() const {
   for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
     Instr in = decode(w);
     w += words_of(in);
-    if (in.op == kOpHoldout && !zero(in.in[0])) return true;
     if (in.op == kOpTransparent && !zero(in.in[0]) && !zero(in.in[1])) return true;
     if (in.op == kOpPrincipled && !zero(in.in[0]) &&
         (!(in.in[23] & kConstBit) || constants_[operand_index(in.in[23])] < 1))

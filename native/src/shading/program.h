@@ -71,6 +71,10 @@ struct ShadingContext {
   // world space (Cycles' sd->dPdu; zero elsewhere). Hair Info and the hair closures read them.
   int curve = -1;
   Vec3 dpdu{0.0f};
+  // Cycles' AOV Output: where this point's program adds its AOV values (4 floats per AOV, of
+  // aov_count), set only where Cycles writes them (a camera path before its first opaque surface).
+  float* aovs = nullptr;
+  int aov_count = 0;
 };
 
 // The machine an instruction runs on: read inputs, write outputs.
@@ -184,7 +188,7 @@ class Program {
   bool uses_bump() const { return uses_bump_; }
   // The program sets the shading normal (a displacement's bump): Program::run keeps room for it.
   bool sets_normal() const { return sets_normal_; }
-  // Whether the program may give a Transparent lobe (Transparent, Holdout, Principled Alpha): then
+  // Whether the program may give a Transparent lobe (Transparent, Principled Alpha): then
   // shadow rays look at it (Cycles' transparent shadows).
   bool may_be_transparent() const;
   // Whether the program is emission closures with constant inputs only (a constant world): then

@@ -176,6 +176,8 @@ const OpSignature kSignatures[] = {
     {"vvvf", "", "", false},                          // velvet
     {"vvv", "", "", false},                           // translucent
     {"vvvff", "", "i", false},                        // toon
+    {"f", "", "i", false},                            // aov value
+    {"v", "", "i", false},                            // aov color
 };
 
 const OpSignature kHairSignatures[] = {
@@ -290,11 +292,25 @@ void hair_bsdf(const Instr& in, Machine& m, const Vec3& weight) {
 
 const OpSignature* shaders_family_signature(uint32_t op) {
   if (op >= kOpPrincipledHair && op <= kOpHairBsdf) return &kHairSignatures[op - kOpPrincipledHair];
-  if (op < kOpEmission || op > kOpToon) return nullptr;
+  if (op < kOpEmission || op > kOpAovColor) return nullptr;
   return &kSignatures[op - kOpEmission];
 }
 
 void exec_shaders_family(const Instr& in, Machine& m) {
+  if (in.op == kOpAovValue || in.op == kOpAovColor) {
+    if (!m.ctx || !m.ctx->aovs || int(in.param[0]) >= m.ctx->aov_count) return;
+    float* o = m.ctx->aovs + 4 * size_t(in.param[0]);
+    if (in.op == kOpAovValue) {
+      o[0] += m.f(in.in[0]);
+    } else {
+      const Vec3 c = m.v(in.in[0]);
+      o[0] += c.x;
+      o[1] += c.y;
+      o[2] += c.z;
+      o[3] += 1;
+    }
+    return;
+  }
   if (in.op == kOpMixWeights) {
     const Vec3 w = m.v(in.in[0]);
     const float f = unit(m.f(in.in[1]));
@@ -381,9 +397,8 @@ void exec_shaders_family(const Instr& in, Machine& m) {
       l.weight = weight * non_negative(m.v(in.in[1]));
       break;
     case kOpHoldout:
-      l.type = LobeType::Transparent;
-      l.weight = weight;
-      break;
+      m.bsdf->add_holdout(weight);
+      return;
     default:
       return;
   }

@@ -20,12 +20,16 @@ enum ShaderOp : uint32_t {
   // emission strength f, alpha f, clearcoat normal v, tangent v; params: distribution, subsurface method
   kOpPrincipled,
   kOpMixWeights,  // in: weight v, fac f; out: weight * (1 - fac) v, weight * fac v (fac clamped to [0, 1])
-  kOpHoldout,     // in: weight v (Holdout: rendered as Transparent until holdout passes exist)
+  kOpHoldout,     // in: weight v (no lobe: Bsdf::add_holdout; opaque to shadow rays, as Cycles')
   // in: weight v, normal v, color v, roughness f, anisotropy f, rotation f, tangent v; param: distribution
   kOpAnisotropic,
   kOpVelvet,       // in: weight v, normal v, color v, sigma f
   kOpTranslucent,  // in: weight v, normal v, color v
   kOpToon,         // in: weight v, normal v, color v, size f, smooth f; param: component (0 diffuse, 1 glossy)
+  // AOV Output (no closure): adds to AOV `index` of ShadingContext::aovs, when set: a value (its
+  // first float), or a colour and 1 (Cycles' film_write_aov_pass_value / _color).
+  kOpAovValue,  // in: value f; param: index
+  kOpAovColor,  // in: color v; param: index
 };
 
 // Hair closures (numbers 20-27 of the family): lobes on curves (bsdf_hair.cpp).

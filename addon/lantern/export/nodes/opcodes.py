@@ -14,6 +14,8 @@ ANISOTROPIC = 9
 VELVET = 10
 TRANSLUCENT = 11
 TOON = 12
+AOV_VALUE = 13
+AOV_COLOR = 14
 # hair closures (shaders.h, numbers 20-27)
 PRINCIPLED_HAIR = 20
 HAIR_BSDF = 21

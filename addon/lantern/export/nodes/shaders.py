@@ -91,7 +91,6 @@ def transparent(c, node, weight):
 
 @register_shader('HOLDOUT')
 def holdout(c, node, weight):
-    c.warn("Holdout '%s' is rendered as Transparent (holdout passes are not written yet)" % node.name)
     c.closure(ops.HOLDOUT, [weight])
 
 

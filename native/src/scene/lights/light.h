@@ -32,6 +32,7 @@ struct Light {
   // Triangle emitters: the instance and primitive.
   int instance = -1, primitive = -1;
   unsigned visibility = 31;
+  int lightgroup = -1;  // the view layer's light group it belongs to (-1: none)
   // Cycles 3.4 draws a point or spot light with a radius as a disk facing whatever it lights: its
   // emission depends on the receiver, so no light subpath can start on it (BDPT reaches it only by
   // the strategies s = 0 and s = 1, which see it from the receiver).

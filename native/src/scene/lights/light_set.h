@@ -47,6 +47,7 @@ class LightSet {
   // Index of the light of an emissive triangle, or -1.
   int triangle_light(int instance, int primitive) const;
   int world_light() const { return world_light_; }
+  int lightgroup(int light) const { return light >= 0 ? lights_[light].lightgroup : -1; }
 
   // time: the sample's shutter time (motion blur: emissive triangles move; lamps do not, as in
   // Cycles 3.4).

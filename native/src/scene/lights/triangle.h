@@ -14,6 +14,7 @@ inline bool triangle_light(const Geometry& geometry, int instance, int primitive
   l->type = LightType::Triangle;
   l->instance = instance;
   l->primitive = primitive;
+  l->lightgroup = geometry.instance(instance).lightgroup;
   Vec3 p0, p1, p2;
   geometry.triangle(instance, primitive, &p0, &p1, &p2);
   l->area = 0.5f * length(cross(p1 - p0, p2 - p0));

@@ -32,6 +32,7 @@ class World {
   void set_program(std::shared_ptr<const Program> program, int map_resolution);
 
   bool camera_visible = true;
+  int lightgroup = -1;  // the light group of its light (-1: none)
 
   // Radiance arriving along -ctx.I (ctx from world_context, with the ray's Light Path flags).
   Spectrum radiance(const ShadingContext& ctx) const {

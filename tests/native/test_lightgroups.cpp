@@ -1,0 +1,120 @@
+// Light groups (Cycles' Combined_<group> passes): each is the radiance from its group's emitters,
+// so where every emitter is in a group they sum to Combined's RGB per pixel, for every integrator
+// (BDPT's light-tracing splats included); an emitter in no group is in none of them.
+#include <gtest/gtest.h>
+
+#include "scene_builders.h"
+
+namespace {
+
+using namespace lt_test;
+
+// A floor and a glossy sphere lit by two area lights (groups 1 and 2: the core's k - 1), an
+// emissive quad (group 2) and the world (group 1); with fog, a fog box around the sphere.
+// `ungrouped`: the second area light is in no group.
+ScenePtr grouped_scene(bool fog, bool ungrouped) {
+  ScenePtr s = new_scene();
+  set_world(s.get(), {0.1f, 0.15f, 0.2f}, 1);
+  check(lt_scene_set_world_lightgroup(s.get(), 1), "lt_scene_set_world_lightgroup");
+  add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.7f, 0.7f, 0.7f}));
+  add_object(s.get(), uv_sphere(0.6f, 24, 12, true), add_glossy(s.get(), {0.9f, 0.8f, 0.6f}, 0.2f),
+             translate({0, 0, 0.6f}));
+  lt_instance_desc d{};
+  const Xform lamp = compose(translate({1.2f, 0.5f, 1.5f}), rotate({1, 0, 0}, 3.14159f));
+  d.mesh = add_mesh(s.get(), plane(0.4f, 0.4f));
+  std::copy(lamp.begin(), lamp.end(), d.transform);
+  const int emission = add_emission(s.get(), {1, 0.8f, 0.6f}, 20);
+  d.materials = &emission;
+  d.material_count = 1;
+  d.visibility = LT_VISIBLE_ALL;
+  d.lightgroup = 2;
+  int id = -1;
+  check(lt_scene_add_instance(s.get(), &d, &id), "lt_scene_add_instance");
+  lt_light_desc a = area_light(LT_AREA_SQUARE, 1, 1, translate({-1, -1, 3}), 150);
+  a.lightgroup = 1;
+  add_light(s.get(), a);
+  lt_light_desc b = area_light(LT_AREA_DISK, 0.5f, 0.5f, translate({1, -1.5f, 2.5f}), 80);
+  b.lightgroup = ungrouped ? 0 : 2;
+  add_light(s.get(), b);
+  if (fog)
+    add_object(s.get(), box({-1, -1, 0}, {1, 1, 1.5f}), add_volume_material(s.get(), volume(LT_VOLUME_SCATTER, 0.3f)));
+  set_camera(s.get(), perspective_camera(look_at({0, -5, 2.5f}, {0, 0, 0.5f})));
+  check(lt_scene_commit(s.get()), "lt_scene_commit");
+  return s;
+}
+
+struct GroupedRender {
+  Passes passes;
+  std::vector<float> group[2];
+};
+
+GroupedRender render_groups(lt_scene* s, lt_render_settings rs) {
+  const char* names[] = {"key", "fill"};
+  rs.lightgroup_count = 2;
+  rs.lightgroup_names = names;
+  lt_render* raw = nullptr;
+  check(lt_render_start(s, &rs, &raw), "lt_render_start");
+  RenderPtr r(raw);
+  check(lt_render_wait(r.get()), "lt_render_wait");
+  GroupedRender out;
+  out.passes = read_passes(r.get(), rs.width, rs.height);
+  for (int g = 0; g < 2; ++g) {
+    out.group[g].resize(size_t(rs.width) * rs.height * 3);
+    check(lt_render_read_lightgroup_rows(r.get(), g, 0, rs.height, out.group[g].data(), out.group[g].size()),
+          "lt_render_read_lightgroup_rows");
+  }
+  return out;
+}
+
+TEST(Lightgroups, SumToCombinedPerPixelForEveryIntegrator) {
+  const int width = 24, height = 18;
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    SCOPED_TRACE("integrator " + std::to_string(integrator));
+    ScenePtr s = grouped_scene(integrator == LT_INTEGRATOR_VOLPATH, false);
+    lt_render_settings rs = render_settings(width, height, 8, 5);
+    rs.integrator = integrator;
+    GroupedRender g = render_groups(s.get(), rs);
+    ASSERT_EQ(g.passes.first_non_finite(), "");
+    double total[2] = {0, 0};
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const size_t i = (size_t(y) * width + x) * 3 + c;
+          const float combined = g.passes.rgba(x, y)[c], sum = g.group[0][i] + g.group[1][i];
+          ASSERT_NEAR(sum, combined, 1e-4f * std::abs(combined) + 1e-6f) << "pixel " << x << ", " << y;
+          total[0] += g.group[0][i];
+          total[1] += g.group[1][i];
+        }
+    EXPECT_GT(total[0], 0.0);  // both groups light the image
+    EXPECT_GT(total[1], 0.0);
+  }
+}
+
+TEST(Lightgroups, AnUngroupedEmitterIsInNone) {
+  // The disk light in no group: the groups' sum is Combined without it, less than Combined.
+  ScenePtr s = grouped_scene(false, true);
+  lt_render_settings rs = render_settings(24, 18, 8, 5);
+  GroupedRender g = render_groups(s.get(), rs);
+  double combined = 0, groups = 0;
+  for (int y = 0; y < rs.height; ++y)
+    for (int x = 0; x < rs.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const size_t i = (size_t(y) * rs.width + x) * 3 + c;
+        combined += g.passes.rgba(x, y)[c];
+        groups += g.group[0][i] + g.group[1][i];
+      }
+  EXPECT_LT(groups, 0.95 * combined);
+  // Without light groups the render keeps none (and reading one is an error).
+  lt_render* raw = nullptr;
+  check(lt_render_start(s.get(), &rs, &raw), "lt_render_start");
+  RenderPtr r(raw);
+  check(lt_render_wait(r.get()), "lt_render_wait");
+  std::vector<float> buf(size_t(rs.width) * rs.height * 3);
+  EXPECT_EQ(lt_render_read_lightgroup_rows(r.get(), 0, 0, rs.height, buf.data(), buf.size()),
+            LT_ERROR_INVALID_ARGUMENT);
+  // ...and its Combined is the same bits: light groups draw no random number.
+  const Passes plain = read_passes(r.get(), rs.width, rs.height);
+  EXPECT_EQ(plain.combined, g.passes.combined);
+}
+
+}  // namespace
