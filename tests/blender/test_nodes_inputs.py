@@ -391,6 +391,36 @@ def _write_blender(path, pixels, kind, bits):
     bpy.data.images.remove(img)
 
 
+def _write_float_tiff(path, pixels):
+    """An uncompressed 32-bit float TIFF (one strip, unassociated alpha) of `pixels` (h, w, channels
+    1, 3 or 4, rows bottom first): Blender 3.4 writes TIFFs at 8 or 16 bits only."""
+    import struct
+    import numpy as np
+    h, w, c = pixels.shape
+    data = np.ascontiguousarray(pixels[::-1], "<f4").tobytes()
+    tags = [(256, 4, [w]), (257, 4, [h]), (258, 3, [32] * c), (259, 3, [1]), (262, 3, [1 if c == 1 else 2]),
+            (273, 4, [0]), (277, 3, [c]), (278, 4, [h]), (279, 4, [len(data)]), (284, 3, [1]),
+            (339, 3, [3] * c)]
+    if c == 4:
+        tags.append((338, 3, [2]))
+    tags.sort()
+    ifd = 8 + len(data)
+    extra = ifd + 2 + 12 * len(tags) + 4  # where values longer than 4 bytes go
+    entries, blobs = b"", b""
+    for tag, kind, values in tags:
+        if tag == 273:
+            values = [8]
+        packed = struct.pack("<%d%s" % (len(values), "I" if kind == 4 else "H"), *values)
+        if len(packed) <= 4:
+            entries += struct.pack("<HHI", tag, kind, len(values)) + packed.ljust(4, b"\0")
+        else:
+            entries += struct.pack("<HHII", tag, kind, len(values), extra + len(blobs))
+            blobs += packed
+    with open(path, "wb") as f:
+        f.write(b"II*\0" + struct.pack("<I", ifd) + data + struct.pack("<H", len(tags)) + entries
+                + b"\0\0\0\0" + blobs)
+
+
 # name: (file, channels, bits, colour space, alpha mode, whether the core reads the file itself)
 IMAGE_FILES = {
     "png8_srgb_rgb": ("png", 3, 8, "sRGB", "STRAIGHT", True),
@@ -425,6 +455,9 @@ IMAGE_FILES = {
     "tiff16_linear_rgba": ("tif", 4, 16, "Linear", "STRAIGHT", True),
     "tiff16_non_color_grey": ("tif", 1, 16, "Non-Color", "STRAIGHT", True),
     "tiff16_srgb_rgb": ("tif", 3, 16, "sRGB", "STRAIGHT", False),
+    "tiff32_linear_rgba": ("tif", 4, 32, "Linear", "STRAIGHT", True),
+    "tiff32_linear_rgb": ("tif", 3, 32, "Linear", "PREMUL", True),
+    "tiff32_non_color_grey": ("tif", 1, 32, "Non-Color", "STRAIGHT", True),
     "tga_srgb_rgba": ("tga", 4, 8, "sRGB", "STRAIGHT", True),
     "tga_raw_rgb": ("tga_raw", 3, 8, "sRGB", "STRAIGHT", True),
     "tga_grey_non_color": ("tga", 1, 8, "Non-Color", "STRAIGHT", True),
@@ -438,7 +471,8 @@ IMAGE_FILES = {
 # What the core keeps of some of them, bytes per texel (the file's precision, no alpha plane).
 IMAGE_FILE_BYTES = {"png8_srgb_rgb": 3, "png8_grey": 1, "png16_linear_grey": 4, "exr32_rgb": 12, "exr16_rgb": 6,
                     "jpeg_srgb": 3, "jpeg_grey_non_color": 1, "tiff8_grey": 1, "tiff16_non_color_grey": 4,
-                    "tga_raw_rgb": 3, "hdr_linear": 12}
+                    "tga_raw_rgb": 3, "hdr_linear": 12, "tiff32_linear_rgb": 12,
+                    "tiff32_non_color_grey": 4}
 
 
 @pytest.mark.parametrize("output", ["Color", "Color with Alpha used", "Alpha"])
@@ -459,13 +493,15 @@ def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_pa
     pixels = rng.random((24, 32, channels))
     if channels in (2, 4):
         pixels[..., -1] = np.where(rng.random((24, 32)) < 0.2, rng.choice([0.0, 1.0], (24, 32)), pixels[..., -1])
-    if kind in ("exr", "hdr"):
+    if kind in ("exr", "hdr") or bits == 32:
         pixels[..., :3] *= 4.0  # beyond 1
     path = str(tmp_path / ("%s.%s" % (case, kind.split("_")[0])))
     if kind == "png":
         _write_png(path, pixels, bits)
     elif kind == "exr":
         _write_exr(path, pixels.astype(np.float32), bits == 16)
+    elif kind == "tif" and bits == 32:
+        _write_float_tiff(path, pixels)
     else:
         _write_blender(path, pixels, kind, bits)
 

@@ -78,7 +78,8 @@ std::string format_refusal(OIIO::ImageInput& in, const std::string& path) {
     if (int_attribute(spec, "tiff:PlanarConfiguration") != 1) return "a TIFF with separate planes";
     const int bits = int_attribute(spec, "oiio:BitsPerSample");
     const bool ok = (bits == 8 && spec.format == OIIO::TypeDesc::UINT8) ||
-                    (bits == 16 && spec.format == OIIO::TypeDesc::UINT16);
+                    (bits == 16 && spec.format == OIIO::TypeDesc::UINT16) ||
+                    (bits == 32 && spec.format == OIIO::TypeDesc::FLOAT);
     if (!ok || !spec.channelformats.empty()) return std::to_string(bits) + "-bit " + spec.format.c_str() + " TIFF";
   } else if (format == "targa") {
     return targa_refusal(path);
@@ -259,6 +260,9 @@ std::unique_ptr<Image> read_image_file(const ImageFileRequest& r) {
       std::memcpy(&u, v + i, sizeof u);
       px[i] = float(u / 65535.0);
     }
+  } else if (format == "tiff" && spec.format == OIIO::TypeDesc::FLOAT) {
+    px = FloatBuffer(n * c);  // Blender's tiff.c copies the floats as they are
+    read_rows(*in, r.path, OIIO::TypeDesc::FLOAT, c, px.data());
   } else if (format == "openexr") {
     // Blender reads R, G, B and A (1 when missing) of a single-layer file.
     static const char* kNames[] = {"R", "G", "B", "A"};
