@@ -481,7 +481,10 @@ def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_pa
     """Images read by the core from their files (so that Blender never loads them) give exactly
     the texels Blender's Image.pixels gives: the same view rendered with the image from its file
     and with a packed copy of the same file (which goes through Image.pixels) is the same image,
-    pixel for pixel (each render pixel a bilinear mix of texels, so that every texel counts)."""
+    pixel for pixel (each render pixel a bilinear mix of texels, so that every texel counts).
+    PNG files are written here, OpenEXR, JPEG, TIFF (8 and 16 bits), TGA and HDR ones by Blender,
+    32-bit float TIFFs by hand (Blender 3.4 writes none); the cases the core leaves to Blender
+    check that it does."""
     import bpy
     import numpy as np
 

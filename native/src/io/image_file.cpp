@@ -36,7 +36,6 @@ ImageAlpha core_alpha(const ImageFileRequest& r, bool premultiplied) {
   return premultiplied ? ImageAlpha::Premultiplied : ImageAlpha::Straight;
 }
 
-
 // An integer attribute of the file (0 when absent).
 int int_attribute(const OIIO::ImageSpec& spec, const char* name) { return spec.get_int_attribute(name, 0); }
 
@@ -65,8 +64,11 @@ std::string format_refusal(OIIO::ImageInput& in, const std::string& path) {
   const std::string format = in.format_name();
   const int c = spec.nchannels;
   if (format == "jpeg") {
-    // CMYK: Blender's own conversion (and its alpha from K) is not OpenImageIO's.
+    // CMYK and YCCK (which OpenImageIO converts to RGB and names in jpeg:ColorSpace): Blender's own
+    // conversion (and its alpha from K) is not OpenImageIO's.
     if (c != 1 && c != 3) return std::to_string(c) + "-channel JPEG";
+    if (const std::string space = spec.get_string_attribute("jpeg:ColorSpace"); !space.empty())
+      return "a " + space + " JPEG";
   } else if (format == "tiff") {
     // Blender reads 8-bit TIFFs with libtiff's TIFFReadRGBAImage (which applies the orientation
     // and expands palettes its way) and 16 and 32-bit ones scanline by scanline.
@@ -86,7 +88,6 @@ std::string format_refusal(OIIO::ImageInput& in, const std::string& path) {
   }
   return "";
 }
-
 
 // Bytes of a file through a small buffer (Radiance files are read in one pass).
 class ByteReader {
@@ -155,7 +156,8 @@ std::unique_ptr<Image> read_radiance(const ImageFileRequest& r) {
   if (std::sscanf(text.c_str(), "%7s %d %7s %d %c", y_axis, &h, x_axis, &w, &rest) != 4 ||
       (std::strcmp(y_axis, "-Y") != 0 && std::strcmp(y_axis, "+Y") != 0) || std::strcmp(x_axis, "+X") != 0)
     throw unsupported("resolution line '" + text + "'");
-  if (w <= 0 || h <= 0 || w > 65536 || h > 65536) throw unsupported("size " + std::to_string(w) + "x" + std::to_string(h));
+  if (w <= 0 || h <= 0 || w > 65536 || h > 65536)
+    throw unsupported("size " + std::to_string(w) + "x" + std::to_string(h));
   const bool top_down = y_axis[0] == '-';  // Blender flips these: file rows run top to bottom
 
   FloatBuffer px(size_t(w) * h * 3);
