@@ -364,7 +364,8 @@ def _write_exr(path, pixels, half):
 
 
 # Blender's file formats and colour modes by file kind and channel count.
-_BLENDER_FORMATS = {"jpg": "JPEG", "tif": "TIFF", "tga": "TARGA", "tga_raw": "TARGA_RAW", "hdr": "HDR"}
+_BLENDER_FORMATS = {"jpg": "JPEG", "tif": "TIFF", "tga": "TARGA", "tga_raw": "TARGA_RAW", "tga_top": "TARGA_RAW",
+                    "hdr": "HDR"}
 _COLOR_MODES = {1: "BW", 3: "RGB", 4: "RGBA"}
 
 
@@ -389,6 +390,16 @@ def _write_blender(path, pixels, kind, bits):
         settings.quality = 90
     img.save_render(path, scene=bpy.context.scene)
     bpy.data.images.remove(img)
+    if kind == "tga_top":
+        # The same pixels stored top row first (descriptor bit 5), as most other programs write TGA.
+        with open(path, "rb") as f:
+            tga = bytearray(f.read())
+        start, row = 18 + tga[0], w * tga[16] // 8
+        rows = [tga[start + y * row:start + (y + 1) * row] for y in range(h)]
+        tga[start:start + h * row] = b"".join(reversed(rows))
+        tga[17] |= 0x20
+        with open(path, "wb") as f:
+            f.write(tga)
 
 
 def _write_float_tiff(path, pixels):
@@ -462,6 +473,7 @@ IMAGE_FILES = {
     "tga_raw_rgb": ("tga_raw", 3, 8, "sRGB", "STRAIGHT", True),
     "tga_grey_non_color": ("tga", 1, 8, "Non-Color", "STRAIGHT", True),
     "tga_alpha_none": ("tga_raw", 4, 8, "sRGB", "NONE", True),
+    "tga_top_left": ("tga_top", 4, 8, "sRGB", "STRAIGHT", True),
     # Radiance RGBE: Blender's (m + 0.5) 2^(e - 136), a float image.
     "hdr_linear": ("hdr", 3, 32, "Linear", "STRAIGHT", True),
     "hdr_srgb": ("hdr", 3, 32, "sRGB", "STRAIGHT", False),
