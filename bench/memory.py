@@ -15,8 +15,9 @@ adds (film, Blender's RenderResult, the add-on's buffers).
 Cycles, its Denoising Data and Debug Sample Count passes, for Lantern the Albedo, Variance and Sample
 Count passes (View Layer > Passes, lantern_extra_passes).
 
-Textures: a plane with an N x N image (generated once into bench/results/: an 8-bit sRGB PNG and a
-32-bit float OpenEXR), rendered at 256 x 256, 1 sample; bytes per texel = (peak - peak of the same
+Textures: a plane with an N x N image (generated once into bench/results/ by Blender: an 8-bit sRGB
+PNG, a 32-bit float OpenEXR, an 8-bit sRGB JPEG and a Radiance HDR; --texture-formats), rendered at
+256 x 256, 1 sample; bytes per texel = (peak - peak of the same
 scene with a 64 x 64 image) / (N^2 - 64^2), so it counts every copy of the image (Blender's own
 included, where the engine makes Blender load it). Nothing asserts on memory or time.
 """
@@ -30,6 +31,11 @@ import time
 BENCH = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(BENCH)
 RESULTS = os.path.join(BENCH, "results")
+
+
+# The texture files' formats by extension, and those Blender reads as float (scene linear).
+_FILE_FORMATS = {"png": "PNG", "exr": "OPEN_EXR", "jpg": "JPEG", "hdr": "HDR"}
+_FLOAT_FORMATS = {"exr", "hdr"}
 
 
 def _parse_size(s):
@@ -47,7 +53,9 @@ def worker(args):
     lantern.register()
     if args.make_image:
         n = args.make_image_size
-        path, is_float = args.make_image, args.make_image.endswith(".exr")
+        path = args.make_image
+        ext = os.path.splitext(path)[1][1:]
+        is_float = ext in _FLOAT_FORMATS
         img = bpy.data.images.new("gen", n, n, alpha=False, float_buffer=is_float)
         ramp = np.linspace(0.0, 1.0, n, dtype=np.float32)
         px = np.empty((n, n, 4), np.float32)
@@ -58,8 +66,8 @@ def worker(args):
         img.pixels.foreach_set(px.ravel())
         del px
         img.filepath_raw = path
-        img.file_format = "OPEN_EXR" if is_float else "PNG"
-        if is_float:
+        img.file_format = _FILE_FORMATS[ext]
+        if ext == "exr":
             img.use_half_precision = False  # 32-bit float EXR
         img.save()
         return
@@ -67,7 +75,7 @@ def worker(args):
     scene = build_scenes.build("cornell_area")
     if args.image:
         img = bpy.data.images.load(args.image)
-        img.colorspace_settings.name = "Linear" if args.image.endswith(".exr") else "sRGB"
+        img.colorspace_settings.name = "Linear" if os.path.splitext(args.image)[1][1:] in _FLOAT_FORMATS else "sRGB"
         floor = scene.objects["Floor"]
         floor.data.materials.clear()
         floor.data.materials.append(build_scenes.image_material("Tex", img))
@@ -128,6 +136,7 @@ def main():
     ap.add_argument("--library", default=os.path.join(REPO, "build", "liblantern.so"))
     ap.add_argument("--sizes", default="1920x1080,4000x4000,8000x8000")
     ap.add_argument("--texture", type=int, default=8192)
+    ap.add_argument("--texture-formats", default="png,exr,jpg,hdr")
     ap.add_argument("--engines", default="cycles,lantern")
     ap.add_argument("--passes-sets", default="default,all")
     ap.add_argument("--out", default=os.path.join(RESULTS, "memory.json"))
@@ -150,7 +159,7 @@ def main():
     for engine in engines:
         base = run(args, engine=engine, no_render=True)["peak_bytes"]
         for passes in args.passes_sets.split(","):
-            for size in args.sizes.split(","):
+            for size in filter(None, args.sizes.split(",")):
                 w, h = _parse_size(size)
                 info = run(args, engine=engine, size=size, passes=passes)
                 row = dict(engine=engine, passes=passes, width=w, height=h, baseline_bytes=base,
@@ -161,7 +170,7 @@ def main():
                     info.get("report", "")), flush=True)
     if args.texture:
         n = args.texture
-        for ext in ("png", "exr"):
+        for ext in args.texture_formats.split(","):
             paths = {}
             for size in (64, n):
                 paths[size] = os.path.join(RESULTS, "memtex_%d.%s" % (size, ext))

@@ -32,7 +32,7 @@ if [[ " $STEPS " == *" asan "* || " $STEPS " == *" fuzz "* ]]; then
   SAN+=" -fsanitize-ignorelist=$ROOT/tests/sanitizers/ubsan_ignore.txt -fno-omit-frame-pointer"
   cmake -S . -B "$ASAN_DIR" "${common[@]}" "-DCMAKE_CXX_FLAGS=$SAN" "-DCMAKE_C_FLAGS=$SAN" \
     "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined" -DLANTERN_BUILD_FUZZ=ON >/dev/null
-  cmake --build "$ASAN_DIR" -j"$JOBS" --target lantern_tests fuzz_abi fuzz_vdb fuzz_exr_merge make_fuzz_seeds
+  cmake --build "$ASAN_DIR" -j"$JOBS" --target lantern_tests fuzz_abi fuzz_vdb fuzz_exr_merge fuzz_image_file make_fuzz_seeds
   took
 fi
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:external_symbolizer_path=$SYMBOLIZER"
@@ -80,7 +80,7 @@ if [[ " $STEPS " == *" fuzz "* ]]; then
   SEEDS="$ASAN_DIR/fuzz/seeds"
   rm -rf "$SEEDS"
   "$FUZZ/make_fuzz_seeds" generated "$SEEDS"
-  for target in abi vdb exr; do
+  for target in abi vdb exr image_file; do
     step "fuzzing $target for $FUZZ_SECONDS s"
     bin="$FUZZ/fuzz_$target"
     if [ "$target" = exr ]; then bin="$FUZZ/fuzz_exr_merge"; fi

@@ -299,14 +299,20 @@ def test_emitter_beyond_float_range_does_not_block_the_noise_target():
 
 # ---- image files: missing or unreadable, magenta as Cycles, named ------------------------------
 
-@pytest.mark.parametrize("broken", ["missing", "corrupt"])
+# A file's start (its format's signature) and what follows, which is not an image.
+_BROKEN_FILES = {"corrupt": ("png", b"\x89PNG\r\n\x1a\n"), "corrupt_jpeg": ("jpg", b"\xff\xd8\xff\xe0"),
+                 "corrupt_hdr": ("hdr", b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n"), "missing": ("png", b"")}
+
+
+@pytest.mark.parametrize("broken", sorted(_BROKEN_FILES))
 def test_missing_or_unreadable_image_file_renders_magenta_by_name(broken, tmp_path):
     """The core reads image files itself; a file that is not there or cannot be read leaves the
     texture magenta (as Cycles), with a warning naming the image and the material."""
     scene = small_scene()
-    path = str(tmp_path / "bark.png")
+    ext, start = _BROKEN_FILES[broken]
+    path = str(tmp_path / ("bark." + ext))
     with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + b"not a PNG at all" * 8)
+        f.write(start + b"not an image at all" * 8)
     img = bpy.data.images.load(path, check_existing=False)
     img.name = "BarkTexture"
     if broken == "missing":

@@ -120,10 +120,12 @@ LT_API int lt_scene_end_image(lt_scene* scene, int* out_id);
  * OpenEXR files as half floats unless the alpha mode is Straight, others as float).
  * The texels are those Blender 3.4 gives in Image.pixels for an image datablock of this colour
  * space and alpha mode, given to lt_scene_add_image with that datablock's srgb and alpha
- * (native/src/io/image_file.h). PNG (8 and 16 bits) and single-part RGB(A) OpenEXR. Refused with
+ * (native/src/io/image_file.h). PNG (8 and 16 bits), JPEG, TIFF (8, 16, 32 bits), TGA, Radiance HDR
+ * and single-part RGB(A) OpenEXR. Refused with
  * LT_ERROR_INVALID_ARGUMENT (and why) for what Blender's loading would change otherwise (a float
  * file in a colour space other than Linear or a data space, an 8-bit file with alpha in
- * Premultiplied mode, other formats): the caller then loads it another way. A file that cannot
+ * Premultiplied mode, variants Blender reads its own way, other formats): the caller then loads it
+ * another way. A file that cannot
  * be opened or read: LT_ERROR_IO. Added without an ABI version bump (still 7). */
 enum lt_color_space {
   LT_COLOR_SPACE_SRGB = 0,

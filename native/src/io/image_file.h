@@ -1,11 +1,14 @@
-// Image files read by the core itself (OpenImageIO), as Cycles reads them, so that Blender never
-// loads the pixels and they are held once, at the file's precision (8-bit files as bytes, half
-// OpenEXR files as half floats unless Blender would premultiply them, others as float). The texels are exactly those
-// the add-on would get from Blender 3.4's Image.pixels for the same image datablock: what Blender's
-// loader does to them (imbuf's png.c / openexr_api.cpp and imb_handle_alpha) is done here, and
-// files for which that would need Blender's colour management (a float file in a colour space
-// other than Linear or a data space) or its unpremultiplied byte buffers are refused
-// (ImageFileUnsupported) for the caller to load through Blender.
+// Image files read by the core itself (OpenImageIO; Radiance files by read_radiance), as Cycles
+// reads them, so that Blender never loads the pixels and they are held once, at the file's
+// precision (8-bit PNG, JPEG, TIFF and TGA files as bytes, half OpenEXR files as half floats unless
+// Blender would premultiply them, 16-bit PNG and TIFF, float OpenEXR and Radiance files as float).
+// The texels are exactly those the add-on would get from Blender 3.4's Image.pixels for the same
+// image datablock: what Blender's loader does to them (imbuf's png.c, jpeg.c, tiff.c, targa.c,
+// radiance_hdr.c, openexr_api.cpp and imb_handle_alpha) is done here, and files for which that
+// would need Blender's colour management (a float file in a colour space other than Linear or a
+// data space), its unpremultiplied byte buffers, or that its loaders read their own way (CMYK
+// JPEG, palettes, TIFF orientations, 16-bit TGA, ...) are refused (ImageFileUnsupported) for the
+// caller to load through Blender.
 #pragma once
 
 #include <memory>
@@ -38,5 +41,7 @@ struct ImageFileUnsupported : std::runtime_error {
 
 // Reads the file (throws IoError when it cannot be opened or read, ImageFileUnsupported as above).
 std::unique_ptr<Image> read_image_file(const ImageFileRequest& request);
+// A Radiance (.hdr) file, decoded as Blender does (read_image_file calls it for them).
+std::unique_ptr<Image> read_radiance(const ImageFileRequest& request);
 
 }  // namespace lt
