@@ -1246,7 +1246,7 @@ def build_caustic(scene):
 
 def build_unsupported_node(scene):
     """Nodes Lantern does not render: Wireframe → Diffuse colour (material "WireframeMaterial") and a
-    Refraction BSDF ("RefractionMaterial")."""
+    Subsurface Scattering ("SubsurfaceMaterial")."""
     set_world(scene, (0.1, 0.1, 0.1), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
     assign(floor, diffuse("FloorGrey", (0.6, 0.6, 0.6)))
@@ -1257,8 +1257,8 @@ def build_unsupported_node(scene):
     nt.links.new(wire.outputs["Fac"], bsdf.inputs["Color"])
     nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
     assign(add_object(scene, "WireSphere", mesh_sphere("WireSphere", 0.5), (-0.6, 0, 0.5)), mat)
-    refraction = _bsdf_material("RefractionMaterial", "ShaderNodeBsdfRefraction", (0.8, 0.3, 0.3))
-    assign(add_object(scene, "RefractionSphere", mesh_sphere("RefractionSphere", 0.5), (0.6, 0, 0.5)), refraction)
+    sss = _bsdf_material("SubsurfaceMaterial", "ShaderNodeSubsurfaceScattering", (0.8, 0.3, 0.3))
+    assign(add_object(scene, "SubsurfaceSphere", mesh_sphere("SubsurfaceSphere", 0.5), (0.6, 0, 0.5)), sss)
     add_light(scene, "AreaLight", "AREA", 100.0, (0, -1.0, 3.0), shape="SQUARE", size=1.0)
     add_camera(scene, (0, -4.0, 1.8), (0, 0, 0.4), lens=40.0)
 

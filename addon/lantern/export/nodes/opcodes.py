@@ -14,6 +14,7 @@ ANISOTROPIC = 9
 VELVET = 10
 TRANSLUCENT = 11
 TOON = 12
+REFRACTION = 16
 # hair closures (shaders.h, numbers 20-27)
 PRINCIPLED_HAIR = 20
 HAIR_BSDF = 21
