@@ -77,6 +77,10 @@ struct ShaderCode {
   void glass(uint32_t weight, Rgb color, float roughness, float ior) {
     emit(lt::kOpGlass, {weight, c3({0, 0, 0}), c3(color), c1(roughness), c1(ior)}, {}, {lt::kDistGGX});
   }
+  // Refraction BSDF (distribution kDistSharp, kDistGGX or kDistBeckmann).
+  void refraction(uint32_t weight, Rgb color, float roughness, float ior, uint32_t distribution = lt::kDistGGX) {
+    emit(lt::kOpRefraction, {weight, c3({0, 0, 0}), c3(color), c1(roughness), c1(ior)}, {}, {distribution});
+  }
   void emission(uint32_t weight, Rgb color, float strength) {
     emit(lt::kOpEmission, {weight, c3(color), c1(strength)}, {});
   }
