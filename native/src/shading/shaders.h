@@ -29,7 +29,7 @@ enum ShaderOp : uint32_t {
 };
 
 // Closures numbered 16-19 of the family.
-enum ShaderOp16 : uint32_t {
+enum RefractionShaderOp : uint32_t {
   // Refraction BSDF: in: weight v, normal v, color v, roughness f, ior f; param: distribution
   // (Sharp, GGX, Beckmann)
   kOpRefraction = kFamilyShadersBegin + 16,

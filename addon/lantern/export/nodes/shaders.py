@@ -62,7 +62,7 @@ def glass(c, node, weight):
 # alone, weighted by the Color without Fresnel.
 @register_shader('BSDF_REFRACTION')
 def refraction(c, node, weight):
-    _ior_warning(c, node)
+    _ior_warning(c, node, "seen from outside it lets almost no light through")
     c.closure(ops.REFRACTION, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
                                c.float(node.inputs["Roughness"]), c.float(node.inputs["IOR"])],
               params=[_distribution(c, node)])
@@ -105,11 +105,10 @@ def holdout(c, node, weight):
     c.closure(ops.HOLDOUT, [weight])
 
 
-def _ior_warning(c, node):
+def _ior_warning(c, node, effect="a near-perfect mirror"):
     s = node.inputs["IOR"]
     if not c.linked(s) and not s.default_value > 0:
-        c.warn("'%s' has IOR %g; rendered as IOR 0.00001 (as Cycles): a near-perfect mirror"
-               % (node.name, s.default_value))
+        c.warn("'%s' has IOR %g; rendered as IOR 0.00001 (as Cycles): %s" % (node.name, s.default_value, effect))
 
 
 # Principled BSDF inputs in the core's order (shaders.h); Blender 4 names second.
