@@ -894,6 +894,51 @@ def build_bsdf_zoo(scene, departures=False, sun_only=False, hidden=False):
     add_camera(scene, (0, -5.2, 2.6), (0, 0.55, 0.35), lens=38.0)
 
 
+def refraction_materials(transmission_roughness=0.5):
+    """The Refraction BSDF (Sharp, GGX, Beckmann) at IORs 1.45 and 0.8 and a Principled glass with a
+    Transmission Roughness of its own (issue 13)."""
+    mats = []
+    for ior in (1.45, 0.8):
+        for dist, rough, color in (("SHARP", 0.0, (0.95, 0.9, 0.8)), ("GGX", 0.3, (0.8, 0.9, 0.95)),
+                                   ("BECKMANN", 0.25, (0.9, 0.95, 0.85))):
+            mats.append(_bsdf_material("Refraction%s_%g" % (dist.capitalize(), ior), "ShaderNodeBsdfRefraction", color,
+                                       distribution=dist, Roughness=rough, IOR=ior))
+    mat, nt, out = _material("PrincipledRoughRefraction")
+    p = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    p.distribution = "GGX"
+    p.inputs["Base Color"].default_value = (0.9, 0.8, 0.7, 1.0)
+    p.inputs["Transmission"].default_value = 1.0
+    p.inputs["Roughness"].default_value = 0.1
+    p.inputs["Transmission Roughness"].default_value = transmission_roughness
+    p.inputs["IOR"].default_value = 1.45
+    nt.links.new(p.outputs[0], out.inputs["Surface"])
+    mats.append(mat)
+    return mats
+
+
+def build_refraction(scene, transmission_roughness=0.5):
+    """Issue 13: refraction_materials' seven spheres over a checker ground under a sun and a sky
+    (the sun 6 degrees wide, so that the caustics paths find it are not single fireflies)."""
+    set_world(scene, (0.35, 0.45, 0.6), 0.8)
+    mat, nt, out = _material("Checker")
+    checker = nt.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Scale"].default_value = 32.0
+    checker.inputs["Color1"].default_value = (0.8, 0.8, 0.75, 1.0)
+    checker.inputs["Color2"].default_value = (0.1, 0.15, 0.3, 1.0)
+    bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    nt.links.new(checker.outputs["Color"], bsdf.inputs["Color"])
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    assign(add_object(scene, "Ground", mesh_plane("Ground", 8.0)), mat)
+    for i, m in enumerate(refraction_materials(transmission_roughness)):
+        row, col = (0, i) if i < 4 else (1, i - 4)
+        x = (col - 1.5) * 0.85 if row == 0 else (col - 1.0) * 0.85
+        sphere = add_object(scene, "Sphere_" + m.name, mesh_sphere("Sphere_" + m.name, 0.36),
+                            (x, 0.0 if row == 0 else 0.9, 0.36))
+        assign(sphere, m)
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(35, 0, 20), angle=math.radians(6.0))
+    add_camera(scene, (0, -4.6, 2.6), (0, 0.45, 0.3), lens=40.0)
+
+
 def gltf_pbr_file(directory, scene):
     """A glTF 2.0 file as other tools write them: a UV sphere whose PBR material has a base colour
     texture times a factor, a metallic-roughness texture (G roughness, B metallic) with factors and
@@ -1345,7 +1390,7 @@ def build_caustic(scene):
 
 def build_unsupported_node(scene):
     """Nodes Lantern does not render: Wireframe → Diffuse colour (material "WireframeMaterial") and a
-    Refraction BSDF ("RefractionMaterial")."""
+    Subsurface Scattering ("SubsurfaceMaterial")."""
     set_world(scene, (0.1, 0.1, 0.1), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
     assign(floor, diffuse("FloorGrey", (0.6, 0.6, 0.6)))
@@ -1356,8 +1401,8 @@ def build_unsupported_node(scene):
     nt.links.new(wire.outputs["Fac"], bsdf.inputs["Color"])
     nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
     assign(add_object(scene, "WireSphere", mesh_sphere("WireSphere", 0.5), (-0.6, 0, 0.5)), mat)
-    refraction = _bsdf_material("RefractionMaterial", "ShaderNodeBsdfRefraction", (0.8, 0.3, 0.3))
-    assign(add_object(scene, "RefractionSphere", mesh_sphere("RefractionSphere", 0.5), (0.6, 0, 0.5)), refraction)
+    sss = _bsdf_material("SubsurfaceMaterial", "ShaderNodeSubsurfaceScattering", (0.8, 0.3, 0.3))
+    assign(add_object(scene, "SubsurfaceSphere", mesh_sphere("SubsurfaceSphere", 0.5), (0.6, 0, 0.5)), sss)
     add_light(scene, "AreaLight", "AREA", 100.0, (0, -1.0, 3.0), shape="SQUARE", size=1.0)
     add_camera(scene, (0, -4.0, 1.8), (0, 0, 0.4), lens=40.0)
 
@@ -1941,6 +1986,7 @@ SCENES = {
                                 (128, 80), 128),
     "bsdf_zoo_departures_sun_visible": (lambda scene: build_bsdf_zoo(scene, departures=True, sun_only=True),
                                         (128, 80), 128),
+    "refraction": (build_refraction, (96, 64), 256),
     "unsupported_node": (build_unsupported_node, (96, 96), 64),
     "door": (build_door, (96, 96), 512),
     "door_bounce": (build_door_bounce, (96, 96), 1600),

@@ -185,6 +185,20 @@ def test_every_new_shader_node_agrees_with_cycles_when_lit(integrator, scene_fac
     assert report == "", report
 
 
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_refraction_bsdf_and_transmission_roughness_agree_with_cycles(integrator, scene_factory, outdir):
+    """Issue 13: the Refraction BSDF (Sharp, GGX, Beckmann at IORs 1.45 and 0.8: refraction alone,
+    weighted by its Color) and the Principled glass's Transmission Roughness (0.5 over Roughness
+    0.1: a refraction of roughness 0.55) over a checker ground under a sun and a sky (refraction),
+    per tile and in the image mean as above (as bsdf_zoo). Ignoring the Transmission Roughness
+    fails the Principled sphere's tiles with both integrators; weighting the Refraction BSDF by
+    1 - F fails the image mean (0.983)."""
+    both = lantern_and_cycles(scene_factory, "refraction", integrator)
+    report, _ = ru.agreement_report("refraction_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
 @pytest.mark.xfail(strict=True, reason="Cycles 3.4's sample() of Toon, the Principled clearcoat and Multiscatter GGX "
                    "departs from its eval(), which Lantern follows (README: departures)")
 def test_shader_nodes_that_depart_from_cycles_when_lit(scene_factory, outdir):

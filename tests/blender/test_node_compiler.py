@@ -4,6 +4,7 @@ import os
 import re
 
 import bpy
+import pytest
 
 import build_scenes as bs
 from lantern import core
@@ -143,6 +144,47 @@ def test_a_cycle_of_links_is_ignored_as_cycles_ignores_it():
     assert c.code, "the material compiled to nothing"
 
 
+def _instructions(c):
+    """(op, inputs, params) of each instruction of a compiled program."""
+    out, i = [], 0
+    while i < len(c.code):
+        op, counts = c.code[i], c.code[i + 1]
+        n_in, n_out, n_par = counts & 0xFF, (counts >> 8) & 0xFF, (counts >> 16) & 0xFF
+        ins = c.code[i + 2:i + 2 + n_in]
+        out.append((op, ins, c.code[i + 2 + n_in + n_out:i + 2 + n_in + n_out + n_par]))
+        i += 2 + n_in + n_out + n_par
+    return out
+
+
+def _constant(c, operand):
+    return c.constants[operand & 0xFFFFFF]
+
+
+def test_refraction_bsdf_and_transmission_roughness_compile_as_cycles_reads_them():
+    """The Refraction BSDF compiles to its closure with the node's distribution and no warning; the
+    Principled BSDF hands its Transmission Roughness to the core with GGX (no "ignored" warning) and
+    0 with Multiscatter GGX, whose glass Cycles 3.4 builds from Roughness alone."""
+    for dist, param in (("SHARP", opcodes.DIST_SHARP), ("GGX", opcodes.DIST_GGX), ("BECKMANN", opcodes.DIST_BECKMANN)):
+        mat = bs._bsdf_material("Refr" + dist, "ShaderNodeBsdfRefraction", (0.8, 0.9, 1.0), distribution=dist,
+                                Roughness=0.3, IOR=0.8)
+        c, warnings = _compile(mat)
+        closures = [(ins, par) for op, ins, par in _instructions(c) if op == opcodes.REFRACTION]
+        assert len(closures) == 1 and list(closures[0][1]) == [param], _instructions(c)
+        assert _constant(c, closures[0][0][4]) == pytest.approx(0.8)
+        assert warnings == [], warnings
+    for dist, expected in (("GGX", 0.5), ("MULTI_GGX", 0.0)):
+        mat, nt, out = bs._material("PrincipledTR" + dist)
+        p = nt.nodes.new("ShaderNodeBsdfPrincipled")
+        p.distribution = dist
+        p.inputs["Transmission"].default_value = 1.0
+        p.inputs["Transmission Roughness"].default_value = 0.5
+        nt.links.new(p.outputs[0], out.inputs["Surface"])
+        c, warnings = _compile(mat)
+        [(ins, _)] = [(ins, par) for op, ins, par in _instructions(c) if op == opcodes.PRINCIPLED]
+        assert _constant(c, ins[2 + 18]) == expected  # operands: weight, normal, then _PRINCIPLED's order
+        assert not any("Transmission Roughness" in w for w in warnings), warnings
+
+
 def test_unsupported_node_passes_its_input_through_and_names_itself():
     """A node the compiler does not know: its internal link passes the input through (as a muted
     node would), with a warning naming the node."""
@@ -156,7 +198,7 @@ def test_unsupported_node_passes_its_input_through_and_names_itself():
 
 def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
     """scripts/node_coverage.py on the unsupported_node scene: it names the Wireframe and the
-    Refraction BSDF and nothing Lantern renders."""
+    Subsurface Scattering and nothing Lantern renders."""
     import importlib.util
     scene_factory("unsupported_node")
     spec = importlib.util.spec_from_file_location("node_coverage", os.path.join(ROOT, "scripts", "node_coverage.py"))
@@ -166,5 +208,5 @@ def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
     out = capsys.readouterr().out
     missing = [line for line in out.splitlines() if "NOT SUPPORTED" in line]
     assert any("ShaderNodeWireframe" in line for line in missing), out
-    assert any("ShaderNodeBsdfRefraction" in line for line in missing), out
+    assert any("ShaderNodeSubsurfaceScattering" in line for line in missing), out
     assert len(missing) == 2, out

@@ -77,13 +77,17 @@ struct ShaderCode {
   void glass(uint32_t weight, Rgb color, float roughness, float ior) {
     emit(lt::kOpGlass, {weight, c3({0, 0, 0}), c3(color), c1(roughness), c1(ior)}, {}, {lt::kDistGGX});
   }
+  // Refraction BSDF (distribution kDistSharp, kDistGGX or kDistBeckmann).
+  void refraction(uint32_t weight, Rgb color, float roughness, float ior, uint32_t distribution = lt::kDistGGX) {
+    emit(lt::kOpRefraction, {weight, c3({0, 0, 0}), c3(color), c1(roughness), c1(ior)}, {}, {distribution});
+  }
   void emission(uint32_t weight, Rgb color, float strength) {
     emit(lt::kOpEmission, {weight, c3(color), c1(strength)}, {});
   }
   void transparent(uint32_t weight, Rgb color) { emit(lt::kOpTransparent, {weight, c3(color)}, {}); }
   // Principled BSDF with these inputs and Blender's defaults for the others.
   void principled(uint32_t weight, Rgb base, float metallic, float roughness, float specular = 0.5f,
-                  float transmission = 0, float ior = 1.45f) {
+                  float transmission = 0, float ior = 1.45f, float transmission_roughness = 0) {
     const uint32_t z3 = c3({0, 0, 0}), z = c1(0);
     // Operand order of kOpPrincipled (shading/shaders.h).
     emit(lt::kOpPrincipled,
@@ -107,7 +111,7 @@ struct ShaderCode {
           c1(0.03f),
           c1(ior),
           c1(transmission),
-          z,
+          c1(transmission_roughness),
           z3,
           c1(1),
           c1(1),

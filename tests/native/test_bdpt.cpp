@@ -235,6 +235,35 @@ TEST(Bdpt, FullBdptAgreesWithPathTracing) {
   }
 }
 
+// Lamps inside globes (emissive balls in a rough Glass BSDF, a rough and a sharp Refraction BSDF
+// sphere; no other light): light subpaths leave the globes through their refraction, whose f is
+// not reciprocal (f(wo, wi) = eta^2 f(wi, wo), Cycles' convention); with the adjoint on light
+// subpaths (Bsdf::set_light_is_wo) full BDPT agrees with path tracing per tile, K renders each.
+// (With f(wo, wi) there, light tracing saw the rough globes' light leave 1/1.5^2 as bright.)
+TEST(Bdpt, LampsInFrostedGlobesAgreeWithPathTracing) {
+  const int size = 48, tile = 16, K = 6;
+  ScenePtr s = new_scene();
+  lt_scene* sc = s.get();
+  const int white = add_diffuse(sc, {0.7f, 0.7f, 0.7f});
+  add_object(sc, plane(3, 3), white);
+  add_object(sc, plane(3, 2), white, compose(translate({0, 0.8f, 1}), rotate({1, 0, 0}, float(M_PI / 2))));
+  ShaderCode frosted, clear;
+  frosted.refraction(frosted.one(), {0.9f, 0.9f, 0.9f}, 0.35f, 1.5f);
+  clear.refraction(clear.one(), {0.9f, 0.9f, 0.9f}, 0, 1.5f, lt::kDistSharp);
+  const int globes[3] = {add_glass(sc, {1, 1, 1}, 0.35f, 1.5f), add_material(sc, frosted), add_material(sc, clear)};
+  const int lamp = add_emission(sc, {1.0f, 0.9f, 0.7f}, 8);
+  for (int k = 0; k < 3; ++k) {
+    const float x = 0.55f * float(k - 1);
+    add_object(sc, icosphere(0.25f, 3), globes[k], translate({x, 0.1f, 0.3f}));
+    add_object(sc, icosphere(0.1f, 2), lamp, translate({x, 0.1f, 0.3f}));
+  }
+  set_camera(sc, perspective_camera(look_at({0, -1.8f, 1.0f}, {0, 0.2f, 0.4f}), 30));
+  check(lt_scene_commit(sc), "commit");
+  lt_render_settings pa = settings(LT_INTEGRATOR_PATH, size, 48, 300, 64);
+  lt_render_settings pb = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 400, 64);
+  EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, K, tile), "");
+}
+
 // Media: BDPT's walks scatter in fog, in a medium behind glass and in a world volume, and its
 // connections carry the transmittance. With light subpaths of length 1 it is volumetric path
 // tracing (per tile within 5 SE from the Variance passes); full BDPT agrees with it from K

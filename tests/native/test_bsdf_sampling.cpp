@@ -96,6 +96,18 @@ Lobe beckmann_glass(float alpha, float eta, Spectrum w = Spectrum(1.0f)) {
   l.type = LobeType::DielectricBeckmann;
   return l;
 }
+// A glass lobe keeping one branch (GlassPart): the Principled glass's closures apart, or the
+// Refraction BSDF node (refraction(), beckmann_refraction()).
+Lobe part(Lobe l, GlassPart p) {
+  l.glass_part = p;
+  return l;
+}
+Lobe refraction(float alpha, float eta, Spectrum w = Spectrum(1.0f)) {
+  return part(dielectric(alpha, eta, w), GlassPart::RefractionBsdf);
+}
+Lobe beckmann_refraction(float alpha, float eta, Spectrum w = Spectrum(1.0f)) {
+  return part(beckmann_glass(alpha, eta, w), GlassPart::RefractionBsdf);
+}
 Lobe ashikhmin(float alpha, Spectrum w = Spectrum(1.0f)) {
   Lobe l = glossy(alpha, w);
   l.type = LobeType::AshikhminShirley;
@@ -370,6 +382,44 @@ std::vector<Chi2Case> make_cases() {
   cs.push_back(with_integral(lobe_case("toon_glossy_0.2_0.1_30", toon(true, 0.2f, 0.1f), from_angles(30, 40)), 1));
   // The cone crosses the horizon: directions below it are lost, so the integral is below 1.
   cs.push_back(lobe_case("toon_glossy_0.3_0.3_70", toon(true, 0.3f, 0.3f), from_angles(70, 40)));
+
+  // Refraction BSDF (refraction alone, no Fresnel): GGX entering and leaving (IOR 0.8: critical
+  // angle 53 degrees, so at 70 most microfacets reflect totally and the lobe keeps less than 1),
+  // Beckmann, and seen from below.
+  for (float a : {0.1f, 0.5f})
+    for (float eta : {1.45f, 0.8f})
+      for (float t : {30.0f, 70.0f}) {
+        Chi2Case c = lobe_case("refraction_a" + std::to_string(a).substr(0, 3) + "_eta" +
+                                   std::to_string(eta).substr(0, 4) + "_" + std::to_string(int(t)),
+                               refraction(a, eta), from_angles(t, 100));
+        if (a < 0.2f) c = with_bins(c, 60, 120);
+        cs.push_back(c);
+      }
+  for (float eta : {1.45f, 0.8f})
+    cs.push_back(lobe_case("refraction_beckmann_0.3_eta" + std::to_string(eta).substr(0, 4),
+                           beckmann_refraction(0.3f, eta), from_angles(45, 30)));
+  cs.push_back(lobe_case("refraction_a0.3_wo_below", refraction(0.3f, 1.45f), normalize(Vec3(-0.5f, 0.4f, -0.3f))));
+  // The Principled glass with a Transmission Roughness: its reflection and refraction closures as
+  // two lobes of different roughness; with a smooth reflection the continuous part carries the
+  // refraction lobe's selection probability, its weight (1 - F) over F + (1 - F) = 1 - F.
+  {
+    const Vec3 wo = from_angles(50, 20);
+    Bsdf b = mixture({part(principled_glass(0.01f, 1.45f, Spectrum(1.0f), 0), GlassPart::Reflection),
+                      part(principled_glass(0.3f, 1.45f, Spectrum(1.0f), 0), GlassPart::Refraction)});
+    Chi2Case c;
+    c.name = "mixture_principled_transmission_roughness";
+    c.sampler = bsdf_sampler(b, wo);
+    c.pdf = bsdf_density(b, wo);
+    cs.push_back(with_bins(c, 60, 120));
+    Bsdf smooth = mixture({part(principled_glass(0, 1.45f, Spectrum(1.0f), 0), GlassPart::Reflection),
+                           part(principled_glass(0.3f, 1.45f, Spectrum(1.0f), 0), GlassPart::Refraction)});
+    Chi2Case d;
+    d.name = "mixture_principled_smooth_reflection_rough_refraction";
+    d.sampler = bsdf_sampler(smooth, wo);
+    d.pdf = bsdf_density(smooth, wo);
+    d.expected_integral = 1 - fresnel_dielectric(wo.z, 1.45f);
+    cs.push_back(d);
+  }
 
   // Multiscatter GGX: the single-scattering visible normals mixed with the cosine hemisphere.
   cs.push_back(lobe_case("multi_ggx_0.3_40", multi_ggx(0.3f), from_angles(40, 15)));
@@ -911,6 +961,9 @@ TEST(BsdfFurnace, NewLobesConserveEnergy) {
       {"beckmann_glass_0.4", beckmann_glass(0.4f, 1.5f), -1, 3e-3},
       {"principled_glass_0.3", principled_glass(0.3f, 1.45f, Spectrum(0.9f, 0.35f, 0.2f), 0.3f), -1, 3e-3},
       {"principled_glass_inside", principled_glass(0.3f, 1 / 1.45f, Spectrum(0.9f, 0.35f, 0.2f), 0.3f), -1, 3e-3},
+      {"refraction_0.3", refraction(0.3f, 1.45f), -1, 3e-3},
+      {"refraction_inside_0.3", refraction(0.3f, 1 / 1.45f), -1, 3e-3},
+      {"refraction_beckmann_0.4", beckmann_refraction(0.4f, 0.8f), -1, 3e-3},
       {"ashikhmin_0.4", ashikhmin(0.4f), -1, 3e-3},
       {"ashikhmin_aniso_0.3_0.8", aniso(ashikhmin(0.3f), 0.8f), -1, 3e-3},
       {"clearcoat_0.3", clearcoat(0.3f), -1, 2e-3},
@@ -965,6 +1018,7 @@ Lobe random_lobe(Sampler& rng) {
   l.alpha_y = v < 0.5f ? -1.0f : (v < 0.6f ? 0.0f : (v < 0.65f ? 1e-6f : std::pow(10.0f, -4 * rng.next_1d())));
   l.toon_size = rng.next_1d() < 0.1f ? 0.0f : rng.next_1d();
   l.toon_smooth = rng.next_1d() < 0.3f ? 0.0f : rng.next_1d();
+  l.glass_part = GlassPart(std::min(3, int(rng.next_1d() * 4)));
   return l;
 }
 
@@ -1512,6 +1566,159 @@ TEST(PrincipledLayers, GlassReflectsUntintedAndRefractsTinted) {
       const double expect = reflected ? (0.5 + 0.5 * base[c]) * (1 - fh) + fh : base[c];
       EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, expect, 1e-5) << c << " u " << u;
     }
+  }
+}
+
+// ---- Refraction BSDF and the Principled glass's Transmission Roughness ---------------------------
+
+// The sharp Refraction BSDF (bsdf_refraction_sample): always the refracted direction, weight the
+// Color with no Fresnel factor, nothing under total internal reflection; from below 1/eta.
+TEST(RefractionLobes, SharpRefractsWithTheColourAlone) {
+  const Spectrum w(0.9f, 0.7f, 0.5f);
+  for (float eta : {1.45f, 0.8f, 1 / 1.45f})
+    for (float t : {0.0f, 30.0f, 52.0f, 54.0f, 80.0f}) {
+      SCOPED_TRACE("eta " + std::to_string(eta) + " theta " + std::to_string(t));
+      const Vec3 wo = from_angles(t, 25);
+      const Lobe l = refraction(0, eta, w);
+      EXPECT_EQ(lobe_flags(l), uint32_t(kLobeSpecular | kLobeTransmission));
+      BsdfSample s;
+      const float sin_i = std::sin(t * kDeg);
+      const bool tir = sin_i / eta >= 1;
+      ASSERT_EQ(lobe_sample(l, wo, Vec2{0.3f, 0.6f}, 0.2f, &s), !tir);
+      if (tir) continue;
+      EXPECT_EQ(s.flags, uint32_t(kLobeSpecular | kLobeTransmission));
+      EXPECT_EQ(s.eta, eta);
+      EXPECT_LT(s.wi.z, 0);
+      EXPECT_NEAR(std::sqrt(s.wi.x * s.wi.x + s.wi.y * s.wi.y) * eta, sin_i, 1e-5f);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, w[c], 1e-5f * w[c]);
+      BsdfSample back;  // from below, back onto wo
+      ASSERT_TRUE(lobe_sample(l, s.wi, Vec2{0.3f, 0.6f}, 0.2f, &back));
+      EXPECT_FLOAT_EQ(back.eta, 1 / eta);
+      EXPECT_NEAR(length(back.wi - wo), 0, 1e-5f);
+    }
+  // Below the epsilon of IOR 1 and at roughness 0 the lobe is delta; rough it is not.
+  EXPECT_EQ(lobe_flags(refraction(0.3f, 1.0f)), uint32_t(kLobeSpecular | kLobeTransmission));
+  EXPECT_EQ(lobe_flags(refraction(0.3f, 1.45f)), uint32_t(kLobeGlossy | kLobeTransmission));
+  EXPECT_EQ(lobe_flags(part(dielectric(0.3f, 1.45f), GlassPart::Reflection)), uint32_t(kLobeGlossy | kLobeReflection));
+}
+
+// The rough Refraction BSDF is the Glass BSDF's refraction without its 1 - F(wo) factor (Cycles'
+// bsdf_microfacet_ggx_eval_transmit with the closure's weight the Color), and reflects nothing.
+TEST(RefractionLobes, RoughIsTheGlassRefractionWithoutFresnel) {
+  const Vec3 wo = from_angles(35, 10);
+  for (float eta : {1.45f, 0.8f})
+    for (Vec2 u : {Vec2{0.3f, 0.2f}, Vec2{0.8f, 0.6f}}) {
+      const float fr = fresnel_dielectric(wo.z, eta);
+      for (bool beck : {false, true}) {
+        const Lobe g = beck ? beckmann_glass(0.3f, eta) : dielectric(0.3f, eta);
+        const Lobe r = beck ? beckmann_refraction(0.3f, eta) : refraction(0.3f, eta);
+        BsdfSample s;
+        ASSERT_TRUE(lobe_sample(r, wo, u, 0.5f, &s));
+        const Vec3 wi = s.wi;
+        EXPECT_EQ(s.flags, uint32_t(kLobeGlossy | kLobeTransmission));
+        const float fg = lobe_eval(g, wo, wi).x, f = lobe_eval(r, wo, wi).x;
+        ASSERT_GT(fg, 0);
+        EXPECT_NEAR(f * (1 - fr), fg, 1e-5f * fg);
+        EXPECT_NEAR(lobe_pdf(r, wo, wi) * (1 - fr), lobe_pdf(g, wo, wi), 1e-5f * lobe_pdf(g, wo, wi));
+        EXPECT_EQ(lobe_eval(r, wo, from_angles(40, 190)).x, 0.0f);
+        EXPECT_EQ(lobe_pdf(r, wo, from_angles(40, 190)), 0.0f);
+      }
+    }
+}
+
+// Refraction is not reciprocal as Cycles writes it: f(wo, wi) = eta^2 f(wi, wo), eta relative
+// from wo's side (Veach 1997, sec. 5.2, with Cycles' radiance convention). BDPT's light subpaths
+// (set_light_is_wo) therefore get f(wi, wo) from eval() and sample(), and a sharp refraction's
+// sampled weight divided by eta^2; the pdfs stay those of sampling wi from wo.
+TEST(RefractionLobes, LightSubpathsGetTheAdjoint) {
+  const Spectrum w(0.6f, 0.5f, 0.4f);
+  Sampler rng(41, 0, 0);
+  for (float eta : {1.45f, 0.8f}) {
+    const Lobe rough = refraction(0.4f, eta, w);
+    Bsdf radiance, importance;
+    radiance.add(rough);
+    importance.add(rough);
+    importance.set_light_is_wo(true);
+    int checked = 0;
+    for (int k = 0; k < 5000; ++k) {
+      const Vec3 wo = sample_uniform_sphere(rng.next_2d());
+      if (std::abs(wo.z) < 1e-2f) continue;
+      BsdfSample s;
+      if (!importance.sample(wo, rng.next_1d(), rng.next_2d(), &s)) continue;
+      const float e = wo.z > 0 ? eta : 1 / eta;  // relative IOR from wo's side
+      const Spectrum forward = radiance.eval(wo, s.wi, nullptr), reverse = radiance.eval(s.wi, wo, nullptr);
+      float pdf, pdf_radiance;
+      const Spectrum f = importance.eval(wo, s.wi, &pdf);
+      radiance.eval(wo, s.wi, &pdf_radiance);
+      EXPECT_EQ(pdf, pdf_radiance);
+      ASSERT_NEAR(pdf, s.pdf, 1e-4f * s.pdf);
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_NEAR(f[c], reverse[c], 1e-5f * reverse[c]);
+        ASSERT_NEAR(s.f[c], reverse[c], 1e-4f * reverse[c]);
+        ASSERT_NEAR(forward[c], e * e * reverse[c], 2e-4f * forward[c]);
+      }
+      ++checked;
+    }
+    EXPECT_GT(checked, 3000);
+    // Sharp: the adjoint weight of the refraction is the radiance weight / eta^2.
+    Bsdf sharp;
+    sharp.add(refraction(0, eta, w));
+    sharp.set_light_is_wo(true);
+    for (const Vec3& wo : {from_angles(30, 0), flip_z_test(from_angles(20, 60))}) {
+      BsdfSample s;
+      ASSERT_TRUE(sharp.sample(wo, 0.5f, Vec2{0.5f, 0.5f}, &s));
+      const float e = wo.z > 0 ? eta : 1 / eta;
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.f[c] * std::abs(s.wi.z) / s.pdf, w[c] / (e * e), 1e-5f);
+    }
+  }
+}
+
+// Cycles 3.4's Principled glass with distribution GGX: the refraction closure's roughness is
+// 1 - (1 - Roughness)(1 - Transmission Roughness), its weight base x (1 - F); the reflection keeps
+// Roughness and F. Transmission Roughness 0 keeps one lobe of both branches.
+TEST(PrincipledLayers, TransmissionRoughnessRoughensTheRefraction) {
+  const Rgb base{0.9f, 0.6f, 0.3f};
+  ShadingContext ctx{};
+  ctx.N = ctx.Ng = ctx.I = Vec3(0, 0, 1);
+  ShadingFrame frame{ctx.N};
+  const std::vector<std::unique_ptr<Image>> images;
+  for (float r : {0.0f, 0.1f})
+    for (float tr : {0.0f, 0.5f}) {
+      SCOPED_TRACE("roughness " + std::to_string(r) + " transmission roughness " + std::to_string(tr));
+      ShaderCode p;
+      p.principled(p.one(), base, 0, r, 0.5f, 1.0f, 1.45f, tr);
+      Bsdf b;
+      Program(p.code, p.k, p.registers, 0).run(ctx, images, &b, &frame);
+      if (tr == 0) {
+        ASSERT_EQ(b.count(), 1);
+        EXPECT_EQ(b.lobe(0).glass_part, GlassPart::Both);
+        EXPECT_NEAR(b.lobe(0).alpha, r * r, 1e-7f);
+        continue;
+      }
+      ASSERT_EQ(b.count(), 2);
+      const Lobe &reflect = b.lobe(0), &refract = b.lobe(1);
+      EXPECT_EQ(reflect.glass_part, GlassPart::Reflection);
+      EXPECT_EQ(refract.glass_part, GlassPart::Refraction);
+      EXPECT_NEAR(reflect.alpha, r * r, 1e-7f);
+      const float rt = 1 - (1 - r) * (1 - tr);
+      EXPECT_NEAR(refract.alpha, rt * rt, 1e-6f);
+      EXPECT_NEAR(refract.refraction_tint.y, base.y, 1e-6f);
+      // The two lobes' light passes colours: reflection weight x F, refraction base x (1 - F).
+      const Vec3 wo = from_angles(40, 0);
+      const float fr = fresnel_dielectric(wo.z, 1.45f);
+      Spectrum kinds[3];
+      b.kind_colors(wo, kinds);
+      EXPECT_NEAR(kinds[int(PassKind::Glossy)].x, fr, 1e-6f);
+      EXPECT_NEAR(kinds[int(PassKind::Transmission)].y, base.y * (1 - fr), 1e-6f);
+    }
+  // At the same roughness the two branches apart sum to the glass lobe (the split Cycles makes).
+  const Lobe both = principled_glass(0.2f, 1.45f, Spectrum(0.9f, 0.6f, 0.3f), 0.5f);
+  const Vec3 wo = from_angles(40, 10);
+  for (const Vec3& wi : {from_angles(45, 190), flip_z_test(from_angles(25, 180))}) {
+    const Spectrum sum =
+        lobe_eval(part(both, GlassPart::Reflection), wo, wi) + lobe_eval(part(both, GlassPart::Refraction), wo, wi);
+    const Spectrum f = lobe_eval(both, wo, wi);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c], f[c], 1e-6f * f[c]) << c;
   }
 }
 

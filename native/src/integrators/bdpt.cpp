@@ -29,8 +29,8 @@ BounceKind kind_of(const Bsdf& bsdf) {
   BounceKind kind = BounceKind::None;
   for (int k = 0; k < bsdf.count(); ++k) {
     const Lobe& l = bsdf.lobe(k);
-    if (lobe_is_glass(l.type)) return BounceKind::Mixed;  // reflection or refraction
-    BounceKind lk = bounce_kind(l, false);
+    if (glass_reflects_and_refracts(l)) return BounceKind::Mixed;  // reflection or refraction
+    BounceKind lk = bounce_kind(l, glass_only_refracts(l));
     if (k > 0 && lk != kind) return BounceKind::Mixed;
     kind = lk;
   }

@@ -7,7 +7,11 @@
 //                refraction closure (Walter et al. 2007) weighted by 1 - F(wo.n), F the exact
 //                dielectric Fresnel at the macro normal; no 1/eta^2 radiance scaling. The
 //                Principled glass's refraction takes refraction_tint (the base colour) and its
-//                reflection interpolate_fresnel_color towards glass_f0, as Cycles' two closures
+//                reflection interpolate_fresnel_color towards glass_f0, as Cycles' two closures.
+//                glass_part keeps one closure: the Principled glass's reflection (x F) or
+//                refraction (x max(1e-4, 1 - F), Cycles' refraction_fresnel) when the refraction
+//                has a roughness of its own, or the Refraction BSDF node (refraction alone, no
+//                Fresnel factor: bsdf_refraction, bsdf_microfacet_{ggx,beckmann} REFRACTION_ID)
 //   SpecularGGX  bsdf_microfacet_ggx_fresnel_setup as the Principled BSDF sets it up: GGX
 //                reflection times interpolate_fresnel_color, f0 (1 - FH) + FH with
 //                FH = (F(wi.m, eta) - F(1, eta)) / (1 - F(1, eta)), F the dielectric Fresnel
@@ -666,6 +670,24 @@ Spectrum glass_reflection_color(const Lobe& l, float eta, float cos_ih) {
   return vmin(vmax(c0 * (1 - fh) + Spectrum(fh), Spectrum(0.0f)), Spectrum(1.0f));
 }
 
+// A glass lobe's branch weights at wo's angle cos_o (GlassPart) and the probability with which it
+// samples its reflection: Fresnel's split for Both, else the one branch it keeps.
+struct GlassSplit {
+  float reflect, refract, p_reflect;
+};
+GlassSplit glass_split(const Lobe& l, float cos_o, float eta) {
+  if (l.glass_part == GlassPart::RefractionBsdf) return {0, 1, 0};
+  const float fr = fresnel_dielectric(cos_o, eta);
+  switch (l.glass_part) {
+    case GlassPart::Reflection:
+      return {fr, 0, 1};
+    case GlassPart::Refraction:
+      return {0, std::max(1e-4f, 1 - fr), 0};
+    default:
+      return {fr, 1 - fr, fr};
+  }
+}
+
 Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
   *pdf = 0;
   switch (l.type) {
@@ -686,16 +708,16 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
     case LobeType::DielectricBeckmann: {
       const Micro mf = lobe_micro(l);
       float eta = lobe_eta(l);
-      float fr = fresnel_dielectric(o.z, eta);
+      const GlassSplit g = glass_split(l, o.z, eta);
       float p = 0, v;
       if (i.z > 0) {
         float cos_oh = 1;
-        v = fr * micro_reflect(o, i, mf, &p, &cos_oh);
-        *pdf = fr * p;
+        v = g.reflect * micro_reflect(o, i, mf, &p, &cos_oh);
+        *pdf = g.p_reflect * p;
         return v > 0 ? l.weight * glass_reflection_color(l, eta, cos_oh) * v : Spectrum(0.0f);
       }
-      v = (1 - fr) * micro_refract(o, i, mf, eta, &p);
-      *pdf = (1 - fr) * p;
+      v = g.refract * micro_refract(o, i, mf, eta, &p);
+      *pdf = (1 - g.p_reflect) * p;
       return l.weight * l.refraction_tint * v;
     }
     case LobeType::AshikhminShirley:
@@ -738,7 +760,8 @@ bool sanitize(BsdfSample* s) {
 // Lobe selection estimate: the average of the weight, times the Fresnel-weighted layers' Fresnel
 // at wo (Cycles' sample_weight), but never below its value at 60 degrees, so that a layer black at
 // normal incidence (f0 = 0) that reflects at other angles is still sampled; the sheen likewise
-// with Cycles' avg_value (1 - cos)^5 cos. Glass needs no factor: its Fresnel split is internal.
+// with Cycles' avg_value (1 - cos)^5 cos. Glass with both branches needs no factor (its Fresnel
+// split is internal); one branch alone weighs its branch's weight at wo (Cycles' closure weight).
 float selection_estimate(const Lobe& l, const Vec3& wo) {
   Spectrum w = vmax(l.weight, Spectrum(0.0f));
   const float c = std::abs(wo.z);
@@ -751,6 +774,10 @@ float selection_estimate(const Lobe& l, const Vec3& wo) {
     w *= std::max(schlick_weight(c) * c, schlick_weight(0.5f) * 0.5f);
   else if ((l.type == LobeType::DiffuseToon || l.type == LobeType::GlossyToon) && toon_black(l))
     return 0;
+  else if (lobe_is_glass(l.type) && l.glass_part != GlassPart::Both) {
+    const GlassSplit g = glass_split(l, c, wo.z < 0 ? 1 / lobe_eta(l) : lobe_eta(l));
+    w = w * g.reflect + w * vmax(l.refraction_tint, Spectrum(0.0f)) * g.refract;
+  }
   float e = average(w);
   return std::isfinite(e) && e > 0 ? e : 0.0f;
 }
@@ -946,7 +973,8 @@ uint32_t lobe_flags(const Lobe& l) {
       return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection;
     case LobeType::Dielectric:
     case LobeType::DielectricBeckmann:
-      return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection | kLobeTransmission;
+      return (delta ? kLobeSpecular : kLobeGlossy) | (glass_only_refracts(l) ? 0u : kLobeReflection) |
+             (l.glass_part == GlassPart::Reflection ? 0u : kLobeTransmission);
     case LobeType::Transparent:
       return kLobeSpecular | kLobeTransmission;
     case LobeType::PrincipledHair:
@@ -1006,7 +1034,8 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
   s.eta = 1;
   if (lobe_is_delta(l)) {
     // f * |wi.z| / pdf equals the lobe's weight times the chosen branch's Fresnel over its
-    // probability, which for all of these is the weight itself.
+    // probability: the weight itself, or for a glass branch alone the weight times the branch's
+    // weight (GlassSplit).
     const Vec3 mirror(-o.x, -o.y, o.z);
     switch (l.type) {
       case LobeType::GlossyGGX:
@@ -1033,19 +1062,21 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
       case LobeType::Dielectric:
       case LobeType::DielectricBeckmann: {
         float eta = lobe_eta(l);
-        float fr = fresnel_dielectric(o.z, eta);
-        if (u_extra < fr) {
+        const GlassSplit g = glass_split(l, o.z, eta);
+        if (u_extra < g.p_reflect) {
           s.wi = mirror;
-          s.pdf = fr;
-          s.f = l.weight * glass_reflection_color(l, eta, o.z) * fr / o.z;
+          s.pdf = g.p_reflect;
+          s.f = l.weight * glass_reflection_color(l, eta, o.z) * g.reflect / o.z;
           s.flags = kLobeSpecular | kLobeReflection;
         } else {
           float sin2_t = (1 - o.z * o.z) / (eta * eta);
-          if (sin2_t >= 1) return false;  // only reachable when fr rounds below 1 at TIR
+          // Total internal reflection: glass with both branches reaches this only when fr rounds
+          // below 1; a refraction alone loses the light there (Cycles' bsdf_refraction_sample).
+          if (sin2_t >= 1) return false;
           float cos_t = std::sqrt(1 - sin2_t);
           s.wi = normalize(Vec3(-o.x / eta, -o.y / eta, -cos_t));
-          s.pdf = 1 - fr;
-          s.f = l.weight * l.refraction_tint * (1 - fr) / std::abs(s.wi.z);
+          s.pdf = 1 - g.p_reflect;
+          s.f = l.weight * l.refraction_tint * g.refract / std::abs(s.wi.z);
           s.flags = kLobeSpecular | kLobeTransmission;
           s.eta = eta;
         }
@@ -1116,15 +1147,15 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
       case LobeType::DielectricBeckmann: {
         const Micro mf = lobe_micro(l);
         float eta = lobe_eta(l);
-        float fr = fresnel_dielectric(o.z, eta);
-        if (u_extra < fr) {
+        const GlassSplit g = glass_split(l, o.z, eta);
+        if (u_extra < g.p_reflect) {
           if (!micro_sample_reflect(o, mf, u, &s.wi, below_shading)) return false;
           s.flags = kLobeGlossy | kLobeReflection;
           if (s.wi.z < 0) {  // Cycles' glass reflects with its GGX reflection closure: as above
             float cos_oh = 1;
             const float v = micro_reflect(o, s.wi, mf, &s.pdf, &cos_oh, true);
-            s.f = l.weight * glass_reflection_color(l, eta, cos_oh) * (fr * v);
-            s.pdf *= fr;
+            s.f = l.weight * glass_reflection_color(l, eta, cos_oh) * (g.reflect * v);
+            s.pdf *= g.p_reflect;
             s.flags |= kLobeBelowShading;
             if (flip) s.wi = flip_z(s.wi);
             if (!sanitize(&s)) return false;
@@ -1194,10 +1225,12 @@ float Bsdf::bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const {
 }
 
 namespace {
-// Lobes whose f is not symmetric in (wo, wi): Cycles' Toon closures make f cos(wi) the ramp, and
-// its hair closures are computed with sd->I, the direction towards the camera.
+// Lobes whose f is not symmetric in (wo, wi): Cycles' Toon closures make f cos(wi) the ramp, its
+// hair closures are computed with sd->I, the direction towards the camera, and glass takes its
+// Fresnel split at wo and refracts with f(wo, wi) = eta^2 f(wi, wo) (bsdf.h, set_light_is_wo).
 inline bool lobe_reciprocal(const Lobe& l) {
-  return l.type != LobeType::DiffuseToon && l.type != LobeType::GlossyToon && !lobe_is_hair(l.type);
+  return l.type != LobeType::DiffuseToon && l.type != LobeType::GlossyToon && !lobe_is_hair(l.type) &&
+         !lobe_is_glass(l.type);
 }
 }  // namespace
 
@@ -1261,6 +1294,10 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
   if (!lobe_sample(lobes_[chosen], wo, u, u_extra, &s, below_shading_)) return false;
   if (s.flags & kLobeSpecular) {
     s.pdf *= p[chosen];
+    // The adjoint of a smooth refraction (the limit of the rough one's f(wi, wo) = f(wo, wi) /
+    // eta^2); a mirror's Fresnel is the same at both ends.
+    if (light_is_wo_ && !lobe_reciprocal(lobes_[chosen]) && (s.flags & kLobeTransmission) && s.eta != 1)
+      s.f *= 1 / (s.eta * s.eta);
   } else {
     // Mixture pdf of the direction (one-sample MIS over the lobes' strategies) and the sum of
     // every non-delta lobe's value, so that MIS against light sampling sees one consistent pdf.
@@ -1328,6 +1365,10 @@ Spectrum Bsdf::albedo() const {
       w *= f0 + (Spectrum(1.0f) - f0) * (1.0f / 21.0f);
     } else if (t == LobeType::Sheen) {
       w *= 1.0f / 21.0f;
+    } else if (lobe_is_glass(t) && lobes_[k].glass_part != GlassPart::Both) {
+      // One branch alone: its weight at normal incidence.
+      const GlassSplit g = glass_split(lobes_[k], 1, lobe_eta(lobes_[k]));
+      w = w * g.reflect + w * vmax(lobes_[k].refraction_tint, Spectrum(0.0f)) * g.refract;
     }
     a += w;
   }
@@ -1366,9 +1407,12 @@ void Bsdf::kind_colors(const Vec3& wo, Spectrum* out) const {
     const Lobe& l = lobes_[k];
     if (l.type == LobeType::Transparent) continue;
     if (lobe_is_glass(l.type)) {
-      const float fr = fresnel_dielectric(std::abs(wo.z), wo.z < 0 ? 1 / lobe_eta(l) : lobe_eta(l));
-      out[int(PassKind::Glossy)] += l.weight * fr;
-      out[int(PassKind::Transmission)] += l.weight * std::max(1e-4f, 1 - fr);
+      // Cycles' closure weights: the reflection's weight x F, the refraction's weight x base x
+      // max(1e-4, 1 - F) (the Refraction BSDF's: its weight).
+      const GlassSplit g = glass_split(l, std::abs(wo.z), wo.z < 0 ? 1 / lobe_eta(l) : lobe_eta(l));
+      if (!glass_only_refracts(l)) out[int(PassKind::Glossy)] += l.weight * g.reflect;
+      if (l.glass_part != GlassPart::Reflection)
+        out[int(PassKind::Transmission)] += l.weight * l.refraction_tint * std::max(1e-4f, g.refract);
     } else {
       out[int(lobe_pass_kind(l, false))] += l.weight;
     }

@@ -39,7 +39,8 @@ enum class LobeType : uint8_t {
   // Colour as constant reflectance, no Fresnel.
   GlossyGGX,
   // Glass BSDF (GGX, Sharp): Fresnel-weighted GGX reflection + refraction; eta = IOR (1/IOR on back
-  // faces), alpha = Roughness^2; delta at alpha 0.
+  // faces), alpha = Roughness^2; delta at alpha 0. glass_part (below) keeps one branch: the
+  // Refraction BSDF node and the Principled glass with a Transmission Roughness.
   Dielectric,
   // Principled BSDF's specular layer: alpha = r^2 / aspect, alpha_y = r^2 aspect with aspect =
   // sqrt(1 - 0.9 Anisotropic), f0 = cspec0, eta = principled_specular_ior(Specular).
@@ -103,6 +104,18 @@ inline bool lobe_is_hair(LobeType t) {
 // as a transmission bounce with diffuse ray visibility (integrator/path_state.h).
 inline bool lobe_is_glass(LobeType t) { return t == LobeType::Dielectric || t == LobeType::DielectricBeckmann; }
 
+// Which branches a glass lobe keeps, and their weights at wo (F the dielectric Fresnel of wo's
+// angle at the macro normal), as Cycles 3.4's closures (svm_node_closure_bsdf):
+enum class GlassPart : uint8_t {
+  Both,        // Glass BSDF: reflection x F and refraction x (1 - F), sampled in that split
+  Reflection,  // the Principled glass's reflection closure alone: x F
+  Refraction,  // its refraction closure alone: x (1 - F) (a Transmission Roughness of its own)
+  // Refraction BSDF node (CLOSURE_BSDF_REFRACTION_ID, MICROFACET_{GGX,BECKMANN}_REFRACTION_ID):
+  // refraction alone with no Fresnel factor (the weight is the Color); light that would reflect
+  // totally at wo's microfacet is lost, as in Cycles.
+  RefractionBsdf,
+};
+
 // Glossy / Anisotropic BSDF roughness (svm_node_closure_bsdf): alpha = Roughness^2 when isotropic;
 // with Anisotropy a (clamped to [-0.99, 0.99]) alpha = alpha0 / (1 + a), alpha_y = alpha0 (1 + a)
 // for a < 0, and alpha = alpha0 (1 - a), alpha_y = alpha0 / (1 - a) otherwise; each clamped to 1.
@@ -131,7 +144,15 @@ struct Lobe {
   Vec3 hair_tangent{1.0f, 0.0f, 0.0f};
   Spectrum hair_sigma{0.0f};
   float hair_roughness = 0.3f, hair_radial = 0.3f, hair_m0 = 0.3f, hair_tilt = 0;
+  GlassPart glass_part = GlassPart::Both;  // Dielectric, DielectricBeckmann: the branches kept
 };
+// A glass lobe that only refracts (its bounces are transmissions) or that reflects and refracts.
+inline bool glass_only_refracts(const Lobe& l) {
+  return lobe_is_glass(l.type) && (l.glass_part == GlassPart::Refraction || l.glass_part == GlassPart::RefractionBsdf);
+}
+inline bool glass_reflects_and_refracts(const Lobe& l) {
+  return lobe_is_glass(l.type) && l.glass_part == GlassPart::Both;
+}
 
 struct BsdfSample {
   Vec3 wi;
@@ -156,9 +177,13 @@ class Bsdf {
   }
   // Light transport (BDPT's light subpaths): the light arrives along wo, so eval() and sample()
   // give the adjoint BSDF f(wi, wo) (Veach 1997, sec. 3.7.6). It differs from f(wo, wi) for the
-  // Toon lobes, which Cycles divides by the light's cosine (f cos = the ramp), and the hair lobes,
-  // which Cycles computes with sd->I (towards the camera); the others are reciprocal as Lantern
-  // writes them. Pdfs stay those of sampling wi from wo. clear() resets.
+  // Toon lobes, which Cycles divides by the light's cosine (f cos = the ramp), the hair lobes,
+  // which Cycles computes with sd->I (towards the camera), and the glass lobes: their Fresnel
+  // split is taken at wo, and their refraction, without Walter et al.'s 1/eta^2 radiance
+  // scaling as Cycles', has f(wo, wi) = eta^2 f(wi, wo) (eta relative from wo's side; Veach
+  // sec. 5.2), so a sampled smooth refraction's adjoint weight is 1/eta^2 of its radiance one.
+  // The others are reciprocal as Lantern writes them. Pdfs stay those of sampling wi from wo.
+  // clear() resets.
   void set_light_is_wo(bool light_is_wo) { light_is_wo_ = light_is_wo; }
   // The interpolated normal (local frame) when a Normal input bent the shading normal: Cycles 3.4
   // then scales its diffuse closures by bump_shadowing_term (kernel/closure/bsdf.h), which darkens

@@ -150,7 +150,21 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
     t.alpha = r * r;
     const float ior = glass_ior(m.f(in.in[18]));
     t.eta = backfacing(m) ? 1 / ior : ior;
-    m.bsdf->add(t);
+    // Cycles 3.4 (GGX; the add-on hands Multiscatter GGX, whose glass ignores it, a zero): the
+    // refraction closure's roughness is 1 - (1 - Roughness)(1 - Transmission Roughness); when it
+    // differs from the reflection's the two closures are separate lobes.
+    const float tr = unit(m.f(in.in[20]));
+    if (tr > 0 && r < 1) {
+      Lobe refract = t;
+      const float rt = 1 - (1 - r) * (1 - tr);
+      refract.glass_part = GlassPart::Refraction;
+      refract.alpha = rt * rt;
+      t.glass_part = GlassPart::Reflection;
+      m.bsdf->add(t);
+      m.bsdf->add(refract);
+    } else {
+      m.bsdf->add(t);
+    }
   }
   const float clearcoat = std::max(0.0f, m.f(in.in[16]));
   if (clearcoat > kClosureCutoff) {
@@ -179,6 +193,8 @@ const OpSignature kSignatures[] = {
     {"f", "", "i", false},                            // aov value
     {"v", "", "i", false},                            // aov color
 };
+
+const OpSignature kRefractionSignature = {"vvvff", "", "i", false};
 
 const OpSignature kHairSignatures[] = {
     {"vvffvvffffffff", "", "ii", false},  // principled hair
@@ -292,6 +308,7 @@ void hair_bsdf(const Instr& in, Machine& m, const Vec3& weight) {
 
 const OpSignature* shaders_family_signature(uint32_t op) {
   if (op >= kOpPrincipledHair && op <= kOpHairBsdf) return &kHairSignatures[op - kOpPrincipledHair];
+  if (op == kOpRefraction) return &kRefractionSignature;
   if (op < kOpEmission || op > kOpAovColor) return nullptr;
   return &kSignatures[op - kOpEmission];
 }
@@ -382,7 +399,8 @@ void exec_shaders_family(const Instr& in, Machine& m) {
       l.toon_size = unit(m.f(in.in[3]));
       l.toon_smooth = unit(m.f(in.in[4]));
       break;
-    case kOpGlass: {
+    case kOpGlass:
+    case kOpRefraction: {
       take_normal(m, m.v(in.in[1]), weight);
       const float r = in.param[0] == kDistSharp ? 0.0f : unit(m.f(in.in[3]));
       l.type = in.param[0] == kDistBeckmann ? LobeType::DielectricBeckmann : LobeType::Dielectric;
@@ -390,6 +408,7 @@ void exec_shaders_family(const Instr& in, Machine& m) {
       l.alpha = r * r;
       const float ior = glass_ior(m.f(in.in[4]));
       l.eta = backfacing(m) ? 1 / ior : ior;
+      if (in.op == kOpRefraction) l.glass_part = GlassPart::RefractionBsdf;
       break;
     }
     case kOpTransparent:

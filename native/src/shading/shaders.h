@@ -32,6 +32,13 @@ enum ShaderOp : uint32_t {
   kOpAovColor,  // in: color v; param: index
 };
 
+// Closures numbered 16-19 of the family.
+enum RefractionShaderOp : uint32_t {
+  // Refraction BSDF: in: weight v, normal v, color v, roughness f, ior f; param: distribution
+  // (Sharp, GGX, Beckmann)
+  kOpRefraction = kFamilyShadersBegin + 16,
+};
+
 // Hair closures (numbers 20-27 of the family): lobes on curves (bsdf_hair.cpp).
 enum HairShaderOp : uint32_t {
   // in: weight v, color v, melanin f, melanin redness f, tint v, absorption coefficient v,

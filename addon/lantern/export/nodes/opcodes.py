@@ -16,6 +16,7 @@ TRANSLUCENT = 11
 TOON = 12
 AOV_VALUE = 13
 AOV_COLOR = 14
+REFRACTION = 16
 # hair closures (shaders.h, numbers 20-27)
 PRINCIPLED_HAIR = 20
 HAIR_BSDF = 21

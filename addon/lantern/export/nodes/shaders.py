@@ -58,6 +58,16 @@ def glass(c, node, weight):
               params=[_distribution(c, node)])
 
 
+# Cycles 3.4's CLOSURE_BSDF_REFRACTION_ID and MICROFACET_{GGX,BECKMANN}_REFRACTION_ID: refraction
+# alone, weighted by the Color without Fresnel.
+@register_shader('BSDF_REFRACTION')
+def refraction(c, node, weight):
+    _ior_warning(c, node, "seen from outside it lets almost no light through")
+    c.closure(ops.REFRACTION, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
+                               c.float(node.inputs["Roughness"]), c.float(node.inputs["IOR"])],
+              params=[_distribution(c, node)])
+
+
 @register_shader('BSDF_ANISOTROPIC')
 def anisotropic(c, node, weight):
     c.closure(ops.ANISOTROPIC, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
@@ -94,11 +104,10 @@ def holdout(c, node, weight):
     c.closure(ops.HOLDOUT, [weight])
 
 
-def _ior_warning(c, node):
+def _ior_warning(c, node, effect="a near-perfect mirror"):
     s = node.inputs["IOR"]
     if not c.linked(s) and not s.default_value > 0:
-        c.warn("'%s' has IOR %g; rendered as IOR 0.00001 (as Cycles): a near-perfect mirror"
-               % (node.name, s.default_value))
+        c.warn("'%s' has IOR %g; rendered as IOR 0.00001 (as Cycles): %s" % (node.name, s.default_value, effect))
 
 
 # Principled BSDF inputs in the core's order (shaders.h); Blender 4 names second.
@@ -113,8 +122,6 @@ _PRINCIPLED = (
 _ALIASES = {"Specular": "Specular IOR Level", "Transmission": "Transmission Weight",
             "Emission": "Emission Color", "Subsurface": "Subsurface Weight",
             "Clearcoat": "Coat Weight", "Sheen": "Sheen Weight"}
-# Inputs the core does not render yet, and the value at which they change nothing.
-_IGNORED = {"Transmission Roughness": 0.0}
 
 
 @register_shader('BSDF_PRINCIPLED')
@@ -126,9 +133,7 @@ def principled(c, node, weight):
 
     if node.distribution != 'GGX' and (c.linked(inp["Roughness"]) or inp["Roughness"].default_value > 0):
         c.warn("Principled BSDF '%s': distribution %s is rendered as GGX" % (node.name, node.distribution))
-    ignored = [name for name, neutral in _IGNORED.items()
-               if socket(name) is not None and (c.linked(socket(name)) or
-                                                abs(float(socket(name).default_value) - neutral) > 1e-6)]
+    ignored = []
     if c.linked(inp.get("Clearcoat Normal")):
         ignored.append("Clearcoat Normal (the clearcoat uses the Normal input)")
     if ignored:
@@ -141,6 +146,10 @@ def principled(c, node, weight):
     operands = [weight, c.normal(inp.get("Normal"))]
     for name, size in _PRINCIPLED:
         s = socket(name)
+        # Cycles 3.4 gives the refraction a roughness of its own only with GGX (its Multiscatter
+        # GGX glass takes Roughness): 0 leaves it the Roughness.
+        if name == "Transmission Roughness" and node.distribution != 'GGX':
+            s = None
         operands.append(c._value(s, size) if s is not None else c.const(0.0 if size == 1 else (0.0,) * 3))
     operands.append(c.normal(inp.get("Clearcoat Normal")))
     operands.append(c.normal(inp.get("Tangent")))
