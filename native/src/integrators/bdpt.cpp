@@ -751,7 +751,8 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   for (int t = 2; t <= nt; ++t)
     for (int s = 1; s <= s_max; ++s) {
       if (s + t - 2 > max_depth()) break;
-      connect_group_ = lights_.lightgroup(light[0].light);  // s = 1: connect() sets its sample's
+      // s = 1: connect() sets its sample's; without a light subpath light[0] is a stale vertex.
+      connect_group_ = ns > 0 ? lights_.lightgroup(light[0].light) : -1;
       Spectrum c = connect(light, camera, s, t);
       if (!is_black(c)) add(c, s, t, connect_group_);
     }
