@@ -41,7 +41,8 @@ extern "C" {
  * (lt_cryptomatte_hash, lt_instance_desc's and lt_scene_set_material_cryptomatte's name hashes,
  * lt_render_settings.cryptomatte and cryptomatte_levels, lt_render_read_cryptomatte_rows); 16:
  * lt_instance_desc.holdout; light groups (the lightgroup fields, lt_scene_set_world_lightgroup,
- * lt_render_read_lightgroup_rows); shader AOVs (lt_render_settings.aov_*, pass_alpha_threshold, lt_render_read_aov_rows). */
+ * lt_render_read_lightgroup_rows); shader AOVs (lt_render_settings.aov_*, pass_alpha_threshold,
+ * lt_render_read_aov_rows). */
 #define LT_ABI_VERSION 16
 
 enum lt_status {
