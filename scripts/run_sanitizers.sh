@@ -41,10 +41,16 @@ export LSAN_OPTIONS="suppressions=$ROOT/tests/sanitizers/lsan.supp:print_suppres
 
 if [[ " $STEPS " == *" asan "* ]]; then
   step "native tests under ASan + UBSan"
-  # Two shards in parallel (one per core). Left out: the long statistical agreement tests (each
-  # 30-90 s in Release, ten times that under ASan; the shorter BDPT tests run the same code).
+  # Two shards in parallel (one per core). Left out: the long statistical tests (15-70 s each in
+  # Release, several times that under ASan), whose code shorter tests run: BDPT's agreement tests
+  # and MIS sums over many paths (MisWeightsSumToOneWithALens, LightTree.BdptMisWeightsSumToOne),
+  # the lobes' furnace and chi-square loops (BsdfSanity, HairLobes.WhiteFurnace, PhaseHG at
+  # g = -0.5 ... 0.5), the rough-metal furnace render (ApiFurnace's other renders).
   SLOW="Bdpt.AgreesWithVolumetricPathTracingInMedia:Bdpt.FullBdptAgreesWithPathTracing"
   SLOW+=":Bdpt.DoorSlabsBounceKindsAgreeWithPathTracing:Bdpt.LightLengthOneEqualsPathTracing"
+  SLOW+=":Bdpt.MisWeightsSumToOne:BsdfFurnace.NewLobesConserveEnergy:HairLobes.SamplesFollowPdf"
+  SLOW+=":ApiFurnace.RoughMetalSphereReflectsAsCyclesPerBounce:PhaseHG/PhaseChi2.SamplingFollowsPdf/0"
+  SLOW+=":PhaseHG/PhaseChi2.SamplingFollowsPdf/4"
   pids=()
   for shard in 0 1; do
     GTEST_TOTAL_SHARDS=2 GTEST_SHARD_INDEX=$shard "$ASAN_DIR/lantern_tests" --gtest_brief=1 \

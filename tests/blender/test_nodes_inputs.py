@@ -39,6 +39,15 @@ def test_point_info(output, outdir):
                  flat=output == "Radius")  # one radius for all points
 
 
+@pytest.mark.parametrize("pixel_size", [False, True])
+def test_wireframe(pixel_size, outdir):
+    """Wireframe on the sphere's triangles: a world-space width, and a width in pixels (the ray
+    footprint seen across the view)."""
+    props = {"use_pixel_size": pixel_size}
+    compare_view(_output("ShaderNodeWireframe", "Fac", props, Size=2.0 if pixel_size else 0.04),
+                 "wireframe_%s" % ("pixels" if pixel_size else "world"), outdir, shape="sphere")
+
+
 @pytest.mark.parametrize("ior", [1.45, 0.6, 3.0])
 def test_fresnel(ior, outdir):
     compare_view(_output("ShaderNodeFresnel", "Fac", IOR=ior), "fresnel_%g" % ior, outdir, shape="sphere")

@@ -169,7 +169,8 @@ class Bdpt {
   float light_footprint(const Vec3& p) const {
     float dP, dD;
     ctx_.camera.differentials(0.5f * ctx_.camera.width(), 0.5f * ctx_.camera.height(), &dP, &dD);
-    return dP + dD * length(p - ctx_.camera.position());
+    // dP is the footprint at the near clip, where camera rays start.
+    return dP + dD * std::max(0.0f, length(p - ctx_.camera.position()) - ctx_.camera.clip_start());
   }
   static bool scatters(const PathVertex& v) {
     return v.type == VertexType::Medium || (v.type == VertexType::Surface && v.bsdf.has_non_delta());

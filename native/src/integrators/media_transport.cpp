@@ -165,6 +165,7 @@ Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sa
       ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, hit.t);
       ctx.camera_ray = false;
       ctx.shadow_ray = true;
+      if (material.needs_differentials()) add_differentials(scene.geometry, sp, 0.0f, &ctx);  // no footprint
       material.evaluate(ctx, scene.images, &bsdf, nullptr);
       T *= bsdf.transparency();
       if (is_black(T)) return T;

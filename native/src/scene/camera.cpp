@@ -231,8 +231,9 @@ void Camera::differentials(float x, float y, float* dP, float* dD) const {
     // direction to the neighbouring pixels as dD (0 towards one that sees nothing).
     const Vec3 c = panorama_direction(x, y), dx = panorama_direction(x + 1, y), dy = panorama_direction(x, y + 1);
     auto step = [&](const Vec3& n) { return is_zero(c) || is_zero(n) ? 0.0f : length(normalize(n) - normalize(c)); };
-    *dP = 0.5f * ((x1_ - x0_) / width_ + (y1_ - y0_) / height_);
     *dD = 0.5f * (step(dx) + step(dy));
+    // Rays start at the near clip: Cycles moves the origin there and grows dP by its dD.
+    *dP = 0.5f * ((x1_ - x0_) / width_ + (y1_ - y0_) / height_) + d_.clip_start * *dD;
     return;
   }
   const float sx = (x1_ - x0_) / width_, sy = (y1_ - y0_) / height_;  // a pixel on the view plane
@@ -245,8 +246,8 @@ void Camera::differentials(float x, float y, float* dP, float* dD) const {
   }
   const Vec2 pp = plane_point(x, y);
   const Vec3 d = right * pp.x + up * pp.y - forward_neg, n = normalize(d);
-  *dP = 0;
   *dD = 0.5f * (length(normalize(d + right * sx) - n) + length(normalize(d + up * sy) - n));
+  *dP = d_.clip_start * length(d) * *dD;  // from the near clip along the ray (Cycles' nearclip / cos)
 }
 
 }  // namespace lt

@@ -59,8 +59,9 @@ class Camera {
   // Whether the camera moves over the shutter.
   bool has_motion() const { return !motion_.empty(); }
   // Cycles' compact ray differentials there (camera_sample_perspective / _orthographic /
-  // _panorama, without depth of field): the footprint's size at the camera (dP) and its growth
-  // per unit distance (dD: the angle between neighbouring pixels' rays).
+  // _panorama, without depth of field): the footprint's size where the ray starts, at the near
+  // clip (dP), and its growth per unit distance beyond it (dD: the angle between neighbouring
+  // pixels' rays).
   void differentials(float x, float y, float* dP, float* dD) const;
   // Blender's Z depth of a world point: the distance along the viewing axis, or from the camera
   // for a panorama (Cycles' camera_z_depth), from the camera at the shutter's centre (as Cycles).
@@ -68,6 +69,7 @@ class Camera {
     return d_.panorama ? length(p - centre_.origin) : -dot(p - centre_.origin, centre_.forward_neg);
   }
   Vec3 position(float time = 0.5f) const { return basis(time).origin; }
+  float clip_start() const { return d_.clip_start; }
   Vec3 forward(float time = 0.5f) const { return -basis(time).forward_neg; }
   bool orthographic() const { return d_.orthographic; }
   bool panorama() const { return d_.panorama; }

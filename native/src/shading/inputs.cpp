@@ -37,6 +37,7 @@ const OpSignature kSignatures[] = {
     {"fffv", "v", "i", false},          // displacement
     {"vff", "v", "ii", false},          // vector displacement
     {"v", "vf", "gii", false},          // environment
+    {"f", "f", "ii", false},            // wireframe
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -434,6 +435,43 @@ void hair_info(const Instr& in, Machine& m) {
   m.set(in.out[5], random);
 }
 
+// Cycles' wireframe(): whether p lies within sqrt(width2) of an edge line of the triangle (|e x
+// (p - c)|^2 / |e|^2 is the squared distance to the line through c along e).
+float near_edge(const Vec3* corners, const Vec3& p, float width2) {
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 edge = corners[i] - corners[i ? i - 1 : 2];
+    const Vec3 crs = cross(edge, p - corners[i]);
+    if (dot(crs, crs) < dot(edge, edge) * width2) return 1.0f;
+  }
+  return 0.0f;
+}
+
+// Wireframe on triangles (zero on curves and points, as Cycles). Half the size on each side: the
+// neighbouring triangle draws the other half.
+void wireframe(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  if (!c.mesh || !c.mesh->is_triangles() || c.primitive < 0) {
+    m.set(in.out[0], 0.0f);
+    return;
+  }
+  float width = 1;
+  if (in.param[0] != 0) {
+    // The footprint's two differentials projected onto the plane normal to the view, averaged.
+    width = 0;
+    for (const ShadingContext::Offset& o : c.offset) width += 0.5f * length(o.P - c.I * dot(o.P, c.I));
+  }
+  width *= 0.5f * m.f(in.in[0]);
+  float f = near_edge(c.corners, c.P, width * width);
+  const uint32_t bump = in.param[1];
+  if (bump == 1 || bump == 2) {
+    // Cycles' svm_node_wireframe at a bump offset: f plus its one-sided difference toward -d.
+    const Vec3 d = c.offset[bump - 1].P;
+    const float l = length(d);
+    if (l > 0) f += (f - near_edge(c.corners, c.P - d, width * width)) / l;
+  }
+  m.set(in.out[0], f);
+}
+
 // Point Info on points (zero elsewhere, as Cycles).
 void point_info(const Instr& in, Machine& m) {
   const ShadingContext& c = *m.ctx;
@@ -465,7 +503,7 @@ void point_info(const Instr& in, Machine& m) {
 const OpSignature* inputs_family_signature(uint32_t op) {
   if (op >= kFamilyCurveInputsBegin && op < kFamilyCurveInputsEnd)
     return op == kOpHairInfo ? &kCurveSignatures[0] : (op == kOpPointInfo ? &kCurveSignatures[1] : nullptr);
-  if (op < kOpTexCoord || op > kOpEnvironment) return nullptr;
+  if (op < kOpTexCoord || op > kOpWireframe) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
@@ -476,6 +514,10 @@ void exec_inputs_family(const Instr& in, Machine& m) {
   }
   if (in.op == kOpPointInfo) {
     point_info(in, m);
+    return;
+  }
+  if (in.op == kOpWireframe) {
+    wireframe(in, m);
     return;
   }
   if (in.op == kOpToFloat) {

@@ -79,6 +79,10 @@ enum InputOp : uint32_t {
   // color v, alpha f; params: image id, unassociate (as Image's), projection (0 equirectangular,
   // 1 mirror ball).
   kOpEnvironment,
+  // Wireframe (Cycles' svm_node_wireframe): in: size f; out: fac f (1 within size / 2 of an edge of
+  // the shading point's triangle, else 0); params: pixel size (size in pixels: times the ray
+  // footprint seen across the view), bump (1, 2: Cycles' one-sided difference along dx, dy).
+  kOpWireframe,
 };
 
 // Curve and point inputs: numbers 100-107 (program.cpp hands them to this family).

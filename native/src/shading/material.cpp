@@ -68,7 +68,8 @@ void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float f
   // The triangle's edges in world space (at the point's time): a move dP in its plane changes the
   // barycentrics of vertices 1 and 2 by the solution of dP = e1 db1 + e2 db2 (least squares,
   // exact in the plane).
-  Vec3 q[3], w[3];
+  Vec3 q[3];
+  Vec3* w = ctx->corners;
   geometry.object_corners(mesh, sp.primitive, sp.time, &q[0], &q[1], &q[2]);
   geometry.triangle(sp.instance, sp.primitive, &w[0], &w[1], &w[2], sp.time);
   const Vec3 e1 = w[1] - w[0], e2 = w[2] - w[0];

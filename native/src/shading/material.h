@@ -32,7 +32,7 @@ class Material {
   }
   bool emissive() const { return emissive_; }
   bool may_be_transparent() const { return program_.may_be_transparent(); }
-  bool uses_bump() const { return program_.uses_bump(); }
+  bool needs_differentials() const { return program_.needs_differentials(); }
   // A rough scalar for how bright the emission is, for picking lights by power.
   float emission_power_estimate() const { return emission_estimate_; }
   const Program& program() const { return program_; }
@@ -65,9 +65,9 @@ ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp,
 // Gives the shading point the normal n (unit, facing the ray) and what depends on it: object_N and
 // Geometry's Tangent (shading_context; Cycles' SetNormal replaces sd->N the same way).
 void set_shading_normal(ShadingContext* ctx, const Vec3& n);
-// What Bump needs (ShadingContext::footprint, offset): the ray footprint at the point (Cycles'
-// compact dP: the camera's dP plus its dD times the path's length) and the shading point moved by
-// it along the surface.
+// What Bump and Wireframe need (ShadingContext::footprint, offset, corners): the ray footprint at
+// the point (Cycles' compact dP: the camera's dP plus its dD times the path's length), the shading
+// point moved by it along the surface, and the triangle's corners in world space.
 void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float footprint, ShadingContext* ctx);
 
 }  // namespace lt

@@ -143,6 +143,7 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
       out_code.insert(out_code.end(), words.begin(), words.end());
       ++count_;
       uses_bump_ |= in.op == kOpBump;
+      uses_wireframe_ |= in.op == kOpWireframe;
       sets_normal_ |= in.op == kOpSetNormal;
     }
     pos += words_of(in);

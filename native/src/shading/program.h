@@ -50,14 +50,15 @@ struct ShadingContext {
   Vec3 object_N;   // object-space N
   bool backfacing = false;
   bool background = false;  // a world ray's point (world_context): no object, P is the direction
-  // Bump (add_differentials): the ray footprint (Cycles' compact sd->dP) and what the shading point
-  // changes by when moved along the footprint's two differentials in the surface (Cycles'
-  // differential_from_compact(Ng, dP)): [0] dx, [1] dy.
+  // Bump and Wireframe (add_differentials): the ray footprint (Cycles' compact sd->dP) and what the
+  // shading point changes by when moved along the footprint's two differentials in the surface
+  // (Cycles' differential_from_compact(Ng, dP)): [0] dx, [1] dy; a triangle's corners in world space.
   float footprint = 0;
   struct Offset {
     Vec3 P, object_P, generated;
     Vec2 uv, bary;
   } offset[2];
+  Vec3 corners[3];
   const Mesh* mesh = nullptr;
   const Instance* instance = nullptr;
   Pose pose;  // the instance's transform at the ray's time (motion blur); identity without an instance
@@ -184,8 +185,9 @@ class Program {
   // Whether the program may emit, and a rough scalar for how bright (for picking lights by power):
   // exact for constant emission, 1 where a texture or a node decides it.
   bool emission_estimate(float* estimate) const;
-  // The program has a Bump node: the shading point's differentials are needed (add_differentials).
-  bool uses_bump() const { return uses_bump_; }
+  // The program has a Bump or a Wireframe node: the shading point's differentials and its triangle
+  // are needed (add_differentials).
+  bool needs_differentials() const { return uses_bump_ || uses_wireframe_; }
   // The program sets the shading normal (a displacement's bump): Program::run keeps room for it.
   bool sets_normal() const { return sets_normal_; }
   // Whether the program may give a Transparent lobe (Transparent, Principled Alpha): then
@@ -202,7 +204,7 @@ class Program {
   std::vector<float> constants_;
   int registers_ = 0;
   size_t count_ = 0;
-  bool uses_bump_ = false;
+  bool uses_bump_ = false, uses_wireframe_ = false;
   bool sets_normal_ = false;
 };
 

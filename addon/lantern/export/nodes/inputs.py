@@ -45,6 +45,13 @@ def bump(c, node, want):
                   [c.normal(node.inputs["Normal"])], [("Normal", 3)], params=[int(node.invert)])
 
 
+@register('WIREFRAME')
+def wireframe(c, node, want):
+    """Cycles' Wireframe: the shading point's triangle edges (as the renderer triangulates)."""
+    return c.emit(ops.WIREFRAME, [c.float(node.inputs["Size"])], [("Fac", 1)],
+                  params=[int(node.use_pixel_size), c.bump])
+
+
 @register('CAMERA')
 def camera_data(c, node, want):
     if c.camera is None:

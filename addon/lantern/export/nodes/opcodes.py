@@ -46,6 +46,7 @@ SET_NORMAL = 49
 DISPLACEMENT = 50
 VECTOR_DISPLACEMENT = 51
 ENVIRONMENT = 52
+WIREFRAME = 53
 
 # curve and point inputs (inputs.h, numbers 100-107)
 HAIR_INFO = 100

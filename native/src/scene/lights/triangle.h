@@ -44,8 +44,12 @@ inline SurfacePoint triangle_light_surface(const Scene& scene, const Light& l, V
   return scene.geometry.surface(h);
 }
 // dir: the direction the light leaves in (toward the receiver).
+// A light sample has no ray footprint (Cycles' shader_setup_from_sample: zero dP).
 inline Spectrum triangle_light_radiance(const Scene& scene, const SurfacePoint& sp, const Vec3& dir) {
-  return scene.material(sp.material).emission(shading_context(scene.geometry, sp, -dir, 0.0f), scene.images);
+  const Material& material = scene.material(sp.material);
+  ShadingContext ctx = shading_context(scene.geometry, sp, -dir, 0.0f);
+  if (material.needs_differentials()) add_differentials(scene.geometry, sp, 0.0f, &ctx);
+  return material.emission(ctx, scene.images);
 }
 
 inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3& p, Vec2 u, float time,
