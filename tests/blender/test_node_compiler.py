@@ -197,8 +197,8 @@ def test_unsupported_node_passes_its_input_through_and_names_itself():
 
 
 def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
-    """scripts/node_coverage.py on the unsupported_node scene: it names the Ambient Occlusion and
-    the Subsurface Scattering and nothing Lantern renders."""
+    """scripts/node_coverage.py on the unsupported_node scene: it names the Bevel and the
+    Subsurface Scattering and nothing Lantern renders."""
     import importlib.util
     scene_factory("unsupported_node")
     spec = importlib.util.spec_from_file_location("node_coverage", os.path.join(ROOT, "scripts", "node_coverage.py"))
@@ -207,6 +207,6 @@ def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
     coverage.main()
     out = capsys.readouterr().out
     missing = [line for line in out.splitlines() if "NOT SUPPORTED" in line]
-    assert any("ShaderNodeAmbientOcclusion" in line for line in missing), out
+    assert any("ShaderNodeBevel" in line for line in missing), out
     assert any("ShaderNodeSubsurfaceScattering" in line for line in missing), out
     assert len(missing) == 2, out

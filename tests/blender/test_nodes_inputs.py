@@ -1,11 +1,13 @@
 """Nodes that read the shading point, against Cycles pixel by pixel (issue 13's check, node_cases):
 Texture Coordinate, Geometry, Fresnel, Layer Weight, Light Path and the implicit socket
 conversions, on a sphere under a perspective camera (normals, incoming directions and angles vary)
-and on a tilted plane under an orthographic one."""
+and on a tilted plane under an orthographic one; Wireframe; Ambient Occlusion (its rays make it
+noisy: the statistical agreement rule instead)."""
 import pytest
 
+import build_scenes as bs
 import render_utils as ru
-from node_cases import compare_view, node
+from node_cases import bpy_material, compare_view, node
 
 pytestmark = pytest.mark.skipif(not ru.engine_registered(), reason="Lantern add-on not registered")
 
@@ -605,3 +607,37 @@ def test_environment_texture(projection, vector, outdir):
             nt.links.new(node(nt, "ShaderNodeNewGeometry").outputs["Normal"], tex.inputs["Vector"])
         return tex.outputs["Color"]
     compare_view(build, "environment_%s_%s" % (projection.lower(), vector.lower()), outdir, shape="sphere")
+
+
+def _ao_material(name, color=(1.0, 1.0, 1.0), distance=1.0, samples=4, inside=False, only_local=False,
+                 output="AO"):
+    mat = bpy_material(name)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    ao = node(nt, "ShaderNodeAmbientOcclusion", {"samples": samples, "inside": inside, "only_local": only_local},
+              Color=color, Distance=distance)
+    em = nt.nodes.new("ShaderNodeEmission")
+    nt.links.new(ao.outputs[output], em.inputs["Color"])
+    nt.links.new(em.outputs[0], nt.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    return mat
+
+
+def test_ambient_occlusion_agrees_with_cycles(outdir):
+    """Ambient Occlusion's rays, seen through emission by camera rays (the agreement rule of
+    test_agreement.py, two seeds each): a floor under a box and a sphere (Color output, tinted), the
+    box with Inside and Distance 0 (the World's AO distance, 0.4 here), the sphere with Only Local
+    (the floor does not darken it)."""
+    bs.reset_file()
+    scene = bs.new_scene("ao_node", resolution=(64, 48), samples=64)
+    scene.cycles.max_bounces = 0
+    bs.set_world(scene, (0.0, 0.0, 0.0), 1.0)
+    scene.world.light_settings.distance = 0.4
+    bs.assign(bs.add_object(scene, "Floor", bs.mesh_plane("Floor", 6.0)),
+              _ao_material("AOFloor", color=(1.0, 0.5, 0.25), distance=0.8, output="Color"))
+    bs.assign(bs.add_object(scene, "Box", bs.mesh_box("Box", (0.8, 0.8, 0.8)), (-0.7, 0.2, 0.0)),
+              _ao_material("AOInside", distance=0.0, inside=True))
+    bs.assign(bs.add_object(scene, "Ball", bs.mesh_sphere("Ball", 0.45), (0.6, 0.0, 0.45)),
+              _ao_material("AOLocal", distance=1.0, only_local=True, samples=8))
+    bs.add_camera(scene, (0.0, -3.6, 2.0), (0.0, 0.0, 0.3), lens=35.0)
+    report, _ = ru.two_seed_agreement(scene, 64, "PATH", "ao_node", outdir)
+    assert report == "", report

@@ -89,6 +89,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
 
     images = ImageExporter(core_scene, report)
     materials = MaterialExporter(core_scene, report, images)
+    if depsgraph.scene_eval.world is not None:
+        materials.ao_distance = depsgraph.scene_eval.world.light_settings.distance
     if state is None or camera_object is not None:
         materials.camera = camera_table(depsgraph, camera_object)
     meshes = MeshExporter(depsgraph, core_scene, report, materials, motion)

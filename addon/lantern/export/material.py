@@ -273,6 +273,7 @@ class MaterialExporter:
 
     def __init__(self, core_scene, report, images):
         self.camera = None  # Texture Coordinate's camera table (camera.camera_table)
+        self.ao_distance = 10.0  # the World's AO distance (Ambient Occlusion's Distance 0)
         self.aovs = {}  # AOV name -> (index, colour) of the view layer's valid AOVs (aov_indices)
         self.core_scene = core_scene
         self.report = report
@@ -353,6 +354,7 @@ class MaterialExporter:
         c = nodes.Compiler(material.name, self.images, self._warn, camera=self.camera)
         c.attributes = self.attributes  # one numbering of attribute names per scene
         c.material_pass_index = material.pass_index
+        c.ao_distance = self.ao_distance
         try:
             if material.use_nodes and material.node_tree is not None:
                 volume = self.volume(material)

@@ -174,6 +174,15 @@ inline uint32_t sobol_1_reversed(uint32_t r) {
 
 inline float u32_to_unit(uint32_t x) { return std::min(kOneMinusEpsilon, float(x) * 0x1p-32f); }
 
+// Point i of a 2D Sobol' sequence, Owen-scrambled and shuffled (Burley 2020) by the hash h, from
+// i's bit reversal: the first two dimensions of Sampler's points.
+inline Vec2 sobol_owen_2d(uint32_t reversed_index, uint64_t h) {
+  const uint32_t r = laine_karras_permutation(reversed_index, uint32_t(h));
+  const uint32_t s3 = hash_u32(uint32_t(h >> 32) ^ 0x68e31da4u);
+  return {u32_to_unit(reverse_bits(laine_karras_permutation(reverse_bits(r), uint32_t(h >> 32)))),
+          u32_to_unit(reverse_bits(laine_karras_permutation(sobol_1_reversed(r), s3)))};
+}
+
 // Where a sample's numbers come from (lt_sample_pattern).
 enum class SamplePattern : uint8_t { SobolOwen = 0, Independent = 1 };
 
@@ -214,11 +223,7 @@ class Sampler {
       float a = next_1d();
       return {a, next_1d()};
     }
-    const uint64_t h = next_hash();
-    const uint32_t r = laine_karras_permutation(reversed_index_, uint32_t(h));
-    const uint32_t s3 = hash_u32(uint32_t(h >> 32) ^ 0x68e31da4u);
-    return {u32_to_unit(reverse_bits(laine_karras_permutation(reverse_bits(r), uint32_t(h >> 32)))),
-            u32_to_unit(reverse_bits(laine_karras_permutation(sobol_1_reversed(r), s3)))};
+    return sobol_owen_2d(reversed_index_, next_hash());
   }
   SamplePattern pattern() const { return pattern_; }
 

@@ -330,6 +330,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       const Material& material = scene_.material(sp.material);
       const float footprint_here = mode == Mode::Radiance ? footprint + ctx.ray_length * cs_.dD : light_footprint(sp.p);
       if (material.needs_differentials()) add_differentials(scene_.geometry, sp, footprint_here, &ctx);
+      if (material.traces_rays()) add_tracing(scene_.geometry, sp, sampler_, &ctx);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
       if (aovs_here)
         first->aovs_done = single_pass_done(material.may_be_transparent(), v.bsdf, s_.pass_alpha_threshold);

@@ -185,6 +185,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       ShadingFrame sf{ctx.N};
       const Material& material = scene.material(sp.material);
       if (material.needs_differentials()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
+      if (material.traces_rays()) add_tracing(scene.geometry, sp, sampler, &ctx);
       Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
       if (b.total == 0 && !aovs_done)
         aovs_done = single_pass_done(material.may_be_transparent(), bsdf, s.pass_alpha_threshold);

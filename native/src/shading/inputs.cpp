@@ -38,6 +38,7 @@ const OpSignature kSignatures[] = {
     {"vff", "v", "ii", false},          // vector displacement
     {"v", "vf", "gii", false},          // environment
     {"f", "f", "ii", false},            // wireframe
+    {"vfv", "vf", "ii", false},         // ambient occlusion
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -472,6 +473,45 @@ void wireframe(const Instr& in, Machine& m) {
   m.set(in.out[0], f);
 }
 
+// Whether a ray meets the instance `instance` before its end (Cycles' scene_intersect_local): the
+// hits along the ray, other instances' stepped over.
+bool occluded_by(const Geometry& g, Ray ray, int instance) {
+  Hit hit;
+  for (int k = 0; k < 256 && g.intersect(ray, 31u, &hit); ++k) {
+    if (hit.instance == instance) return true;
+    ray.tmin = std::nextafter(hit.t, ray.tmax);
+  }
+  return false;
+}
+
+// Cycles' svm_ao: `samples` rays cosine-distributed about the normal (flipped: Inside), within the
+// distance; 1 where nothing is traced (no scene, no object, no distance).
+float ambient_occlusion(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  const float dist = m.f(in.in[1]);
+  const int samples = int(std::min<uint32_t>(in.param[0], 1024));
+  if (!c.geometry || !c.instance || c.primitive < 0 || !(dist > 0) || samples < 1) return 1.0f;
+  Vec3 n = normal_or_default(m, in.in[2]);
+  if (in.param[1] & 2) n = -n;
+  Vec3 t, b;
+  orthonormals(n, &t, &b);
+  const bool local = in.param[1] & 1;
+  const int instance = int(c.instance - &c.geometry->instance(0));
+  int unoccluded = 0;
+  for (int k = 0; k < samples; ++k) {
+    // The node's rays are the first `samples` points of one scrambled 2D sequence: stratified.
+    const Vec3 d = sample_cosine_hemisphere(sobol_owen_2d(reverse_bits(uint32_t(k)), c.trace_seed));
+    Ray ray;
+    ray.d = t * d.x + b * d.y + n * d.z;
+    ray.o = offset_ray_origin(c.P, dot(ray.d, c.Ng) >= 0 ? c.Ng : -c.Ng);
+    ray.tmin = 0;
+    ray.tmax = dist;
+    ray.time = c.time;
+    if (!(local ? occluded_by(*c.geometry, ray, instance) : c.geometry->occluded(ray))) ++unoccluded;
+  }
+  return float(unoccluded) / float(samples);
+}
+
 // Point Info on points (zero elsewhere, as Cycles).
 void point_info(const Instr& in, Machine& m) {
   const ShadingContext& c = *m.ctx;
@@ -503,7 +543,7 @@ void point_info(const Instr& in, Machine& m) {
 const OpSignature* inputs_family_signature(uint32_t op) {
   if (op >= kFamilyCurveInputsBegin && op < kFamilyCurveInputsEnd)
     return op == kOpHairInfo ? &kCurveSignatures[0] : (op == kOpPointInfo ? &kCurveSignatures[1] : nullptr);
-  if (op < kOpTexCoord || op > kOpWireframe) return nullptr;
+  if (op < kOpTexCoord || op > kOpAmbientOcclusion) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
@@ -518,6 +558,12 @@ void exec_inputs_family(const Instr& in, Machine& m) {
   }
   if (in.op == kOpWireframe) {
     wireframe(in, m);
+    return;
+  }
+  if (in.op == kOpAmbientOcclusion) {
+    const float ao = ambient_occlusion(in, m);
+    m.set(in.out[0], m.v(in.in[0]) * ao);
+    m.set(in.out[1], ao);
     return;
   }
   if (in.op == kOpToFloat) {

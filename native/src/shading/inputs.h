@@ -83,6 +83,10 @@ enum InputOp : uint32_t {
   // the shading point's triangle, else 0); params: pixel size (size in pixels: times the ray
   // footprint seen across the view), bump (1, 2: Cycles' one-sided difference along dx, dy).
   kOpWireframe,
+  // Ambient Occlusion (Cycles' svm_node_ao / svm_ao): in: color v, distance f, normal v; out:
+  // color v (times ao), ao f (the fraction of `samples` cosine-distributed rays within distance
+  // that reach nothing); params: samples, flags (1 only local, 2 inside).
+  kOpAmbientOcclusion,
 };
 
 // Curve and point inputs: numbers 100-107 (program.cpp hands them to this family).

@@ -52,6 +52,12 @@ void set_shading_normal(ShadingContext* c, const Vec3& n) {
   c->tangent = is_finite(tangent) ? tangent : Vec3(0.0f);
 }
 
+void add_tracing(const Geometry& geometry, const SurfacePoint& sp, Sampler& sampler, ShadingContext* ctx) {
+  ctx->geometry = &geometry;
+  ctx->time = sp.time;
+  ctx->trace_seed = mix_u64(uint64_t(sampler.next_1d() * 0x1p32f) ^ 0x2545f4914f6cdd1dULL);
+}
+
 void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float footprint, ShadingContext* ctx) {
   ctx->footprint = footprint;
   const Instance& inst = geometry.instance(sp.instance);

@@ -33,6 +33,7 @@ class Material {
   bool emissive() const { return emissive_; }
   bool may_be_transparent() const { return program_.may_be_transparent(); }
   bool needs_differentials() const { return program_.needs_differentials(); }
+  bool traces_rays() const { return program_.traces_rays(); }
   // A rough scalar for how bright the emission is, for picking lights by power.
   float emission_power_estimate() const { return emission_estimate_; }
   const Program& program() const { return program_; }
@@ -69,5 +70,8 @@ void set_shading_normal(ShadingContext* ctx, const Vec3& n);
 // the point (Cycles' compact dP: the camera's dP plus its dD times the path's length), the shading
 // point moved by it along the surface, and the triangle's corners in world space.
 void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float footprint, ShadingContext* ctx);
+// What Ambient Occlusion needs at a path's vertex: the scene to trace, the point's time and one
+// number from the path's sampler for its rays (drawn only by materials that trace).
+void add_tracing(const Geometry& geometry, const SurfacePoint& sp, Sampler& sampler, ShadingContext* ctx);
 
 }  // namespace lt

@@ -25,6 +25,7 @@ namespace lt {
 
 class Image;
 class Bsdf;
+class Geometry;
 struct Mesh;
 struct Instance;
 
@@ -76,6 +77,11 @@ struct ShadingContext {
   // aov_count), set only where Cycles writes them (a camera path before its first opaque surface).
   float* aovs = nullptr;
   int aov_count = 0;
+  // Ambient Occlusion's rays (add_tracing): the scene they meet (null: AO is 1, as Cycles' light
+  // and shadow evaluations), the ray's time and a number scrambling the node's ray pattern.
+  const Geometry* geometry = nullptr;
+  float time = 0.5f;
+  uint64_t trace_seed = 0;
 };
 
 // The machine an instruction runs on: read inputs, write outputs.
@@ -188,6 +194,8 @@ class Program {
   // The program has a Bump or a Wireframe node: the shading point's differentials and its triangle
   // are needed (add_differentials).
   bool needs_differentials() const { return uses_bump_ || uses_wireframe_; }
+  // The program traces rays (Ambient Occlusion): the shading point needs add_tracing.
+  bool traces_rays() const { return traces_rays_; }
   // The program sets the shading normal (a displacement's bump): Program::run keeps room for it.
   bool sets_normal() const { return sets_normal_; }
   // Whether the program may give a Transparent lobe (Transparent, Principled Alpha): then
@@ -204,7 +212,7 @@ class Program {
   std::vector<float> constants_;
   int registers_ = 0;
   size_t count_ = 0;
-  bool uses_bump_ = false, uses_wireframe_ = false;
+  bool uses_bump_ = false, uses_wireframe_ = false, traces_rays_ = false;
   bool sets_normal_ = false;
 };
 

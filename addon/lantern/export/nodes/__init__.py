@@ -69,6 +69,7 @@ class Compiler:
         self.images = images
         self._warn = warn
         self.camera = camera  # 28 floats for Texture Coordinate's Camera and Window, or None
+        self.ao_distance = 10.0  # the World's AO distance (Ambient Occlusion's Distance 0), Blender's default
         self.code = []
         self.constants = []
         self._const_ids = {}

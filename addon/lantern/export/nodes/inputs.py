@@ -52,6 +52,17 @@ def wireframe(c, node, want):
                   params=[int(node.use_pixel_size), c.bump])
 
 
+@register('AMBIENT_OCCLUSION')
+def ambient_occlusion(c, node, want):
+    """Cycles' Ambient Occlusion: an unlinked Distance of 0 means the World's AO distance (Cycles'
+    NODE_AO_GLOBAL_RADIUS)."""
+    dist = node.inputs["Distance"]
+    distance = c.const(c.ao_distance) if not c.linked(dist) and dist.default_value == 0 else c.float(dist)
+    return c.emit(ops.AMBIENT_OCCLUSION, [c.color(node.inputs["Color"]), distance, c.normal(node.inputs["Normal"])],
+                  [("Color", 3), ("AO", 1)], params=[max(1, min(int(node.samples), 128)),
+                                                     int(node.only_local) | 2 * int(node.inside)])
+
+
 @register('CAMERA')
 def camera_data(c, node, want):
     if c.camera is None:
