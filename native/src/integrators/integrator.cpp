@@ -85,8 +85,7 @@ Spectrum ambient_occlusion(const Scene& scene, const IntegratorSettings& s, cons
     st = *stack;
     leave_surface(scene, sp, side, d, &st);
   }
-  return shadow_transmittance(scene, st, ray, sampler, s.volume_estimator, s.volume_step, stats,
-                              s.transparent_bounces);
+  return shadow_transmittance(scene, st, ray, sampler, s.volume_estimator, s.volume_step, stats, s.transparent_bounces);
 }
 
 bool motion_vector(const Scene& scene, const Camera& camera, const SurfacePoint& sp, float out[4]) {

@@ -196,7 +196,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         kind[k] = First;
       if (Pass(pass) == Pass::Vector) {
         if (coverage_k < 0)
-          throw InvalidArgument(paths[0] + ": " + name + " without VectorCoverage.X, which it is weighted by; not merged");
+          throw InvalidArgument(paths[0] + ": " + name +
+                                " without VectorCoverage.X, which it is weighted by; not merged");
         kind[k] = Covered;
       }
       split_k[k] = channel_index("LightTracing." + name);
