@@ -328,8 +328,8 @@ lt_test::V3 raster(const lt_test::Xform& xf, lt_test::V3 p, int width, int heigh
 // to 0.03 px times the motion's change to a neighbour, plus float rounding.
 TEST(Motion, VectorPassIsTheFilmMotionToTheNeighbouringFrames) {
   ScenePtr moving = moving_scene(true);
-  const int w = 48, h = 32;
-  lt_render_settings rs = render_settings(w, h, 4, 3);
+  const int w = 96, h = 64;
+  lt_render_settings rs = render_settings(w, h, 2, 3);
   rs.filter = LT_FILTER_GAUSSIAN;
   rs.filter_width = 0.01f;
   rs.passes |= 1u << LT_PASS_VECTOR;
