@@ -271,3 +271,22 @@ def test_vector_pass_matches_cycles(motion_runs):
         for dx in (-1, 0, 1):
             background[1:-1, 1:-1] &= index[1 + dy:h - 1 + dy, 1 + dx:w - 1 + dx] == 0
     assert background.sum() > 10 and (vl[background] == 0).all()
+
+
+def test_vector_pass_is_zero_with_motion_blur_and_costs_nothing_when_off(scene_factory):
+    """With motion blur on, Cycles' Vector pass is zero (its UI greys the toggle): Lantern's too,
+    with a warning. Without the pass no other frame is exported (nothing in the report)."""
+    scene = scene_factory("textured")
+    scene.render.resolution_percentage = 25
+    cube = scene.objects["Cube"]
+    _keyframes(cube, "location", [(-0.9, 0.2, 0), (-0.7, 0.2, 0), (-0.4, 0.25, 0)])
+    scene.frame_set(2)
+    bpy.context.scene.frame_set(2)
+    ru.render(scene, ru.LANTERN, 1, seed=0)
+    assert "Vector pass motion" not in lantern_engine.LAST_RENDER["report"]
+    assert "motion blur:" not in lantern_engine.LAST_RENDER["report"]
+    scene.view_layers[0].use_pass_vector = True
+    scene.render.use_motion_blur = True
+    out = ru.render(scene, ru.LANTERN, 1, seed=0)
+    assert (out["Vector"] == 0).all()
+    assert "The Vector pass is zero with motion blur on" in lantern_engine.LAST_RENDER["report"]
