@@ -584,6 +584,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             settings["motion_pass"] = int(motion is not None and motion.vector_pass)
             if view_layer.use_pass_vector and not vector and not self.is_preview:
                 report({'WARNING'}, "The Vector pass is zero with motion blur on, as Cycles writes it")
+            if vector and camera is not None and getattr(camera.data, "type", "") == 'PANO':
+                report({'WARNING'}, "The Vector pass stays zero with a panoramic camera (Lantern does not "
+                                    "project motion through panoramas; Cycles does)")
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:
