@@ -524,7 +524,8 @@ typedef struct lt_render_settings {
   int adaptive;
   int min_samples;
   /* Passes the film keeps: bits 1 << lt_pass (Combined and Sample Count are always kept; adaptive
-   * sampling also keeps what Variance needs). lt_render_settings_default sets every pass; reading
+   * sampling also keeps what Variance needs). lt_render_settings_default sets every pass but
+   * LT_PASS_AO (its rays cost time) and LT_PASS_VECTOR (it needs motion_pass); reading
    * a pass that is not kept is LT_ERROR_STATE. */
   unsigned passes;
   /* Bytes the caller will also allocate for this render (its copies of the passes): added to the
