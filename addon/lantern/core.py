@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 16
+ABI_VERSION = 17
 
 # lt_status
 OK = 0
@@ -94,7 +94,9 @@ PASS_UV = 24
 PASS_MIST = 25
 PASS_OBJECT_INDEX = 26
 PASS_MATERIAL_INDEX = 27
-PASS_COUNT = 28
+PASS_AO = 28
+PASS_VECTOR = 29
+PASS_COUNT = 30
 # lt_cryptomatte (bits of lt_render_settings.cryptomatte)
 CRYPTOMATTE_OBJECT, CRYPTOMATTE_MATERIAL, CRYPTOMATTE_ASSET = 1, 2, 4
 
@@ -334,6 +336,8 @@ class RenderSettings(ctypes.Structure):
         ("aov_names", ctypes.POINTER(ctypes.c_char_p)),
         ("aov_colors", _i_p),
         ("pass_alpha_threshold", ctypes.c_float),
+        ("ao_distance", ctypes.c_float),
+        ("motion_pass", ctypes.c_int),
     ]
 
 

@@ -54,6 +54,8 @@ PASSES = (
     ("VolumeInd", core.PASS_VOLUME_INDIRECT, 3, "RGB", 'COLOR', "cycles.use_pass_volume_indirect"),
     ("Emit", core.PASS_EMISSION, 3, "RGB", 'COLOR', "use_pass_emit"),
     ("Env", core.PASS_ENVIRONMENT, 3, "RGB", 'COLOR', "use_pass_environment"),
+    ("AO", core.PASS_AO, 3, "RGB", 'COLOR', "use_pass_ambient_occlusion"),
+    ("Vector", core.PASS_VECTOR, 4, "XYZW", 'VECTOR', "use_pass_vector"),
 )
 
 # Cycles' World > Mist Pass falloff as the exponent its film applies (blender/sync.cpp).
@@ -194,6 +196,7 @@ def render_settings(scene, width, height, border):
         sample_pattern=core.enum_value("lt_sample_pattern", lt.sample_pattern),
         denoise=int(lt.use_denoising),
         **mist_settings(scene.world),
+        ao_distance=ao_distance(scene.world),
     )
 
 
@@ -203,6 +206,18 @@ def mist_settings(world):
         return dict(mist_start=5.0, mist_depth=25.0, mist_falloff=2.0)
     m = world.mist_settings
     return dict(mist_start=m.start, mist_depth=m.depth, mist_falloff=MIST_FALLOFF.get(m.falloff, 2.0))
+
+
+def ao_distance(world):
+    """The AO pass's ray length, World > Light Settings > Distance (Blender's default 10 without a
+    world)."""
+    return 10.0 if world is None else world.light_settings.distance
+
+
+def vector_from_frames(scene, view_layer):
+    """Whether the Vector pass is asked for and motion blur is off: its motion then comes from the
+    neighbouring frames (export/motion.py). With motion blur on the pass stays zero, as Cycles'."""
+    return view_layer.use_pass_vector and not (scene.render.use_motion_blur and view_layer.use_motion_blur)
 
 
 # What the last render did (status and settings, and the BDPT strategy view when asked for):
@@ -346,8 +361,9 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
         lines.append(text)
     else:
         lines.append("media: none")
-    if "motion_instances" in summary:  # motion blur asked for (final renders)
-        lines.append("motion blur: %d moving object(s), %d deforming mesh(es), camera %s (counted by the core)"
+    if "motion_instances" in summary:  # motion blur or the Vector pass asked for (final renders)
+        lines.append(("Vector pass motion (frames -1, +1)" if summary.get("motion_vector_pass") else "motion blur") +
+                     ": %d moving object(s), %d deforming mesh(es), camera %s (counted by the core)"
                      % (summary["motion_instances"], summary["motion_meshes"],
                         "moving, %d steps" % summary["camera_motion_steps"] if summary["camera_motion_steps"]
                         else "still"))
@@ -506,8 +522,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         camera = self.camera_override or depsgraph.scene_eval.camera
         # Motion blur samples sub-frames with frame_set, which a kept scene would take for edits:
         # with it, every frame is exported anew.
+        vector = vector_from_frames(scene, view_layer) and not self.is_preview
         persistent = (scene.render.use_persistent_data and not self.is_preview and camera is not None
-                      and not scene.render.use_motion_blur)
+                      and not scene.render.use_motion_blur and not vector)
         try:
             t0 = time.monotonic()
             if persistent:
@@ -526,7 +543,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                 # Cycles'): the shutter's sub-frames sampled first, the scene exported at the
                 # shutter's centre, then the frame being rendered restored.
                 motion, restore = (None, None) if self.is_preview else \
-                    collect_motion(self, depsgraph, self.camera_override, report)
+                    collect_motion(self, depsgraph, self.camera_override, report, vector_pass=vector)
                 try:
                     summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override,
                                            motion=motion)
@@ -544,7 +561,8 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                             image_bytes=stats["image_bytes"], image_texels=stats["image_texels"],
                             byte_images=stats["byte_images"])
             if motion is not None:
-                summary.update(motion_instances=stats["motion_instances"], motion_meshes=stats["motion_meshes"],
+                summary.update(motion_vector_pass=motion.vector_pass,
+                               motion_instances=stats["motion_instances"], motion_meshes=stats["motion_meshes"],
                                camera_motion_steps=stats["camera_motion_steps"])
             if summary.get("world") == "nodes":
                 summary["world"] = ("nodes, sampling map %dx%d" % (stats["world_map_width"], stats["world_map_height"])
@@ -563,6 +581,12 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             crypto, crypto_bytes = cryptomatte_settings(view_layer, region)
             settings.update(crypto, caller_bytes=settings["caller_bytes"] + crypto_bytes)
             settings["pass_alpha_threshold"] = view_layer.pass_alpha_threshold  # where AOVs are written
+            settings["motion_pass"] = int(motion is not None and motion.vector_pass)
+            if view_layer.use_pass_vector and not vector and not self.is_preview:
+                report({'WARNING'}, "The Vector pass is zero with motion blur on, as Cycles writes it")
+            if vector and camera is not None and getattr(camera.data, "type", "") == 'PANO':
+                report({'WARNING'}, "The Vector pass stays zero with a panoramic camera (Lantern does not "
+                                    "project motion through panoramas; Cycles does)")
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:

@@ -353,6 +353,9 @@ class LANTERN_VIEWLAYER_PT_passes_data(LanternButtonsPanel, Panel):
         view_layer = context.view_layer
         col = layout.column(heading="Include", align=True)
         col.prop(view_layer, "use_pass_position")
+        sub = col.column()
+        sub.active = not context.scene.render.use_motion_blur  # zero with motion blur, as Cycles'
+        sub.prop(view_layer, "use_pass_vector")
         col.prop(view_layer, "use_pass_uv")
         col.prop(view_layer, "use_pass_mist")
         col = layout.column(heading="Indexes", align=True)
@@ -383,6 +386,7 @@ class LANTERN_VIEWLAYER_PT_passes_light(LanternButtonsPanel, Panel):
         col = layout.column(heading="Other", align=True)
         col.prop(view_layer, "use_pass_emit", text="Emission")
         col.prop(view_layer, "use_pass_environment")
+        col.prop(view_layer, "use_pass_ambient_occlusion", text="Ambient Occlusion")
 
 
 class LANTERN_VIEWLAYER_PT_passes_crypto(LanternButtonsPanel, Panel):
@@ -568,6 +572,25 @@ class LANTERN_WORLD_PT_ray_visibility(LanternButtonsPanel, Panel):
         layout.prop(context.world.cycles_visibility, "camera")
 
 
+class LANTERN_WORLD_PT_ambient_occlusion(LanternButtonsPanel, Panel):
+    """The AO pass's ray length (World > Light Settings > Distance; Cycles shows it in its Fast GI
+    panel, which Lantern has not), when a view layer asks for the pass."""
+    bl_label = "Ambient Occlusion"
+    bl_context = "world"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return (context.world is not None and super().poll(context)
+                and any(v.use_pass_ambient_occlusion for v in context.scene.view_layers))
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(context.world.light_settings, "distance", text="AO Distance")
+
+
 class LANTERN_WORLD_PT_settings(LanternButtonsPanel, Panel):
     """Cycles' world importance-sampling map (the core bakes the world's nodes into it): its
     resolution trades commit time and memory against noise from small bright spots."""
@@ -623,6 +646,7 @@ classes = (
     LANTERN_WORLD_PT_surface,
     LANTERN_WORLD_PT_ray_visibility,
     LANTERN_WORLD_PT_settings,
+    LANTERN_WORLD_PT_ambient_occlusion,
 )
 
 

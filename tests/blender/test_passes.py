@@ -12,10 +12,15 @@ glass, the world, a lamp) by test_agreement.py's rule, each pass as an image: Di
 are read divided by their Colour in both engines, and compared multiplied back by it (the mean of
 the samples' values, which the rule's noise estimate holds for).
 """
+import math
+
+import bpy
 import numpy as np
 import pytest
+from mathutils import Vector
 
 import render_utils as ru
+from lantern import engine as lantern_engine
 
 DATA_PASSES = ("Position", "UV", "Mist", "IndexOB", "IndexMA")
 LIGHT_PASSES = ("DiffDir", "DiffInd", "DiffCol", "GlossDir", "GlossInd", "GlossCol", "TransDir", "TransInd",
@@ -171,3 +176,117 @@ def test_shader_aovs_agree_with_cycles(scene_factory, outdir):
         cycles = [r[name][..., channels] for r in runs[ru.CYCLES]]
         report, _ = ru.agreement_report("aovs_%s_%d" % (name, channels[0]), lantern, cycles, outdir, 16, 1e-5)
         assert report == "", report
+
+
+def _keyframes(target, path, values):
+    """Keys target.<path> at frames 1, 2, 3, interpolated linearly (frame 2 is rendered)."""
+    for frame, value in zip((1, 2, 3), values):
+        setattr(target, path, value)
+        target.keyframe_insert(path, frame=frame)
+    for fc in target.animation_data.action.fcurves:
+        for k in fc.keyframe_points:
+            k.interpolation = 'LINEAR'
+
+
+@pytest.fixture(scope="module")
+def motion_runs():
+    """`textured` at half size, frame 2 of an animation: the Cube translates (unevenly: its
+    previous and next frames' motions differ), the GlossyPanel turns about Z, the camera moves;
+    AO (distance 1) and Vector passes, motion blur off, a Gaussian filter of width 0.01 px as for
+    the data passes. Seeds 0 and 1 for each engine."""
+    import build_scenes
+    runs = {}
+    for engine in (ru.CYCLES, ru.LANTERN):
+        for seed in (0, 1):
+            build_scenes.reset_file()
+            scene = build_scenes.build("textured")
+            scene.render.resolution_percentage = 50
+            scene.render.use_motion_blur = False
+            scene.cycles.pixel_filter_type = 'GAUSSIAN'
+            scene.cycles.filter_width = 0.01
+            scene.world.light_settings.distance = 1.0
+            for i, name in enumerate(("Floor", "Cube", "GlossyPanel")):
+                scene.objects[name].pass_index = i + 1
+            _keyframes(scene.objects["Cube"], "location", [(-0.9, 0.2, 0), (-0.7, 0.2, 0), (-0.4, 0.25, 0)])
+            panel = scene.objects["GlossyPanel"]
+            _keyframes(panel, "rotation_euler", [(0, 0, math.radians(a)) for a in (-35, -20, -10)])
+            cam = scene.camera
+            _keyframes(cam, "location", [cam.location + Vector((dx, 0, dz)) for dx, dz in
+                                         ((-0.2, 0.1), (0, 0), (0.15, -0.05))])
+            scene.frame_set(2)
+            bpy.context.scene.frame_set(2)  # the render operator renders the context scene's frame
+            vl = scene.view_layers[0]
+            vl.use_pass_ambient_occlusion = True
+            vl.use_pass_vector = True
+            vl.use_pass_object_index = True
+            runs.setdefault(engine, []).append(ru.render(scene, engine, 16, seed=seed))
+            if engine == ru.LANTERN and seed == 0:
+                runs["report"] = lantern_engine.LAST_RENDER.get("report", "")
+    return runs
+
+
+def test_ambient_occlusion_pass_agrees_with_cycles(motion_runs, outdir):
+    """Cycles' AO pass (integrate_surface_ao): one cosine-distributed ray from the first surface up
+    to World > Light Settings > Distance; its mean by test_agreement.py's rule."""
+    assert "AO" in motion_runs[ru.LANTERN][0], sorted(motion_runs[ru.LANTERN][0])
+    lantern = [r["AO"][..., :3] for r in motion_runs[ru.LANTERN]]
+    cycles = [r["AO"][..., :3] for r in motion_runs[ru.CYCLES]]
+    assert 0.2 < cycles[0].mean() < 0.95, "the AO distance should make some but not all rays occluded"
+    report, _ = ru.agreement_report("textured_AO", lantern, cycles, outdir, 16, 1e-5)
+    assert report == "", report
+
+
+def test_vector_pass_matches_cycles(motion_runs):
+    """Cycles' Vector pass with motion blur off: per pixel, where the 3x3 neighbourhood shows one
+    object in both engines, Lantern's equals Cycles' up to what 0.03 px moves it there (each
+    engine's samples are within 0.015 px of the pixel centre: the pixel's vectors differ by at most
+    0.03 px times the largest change to a neighbour) plus float rounding."""
+    lantern, cycles = motion_runs[ru.LANTERN][0], motion_runs[ru.CYCLES][0]
+    assert "Vector pass motion" in motion_runs["report"], motion_runs["report"]
+    vl, vc = lantern["Vector"], cycles["Vector"]
+    index = cycles["IndexOB"][..., 0]
+    h, w = index.shape
+    inner = np.zeros((h, w), dtype=bool)
+    inner[1:-1, 1:-1] = True
+    step = np.zeros((h, w, 4), dtype=np.float64)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            for idx in (index, lantern["IndexOB"][..., 0]):
+                inner[1:-1, 1:-1] &= idx[1 + dy:h - 1 + dy, 1 + dx:w - 1 + dx] == index[1:-1, 1:-1]
+            step[1:-1, 1:-1] = np.maximum(step[1:-1, 1:-1], np.abs(
+                vc[1 + dy:h - 1 + dy, 1 + dx:w - 1 + dx] - vc[1:-1, 1:-1]))
+    inner &= index > 0
+    for obj in (1, 2, 3):  # the floor (camera motion), the Cube and the panel
+        assert (inner & (index == obj)).sum() > 10, "too few pixels of object %d to compare" % obj
+        assert np.abs(vc[inner & (index == obj)]).max() > 0.5, "object %d barely moves" % obj
+    tol = 0.03 * step + 1e-4 * (1 + np.abs(vc))
+    wrong = inner[..., None] & ~(np.abs(vl - vc) <= tol)
+    assert not wrong.any(), "%d values differ from Cycles', e.g. at %s: %s against %s (tolerance %s)" % (
+        wrong.sum(), np.argwhere(wrong)[0], vl[tuple(np.argwhere(wrong)[0][:2])],
+        vc[tuple(np.argwhere(wrong)[0][:2])], tol[tuple(np.argwhere(wrong)[0][:2])])
+    # The background (pixels whose neighbourhood shows no object): no motion written, as Cycles.
+    background = np.zeros((h, w), dtype=bool)
+    background[1:-1, 1:-1] = True
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            background[1:-1, 1:-1] &= index[1 + dy:h - 1 + dy, 1 + dx:w - 1 + dx] == 0
+    assert background.sum() > 10 and (vl[background] == 0).all()
+
+
+def test_vector_pass_is_zero_with_motion_blur_and_costs_nothing_when_off(scene_factory):
+    """With motion blur on, Cycles' Vector pass is zero (its UI greys the toggle): Lantern's too,
+    with a warning. Without the pass no other frame is exported (nothing in the report)."""
+    scene = scene_factory("textured")
+    scene.render.resolution_percentage = 25
+    cube = scene.objects["Cube"]
+    _keyframes(cube, "location", [(-0.9, 0.2, 0), (-0.7, 0.2, 0), (-0.4, 0.25, 0)])
+    scene.frame_set(2)
+    bpy.context.scene.frame_set(2)
+    ru.render(scene, ru.LANTERN, 1, seed=0)
+    assert "Vector pass motion" not in lantern_engine.LAST_RENDER["report"]
+    assert "motion blur:" not in lantern_engine.LAST_RENDER["report"]
+    scene.view_layers[0].use_pass_vector = True
+    scene.render.use_motion_blur = True
+    out = ru.render(scene, ru.LANTERN, 1, seed=0)
+    assert (out["Vector"] == 0).all()
+    assert "The Vector pass is zero with motion blur on" in lantern_engine.LAST_RENDER["report"]

@@ -108,8 +108,9 @@ TEST(Memory, FilmKeepsOnlyThePassesAskedFor) {
   EXPECT_EQ(lean.bytes_per_pixel(), 11u * 4u);
   lt::FilmLayout all;
   // Every pass: Normal, Albedo, Variance's squares and the denoising features (both halves' sums).
-  // The light passes: 13 RGB (Colours included); Position, UV (3 each), Mist and two indices.
-  EXPECT_EQ(all.bytes_per_pixel(), (11u + 3 + 3 + 3 + 2 * lt::kFeatureChannels + 13 * 3 + 3 + 3 + 3) * 4u);
+  // The light passes: 13 RGB (Colours included); Position, UV (3 each), Mist and two indices;
+  // AO (RGB) and Vector (4 and the count of samples that wrote one).
+  EXPECT_EQ(all.bytes_per_pixel(), (11u + 3 + 3 + 3 + 2 * lt::kFeatureChannels + 13 * 3 + 3 + 3 + 3 + 3 + 5) * 4u);
   // Reading a pass the film does not keep is an error, never zeros that look like data.
   lt::Film film(4, 3, lean);
   film.finish();
@@ -138,6 +139,7 @@ TEST(Memory, PassesReadInRowBandsAreTheFullPassesRows) {
   // every band must be exactly those rows of the full read, labels included.
   ScenePtr s = lit_scene();
   lt_render_settings rs = render_settings(24, 16, 4, 7);
+  rs.passes = (1u << LT_PASS_COUNT) - 1;  // every pass, AO and Vector too
   lt_render* r = nullptr;
   ASSERT_EQ(lt_render_start(s.get(), &rs, &r), LT_OK) << lt_last_error();
   RenderPtr rp(r);

@@ -3,6 +3,7 @@
 // up to float rounding; parts that do not belong together are refused and nothing is written.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -24,7 +25,21 @@ constexpr int kW = 24, kH = 18;
 ScenePtr merge_scene(bool media) {
   ScenePtr s = new_scene();
   add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.7f, 0.6f, 0.5f}));
-  add_object(s.get(), icosphere(0.5f, 2), add_diffuse(s.get(), {0.2f, 0.5f, 0.8f}), translate({-0.6f, 0, 0.5f}));
+  // The sphere moves between frames (the Vector pass; settings_for takes the steps as frames).
+  const int sphere_material = add_diffuse(s.get(), {0.2f, 0.5f, 0.8f});
+  lt_instance_desc sphere{};
+  sphere.mesh = add_mesh(s.get(), icosphere(0.5f, 2));
+  sphere.materials = &sphere_material;
+  sphere.material_count = 1;
+  sphere.visibility = LT_VISIBLE_ALL;
+  std::vector<float> steps;
+  for (float dx : {-0.3f, 0.0f, 0.2f})
+    for (float v : translate({-0.6f + dx, 0, 0.5f})) steps.push_back(v);
+  std::copy(steps.begin() + 12, steps.begin() + 24, sphere.transform);
+  sphere.motion_transforms = steps.data();
+  sphere.motion_step_count = 3;
+  int id;
+  check(lt_scene_add_instance(s.get(), &sphere, &id), "sphere");
   const int gm = add_glossy(s.get(), {0.8f, 0.8f, 0.8f}, 0.3f);
   add_object(s.get(), box({0.2f, -0.3f, 0}, {0.9f, 0.4f, 0.7f}), gm);
   if (media) {
@@ -43,7 +58,15 @@ ScenePtr merge_scene(bool media) {
   add_light(s.get(), light);
   set_world(s.get(), {0.05f, 0.06f, 0.08f}, 1);
   check(lt_scene_set_world_lightgroup(s.get(), 2), "set_world_lightgroup");
-  set_camera(s.get(), perspective_camera(look_at({0, -4, 2}, {0, 0, 0.4f}), 35));
+  // The camera moves too: the floor's vectors vary within a pixel, where the world's edge leaves
+  // parts different coverages.
+  lt_camera_desc camera = perspective_camera(look_at({0, -4, 2}, {0, 0, 0.4f}), 35);
+  std::vector<float> camera_steps;
+  for (float dx : {-0.1f, 0.0f, 0.15f})
+    for (float v : look_at({dx, -4, 2}, {0, 0, 0.4f})) camera_steps.push_back(v);
+  camera.motion_transforms = camera_steps.data();
+  camera.motion_step_count = 3;
+  set_camera(s.get(), camera);
   check(lt_scene_commit(s.get()), "commit");
   return s;
 }
@@ -56,6 +79,8 @@ lt_render_settings settings_for(int integrator, int offset, int samples) {
   static const char* const kGroups[] = {"lamp", "world"};
   rs.lightgroup_count = 2;
   rs.lightgroup_names = kGroups;
+  rs.passes |= (1u << LT_PASS_AO) | (1u << LT_PASS_VECTOR);  // AO: a mean; Vector: by its coverage
+  rs.motion_pass = 1;
   return rs;
 }
 
@@ -136,6 +161,13 @@ TEST_P(MergeExactness, SplitPartsMergeIntoTheFullRender) {
   for (float v : m.find("SampleCount.X")->pixels) ASSERT_EQ(v, 128.0f);
   if (integrator == LT_INTEGRATOR_BIDIRECTIONAL) EXPECT_NE(f.find("LightTracing.R"), nullptr);
   EXPECT_NE(f.find("Combined_lamp.R"), nullptr);  // light groups, their splats apart with BDPT
+  EXPECT_NE(f.find("AO.G"), nullptr);
+  ASSERT_NE(f.find("VectorCoverage.X"), nullptr);
+  // Pixels at the floor's edge against the world: a part of their samples wrote a Vector (the
+  // merge weights it).
+  int partial = 0;
+  for (float c : f.find("VectorCoverage.X")->pixels) partial += c > 0 && c < 1;
+  EXPECT_GT(partial, 0);
   EXPECT_EQ(f.find("LightTracing.Combined_world.B") != nullptr, integrator == LT_INTEGRATOR_BIDIRECTIONAL);
 
   // The part is a different estimate (so the equality above says something), and the offset

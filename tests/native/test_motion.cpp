@@ -3,6 +3,8 @@
 // ABI's motion steps, and determinism across thread counts with motion.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -299,4 +301,102 @@ TEST(Motion, BadMotionStepsAreRefusedOrLeftStill) {
   lt_render_settings rs = render_settings(16, 16, 2, 1);
   Passes p = render(s, rs);
   EXPECT_EQ(p.first_non_finite(), "");
+}
+
+// ---- The Vector pass (Cycles' motion pass: motion steps are the previous and next frames) -------
+
+namespace {
+
+// The film position of p seen by a camera at xf (35 mm over a 36 mm sensor, fitted to the
+// width; look_at's axes: right, up, back), as a pinhole projects it.
+lt_test::V3 raster(const lt_test::Xform& xf, lt_test::V3 p, int width, int height) {
+  const lt_test::V3 v{p.x - xf[3], p.y - xf[7], p.z - xf[11]};
+  const float x = xf[0] * v.x + xf[4] * v.y + xf[8] * v.z, y = xf[1] * v.x + xf[5] * v.y + xf[9] * v.z;
+  const float z = -(xf[2] * v.x + xf[6] * v.y + xf[10] * v.z);
+  const float scale = width * 35.0f / 36.0f;
+  return {0.5f * width + scale * x / z, 0.5f * height + scale * y / z, 0};
+}
+
+}  // namespace
+
+// moving_scene's motion steps taken as the previous, this and the next frame: the box moves 0.8
+// along x per frame, the quad rises 0.4, the camera pans 0.2; the floor stays. Each pixel's
+// Vector is (film position then - now) for the previous frame and (now - then) for the next, the
+// mean over its samples; with a Gaussian filter of width 0.01 px every sample lands within
+// 0.015 px of the pixel's centre, so where the pixel's 3x3 neighbourhood shows one object the
+// pass equals the motion of the first sample's Position (the point the test projects itself) up
+// to 0.03 px times the motion's change to a neighbour, plus float rounding.
+TEST(Motion, VectorPassIsTheFilmMotionToTheNeighbouringFrames) {
+  ScenePtr moving = moving_scene(true);
+  const int w = 96, h = 64;
+  lt_render_settings rs = render_settings(w, h, 2, 3);
+  rs.filter = LT_FILTER_GAUSSIAN;
+  rs.filter_width = 0.01f;
+  rs.passes |= 1u << LT_PASS_VECTOR;
+  rs.motion_pass = 1;
+  const std::vector<Xform> cam = {look_at({0.3f, -5, 2.5f}, {0, 0, 0.5f}), look_at({0.5f, -5, 2.5f}, {0, 0, 0.5f}),
+                                  look_at({0.7f, -5, 2.5f}, {0, 0, 0.5f})};
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    rs.integrator = integrator;
+    const Passes p = render(moving.get(), rs);
+    ASSERT_EQ(p.first_non_finite(), "");
+    const std::vector<float>& vec = p.pass(LT_PASS_VECTOR);
+    const std::vector<float>& pos = p.pass(LT_PASS_POSITION);
+    ASSERT_EQ(vec.size(), size_t(4 * w * h));
+    // Which object a Position is on (0: none, 1 floor, 2 box, 3 quad) and its expected Vector.
+    auto object = [&](int i) {
+      const V3 q{pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]};
+      if (p.depth[i] >= 1e9f) return 0;
+      if (std::abs(q.z) < 1e-4f) return 1;
+      if (std::abs(q.z - 0.6f) < 1e-4f && q.x > 0.65f) return 3;
+      return std::abs(q.x) < 0.401f && std::abs(q.y) < 0.401f && q.z > -1e-4f && q.z < 0.801f ? 2 : -1;
+    };
+    auto expected = [&](int i, float out[4]) {
+      const V3 q{pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]};
+      const int o = object(i);
+      const V3 d = o == 2 ? V3{0.8f, 0, 0} : o == 3 ? V3{0, 0, 0.4f} : V3{0, 0, 0};
+      const V3 pre = raster(cam[0], {q.x - d.x, q.y - d.y, q.z - d.z}, w, h), now = raster(cam[1], q, w, h);
+      const V3 post = raster(cam[2], {q.x + d.x, q.y + d.y, q.z + d.z}, w, h);
+      out[0] = pre.x - now.x, out[1] = pre.y - now.y, out[2] = now.x - post.x, out[3] = now.y - post.y;
+    };
+    int checked[4] = {0, 0, 0, 0}, bad = 0;
+    for (int y = 1; y + 1 < h; ++y)
+      for (int x = 1; x + 1 < w; ++x) {
+        const int i = y * w + x, o = object(i);
+        float e[4];
+        if (o <= 0) {
+          if (o == 0)
+            for (int k = 0; k < 4; ++k) EXPECT_EQ(vec[4 * i + k], 0.0f) << "background pixel " << i;
+          continue;
+        }
+        expected(i, e);
+        double step = 0;
+        bool one_object = true;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int j = (y + dy) * w + x + dx;
+            one_object = one_object && object(j) == o;
+            float en[4];
+            if (one_object) expected(j, en);
+            for (int k = 0; k < 4 && one_object; ++k) step = std::max(step, double(std::abs(en[k] - e[k])));
+          }
+        if (!one_object) continue;
+        ++checked[o];
+        for (int k = 0; k < 4; ++k) {
+          const double tol = 0.03 * step + 1e-4 * (1 + std::abs(e[k]));
+          if (!(std::abs(vec[4 * i + k] - e[k]) <= tol) && bad++ < 5)
+            ADD_FAILURE() << "integrator " << integrator << " pixel (" << x << ", " << y << ") object " << o
+                          << " channel " << k << ": " << vec[4 * i + k] << ", expected " << e[k] << " +- " << tol;
+        }
+      }
+    EXPECT_EQ(bad, 0);
+    EXPECT_GT(checked[1], 100);
+    EXPECT_GT(checked[2], 20);
+    EXPECT_GT(checked[3], 10);
+  }
+  // With the steps a shutter (motion blur) the pass stays zero, as Cycles'.
+  rs.motion_pass = 0;
+  rs.integrator = LT_INTEGRATOR_PATH;
+  const Passes blurred = render(moving.get(), rs);
+  for (float v : blurred.pass(LT_PASS_VECTOR)) ASSERT_EQ(v, 0.0f);
 }

@@ -3,9 +3,12 @@
 // Environment, gives Combined back, for every integrator that fills them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
+#include "program_builder.h"
 #include "scene_builders.h"
 
 using namespace lt_test;
@@ -132,3 +135,82 @@ void expect_recombines(int integrator, int samples) {
 TEST(Passes, LightPassesRecombineToCombinedPath) { expect_recombines(LT_INTEGRATOR_PATH, 16); }
 TEST(Passes, LightPassesRecombineToCombinedVolPath) { expect_recombines(LT_INTEGRATOR_VOLPATH, 16); }
 TEST(Passes, LightPassesRecombineToCombinedBidirectional) { expect_recombines(LT_INTEGRATOR_BIDIRECTIONAL, 8); }
+
+// ---- Ambient Occlusion (Cycles' integrate_surface_ao) ------------------------------------------
+
+namespace {
+
+// A floor and, 1 above it, a ceiling (both 200 wide: infinite for rays of length <= 2), seen from
+// between them looking straight down. A cosine-distributed ray from the floor meets the ceiling at
+// distance 1 / cos(theta): within the AO distance d exactly when cos(theta) > 1 / d, which has
+// probability 1 - 1/d^2, so the AO pass is 1/d^2 (d >= 1), and 1 for d < 1. A ceiling that
+// passes a fraction t of light (a Transparent BSDF of colour t) gives 1/d^2 + (1 - 1/d^2) t.
+ScenePtr ao_scene(float ceiling_transparency) {
+  ScenePtr sp = new_scene();
+  lt_scene* s = sp.get();
+  add_object(s, plane(200, 200), add_diffuse(s, {0.5f, 0.4f, 0.3f}));  // the pass is not the albedo
+  int ceiling = add_diffuse(s, {0.8f, 0.8f, 0.8f});
+  if (ceiling_transparency > 0) {
+    ShaderCode p;
+    p.transparent(p.one(), {ceiling_transparency, ceiling_transparency, ceiling_transparency});
+    ceiling = add_material(s, p);
+  }
+  add_object(s, plane(200, 200), ceiling, translate({0, 0, 1}));
+  set_world(s, {0.3f, 0.4f, 0.6f}, 1);
+  set_camera(s, perspective_camera(look_at({0, 0, 0.5f}, {0, 0, 0}, {0, 1, 0}), 35));
+  check(lt_scene_commit(s), "commit");
+  return sp;
+}
+
+Passes render_ao(lt_scene* s, int integrator, float distance, bool ao) {
+  lt_render_settings rs = render_settings(32, 24, 16, 5);
+  rs.integrator = integrator;
+  rs.ao_distance = distance;
+  if (ao) rs.passes |= 1u << LT_PASS_AO;
+  return render(s, rs);
+}
+
+// The AO pass's mean over the image and over 8 x 8 tiles against `expected`. Each sample's value
+// is 0 or 1 (or, through the ceiling, 0..1 with variance at most that), so a mean of N samples has
+// a standard error at most sqrt(e (1 - e) / N) for independent samples (the Sobol' points only
+// lower it); 5 of them for the image, and Bonferroni's z for the 12 tiles (family 1e-3: 4.0).
+void expect_ao(const Passes& p, double expected, const char* what) {
+  const std::vector<float>& ao = p.pass(LT_PASS_AO);
+  ASSERT_EQ(ao.size(), size_t(3 * p.width * p.height)) << what;
+  const double var = std::max(expected * (1 - expected), 1e-12);
+  double total = 0;
+  for (int ty = 0; ty < p.height; ty += 8)
+    for (int tx = 0; tx < p.width; tx += 8) {
+      double sum = 0;
+      for (int y = ty; y < ty + 8; ++y)
+        for (int x = tx; x < tx + 8; ++x) {
+          const float* v = &ao[3 * (size_t(y) * p.width + x)];
+          EXPECT_TRUE(v[0] == v[1] && v[1] == v[2]) << what << ": grey rays give a grey pass";
+          sum += v[0];
+        }
+      const double mean = sum / 64, se = std::sqrt(var / (64.0 * 16));
+      EXPECT_NEAR(mean, expected, 4.0 * se + 1e-6) << what << " tile (" << tx << ", " << ty << ")";
+      total += sum;
+    }
+  const double mean = total / (p.width * p.height), se = std::sqrt(var / (p.width * p.height * 16.0));
+  EXPECT_NEAR(mean, expected, 5 * se + 1e-6) << what << ": image mean";
+}
+
+}  // namespace
+
+TEST(Passes, AmbientOcclusionIsTheUnoccludedCosineFraction) {
+  ScenePtr s = ao_scene(0), glass = ao_scene(0.5f);
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    const std::string name = "integrator " + std::to_string(integrator);
+    const Passes p = render_ao(s.get(), integrator, 2, true);
+    ASSERT_EQ(p.first_non_finite(), "");
+    expect_ao(p, 0.25, (name + ", distance 2").c_str());
+    expect_ao(render_ao(s.get(), integrator, 0.9f, true), 1.0, (name + ", distance 0.9").c_str());
+    expect_ao(render_ao(glass.get(), integrator, 2, true), 0.25 + 0.75 * 0.5, (name + ", transparent").c_str());
+    // The pass draws no random number of the path's: Combined is the same bits without it, and
+    // a render that does not ask for it keeps no AO pass.
+    const Passes without = render_ao(s.get(), integrator, 2, false);
+    EXPECT_TRUE(without.pass(LT_PASS_AO).empty());
+    EXPECT_EQ(std::memcmp(without.combined.data(), p.combined.data(), p.combined.size() * sizeof(float)), 0) << name;
+  }
+}

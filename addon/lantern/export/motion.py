@@ -10,6 +10,12 @@ middle one at the shutter's centre; obj.cycles.use_motion_blur and use_deform_mo
 per object (and the instancer's, for instances). An object missing at a step keeps its centre
 transform there (Object::update_motion); one missing at the centre is not rendered. Lights do not
 move (Cycles 3.4 has no light motion); Volume objects are rendered at the shutter's centre.
+
+The Vector pass with motion blur off samples the same way, as Cycles' motion pass
+(Scene::MOTION_PASS): a "shutter" of 2 frames around the frame, so the steps are the previous frame,
+this one and the next; every object has 3 steps (whatever its own motion blur settings) and every
+mesh its deformation, the camera its own steps (0 when its motion blur is off). The core then takes
+every sample at the centre step (lt_render_settings.motion_pass): nothing blurs.
 """
 
 import numpy as np
@@ -96,6 +102,7 @@ class Motion:
         self.camera_matrices = {}
         self.moving_instances = self.deforming_meshes = 0
         self.camera_moves = False
+        self.vector_pass = False  # the steps are the neighbouring frames, for the Vector pass
 
     def transforms(self, key, centre, name):
         """The instance's transforms at its motion steps, or None when it does not move."""
@@ -186,9 +193,10 @@ def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
             motion.camera_matrices[s] = np.array(cam.matrix_world, dtype=np.float32)
 
 
-def collect(engine, depsgraph, camera_object, report):
+def collect(engine, depsgraph, camera_object, report, vector_pass=False):
     """Samples the shutter's sub-frames (RenderEngine.frame_set) when the scene asks for motion
-    blur; leaves the depsgraph at the shutter's centre. Returns (Motion or None, restore): call
+    blur, or the neighbouring frames for the Vector pass (vector_pass, without motion blur);
+    leaves the depsgraph at the shutter's centre. Returns (Motion or None, restore): call
     restore() once the scene is exported to return to the frame being rendered."""
     from .mesh import mesh_arrays
     scene = depsgraph.scene
@@ -198,24 +206,26 @@ def collect(engine, depsgraph, camera_object, report):
     def restore():
         engine.frame_set(frame, subframe)
 
-    if not rd.use_motion_blur or not getattr(depsgraph.view_layer, "use_motion_blur", True):
+    settings = _cycles(scene)
+    frames = not (rd.use_motion_blur and getattr(depsgraph.view_layer, "use_motion_blur", True))
+    if frames and not vector_pass:
         return None, lambda: None
-    shutter = float(rd.motion_blur_shutter)
+    # Cycles' motion_shutter_time: 2 frames around the frame for the Vector pass.
+    shutter = 2.0 if frames else float(rd.motion_blur_shutter)
     if not shutter > 0:
         return None, lambda: None  # a closed shutter: nothing blurs (Cycles' shutter 0)
-    settings = _cycles(scene)
-    position = getattr(settings, "motion_blur_position", 'CENTER')
-    if getattr(settings, "rolling_shutter_type", 'NONE') != 'NONE':
+    position = 'CENTER' if frames else getattr(settings, "motion_blur_position", 'CENTER')
+    if not frames and getattr(settings, "rolling_shutter_type", 'NONE') != 'NONE':
         report({'WARNING'}, "Rolling shutter is not supported by Lantern: the whole frame is exposed "
                             "over the same shutter interval")
-    if not _shutter_curve_flat(rd):
+    if not frames and not _shutter_curve_flat(rd):
         report({'WARNING'}, "The shutter curve is not supported by Lantern: the shutter opens and "
                             "closes instantly (Blender's default flat curve)")
     delta = {'START': 0.5 * shutter, 'END': -0.5 * shutter}.get(position, 0.0)
     centre_time = frame + subframe + delta
     if abs(centre_time) + 0.5 * shutter > MAX_FRAME:
-        report({'WARNING'}, "Motion blur off: the shutter of %g frames reaches beyond Blender's frame "
-                            "range (+-%d)" % (shutter, MAX_FRAME))
+        report({'WARNING'}, ("The Vector pass stays zero" if frames else "Motion blur off") +
+               ": the shutter of %g frames reaches beyond Blender's frame range (+-%d)" % (shutter, MAX_FRAME))
         return None, lambda: None
 
     def go(time):
@@ -223,23 +233,26 @@ def collect(engine, depsgraph, camera_object, report):
         engine.frame_set(f, time - f)
 
     motion = Motion(report)
+    motion.vector_pass = frames
     if delta != 0.0:
         go(centre_time)
     camera = camera_object or scene.camera
     if camera is not None:
         motion.camera_steps = object_motion_steps(camera, camera)
+        if frames:  # its first and last steps are the neighbouring frames whatever their count
+            motion.camera_steps = min(motion.camera_steps, 3)
     times = set()
     for inst in depsgraph.object_instances:
         if not inst.show_self or inst.object.type not in _MESH_TYPES:
             continue
         obj = inst.object
         parent = inst.parent if inst.is_instance else None
-        steps = object_motion_steps(obj.original, parent.original if parent is not None else None)
+        steps = 3 if frames else object_motion_steps(obj.original, parent.original if parent is not None else None)
         if steps < 3:
             continue
         motion.steps[_key(inst)] = steps
         times.update(relative_time(s, steps) for s in range(steps))
-        if not inst.is_instance and obj.type == 'MESH' and _uses_deform(obj.original):
+        if not inst.is_instance and obj.type == 'MESH' and (frames or _uses_deform(obj.original)):
             co = _vertices(obj)
             if co is not None:
                 motion.deform[obj.original.as_pointer()] = steps

@@ -42,8 +42,9 @@ extern "C" {
  * lt_render_settings.cryptomatte and cryptomatte_levels, lt_render_read_cryptomatte_rows); 16:
  * lt_instance_desc.holdout; light groups (the lightgroup fields, lt_scene_set_world_lightgroup,
  * lt_render_read_lightgroup_rows); shader AOVs (lt_render_settings.aov_*, pass_alpha_threshold,
- * lt_render_read_aov_rows). */
-#define LT_ABI_VERSION 16
+ * lt_render_read_aov_rows); 17: the AO and Vector passes (LT_PASS_AO, LT_PASS_VECTOR,
+ * lt_render_settings.ao_distance and motion_pass). */
+#define LT_ABI_VERSION 17
 
 enum lt_status {
   LT_OK = 0,
@@ -523,7 +524,8 @@ typedef struct lt_render_settings {
   int adaptive;
   int min_samples;
   /* Passes the film keeps: bits 1 << lt_pass (Combined and Sample Count are always kept; adaptive
-   * sampling also keeps what Variance needs). lt_render_settings_default sets every pass; reading
+   * sampling also keeps what Variance needs). lt_render_settings_default sets every pass but
+   * LT_PASS_AO (its rays cost time) and LT_PASS_VECTOR (it needs motion_pass); reading
    * a pass that is not kept is LT_ERROR_STATE. */
   unsigned passes;
   /* Bytes the caller will also allocate for this render (its copies of the passes): added to the
@@ -563,6 +565,13 @@ typedef struct lt_render_settings {
   /* Cycles' View Layer > Passes > Alpha Threshold: AOVs are written at the surfaces a camera path
    * meets through transparent passes up to the first whose alpha reaches it. Default 0.5. */
   float pass_alpha_threshold;
+  /* LT_PASS_AO: the length of its rays (World > Light Settings > AO Distance; default 10). */
+  float ao_distance;
+  /* != 0: the scene's motion steps (lt_instance_desc, lt_mesh_desc, lt_camera_desc; three each)
+   * are the previous frame, this frame and the next, for LT_PASS_VECTOR, not a shutter: every
+   * sample is taken at the centre step, nothing blurs. 0 (default): motion steps span the shutter
+   * (motion blur) and LT_PASS_VECTOR stays zero, as Cycles' Vector pass with motion blur on. */
+  int motion_pass;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -652,7 +661,15 @@ enum lt_pass {
   LT_PASS_MIST = 25,
   LT_PASS_OBJECT_INDEX = 26,
   LT_PASS_MATERIAL_INDEX = 27,
-  LT_PASS_COUNT = 28
+  /* Cycles' Ambient Occlusion pass (RGB; docs/passes.md): at the surface the camera path first
+   * scatters from, one cosine-distributed ray about its shading normal up to ao_distance; the
+   * mean of the throughput there times the ray's transmittance (1 unoccluded, 0 blocked). */
+  LT_PASS_AO = 28,
+  /* Cycles' Vector pass (4 channels, pixels of the render): at that surface, its motion on the
+   * film to the previous frame (x, y: previous - now) and from the next (z, w: now - next), the
+   * mean over the samples that hit a surface (0 elsewhere); needs motion_pass (zero without). */
+  LT_PASS_VECTOR = 29,
+  LT_PASS_COUNT = 30
 };
 LT_API int lt_pass_channels(int pass);
 

@@ -285,6 +285,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_settings, aov_names),
     LT_FIELD(lt_render_settings, aov_colors),
     LT_FIELD(lt_render_settings, pass_alpha_threshold),
+    LT_FIELD(lt_render_settings, ao_distance),
+    LT_FIELD(lt_render_settings, motion_pass),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),
@@ -339,6 +341,8 @@ const lt_abi_entry kLayout[] = {
     LT_CONST(lt_pass, LT_PASS_MIST),
     LT_CONST(lt_pass, LT_PASS_OBJECT_INDEX),
     LT_CONST(lt_pass, LT_PASS_MATERIAL_INDEX),
+    LT_CONST(lt_pass, LT_PASS_AO),
+    LT_CONST(lt_pass, LT_PASS_VECTOR),
     LT_CONST(lt_pass, LT_PASS_COUNT),
 };
 

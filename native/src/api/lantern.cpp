@@ -843,7 +843,8 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->volume_estimator = LT_VOLUME_TRACKING;
   s->volume_step = 0;
   s->min_samples = 16;
-  s->passes = (1u << LT_PASS_COUNT) - 1;
+  // Every pass but AO (its rays cost time) and Vector (it needs motion_pass).
+  s->passes = ((1u << LT_PASS_COUNT) - 1) & ~((1u << LT_PASS_AO) | (1u << LT_PASS_VECTOR));
   s->caller_bytes = 0;
   s->sample_pattern = LT_PATTERN_SOBOL_OWEN;
   s->denoise = 0;
@@ -853,6 +854,8 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->cryptomatte = 0;
   s->cryptomatte_levels = 6;
   s->pass_alpha_threshold = 0.5f;
+  s->ao_distance = 10;
+  s->motion_pass = 0;
 }
 
 namespace {
@@ -984,6 +987,9 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.aovs = s->aov_count;
     require(std::isfinite(s->pass_alpha_threshold), "pass alpha threshold must be finite");
     is.pass_alpha_threshold = s->pass_alpha_threshold;
+    require(std::isfinite(s->ao_distance) && s->ao_distance >= 0, "AO distance must be finite and >= 0");
+    is.ao_distance = s->ao_distance;
+    rs.motion_pass = s->motion_pass != 0;
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;

@@ -130,6 +130,8 @@ int pass_channels(Pass pass) {
     case Pass::ObjectIndex:
     case Pass::MaterialIndex:
       return 1;
+    case Pass::Vector:
+      return 4;
     case Pass::Count:
       return 0;
     default:
@@ -166,6 +168,11 @@ unsigned with_dependencies(unsigned passes) {
 }
 }  // namespace
 
+namespace {
+// Floats a summed pass keeps per pixel: its channels, and the Vector pass its weight besides.
+int summed_floats(Pass p) { return pass_channels(p) + (p == Pass::Vector ? 1 : 0); }
+}  // namespace
+
 size_t FilmLayout::bytes_per_pixel() const {
   auto has = [&](Pass p) { return (passes & pass_bit(p)) != 0; };
   size_t floats = 3 + 1 + 3 + 1;  // mean, alpha, half, count
@@ -183,7 +190,7 @@ size_t FilmLayout::bytes_per_pixel() const {
   const unsigned kept = with_dependencies(passes);
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
     if (kept & pass_bit(Pass(p))) {
-      floats += pass_channels(Pass(p));
+      floats += summed_floats(Pass(p));
       if (splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p))) floats += 3;
     }
   return floats * sizeof(float);
@@ -214,7 +221,7 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
   layout_.passes = with_dependencies(layout_.passes);
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p) {
     if (!has(Pass(p))) continue;
-    sums_[p - kFirstSummedPass].assign(pass_channels(Pass(p)) * n, 0.0f);
+    sums_[p - kFirstSummedPass].assign(summed_floats(Pass(p)) * n, 0.0f);
     if (layout_.splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p)))
       light_splat_[p - kFirstSummedPass].assign(3 * n, 0.0f);
   }
@@ -270,6 +277,11 @@ void Film::add(int x, int y, const SampleValue& s) {
       for (int k = 0; k < 3; ++k) a[3 * i + k] += s.uv[k];
     } else if (p == Pass::Mist) {
       a[i] += s.mist;
+    } else if (p == Pass::AO) {
+      for (int k = 0; k < 3; ++k) a[3 * i + k] += s.ao[k];
+    } else if (p == Pass::Vector) {
+      for (int k = 0; k < 4; ++k) a[5 * i + k] += s.vector[k];
+      a[5 * i + 4] += s.vector_weight;
     } else if (n == 1) {  // Position and the indices: the first sample's, as Cycles' sample 0
       if (p == Pass::Position)
         for (int k = 0; k < 3; ++k) a[3 * i + k] = s.position[k];
@@ -483,9 +495,10 @@ std::unique_lock<std::mutex> Film::lock_accumulators() const {
 }
 
 const char* exr_pass_name(Pass p) {
-  static const char* const kNames[] = {"DiffDir",  "DiffInd",  "DiffCol",  "GlossDir",  "GlossInd",  "GlossCol",
-                                       "TransDir", "TransInd", "TransCol", "VolumeDir", "VolumeInd", "Emit",
-                                       "Env",      "Position", "UV",       "Mist",      "IndexOB",   "IndexMA"};
+  static const char* const kNames[] = {"DiffDir",   "DiffInd",  "DiffCol",  "GlossDir", "GlossInd",
+                                       "GlossCol",  "TransDir", "TransInd", "TransCol", "VolumeDir",
+                                       "VolumeInd", "Emit",     "Env",      "Position", "UV",
+                                       "Mist",      "IndexOB",  "IndexMA",  "AO",       "Vector"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(kSummedPasses), "a name per pass");
   return int(p) >= kFirstSummedPass && p < Pass::Count ? kNames[int(p) - kFirstSummedPass] : nullptr;
 }
@@ -499,6 +512,10 @@ const char* exr_channel_letters(Pass p) {
       return "UVA";
     case Pass::Mist:
       return "Z";
+    case Pass::AO:
+      return "RGB";
+    case Pass::Vector:
+      return "XYZW";
     case Pass::ObjectIndex:
     case Pass::MaterialIndex:
       return "X";
@@ -546,6 +563,11 @@ void Film::read_summed(Pass pass, size_t i, float* o) const {
   if (pass == Pass::Mist) {
     // Cycles accumulates 1 - mist and negates it when reading (film/data_passes.h).
     o[0] = float(1.0 - a[i] * inv);
+    return;
+  }
+  if (pass == Pass::Vector) {  // the mean over the samples that wrote one (film/read.h)
+    const double w = a[5 * i + 4];
+    for (int k = 0; k < 4; ++k) o[k] = w > 0 ? float(a[5 * i + k] / w) : 0.0f;
     return;
   }
   double v[3];
@@ -609,6 +631,14 @@ bool Film::read_light_tracing(Pass pass, float* out) const {
   if (a.empty()) return false;
   const double scale = 1.0 / double(light_paths_);
   for (size_t i = 0; i < a.size(); ++i) out[i] = float(a[i] * scale);
+  return true;
+}
+
+bool Film::read_vector_coverage(float* out) const {
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  const std::vector<float>& a = sums_[int(Pass::Vector) - kFirstSummedPass];
+  if (a.empty()) return false;
+  for (size_t i = 0; i < count_.size(); ++i) out[i] = count_[i] ? float(double(a[5 * i + 4]) / count_[i]) : 0.0f;
   return true;
 }
 
@@ -693,7 +723,9 @@ const char* pass_name(Pass p) {
                                        "UV",
                                        "Mist",
                                        "IndexOB",
-                                       "IndexMA"};
+                                       "IndexMA",
+                                       "AO",
+                                       "Vector"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(Pass::Count), "a name per pass");
   return unsigned(p) < unsigned(Pass::Count) ? kNames[int(p)] : "?";
 }

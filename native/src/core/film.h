@@ -78,6 +78,12 @@ struct SampleValue {
   // without the transparency factor: Lantern chooses to pass a transparent layer or not).
   float crypto_id[kCryptoTypes] = {0, 0, 0};
   float crypto_weight = 0;
+  // Cycles' AO pass (throughput x the AO ray's transmittance) and Vector pass (the film motion
+  // to the previous and from the next frame; vector_weight 1 where the sample wrote one: the pass
+  // is the mean over those samples, as Cycles' pass_motion_weight).
+  Spectrum ao{0.0f};
+  float vector[4] = {0, 0, 0, 0};
+  float vector_weight = 0;
   // Light groups (Cycles' Combined_<group>): the radiance per group of the emitter each
   // contribution comes from, into a buffer of FilmLayout::lightgroups the render job zeroes
   // (CameraSample::lightgroups); null when the film keeps none.
@@ -122,7 +128,9 @@ enum class Pass {
   Mist = 25,
   ObjectIndex = 26,
   MaterialIndex = 27,
-  Count = 28
+  AO = 28,
+  Vector = 29,
+  Count = 30
 };
 constexpr int kFirstSummedPass = int(Pass::DiffuseDirect);
 constexpr int kSummedPasses = int(Pass::Count) - kFirstSummedPass;
@@ -139,6 +147,9 @@ const char* exr_channel_letters(Pass p);
 int pass_channels(Pass pass);
 constexpr unsigned pass_bit(Pass p) { return 1u << unsigned(p); }
 constexpr unsigned kAllPasses = (1u << unsigned(Pass::Count)) - 1;
+// What a render keeps unless asked otherwise: every pass but AO (its rays cost time) and Vector
+// (it needs the neighbouring frames' motion).
+constexpr unsigned kDefaultPasses = kAllPasses & ~(pass_bit(Pass::AO) | pass_bit(Pass::Vector));
 constexpr unsigned kDenoisingFeatures =
     pass_bit(Pass::DenoisingNormal) | pass_bit(Pass::DenoisingAlbedo) | pass_bit(Pass::DenoisingDepth);
 // Per pixel, the features a denoiser reads: camera-space normal (3), albedo (3), distance (1).
@@ -297,6 +308,9 @@ class Film {
   bool read_light_tracing(float* out) const;
   // The same for a light pass (not a Colour): its splats' part, undivided (merges need it apart).
   bool read_light_tracing(Pass pass, float* out) const;
+  // The Vector pass's coverage, per pixel the share of its samples that wrote a vector (what a
+  // merge weights the parts' vectors by); false when the film does not keep the pass.
+  bool read_vector_coverage(float* out) const;
   uint64_t total_samples() const;
   // The half images (the rendering thread, once the last pass is done); needs the features.
   HalfImages half_images() const;

@@ -468,6 +468,10 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
       out_.albedo = path[1].bsdf.albedo();
       if (s_.light_passes) add_light_colors(&out_, path[1].bsdf, path[1].wo, path[1].beta);
       if (s_.data_passes) write_data_passes(scene_, ctx_.camera, s_, path[1].sp, path[1].beta, &out_);
+      if (s_.ao_pass)
+        out_.ao = path[1].beta * ambient_occlusion(scene_, s_, path[1].sp, path[1].frame.n, path[1].n,
+                                                   media_ ? &path[1].stack : nullptr, sampler_, stats_);
+      if (s_.vector_pass && motion_vector(scene_, ctx_.camera, path[1].sp, out_.vector)) out_.vector_weight = 1;
     }
   }
   return count;

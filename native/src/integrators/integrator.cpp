@@ -1,5 +1,7 @@
 #include "integrators/integrator.h"
 
+#include "integrators/media_transport.h"
+
 namespace lt {
 
 std::unique_ptr<Integrator> make_integrator(IntegratorType type, const RenderContext& ctx) {
@@ -64,6 +66,54 @@ void write_data_passes(const Scene& scene, const Camera& camera, const Integrato
   out->crypto_id[kCryptoAsset] = inst.crypto_asset;
   out->crypto_weight = (beta[0] + beta[1] + beta[2]) / 3;
   out->mist += mist_coverage(camera, s, sp.p, beta);
+}
+
+Spectrum ambient_occlusion(const Scene& scene, const IntegratorSettings& s, const SurfacePoint& sp, const Vec3& n,
+                           const Vec3& side, const VolumeStack* stack, Sampler sampler, SampleStats& stats) {
+  // Cycles samples the direction with the BSDF's dimension (PRNG_SURFACE_BSDF); the copy gives the
+  // ray the numbers next-event estimation takes next, which keeps them stratified over the pixel.
+  sampler.next_1d();
+  const Vec3 d = Frame(n).to_world(sample_cosine_hemisphere(sampler.next_2d()));
+  Ray ray;
+  ray.o = spawn_origin(sp, d);
+  ray.d = d;
+  ray.tmin = 0;
+  ray.tmax = s.ao_distance;
+  ray.time = sp.time;
+  VolumeStack st;
+  if (stack) {
+    st = *stack;
+    leave_surface(scene, sp, side, d, &st);
+  }
+  return shadow_transmittance(scene, st, ray, sampler, s.volume_estimator, s.volume_step, stats, s.transparent_bounces);
+}
+
+bool motion_vector(const Scene& scene, const Camera& camera, const SurfacePoint& sp, float out[4]) {
+  // The point at the previous and next frames (motion steps at times 0 and 1, the centre at 0.5):
+  // a triangle's barycentric point on its corners then (deformation included), else the
+  // object-space point through the instance's transform then.
+  const Instance& inst = scene.geometry.instance(sp.instance);
+  const bool triangles = scene.geometry.mesh(inst.mesh).is_triangles();
+  Vec2 at[3];
+  for (int k = 0; k < 3; ++k) {
+    const float time = 0.5f * k;
+    // The centre too, so that what does not move has exactly zero motion.
+    Vec3 p;
+    if (triangles) {
+      Vec3 p0, p1, p2;
+      scene.geometry.triangle(sp.instance, sp.primitive, &p0, &p1, &p2, time);
+      p = p0 * (1 - sp.bary.x - sp.bary.y) + p1 * sp.bary.x + p2 * sp.bary.y;
+    } else {
+      p = scene.geometry.pose(sp.instance, time).xf.point(sp.po);
+    }
+    if (!camera.raster(p, time, &at[k])) return false;
+  }
+  // Cycles' primitive_motion_vector: (pre - centre, centre - post).
+  out[0] = at[0].x - at[1].x;
+  out[1] = at[0].y - at[1].y;
+  out[2] = at[1].x - at[2].x;
+  out[3] = at[1].y - at[2].y;
+  return true;
 }
 
 }  // namespace lt

@@ -11,6 +11,7 @@
 #include "core/sampling.h"
 #include "integrators/light_passes.h"
 #include "media/medium.h"
+#include "media/volume_stack.h"
 #include "scene/scene.h"
 
 namespace lt {
@@ -47,6 +48,10 @@ struct IntegratorSettings {
   // Cycles' pass alpha threshold: the camera path writes AOVs at the surfaces it reaches through
   // transparent passes up to the first whose alpha reaches it (single_pass_done).
   float pass_alpha_threshold = 0.5f;
+  // Cycles' Ambient Occlusion pass and its rays' length (World > Light Settings > AO Distance),
+  // and the Vector pass (the scene's motion steps are the neighbouring frames: render.h).
+  bool ao_pass = false, vector_pass = false;
+  float ao_distance = 10;
 };
 
 // The Mist pass's value for a sample whose camera path scatters first at p with throughput beta
@@ -55,6 +60,18 @@ float mist_coverage(const Camera& camera, const IntegratorSettings& s, const Vec
 // The data passes of a first hit: position, UV, indices, mist, Cryptomatte ids and weight.
 void write_data_passes(const Scene& scene, const Camera& camera, const IntegratorSettings& s, const SurfacePoint& sp,
                        const Spectrum& beta, SampleValue* out);
+
+struct SampleStats;
+// Cycles' AO pass (integrate_surface_ao): from sp, one cosine-distributed ray about n (the
+// shading normal facing the path's side `side`, the geometric normal there) up to ao_distance,
+// its transmittance through transparent surfaces and the media of `stack` (1: unoccluded).
+// Draws from a copy of the sampler, so the path's own numbers (and Combined) stay as they are.
+Spectrum ambient_occlusion(const Scene& scene, const IntegratorSettings& s, const SurfacePoint& sp, const Vec3& n,
+                           const Vec3& side, const VolumeStack* stack, Sampler sampler, SampleStats& stats);
+// Cycles' Vector pass (primitive_motion_vector): the film motion of the surface point sp seen at
+// the centre step, (previous - now, now - next) in pixels; false on a camera whose projection it
+// does not handle (panoramas), leaving *out as it is.
+bool motion_vector(const Scene& scene, const Camera& camera, const SurfacePoint& sp, float out[4]);
 
 struct SampleStats {
   uint64_t rays = 0;

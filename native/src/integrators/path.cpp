@@ -225,6 +225,9 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       if (b.total == 0) {
         if (s.light_passes) add_light_colors(&out, bsdf, wo, beta);
         if (s.data_passes) write_data_passes(scene, camera, s, sp, beta, &out);
+        if (s.ao_pass)
+          out.ao = beta * ambient_occlusion(scene, s, sp, ns, ng, kMedia ? &stack : nullptr, sampler, stats);
+        if (s.vector_pass && motion_vector(scene, camera, sp, out.vector)) out.vector_weight = 1;
       }
       if (bsdf.count() == 0) break;
       if (b.exceeded(s) || (kMedia && volume > s.volume_bounces)) break;

@@ -186,6 +186,9 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
     for (const char* c = exr_channel_letters(Pass(p)); *c; ++c)
       names.push_back(std::string(exr_pass_name(Pass(p))) + "." + *c);
     add_channels(channels, buf, n, names);
+    // The Vector pass is a mean over the samples that wrote one: their share, for merges.
+    if (Pass(p) == Pass::Vector && job.film().read_vector_coverage(buf.data()))
+      add_channels(channels, buf, n, {"VectorCoverage.X"});
     // BDPT: the splats' part apart, as for Combined, so that merges stay exact (merge.cpp).
     if (is_light_pass(Pass(p)) && job.film().read_light_tracing(Pass(p), buf.data()))
       add_channels(channels, buf, n,

@@ -158,12 +158,19 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   // (LightTracing.<pass>), weighted by the light paths as Combined's; First: the pixel's first
   // sample's value (Position and the indices), from the part with the lowest sample index.
   // Crypto: a Cryptomatte layer's channel (CryptoObject00.r, ...), merged per type below.
-  enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB, Divided, First, SplitMean, Crypto };
+  // Covered: a mean over the samples that wrote a value (Vector), weighted by the part's samples
+  // times its share of them (VectorCoverage.X, itself a Mean).
+  enum Kind { Mean, Count, Depth, Light, Variance, CombinedRGB, Divided, First, SplitMean, Crypto, Covered };
   std::vector<Kind> kind(nc);
   std::vector<int> rgb_index(nc, -1);
   // Divided channels: the channels of their pass and of its Colour, in RGB order.
   std::vector<std::array<int, 3>> self_k(nc, {-1, -1, -1}), colour_k(nc, {-1, -1, -1});
   std::vector<int> split_k(nc, -1);  // a light pass's LightTracing.<pass> channel
+  const int coverage_k = [&] {
+    for (size_t k = 0; k < nc; ++k)
+      if (ref.channels[k].name == "VectorCoverage.X") return int(k);
+    return -1;
+  }();
   auto channel_index = [&](const std::string& name) {
     for (size_t k = 0; k < nc; ++k)
       if (ref.channels[k].name == name) return int(k);
@@ -187,6 +194,12 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       const Pass colour = light_pass_color(Pass(pass));
       if (Pass(pass) == Pass::Position || Pass(pass) == Pass::ObjectIndex || Pass(pass) == Pass::MaterialIndex)
         kind[k] = First;
+      if (Pass(pass) == Pass::Vector) {
+        if (coverage_k < 0)
+          throw InvalidArgument(paths[0] + ": " + name +
+                                " without VectorCoverage.X, which it is weighted by; not merged");
+        kind[k] = Covered;
+      }
       split_k[k] = channel_index("LightTracing." + name);
       if (split_k[k] >= 0 && colour == Pass::Count) kind[k] = SplitMean;
       if (colour == Pass::Count) continue;
@@ -280,6 +293,11 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
           for (size_t i = 0; i < n; ++i)
             if (c_p[i] > 0 && first_sample[p] < first_from[i]) a[i] = in[i];
           break;
+        case Covered: {
+          const float* cov = img.channels[coverage_k].pixels.data();
+          for (size_t i = 0; i < n; ++i) a[i] += double(c_p[i]) * cov[i] * in[i];
+          break;
+        }
         case Variance:
         case CombinedRGB:
         case Crypto:
@@ -362,6 +380,9 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         case Depth:
         case First:
           v = a[i];
+          break;
+        case Covered:
+          v = acc[coverage_k][i] > 0 ? a[i] / acc[coverage_k][i] : 0.0;
           break;
         case Divided: {
           if (!(count[i] > 0)) break;

@@ -32,6 +32,9 @@ IntegratorSettings with_passes(const RenderSettings& s) {
   for (int p = int(Pass::Position); p <= int(Pass::MaterialIndex); ++p) data |= pass_bit(Pass(p));
   is.light_passes = (s.passes & light) != 0;
   is.data_passes = (s.passes & data) != 0 || s.cryptomatte != 0;
+  is.ao_pass = (s.passes & pass_bit(Pass::AO)) != 0;
+  // Cycles writes no motion with motion blur on: the pass stays zero.
+  is.vector_pass = (s.passes & pass_bit(Pass::Vector)) != 0 && s.motion_pass;
   return is;
 }
 }  // namespace
@@ -44,7 +47,7 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
           s.integrator, RenderContext{scene, camera_, filter_, with_passes(s), s.x0, s.y0, s.x1 - s.x0, s.y1 - s.y0})),
       film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
       active_(size_t(film_.width()) * film_.height(), 1),
-      motion_(scene.geometry.has_motion() || camera_.has_motion()) {
+      motion_(!s.motion_pass && (scene.geometry.has_motion() || camera_.has_motion())) {
   active_pixels_.store(active_.size());
   film_.set_labels(integrator_->film_labels());
   camera_x_ = normalize(scene.camera.xf.column(0));

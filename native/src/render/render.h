@@ -35,7 +35,7 @@ struct RenderSettings {
   double noise_target = 0;
   bool adaptive = false;
   int min_samples = 16;
-  unsigned passes = kAllPasses;  // what the film keeps (FilmLayout::passes)
+  unsigned passes = kDefaultPasses;  // what the film keeps (FilmLayout::passes)
   // Light groups' names (integrator_settings.lightgroups of them): EXR channels Combined_<name>.
   std::vector<std::string> lightgroup_names;
   // Shader AOVs (integrator_settings.aovs of them): names and whether each is a colour (RGBA) or a
@@ -48,6 +48,9 @@ struct RenderSettings {
   // Cryptomatte types kept (bits 1 << CryptomatteType) and Blender's Levels (FilmLayout).
   unsigned cryptomatte = 0;
   int cryptomatte_levels = 6;
+  // The scene's motion steps are the previous, this and the next frame for the Vector pass
+  // (lt_render_settings.motion_pass): samples are taken at the centre step, nothing blurs.
+  bool motion_pass = false;
 };
 
 // The film and per-pixel buffers a render allocates, in bytes (RenderJob::estimate_bytes).

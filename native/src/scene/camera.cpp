@@ -225,6 +225,25 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec
   return true;
 }
 
+bool Camera::raster(const Vec3& p, float time, Vec2* film) const {
+  if (d_.panorama) return false;
+  const Basis b = basis(time);
+  const Vec3 v = p - b.origin;
+  float px = dot(v, b.right), py = dot(v, b.up);
+  if (!d_.orthographic) {
+    const float z = -dot(v, b.forward_neg);
+    if (z == 0) {  // Cycles' transform_perspective: the raster origin where w = 0
+      *film = Vec2{0.0f, 0.0f};
+      return true;
+    }
+    px /= z;
+    py /= z;
+  }
+  film->x = (px - x0_) / (x1_ - x0_) * width_;
+  film->y = (py - y0_) / (y1_ - y0_) * height_;
+  return true;
+}
+
 void Camera::differentials(float x, float y, float* dP, float* dD) const {
   if (d_.panorama) {
     // Cycles' camera_sample_panorama: the view-plane step of a pixel as dP, the change of

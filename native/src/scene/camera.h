@@ -92,6 +92,11 @@ class Camera {
   // behind the camera, outside the ray's clipping range or off the film (margin included).
   bool project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance,
                float time = 0.5f) const;
+  // The full-frame film position (pixels, y up) a world point projects to, seen by the camera at
+  // shutter time `time` (the pinhole; no clipping, the film's bounds not checked), as Cycles'
+  // worldtoraster for the Vector pass (a point behind the camera is mirrored, as its projection
+  // divides by the depth). False for panoramas.
+  bool raster(const Vec3& p, float time, Vec2* film) const;
   // The view-plane area of one pixel at unit distance, a: a camera ray from any lens point in the
   // direction making angle theta with the view axis has solid-angle density
   // pixel_density / (a cos^3 theta) (pbrt 3, section 16.1.1; the same with a lens, pbrt-v4's
