@@ -558,7 +558,8 @@ def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_pa
 CUBIC_FILE_CASES = [("png8_srgb_rgba", "Cubic", "REPEAT", "Color with Alpha used"),
                     ("exr16_rgba", "Cubic", "EXTEND", "Color with Alpha used"),
                     ("exr32_rgb", "Smart", "CLIP", "Color"),
-                    ("png16_linear_grey", "Smart", "EXTEND", "Color")]
+                    ("png16_linear_grey", "Smart", "EXTEND", "Color"),
+                    ("hdr_linear", "Smart", "environment", "Color")]  # an Environment Texture
 
 
 @pytest.mark.parametrize("case,interpolation,extension,output", CUBIC_FILE_CASES)
@@ -574,7 +575,8 @@ def test_image_file_cubic_read_by_the_core_equals_blenders_pixels(case, interpol
 
 def _file_against_packed(case, output, tmp_path, interpolation="Linear", extension="REPEAT", zoom=1.0):
     """The view of one IMAGE_FILES case read from its file and from a packed copy: equal within
-    1e-6, read by the core or left to Blender as the case says. zoom: UVs scaled about the centre."""
+    1e-6, read by the core or left to Blender as the case says. zoom: UVs scaled about the centre;
+    extension "environment": an Environment Texture instead of an Image Texture."""
     import bpy
     import numpy as np
 
@@ -612,6 +614,11 @@ def _file_against_packed(case, output, tmp_path, interpolation="Linear", extensi
             img.alpha_mode = alpha_mode
             if packed:
                 img.pack()
+            if extension == "environment":  # the Generated coordinates' directions
+                tex = node(nt, "ShaderNodeTexEnvironment", {"interpolation": interpolation})
+                tex.image = img
+                nt.links.new(node(nt, "ShaderNodeTexCoord").outputs["Generated"], tex.inputs["Vector"])
+                return tex.outputs["Color"]
             tex = node(nt, "ShaderNodeTexImage", {"interpolation": interpolation, "extension": extension})
             tex.image = img
             uv = node(nt, "ShaderNodeTexCoord").outputs["UV"]
