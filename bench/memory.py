@@ -1,7 +1,8 @@
 """Peak memory of a render, Lantern against Cycles, in the same run (issue 18).
 
     python3 bench/memory.py --library build/liblantern.so [--sizes 1920x1080,4000x4000,8000x8000]
-        [--texture 8192] [--out bench/results/memory.json]
+        [--texture 8192] [--texture-formats png,exr,jpg,hdr] [--interpolation Linear]
+        [--out bench/results/memory.json]
 
 Each measurement is a fresh `blender -b --factory-startup` process (this script is its own worker):
 it builds `cornell_area` from scenes/build_scenes.py, sets the resolution, 1 sample, and
@@ -78,7 +79,11 @@ def worker(args):
         img.colorspace_settings.name = "Linear" if os.path.splitext(args.image)[1][1:] in _FLOAT_FORMATS else "sRGB"
         floor = scene.objects["Floor"]
         floor.data.materials.clear()
-        floor.data.materials.append(build_scenes.image_material("Tex", img))
+        mat = build_scenes.image_material("Tex", img)
+        for n in mat.node_tree.nodes:
+            if n.type == 'TEX_IMAGE':
+                n.interpolation = args.interpolation
+        floor.data.materials.append(mat)
     w, h = _parse_size(args.size)
     r = scene.render
     r.resolution_x, r.resolution_y, r.resolution_percentage = w, h, 100
@@ -139,6 +144,7 @@ def main():
     ap.add_argument("--texture-formats", default="png,exr,jpg,hdr")
     ap.add_argument("--engines", default="cycles,lantern")
     ap.add_argument("--passes-sets", default="default,all")
+    ap.add_argument("--interpolation", default="Linear", help="the texture's: Linear, Closest, Cubic, Smart")
     ap.add_argument("--out", default=os.path.join(RESULTS, "memory.json"))
     # worker arguments
     ap.add_argument("--engine")
@@ -177,9 +183,11 @@ def main():
                 if not os.path.exists(paths[size]):
                     run(args, make_image=paths[size], make_image_size=size)
             for engine in engines:
-                small = run(args, engine=engine, size="256x256", image=paths[64])["peak_bytes"]
-                info = run(args, engine=engine, size="256x256", image=paths[n])
-                row = dict(engine=engine, format=ext, texels=n * n, small_peak_bytes=small,
+                small = run(args, engine=engine, size="256x256", image=paths[64],
+                            interpolation=args.interpolation)["peak_bytes"]
+                info = run(args, engine=engine, size="256x256", image=paths[n], interpolation=args.interpolation)
+                row = dict(engine=engine, format=ext, interpolation=args.interpolation, texels=n * n,
+                           small_peak_bytes=small,
                            bytes_per_texel=(info["peak_bytes"] - small) / (n * n - 64 * 64), **info)
                 results["texture"].append(row)
                 print("%-8s %s %dx%d texture: peak %6.2f GiB  %5.1f B/texel  %s" % (

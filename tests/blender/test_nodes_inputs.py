@@ -421,25 +421,58 @@ def _write_blender(path, pixels, kind, bits):
             f.write(tga)
 
 
-def _write_float_tiff(path, pixels):
-    """An uncompressed 32-bit float TIFF (one strip, unassociated alpha) of `pixels` (h, w, channels
-    1, 3 or 4, rows bottom first): Blender 3.4 writes TIFFs at 8 or 16 bits only."""
+def _write_pil(path, pixels, kind):
+    """Files Blender does not write, by Pillow (Blender's Python has it): a CMYK JPEG ("jpg_cmyk",
+    the colours' complements as C, M, Y, their mean as K) and 16-colour palette TIFF and TGA files
+    (rows bottom first)."""
+    import numpy as np
+    from PIL import Image
+    rgb = np.round(pixels[::-1, :, :3] * 255).astype(np.uint8)
+    if kind == "jpg_cmyk":
+        cmyk = np.concatenate([255 - rgb, rgb.mean(axis=-1, keepdims=True).astype(np.uint8)], axis=-1)
+        Image.fromarray(cmyk, "CMYK").save(path, quality=95)
+    else:
+        Image.fromarray(rgb, "RGB").quantize(16).save(path)
+
+
+def _write_tiff(path, pixels, bits=32, layout="strip"):
+    """An uncompressed TIFF of `pixels` (h, w, channels 1, 3 or 4 in 0..1, rows bottom first, alpha
+    unassociated) written by hand, for what Blender 3.4 does not write: 32-bit float (bits 32), and
+    8-bit files in 16 x 16 tiles (layout "tiled") or with separate planes (layout "planar")."""
     import struct
     import numpy as np
     h, w, c = pixels.shape
-    data = np.ascontiguousarray(pixels[::-1], "<f4").tobytes()
-    tags = [(256, 4, [w]), (257, 4, [h]), (258, 3, [32] * c), (259, 3, [1]), (262, 3, [1 if c == 1 else 2]),
-            (273, 4, [0]), (277, 3, [c]), (278, 4, [h]), (279, 4, [len(data)]), (284, 3, [1]),
-            (339, 3, [3] * c)]
+    top = np.ascontiguousarray(pixels[::-1])
+    if bits == 32:
+        top = top.astype("<f4")
+    else:
+        top = np.round(top * 255).astype(np.uint8)
+    if layout == "tiled":
+        t = 16
+        th, tw = -(-h // t), -(-w // t)
+        padded = np.zeros((th * t, tw * t, c), top.dtype)
+        padded[:h, :w] = top
+        chunks = [padded[y * t:(y + 1) * t, x * t:(x + 1) * t].tobytes() for y in range(th) for x in range(tw)]
+        where = [(322, 3, [t]), (323, 3, [t]), (324, 4, None), (325, 4, [len(b) for b in chunks])]
+    elif layout == "planar":
+        chunks = [np.ascontiguousarray(top[..., k]).tobytes() for k in range(c)]
+        where = [(273, 4, None), (278, 4, [h]), (279, 4, [len(b) for b in chunks])]
+    else:
+        chunks = [top.tobytes()]
+        where = [(273, 4, None), (278, 4, [h]), (279, 4, [len(chunks[0])])]
+    offsets = [8 + sum(len(b) for b in chunks[:i]) for i in range(len(chunks))]
+    where = [(tag, kind, offsets if values is None else values) for tag, kind, values in where]
+    tags = [(256, 4, [w]), (257, 4, [h]), (258, 3, [bits] * c), (259, 3, [1]), (262, 3, [1 if c == 1 else 2]),
+            (277, 3, [c]), (284, 3, [2 if layout == "planar" else 1]), (339, 3, [3 if bits == 32 else 1] * c)]
+    tags += where
     if c == 4:
         tags.append((338, 3, [2]))
     tags.sort()
+    data = b"".join(chunks)
     ifd = 8 + len(data)
     extra = ifd + 2 + 12 * len(tags) + 4  # where values longer than 4 bytes go
     entries, blobs = b"", b""
     for tag, kind, values in tags:
-        if tag == 273:
-            values = [8]
         packed = struct.pack("<%d%s" % (len(values), "I" if kind == 4 else "H"), *values)
         if len(packed) <= 4:
             entries += struct.pack("<HHI", tag, kind, len(values)) + packed.ljust(4, b"\0")
@@ -461,8 +494,9 @@ IMAGE_FILES = {
     "png8_linear_rgba": ("png", 4, 8, "Linear", "STRAIGHT", True),
     "png8_channel_packed": ("png", 4, 8, "sRGB", "CHANNEL_PACKED", True),
     "png8_alpha_none": ("png", 4, 8, "sRGB", "NONE", True),
-    # Blender unpremultiplies 8-bit buffers in Premultiplied mode: left to Blender.
-    "png8_premultiplied": ("png", 4, 8, "sRGB", "PREMUL", False),
+    # Blender unpremultiplies 8-bit buffers in Premultiplied mode (imb_handle_alpha): so does the core.
+    "png8_premultiplied": ("png", 4, 8, "sRGB", "PREMUL", True),
+    "png8_grey_alpha_premultiplied": ("png", 2, 8, "sRGB", "PREMUL", True),
     "png16_linear_rgba": ("png", 4, 16, "Linear", "STRAIGHT", True),
     "png16_non_color_rgba": ("png", 4, 16, "Non-Color", "STRAIGHT", True),
     "png16_linear_grey": ("png", 1, 16, "Linear", "STRAIGHT", True),
@@ -481,7 +515,18 @@ IMAGE_FILES = {
     "tiff8_srgb_rgba": ("tif", 4, 8, "sRGB", "STRAIGHT", True),
     "tiff8_grey": ("tif", 1, 8, "sRGB", "STRAIGHT", True),
     "tiff8_channel_packed": ("tif", 4, 8, "sRGB", "CHANNEL_PACKED", True),
-    "tiff8_premultiplied": ("tif", 4, 8, "sRGB", "PREMUL", False),
+    "tiff8_premultiplied": ("tif", 4, 8, "sRGB", "PREMUL", True),
+    # 8-bit tiles and separate planes (Blender's TIFFReadRGBAImage reads any layout); Blender 3.4
+    # loads no pixels from a tiled grey or RGB TIFF, which the core leaves to it.
+    "tiff8_tiled_rgba": ("tif_tiled", 4, 8, "sRGB", "STRAIGHT", True),
+    "tiff8_planar_rgb": ("tif_planar", 3, 8, "sRGB", "STRAIGHT", True),
+    "tiff8_planar_rgba": ("tif_planar", 4, 8, "sRGB", "PREMUL", True),
+    # Left to Blender: OpenImageIO 2.4 rounds where Blender's jpeg.c truncates (c k / 255) and has
+    # no raw CMYK read; expands a TIFF palette by / 257 where libtiff takes the high byte; Blender's
+    # targa.c gives colour-mapped texels an alpha of its own (0 for some).
+    "jpeg_cmyk": ("jpg_cmyk", 3, 8, "sRGB", "STRAIGHT", False),
+    "tiff8_palette": ("tif_palette", 3, 8, "sRGB", "STRAIGHT", False),
+    "tga_colour_mapped": ("tga_palette", 3, 8, "sRGB", "STRAIGHT", False),
     "tiff16_linear_rgba": ("tif", 4, 16, "Linear", "STRAIGHT", True),
     "tiff16_non_color_grey": ("tif", 1, 16, "Non-Color", "STRAIGHT", True),
     "tiff16_srgb_rgb": ("tif", 3, 16, "sRGB", "STRAIGHT", False),
@@ -516,6 +561,33 @@ def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_pa
     PNG files are written here, OpenEXR, JPEG, TIFF (8 and 16 bits), TGA and HDR ones by Blender,
     32-bit float TIFFs by hand (Blender 3.4 writes none); the cases the core leaves to Blender
     check that it does."""
+    _file_against_packed(case, output, tmp_path)
+
+
+# Cubic (and Smart, which is Cubic on Cycles' CPU) on the core's 8-bit, half and float storage,
+# each with an extension: (case, interpolation, extension, output).
+CUBIC_FILE_CASES = [("png8_srgb_rgba", "Cubic", "REPEAT", "Color with Alpha used"),
+                    ("exr16_rgba", "Cubic", "EXTEND", "Color with Alpha used"),
+                    ("exr32_rgb", "Smart", "CLIP", "Color"),
+                    ("png16_linear_grey", "Smart", "EXTEND", "Color"),
+                    ("hdr_linear", "Smart", "environment", "Color")]  # an Environment Texture
+
+
+@pytest.mark.parametrize("case,interpolation,extension,output", CUBIC_FILE_CASES)
+def test_image_file_cubic_read_by_the_core_equals_blenders_pixels(case, interpolation, extension, output,
+                                                                  tmp_path):
+    """Cubic and Smart image textures read from their files by the core (no longer through
+    Image.pixels) filter the stored bytes, halves or floats as they filter Blender's pixels: the
+    view magnified (about 2.4 pixels a texel, so that the B-spline's 4 x 4 texels show) and
+    widened past the image's edges (so that the extension shows), equal to the packed copy's
+    render within 1e-6. That cubic filter is Cycles' (test_image_interpolation_and_extension)."""
+    _file_against_packed(case, output, tmp_path, interpolation, extension, zoom=1.3)
+
+
+def _file_against_packed(case, output, tmp_path, interpolation="Linear", extension="REPEAT", zoom=1.0):
+    """The view of one IMAGE_FILES case read from its file and from a packed copy: equal within
+    1e-6, read by the core or left to Blender as the case says. zoom: UVs scaled about the centre;
+    extension "environment": an Environment Texture instead of an Image Texture."""
     import bpy
     import numpy as np
 
@@ -535,7 +607,11 @@ def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_pa
     elif kind == "exr":
         _write_exr(path, pixels.astype(np.float32), bits == 16)
     elif kind == "tif" and bits == 32:
-        _write_float_tiff(path, pixels)
+        _write_tiff(path, pixels)
+    elif kind in ("tif_tiled", "tif_planar"):
+        _write_tiff(path, pixels, bits, kind.split("_")[1])
+    elif kind in ("jpg_cmyk", "tif_palette", "tga_palette"):
+        _write_pil(path, pixels, kind)
     else:
         _write_blender(path, pixels, kind, bits)
 
@@ -549,10 +625,21 @@ def test_image_file_read_by_the_core_equals_blenders_pixels(case, output, tmp_pa
             img.alpha_mode = alpha_mode
             if packed:
                 img.pack()
-            tex = node(nt, "ShaderNodeTexImage")
+            if extension == "environment":  # the Generated coordinates' directions
+                tex = node(nt, "ShaderNodeTexEnvironment", {"interpolation": interpolation})
+                tex.image = img
+                nt.links.new(node(nt, "ShaderNodeTexCoord").outputs["Generated"], tex.inputs["Vector"])
+                return tex.outputs["Color"]
+            tex = node(nt, "ShaderNodeTexImage", {"interpolation": interpolation, "extension": extension})
             tex.image = img
-            uv = node(nt, "ShaderNodeTexCoord")
-            nt.links.new(uv.outputs["UV"], tex.inputs["Vector"])
+            uv = node(nt, "ShaderNodeTexCoord").outputs["UV"]
+            if zoom != 1.0:
+                mapping = node(nt, "ShaderNodeMapping", {"vector_type": "POINT"})
+                mapping.inputs["Scale"].default_value = (zoom, zoom, 1.0)
+                mapping.inputs["Location"].default_value = (0.5 - 0.5 * zoom, 0.5 - 0.5 * zoom, 0.0)
+                nt.links.new(uv, mapping.inputs["Vector"])
+                uv = mapping.outputs[0]
+            nt.links.new(uv, tex.inputs["Vector"])
             if output == "Color with Alpha used":
                 mix = node(nt, "ShaderNodeMixRGB", {"blend_type": "ADD"})
                 nt.links.new(tex.outputs["Alpha"], mix.inputs["Fac"])

@@ -1,4 +1,5 @@
 // Image lookups as Cycles' CPU kernel makes them (kernel/device/cpu/image.h): the cubic B-spline.
+#include <Imath/half.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -42,6 +43,87 @@ TEST(ImageCubic, ReproducesRampsAndWrapsLikeLinear) {
   for (float u : {0.3f, 0.41f, 0.5f, 0.66f}) EXPECT_NEAR(r.lookup({u, 0.5f}).x, 0.1f * (u * 8 - 0.5f), 1e-5f);
   const lt::Image flat = grey(4, 4, std::vector<float>(16, 0.7f), lt::Extension::Repeat);
   for (float u : {0.0f, 0.01f, 0.99f, 2.37f, -1.2f}) EXPECT_NEAR(flat.lookup({u, u * 0.7f}).x, 0.7f, 1e-6f);
+}
+
+TEST(ImageCubic, QuadraticGainsTheBSplineOffsetUnlikeAnInterpolatingCubic) {
+  // The uniform cubic B-spline of samples f(i) = i^2 is x^2 + 1/3 (Schoenberg's spline: its
+  // weights' second moment about x is 1/3), where an interpolating cubic (Catmull-Rom) would give
+  // x^2 and linear interpolation x^2 + t (1 - t). x in texels: u * width - 0.5.
+  const int w = 16;
+  std::vector<float> sq(w);
+  for (int i = 0; i < w; ++i) sq[i] = float((i - 8) * (i - 8)) / 64.0f;
+  const lt::Image img = grey(w, 1, sq, lt::Extension::Extend);
+  for (float x : {5.0f, 6.25f, 7.5f, 8.0f, 9.8f}) {
+    const float u = (x + 0.5f) / w;
+    EXPECT_NEAR(img.lookup({u, 0.5f}).x, ((x - 8) * (x - 8) + 1.0f / 3.0f) / 64.0f, 2e-6f) << x;
+  }
+}
+
+TEST(ImageCubic, PartitionOfUnityAndExtensionsAtTheEdges) {
+  // A constant image: Repeat and Extend keep it everywhere (the weights sum to 1 for any t);
+  // Clip drops the texels outside, so at a corner texel's centre one of the 4 per axis is gone
+  // (weight 1/6): (5/6)^2 of the constant, and half a texel out (t = 1/2: 1/48 + 23/48 left)
+  // 1/2 per axis.
+  const float c = 0.6f;
+  const std::vector<float> flat(5 * 4, c);
+  for (float t : {0.0f, 0.1f, 0.37f, 0.5f, 0.93f}) {
+    const lt::Vec2 uv{centre(2, 5) + t / 5, centre(1, 4) + t / 4};
+    EXPECT_NEAR(grey(5, 4, flat, lt::Extension::Extend).lookup(uv).x, c, 1e-6f);
+    EXPECT_NEAR(grey(5, 4, flat, lt::Extension::Clip).lookup(uv).x, c, 1e-6f);
+  }
+  EXPECT_NEAR(grey(5, 4, flat, lt::Extension::Clip).lookup({centre(0, 5), centre(3, 4)}).x, c * 25 / 36, 1e-6f);
+  EXPECT_NEAR(grey(5, 4, flat, lt::Extension::Clip).lookup({1.0f, centre(2, 4)}).x, c * 0.5f, 1e-6f);
+  EXPECT_EQ(grey(5, 4, flat, lt::Extension::Clip).lookup({1.5f, centre(2, 4)}).x, 0.0f);
+  // A ramp 0.1 i on 4 x 1 texels: Extend repeats the edge texel (at texel 0's centre: 1/6 of
+  // texel 1), Repeat wraps to the far edge (1/6 of texel 3 besides), Clip drops it (and the rows
+  // above and below the only one: 2/3 of that).
+  const std::vector<float> ramp = {0.0f, 0.1f, 0.2f, 0.3f};
+  const lt::Vec2 first{centre(0, 4), 0.5f};
+  EXPECT_NEAR(grey(4, 1, ramp, lt::Extension::Extend).lookup(first).x, 0.1f / 6, 1e-6f);
+  EXPECT_NEAR(grey(4, 1, ramp, lt::Extension::Repeat).lookup(first).x, (0.1f + 0.3f) / 6, 1e-6f);
+  EXPECT_NEAR(grey(4, 1, ramp, lt::Extension::Clip).lookup(first).x, (0.1f / 6) * (2.0f / 3.0f), 1e-6f);
+  EXPECT_NEAR(grey(4, 1, ramp, lt::Extension::Repeat).lookup({centre(0, 4) + 1.0f, 0.5f}).x, (0.1f + 0.3f) / 6, 1e-6f);
+}
+
+TEST(ImageCubic, OneFilterForBytesHalvesAndFloats) {
+  // The same texels stored as bytes (a file's), half floats (a half OpenEXR's) and floats give the
+  // same cubic lookups: one filter reads each storage in place. The float images hold one texel
+  // that is not a byte value (column 6, outside every footprint sampled) so that they stay float.
+  const int w = 12, h = 3, n = w * h;
+  std::vector<uint8_t> bytes(n * 3);
+  std::vector<float> byte_values(n * 3), eighths(n * 3);
+  std::vector<uint16_t> halfs(n * 3);
+  for (int i = 0; i < n * 3; ++i) {
+    bytes[i] = uint8_t((i * 37) % 256);
+    byte_values[i] = float(bytes[i]) * (1.0f / 255.0f);
+    eighths[i] = float((i * 5) % 17) / 8.0f;  // exact in half
+    halfs[i] = imath_float_to_half(eighths[i]);
+  }
+  byte_values[3 * (w + 6)] += 1e-3f;
+  const auto cubic = lt::Interpolation::Cubic;
+  for (auto ext : {lt::Extension::Repeat, lt::Extension::Extend, lt::Extension::Clip}) {
+    lt::ByteBuffer b(n * 3);
+    lt::HalfBuffer hb(n * 3);
+    std::copy(bytes.begin(), bytes.end(), b.data());
+    std::copy(halfs.begin(), halfs.end(), hb.data());
+    const lt::Image from_bytes(w, h, 3, std::move(b), false, cubic, ext);
+    const lt::Image from_halfs(w, h, 3, std::move(hb), cubic, ext);
+    const lt::Image byte_floats(w, h, 3, byte_values.data(), false, cubic, ext);
+    const lt::Image half_floats(w, h, 3, eighths.data(), false, cubic, ext);
+    ASSERT_TRUE(from_bytes.is_byte());
+    ASSERT_FALSE(byte_floats.is_byte());
+    ASSERT_EQ(from_halfs.bytes(), size_t(n) * 3 * 2);
+    ASSERT_EQ(half_floats.bytes(), size_t(n) * 3 * 4);
+    // Footprints (4 texels around u w - 0.5) that miss column 6.
+    for (lt::Vec2 uv : {lt::Vec2{0.03f, 0.5f}, lt::Vec2{0.2f, 0.77f}, lt::Vec2{0.99f, 0.02f}, lt::Vec2{1.2f, -0.1f}}) {
+      const lt::Vec3 a = from_bytes.lookup(uv), a2 = byte_floats.lookup(uv);
+      const lt::Vec3 c = from_halfs.lookup(uv), c2 = half_floats.lookup(uv);
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(a[k], a2[k]) << uv.x << " " << uv.y;
+        EXPECT_EQ(c[k], c2[k]) << uv.x << " " << uv.y;
+      }
+    }
+  }
 }
 
 }  // namespace

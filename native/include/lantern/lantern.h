@@ -119,14 +119,15 @@ LT_API int lt_scene_begin_image(lt_scene* scene, const lt_image_desc* desc, floa
 LT_API int lt_scene_end_image(lt_scene* scene, int* out_id);
 /* An image the core reads from its file itself (OpenImageIO), as Cycles does, so that the caller
  * never loads the pixels: they are held once, at the file's precision (8-bit files as bytes, half
- * OpenEXR files as half floats unless the alpha mode is Straight, others as float).
+ * OpenEXR files as half floats unless the alpha mode is Straight, others as float), and filtered
+ * there with any lt_interpolation.
  * The texels are those Blender 3.4 gives in Image.pixels for an image datablock of this colour
  * space and alpha mode, given to lt_scene_add_image with that datablock's srgb and alpha
  * (native/src/io/image_file.h). PNG (8 and 16 bits), JPEG, TIFF (8, 16, 32 bits), TGA, Radiance HDR
  * and single-part RGB(A) OpenEXR. Refused with
  * LT_ERROR_INVALID_ARGUMENT (and why) for what Blender's loading would change otherwise (a float
- * file in a colour space other than Linear or a data space, an 8-bit file with alpha in
- * Premultiplied mode, variants Blender reads its own way, other formats): the caller then loads it
+ * file in a colour space other than Linear or a data space, variants Blender reads its own way,
+ * other formats): the caller then loads it
  * another way. A file that cannot
  * be opened or read: LT_ERROR_IO. Added without an ABI version bump (still 7). */
 enum lt_color_space {

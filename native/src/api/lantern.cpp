@@ -148,27 +148,29 @@ lt::Material to_material(const lt_scene* scene, const lt_shader_program* p);
 
 constexpr int kMaxDimension = 65536;
 
-constexpr long long kMaxPixels = 1LL << 28;
+constexpr long long kMaxPixels = 1LL << 28;  // 268 M pixels: beyond this a render is a mistake
+
+bool known_interpolation(int i) { return i == LT_INTERP_LINEAR || i == LT_INTERP_CLOSEST || i == LT_INTERP_CUBIC; }
 
 void check_image(const lt_image_desc& d) {
   require(d.width > 0 && d.height > 0 && d.width <= kMaxDimension && d.height <= kMaxDimension,
           "image size " + std::to_string(d.width) + "x" + std::to_string(d.height) + " is out of range");
   require(d.channels == 1 || d.channels == 3 || d.channels == 4,
           "image has " + std::to_string(d.channels) + " channels; 1, 3 or 4 are supported");
-  require(
-      d.interpolation == LT_INTERP_LINEAR || d.interpolation == LT_INTERP_CLOSEST || d.interpolation == LT_INTERP_CUBIC,
-      "unknown image interpolation");
+  require(known_interpolation(d.interpolation), "unknown image interpolation");
   require(d.extension >= LT_EXTENSION_REPEAT && d.extension <= LT_EXTENSION_CLIP, "unknown image extension");
   require(
       d.alpha >= LT_ALPHA_IGNORE && d.alpha <= LT_ALPHA_CHANNEL_PACKED,
       "unknown image alpha " + std::to_string(d.alpha) + "; valid: IGNORE, STRAIGHT, PREMULTIPLIED, CHANNEL_PACKED");
 }
 
-lt::Interpolation interpolation(const lt_image_desc& d) {
-  return d.interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest
-         : d.interpolation == LT_INTERP_CUBIC ? lt::Interpolation::Cubic
-                                              : lt::Interpolation::Linear;
-}  // 268 M pixels: beyond this a render is a mistake
+// lt_interpolation, for images given by the caller and read from files alike (one filter each,
+// shading/image.cpp, whatever the storage).
+lt::Interpolation interpolation(int i) {
+  return i == LT_INTERP_CLOSEST ? lt::Interpolation::Closest
+         : i == LT_INTERP_CUBIC ? lt::Interpolation::Cubic
+                                : lt::Interpolation::Linear;
+}
 
 lt::Program to_program(const lt_scene* scene, const lt_shader_program* p) {
   require(p->code_words >= 0 && p->code_words <= lt::kMaxProgramWords,
@@ -236,7 +238,7 @@ int lt_scene_add_image(lt_scene* scene, const lt_image_desc* d, int* out_id) {
     require(d->pixels != nullptr, "image pixels are NULL");
     auto& images = scene->scene.images;
     images.push_back(std::make_unique<lt::Image>(d->width, d->height, d->channels, d->pixels, d->srgb != 0,
-                                                 interpolation(*d), lt::Extension(d->extension),
+                                                 interpolation(d->interpolation), lt::Extension(d->extension),
                                                  lt::ImageAlpha(d->alpha)));
     *out_id = int(images.size()) - 1;
   });
@@ -267,7 +269,7 @@ int lt_scene_end_image(lt_scene* scene, int* out_id) {
     const lt_image_desc& d = p->desc;
     auto& images = scene->scene.images;
     images.push_back(std::make_unique<lt::Image>(d.width, d.height, d.channels, std::move(p->pixels), d.srgb != 0,
-                                                 interpolation(d), lt::Extension(d.extension),
+                                                 interpolation(d.interpolation), lt::Extension(d.extension),
                                                  lt::ImageAlpha(d.alpha)));
     *out_id = int(images.size()) - 1;
   });
@@ -282,15 +284,14 @@ int lt_scene_add_image_file(lt_scene* scene, const lt_image_file_desc* d, int* o
             "unknown colour space " + std::to_string(d->color_space));
     require(d->alpha_mode >= LT_ALPHA_MODE_STRAIGHT && d->alpha_mode <= LT_ALPHA_MODE_NONE,
             "unknown alpha mode " + std::to_string(d->alpha_mode));
-    require(d->interpolation == LT_INTERP_LINEAR || d->interpolation == LT_INTERP_CLOSEST,
-            "unknown image interpolation");
+    require(known_interpolation(d->interpolation), "unknown image interpolation");
     require(d->extension >= LT_EXTENSION_REPEAT && d->extension <= LT_EXTENSION_CLIP, "unknown image extension");
     lt::ImageFileRequest r;
     r.path = d->path;
     r.space = lt::FileColorSpace(d->color_space);
     r.alpha_mode = lt::FileAlphaMode(d->alpha_mode);
     r.use_alpha = d->use_alpha != 0;
-    r.interp = d->interpolation == LT_INTERP_CLOSEST ? lt::Interpolation::Closest : lt::Interpolation::Linear;
+    r.interp = interpolation(d->interpolation);
     r.ext = lt::Extension(d->extension);
     std::unique_ptr<lt::Image> image;
     try {

@@ -21,6 +21,14 @@ namespace OIIO = OIIO_NAMESPACE;
 void read_rows(OIIO::ImageInput& in, const std::string& path, OIIO::TypeDesc type, int channels, void* out) {
   const OIIO::ImageSpec& spec = in.spec();
   const OIIO::stride_t row = OIIO::stride_t(spec.width) * channels * type.size();
+  if (spec.tile_width != 0) {
+    // Tiles a row of tiles at a time (OpenImageIO 2.4's read_scanlines on a tiled TIFF divides by
+    // zero).
+    char* top = static_cast<char*>(out) + (spec.height - 1) * row;
+    if (!in.read_image(0, 0, 0, channels, type, top, OIIO::AutoStride, -row))
+      throw IoError("cannot read image '" + path + "': " + in.geterror());
+    return;
+  }
   constexpr int kRows = 64;
   for (int y = 0; y < spec.height; y += kRows) {
     const int end = std::min(spec.height, y + kRows);
@@ -76,9 +84,12 @@ std::string format_refusal(OIIO::ImageInput& in, const std::string& path) {
     if (!((photometric == 1 && c == 1) || (photometric == 2 && (c == 3 || c == 4))))
       return "TIFF photometric " + std::to_string(photometric) + " with " + std::to_string(c) + " channels";
     if (spec.get_int_attribute("Orientation", 1) != 1) return "a TIFF orientation";
-    if (spec.tile_width != 0) return "a tiled TIFF";
-    if (int_attribute(spec, "tiff:PlanarConfiguration") != 1) return "a TIFF with separate planes";
     const int bits = int_attribute(spec, "oiio:BitsPerSample");
+    // Tiles and separate planes are only a layout for TIFFReadRGBAImage (8 bits; measured equal),
+    // but Blender 3.4 loads no pixels from a tiled grey or RGB TIFF (measured), and its 16 and
+    // 32-bit readers take neither.
+    if (spec.tile_width != 0 && (bits != 8 || c != 4)) return "a tiled TIFF of " + std::to_string(c) + " channels";
+    if (int_attribute(spec, "tiff:PlanarConfiguration") != 1 && bits != 8) return "a TIFF with separate planes";
     const bool ok = (bits == 8 && spec.format == OIIO::TypeDesc::UINT8) ||
                     (bits == 16 && spec.format == OIIO::TypeDesc::UINT16) ||
                     (bits == 32 && spec.format == OIIO::TypeDesc::FLOAT);
@@ -121,6 +132,20 @@ inline float rgbe_value(int m, int e) {
   if (e == 0) return 0.0f;
   const float f = float(std::ldexp(1.0, e - 136));
   return f * (float(m) + 0.5f);
+}
+
+// Blender 3.4's IMB_unpremultiply_rect on n texels of c channels (the last one alpha), in place:
+// each colour byte becomes unit_float_to_uchar_clamp(b * (1 / a)), with 1 for a = 0 (so that a
+// transparent texel's colours become 255 where not 0), in single-precision floats as Blender's.
+void unpremultiply_bytes(uint8_t* p, size_t n, int c) {
+  auto unit_to_byte = [](float v) {
+    return v <= 0.0f ? uint8_t(0) : v > 1.0f - 0.5f / 255.0f ? uint8_t(255) : uint8_t(255.0f * v + 0.5f);
+  };
+  for (size_t i = 0; i < n; ++i) {
+    uint8_t* t = p + i * c;
+    const float inv = t[c - 1] != 0 ? 1.0f / float(t[c - 1]) : 1.0f;
+    for (int k = 0; k < c - 1; ++k) t[k] = unit_to_byte(float(t[k]) * inv);
+  }
 }
 
 }  // namespace
@@ -237,11 +262,11 @@ std::unique_ptr<Image> read_image_file(const ImageFileRequest& r) {
 
   if (spec.format == OIIO::TypeDesc::UINT8 && format != "openexr") {
     if (c < 1 || c > 4) throw unsupported(std::to_string(c) + " channels");
-    // Blender unpremultiplies a byte buffer whose alpha mode is Premultiplied (imb_handle_alpha).
-    if (has_alpha && mode == FileAlphaMode::Premultiplied && !data)
-      throw unsupported("8-bit with Premultiplied alpha mode");
     ByteBuffer px(n * c);
     read_rows(*in, r.path, OIIO::TypeDesc::UINT8, c, px.data());
+    // Blender unpremultiplies a byte buffer whose alpha mode is Premultiplied (imb_handle_alpha),
+    // which then holds straight colours as any other byte image.
+    if (has_alpha && mode == FileAlphaMode::Premultiplied && !data) unpremultiply_bytes(px.data(), n, c);
     return std::make_unique<Image>(w, h, c, std::move(px), r.space == FileColorSpace::Srgb, r.interp, r.ext,
                                    core_alpha(r, false));
   }

@@ -6,9 +6,10 @@
 // image datablock: what Blender's loader does to them (imbuf's png.c, jpeg.c, tiff.c, targa.c,
 // radiance_hdr.c, openexr_api.cpp and imb_handle_alpha) is done here, and files for which that
 // would need Blender's colour management (a float file in a colour space other than Linear or a
-// data space), its unpremultiplied byte buffers, or that its loaders read their own way (CMYK
-// JPEG, palettes, TIFF orientations, 16-bit TGA, ...) are refused (ImageFileUnsupported) for the
-// caller to load through Blender.
+// data space), or that its loaders read their own way (CMYK JPEG, TIFF palettes and orientations,
+// tiled grey or RGB TIFFs, colour-mapped and 16-bit TGA, ...) are refused (ImageFileUnsupported)
+// for the caller to load through Blender; 8-bit buffers Blender unpremultiplies are unpremultiplied
+// here as it does.
 #pragma once
 
 #include <memory>
