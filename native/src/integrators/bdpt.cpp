@@ -321,7 +321,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
         bool background = count == 1;
         if (background && first && s_.transparent_background) first->transparent += average(beta);
         if (!(background && s_.transparent_background)) {
-          auto escape = [&](int light, const Spectrum& le) { reach(light, true, prev.p + ray.d, Vec3(0.0f), beta, le); };
+          auto escape = [&](int light, const Spectrum& le) {
+            reach(light, true, prev.p + ray.d, Vec3(0.0f), beta, le);
+          };
           if (lights_.world_light() >= 0 && (!background || scene_.world.camera_visible)) {
             ShadingContext wc = world_context(ray.d);
             Bounces b;  // a camera ray stays one through transparent passes, as at surfaces here
