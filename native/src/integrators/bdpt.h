@@ -211,8 +211,8 @@ class Bdpt {
   void emitter_reached(std::vector<PathVertex>& camera, int t, PathVertex* crossed, const Spectrum& le);
   float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, PathVertex* sampled, int s, int t,
                    const Vec2& pixel, double* light_sum = nullptr);
-  // A light or camera vertex for a strategy's sampled endpoint, reset without constructing a
-  // PathVertex (whose BSDF those types never use).
+  // A light or camera vertex for a strategy's sampled endpoint (or an emitter the camera walk
+  // crossed), reset without constructing a PathVertex (whose BSDF those types never use).
   PathVertex& endpoint(VertexType type) {
     PathVertex& v = scratch_.endpoint;
     v.type = type;
