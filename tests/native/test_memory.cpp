@@ -21,7 +21,9 @@
 #include <vector>
 
 #include "core/film.h"
+#include "integrators/integrator.h"
 #include "io/image_file.h"
+#include "render/render.h"
 #include "scene_builders.h"
 #include "shading/image.h"
 
@@ -132,6 +134,31 @@ TEST(Memory, FilmKeepsOnlyThePassesAskedFor) {
   EXPECT_EQ(std::memcmp(combined.data(), full.combined.data(), combined.size() * sizeof(float)), 0);
   EXPECT_EQ(lt_render_read_pass(r, LT_PASS_NORMAL, normal.data(), normal.size()), LT_ERROR_STATE);
   EXPECT_NE(std::string(lt_last_error()).find("Normal"), std::string::npos) << lt_last_error();
+}
+
+// The render job sizes the film and estimates its memory from what the integrator type asks
+// (integrator_needs, known before the integrator exists), never from the type's name: BDPT's splat
+// buffers and strategy view in the film, a pass's splat lists in the estimate, nothing for the rest.
+TEST(Memory, FilmAndEstimateFollowTheIntegratorsNeeds) {
+  lt::RenderSettings rs;
+  rs.width = rs.x1 = 64;
+  rs.height = rs.y1 = 32;
+  rs.integrator_settings.strategy_depth = 3;
+  const size_t other_path = lt::RenderJob::estimate_bytes(rs).other;
+  for (lt::IntegratorType type : {lt::IntegratorType::Path, lt::IntegratorType::VolPath,
+                                  lt::IntegratorType::VolumeDebug, lt::IntegratorType::Bidirectional}) {
+    rs.integrator = type;
+    const lt::IntegratorNeeds needs = lt::integrator_needs(type, rs.integrator_settings);
+    const bool bdpt = type == lt::IntegratorType::Bidirectional;
+    EXPECT_EQ(needs.splats, bdpt);
+    EXPECT_EQ(needs.strategy_cells, bdpt ? 3 * lt::strategy_columns(3) : 0);
+    const lt::FilmLayout layout = lt::RenderJob::film_layout(rs);
+    EXPECT_EQ(layout.splats, needs.splats) << int(type);
+    EXPECT_EQ(layout.strategy_cells, needs.strategy_cells) << int(type);
+    EXPECT_EQ(lt::RenderJob::estimate_bytes(rs).other - other_path, size_t(64 * 32) * needs.bytes_per_pixel)
+        << int(type);
+    EXPECT_EQ(needs.bytes_per_pixel, bdpt ? sizeof(lt::Splat) : 0u);
+  }
 }
 
 TEST(Memory, PassesReadInRowBandsAreTheFullPassesRows) {

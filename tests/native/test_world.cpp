@@ -109,7 +109,7 @@ TEST(World, LightPathSeesTheRay) {
   ShadingContext c = world_context(d);
   describe_ray(b, kVisCamera, &c);
   EXPECT_NEAR(s->world.radiance(c).x, 0.5f, 1e-6f);
-  b.total = b.diffuse = 1;
+  b.add(BounceKind::Diffuse);
   c = world_context(d);
   describe_ray(b, kVisDiffuse, &c);
   EXPECT_NEAR(s->world.radiance(c).x, 2.0f, 1e-6f);

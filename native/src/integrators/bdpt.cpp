@@ -62,7 +62,7 @@ float Bdpt::kind_limit_factor(const std::vector<PathVertex>& light, const std::v
                               int t) const {
   const int k = s + t - 1;  // x[0] the camera ... x[k] the light
   auto x = [&](int i) -> const PathVertex& { return i < t ? camera[i] : light[k - i]; };
-  int n[6] = {0, 0, 0, 0, 0, 0};
+  Bounces n;  // the vertices whose kind is certain
   // Vertices whose kind depends on the lobe: the probabilities of diffuse, glossy, transmission.
   constexpr int kMaxMixed = 64;
   float mixed[kMaxMixed][3];
@@ -70,12 +70,12 @@ float Bdpt::kind_limit_factor(const std::vector<PathVertex>& light, const std::v
   for (int i = 1; i <= k - 2; ++i) {
     const PathVertex& v = x(i);
     if (v.type == VertexType::Medium) {
-      ++n[int(BounceKind::Volume)];
+      n.add(BounceKind::Volume);
       continue;
     }
     if (v.type != VertexType::Surface) continue;
     if (v.kind != BounceKind::Mixed) {
-      ++n[int(v.kind)];
+      n.add(v.kind);
       continue;
     }
     // The walks stored the probabilities of vertices inside a subpath; the connection vertices
@@ -92,7 +92,7 @@ float Bdpt::kind_limit_factor(const std::vector<PathVertex>& light, const std::v
       if (p[j] > 0) ++nonzero, only = j;
     if (nonzero == 0) continue;  // transparent
     if (nonzero == 1) {
-      ++n[int(BounceKind::Diffuse) + only];
+      n.add(BounceKind(int(BounceKind::Diffuse) + only));
       continue;
     }
     if (m == kMaxMixed) return 0;
@@ -102,11 +102,12 @@ float Bdpt::kind_limit_factor(const std::vector<PathVertex>& light, const std::v
     }
     ++m;
   }
-  const int limit[3] = {s_.diffuse_bounces, s_.glossy_bounces, s_.transmission_bounces};
-  int cap[3];
-  for (int j = 0; j < 3; ++j)
-    if ((cap[j] = limit[j] - n[int(BounceKind::Diffuse) + j]) < 0) return 0;
-  if (n[int(BounceKind::Volume)] > s_.volume_bounces) return 0;
+  if (n.kind_exceeded(s_)) return 0;
+  int cap[3];  // what the mixed vertices may add to each of diffuse, glossy, transmission
+  for (int j = 0; j < 3; ++j) {
+    const BounceKind k = BounceKind(int(BounceKind::Diffuse) + j);
+    cap[j] = Bounces::limit(s_, k) - n.of(k);
+  }
   if (m == 0) return 1;
   // Probability that the mixed vertices' kinds keep within the remaining capacities: dynamic
   // programming over their counts, tracking only the kinds that could exceed their capacity.
@@ -176,9 +177,38 @@ bool Bdpt::mixed_kind(const PathVertex& v, const Vec3& camera_side, const Vec3& 
   return true;
 }
 
-// Adds the s = 0 strategy for a camera subpath whose vertex t - 1 is on an emitter.
-void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le) {
-  PathVertex& v = camera[t - 1];
+void Bdpt::add_emitters_reached(std::vector<PathVertex>& camera, int nt) {
+  const std::vector<Crossed>& crossed = scratch_.crossed;
+  size_t r = 0;
+  for (int at = 1; at <= nt; ++at) {
+    // The segment before camera[at], then that vertex.
+    for (; r < crossed.size() && crossed[r].at == at; ++r) {
+      const Crossed& c = crossed[r];
+      if (c.light >= 0) {
+        PathVertex& v = endpoint(VertexType::Light);
+        v.light = c.light;
+        v.infinite = c.infinite;
+        v.vis = c.vis;
+        v.p = c.p;
+        v.n = c.n;
+        v.beta = c.beta;
+        v.pdf_fwd = c.pdf_fwd;
+        emitter_reached(camera, at + 1, &v, c.le);
+        continue;
+      }
+      // Volume emission: light that only camera subpaths find (no light subpath starts in a
+      // medium, and connections never end on one), so strategy s = 0 is its only estimator and
+      // takes it with MIS weight 1, within the same depth and per-kind limits as an emitter there.
+      if (at - 1 > max_depth()) continue;
+      const float kinds_within = kind_limit_factor(camera, camera, 0, at + 1);
+      if (kinds_within > 0) add(c.le * kinds_within, 0, at + 1, -1);
+    }
+    if (at < nt && !is_black(camera[at].le)) emitter_reached(camera, at + 1, nullptr, camera[at].le);
+  }
+}
+
+void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, PathVertex* crossed, const Spectrum& le) {
+  PathVertex& v = crossed ? *crossed : camera[t - 1];
   if (v.type == VertexType::Surface && v.light < 0) {
     // Emission no light sampler knows: s = 0 alone finds it, with no MIS partner.
     if (!is_black(le)) add(v.beta * le, 0, t, scene_.geometry.instance(v.sp.instance).lightgroup);
@@ -192,29 +222,16 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, const Spectru
   // Strategy s = 1 would have picked this light from the vertex before (mis_weight).
   const PathVertex& before = camera[t - 2];
   v.pick_nee = before.type == VertexType::Camera ? 0.0f : lights_.pmf_nee(before.p, nee_normal(before), v.light);
-  add(c * mis_weight(camera /*unused light*/, camera, nullptr, 0, t, pixel_center_), 0, t, lights_.lightgroup(v.light),
+  add(c * mis_weight(camera /*unused light*/, camera, crossed, 0, t, pixel_center_), 0, t, lights_.lightgroup(v.light),
       v.infinite && v.light == lights_.world_light());
 }
 
-// Volume emission along the segment before camera vertex `count` (media_transport.h): light that
-// only camera subpaths find (no light subpath starts in a medium, and connections never end on
-// one), so strategy s = 0, t = count + 1 is its only estimator and takes it with MIS weight 1.
-// The same depth and per-kind limits (kind_limit_factor) as an emitter reached at vertex count.
-void Bdpt::media_emission_reached(std::vector<PathVertex>& camera, int count, const Ray& ray, float t_end,
-                                  const VolumeStack& stack, const Spectrum& beta) {
-  if (count - 1 > max_depth()) return;
-  camera[count].type = VertexType::Light;  // the emission point: not a scattering vertex for the kind limits
-  const float kinds_within = kind_limit_factor(camera, camera, 0, count + 1);
-  if (!(kinds_within > 0)) return;
-  Spectrum le = media_emission(scene_, stack, ray, ray.tmin, t_end, sampler_, s_.volume_estimator, s_.volume_step);
-  if (!is_black(le)) add(beta * le * kinds_within, 0, count + 1, -1);
-}
-
 // Extends `path` from vertex 0 by sampling the BSDFs and phase functions (pbrt-v4's RandomWalk),
-// with free flights through the media. The camera walk (mode Radiance) reports the emitters its
-// rays reach to s = 0 as it goes: lamps, the world and suns make no vertex of the subpath (the
-// vertex after the last is set for each in turn), and emitting media are estimated along each
-// segment with the walk's own sampler.
+// with free flights through the media. It only builds the subpath: the camera walk (mode
+// Radiance) records for strategy s = 0 what its rays reach, emitting surfaces in their vertices
+// (PathVertex::le) and, per segment, what makes no vertex (scratch_.crossed: lamps crossed, the
+// world and suns escaped to, the emission of the media along it, estimated with the walk's own
+// sampler); add_emitters_reached evaluates them after the walks.
 int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeStack stack,
                       std::vector<PathVertex>& path, FirstSegment* first) {
   if (max_depth <= 0) return 1;
@@ -227,8 +244,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     return pdf(prev, count >= 2 ? &path[count - 2] : nullptr, v, pixel_center_);
   };
   // The density of the vertex before prev as sampled from prev, arriving from v (the other
-  // direction). Every vertex the walk reaches sets it, emitters ended on included: the s = 0 weight
-  // of a path that escapes to the world or crosses a lamp reads it.
+  // direction). Every vertex of the walk sets it; for an emitter crossed, which is none,
+  // mis_weight does.
   auto reverse_density = [&](int count, const PathVertex& v) {
     if (count >= 2)
       path[count - 2].pdf_rev = path[count - 1].delta ? 0.0f : pdf(path[count - 1], &v, path[count - 2], pixel_center_);
@@ -242,10 +259,13 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   // it straight from the camera's centre would have (Cycles has no light paths).
   float footprint = mode == Mode::Radiance ? cs_.dP : 0.0f;
   const float beta_start = max_abs_component(beta);
-  // Bounce kinds counted so far towards Cycles' per-kind limits (see kind_limit_factor): a walk
-  // stops where every strategy using its further vertices would fail them, so no work is spent
-  // on vertices no strategy can use.
-  int kinds[5] = {0, 0, 0, 0, 0};
+  // Bounce kinds counted so far towards Cycles' per-kind limits (path_state.h): the walk stops
+  // where every strategy using its further vertices would fail them (kind_limit_factor 0; only
+  // kinds that are certain count, Mixed ones may be any of theirs). The stop stays in the walk,
+  // as its length limit does (pbrt-v4's maxDepth in RandomWalk): it is where the work on vertices
+  // no strategy can use is saved, and it changes no estimate.
+  Bounces kinds;
+  std::vector<Crossed>& crossed = scratch_.crossed;
   for (;;) {
     PathVertex& prev = path[count - 1];
     PathVertex& v = path[count];
@@ -256,44 +276,53 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     const Spectrum beta_before = beta;
     MediumInteraction mi;
     int medium = -1;
-    if (mode == Mode::Radiance && media_ && scene_.has_emissive_media() && stack.size > 0)
-      media_emission_reached(path, count, ray, found ? hit.t : INFINITY, stack, beta);
+    if (mode == Mode::Radiance && media_ && scene_.has_emissive_media() && stack.size > 0) {
+      Crossed c;
+      c.at = count;
+      c.le = beta * media_emission(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_,
+                                   s_.volume_estimator, s_.volume_step);
+      if (!is_black(c.le)) crossed.push_back(c);
+    }
     if (media_)
       medium = sample_media(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_, s_.volume_estimator,
                             s_.volume_step, &beta, &mi);
     if (mode == Mode::Radiance) {
+      // An emitter the segment reaches that makes no vertex: recorded for s = 0, with its density
+      // from prev as the walk's vertices have theirs.
+      auto reach = [&](int light, bool infinite, const Vec3& p, const Vec3& n, const Spectrum& b, const Spectrum& le) {
+        if (is_black(le)) return;
+        Crossed c;
+        c.at = count;
+        c.light = light;
+        c.infinite = infinite;
+        c.vis = scene_.light_visibility(light);
+        c.p = p;
+        c.n = n;
+        c.beta = b;
+        c.le = le;
+        PathVertex& e = endpoint(VertexType::Light);
+        e.infinite = infinite;
+        e.p = p;
+        e.n = n;
+        c.pdf_fwd = density_of(count, e);
+        crossed.push_back(c);
+      };
       // Lamps with a size are crossed, not hit: each one crossed ends a path of strategy s = 0.
       if (lights_.has_hittable()) {
         Ray r = ray;
         r.tmax = medium >= 0 ? std::min(mi.t, found ? hit.t : ray.tmax) : (found ? hit.t : ray.tmax);
         lights_.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
-          v = PathVertex();
-          v.type = VertexType::Light;
-          v.light = h.light;
-          v.p = ray.o + ray.d * h.t;
-          v.n = h.n;
-          v.vis = scene_.light_visibility(h.light);
-          v.beta = medium >= 0 ? beta_before : beta;  // the segment before the collision (exact for grey media)
-          v.pdf_fwd = density_of(count, v);
-          reverse_density(count, v);
-          emitter_reached(path, count + 1, h.radiance);
+          reach(h.light, false, ray.o + ray.d * h.t, h.n,
+                medium >= 0 ? beta_before : beta,  // the segment before the collision (exact for grey media)
+                h.radiance);
         });
       }
       if (!found && medium < 0) {
         bool background = count == 1;
         if (background && first && s_.transparent_background) first->transparent += average(beta);
         if (!(background && s_.transparent_background)) {
-          auto reach = [&](int light, const Spectrum& le) {
-            v = PathVertex();
-            v.type = VertexType::Light;
-            v.infinite = true;
-            v.light = light;
-            v.vis = scene_.light_visibility(light);
-            v.p = prev.p + ray.d;
-            v.beta = beta;
-            v.pdf_fwd = density_of(count, v);
-            reverse_density(count, v);
-            emitter_reached(path, count + 1, le);
+          auto escape = [&](int light, const Spectrum& le) {
+            reach(light, true, prev.p + ray.d, Vec3(0.0f), beta, le);
           };
           if (lights_.world_light() >= 0 && (!background || scene_.world.camera_visible)) {
             ShadingContext wc = world_context(ray.d);
@@ -301,9 +330,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
             b.total = bounces;
             describe_ray(b, visibility, &wc);
             wc.transparent_depth = transparent;
-            reach(lights_.world_light(), scene_.world.radiance(wc));
+            escape(lights_.world_light(), scene_.world.radiance(wc));
           }
-          lights_.escaped_suns(ray.d, visibility, reach);
+          lights_.escaped_suns(ray.d, visibility, escape);
         }
       }
     }
@@ -394,14 +423,20 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.light = is_black(le) ? -1 : lights_.triangle_light(sp.instance, sp.primitive);
       v.kind = kind_of(v.bsdf);
     }
+    v.le = le;
     // Light subpaths: strategies with s >= count + 1 count the kinds of light[2..count].
-    if (mode == Mode::Importance && count >= 2 && exceeds_kind_limit(kinds, v.kind)) break;
+    if (mode == Mode::Importance && count >= 2) {
+      kinds.add(v.kind);
+      if (kinds.kind_exceeded(s_)) break;
+    }
     ++count;
     if (count == 2 && first) first->t = hit.t;
-    if (mode == Mode::Radiance) emitter_reached(path, count, le);
     if (++bounces >= max_depth || (medium < 0 && v.bsdf.count() == 0)) break;
     // Camera subpaths: every strategy using vertex `count` counts the kinds of camera[1..count-2].
-    if (mode == Mode::Radiance && count >= 3 && exceeds_kind_limit(kinds, path[count - 2].kind)) break;
+    if (mode == Mode::Radiance && count >= 3) {
+      kinds.add(path[count - 2].kind);
+      if (kinds.kind_exceeded(s_)) break;
+    }
 
     Vec3 wi;
     if (medium >= 0) {
@@ -458,6 +493,7 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   z0.delta = !ctx_.camera.connectable();
   if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, cs_.ray, &z0.stack, stats_);
   FirstSegment first;
+  scratch_.crossed.clear();
   const int count = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, z0.stack, path, &first);
   // The data passes, from the first vertex (Cycles': none behind a medium vertex).
   out_.alpha = 1 - first.transparent;
@@ -478,6 +514,10 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
 }
 
 int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
+  // Without a subpath light[0] is an empty light vertex, of no light (none of a previous sample).
+  PathVertex& y0 = path[0];
+  y0 = PathVertex();
+  y0.type = VertexType::Light;
   if (lights_.empty() || s_.max_light_length <= 0) return 0;
   float pmf, u_remapped;
   int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
@@ -491,9 +531,6 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   EmissionSample e;
   if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e, time_) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
     return 0;
-  PathVertex& y0 = path[0];
-  y0 = PathVertex();
-  y0.type = VertexType::Light;
   y0.light = li;
   y0.vis = scene_.light_visibility(li);
   y0.infinite = l.infinite();
@@ -534,11 +571,12 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
 float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, PathVertex* sampled, int s,
                        int t, const Vec2& pixel, double* light_sum) {
   if (s + t == 2) return 1;
-  // The sampled endpoint (s = 1: a light sample, t = 1: the camera) stands in for light[0] or
-  // camera[0]. The densities this strategy implies are assigned temporarily (pbrt's
-  // ScopedAssignment), then restored.
+  // The sampled endpoint (s = 1: a light sample; t = 1: the camera; s = 0: an emitter the camera
+  // walk crossed, which is no vertex of it) stands in for light[0], camera[0] or camera[t - 1].
+  // The densities this strategy implies are assigned temporarily (pbrt's ScopedAssignment), then
+  // restored.
   PathVertex* qs = s == 1 ? sampled : (s > 1 ? &light[s - 1] : nullptr);
-  PathVertex* pt = t == 1 ? sampled : (t > 1 ? &camera[t - 1] : nullptr);
+  PathVertex* pt = s != 1 && sampled ? sampled : (t > 1 ? &camera[t - 1] : nullptr);
   PathVertex* qs_minus = s > 1 ? &light[s - 2] : nullptr;
   PathVertex* pt_minus = t > 1 ? &camera[t - 2] : nullptr;
   auto L = [&](int i) -> const PathVertex& { return i == s - 1 ? *qs : light[i]; };
@@ -547,7 +585,7 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     float* where;
     float value;
   };
-  Saved saved[4];
+  Saved saved[5];
   int n_saved = 0;
   auto assign = [&](float* where, float value) {
     saved[n_saved++] = {where, *where};
@@ -560,10 +598,13 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   if (pt_minus) assign(&pt_minus->pdf_rev, s > 0 ? pdf(*pt, qs, *pt_minus, pixel) : pdf_light(*pt, *pt_minus));
   if (qs) assign(&qs->pdf_rev, pdf(*pt, pt_minus, *qs, pixel));
   if (qs_minus) assign(&qs_minus->pdf_rev, pdf(*qs, pt, *qs_minus, pixel));
+  // A crossed emitter: the walk set camera[t - 3]'s reverse density towards its own next vertex.
+  if (s == 0 && sampled && t >= 3)
+    assign(&camera[t - 3].pdf_rev, pt_minus->delta ? 0.0f : pdf(*pt_minus, pt, camera[t - 3], pixel));
 
   // Strategy (s', t') exists only if the subpath limits let both walks produce it, and light
   // subpaths (s' >= 2) never start on a lamp that faces its receiver.
-  const PathVertex& light_end = s > 1 ? light[0] : (s == 1 ? *qs : camera[t - 1]);
+  const PathVertex& light_end = s > 1 ? light[0] : (s == 1 ? *qs : *pt);
   const bool subpaths_from_light = light_end.light < 0 || !lights_.light(light_end.light).faces_receiver();
   auto exists = [&](int s2, int t2) {
     return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light);
@@ -749,6 +790,7 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   int nt = generate_camera_subpath(camera);
   int ns = generate_light_subpath(light);
 
+  add_emitters_reached(camera, nt);
   // s = 1 takes a fresh light sample and needs no light subpath (there is none when the picked
   // lamp faces its receiver, or emission sampling failed); a scene without lights has no s >= 1
   // (fuzz_abi: picking from the empty light set read through a null pointer).
@@ -756,8 +798,7 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   for (int t = 2; t <= nt; ++t)
     for (int s = 1; s <= s_max; ++s) {
       if (s + t - 2 > max_depth()) break;
-      // s = 1: connect() sets its sample's; without a light subpath light[0] is a stale vertex.
-      connect_group_ = ns > 0 ? lights_.lightgroup(light[0].light) : -1;
+      connect_group_ = lights_.lightgroup(light[0].light);  // s = 1: connect() sets its sample's
       Spectrum c = connect(light, camera, s, t);
       if (!is_black(c)) add(c, s, t, connect_group_);
     }
@@ -818,6 +859,14 @@ class BdptIntegrator final : public Integrator {
 
 std::unique_ptr<Integrator> make_bdpt_integrator(const RenderContext& ctx) {
   return std::make_unique<BdptIntegrator>(ctx);
+}
+
+IntegratorNeeds bdpt_needs(const IntegratorSettings& s) {
+  IntegratorNeeds n;
+  n.splats = true;
+  if (s.strategy_depth > 0) n.strategy_cells = s.strategy_depth * strategy_columns(s.strategy_depth);
+  n.bytes_per_pixel = sizeof(Splat);  // a pass's splats: about one per camera sample
+  return n;
 }
 
 }  // namespace lt

@@ -15,9 +15,23 @@ namespace lt {
 // The kinds of ray a light subpath's segments and BDPT's connections stand for: any indirect ray.
 constexpr unsigned kVisLightRay = kVisDiffuse | kVisGlossy | kVisTransmission;
 
+// What a camera walk's segment crossed that strategy s = 0 takes and that is no vertex of the
+// subpath: an emitter (a lamp with a size crossed, the world or a sun escaped to), or the emission
+// of the media along it (light < 0: `le` holds the segment's estimate, media_transport.h).
+struct Crossed {
+  int at = 0;      // the segment ends at camera[at]: s = 0 takes the emitter as that vertex (t = at + 1)
+  int light = -1;  // the emitter
+  bool infinite = false;
+  unsigned vis = kVisAll;  // its ray visibility
+  Vec3 p, n;
+  Spectrum beta{1.0f}, le{0.0f};  // the walk's throughput up to it, and its radiance towards the walk
+  float pdf_fwd = 0;              // the density of reaching it from camera[at - 1] (area measure)
+};
+
 // Per-thread scratch, allocated once and reused: no heap allocation per sample.
 struct BdptScratch {
   std::vector<PathVertex> camera, light;  // the subpaths
+  std::vector<Crossed> crossed;           // the camera walk's, in its order
   PathVertex endpoint;                    // the sampled light vertex of s = 1, the camera vertex of t = 1
   std::vector<double> prob, next;         // kind_limit_factor's dynamic programming
 };
@@ -190,16 +204,16 @@ class Bdpt {
   int generate_light_subpath(std::vector<PathVertex>& path);
 
   // ---- strategies (pbrt-v4's ConnectBDPT and MISWeight) ----------------------------------------
-  // s = 0, reported by the camera walk as it goes: an emitter at camera vertex t - 1 (a lamp, the
-  // world or a sun the walk's ray reached, or an emissive surface), and the emission of the media
-  // along the walk's segment before vertex `count` (its estimate draws on the walk's sampler).
-  void emitter_reached(std::vector<PathVertex>& camera, int t, const Spectrum& le);
-  void media_emission_reached(std::vector<PathVertex>& camera, int count, const Ray& ray, float t_end,
-                              const VolumeStack& stack, const Spectrum& beta);
+  // Strategy s = 0 for every t, after the walks: the camera subpath's emitting surface vertices
+  // and what its segments crossed (scratch_.crossed), in the walk's order.
+  void add_emitters_reached(std::vector<PathVertex>& camera, int nt);
+  // s = 0 with the emitter at camera vertex t - 1: that vertex itself, or `crossed`, one the walk
+  // crossed that stands in for it.
+  void emitter_reached(std::vector<PathVertex>& camera, int t, PathVertex* crossed, const Spectrum& le);
   float mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& camera, PathVertex* sampled, int s, int t,
                    const Vec2& pixel, double* light_sum = nullptr);
-  // A light or camera vertex for a strategy's sampled endpoint, reset without constructing a
-  // PathVertex (whose BSDF those types never use).
+  // A light or camera vertex for a strategy's sampled endpoint (or an emitter the camera walk
+  // crossed), reset without constructing a PathVertex (whose BSDF those types never use).
   PathVertex& endpoint(VertexType type) {
     PathVertex& v = scratch_.endpoint;
     v.type = type;
@@ -260,16 +274,6 @@ class Bdpt {
   // surface vertex of kind Mixed as each kind, scattering from the neighbour at `camera_side`
   // towards the one at `light_side` (delta: through a delta lobe). False if no lobe can.
   bool mixed_kind(const PathVertex& v, const Vec3& camera_side, const Vec3& light_side, bool delta, float* p) const;
-  // Adds a vertex of kind k to the counts; true if that takes them past its limit. A walk counts
-  // only the vertices whose kind is certain (Mixed ones may count as any of theirs), so it stops
-  // only where every strategy using its further vertices would fail the limits.
-  bool exceeds_kind_limit(int* n, BounceKind k) const {
-    if (k == BounceKind::Mixed) return false;
-    const int c = ++n[int(k)];
-    return (k == BounceKind::Diffuse && c > s_.diffuse_bounces) || (k == BounceKind::Glossy && c > s_.glossy_bounces) ||
-           (k == BounceKind::Transmission && c > s_.transmission_bounces) ||
-           (k == BounceKind::Volume && c > s_.volume_bounces);
-  }
   int camera_depth() const { return std::min(s_.max_camera_length, s_.max_bounces + 2); }
 
   const RenderContext& ctx_;

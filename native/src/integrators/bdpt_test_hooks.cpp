@@ -81,6 +81,19 @@ std::vector<float> Bdpt::weight_sums() {
         if (sampled) sampled_copy = *sampled;
         float w = mis_weight(l2, c2, sampled ? &sampled_copy : nullptr, s2, t2, pixel_center_);
         if (!(w >= 0 && w <= 1 + 1e-5f)) sum = NAN;  // a weight outside [0, 1] fails the check
+        if (s2 == 0 && t2 >= 3) {
+          // The same weight with the emitter off the subpath, as one the camera walk crossed
+          // (add_emitters_reached): the vertex in its place and the reverse density of the vertex
+          // before its predecessor are the walk's, towards another vertex; mis_weight must not
+          // read them.
+          PathVertex emitter = c2[t2 - 1];
+          std::vector<PathVertex> c3(c2);
+          c3[t2 - 1].p = c3[t2 - 1].p + Vec3(1.0f);
+          c3[t2 - 1].pdf_fwd = c3[t2 - 1].pdf_rev = NAN;
+          c3[t2 - 3].pdf_rev = 2 * c3[t2 - 3].pdf_rev + 1;
+          const float w_crossed = mis_weight(l2, c3, &emitter, 0, t2, pixel_center_);
+          if (!(std::abs(w_crossed - w) <= 1e-5f * std::max(1.0f, w))) sum = NAN;
+        }
         sum += w * kind_limit_factor(l2, c2, s2, t2) / factor;
       }
       sums.push_back(sum);

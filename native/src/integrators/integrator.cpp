@@ -19,6 +19,10 @@ std::unique_ptr<Integrator> make_integrator(IntegratorType type, const RenderCon
   return make_path_integrator(ctx, false);
 }
 
+IntegratorNeeds integrator_needs(IntegratorType type, const IntegratorSettings& s) {
+  return type == IntegratorType::Bidirectional ? bdpt_needs(s) : IntegratorNeeds{};
+}
+
 const char* integrator_name(IntegratorType type) {
   switch (type) {
     case IntegratorType::Path:

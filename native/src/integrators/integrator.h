@@ -149,6 +149,14 @@ class Integrator {
 // The integrator for `type`; "Volumetric Path" on a scene without media is the path tracer (the
 // same estimator, without the media code).
 std::unique_ptr<Integrator> make_integrator(IntegratorType type, const RenderContext& ctx);
+// What an integrator of a type asks of the film and the render job beyond the passes, known before
+// the integrator exists (the job sizes the film and estimates its memory from it).
+struct IntegratorNeeds {
+  bool splats = false;         // light-tracing splats: the film's splat buffers
+  int strategy_cells = 0;      // the film's per-pixel strategy view (Film::add_strategies)
+  size_t bytes_per_pixel = 0;  // the integrator's own per-pixel buffers during a pass
+};
+IntegratorNeeds integrator_needs(IntegratorType type, const IntegratorSettings& s);
 // The integrator's name as lt_integrator spells it without LT_INTEGRATOR_ (EXR metadata).
 const char* integrator_name(IntegratorType type);
 
@@ -159,6 +167,7 @@ std::unique_ptr<Integrator> make_path_integrator(const RenderContext& ctx, bool 
 // connection strategy weighted by MIS; t = 1 contributions are splats. With the film's strategy
 // view on, each sample's weighted contribution per strategy cell goes to the film too.
 std::unique_ptr<Integrator> make_bdpt_integrator(const RenderContext& ctx);
+IntegratorNeeds bdpt_needs(const IntegratorSettings& s);
 // Volume debug view (volume_debug.cpp): a 2x2 grid of panels, each the whole view at half size:
 // transmittance by ray marching | by ratio tracking (top), distance sampled by ray marching | by
 // delta tracking (bottom).

@@ -30,7 +30,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   Ray ray = camera_ray;
   unsigned visibility = kVisCamera;
   Bounces b;
-  int volume = 0, nulls = 0;
+  int nulls = 0;
   // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
   float prev_pdf = 0;
   bool prev_delta = true;
@@ -126,7 +126,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
 
     if (medium >= 0) {
       // A real collision: beta already holds sigma_s T / pdf (medium.h).
-      if (is_black(beta) || volume > s.volume_bounces || b.total > s.max_bounces) break;
+      if (is_black(beta) || b.of(BounceKind::Volume) > s.volume_bounces || b.total > s.max_bounces) break;
       const Phase& phase = scene.media[medium].phase();
       const Vec3 wo = normalize(-ray.d);
       if (b.total == 0) nee_first.set_volume();
@@ -140,8 +140,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       float pdf;
       if (!phase.sample(wo, sampler.next_2d(), &wi, &pdf) || !(pdf > 0)) break;
       if (b.total == 0) first.set_volume();
-      ++volume;
-      ++b.total;
+      b.add(BounceKind::Volume);
       visibility = kVisDiffuse;
       prev_pdf = pdf;
       prev_delta = false;
@@ -209,7 +208,9 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       // A transparent pass continues the line as an invisible boundary does: the MIS state stays
       // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.
       if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta, b.from_camera())) {
-        if (++b.transparent > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
+        b.add(BounceKind::None);
+        if (b.of(BounceKind::None) > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls))
+          break;
         t_prev += hit.t * length(ray.d);
         footprint = footprint_here;
         continue;
@@ -230,7 +231,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         if (s.vector_pass && motion_vector(scene, camera, sp, out.vector)) out.vector_weight = 1;
       }
       if (bsdf.count() == 0) break;
-      if (b.exceeded(s) || (kMedia && volume > s.volume_bounces)) break;
+      if (b.exceeded(s)) break;
 
       if (bsdf.has_non_delta() && !lights.empty())
         next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf, unsigned excluded) {

@@ -63,32 +63,53 @@ inline BounceKind bounce_kind(const Lobe& l, bool transmit) {
   return bounce_kind(flags, transmit && lobe_is_glass(l.type) ? l.eta : 1.0f);
 }
 
-// Cycles' bounce bookkeeping: transparent pass-throughs are counted apart from the bounces.
+// Cycles' bounce bookkeeping, for the path tracer and BDPT alike: transparent pass-throughs are
+// counted apart from the bounces, and each kind against its own limit.
 struct Bounces {
-  int total = 0, diffuse = 0, glossy = 0, transmission = 0, transparent = 0;
-  bool from_camera() const { return total == 0 && transparent == 0; }  // still on the camera ray
+  int total = 0;
+  int n[5] = {0, 0, 0, 0, 0};  // by BounceKind, None to Volume (None: transparent pass-throughs)
+  int of(BounceKind k) const { return k == BounceKind::Mixed ? 0 : n[int(k)]; }
+  bool from_camera() const { return total == 0 && of(BounceKind::None) == 0; }  // still on the camera ray
+  // Counts a scattering of kind k. Mixed counts nothing: its kind is that of the lobe the path
+  // tracer would sample (BDPT's kind_limit_factor weighs it).
+  void add(BounceKind k) {
+    if (k == BounceKind::Mixed) return;
+    ++n[int(k)];
+    if (k != BounceKind::None) ++total;
+  }
   // Counts the scattering a BSDF sample made; a bounce changes the next ray's kind.
   void count(const BsdfSample& bs, unsigned* visibility) {
-    switch (bounce_kind(bs.flags, bs.eta)) {
+    const BounceKind k = bounce_kind(bs.flags, bs.eta);
+    add(k);
+    if (k != BounceKind::None) *visibility = visibility_of(bs.flags);
+  }
+  // Cycles' limit on scatterings of kind k.
+  static int limit(const IntegratorSettings& s, BounceKind k) {
+    switch (k) {
       case BounceKind::None:
-        ++transparent;
-        return;
+        return s.transparent_bounces;
       case BounceKind::Diffuse:
-        ++diffuse;
-        break;
+        return s.diffuse_bounces;
+      case BounceKind::Glossy:
+        return s.glossy_bounces;
       case BounceKind::Transmission:
-        ++transmission;
-        break;
-      default:
-        ++glossy;
+        return s.transmission_bounces;
+      case BounceKind::Volume:
+        return s.volume_bounces;
+      case BounceKind::Mixed:
         break;
     }
-    ++total;
-    *visibility = visibility_of(bs.flags);
+    return INT32_MAX;
   }
+  // Past the limit of a kind of bounce (diffuse, glossy, transmission, volume).
+  bool kind_exceeded(const IntegratorSettings& s) const {
+    for (int k = int(BounceKind::Diffuse); k <= int(BounceKind::Volume); ++k)
+      if (n[k] > limit(s, BounceKind(k))) return true;
+    return false;
+  }
+  // Past any of Cycles' limits: a path tracer's path ends.
   bool exceeded(const IntegratorSettings& s) const {
-    return total > s.max_bounces || diffuse > s.diffuse_bounces || glossy > s.glossy_bounces ||
-           transmission > s.transmission_bounces || transparent > s.transparent_bounces;
+    return total > s.max_bounces || kind_exceeded(s) || of(BounceKind::None) > s.transparent_bounces;
   }
 };
 
@@ -100,10 +121,10 @@ inline void describe_ray(const Bounces& b, unsigned visibility, ShadingContext* 
   c->transmission_ray = !c->camera_ray && (visibility & kVisTransmission);
   c->reflection_ray = c->diffuse_ray || c->glossy_ray;
   c->ray_depth = b.total;
-  c->diffuse_depth = b.diffuse;
-  c->glossy_depth = b.glossy;
-  c->transparent_depth = b.transparent;
-  c->transmission_depth = b.transmission;
+  c->diffuse_depth = b.of(BounceKind::Diffuse);
+  c->glossy_depth = b.of(BounceKind::Glossy);
+  c->transparent_depth = b.of(BounceKind::None);
+  c->transmission_depth = b.of(BounceKind::Transmission);
 }
 
 // Cycles' integrate_surface_holdout (integrator/shade_surface.h): at a surface that a camera path

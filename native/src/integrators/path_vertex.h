@@ -29,6 +29,7 @@ struct PathVertex {
   // sample the path there). Set by the walk once both neighbours are known (bdpt.cpp).
   float kind_p[3] = {0, 0, 0};
   Spectrum beta{1.0f};  // throughput of the subpath up to and including this vertex
+  Spectrum le{0.0f};    // Surface vertices: the radiance they emit towards their predecessor (s = 0)
   float pdf_fwd = 0;    // density of sampling this vertex from its predecessor
   float pdf_rev = 0;    // density of sampling it from its successor (the other direction)
   // Light vertices: the probability that next-event estimation from the neighbouring vertex picks

@@ -60,13 +60,13 @@ FilmLayout RenderJob::film_layout(const RenderSettings& s) {
   l.passes = s.passes;
   if (s.denoise) l.passes |= kDenoisingFeatures | pass_bit(Pass::NoisyImage);
   l.squares = (s.passes & pass_bit(Pass::Variance)) || s.adaptive;
-  l.splats = s.integrator == IntegratorType::Bidirectional;
+  const IntegratorNeeds needs = integrator_needs(s.integrator, s.integrator_settings);
+  l.splats = needs.splats;
+  l.strategy_cells = needs.strategy_cells;
   l.cryptomatte = s.cryptomatte;
   l.cryptomatte_levels = s.cryptomatte_levels;
   l.lightgroups = s.integrator_settings.lightgroups;
   l.aovs = s.integrator_settings.aovs;
-  const int depth = s.integrator_settings.strategy_depth;
-  if (l.splats && depth > 0) l.strategy_cells = depth * strategy_columns(depth);
   return l;
 }
 
@@ -76,8 +76,7 @@ MemoryEstimate RenderJob::estimate_bytes(const RenderSettings& s) {
   m.film = pixels * film_layout(s).bytes_per_pixel();
   m.other = pixels;                       // active_
   if (s.adaptive) m.other += pixels * 8;  // update_active's per-pixel variances
-  if (s.integrator == IntegratorType::Bidirectional)
-    m.other += pixels * sizeof(Splat);  // a pass's splats: about one per camera sample
+  m.other += pixels * integrator_needs(s.integrator, s.integrator_settings).bytes_per_pixel;
   // Denoising: the half images, the denoiser's planes, its reconstruction sums (2 x RGB + weight)
   // and its output (denoise/nfor.cpp).
   if (s.denoise) m.other += pixels * (2 * (3 + 3 + kFeatureChannels) + 1 + 12 + kFeatureChannels + 1 + 8 + 6) * 4;
