@@ -40,9 +40,10 @@ WORLD_SCENES = ["hdri_world", "light_path_world", "procedural_world"]
 # points as spheres (issue 15; the hair scenes have their own test).
 PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "sun_world",
                "textured", "instanced", "cornell_dof", "motion_blur", "point_cloud"] + WORLD_SCENES
-# Issue 15's panoramic cameras, one small render each (path tracing: BIDIRECTIONAL does not
-# connect to panoramas, tests/native/test_bdpt.cpp checks it agrees with path tracing there).
-PANORAMA_SCENES = ["pano_equirectangular", "pano_fisheye_equidistant", "pano_fisheye_equisolid"]
+# Issue 15's panoramic cameras, one small render each for path tracing; BIDIRECTIONAL's light
+# tracing to a panorama on one of them (BDPT_SCENES), tests/native/test_bdpt.cpp on the others.
+PANORAMA_SCENES = ["pano_equirectangular", "pano_fisheye_equidistant", "pano_fisheye_equisolid", "pano_mirrorball",
+                   "pano_fisheye_polynomial"]
 TILE = 16
 ROUNDING = 1e-5  # float32 accumulation and EXR round trip
 
@@ -94,9 +95,10 @@ def test_volumetric_path_tracer_agrees_with_cycles_and_path_without_media(name, 
 
 @pytest.mark.parametrize("name", PANORAMA_SCENES)
 def test_panoramic_cameras_agree_with_cycles(name, scene_factory, outdir):
-    """Equirectangular (reduced ranges) and the fisheyes (equidistant over 200 degrees, equisolid
-    with its lens and sensor), each with a shift: per 8 x 8 tile (these images are small) and in
-    the image mean as above. The film outside a fisheye's circle is black (and opaque) in both."""
+    """Equirectangular (reduced ranges), the fisheyes (equidistant over 200 degrees, equisolid
+    with its lens and sensor, a lens polynomial cut by its field of view) and the mirror ball, each
+    with a shift: per 8 x 8 tile (these images are small) and in the image mean as above. The film
+    outside a fisheye's or the mirror ball's circle is black (and opaque) in both."""
     both = lantern_and_cycles(scene_factory, name, "PATH")
     report, _ = ru.agreement_report(name, both[ru.LANTERN], both[ru.CYCLES], outdir, 8, ROUNDING)
     assert report == "", report
@@ -333,11 +335,11 @@ def student_t_upper(p, dof):
 # walls of two lobe kinds (issue 12, item 4)
 BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "door",
                "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud", "cornell_dof",
-               "motion_blur"] + WORLD_SCENES
+               "motion_blur", "pano_fisheye_equidistant"] + WORLD_SCENES
 # Scenes without media whose path-traced image mean is known within MEAN_POWER at their samples:
 # BDPT's image mean must equal PATH's there too (the door scenes' path tracing is too noisy).
 BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "cornell_dof",
-                "motion_blur"]
+                "motion_blur", "pano_fisheye_equidistant"]
 # Open discrepancy, measured and not yet explained: on world_fog (a delta point light inside a World
 # volume) BDPT's image mean is 0.3-0.5 % below Cycles' (0.9949 at 0.10 % standard error in this
 # test; 0.9971 +- 0.0006 with the lamp out of frame), while every internal check agrees (light

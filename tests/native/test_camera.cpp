@@ -362,9 +362,8 @@ std::vector<PanoramaCase> panorama_cases() {
   });
   add("equidistant 200", LT_PANORAMA_FISHEYE_EQUIDISTANT, [](lt_camera_desc& d) { d.fisheye_fov = 3.49f; });
   add("equidistant 400", LT_PANORAMA_FISHEYE_EQUIDISTANT, [](lt_camera_desc& d) { d.fisheye_fov = 7.0f; });
-  add("equisolid", LT_PANORAMA_FISHEYE_EQUISOLID, [](lt_camera_desc& d) {
-    d.fisheye_lens = 9, d.fisheye_fov = 2.97f, d.shift_x = 0.05f;
-  });
+  add("equisolid", LT_PANORAMA_FISHEYE_EQUISOLID,
+      [](lt_camera_desc& d) { d.fisheye_lens = 9, d.fisheye_fov = 2.97f, d.shift_x = 0.05f; });
   add("mirror ball", LT_PANORAMA_MIRRORBALL, [](lt_camera_desc& d) { d.shift_y = 0.06f; });
   add("polynomial", LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL, [](lt_camera_desc& d) { d.fisheye_fov = 2.6f; });
   add("polynomial turning", LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL, [](lt_camera_desc& d) {
@@ -445,9 +444,9 @@ TEST(Camera, PanoramaBadInput) {
   lt::Ray r;
   EXPECT_FALSE(cam.generate(1, 1, &r));  // outside the circle
   ASSERT_TRUE(cam.generate(32, 24, &r));
-  EXPECT_LT(dist(r.d, {0, 1, 0}), 1e-5f);  // the centre looks forward
+  EXPECT_LT(dist(r.d, {0, 1, 0}), 1e-5f);    // the centre looks forward
   ASSERT_TRUE(cam.generate(63.5f, 24, &r));  // the circle spans the frame (an ellipse on a wide film)
-  EXPECT_LT(r.d.y, -0.9f);  // the rim behind
+  EXPECT_LT(r.d.y, -0.9f);                   // the rim behind
   EXPECT_GT(r.d.x, 0);
   d = panorama_camera(view, LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL);
   const float huge[5] = {1e30f, -1e30f, 1e30f, -1e30f, 1e30f};

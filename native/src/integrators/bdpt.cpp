@@ -774,6 +774,21 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   return out_;
 }
 
+void Bdpt::run_light_tracing(std::vector<Splat>& splats) {
+  strategies_ = nullptr;
+  const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
+  std::vector<PathVertex>& camera = scratch_.camera;
+  std::vector<PathVertex>& light = scratch_.light;
+  if (camera.size() < capacity) camera.resize(capacity);
+  if (light.size() < capacity) light.resize(capacity);
+  camera[0] = PathVertex();  // no camera subpath: t = 1 reads none of it
+  camera[0].type = VertexType::Camera;
+  camera[0].p = ctx_.camera.position(time_);
+  const int ns = generate_light_subpath(light);
+  for (int s = 2; s <= ns; ++s)
+    if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
+}
+
 namespace {
 
 class BdptIntegrator final : public Integrator {
@@ -794,6 +809,12 @@ class BdptIntegrator final : public Integrator {
     if (is_finite(v.radiance))
       film_->add_strategies(int(cs.pixel_center.x) - ctx_.x0, int(cs.pixel_center.y) - ctx_.y0, strategies.data());
     return v;
+  }
+  void trace_unseen(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
+                    std::vector<Splat>& splats) const override {
+    if (!ctx_.camera.connectable()) return;
+    Bdpt b(ctx_, cs, sampler, stats);
+    b.run_light_tracing(splats);
   }
   void end_pass(Film& film, const PassSplats& p) override {
     // Merge the splats tile by tile in a fixed order (deterministic for any thread count).

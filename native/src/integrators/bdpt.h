@@ -33,6 +33,8 @@ class Bdpt {
 
   // One sample: both subpaths, then every strategy (pbrt-v4's BDPTIntegrator::Li).
   SampleValue run(std::vector<Splat>& splats, Spectrum* strategies);
+  // A sample the camera does not see (Integrator::trace_unseen): its light subpath's t = 1 splats.
+  void run_light_tracing(std::vector<Splat>& splats);
   // Test hook (bdpt_test_hooks.cpp): see bdpt_mis_weight_sums.
   std::vector<float> weight_sums();
 
@@ -63,8 +65,8 @@ class Bdpt {
   float film_density(const Camera::Projection& pr, const Vec2& pixel) const {
     float sum = 0;
     for (int k = 0; k < pr.count; ++k)
-      sum += ctx_.filter.pdf(pr.at[k].film.x - pixel.x) * ctx_.filter.pdf(pr.at[k].film.y - pixel.y) *
-             pr.at[k].importance;
+      sum +=
+          ctx_.filter.pdf(pr.at[k].film.x - pixel.x) * ctx_.filter.pdf(pr.at[k].film.y - pixel.y) * pr.at[k].importance;
     return sum;
   }
   float bsdf_pdf(const PathVertex& v, const Vec3& to_prev, const Vec3& to_next) const {

@@ -264,8 +264,10 @@ void Camera::panorama_preimages(const Vec3& w, float margin, Projection* out) co
     out->at[out->count++] = {film, float(importance)};
   };
   // The film's uv range within the margin.
-  const float u_lo = std::min(x0_, x1_) - margin / W * std::abs(du), u_hi = std::max(x0_, x1_) + margin / W * std::abs(du);
-  const float v_lo = std::min(y0_, y1_) - margin / H * std::abs(dv), v_hi = std::max(y0_, y1_) + margin / H * std::abs(dv);
+  const float u_lo = std::min(x0_, x1_) - margin / W * std::abs(du),
+              u_hi = std::max(x0_, x1_) + margin / W * std::abs(du);
+  const float v_lo = std::min(y0_, y1_) - margin / H * std::abs(dv),
+              v_hi = std::max(y0_, y1_) + margin / H * std::abs(dv);
   if (d_.panorama_type == PanoramaType::Equirectangular) {
     // d omega = cos(lat) dlat dlon; the film's pixels cover the ranges linearly. Longitudes repeat
     // every turn, and a latitude past a pole is the one before it half a turn round.
@@ -302,7 +304,8 @@ void Camera::panorama_preimages(const Vec3& w, float margin, Projection* out) co
   // dA = rho drho dphi, d omega = |sin theta theta'| drho dphi, and the film's pixels cover uv
   // linearly, the radial units by fisheye_scale().
   const double pi = 3.14159265358979323846;
-  const double alpha = std::acos(std::clamp(-double(w.z), -1.0, 1.0));
+  // (atan2: accurate near the axis and straight behind, where acos of -z is not)
+  const double alpha = std::atan2(std::hypot(double(w.x), double(w.y)), -double(w.z));
   const double psi = std::atan2(double(w.y), double(w.x));
   const Vec2 scale = fisheye_scale();
   const double to_pixels = uv_to_pixels / (double(scale.x) * scale.y);
@@ -328,7 +331,8 @@ void Camera::panorama_preimages(const Vec3& w, float margin, Projection* out) co
         const double rho = 0.5 * (a + b);
         // A root on the end two pieces share is found by both.
         bool seen = false;
-        for (int j = 0; j < n_found; ++j) seen = seen || std::abs(found[j] - (side == 0 ? rho : -rho)) < 1e-9 * (1 + rb);
+        for (int j = 0; j < n_found; ++j)
+          seen = seen || std::abs(found[j] - (side == 0 ? rho : -rho)) < 1e-9 * (1 + rb);
         if (seen || n_found == kMaxPreimages) continue;
         found[n_found++] = side == 0 ? rho : -rho;
         const double theta = radial_theta(rho);

@@ -146,7 +146,7 @@ class Camera {
   double radial_theta(double rho) const;
   double radial_dtheta(double rho) const;
   bool radial_visible(double rho, double theta) const;
-  Vec2 fisheye_scale() const;  // film uv to radial units: (2, 2), or the fitted sensor in mm
+  Vec2 fisheye_scale() const;                 // film uv to radial units: (2, 2), or the fitted sensor in mm
   std::vector<double> radial_pieces() const;  // radial_ends_, at construction
   // Camera-space direction (unit) to the panorama's film positions (project()).
   void panorama_preimages(const Vec3& w, float margin, Projection* out) const;
