@@ -1967,7 +1967,7 @@ SCENES = {
     "pano_fisheye_equidistant": (lambda scene: build_panorama(scene, "FISHEYE_EQUIDISTANT"), (48, 48), 128),
     "pano_fisheye_equisolid": (lambda scene: build_panorama(scene, "FISHEYE_EQUISOLID"), (48, 32), 128),
     "pano_mirrorball": (lambda scene: build_panorama(scene, "MIRRORBALL"), (32, 32), 128),
-    "pano_fisheye_polynomial": (lambda scene: build_panorama(scene, "FISHEYE_LENS_POLYNOMIAL"), (48, 32), 128),
+    "pano_fisheye_polynomial": (lambda scene: build_panorama(scene, "FISHEYE_LENS_POLYNOMIAL"), (32, 32), 128),
     "sun_world": (build_sun_world, (96, 96), 128),
     "world_spheres": (build_world_spheres, (96, 64), 128),
     "textured": (build_textured, (96, 96), 128),
