@@ -613,6 +613,12 @@ PANORAMAS = {
                             longitude_min=math.radians(-150.0), longitude_max=math.radians(120.0)),
     "FISHEYE_EQUIDISTANT": dict(fisheye_fov=math.radians(200.0)),
     "FISHEYE_EQUISOLID": dict(fisheye_lens=9.0, fisheye_fov=math.radians(170.0)),
+    "MIRRORBALL": {},
+    # theta(r) = 0.06 r - 3e-4 r^2 + 1e-5 r^3 (r in mm on the 36 mm sensor), cut at 63 degrees:
+    # the corners see nothing.
+    "FISHEYE_LENS_POLYNOMIAL": dict(fisheye_fov=math.radians(126.0), fisheye_polynomial_k0=0.0,
+                                    fisheye_polynomial_k1=-0.06, fisheye_polynomial_k2=3e-4,
+                                    fisheye_polynomial_k3=-1e-5, fisheye_polynomial_k4=0.0),
 }
 
 
@@ -1960,6 +1966,8 @@ SCENES = {
     "pano_equirectangular": (lambda scene: build_panorama(scene, "EQUIRECTANGULAR"), (64, 32), 128),
     "pano_fisheye_equidistant": (lambda scene: build_panorama(scene, "FISHEYE_EQUIDISTANT"), (48, 48), 128),
     "pano_fisheye_equisolid": (lambda scene: build_panorama(scene, "FISHEYE_EQUISOLID"), (48, 32), 128),
+    "pano_mirrorball": (lambda scene: build_panorama(scene, "MIRRORBALL"), (32, 32), 128),
+    "pano_fisheye_polynomial": (lambda scene: build_panorama(scene, "FISHEYE_LENS_POLYNOMIAL"), (32, 32), 128),
     "sun_world": (build_sun_world, (96, 96), 128),
     "world_spheres": (build_world_spheres, (96, 64), 128),
     "textured": (build_textured, (96, 96), 128),

@@ -50,6 +50,10 @@ AREA_SQUARE, AREA_RECTANGLE, AREA_DISK, AREA_ELLIPSE = 0, 1, 2, 3
 CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC, CAMERA_PANORAMA = 0, 1, 2
 SENSOR_AUTO, SENSOR_HORIZONTAL, SENSOR_VERTICAL = 0, 1, 2
 PANORAMA_EQUIRECTANGULAR, PANORAMA_FISHEYE_EQUIDISTANT, PANORAMA_FISHEYE_EQUISOLID = 0, 1, 2
+PANORAMA_MIRRORBALL, PANORAMA_FISHEYE_LENS_POLYNOMIAL = 3, 4
+# Cycles' default lens polynomial k0 .. k4 (cycles/camera.py: a 50 mm lens on a 36 mm sensor).
+FISHEYE_POLYNOMIAL_DEFAULT = (-1.1735143712967577e-05, -0.019988736953434998, -3.3525322965709175e-06,
+                              3.099275275886036e-06, -2.6064646454854524e-08)
 
 # lt_integrator: by name from the core (enum_value("lt_integrator", "PATH"), enum_names).
 # lt_volume_estimator, lt_volume_node
@@ -275,6 +279,9 @@ class CameraDesc(ctypes.Structure):
         ("longitude_max", ctypes.c_float),
         ("motion_transforms", _f_p),
         ("motion_step_count", ctypes.c_int),
+        ("fisheye_polynomial", ctypes.c_float * 5),
+        ("panorama_viewplane", ctypes.c_float * 4),
+        ("panorama_frame_aspect", ctypes.c_float),
     ]
 
 
@@ -887,8 +894,12 @@ class Scene:
                    aperture_blades=0, aperture_rotation=0.0, aperture_ratio=1.0,
                    panorama_type=PANORAMA_FISHEYE_EQUISOLID, fisheye_fov=3.14159265,
                    fisheye_lens=10.5, latitude_min=-1.57079633, latitude_max=1.57079633,
-                   longitude_min=-3.14159265, longitude_max=3.14159265, motion=None):
-        """motion: the camera's transforms at its motion steps over the shutter."""
+                   longitude_min=-3.14159265, longitude_max=3.14159265, motion=None,
+                   fisheye_polynomial=FISHEYE_POLYNOMIAL_DEFAULT, panorama_viewplane=(0.0, 0.0, 0.0, 0.0),
+                   panorama_frame_aspect=0.0):
+        """motion: the camera's transforms at its motion steps over the shutter.
+        fisheye_polynomial: the lens polynomial's k0 .. k4 (Cycles' camera settings).
+        panorama_viewplane, panorama_frame_aspect: a viewport through a panoramic camera (lantern.h)."""
         d = CameraDesc()
         d.type = int(type)
         d.transform = _transform(transform)
@@ -902,6 +913,9 @@ class Scene:
         d.fisheye_fov, d.fisheye_lens = fisheye_fov, fisheye_lens
         d.latitude_min, d.latitude_max = latitude_min, latitude_max
         d.longitude_min, d.longitude_max = longitude_min, longitude_max
+        d.fisheye_polynomial[:] = [float(k) for k in fisheye_polynomial]
+        d.panorama_viewplane[:] = [float(v) for v in panorama_viewplane]
+        d.panorama_frame_aspect = panorama_frame_aspect
         motion_keep = _motion(d, motion)  # noqa: F841 (kept alive for the call)
         _check(self._lib.lt_scene_set_camera(self.handle, ctypes.byref(d)), "lt_scene_set_camera")
 

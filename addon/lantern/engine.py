@@ -13,7 +13,7 @@ from .export import cryptomatte
 from .export.motion import collect as collect_motion
 from .export.camera import export_camera
 from .scene_sync import SceneSync
-from .viewport import ViewportSession, view_camera, with_camera_lens
+from .viewport import ViewportSession, view_camera, with_camera_lens, with_camera_panorama
 
 REDRAW_SECONDS = 0.05      # while a viewport refines, it is redrawn this often
 
@@ -753,6 +753,8 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                 space = context.space_data
                 camera = space.camera if space.use_local_camera else scene.camera
                 view = with_camera_lens(view, camera, depsgraph)
+                # (the scene export reported what the camera lacks: not again at each redraw)
+                view = with_camera_panorama(view, camera, depsgraph, context.region_data, lambda *m: None)
             session.set_view(view, width, height)
             settings = render_settings(scene, width, height, [0, 0, 0, 0])
             # The viewport stops at its own samples or the noise target, never by the time limit.

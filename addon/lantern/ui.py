@@ -524,7 +524,11 @@ class LANTERN_CAMERA_PT_panorama(Panel):
             sub = col.column(align=True)
             sub.prop(ccam, "longitude_min", text="Longitude Min")
             sub.prop(ccam, "longitude_max", text="Max")
-        else:
+        elif ccam.panorama_type == 'FISHEYE_LENS_POLYNOMIAL':
+            col.prop(ccam, "fisheye_fov")
+            for i in range(5):
+                col.prop(ccam, "fisheye_polynomial_k%d" % i, text="K%d" % i)
+        elif ccam.panorama_type != 'MIRRORBALL':
             col.label(text="Not supported by Lantern: rendered as perspective", icon='ERROR')
 
 

@@ -80,6 +80,36 @@ def with_camera_lens(kw, camera_object, depsgraph):
                 aperture_ratio=cam.dof.aperture_ratio)
 
 
+def with_camera_panorama(kw, camera_object, depsgraph, region_data, report):
+    """view_camera's keywords for a view through a panoramic camera: the camera's panorama (as
+    renders export it, depth of field included) on the part of the camera's frame that the region
+    covers, as Cycles maps its viewport to the camera border (pano_viewplane); the fisheyes'
+    sensor fitted to the frame. Blender draws a panoramic camera's view as a perspective one of
+    its lens and frame (kw's projection, from the region's window matrix)."""
+    from .export.camera import camera_keywords
+    if camera_object is None or camera_object.type != 'CAMERA' or camera_object.data.type != 'PANO':
+        return kw
+    pano = camera_keywords(depsgraph, camera_object, report)
+    if pano.get("type") != core.CAMERA_PANORAMA:
+        return kw  # reported: rendered as perspective
+    rd = depsgraph.scene.render
+    frame = np.array(camera_object.evaluated_get(depsgraph).calc_matrix_camera(
+        depsgraph, x=rd.resolution_x, y=rd.resolution_y, scale_x=rd.pixel_aspect_x, scale_y=rd.pixel_aspect_y),
+        dtype=np.float64)
+    region = np.array(region_data.window_matrix, dtype=np.float64)
+
+    def on_frame(ndc, axis):
+        # The region's NDC to the view plane at unit distance (view_camera's docstring), to the
+        # frame's NDC, to [0, 1] across the frame.
+        plane = (ndc + region[axis, 2]) / region[axis, axis]
+        return 0.5 * (frame[axis, axis] * plane - frame[axis, 2] + 1.0)
+
+    pano.update(transform=kw["transform"], panorama_frame_aspect=(rd.resolution_x * rd.pixel_aspect_x) /
+                (rd.resolution_y * rd.pixel_aspect_y),
+                panorama_viewplane=(on_frame(-1.0, 0), on_frame(1.0, 0), on_frame(-1.0, 1), on_frame(1.0, 1)))
+    return pano
+
+
 def _same_camera(a, b):
     if a is None or b is None or a.keys() != b.keys():
         return False

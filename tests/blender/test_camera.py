@@ -32,7 +32,8 @@ def test_focus_object_distance_is_along_the_view_axis(scene_factory):
 
 def test_camera_settings_lantern_cannot_render_are_reported(scene_factory):
     """A focus distance of 0 (the plane in focus at the lens) renders without depth of field, a
-    mirror ball as perspective; both with a warning naming the camera, and a finite image."""
+    equiangular cubemap face as perspective; both with a warning naming the camera, and a finite
+    image."""
     scene = scene_factory("cornell_dof", resolution=(24, 24))
     cam = scene.camera.data
     cam.dof.focus_object = None
@@ -41,9 +42,9 @@ def test_camera_settings_lantern_cannot_render_are_reported(scene_factory):
     assert any("Camera" in r and "focus distance is 0" in r for r in reports), reports
     cam.dof.use_dof = False
     cam.type = 'PANO'
-    cam.cycles.panorama_type = 'MIRRORBALL'
+    cam.cycles.panorama_type = 'EQUIANGULAR_CUBEMAP_FACE'
     reports = ru.export(scene)[1]
-    assert any("MIRRORBALL" in r and "FISHEYE_EQUISOLID" in r for r in reports), reports
+    assert any("EQUIANGULAR_CUBEMAP_FACE" in r and "MIRRORBALL" in r for r in reports), reports
     assert np.isfinite(ru.render(scene, ru.LANTERN, 2, seed=0).combined).all()
 
 
@@ -60,7 +61,7 @@ def test_depth_of_field_and_panorama_panels_show_for_lantern(scene_factory):
         cam.type = kind
         assert bool(panel.poll(types.SimpleNamespace(engine=engine_id, camera=cam))) == visible
     cam.type = 'PANO'
-    for kind in ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID'):
+    for kind in ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'FISHEYE_LENS_POLYNOMIAL'):
         cam.cycles.panorama_type = kind
         drawn = []
 

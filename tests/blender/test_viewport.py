@@ -8,7 +8,7 @@ import numpy as np
 from lantern import core
 from lantern.engine import render_settings
 from lantern.export import export_scene
-from lantern.viewport import ViewportSession, view_camera, with_camera_lens
+from lantern.viewport import ViewportSession, view_camera, with_camera_lens, with_camera_panorama
 
 
 def _render(core_scene, width, height, samples=4):
@@ -86,6 +86,45 @@ def test_view_through_a_camera_has_its_depth_of_field(scene_factory):
     for (ia, ib), expected in zip(images, (True, False)):
         same = (np.abs(ia[..., :3] - ib[..., :3]).mean(axis=2) < 1e-3).mean()
         assert (same > 0.97) == expected, (expected, same)
+
+
+def test_view_through_a_panoramic_camera_renders_its_panorama(scene_factory):
+    """Issue 15: looking through a panoramic camera, the viewport renders the camera's panorama
+    on the camera's frame, as Cycles maps its viewport to the camera border: a region that is the
+    frame renders the render's pixels (same seed); a region twice as wide shows the frame's image
+    in its middle half and, beyond the fisheye's circle, black."""
+    scene = scene_factory("pano_fisheye_equidistant")
+    cam = scene.camera
+    w, h = 32, 32
+    scene.render.resolution_x, scene.render.resolution_y = w, h
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    view = _camera_view(cam.evaluated_get(depsgraph), depsgraph, w, h)
+    wide = types.SimpleNamespace(window_matrix=np.array(view.window_matrix), view_matrix=view.view_matrix,
+                                 is_perspective=True)
+    wide.window_matrix[0, 0] *= 0.5  # the same centre, twice the width
+    wide.window_matrix[0, 2] *= 0.5
+    images = []
+    for region, rw in ((view, w), (wide, 2 * w)):
+        a, b = core.Scene(), core.Scene()
+        try:
+            export_scene(depsgraph, a, lambda *m: None)
+            export_scene(depsgraph, b, lambda *m: None, state={})
+            kw = with_camera_panorama(view_camera(region, rw, h), cam, depsgraph, region, lambda *m: None)
+            assert kw["type"] == core.CAMERA_PANORAMA
+            b.set_camera(**kw)
+            a.commit()
+            b.commit()
+            images.append((_render(a, w, h, samples=16), _render(b, rw, h, samples=16)))
+        finally:
+            a.close()
+            b.close()
+    (ia, ib), (_, iw) = images
+    same = (np.abs(ia[..., :3] - ib[..., :3]).mean(axis=2) < 1e-3).mean()
+    assert same > 0.97, same
+    assert np.all(iw[:, :w // 2 - 2, :3] == 0) and np.all(iw[:, -(w // 2 - 2):, :3] == 0)
+    middle, frame = iw[:, w // 2:w // 2 + w, :3].mean(), ia[..., :3].mean()
+    assert abs(middle / frame - 1) < 0.05, (middle, frame)
 
 
 def _rss_mb():

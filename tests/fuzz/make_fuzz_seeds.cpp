@@ -296,7 +296,8 @@ std::vector<uint8_t> seed_cameras() {
   render(w, r);
   r.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
   render(w, r);
-  for (int panorama : {LT_PANORAMA_EQUIRECTANGULAR, LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_FISHEYE_EQUISOLID}) {
+  for (int panorama : {LT_PANORAMA_EQUIRECTANGULAR, LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_FISHEYE_EQUISOLID,
+                       LT_PANORAMA_MIRRORBALL, LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL}) {
     camera_lens(w, LT_CAMERA_PANORAMA, true, panorama);
     render(w, r);
   }

@@ -2,6 +2,7 @@
 
 #include <stdlib.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -306,6 +307,10 @@ lt_camera_desc panorama_camera(const Xform& xf, int panorama_type) {
   c.latitude_max = float(M_PI / 2);
   c.longitude_min = -float(M_PI);
   c.longitude_max = float(M_PI);
+  // Cycles' default lens polynomial (a 50 mm lens on a 36 mm sensor).
+  const float k[5] = {-1.1735143712967577e-05f, -0.019988736953434998f, -3.3525322965709175e-06f,
+                      3.099275275886036e-06f, -2.6064646454854524e-08f};
+  std::copy(k, k + 5, c.fisheye_polynomial);
   return c;
 }
 

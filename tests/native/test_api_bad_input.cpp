@@ -441,11 +441,19 @@ TEST(ApiBadInput, UnknownEnumValuesListTheValidNames) {
     std::string msg = EXPECT_INVALID(lt_scene_set_camera(s, &c));
     for (const char* name : {"PERSPECTIVE", "ORTHOGRAPHIC", "PANORAMA"}) EXPECT_CONTAINS(msg, name);
   }
-  for (int type : {-1, 3, 1000}) {
+  for (int type : {-1, 5, 1000}) {
     lt_camera_desc c = panorama_camera(identity(), LT_PANORAMA_EQUIRECTANGULAR);
     c.panorama_type = type;
     std::string msg = EXPECT_INVALID(lt_scene_set_camera(s, &c));
-    for (const char* name : {"EQUIRECTANGULAR", "FISHEYE_EQUIDISTANT", "FISHEYE_EQUISOLID"}) EXPECT_CONTAINS(msg, name);
+    for (const char* name :
+         {"EQUIRECTANGULAR", "FISHEYE_EQUIDISTANT", "FISHEYE_EQUISOLID", "MIRRORBALL", "FISHEYE_LENS_POLYNOMIAL"})
+      EXPECT_CONTAINS(msg, name);
+  }
+  {
+    // A lens polynomial's coefficients must be finite (any finite ones render: PanoramaBadInput).
+    lt_camera_desc c = panorama_camera(identity(), LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL);
+    c.fisheye_polynomial[3] = NAN;
+    EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_set_camera(s, &c)), "finite");
   }
   // Other enums: refused with a message.
   lt_camera_desc c = perspective_camera(identity());

@@ -655,48 +655,69 @@ static lt_camera_desc room_lens(int blades, float ratio) {
   return with_dof(perspective_camera(look_at({0, -1.5f, 1.0f}, {0, 0.5f, 0.8f}), 22), 1.9f, 0.04f, blades, 0.3f, ratio);
 }
 
+// The MIS weights of every strategy that can sample a path, t = 1 included, sum to one for a
+// camera: `camera` replaces the room's.
+static void expect_mis_weights_sum_to_one(const lt_camera_desc& desc, const std::string& label) {
+  ScenePtr s = room(Lights::Area);
+  set_camera(s.get(), desc);
+  const lt::Scene& scene = s->scene;
+  const int size = 32;
+  lt::Camera camera(scene.camera, size, size);
+  lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
+  for (lt::MisHeuristic h : {lt::MisHeuristic::Power, lt::MisHeuristic::Balance}) {
+    lt::IntegratorSettings is;
+    is.max_bounces = 8;
+    is.mis = h;
+    lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
+    int checked = 0;
+    double worst = 0;
+    for (int i = 0; i < 3000; ++i) {
+      int px = i % size, py = (i / size) % size;
+      lt::Sampler sampler(7, uint32_t(py * size + px), uint32_t(i));
+      float ox = filter.sample(sampler.next_1d()), oy = filter.sample(sampler.next_1d());
+      lt::CameraSample cs;
+      cs.pixel_center = {px + 0.5f, py + 0.5f};
+      cs.film = {px + 0.5f + ox, py + 0.5f + oy};
+      cs.lens = sampler.next_2d();
+      if (!camera.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray)) continue;  // outside a fisheye's circle
+      for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
+        ++checked;
+        worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
+      }
+    }
+    EXPECT_GT(checked, 1000) << label << ": too few connected paths to test";
+    EXPECT_LT(worst, 1e-3) << label << " heuristic " << int(h) << ": " << checked << " paths";
+  }
+}
+
 // With a lens the camera vertex is a point on the aperture: the MIS weights of every strategy
 // that can sample a path, t = 1 connecting to that lens point included, still sum to one.
 TEST(Bdpt, MisWeightsSumToOneWithALens) {
   for (int blades : {0, 5}) {
-    ScenePtr s = room(Lights::Area);
-    set_camera(s.get(), room_lens(blades, 1.4f));
-    const lt::Scene& scene = s->scene;
-    const int size = 32;
-    lt::Camera camera(scene.camera, size, size);
-    ASSERT_TRUE(camera.has_lens());
-    lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
-    for (lt::MisHeuristic h : {lt::MisHeuristic::Power, lt::MisHeuristic::Balance}) {
-      lt::IntegratorSettings is;
-      is.max_bounces = 8;
-      is.mis = h;
-      lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
-      int checked = 0;
-      double worst = 0;
-      for (int i = 0; i < 3000; ++i) {
-        int px = i % size, py = (i / size) % size;
-        lt::Sampler sampler(7, uint32_t(py * size + px), uint32_t(i));
-        float ox = filter.sample(sampler.next_1d()), oy = filter.sample(sampler.next_1d());
-        lt::CameraSample cs;
-        cs.pixel_center = {px + 0.5f, py + 0.5f};
-        cs.film = {px + 0.5f + ox, py + 0.5f + oy};
-        cs.lens = sampler.next_2d();
-        ASSERT_TRUE(camera.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray));
-        for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
-          ++checked;
-          worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
-        }
-      }
-      EXPECT_GT(checked, 1000) << "too few connected paths to test";
-      EXPECT_LT(worst, 1e-3) << "blades " << blades << " heuristic " << int(h) << ": " << checked << " paths";
-    }
+    expect_mis_weights_sum_to_one(room_lens(blades, 1.4f), "blades " + std::to_string(blades));
   }
+}
+
+// Panoramas: t = 1 connects to the film positions that see the light vertex (Camera::project),
+// several for a fisheye of more than a turn, whose camera density sums over them.
+static lt_camera_desc room_panorama(int type) {
+  lt_camera_desc d = panorama_camera(look_at({0, -1.2f, 1.0f}, {0, 0.5f, 0.8f}), type);
+  d.fisheye_fov = type == LT_PANORAMA_FISHEYE_EQUIDISTANT ? 7.0f : 3.5f;  // 400 degrees: seen twice
+  d.shift_x = 0.03f;
+  return d;
+}
+
+TEST(Bdpt, MisWeightsSumToOneWithPanoramas) {
+  for (int type : {LT_PANORAMA_EQUIRECTANGULAR, LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_FISHEYE_EQUISOLID,
+                   LT_PANORAMA_MIRRORBALL, LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL})
+    expect_mis_weights_sum_to_one(room_panorama(type), "panorama " + std::to_string(type));
 }
 
 // Depth of field in BDPT: with light subpaths of length 1 it is path tracing (per tile within 5
 // SE from the Variance passes); full BDPT, whose light tracing (t = 1) samples a point on the
 // aperture and weighs it by the lens's importance, agrees with path tracing from K renders each.
-// A panorama is not connectable: BDPT leaves t = 1 out and still agrees.
+// Panoramas: light tracing splats through the film's importance at every film position that sees
+// the vertex (a 400-degree fisheye sees the room's caustic twice; an equirectangular film's seam).
 TEST(Bdpt, DepthOfFieldAndPanoramasAgreeWithPathTracing) {
   ScenePtr s = room(Lights::Area, 0.5f);
   set_camera(s.get(), room_lens(0, 1.0f));
@@ -713,9 +734,9 @@ TEST(Bdpt, DepthOfFieldAndPanoramasAgreeWithPathTracing) {
   lt_render_settings pb = settings(LT_INTEGRATOR_BIDIRECTIONAL, size, 16, 200, 64);
   set_camera(s.get(), room_lens(6, 1.5f));
   EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, K, tile), "") << "full BDPT, 6 blades, anamorphic";
-  lt_camera_desc pano = panorama_camera(look_at({0, -1.2f, 1.0f}, {0, 0.5f, 0.8f}), LT_PANORAMA_FISHEYE_EQUIDISTANT);
-  pano.fisheye_fov = 3.5f;
-  set_camera(s.get(), pano);
   pa.width = pb.width = pa.height = pb.height = 32;
-  EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, 4, 16), "") << "full BDPT, fisheye";
+  for (int type : {LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_EQUIRECTANGULAR}) {
+    set_camera(s.get(), room_panorama(type));
+    EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, 4, 16), "") << "full BDPT, panorama " << type;
+  }
 }

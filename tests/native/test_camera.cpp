@@ -166,31 +166,31 @@ TEST(Camera, LensRaysProjectBackToTheirFilmPosition) {
     ASSERT_TRUE(cam.generate(x, y, sampler.next_2d(), &r));
     // Inside the range (its ends are where rounding decides).
     const float t = r.tmin * 1.001f + (r.tmax * 0.999f - r.tmin * 1.001f) * std::pow(sampler.next_1d(), 3.0f);
-    lt::Vec2 film;
-    lt::Vec3 dir;
-    float distance;
-    ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &film, &dir, &distance)) << t;
-    EXPECT_NEAR(film.x, x, 2e-3f * (1 + t));
-    EXPECT_NEAR(film.y, y, 2e-3f * (1 + t));
-    EXPECT_NEAR(distance, t, 1e-4f * t);
-    EXPECT_GT(lt::dot(dir, r.d), 1 - 1e-6f);
-    EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmin * 0.98f), 1, &film, &dir, &distance));
-    EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmax * 1.02f), 1, &film, &dir, &distance));
+    lt::Camera::Projection pr;
+    ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &pr)) << t;
+    ASSERT_EQ(pr.count, 1);
+    EXPECT_NEAR(pr.at[0].film.x, x, 2e-3f * (1 + t));
+    EXPECT_NEAR(pr.at[0].film.y, y, 2e-3f * (1 + t));
+    EXPECT_NEAR(pr.distance, t, 1e-4f * t);
+    EXPECT_GT(lt::dot(pr.dir, r.d), 1 - 1e-6f);
+    EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmin * 0.98f), 1, &pr));
+    EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmax * 1.02f), 1, &pr));
     ++checked;
   }
   EXPECT_EQ(checked, 2000);
 }
 
-// The camera's directional density from a lens point, 1 / (A cos^3) for a film uniform over its
-// area A at unit distance (pbrt-v4's PerspectiveCamera::PDF_We), integrates to one over the
-// directions that reach the film: Monte Carlo over the sphere of directions from several lens
-// points (4 standard errors). It holds the projection's film scale (Camera::project) and the
-// film's area (pixel_plane_area) to the density BDPT uses (bdpt.h, camera_pdf_dir); the lens
-// offset itself only shifts the film and is held by LensRaysProjectBackToTheirFilmPosition.
+// The camera's directional density from a lens point, the film's importance (pixels per
+// steradian; 1 / (a cos^3) for a view-plane area a per pixel, pbrt-v4's
+// PerspectiveCamera::PDF_We) over the film's pixels, integrates to one over the directions that
+// reach the film: Monte Carlo over the sphere of directions from several lens points (4 standard
+// errors). It holds the projection's film scale and importance (Camera::project) to the density
+// BDPT uses (bdpt.h, camera_pdf_dir); the lens offset itself only shifts the film and is held by
+// LensRaysProjectBackToTheirFilmPosition.
 TEST(Camera, DirectionalDensityIntegratesToOne) {
   const lt_camera_desc d = with_dof(perspective_camera(kView, 20), 0.6f, 0.25f, 0, 0, 1);
   const lt::Camera cam = camera_of(d);
-  const float film_area = cam.pixel_plane_area() * kW * kH;
+  const float film_area = kW * kH;
   lt::Sampler sampler(8, 0, 0);
   for (lt::Vec2 u : {lt::Vec2{0.5f, 0.5f}, lt::Vec2{0.95f, 0.5f}, lt::Vec2{0.1f, 0.85f}}) {
     const lt::Vec3 o = cam.lens_point(u);
@@ -198,14 +198,9 @@ TEST(Camera, DirectionalDensityIntegratesToOne) {
     double sum = 0, sum2 = 0;
     for (int n = 0; n < kN; ++n) {
       const lt::Vec3 w = lt::sample_uniform_sphere(sampler.next_2d());
-      lt::Vec2 film;
-      lt::Vec3 dir;
-      float distance;
+      lt::Camera::Projection pr;
       double f = 0;
-      if (cam.project(o, o + w * 5.0f, 0, &film, &dir, &distance)) {
-        const float c = lt::dot(dir, cam.forward());
-        f = 1.0 / (film_area * c * c * c) / lt::uniform_sphere_pdf();
-      }
+      if (cam.project(o, o + w * 5.0f, 0, &pr)) f = pr.at[0].importance / film_area / lt::uniform_sphere_pdf();
       sum += f;
       sum2 += f * f;
     }
@@ -252,7 +247,7 @@ TEST(Camera, BadDepthOfFieldInput) {
 TEST(Camera, EquirectangularDirections) {
   const Xform view = look_at({0, 0, 0}, {0, 1, 0});  // forward +Y, right +X, up +Z
   lt::Camera cam = camera_of(panorama_camera(view, LT_PANORAMA_EQUIRECTANGULAR), 200, 100);
-  EXPECT_FALSE(cam.connectable());
+  EXPECT_TRUE(cam.connectable());  // without a lens
   auto dir = [&](float x, float y) {
     lt::Ray r;
     EXPECT_TRUE(cam.generate(x, y, &r));
@@ -338,5 +333,136 @@ TEST(Camera, PanoramaRenders) {
     p = render(s.get(), rs);
     EXPECT_EQ(p.first_non_finite(), "");
     EXPECT_EQ(p.status.nan_samples, 0u);
+  }
+}
+
+namespace {
+
+// Panoramas of every type, including what makes a direction seen from several film positions: a
+// fisheye of more than a turn, a lens polynomial that turns back and changes sign, and the
+// equirectangular seam and poles (with the filter's margin).
+struct PanoramaCase {
+  const char* name;
+  lt_camera_desc desc;
+};
+
+std::vector<PanoramaCase> panorama_cases() {
+  const Xform view = look_at({0.3f, -1, 0.5f}, {0, 1, 0.7f});
+  std::vector<PanoramaCase> cases;
+  auto add = [&](const char* name, int type, auto tweak) {
+    lt_camera_desc d = panorama_camera(view, type);
+    d.clip_start = 0.01f;
+    tweak(d);
+    cases.push_back({name, d});
+  };
+  add("equirectangular", LT_PANORAMA_EQUIRECTANGULAR, [](lt_camera_desc&) {});
+  add("equirectangular ranges", LT_PANORAMA_EQUIRECTANGULAR, [](lt_camera_desc& d) {
+    d.latitude_min = -1.0f, d.latitude_max = 1.3f, d.longitude_min = -2.6f, d.longitude_max = 2.1f;
+    d.shift_x = 0.04f, d.shift_y = -0.03f;
+  });
+  add("equidistant 200", LT_PANORAMA_FISHEYE_EQUIDISTANT, [](lt_camera_desc& d) { d.fisheye_fov = 3.49f; });
+  add("equidistant 400", LT_PANORAMA_FISHEYE_EQUIDISTANT, [](lt_camera_desc& d) { d.fisheye_fov = 7.0f; });
+  add("equisolid", LT_PANORAMA_FISHEYE_EQUISOLID,
+      [](lt_camera_desc& d) { d.fisheye_lens = 9, d.fisheye_fov = 2.97f, d.shift_x = 0.05f; });
+  add("mirror ball", LT_PANORAMA_MIRRORBALL, [](lt_camera_desc& d) { d.shift_y = 0.06f; });
+  add("polynomial", LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL, [](lt_camera_desc& d) { d.fisheye_fov = 2.6f; });
+  add("polynomial turning", LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL, [](lt_camera_desc& d) {
+    // theta = -0.05 + 0.08 r - 2e-4 r^3: rises to 0.56 at r = 11.5 mm, then falls below 0.
+    const float k[5] = {0.05f, -0.08f, 0, 2e-4f, 0};
+    std::copy(k, k + 5, d.fisheye_polynomial);
+    d.fisheye_fov = 6.2f;
+  });
+  return cases;
+}
+
+}  // namespace
+
+// A panoramic camera ray's points project back (Camera::project, BDPT's t = 1) with the ray's
+// direction and distance, and one of the film positions found is the ray's own.
+TEST(Camera, PanoramaRaysProjectBackToTheirFilmPosition) {
+  for (const PanoramaCase& c : panorama_cases()) {
+    const lt::Camera cam = camera_of(c.desc);
+    ASSERT_TRUE(cam.connectable()) << c.name;
+    lt::Sampler sampler(11, 0, 0);
+    int checked = 0, several = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const float x = sampler.next_1d() * kW, y = sampler.next_1d() * kH;
+      lt::Ray r;
+      if (!cam.generate(x, y, &r)) continue;
+      const float t = 0.05f + 3 * sampler.next_1d();
+      lt::Camera::Projection pr;
+      ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &pr)) << c.name << " at " << x << " " << y;
+      EXPECT_NEAR(pr.distance, t, 1e-4f * t);
+      EXPECT_GT(lt::dot(pr.dir, r.d), 1 - 1e-5f);
+      float nearest = INFINITY;
+      for (int k = 0; k < pr.count; ++k)
+        nearest = std::min(nearest, std::hypot(pr.at[k].film.x - x, pr.at[k].film.y - y));
+      EXPECT_LT(nearest, 0.02f) << c.name << " at " << x << " " << y;
+      several += pr.count > 1;
+      ++checked;
+    }
+    EXPECT_GT(checked, 1000) << c.name;
+    if (std::string(c.name) == "equidistant 400" || std::string(c.name) == "polynomial turning")
+      EXPECT_GT(several, 100) << c.name << ": directions seen twice";
+  }
+}
+
+// The film's importance summed over a direction's film positions (pixels per steradian),
+// integrated over the sphere of directions, is the film area (pixels) that sees something:
+// Monte Carlo over directions against Monte Carlo over the film (4 standard errors). It holds
+// each projection's inverse and Jacobian to its direction map (Camera::generate).
+TEST(Camera, PanoramaImportanceIntegratesToTheFilmSeen) {
+  for (const PanoramaCase& c : panorama_cases()) {
+    const lt::Camera cam = camera_of(c.desc);
+    lt::Sampler sampler(12, 0, 0);
+    constexpr int kN = 200000;
+    double sum = 0, sum2 = 0, seen = 0;
+    for (int n = 0; n < kN; ++n) {
+      const lt::Vec3 w = lt::sample_uniform_sphere(sampler.next_2d());
+      lt::Camera::Projection pr;
+      double f = 0;
+      if (cam.project(cam.position(), cam.position() + w, 0, &pr))
+        for (int k = 0; k < pr.count; ++k) f += pr.at[k].importance / lt::uniform_sphere_pdf();
+      sum += f;
+      sum2 += f * f;
+      lt::Ray r;
+      seen += cam.generate(sampler.next_1d() * kW, sampler.next_1d() * kH, &r) ? 1 : 0;
+    }
+    const double mean = sum / kN, se = std::sqrt(std::max(0.0, sum2 / kN - mean * mean) / kN);
+    const double p = seen / kN, area = p * kW * kH, se_area = std::sqrt(p * (1 - p) / kN) * kW * kH;
+    EXPECT_NEAR(mean, area, 4 * std::hypot(se, se_area) + 1e-3 * area) << c.name;
+  }
+}
+
+// Bad input: a polynomial that turns back, or one whose angle leaves the field of view, and the
+// film outside a mirror ball's circle render defined values (no NaN): the film that sees nothing
+// is black and opaque.
+TEST(Camera, PanoramaBadInput) {
+  const Xform view = look_at({0, 0, 0}, {0, 1, 0});
+  lt_camera_desc d = panorama_camera(view, LT_PANORAMA_MIRRORBALL);
+  lt::Camera cam = camera_of(d, 64, 48);
+  lt::Ray r;
+  EXPECT_FALSE(cam.generate(1, 1, &r));  // outside the circle
+  ASSERT_TRUE(cam.generate(32, 24, &r));
+  EXPECT_LT(dist(r.d, {0, 1, 0}), 1e-5f);    // the centre looks forward
+  ASSERT_TRUE(cam.generate(63.5f, 24, &r));  // the circle spans the frame (an ellipse on a wide film)
+  EXPECT_LT(r.d.y, -0.9f);                   // the rim behind
+  EXPECT_GT(r.d.x, 0);
+  d = panorama_camera(view, LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL);
+  const float huge[5] = {1e30f, -1e30f, 1e30f, -1e30f, 1e30f};
+  std::copy(huge, huge + 5, d.fisheye_polynomial);
+  ScenePtr s = new_scene();
+  add_object(s.get(), uv_sphere(2, 32, 16), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}));
+  add_light(s.get(), point_light({0.5f, 0.3f, 0.2f}, 50));
+  check(lt_scene_commit(s.get()), "commit");
+  for (const lt_camera_desc& c : {d, panorama_cases().back().desc}) {
+    set_camera(s.get(), c);
+    for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+      lt_render_settings rs = render_settings(16, 12, 2, 1);
+      rs.integrator = integrator;
+      Passes p = render(s.get(), rs);
+      EXPECT_EQ(p.first_non_finite(), "");
+      EXPECT_EQ(p.status.nan_samples, 0u);
+    }
   }
 }

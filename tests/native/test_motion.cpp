@@ -162,11 +162,10 @@ TEST(Motion, CameraMovesWithTheSamplesTime) {
     EXPECT_EQ(r.time, time);
     EXPECT_NEAR(cam.position(time).x, 2 * time - 1, 1e-6f);
   }
-  Vec2 film;
-  Vec3 dir;
-  float dist;
-  ASSERT_TRUE(cam.project(cam.position(1.0f), Vec3(1, 0, -5), 0, &film, &dir, &dist, 1.0f));
-  EXPECT_NEAR(film.x, 16, 1e-3f);  // straight ahead of the camera at time 1
+  lt::Camera::Projection pr;
+  ASSERT_TRUE(cam.project(cam.position(1.0f), Vec3(1, 0, -5), 0, &pr, 1.0f));
+  ASSERT_EQ(pr.count, 1);
+  EXPECT_NEAR(pr.at[0].film.x, 16, 1e-3f);  // straight ahead of the camera at time 1
 }
 
 namespace {

@@ -14,6 +14,8 @@ _PANORAMA = {
     'EQUIRECTANGULAR': core.PANORAMA_EQUIRECTANGULAR,
     'FISHEYE_EQUIDISTANT': core.PANORAMA_FISHEYE_EQUIDISTANT,
     'FISHEYE_EQUISOLID': core.PANORAMA_FISHEYE_EQUISOLID,
+    'MIRRORBALL': core.PANORAMA_MIRRORBALL,
+    'FISHEYE_LENS_POLYNOMIAL': core.PANORAMA_FISHEYE_LENS_POLYNOMIAL,
 }
 
 
@@ -47,6 +49,13 @@ def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None
     if obj is None:
         raise core.LanternError("The scene has no camera: add one and set it as the scene's "
                                 "active camera (Scene Properties > Camera)")
+    core_scene.set_camera(**camera_keywords(depsgraph, obj, report, matrix, shift_x, motion))
+    return obj.name
+
+
+def camera_keywords(depsgraph, obj, report, matrix=None, shift_x=None, motion=None):
+    """core.Scene.set_camera's keywords for camera object obj (export_camera's arguments)."""
+    scene = depsgraph.scene
     obj = obj.evaluated_get(depsgraph)
     rd = scene.render
     kw = dict(
@@ -59,8 +68,7 @@ def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None
         # Blender allows any object as the scene camera: render with a default camera's lens.
         report({'WARNING'}, "Scene camera '%s' is not a camera object: using a default "
                             "50 mm perspective lens at its transform" % obj.name)
-        core_scene.set_camera(**kw)
-        return obj.name
+        return kw
 
     cam = obj.data
     kw["type"] = core.CAMERA_PERSPECTIVE
@@ -89,8 +97,7 @@ def export_camera(depsgraph, core_scene, report, camera_object=None, matrix=None
         clip_start=cam.clip_start,
         clip_end=cam.clip_end,
     )
-    core_scene.set_camera(**kw)
-    return obj.name
+    return kw
 
 
 def _panorama(cam, name, report):
@@ -110,7 +117,8 @@ def _panorama(cam, name, report):
     return dict(type=core.CAMERA_PANORAMA, panorama_type=_PANORAMA[ccam.panorama_type],
                 fisheye_fov=ccam.fisheye_fov, fisheye_lens=ccam.fisheye_lens,
                 latitude_min=ccam.latitude_min, latitude_max=ccam.latitude_max,
-                longitude_min=ccam.longitude_min, longitude_max=ccam.longitude_max)
+                longitude_min=ccam.longitude_min, longitude_max=ccam.longitude_max,
+                fisheye_polynomial=[getattr(ccam, "fisheye_polynomial_k%d" % i) for i in range(5)])
 
 
 def camera_table(depsgraph, camera_object=None):

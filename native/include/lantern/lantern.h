@@ -43,7 +43,9 @@ extern "C" {
  * lt_instance_desc.holdout; light groups (the lightgroup fields, lt_scene_set_world_lightgroup,
  * lt_render_read_lightgroup_rows); shader AOVs (lt_render_settings.aov_*, pass_alpha_threshold,
  * lt_render_read_aov_rows); 17: the AO and Vector passes (LT_PASS_AO, LT_PASS_VECTOR,
- * lt_render_settings.ao_distance and motion_pass). */
+ * lt_render_settings.ao_distance and motion_pass); the Mirror Ball and Fisheye Lens Polynomial
+ * panoramas (lt_camera_desc.fisheye_polynomial); panoramas in the viewport (panorama_viewplane,
+ * panorama_frame_aspect). */
 #define LT_ABI_VERSION 17
 
 enum lt_status {
@@ -298,7 +300,9 @@ enum lt_sensor_fit { LT_SENSOR_AUTO = 0, LT_SENSOR_HORIZONTAL = 1, LT_SENSOR_VER
 enum lt_panorama_type {
   LT_PANORAMA_EQUIRECTANGULAR = 0,
   LT_PANORAMA_FISHEYE_EQUIDISTANT = 1,
-  LT_PANORAMA_FISHEYE_EQUISOLID = 2
+  LT_PANORAMA_FISHEYE_EQUISOLID = 2,
+  LT_PANORAMA_MIRRORBALL = 3,
+  LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL = 4
 };
 typedef struct lt_camera_desc {
   int type;
@@ -313,8 +317,8 @@ typedef struct lt_camera_desc {
   /* Depth of field (Blender's camera.dof): the core takes Cycles' aperture radius from the
    * F-stop (focal length in metres / (2 F-stop), 1 / (2 F-stop) for orthographic; F-stop clamped
    * to 1e-5). focus_distance: along the view axis (> 0 with use_dof; a focus object's resolved by
-   * the caller). Blades < 3 make a round aperture. Panoramas and orthographic cameras with depth
-   * of field render it but are not connectable for BIDIRECTIONAL's light tracing (docs). */
+   * the caller). Blades < 3 make a round aperture. Panoramas with depth of field and orthographic
+   * cameras render it but are not connectable for BIDIRECTIONAL's light tracing (docs). */
   int use_dof;
   float focus_distance;
   float aperture_fstop; /* >= 0 */
@@ -330,6 +334,15 @@ typedef struct lt_camera_desc {
    * lt_instance_desc's, the centre one equal to transform. */
   const float* motion_transforms;
   int motion_step_count;
+  /* LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL: Cycles' k0 .. k4 (finite); the angle from the axis at
+   * sensor radius r (mm) is -(k0 + k1 r + k2 r^2 + k3 r^3 + k4 r^4), seen within fisheye_fov. */
+  float fisheye_polynomial[5];
+  /* LT_CAMERA_PANORAMA seen by a viewport through the camera (Cycles' pano_viewplane): the
+   * film's u range and v range (left, right, bottom, top) on the camera frame's [0, 1]^2, before
+   * the shift (finite; an empty range: the frame itself, as renders), and the frame's aspect
+   * ratio (width / height) that the fisheyes' sensor is fitted to (0: the film's). */
+  float panorama_viewplane[4];
+  float panorama_frame_aspect;
 } lt_camera_desc;
 LT_API int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* desc);
 

@@ -152,6 +152,8 @@ const lt_abi_entry kLayout[] = {
     LT_CONST(lt_panorama_type, LT_PANORAMA_EQUIRECTANGULAR),
     LT_CONST(lt_panorama_type, LT_PANORAMA_FISHEYE_EQUIDISTANT),
     LT_CONST(lt_panorama_type, LT_PANORAMA_FISHEYE_EQUISOLID),
+    LT_CONST(lt_panorama_type, LT_PANORAMA_MIRRORBALL),
+    LT_CONST(lt_panorama_type, LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL),
     LT_CONST(lt_sensor_fit, LT_SENSOR_AUTO),
     LT_CONST(lt_sensor_fit, LT_SENSOR_HORIZONTAL),
     LT_CONST(lt_sensor_fit, LT_SENSOR_VERTICAL),
@@ -183,6 +185,9 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_camera_desc, longitude_max),
     LT_FIELD(lt_camera_desc, motion_transforms),
     LT_FIELD(lt_camera_desc, motion_step_count),
+    LT_FIELD(lt_camera_desc, fisheye_polynomial),
+    LT_FIELD(lt_camera_desc, panorama_viewplane),
+    LT_FIELD(lt_camera_desc, panorama_frame_aspect),
 
     LT_STRUCT(lt_world_desc),
     LT_FIELD(lt_world_desc, color),

@@ -650,7 +650,9 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     const float lens_values[] = {d->focus_distance, d->aperture_fstop, d->aperture_rotation, d->aperture_ratio,
                                  d->fisheye_fov,    d->fisheye_lens,   d->latitude_min,      d->latitude_max,
                                  d->longitude_min,  d->longitude_max};
-    require(finite_array(lens_values, 10), "camera depth of field and panorama parameters must be finite");
+    require(finite_array(lens_values, 10) && finite_array(d->fisheye_polynomial, 5) &&
+                finite_array(d->panorama_viewplane, 4) && std::isfinite(d->panorama_frame_aspect),
+            "camera depth of field and panorama parameters must be finite");
     if (d->use_dof) {
       require(d->focus_distance > 0,
               "camera focus distance must be positive with depth of field (the plane in focus cannot be at the lens)");
@@ -659,9 +661,11 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
       require(d->aperture_ratio > 0, "camera aperture ratio must be positive");
     }
     if (d->type == LT_CAMERA_PANORAMA) {
-      require(d->panorama_type >= LT_PANORAMA_EQUIRECTANGULAR && d->panorama_type <= LT_PANORAMA_FISHEYE_EQUISOLID,
-              "unknown panorama type " + std::to_string(d->panorama_type) +
-                  "; valid types are EQUIRECTANGULAR, FISHEYE_EQUIDISTANT, FISHEYE_EQUISOLID");
+      require(
+          d->panorama_type >= LT_PANORAMA_EQUIRECTANGULAR && d->panorama_type <= LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL,
+          "unknown panorama type " + std::to_string(d->panorama_type) +
+              "; valid types are EQUIRECTANGULAR, FISHEYE_EQUIDISTANT, FISHEYE_EQUISOLID, MIRRORBALL, "
+              "FISHEYE_LENS_POLYNOMIAL");
       require(d->fisheye_fov > 0 && d->fisheye_lens > 0, "camera fisheye field of view and lens must be positive");
     }
     lt::CameraDesc c = scene->scene.camera;  // assigned only once valid: a refused call changes nothing
@@ -680,6 +684,9 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     c.latitude_max = d->latitude_max;
     c.longitude_min = d->longitude_min;
     c.longitude_max = d->longitude_max;
+    std::copy(d->fisheye_polynomial, d->fisheye_polynomial + 5, c.polynomial);
+    std::copy(d->panorama_viewplane, d->panorama_viewplane + 4, c.panorama_viewplane);
+    c.panorama_frame_aspect = std::max(0.0f, d->panorama_frame_aspect);
     c.xf = to_transform(d->transform, "camera");
     require(std::abs(c.xf.determinant()) > 1e-30f, "camera transform is singular");
     c.focal_length = d->focal_length;

@@ -55,7 +55,7 @@ Bdpt::Bdpt(const RenderContext& ctx, const CameraSample& cs, Sampler& sampler, S
       stats_(stats),
       scratch_(thread_scratch()),
       pixel_center_(cs.pixel_center),
-      film_area_(ctx.camera.pixel_plane_area() * float(ctx.width) * float(ctx.height)),
+      n_pixels_(float(ctx.width) * float(ctx.height)),
       media_(ctx.scene.has_media()) {}
 
 float Bdpt::kind_limit_factor(const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera, int s,
@@ -716,10 +716,10 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   // A point on the lens, uniform over the aperture as the camera's rays sample it (pbrt-v4's
   // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were.
   const Vec3 lens = cam.has_lens() ? cam.lens_point(sampler_.next_2d(), time_) : cam.position(time_);
-  Vec2 film;
-  Vec3 dir;
-  float dist;
-  if (!cam.project(lens, qs.p, ctx_.filter.radius(), &film, &dir, &dist, time_)) return;
+  Camera::Projection& pr = scratch_.splat;
+  if (!cam.project(lens, qs.p, ctx_.filter.radius(), &pr, time_)) return;
+  const Vec3 dir = pr.dir;
+  const float dist = pr.distance;
   Spectrum base = qs.beta * f(qs, -dir, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) * kinds;
   if (is_black(base)) return;
   // Light passes: qs is the path's first bounce seen from the camera (towards -dir), lit from its
@@ -738,43 +738,55 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   z0.p = lens;
   base *= transmittance(qs, z0, kVisCamera);
   if (is_black(base)) return;
-  float c = dot(dir, cam.forward(time_));
-  // Pixel j's importance is W_j = h_j(x) / (a A_lens cos^4) (a: view-plane area of a pixel,
-  // A_lens the aperture's area, 1 for a pinhole), the lens point's density 1 / A_lens; with the
-  // geometry term cos * cos_qs / d^2 the contribution is h_j cos_qs / (a cos^3 d^2), cos and d
-  // seen from the lens point (pbrt-v4's PerspectiveCamera::We and SampleWi). The film divides the
-  // sum of splats by the number of light paths.
-  base *= cos_at(qs, dir) / (cam.pixel_plane_area() * c * c * c * dist * dist);
+  // Pixel j's estimate is the integral over the film of its filter h_j times the radiance of the
+  // film position's ray; over directions instead, h_j times the film's importance J (pixels per
+  // steradian, summed over the film positions that see the direction: film_density), and over
+  // qs's surface d omega = cos_qs dA / d^2 (pbrt-v4's PerspectiveCamera::We and SampleWi: for a
+  // perspective camera J = 1 / (a cos^3), a the view-plane area of a pixel; with a lens, seen
+  // from the lens point, whose density 1 / A_lens cancels We's). The film divides the sum of
+  // splats by the number of light paths.
+  base *= cos_at(qs, dir) / (dist * dist);
   const float r = ctx_.filter.radius();
-  const int px0 = std::max(ctx_.x0, int(std::ceil(film.x - r - 0.5f))),
-            px1 = std::min(ctx_.x0 + ctx_.width - 1, int(std::floor(film.x + r - 0.5f)));
-  const int py0 = std::max(ctx_.y0, int(std::ceil(film.y - r - 0.5f))),
-            py1 = std::min(ctx_.y0 + ctx_.height - 1, int(std::floor(film.y + r - 0.5f)));
   // The MIS weight depends on the pixel only through the camera's density at qs, which is the
-  // pixel's filter value h times a common factor; that density is a factor of every ratio on the
+  // pixel's film_density times a common factor; that density is a factor of every ratio on the
   // light side (the camera side is empty for t = 1). So the first pixel's sum of ratios, scaled by
-  // heuristic(h / h_first), gives the others' (the heuristics are multiplicative).
-  float h_first = 0;
+  // heuristic(D / D_first), gives the others' (the heuristics are multiplicative).
+  float d_first = 0;
   double sum_first = 0;
-  for (int py = py0; py <= py1; ++py)
-    for (int px = px0; px <= px1; ++px) {
-      float h = ctx_.filter.pdf(film.x - (px + 0.5f)) * ctx_.filter.pdf(film.y - (py + 0.5f));
-      if (!(h > 0)) continue;
-      float w;
-      if (h_first > 0) {
-        w = float(1 / (1 + heuristic(h / h_first) * sum_first));
-      } else {
+  auto in_box = [&](int px, int py, const Vec2& film) {
+    return px >= int(std::ceil(film.x - r - 0.5f)) && px <= int(std::floor(film.x + r - 0.5f)) &&
+           py >= int(std::ceil(film.y - r - 0.5f)) && py <= int(std::floor(film.y + r - 0.5f));
+  };
+  for (int k = 0; k < pr.count; ++k) {
+    const Vec2 film = pr.at[k].film;
+    const int px0 = std::max(ctx_.x0, int(std::ceil(film.x - r - 0.5f))),
+              px1 = std::min(ctx_.x0 + ctx_.width - 1, int(std::floor(film.x + r - 0.5f)));
+    const int py0 = std::max(ctx_.y0, int(std::ceil(film.y - r - 0.5f))),
+              py1 = std::min(ctx_.y0 + ctx_.height - 1, int(std::floor(film.y + r - 0.5f)));
+    for (int py = py0; py <= py1; ++py)
+      for (int px = px0; px <= px1; ++px) {
+        // A pixel near two film positions (a panorama's) is splatted once, with both.
+        bool done = false;
+        for (int j = 0; j < k && !done; ++j) done = in_box(px, py, pr.at[j].film);
+        if (done) continue;
         const Vec2 pixel{px + 0.5f, py + 0.5f};
-        w = mis_weight(light, camera, &z0, s, 1, pixel, &sum_first);
-        // The shortcut needs that density to be non-zero (not remapped to 1).
-        if (pdf(z0, nullptr, qs, pixel) > 0) h_first = h;
+        const float d = film_density(pr, pixel);
+        if (!(d > 0)) continue;
+        float w;
+        if (d_first > 0) {
+          w = float(1 / (1 + heuristic(d / d_first) * sum_first));
+        } else {
+          w = mis_weight(light, camera, &z0, s, 1, pixel, &sum_first);
+          // The shortcut needs that density to be non-zero (not remapped to 1).
+          if (pdf(z0, nullptr, qs, pixel) > 0) d_first = d;
+        }
+        Spectrum v = base * (d * w);
+        if (is_finite(v) && !is_black(v))
+          splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v,
+                            strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1, s - 1, first,
+                            lights_.lightgroup(light[0].light)});
       }
-      Spectrum v = base * (h * w);
-      if (is_finite(v) && !is_black(v))
-        splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v,
-                          strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1, s - 1, first,
-                          lights_.lightgroup(light[0].light)});
-    }
+  }
 }
 
 SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
@@ -808,6 +820,21 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   return out_;
 }
 
+void Bdpt::run_light_tracing(std::vector<Splat>& splats) {
+  strategies_ = nullptr;
+  const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
+  std::vector<PathVertex>& camera = scratch_.camera;
+  std::vector<PathVertex>& light = scratch_.light;
+  if (camera.size() < capacity) camera.resize(capacity);
+  if (light.size() < capacity) light.resize(capacity);
+  camera[0] = PathVertex();  // no camera subpath: t = 1 reads none of it
+  camera[0].type = VertexType::Camera;
+  camera[0].p = ctx_.camera.position(time_);
+  const int ns = generate_light_subpath(light);
+  for (int s = 2; s <= ns; ++s)
+    if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
+}
+
 namespace {
 
 class BdptIntegrator final : public Integrator {
@@ -828,6 +855,12 @@ class BdptIntegrator final : public Integrator {
     if (is_finite(v.radiance))
       film_->add_strategies(int(cs.pixel_center.x) - ctx_.x0, int(cs.pixel_center.y) - ctx_.y0, strategies.data());
     return v;
+  }
+  void trace_unseen(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
+                    std::vector<Splat>& splats) const override {
+    if (!ctx_.camera.connectable()) return;
+    Bdpt b(ctx_, cs, sampler, stats);
+    b.run_light_tracing(splats);
   }
   void end_pass(Film& film, const PassSplats& p) override {
     // Merge the splats tile by tile in a fixed order (deterministic for any thread count).

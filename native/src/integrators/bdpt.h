@@ -33,6 +33,7 @@ struct BdptScratch {
   std::vector<PathVertex> camera, light;  // the subpaths
   std::vector<Crossed> crossed;           // the camera walk's, in its order
   PathVertex endpoint;                    // the sampled light vertex of s = 1, the camera vertex of t = 1
+  Camera::Projection projection, splat;   // camera_pdf_dir's and splat_t1's (not on the stack)
   std::vector<double> prob, next;         // kind_limit_factor's dynamic programming
 };
 
@@ -46,6 +47,8 @@ class Bdpt {
 
   // One sample: both subpaths, then every strategy (pbrt-v4's BDPTIntegrator::Li).
   SampleValue run(std::vector<Splat>& splats, Spectrum* strategies);
+  // A sample the camera does not see (Integrator::trace_unseen): its light subpath's t = 1 splats.
+  void run_light_tracing(std::vector<Splat>& splats);
   // Test hook (bdpt_test_hooks.cpp): see bdpt_mis_weight_sums.
   std::vector<float> weight_sums();
 
@@ -60,19 +63,25 @@ class Bdpt {
     return pdf / d2;
   }
   // Solid-angle density with which the camera, for the pixel centred at `pixel`, shoots from the
-  // lens point o towards p, as MIS must see it: each pixel has spp camera samples but N * spp
-  // light paths (N pixels in the region), so the camera's per-pixel density is divided by N
-  // (Veach's sample-count-weighted heuristics; it equals pbrt's density normalised over the whole
-  // film). The lens point's own density (uniform over the aperture) is the same for every
+  // lens point o towards p, as MIS must see it: the filter's density at each film position whose
+  // ray passes through p times the film's importance there (pixels per steradian,
+  // Camera::project), summed over those positions. Each pixel has spp camera samples but
+  // N * spp light paths (N pixels in the region), so the camera's per-pixel density is divided by
+  // N (Veach's sample-count-weighted heuristics; it equals pbrt's density normalised over the
+  // whole film). The lens point's own density (uniform over the aperture) is the same for every
   // strategy (t = 1 samples it as the camera does) and no strategy moves it, so MIS leaves it out.
   float camera_pdf_dir(const Vec3& o, const Vec3& p, const Vec2& pixel) const {
-    Vec2 film;
-    Vec3 dir;
-    float dist;
-    if (!ctx_.camera.project(o, p, ctx_.filter.radius() + 1, &film, &dir, &dist, time_)) return 0;
-    float h = ctx_.filter.pdf(film.x - pixel.x) * ctx_.filter.pdf(film.y - pixel.y);
-    float c = dot(dir, ctx_.camera.forward(time_));
-    return h / (film_area_ * c * c * c);
+    Camera::Projection& pr = scratch_.projection;
+    if (!ctx_.camera.project(o, p, ctx_.filter.radius() + 1, &pr, time_)) return 0;
+    return film_density(pr, pixel) / n_pixels_;
+  }
+  // Sum over the projection's film positions of the pixel's filter value times the importance.
+  float film_density(const Camera::Projection& pr, const Vec2& pixel) const {
+    float sum = 0;
+    for (int k = 0; k < pr.count; ++k)
+      sum +=
+          ctx_.filter.pdf(pr.at[k].film.x - pixel.x) * ctx_.filter.pdf(pr.at[k].film.y - pixel.y) * pr.at[k].importance;
+    return sum;
   }
   float bsdf_pdf(const PathVertex& v, const Vec3& to_prev, const Vec3& to_next) const {
     if (v.type == VertexType::Medium) return phase(v).pdf(to_prev, to_next);
@@ -287,7 +296,7 @@ class Bdpt {
   SampleStats& stats_;
   BdptScratch& scratch_;
   const Vec2 pixel_center_;  // of the pixel this sample estimates
-  float film_area_;          // view-plane area of the render region at unit distance
+  float n_pixels_;           // the render region's pixels
   bool media_;               // the scene has media: walks sample free flights, connections transmittance
   SampleValue out_;
   Spectrum L_{0.0f};

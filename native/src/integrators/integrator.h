@@ -138,6 +138,11 @@ class Integrator {
   // region (light tracing) go to `splats`, dropped by the caller if the value is not finite.
   virtual SampleValue trace(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
                             std::vector<Splat>& splats) const = 0;
+  // A camera sample whose film position sees nothing (outside a fisheye's circle): black and
+  // opaque, but it still counts as a light path (light tracing divides splats by their number),
+  // so an integrator that splats traces that path (cs.ray holds only the time).
+  virtual void trace_unseen(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
+                            std::vector<Splat>& splats) const {}
   // After a pass: the pass's splats into the film, in a fixed order (the same image for any
   // thread count).
   virtual void end_pass(Film& film, const PassSplats& splats) {}

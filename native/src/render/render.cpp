@@ -168,8 +168,8 @@ void RenderJob::render_pass(int sample_index) {
             const float time = motion_ ? sampler.next_1d() : 0.5f;
             if (!camera_.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray, time)) {
               // The film sees nothing there (outside a fisheye's circle): black and opaque, as Cycles.
-              // No light path is traced for it; it still counts as one, harmlessly: only panoramas
-              // have such samples, and BDPT splats nothing for them (Camera::connectable).
+              // It still counts as a light path, which BDPT traces (its splats reach the circle).
+              integrator_->trace_unseen(cs, sampler, stats, splats);
               SampleValue none;
               none.alpha = 1;
               film_.add(x, y, none);

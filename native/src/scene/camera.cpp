@@ -1,5 +1,7 @@
 #include "scene/camera.h"
 
+#include <algorithm>
+
 namespace lt {
 
 namespace {
@@ -32,16 +34,30 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : d_(desc), width_
   y1_ = (0.5f * ycor * winy + dy) * pixsize;
   pixel_area_ = ((x1_ - x0_) / winx) * ((y1_ - y0_) / winy);
   if (desc.panorama) {
-    // Cycles' panorama view plane is [0, 1]^2 shifted by the camera's shift (blender/camera.cpp).
-    x0_ = desc.shift_x, x1_ = 1 + desc.shift_x, y0_ = desc.shift_y, y1_ = 1 + desc.shift_y;
-    // The equisolid fisheye's sensor, fitted to the frame as Cycles does: note its automatic fit
-    // is horizontal only for a strictly wider frame.
-    const float xr = winx, yr = winy * yasp;
+    // Cycles' panorama view plane is [0, 1]^2 shifted by the camera's shift (blender/camera.cpp);
+    // a viewport looking through the camera sees the part of it its region covers
+    // (pano_viewplane: the region relative to the camera's frame).
+    const float* vp = desc.panorama_viewplane;
+    const bool region = vp[1] != vp[0] && vp[3] != vp[2];
+    x0_ = (region ? vp[0] : 0) + desc.shift_x, x1_ = (region ? vp[1] : 1) + desc.shift_x;
+    y0_ = (region ? vp[2] : 0) + desc.shift_y, y1_ = (region ? vp[3] : 1) + desc.shift_y;
+    // The equisolid and polynomial fisheyes' sensor, fitted to the frame as Cycles does: note its
+    // automatic fit is horizontal only for a strictly wider frame.
+    const bool frame = desc.panorama_frame_aspect > 0;
+    const float xr = frame ? desc.panorama_frame_aspect : winx, yr = frame ? 1.0f : winy * yasp;
     const bool horizontal = desc.sensor_fit == 1 || (desc.sensor_fit == 0 && xr > yr);
     const float size = desc.sensor_fit == 2 ? desc.sensor_height : desc.sensor_width;
     fisheye_w_ = horizontal ? size : size * xr / yr;
     fisheye_h_ = horizontal ? size * yr / xr : size;
+    if (radial()) radial_ends_ = radial_pieces();
   }
+  const float* k = desc.polynomial;
+  const bool degenerate =
+      desc.panorama &&
+      ((desc.panorama_type == PanoramaType::Equirectangular &&
+        (desc.latitude_max == desc.latitude_min || desc.longitude_max == desc.longitude_min)) ||
+       (desc.panorama_type == PanoramaType::FisheyeLensPolynomial && k[1] == 0 && k[2] == 0 && k[3] == 0 && k[4] == 0));
+  connectable_ = !desc.orthographic && !(desc.panorama && desc.aperture_radius > 0) && !degenerate;
   centre_ = basis_of(desc.xf);
   if (desc.motion.size() >= 2) motion_ = decompose_motion(desc.motion);
   generation_ = next_motion_generation();
@@ -108,6 +124,103 @@ Vec3 Camera::lens_point(Vec2 u, float time) const {
   return b.origin + b.right * l.x + b.up * l.y;
 }
 
+bool Camera::radial() const {
+  return d_.panorama_type == PanoramaType::FisheyeEquidistant || d_.panorama_type == PanoramaType::FisheyeEquisolid ||
+         d_.panorama_type == PanoramaType::FisheyeLensPolynomial;
+}
+
+Vec2 Camera::fisheye_scale() const {
+  return d_.panorama_type == PanoramaType::FisheyeEquidistant ? Vec2{2, 2} : Vec2{fisheye_w_, fisheye_h_};
+}
+
+// Cycles' fisheye_to_direction (equidistant: r fov / 2 over the inscribed circle),
+// fisheye_equisolid_to_direction (2 asin(r / 2 lens)) and fisheye_lens_polynomial_to_direction.
+double Camera::radial_theta(double rho) const {
+  switch (d_.panorama_type) {
+    case PanoramaType::FisheyeEquidistant:
+      return rho * d_.fisheye_fov * 0.5;
+    case PanoramaType::FisheyeEquisolid:
+      return 2 * std::asin(std::min(1.0, rho / (2.0 * d_.fisheye_lens)));
+    default: {
+      const float* k = d_.polynomial;
+      return -(k[0] + rho * (k[1] + rho * (k[2] + rho * (k[3] + rho * double(k[4])))));
+    }
+  }
+}
+
+double Camera::radial_dtheta(double rho) const {
+  switch (d_.panorama_type) {
+    case PanoramaType::FisheyeEquidistant:
+      return d_.fisheye_fov * 0.5;
+    case PanoramaType::FisheyeEquisolid: {
+      const double f2 = 4.0 * d_.fisheye_lens * d_.fisheye_lens - rho * rho;
+      return f2 > 0 ? 2 / std::sqrt(f2) : INFINITY;
+    }
+    default: {
+      const float* k = d_.polynomial;
+      return -(k[1] + rho * (2 * k[2] + rho * (3 * k[3] + rho * 4.0 * k[4])));
+    }
+  }
+}
+
+// What each projection sees: equidistant its inscribed circle, equisolid the circle of its field
+// of view on the sensor, the polynomial where its angle is within half the field of view.
+bool Camera::radial_visible(double rho, double theta) const {
+  switch (d_.panorama_type) {
+    case PanoramaType::FisheyeEquidistant:
+      return rho <= 1;
+    case PanoramaType::FisheyeEquisolid:
+      return rho <= 2.0 * d_.fisheye_lens * std::sin(0.25 * d_.fisheye_fov);
+    default:
+      return std::abs(theta) <= 0.5 * d_.fisheye_fov;
+  }
+}
+
+// The rho range that the film within a frame's size of margin covers, cut at theta's turning
+// points: the roots of theta' (a cubic for the polynomial), each alone in a piece between the
+// roots of theta'' (a quadratic), found by bisection.
+std::vector<double> Camera::radial_pieces() const {
+  const Vec2 scale = fisheye_scale();
+  const double m = std::max(width_, height_);  // the margin, in uv below
+  const double mu = m / width_ * std::abs(x1_ - x0_), mv = m / height_ * std::abs(y1_ - y0_);
+  const double ux = std::max(std::abs(std::min(x0_, x1_) - mu - 0.5), std::abs(std::max(x0_, x1_) + mu - 0.5));
+  const double uy = std::max(std::abs(std::min(y0_, y1_) - mv - 0.5), std::abs(std::max(y0_, y1_) + mv - 0.5));
+  double r_max = std::sqrt(ux * ux * scale.x * scale.x + uy * uy * scale.y * scale.y);
+  if (d_.panorama_type == PanoramaType::FisheyeEquidistant) r_max = std::min(r_max, 1.0);
+  if (d_.panorama_type == PanoramaType::FisheyeEquisolid) r_max = std::min(r_max, 2.0 * d_.fisheye_lens);
+  std::vector<double> ends{0.0};
+  if (d_.panorama_type == PanoramaType::FisheyeLensPolynomial) {
+    // theta'' = -(2 k2 + 6 k3 rho + 12 k4 rho^2).
+    const double a = 12.0 * d_.polynomial[4], b = 6.0 * d_.polynomial[3], c = 2.0 * d_.polynomial[2];
+    std::vector<double> cuts{0.0};
+    if (a != 0) {
+      const double disc = b * b - 4 * a * c;
+      if (disc >= 0) {
+        const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+        for (double root : {q / a, q != 0 ? c / q : -1.0})
+          if (root > 0 && root < r_max) cuts.push_back(root);
+      }
+    } else if (b != 0 && -c / b > 0 && -c / b < r_max) {
+      cuts.push_back(-c / b);
+    }
+    cuts.push_back(r_max);
+    std::sort(cuts.begin(), cuts.end());
+    for (size_t i = 0; i + 1 < cuts.size(); ++i) {
+      double lo = cuts[i], hi = cuts[i + 1];
+      const double dlo = radial_dtheta(lo), dhi = radial_dtheta(hi);
+      if ((dlo < 0) != (dhi < 0) && dlo != 0 && dhi != 0) {
+        for (int it = 0; it < 80; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          ((radial_dtheta(mid) < 0) == (dlo < 0) ? lo : hi) = mid;
+        }
+        ends.push_back(0.5 * (lo + hi));
+      }
+    }
+  }
+  ends.push_back(r_max);
+  return ends;
+}
+
 Vec3 Camera::panorama_direction(float x, float y) const {
   const Vec2 uv = plane_point(x, y);
   if (d_.panorama_type == PanoramaType::Equirectangular) {
@@ -118,24 +231,120 @@ Vec3 Camera::panorama_direction(float x, float y) const {
     const float c = std::cos(lat);
     return {c * std::sin(lon), std::sin(lat), -c * std::cos(lon)};
   }
-  // Fisheyes: the angle from the axis grows with the film radius, linearly (equidistant, over the
-  // frame's inscribed circle) or as 2 asin(r / 2f) (equisolid, r on the fitted sensor in mm).
-  float a, b, theta;
-  if (d_.panorama_type == PanoramaType::FisheyeEquidistant) {
-    a = 2 * (uv.x - 0.5f), b = 2 * (uv.y - 0.5f);
-    const float r = std::sqrt(a * a + b * b);
-    if (r > 1) return Vec3(0.0f);
-    theta = r * d_.fisheye_fov * 0.5f;
-  } else {
-    a = (uv.x - 0.5f) * fisheye_w_, b = (uv.y - 0.5f) * fisheye_h_;
-    const float r = std::sqrt(a * a + b * b);
-    if (r > 2 * d_.fisheye_lens * std::sin(0.25f * d_.fisheye_fov)) return Vec3(0.0f);
-    theta = 2 * std::asin(std::min(1.0f, r / (2 * d_.fisheye_lens)));
+  if (d_.panorama_type == PanoramaType::MirrorBall) {
+    // Cycles' mirrorball_to_direction: the film's inscribed circle is a mirror sphere seen from
+    // infinitely far behind the camera, the view reflected off it (the centre sees forward, the
+    // rim backward); outside the circle nothing.
+    const float nx = 2 * uv.x - 1, ny = 2 * uv.y - 1, r2 = nx * nx + ny * ny;
+    if (r2 > 1) return Vec3(0.0f);
+    const float h = std::sqrt(std::max(0.0f, 1 - r2));
+    return {2 * h * nx, 2 * h * ny, 1 - 2 * h * h};
   }
+  // Fisheyes: the angle from the axis grows with the film radius (radial_theta). Cycles takes the
+  // azimuth as acos(a / r), the upward one at the centre (which only the polynomial's k0 tilts).
+  const Vec2 scale = fisheye_scale();
+  const float a = (uv.x - 0.5f) * scale.x, b = (uv.y - 0.5f) * scale.y;
   const float r = std::sqrt(a * a + b * b);
-  const float s = std::sin(theta);
-  if (!(r > 0)) return {0, 0, -1};
-  return {a / r * s, b / r * s, -std::cos(theta)};
+  const double theta = radial_theta(r);
+  if (!radial_visible(r, theta) || !std::isfinite(theta)) return Vec3(0.0f);
+  const float s = float(std::sin(theta)), c = float(std::cos(theta));
+  if (!(r > 0)) return {0, s, -c};
+  return {a / r * s, b / r * s, -c};
+}
+
+void Camera::panorama_preimages(const Vec3& w, float margin, Projection* out) const {
+  const float W = float(width_), H = float(height_);
+  const float du = x1_ - x0_, dv = y1_ - y0_;
+  // The film's pixels per unit of uv area.
+  const double uv_to_pixels = double(W) * H / std::abs(double(du) * dv);
+  auto add = [&](float u, float v, double importance) {
+    const Vec2 film{(u - x0_) / du * W, (v - y0_) / dv * H};
+    if (!(film.x >= -margin && film.x <= W + margin && film.y >= -margin && film.y <= H + margin)) return;
+    if (!(importance > 0) || !std::isfinite(importance) || out->count == kMaxPreimages) return;
+    out->at[out->count++] = {film, float(importance)};
+  };
+  // The film's uv range within the margin.
+  const float u_lo = std::min(x0_, x1_) - margin / W * std::abs(du),
+              u_hi = std::max(x0_, x1_) + margin / W * std::abs(du);
+  const float v_lo = std::min(y0_, y1_) - margin / H * std::abs(dv),
+              v_hi = std::max(y0_, y1_) + margin / H * std::abs(dv);
+  if (d_.panorama_type == PanoramaType::Equirectangular) {
+    // d omega = cos(lat) dlat dlon; the film's pixels cover the ranges linearly. Longitudes repeat
+    // every turn, and a latitude past a pole is the one before it half a turn round.
+    const double dlon = double(d_.longitude_max) - d_.longitude_min, dlat = double(d_.latitude_max) - d_.latitude_min;
+    if (dlon == 0 || dlat == 0) return;
+    const double lon = std::atan2(double(w.x), -double(w.z)), lat = std::asin(std::clamp(double(w.y), -1.0, 1.0));
+    const double pi = 3.14159265358979323846;
+    const double lats[3] = {lat, pi - lat, -pi - lat}, turns[3] = {0, pi, pi};
+    for (int i = 0; i < 3; ++i) {
+      const double v = (lats[i] - d_.latitude_min) / dlat;
+      if (v < v_lo || v > v_hi) continue;
+      const double importance = uv_to_pixels / (std::abs(std::cos(lats[i]) * dlon * dlat));
+      // Longitudes lon + turn + 2 pi k whose u is within [u_lo, u_hi].
+      const double l0 = lon + turns[i] - d_.longitude_min;
+      const double ka = (std::min(u_lo * dlon, u_hi * dlon) - l0) / (2 * pi),
+                   kb = (std::max(u_lo * dlon, u_hi * dlon) - l0) / (2 * pi);
+      for (double k = std::ceil(ka); k <= std::floor(kb) && k - std::ceil(ka) < 8; ++k)
+        add(float((l0 + 2 * pi * k) / dlon), float(v), importance);
+    }
+    return;
+  }
+  if (d_.panorama_type == PanoramaType::MirrorBall) {
+    // The sphere's normal halves the angle between the view's -Z and the direction: equal-area,
+    // d omega = 4 dA on the unit disk (the angle from the axis is twice the normal's), and the
+    // disk is 2 x 2 in uv, 16 uv areas per steradian. The rim (straight behind) is a null set.
+    const Vec3 m = w - Vec3(0, 0, 1);
+    const float len = length(m);
+    if (!(len > 1e-7f)) return;
+    add(0.5f * (m.x / len + 1), 0.5f * (m.y / len + 1), uv_to_pixels / 16);
+    return;
+  }
+  // Radial fisheyes: a direction at angle alpha from the axis and azimuth psi on the film is seen
+  // where theta(rho) = alpha + 2 pi k (azimuth psi) or -alpha + 2 pi k (the opposite azimuth).
+  // dA = rho drho dphi, d omega = |sin theta theta'| drho dphi, and the film's pixels cover uv
+  // linearly, the radial units by fisheye_scale().
+  const double pi = 3.14159265358979323846;
+  // (atan2: accurate near the axis and straight behind, where acos of -z is not)
+  const double alpha = std::atan2(std::hypot(double(w.x), double(w.y)), -double(w.z));
+  const double psi = std::atan2(double(w.y), double(w.x));
+  const Vec2 scale = fisheye_scale();
+  const double to_pixels = uv_to_pixels / (double(scale.x) * scale.y);
+  const double half_fov = 0.5 * d_.fisheye_fov;
+  double found[kMaxPreimages];
+  int n_found = 0;
+  for (size_t i = 0; i + 1 < radial_ends_.size(); ++i) {
+    const double ra = radial_ends_[i], rb = radial_ends_[i + 1];
+    const double ta = radial_theta(ra), tb = radial_theta(rb);
+    const double lo = std::max(std::min(ta, tb), -half_fov), hi = std::min(std::max(ta, tb), half_fov);
+    if (!(lo <= hi)) continue;
+    for (int side = 0; side < 2; ++side) {
+      const double base = side == 0 ? alpha : -alpha;
+      for (double k = std::ceil((lo - base) / (2 * pi)); base + 2 * pi * k <= hi; ++k) {
+        const double target = base + 2 * pi * k;
+        // theta is monotonic on [ra, rb]: bisection.
+        double a = ra, b = rb;
+        const bool rising = tb >= ta;
+        for (int it = 0; it < 60; ++it) {
+          const double mid = 0.5 * (a + b);
+          ((radial_theta(mid) < target) == rising ? a : b) = mid;
+        }
+        const double rho = 0.5 * (a + b);
+        // A root on the end two pieces share is found by both.
+        bool seen = false;
+        for (int j = 0; j < n_found; ++j)
+          seen = seen || std::abs(found[j] - (side == 0 ? rho : -rho)) < 1e-9 * (1 + rb);
+        if (seen || n_found == kMaxPreimages) continue;
+        found[n_found++] = side == 0 ? rho : -rho;
+        const double theta = radial_theta(rho);
+        if (!radial_visible(rho, theta)) continue;
+        const double phi = side == 0 ? psi : psi + pi;
+        const double st = std::abs(std::sin(theta)), dt = std::abs(radial_dtheta(rho));
+        // rho / sin(theta) tends to 1 / theta'(0) on the axis when theta(0) = 0.
+        const double jac = st > 1e-9 ? rho / (st * dt) : (std::abs(theta) < 1e-6 ? 1 / (dt * dt) : 0.0);
+        add(float(rho * std::cos(phi) / scale.x + 0.5), float(rho * std::sin(phi) / scale.y + 0.5), jac * to_pixels);
+      }
+    }
+  }
 }
 
 bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
@@ -197,14 +406,24 @@ bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
   return true;
 }
 
-bool Camera::project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance,
-                     float time) const {
+bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out, float time) const {
+  out->count = 0;
   if (!connectable()) return false;
   const Basis b = basis(time);
   Vec3 v = p - o;
+  const float dist = length(v);
+  if (!(dist > 0)) return false;
+  out->dir = v / dist;
+  out->distance = dist;
+  if (d_.panorama) {
+    // Clipping is the distance from the camera (camera_sample_panorama).
+    if (dist < d_.clip_start || dist > d_.clip_end) return false;
+    const Vec3 w{dot(out->dir, b.right), dot(out->dir, b.up), dot(out->dir, b.forward_neg)};
+    panorama_preimages(w, margin, out);
+    return out->count > 0;
+  }
   float z = -dot(v, b.forward_neg);
   if (!(z > 0)) return false;
-  float dist = length(v);
   float px = dot(v, b.right) / z, py = dot(v, b.up) / z;
   if (has_lens()) {
     // The ray from o through p meets the plane in focus at the pinhole ray of film position
@@ -217,11 +436,15 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec
   } else if (z < d_.clip_start || z > d_.clip_end) {
     return false;  // clipping planes are perpendicular to the axis
   }
-  film->x = (px - x0_) / (x1_ - x0_) * width_;
-  film->y = (py - y0_) / (y1_ - y0_) * height_;
-  if (film->x < -margin || film->x > width_ + margin || film->y < -margin || film->y > height_ + margin) return false;
-  *dir = v / dist;
-  *distance = dist;
+  Vec2 film{(px - x0_) / (x1_ - x0_) * width_, (py - y0_) / (y1_ - y0_) * height_};
+  if (film.x < -margin || film.x > width_ + margin || film.y < -margin || film.y > height_ + margin) return false;
+  // A view-plane area a per pixel at unit distance: the direction at angle theta from the axis
+  // covers a / cos^3 theta of it per steradian (pbrt 3, section 16.1.1; the same from a lens
+  // point, pbrt-v4's PerspectiveCamera::PDF_We, since the focus plane is at cos theta times the
+  // ray's length).
+  const float c = z / dist;
+  out->at[0] = {film, 1 / (pixel_area_ * c * c * c)};
+  out->count = 1;
   return true;
 }
 

@@ -1,7 +1,8 @@
 // Blender's camera model: sensor fit, focal length, shift, orthographic scale and clipping planes
 // (BKE_camera_params_compute_viewplane), looking down local -Z with +Y up; Cycles' thin lens
 // (depth of field: circular or polygonal aperture, anamorphic ratio) and its panoramic projections
-// (equirectangular, fisheye equidistant and equisolid; kernel/camera/camera.h and projection.h).
+// (equirectangular, fisheye equidistant, equisolid and lens polynomial, mirror ball;
+// kernel/camera/camera.h and projection.h).
 #pragma once
 
 #include <vector>
@@ -12,7 +13,13 @@
 
 namespace lt {
 
-enum class PanoramaType { Equirectangular = 0, FisheyeEquidistant = 1, FisheyeEquisolid = 2 };
+enum class PanoramaType {
+  Equirectangular = 0,
+  FisheyeEquidistant = 1,
+  FisheyeEquisolid = 2,
+  MirrorBall = 3,
+  FisheyeLensPolynomial = 4
+};
 
 struct CameraDesc {
   bool orthographic = false;
@@ -35,6 +42,15 @@ struct CameraDesc {
   PanoramaType panorama_type = PanoramaType::FisheyeEquisolid;
   float fisheye_fov = kPi, fisheye_lens = 10.5f;
   float latitude_min = -0.5f * kPi, latitude_max = 0.5f * kPi, longitude_min = -kPi, longitude_max = kPi;
+  // The lens polynomial's k0 .. k4: the angle from the axis at sensor radius r (mm) is
+  // -(k0 + k1 r + ... + k4 r^4) (Cycles' fisheye_lens_polynomial_to_direction; Cycles' defaults).
+  // A viewport looking through the camera: the film's u range and v range on the frame's
+  // [0, 1]^2 (before the shift; an empty range: the frame itself), and the frame's aspect ratio
+  // for the fisheyes' sensor fit (0: the film's).
+  float panorama_viewplane[4] = {0, 0, 0, 0};
+  float panorama_frame_aspect = 0;
+  float polynomial[5] = {-1.1735143712967577e-05f, -0.019988736953434998f, -3.3525322965709175e-06f,
+                         3.099275275886036e-06f, -2.6064646454854524e-08f};
   // Motion blur: 0, or 2 to 129 transforms equally spaced over the shutter, the centre one xf
   // (Cycles interpolates them as objects', kernel/camera/camera.h); the lens stays as it is.
   std::vector<Transform> motion;
@@ -83,25 +99,42 @@ class Camera {
   int height() const { return height_; }
 
   // Whether a point can be connected to the camera (BDPT's t = 1): a perspective camera, with or
-  // without a lens. Orthographic cameras (a delta direction) and panoramas (light tracing to them
-  // is not implemented) cannot: their connection strategy has density 0 and MIS leaves it out.
-  bool connectable() const { return !d_.orthographic && !d_.panorama; }
+  // without a lens, and a panorama without one. Orthographic cameras (every ray has the same
+  // direction: a delta) and panoramas with depth of field (the lens turns with the direction, so
+  // a lens point does not fix the ray) are not: their connection strategy has density 0 and MIS
+  // leaves it out. So is a panorama whose map is degenerate (an empty latitude or longitude
+  // range, a lens polynomial of k0 alone: one direction for a whole area of film, a delta too).
+  bool connectable() const { return connectable_; }
+
+  // The film positions whose camera rays (from one lens point) have a given direction, with the
+  // film's importance there: pixels of film per unit solid angle of direction (the inverse of
+  // the direction map's Jacobian; pbrt-v4's camera importance We is it times the filter's value,
+  // over cos^4 and the lens area for a perspective camera). A perspective camera has one such
+  // position; a panorama can have several (a fisheye of more than 360 degrees, an equirectangular
+  // film's seam and poles in the pixel filter's margin, a polynomial that is not monotonic), and
+  // importance sums over them.
+  struct Preimage {
+    Vec2 film;         // full-frame pixels, y up
+    float importance;  // pixels per steradian
+  };
+  static constexpr int kMaxPreimages = 48;  // radial: 4 monotonic pieces x 2 sides x 6 turns
+  struct Projection {
+    Vec3 dir;        // unit, from the lens point to the point
+    float distance;  // from the lens point
+    int count = 0;
+    Preimage at[kMaxPreimages];
+  };
   // For connecting a point p to the lens point o (the camera's position for a pinhole): the
-  // full-frame film position (pixels, y up) of the camera ray from o that passes through p, the
-  // unit direction from o to p and the distance. False if the camera is not connectable, or p is
-  // behind the camera, outside the ray's clipping range or off the film (margin included).
-  bool project(const Vec3& o, const Vec3& p, float margin, Vec2* film, Vec3* dir, float* distance,
-               float time = 0.5f) const;
+  // direction and distance from o to p, and every film position within `margin` pixels of the
+  // frame (margin at most the frame's larger side) whose camera ray from o passes through p.
+  // False if the camera is not connectable, or p is outside the rays' clipping range or seen by
+  // no film position there (behind a perspective camera, outside a fisheye's circle).
+  bool project(const Vec3& o, const Vec3& p, float margin, Projection* out, float time = 0.5f) const;
   // The full-frame film position (pixels, y up) a world point projects to, seen by the camera at
   // shutter time `time` (the pinhole; no clipping, the film's bounds not checked), as Cycles'
   // worldtoraster for the Vector pass (a point behind the camera is mirrored, as its projection
   // divides by the depth). False for panoramas.
   bool raster(const Vec3& p, float time, Vec2* film) const;
-  // The view-plane area of one pixel at unit distance, a: a camera ray from any lens point in the
-  // direction making angle theta with the view axis has solid-angle density
-  // pixel_density / (a cos^3 theta) (pbrt 3, section 16.1.1; the same with a lens, pbrt-v4's
-  // PerspectiveCamera::PDF_We, since the focus plane is at cos theta times the ray's length).
-  float pixel_plane_area() const { return pixel_area_; }
 
  private:
   // The view plane (x, y at unit distance, or the orthographic plane) at film position (x, y).
@@ -113,6 +146,17 @@ class Camera {
   // A panorama's direction in camera space (x right, y up, -z forward) at film position (x, y);
   // zero where the projection sees nothing.
   Vec3 panorama_direction(float x, float y) const;
+  // The fisheyes as radial maps: the film point at radius rho (in the units of fisheye_scale(),
+  // about the film's centre) sees the direction at angle theta(rho) from the axis, on its side
+  // (its other side for a negative angle); visible where radial_visible.
+  bool radial() const;
+  double radial_theta(double rho) const;
+  double radial_dtheta(double rho) const;
+  bool radial_visible(double rho, double theta) const;
+  Vec2 fisheye_scale() const;                 // film uv to radial units: (2, 2), or the fitted sensor in mm
+  std::vector<double> radial_pieces() const;  // radial_ends_, at construction
+  // Camera-space direction (unit) to the panorama's film positions (project()).
+  void panorama_preimages(const Vec3& w, float margin, Projection* out) const;
   // The camera's position and axes (forward_neg: local +Z; the camera looks down -Z).
   struct Basis {
     Vec3 origin, right, up, forward_neg;
@@ -127,7 +171,11 @@ class Camera {
   int width_ = 1, height_ = 1;
   float x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // view plane at unit distance (or ortho plane)
   float pixel_area_ = 1;
-  float fisheye_w_ = 36, fisheye_h_ = 24;  // the equisolid's sensor, fitted to the frame
+  float fisheye_w_ = 36, fisheye_h_ = 24;  // the equisolid's and polynomial's sensor, fitted to the frame
+  // A radial fisheye's rho range (the film within a frame's size of margin) cut where theta turns
+  // (the lens polynomial's), so that theta is monotonic between consecutive ends: project()'s roots.
+  std::vector<double> radial_ends_;
+  bool connectable_ = true;
   Basis centre_;
   std::vector<DecomposedTransform> motion_;
   uint64_t generation_ = 0;  // moving_basis()'s per-thread cache key (copies share the contents)
