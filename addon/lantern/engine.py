@@ -54,6 +54,7 @@ PASSES = (
     ("VolumeInd", core.PASS_VOLUME_INDIRECT, 3, "RGB", 'COLOR', "cycles.use_pass_volume_indirect"),
     ("Emit", core.PASS_EMISSION, 3, "RGB", 'COLOR', "use_pass_emit"),
     ("Env", core.PASS_ENVIRONMENT, 3, "RGB", 'COLOR', "use_pass_environment"),
+    ("Shadow Catcher", core.PASS_SHADOW_CATCHER, 3, "RGB", 'COLOR', "cycles.use_pass_shadow_catcher"),
 )
 
 # Cycles' World > Mist Pass falloff as the exponent its film applies (blender/sync.cpp).
@@ -563,6 +564,13 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             crypto, crypto_bytes = cryptomatte_settings(view_layer, region)
             settings.update(crypto, caller_bytes=settings["caller_bytes"] + crypto_bytes)
             settings["pass_alpha_threshold"] = view_layer.pass_alpha_threshold  # where AOVs are written
+            # Cycles approximates the catchers' shadow into Combined unless the pass is on (blender/sync.cpp).
+            settings["shadow_catcher_approximate"] = int(not _pass_enabled(scene, view_layer,
+                                                                           "cycles.use_pass_shadow_catcher"))
+            if summary.get("shadow_catchers") and scene.lantern.integrator == 'BIDIRECTIONAL':
+                report({'WARNING'}, "Bidirectional does not split paths at shadow catchers: %d shadow "
+                       "catcher(s) render as ordinary objects and the Shadow Catcher pass is white; use "
+                       "Path Tracing or Volumetric Path" % summary["shadow_catchers"])
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:

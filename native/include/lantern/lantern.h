@@ -43,7 +43,7 @@ extern "C" {
  * lt_instance_desc.holdout; light groups (the lightgroup fields, lt_scene_set_world_lightgroup,
  * lt_render_read_lightgroup_rows); shader AOVs (lt_render_settings.aov_*, pass_alpha_threshold,
  * lt_render_read_aov_rows). */
-#define LT_ABI_VERSION 16
+#define LT_ABI_VERSION 17
 
 enum lt_status {
   LT_OK = 0,
@@ -270,6 +270,10 @@ typedef struct lt_instance_desc {
   /* The light group of its emission: 0 none, k > 0 the render's light group k - 1
    * (lt_render_settings.lightgroup_count); the same in lt_light_desc. */
   int lightgroup;
+  /* Nonzero: a shadow catcher (Object.is_shadow_catcher, or its instancer's), which PATH and
+   * VOLPATH render as Cycles 3.4: Combined becomes the catchers' matte and LT_PASS_SHADOW_CATCHER
+   * their shadows (BIDIRECTIONAL renders catchers as ordinary objects). */
+  int shadow_catcher;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 
@@ -563,6 +567,12 @@ typedef struct lt_render_settings {
   /* Cycles' View Layer > Passes > Alpha Threshold: AOVs are written at the surfaces a camera path
    * meets through transparent passes up to the first whose alpha reaches it. Default 0.5. */
   float pass_alpha_threshold;
+  /* With shadow catchers in the scene (lt_instance_desc.shadow_catcher), Cycles' Combined is the
+   * matte of the other objects: nonzero (Cycles with the Shadow Catcher pass off, its
+   * use_approximate_shadow_catcher) composites the approximated shadow into it, over the world
+   * seen behind the catchers unless the background is transparent; zero leaves the catchers
+   * transparent, their shadows in LT_PASS_SHADOW_CATCHER. Default 1. */
+  int shadow_catcher_approximate;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -652,7 +662,10 @@ enum lt_pass {
   LT_PASS_MIST = 25,
   LT_PASS_OBJECT_INDEX = 26,
   LT_PASS_MATERIAL_INDEX = 27,
-  LT_PASS_COUNT = 28
+  /* 3 channels: Cycles' Shadow Catcher pass (the catchers' light with the other objects divided by
+   * their light without them; 1 where no catcher was seen), kept when the scene has a catcher. */
+  LT_PASS_SHADOW_CATCHER = 28,
+  LT_PASS_COUNT = 29
 };
 LT_API int lt_pass_channels(int pass);
 

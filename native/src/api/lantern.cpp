@@ -507,6 +507,7 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
     }
     inst.visibility = d->visibility & LT_VISIBLE_ALL;
     inst.holdout = d->holdout != 0;
+    inst.shadow_catcher = d->shadow_catcher != 0;
     require(d->lightgroup >= 0 && d->lightgroup <= kMaxLightgroups, "instance light group out of range");
     inst.lightgroup = d->lightgroup - 1;
     require(finite_array(d->color, 4), "instance colour must be finite");
@@ -853,6 +854,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->cryptomatte = 0;
   s->cryptomatte_levels = 6;
   s->pass_alpha_threshold = 0.5f;
+  s->shadow_catcher_approximate = 1;
 }
 
 namespace {
@@ -984,6 +986,10 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.aovs = s->aov_count;
     require(std::isfinite(s->pass_alpha_threshold), "pass alpha threshold must be finite");
     is.pass_alpha_threshold = s->pass_alpha_threshold;
+    is.shadow_catcher_approximate = s->shadow_catcher_approximate != 0;
+    // Bidirectional does not split its camera subpaths: catchers render there as ordinary objects.
+    is.shadow_catcher = scene->scene.geometry.has_shadow_catcher() &&
+                        (s->integrator == LT_INTEGRATOR_PATH || s->integrator == LT_INTEGRATOR_VOLPATH);
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;

@@ -180,9 +180,10 @@ size_t FilmLayout::bytes_per_pixel() const {
   for (int t = 0; t < kCryptoTypes; ++t)
     if ((cryptomatte >> t) & 1u) floats += 2 * size_t(cryptomatte_slots());
   floats += size_t(lightgroups) * (splats ? 6 : 3) + size_t(aovs) * 4;
+  if (shadow_catcher) floats += 3 + 4 + 1 + 3;
   const unsigned kept = with_dependencies(passes);
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
-    if (kept & pass_bit(Pass(p))) {
+    if ((kept & pass_bit(Pass(p))) && Pass(p) != Pass::ShadowCatcher) {
       floats += pass_channels(Pass(p));
       if (splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p))) floats += 3;
     }
@@ -212,8 +213,14 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
     splat_half_.assign(3 * n, 0.0f);
   }
   layout_.passes = with_dependencies(layout_.passes);
+  if (layout_.shadow_catcher) {
+    catcher_.assign(3 * n, 0.0f);
+    matte_.assign(4 * n, 0.0f);
+    splits_.assign(n, 0.0f);
+    background_.assign(3 * n, 0.0f);
+  }
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p) {
-    if (!has(Pass(p))) continue;
+    if (!has(Pass(p)) || Pass(p) == Pass::ShadowCatcher) continue;
     sums_[p - kFirstSummedPass].assign(pass_channels(Pass(p)) * n, 0.0f);
     if (layout_.splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p)))
       light_splat_[p - kFirstSummedPass].assign(3 * n, 0.0f);
@@ -290,6 +297,15 @@ void Film::add(int x, int y, const SampleValue& s) {
   if (!aov_.empty() && s.aovs) {
     float* a = &aov_[size_t(layout_.aovs) * 4 * i];
     for (int j = 0; j < 4 * layout_.aovs; ++j) a[j] += s.aovs[j];
+  }
+  if (!catcher_.empty()) {
+    for (int k = 0; k < 3; ++k) {
+      catcher_[3 * i + k] += s.catcher[k];
+      matte_[4 * i + k] += s.matte[k];
+      background_[3 * i + k] += s.background[k];
+    }
+    matte_[4 * i + 3] += s.matte_transparent;
+    splits_[i] += s.catcher_split;
   }
   alpha_[i] += s.alpha;
   if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
@@ -425,8 +441,43 @@ double Film::pixel_variance(int x, int y) const {
   return v;
 }
 
+void Film::resolve_shadow_catcher(size_t i, double* o) const {
+  o[0] = o[1] = o[2] = 1.0;
+  if (catcher_.empty() || splits_[i] == 0) return;
+  // The catchers' light with the other objects (Combined less the matte) over their light without
+  // them, each channel 1 where the divisor is 0 (Cycles' safe_divide_shadow_catcher); then over
+  // white by Combined's alpha, which hides the edges of catchers against a transparent film.
+  const double inv = 1.0 / count_[i];
+  const double alpha = std::clamp(alpha_[i] * inv, 0.0, 1.0);
+  for (int k = 0; k < 3; ++k) {
+    const double with = double(mean_[3 * i + k]) - matte_[4 * i + k] * inv, without = catcher_[3 * i + k] * inv;
+    const double ratio = without != 0 ? with / without : 1.0;
+    o[k] = (1 - alpha) + alpha * ratio;
+  }
+}
+
 void Film::resolve_combined(size_t i, float* o) const {
   const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+  if (!catcher_.empty()) {
+    // Cycles reads Combined from the matte when the scene has a catcher (Film::get_actual_display_pass);
+    // approximated, with the shadow as coverage (film_calculate_shadow_catcher_matte_with_shadow).
+    const float* m = &matte_[4 * i];
+    const double alpha = std::clamp(1.0 - m[3] * inv, 0.0, 1.0);
+    for (int k = 0; k < 3; ++k) o[k] = float(m[k] * inv);
+    o[3] = float(alpha);
+    if (!layout_.catcher_approximate || !count_[i]) return;
+    double sc[3];
+    resolve_shadow_catcher(i, sc);
+    const double shadow = 1.0 - std::clamp((sc[0] + sc[1] + sc[2]) / 3.0, 0.0, 1.0);
+    const double alpha_matte = (1.0 - alpha) * shadow + alpha;
+    if (layout_.transparent) {
+      o[3] = float(alpha_matte);
+      return;
+    }
+    for (int k = 0; k < 3; ++k) o[k] = float(m[k] * inv + background_[3 * i + k] * inv * (1.0 - alpha_matte));
+    o[3] = 1.0f;
+    return;
+  }
   const double splat_scale = light_paths_ && !splat_.empty() ? 1.0 / double(light_paths_) : 0.0;
   for (int k = 0; k < 3; ++k)
     o[k] = splat_scale > 0 ? float(double(mean_[3 * i + k]) + splat_[3 * i + k] * splat_scale) : mean_[3 * i + k];
@@ -483,15 +534,16 @@ std::unique_lock<std::mutex> Film::lock_accumulators() const {
 }
 
 const char* exr_pass_name(Pass p) {
-  static const char* const kNames[] = {"DiffDir",  "DiffInd",  "DiffCol",  "GlossDir",  "GlossInd",  "GlossCol",
-                                       "TransDir", "TransInd", "TransCol", "VolumeDir", "VolumeInd", "Emit",
-                                       "Env",      "Position", "UV",       "Mist",      "IndexOB",   "IndexMA"};
+  static const char* const kNames[] = {"DiffDir",   "DiffInd",  "DiffCol",  "GlossDir",     "GlossInd",
+                                       "GlossCol",  "TransDir", "TransInd", "TransCol",     "VolumeDir",
+                                       "VolumeInd", "Emit",     "Env",      "Position",     "UV",
+                                       "Mist",      "IndexOB",  "IndexMA",  "ShadowCatcher"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(kSummedPasses), "a name per pass");
   return int(p) >= kFirstSummedPass && p < Pass::Count ? kNames[int(p) - kFirstSummedPass] : nullptr;
 }
 
 const char* exr_channel_letters(Pass p) {
-  if (is_light_pass(p)) return "RGB";
+  if (is_light_pass(p) || p == Pass::ShadowCatcher) return "RGB";
   switch (p) {
     case Pass::Position:
       return "XYZ";
@@ -693,7 +745,8 @@ const char* pass_name(Pass p) {
                                        "UV",
                                        "Mist",
                                        "IndexOB",
-                                       "IndexMA"};
+                                       "IndexMA",
+                                       "Shadow Catcher"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(Pass::Count), "a name per pass");
   return unsigned(p) < unsigned(Pass::Count) ? kNames[int(p)] : "?";
 }
@@ -760,6 +813,12 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
           case Pass::SampleCount:
             o[0] = float(count_[i]);
             break;
+          case Pass::ShadowCatcher: {
+            double sc[3];
+            resolve_shadow_catcher(i, sc);
+            for (int k = 0; k < 3; ++k) o[k] = float(sc[k]);
+            break;
+          }
           case Pass::Count:
             break;
           default:

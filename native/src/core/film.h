@@ -88,6 +88,13 @@ struct SampleValue {
   // Shader AOVs: 4 floats per AOV of FilmLayout::aovs (ShadingContext::aovs), zeroed by the render
   // job (CameraSample::aovs); null when the film keeps none.
   float* aovs = nullptr;
+  // Shadow catcher (Cycles' catcher split, integrators/path.cpp), when FilmLayout::shadow_catcher:
+  // the light of the catcher-only path (PASS_SHADOW_CATCHER), the light and transparency of the
+  // camera path before it met a catcher (PASS_SHADOW_CATCHER_MATTE; the throughput there counts as
+  // transparency), 1 when it met one (PASS_SHADOW_CATCHER_SAMPLE_COUNT), and the world the camera
+  // ray sees directly or behind the catcher (PASS_BACKGROUND, for the approximate Combined).
+  Spectrum catcher{0.0f}, matte{0.0f}, background{0.0f};
+  float matte_transparent = 0, catcher_split = 0;
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
@@ -122,7 +129,9 @@ enum class Pass {
   Mist = 25,
   ObjectIndex = 26,
   MaterialIndex = 27,
-  Count = 28
+  // Cycles' Shadow Catcher pass, read from the film's catcher accumulators (not a sum of its own).
+  ShadowCatcher = 28,
+  Count = 29
 };
 constexpr int kFirstSummedPass = int(Pass::DiffuseDirect);
 constexpr int kSummedPasses = int(Pass::Count) - kFirstSummedPass;
@@ -169,6 +178,10 @@ struct FilmLayout {
   int cryptomatte_slots() const { return cryptomatte ? 2 * cryptomatte_layers(cryptomatte_levels) : 0; }
   int lightgroups = 0;  // light group passes (Combined_<group>), RGB each
   int aovs = 0;         // shader AOV passes, 4 floats each
+  // Shadow catchers (SampleValue::catcher ...): kept when the scene has one and the integrator
+  // splits paths there; Combined then reads as Cycles' matte, approximated (the catchers' shadows
+  // composited in, over the world behind them unless `transparent`) or not.
+  bool shadow_catcher = false, catcher_approximate = true, transparent = false;
   // Bytes per pixel of the accumulators and the published image.
   size_t bytes_per_pixel() const;
 };
@@ -310,6 +323,8 @@ class Film {
 
  private:
   void resolve_combined(size_t i, float* o) const;
+  // Cycles' film_calculate_shadow_catcher (film/read.h) at pixel i (1 without catcher samples).
+  void resolve_shadow_catcher(size_t i, double* o) const;
   void read_summed(Pass pass, size_t i, float* o) const;  // a pass from DiffuseDirect on, pixel i
   // Pixel i's means of Combined RGB over half A, half B and all its samples (count >= 2), light
   // tracing's splats split the same way and normalised by each half's light paths.
@@ -343,6 +358,9 @@ class Film {
   std::vector<float> crypto_[kCryptoTypes];
   std::vector<float> lightgroup_, lightgroup_splat_;  // per pixel, per group, RGB sums
   std::vector<float> aov_;                            // per pixel, per AOV, 4 sums
+  // Shadow catcher sums (FilmLayout::shadow_catcher): catcher-only light (RGB), matte (RGB and
+  // transparency), splits, world behind (RGB).
+  std::vector<float> catcher_, matte_, splits_, background_;
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;

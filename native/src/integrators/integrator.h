@@ -47,6 +47,9 @@ struct IntegratorSettings {
   // Cycles' pass alpha threshold: the camera path writes AOVs at the surfaces it reaches through
   // transparent passes up to the first whose alpha reaches it (single_pass_done).
   float pass_alpha_threshold = 0.5f;
+  // Shadow catchers: split camera paths at them (Cycles' catcher split; set when the scene has one
+  // and the integrator splits: path and volumetric path) and Cycles' use_approximate_shadow_catcher.
+  bool shadow_catcher = false, shadow_catcher_approximate = true;
 };
 
 // The Mist pass's value for a sample whose camera path scatters first at p with throughput beta
