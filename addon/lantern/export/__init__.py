@@ -133,7 +133,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
         holdout = holdout_of(inst, view_layer)
         lightgroup = lightgroup_of(inst, groups)
         catcher = shadow_catcher_of(inst)
-        catchers += catcher and inst.show_self and t in ('MESH', 'CURVES', 'POINTCLOUD') + CONVERTIBLE_TYPES
+        catchers += catcher and inst.show_self and (t in ('MESH', 'CURVES', 'POINTCLOUD') or t in CONVERTIBLE_TYPES)
         if holdout or lightgroup or catcher:
             flags[instance_key(inst)] = (holdout, lightgroup, catcher)
         if t == 'MESH' and inst.show_particles and hair_systems(obj):
