@@ -65,9 +65,10 @@ TEST(ShadowCatcher, MatteIsTransparentAndThePassHoldsTheShadow) {
         for (int c = 0; c < 4; ++c) ASSERT_EQ(p.rgba(x, y)[c], 0.0f) << "pixel " << x << ", " << y;
     const std::vector<float>& sc = p.pass(LT_PASS_SHADOW_CATCHER);
     ASSERT_FALSE(sc.empty());
-    // Left: the occluder's shadow; right: what it hides of the sky.
+    // Left: the occluder's shadow (about 0.05: the catcher-only path is lit by the lamp and the whole
+    // sky; 0.3 if its light samples saw the occluder); right: what it hides of the sky.
     for (int c = 0; c < 3; ++c) {
-      EXPECT_LT(band_mean(sc, width, height, c, 2, width / 4), 0.5);
+      EXPECT_LT(band_mean(sc, width, height, c, 2, width / 4), 0.15);
       EXPECT_GT(band_mean(sc, width, height, c, 3 * width / 4, width), 0.95);
     }
     // Without the occluder both paths see the same scene with the same random numbers: their ratio
