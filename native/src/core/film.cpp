@@ -441,41 +441,81 @@ double Film::pixel_variance(int x, int y) const {
   return v;
 }
 
-void Film::resolve_shadow_catcher(size_t i, double* o) const {
+void catcher_pass(const CatcherPixel& m, double* o) {
   o[0] = o[1] = o[2] = 1.0;
-  if (catcher_.empty() || splits_[i] == 0) return;
+  if (m.split == 0) return;
   // The catchers' light with the other objects (Combined less the matte) over their light without
   // them, each channel 1 where the divisor is 0 (Cycles' safe_divide_shadow_catcher); then over
   // white by Combined's alpha, which hides the edges of catchers against a transparent film.
-  const double inv = 1.0 / count_[i];
-  const double alpha = std::clamp(alpha_[i] * inv, 0.0, 1.0);
+  const double alpha = std::clamp(m.alpha, 0.0, 1.0);
   for (int k = 0; k < 3; ++k) {
-    const double with = double(mean_[3 * i + k]) - matte_[4 * i + k] * inv, without = catcher_[3 * i + k] * inv;
-    const double ratio = without != 0 ? with / without : 1.0;
+    const double ratio = m.catcher[k] != 0 ? (m.combined[k] - m.matte[k]) / m.catcher[k] : 1.0;
     o[k] = (1 - alpha) + alpha * ratio;
   }
+}
+
+void catcher_combined(const CatcherPixel& m, bool approximate, bool transparent, float* o) {
+  const double alpha = std::clamp(1.0 - m.matte[3], 0.0, 1.0);
+  for (int k = 0; k < 3; ++k) o[k] = float(m.matte[k]);
+  o[3] = float(alpha);
+  if (!approximate) return;
+  // The shadow is 1 - the pass's average, the coverage of what the matte does not cover.
+  double sc[3];
+  catcher_pass(m, sc);
+  const double alpha_matte = (1.0 - alpha) * (1.0 - std::clamp((sc[0] + sc[1] + sc[2]) / 3.0, 0.0, 1.0)) + alpha;
+  if (transparent) {
+    o[3] = float(alpha_matte);
+    return;
+  }
+  for (int k = 0; k < 3; ++k) o[k] = float(m.matte[k] + m.background[k] * (1.0 - alpha_matte));
+  o[3] = 1.0f;
+}
+
+const char* catcher_part_name(int part) {
+  static const char* const kNames[] = {"CatcherCombined", "CatcherLight", "CatcherMatte", "CatcherSplit",
+                                       "CatcherBackground"};
+  return part >= 0 && part < kCatcherParts ? kNames[part] : nullptr;
+}
+
+const char* catcher_part_letters(int part) {
+  static const char* const kLetters[] = {"RGBA", "RGB", "RGBA", "X", "RGB"};
+  return part >= 0 && part < kCatcherParts ? kLetters[part] : nullptr;
+}
+
+CatcherPixel Film::catcher_pixel(size_t i) const {
+  CatcherPixel m;
+  const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+  for (int k = 0; k < 3; ++k) {
+    m.combined[k] = mean_[3 * i + k];
+    m.catcher[k] = catcher_[3 * i + k] * inv;
+    m.background[k] = background_[3 * i + k] * inv;
+  }
+  for (int k = 0; k < 4; ++k) m.matte[k] = matte_[4 * i + k] * inv;
+  m.alpha = alpha_[i] * inv;
+  m.split = splits_[i] * inv;
+  return m;
+}
+
+bool Film::read_catcher_part(int part, float* out) const {
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  if (catcher_.empty() || part < 0 || part >= kCatcherParts) return false;
+  const size_t n = count_.size();
+  for (size_t i = 0; i < n; ++i) {
+    const CatcherPixel m = catcher_pixel(i);
+    const double* src[] = {m.combined, m.catcher, m.matte, &m.split, m.background};
+    const int c = int(std::strlen(catcher_part_letters(part)));
+    for (int k = 0; k < c; ++k) out[c * i + k] = float(part == kCatcherCombined && k == 3 ? m.alpha : src[part][k]);
+  }
+  return true;
 }
 
 void Film::resolve_combined(size_t i, float* o) const {
   const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
   if (!catcher_.empty()) {
-    // Cycles reads Combined from the matte when the scene has a catcher (Film::get_actual_display_pass);
-    // approximated, with the shadow as coverage (film_calculate_shadow_catcher_matte_with_shadow).
-    const float* m = &matte_[4 * i];
-    const double alpha = std::clamp(1.0 - m[3] * inv, 0.0, 1.0);
-    for (int k = 0; k < 3; ++k) o[k] = float(m[k] * inv);
-    o[3] = float(alpha);
-    if (!layout_.catcher_approximate || !count_[i]) return;
-    double sc[3];
-    resolve_shadow_catcher(i, sc);
-    const double shadow = 1.0 - std::clamp((sc[0] + sc[1] + sc[2]) / 3.0, 0.0, 1.0);
-    const double alpha_matte = (1.0 - alpha) * shadow + alpha;
-    if (layout_.transparent) {
-      o[3] = float(alpha_matte);
-      return;
-    }
-    for (int k = 0; k < 3; ++k) o[k] = float(m[k] * inv + background_[3 * i + k] * inv * (1.0 - alpha_matte));
-    o[3] = 1.0f;
+    if (count_[i])
+      catcher_combined(catcher_pixel(i), layout_.catcher_approximate, layout_.transparent, o);
+    else
+      o[0] = o[1] = o[2] = o[3] = 0.0f;
     return;
   }
   const double splat_scale = light_paths_ && !splat_.empty() ? 1.0 / double(light_paths_) : 0.0;
@@ -814,8 +854,8 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
             o[0] = float(count_[i]);
             break;
           case Pass::ShadowCatcher: {
-            double sc[3];
-            resolve_shadow_catcher(i, sc);
+            double sc[3] = {1, 1, 1};
+            if (!catcher_.empty()) catcher_pass(catcher_pixel(i), sc);
             for (int k = 0; k < 3; ++k) o[k] = float(sc[k]);
             break;
           }

@@ -153,6 +153,25 @@ constexpr unsigned kDenoisingFeatures =
 // Per pixel, the features a denoiser reads: camera-space normal (3), albedo (3), distance (1).
 constexpr int kFeatureChannels = 7;
 
+// Shadow catchers: a pixel's means over its samples of what Cycles' catcher passes hold (SampleValue
+// ::catcher ...), and Combined's (RGB and alpha), from which Combined and the Shadow Catcher pass are
+// read (the film, and io/merge.cpp for merged parts).
+struct CatcherPixel {
+  double combined[3] = {0, 0, 0}, alpha = 0;
+  double catcher[3] = {0, 0, 0}, matte[4] = {0, 0, 0, 0}, split = 0, background[3] = {0, 0, 0};
+};
+// Cycles' film_calculate_shadow_catcher (film/read.h): 1 where no sample split.
+void catcher_pass(const CatcherPixel& m, double* rgb);
+// Cycles' Combined with catchers: the matte pass (Film::get_actual_display_pass), `approximate`: with
+// the shadow composited in (film_calculate_shadow_catcher_matte_with_shadow), over the world behind
+// unless `transparent`.
+void catcher_combined(const CatcherPixel& m, bool approximate, bool transparent, float* rgba);
+// The EXR channels of the catcher means (CatcherPixel order, "CatcherCombined.R" ...): parts keep
+// them so that merges recompute Combined and the Shadow Catcher pass exactly.
+enum CatcherPart { kCatcherCombined, kCatcherLight, kCatcherMatte, kCatcherSplit, kCatcherBackground, kCatcherParts };
+const char* catcher_part_name(int part);
+const char* catcher_part_letters(int part);
+
 // A film's two half images (see ErrorEstimate) of Combined and of the denoising features, the
 // means of each half per pixel: what a denoiser reads (denoise/). Pixels without a sample in
 // both halves are not valid (their values are zero).
@@ -310,6 +329,9 @@ class Film {
   bool read_light_tracing(float* out) const;
   // The same for a light pass (not a Colour): its splats' part, undivided (merges need it apart).
   bool read_light_tracing(Pass pass, float* out) const;
+  // A catcher part's means (CatcherPart; channels as catcher_part_letters) for every pixel; false
+  // when the film keeps no catcher sums. Between passes, as read().
+  bool read_catcher_part(int part, float* out) const;
   uint64_t total_samples() const;
   // The half images (the rendering thread, once the last pass is done); needs the features.
   HalfImages half_images() const;
@@ -323,8 +345,7 @@ class Film {
 
  private:
   void resolve_combined(size_t i, float* o) const;
-  // Cycles' film_calculate_shadow_catcher (film/read.h) at pixel i (1 without catcher samples).
-  void resolve_shadow_catcher(size_t i, double* o) const;
+  CatcherPixel catcher_pixel(size_t i) const;
   void read_summed(Pass pass, size_t i, float* o) const;  // a pass from DiffuseDirect on, pixel i
   // Pixel i's means of Combined RGB over half A, half B and all its samples (count >= 2), light
   // tracing's splats split the same way and normalised by each half's light paths.
