@@ -843,7 +843,8 @@ class Scene:
                      pass_index=0, random_id=0, attributes=(), motion=None, cryptomatte=(0, 0), holdout=False,
                      lightgroup=0, shadow_catcher=False):
         """color: Object.color; random_id: the uint32 Cycles hashes into Object Info's Random;
-        holdout: a holdout object (Object.holdout_get); shadow_catcher: Object.is_shadow_catcher; lightgroup: 0 none, k the light group k - 1;
+        holdout: a holdout object (Object.holdout_get); shadow_catcher: Object.is_shadow_catcher;
+        lightgroup: 0 none, k the light group k - 1;
         attributes: (id, 4 floats) of the object's attributes; motion: the transforms (3x4 or 4x4
         each) at the motion steps over the shutter; cryptomatte: the object's and its asset's
         name hashes (cryptomatte_hash)."""

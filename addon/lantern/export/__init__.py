@@ -141,8 +141,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                 warn_curve_shape(depsgraph, report)
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             key = instance_key(inst) + ('hair',)
-            instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR', holdout=holdout, shadow_catcher=catcher,
-                                                                 lightgroup=lightgroup), matrix)
+            instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR', holdout=holdout,
+                                                            shadow_catcher=catcher, lightgroup=lightgroup), matrix)
             hair += 1
         if not inst.show_self:  # e.g. a particle emitter set not to render itself
             continue
@@ -157,13 +157,15 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, random_id=random_id,
                                                                     key=instance_key(inst),
                                                                     deform=not inst.is_instance,
-                                                                    holdout=holdout, shadow_catcher=catcher, lightgroup=lightgroup), matrix)
+                                                                    holdout=holdout, shadow_catcher=catcher,
+                                                                    lightgroup=lightgroup), matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
                 instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False,
                                                                         random_id=inst.random_id,
                                                                         key=instance_key(inst),
-                                                                        holdout=holdout, shadow_catcher=catcher, lightgroup=lightgroup),
+                                                                        holdout=holdout, shadow_catcher=catcher,
+                                                                        lightgroup=lightgroup),
                                                  matrix)
             else:
                 deferred.append((obj, matrix, instance_key(inst), holdout, lightgroup, catcher))
@@ -179,7 +181,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             hair += t == 'CURVES'
             random_id = inst.random_id if inst.is_instance else None
             instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id,
-                                                                           holdout=holdout, shadow_catcher=catcher, lightgroup=lightgroup),
+                                                                           holdout=holdout, shadow_catcher=catcher,
+                                                                           lightgroup=lightgroup),
                                              matrix)
         elif t not in skipped_types:
             skipped_types.add(t)
@@ -188,8 +191,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     for obj, matrix, key, holdout, lightgroup, catcher in deferred:
         if obj.original.as_pointer() not in has_mesh_instance:
             # e.g. a curve without bevel
-            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key, holdout=holdout, shadow_catcher=catcher,
-                                                     lightgroup=lightgroup), matrix)
+            instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key, holdout=holdout,
+                                                     shadow_catcher=catcher, lightgroup=lightgroup), matrix)
     if state is not None:
         state.update(materials=materials, instances=instances, flags=flags)
 

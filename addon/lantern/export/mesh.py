@@ -298,13 +298,15 @@ class MeshExporter:
                              mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
                              pass_index=obj.pass_index, random_id=random_id,
                              attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion,
-                             cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout, shadow_catcher=shadow_catcher,
+                             cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
+                             shadow_catcher=shadow_catcher,
                              lightgroup=lightgroup)
         if instance is not None:
             self.instance_count += 1
         return instance
 
-    def export_curves_instance(self, obj, matrix_world, kind, random_id=None, holdout=False, lightgroup=0, shadow_catcher=False):
+    def export_curves_instance(self, obj, matrix_world, kind, random_id=None, holdout=False, lightgroup=0,
+                               shadow_catcher=False):
         """Curves or spheres of obj as an instance: kind 'HAIR' (the object's particle hair),
         'CURVES' (a Curves object) or 'POINTCLOUD'. Returns the core instance id or None."""
         from .hair import curves_arrays, particle_hair_arrays, pointcloud_arrays
@@ -336,7 +338,8 @@ class MeshExporter:
                              mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
                              pass_index=obj.pass_index, random_id=random_id,
                              attributes=object_values(obj, self.materials.attributes.object_keys()),
-                             cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout, shadow_catcher=shadow_catcher,
+                             cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
+                             shadow_catcher=shadow_catcher,
                              lightgroup=lightgroup)
         if instance is not None:
             self.instance_count += 1

@@ -820,7 +820,8 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
         switch (pass) {
           case Pass::Combined:
             resolve_combined(i, o);
-            if (!denoised_.empty())
+            // The denoiser sees the full image: a matte (shadow catchers) is read as rendered.
+            if (!denoised_.empty() && catcher_.empty())
               for (int k = 0; k < 3; ++k) o[k] = denoised_[3 * i + k];
             break;
           case Pass::NoisyImage:
