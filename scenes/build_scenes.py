@@ -413,6 +413,19 @@ def build_holdout(scene):
     add_camera(scene, (0.0, -4.5, 2.2), (0.0, 0.0, 0.5), lens=35.0)
 
 
+def build_shadow_catcher(scene):
+    """Issue 16's shadow catcher: a red cube standing on a ground that is a shadow catcher
+    (Object.is_shadow_catcher), lit by an area light and a sky."""
+    set_world(scene, (0.3, 0.45, 0.7), 0.8)
+    ground = add_object(scene, "Catcher", mesh_plane("Catcher", 8.0))
+    assign(ground, diffuse("Catcher", WHITE))
+    ground.is_shadow_catcher = True
+    cube = add_object(scene, "Cube", mesh_box("Cube", (0.8, 0.8, 0.8)), (0.0, 0.3, 0), (0, 0, 20))
+    assign(cube, diffuse("Cube", RED))
+    add_light(scene, "Area", "AREA", 400.0, (0.8, -1.0, 3.0), size=1.0)
+    add_camera(scene, (0.0, -4.5, 2.2), (0.0, 0.0, 0.5), lens=35.0)
+
+
 def build_light_groups(scene):
     """Issue 16's light groups: a floor, a diffuse sphere and a glossy box lit by an area light
     (group "key"), a point light and an emissive ball (group "fill") and a world in no group
@@ -1983,6 +1996,7 @@ SCENES = {
     "layered_material": (build_layered_material, (96, 64), 128),
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
     "holdout": (build_holdout, (64, 48), 128),
+    "shadow_catcher": (build_shadow_catcher, (48, 36), 128),
     "light_groups": (build_light_groups, (80, 60), 128),
     "aovs": (build_aovs, (64, 48), 64),
     "gltf_pbr": (build_gltf_pbr, (80, 80), 256),

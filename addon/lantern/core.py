@@ -100,7 +100,8 @@ PASS_OBJECT_INDEX = 26
 PASS_MATERIAL_INDEX = 27
 PASS_AO = 28
 PASS_VECTOR = 29
-PASS_COUNT = 30
+PASS_SHADOW_CATCHER = 30
+PASS_COUNT = 31
 # lt_cryptomatte (bits of lt_render_settings.cryptomatte)
 CRYPTOMATTE_OBJECT, CRYPTOMATTE_MATERIAL, CRYPTOMATTE_ASSET = 1, 2, 4
 
@@ -228,6 +229,7 @@ class InstanceDesc(ctypes.Structure):
         ("cryptomatte_asset", ctypes.c_uint32),
         ("holdout", ctypes.c_int),
         ("lightgroup", ctypes.c_int),
+        ("shadow_catcher", ctypes.c_int),
     ]
 
 
@@ -345,6 +347,7 @@ class RenderSettings(ctypes.Structure):
         ("pass_alpha_threshold", ctypes.c_float),
         ("ao_distance", ctypes.c_float),
         ("motion_pass", ctypes.c_int),
+        ("shadow_catcher_approximate", ctypes.c_int),
     ]
 
 
@@ -849,9 +852,10 @@ class Scene:
 
     def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL, color=(1.0, 1.0, 1.0, 1.0),
                      pass_index=0, random_id=0, attributes=(), motion=None, cryptomatte=(0, 0), holdout=False,
-                     lightgroup=0):
+                     lightgroup=0, shadow_catcher=False):
         """color: Object.color; random_id: the uint32 Cycles hashes into Object Info's Random;
-        holdout: a holdout object (Object.holdout_get); lightgroup: 0 none, k the light group k - 1;
+        holdout: a holdout object (Object.holdout_get); shadow_catcher: Object.is_shadow_catcher;
+        lightgroup: 0 none, k the light group k - 1;
         attributes: (id, 4 floats) of the object's attributes; motion: the transforms (3x4 or 4x4
         each) at the motion steps over the shutter; cryptomatte: the object's and its asset's
         name hashes (cryptomatte_hash)."""
@@ -864,6 +868,7 @@ class Scene:
         d.cryptomatte_object, d.cryptomatte_asset = (int(h) & 0xFFFFFFFF for h in cryptomatte)
         d.holdout = int(bool(holdout))
         d.lightgroup = int(lightgroup)
+        d.shadow_catcher = int(bool(shadow_catcher))
         if attributes:
             ids = _i32([int(i) for i, _ in attributes], "attribute ids")
             values = _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values")

@@ -56,6 +56,7 @@ PASSES = (
     ("Env", core.PASS_ENVIRONMENT, 3, "RGB", 'COLOR', "use_pass_environment"),
     ("AO", core.PASS_AO, 3, "RGB", 'COLOR', "use_pass_ambient_occlusion"),
     ("Vector", core.PASS_VECTOR, 4, "XYZW", 'VECTOR', "use_pass_vector"),
+    ("Shadow Catcher", core.PASS_SHADOW_CATCHER, 3, "RGB", 'COLOR', "cycles.use_pass_shadow_catcher"),
 )
 
 # Cycles' World > Mist Pass falloff as the exponent its film applies (blender/sync.cpp).
@@ -587,6 +588,13 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if vector and camera is not None and getattr(camera.data, "type", "") == 'PANO':
                 report({'WARNING'}, "The Vector pass stays zero with a panoramic camera (Lantern does not "
                                     "project motion through panoramas; Cycles does)")
+            # Cycles approximates the catchers' shadow into Combined unless the pass is on (blender/sync.cpp).
+            settings["shadow_catcher_approximate"] = int(not _pass_enabled(scene, view_layer,
+                                                                           "cycles.use_pass_shadow_catcher"))
+            if summary.get("shadow_catchers") and scene.lantern.integrator == 'BIDIRECTIONAL':
+                report({'WARNING'}, "Bidirectional does not split paths at shadow catchers: %d shadow "
+                       "catcher(s) render as ordinary objects and the Shadow Catcher pass is white; use "
+                       "Path Tracing or Volumetric Path" % summary["shadow_catchers"])
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:

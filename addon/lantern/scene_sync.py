@@ -9,7 +9,8 @@ import bpy
 import numpy as np
 
 from . import core
-from .export import export_lights, export_scene, holdout_of, instance_key, lightgroup_indices, lightgroup_of
+from .export import (export_lights, export_scene, holdout_of, instance_key, lightgroup_indices, lightgroup_of,
+                     shadow_catcher_of)
 from .export.camera import camera_table, export_camera
 
 _GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
@@ -140,8 +141,9 @@ class SceneSync:
                     return None  # an instance that was not exported
                 continue
             seen += 1
-            if (holdout_of(inst, view_layer), lightgroup_of(inst, groups)) != flags.get(key, (False, 0)):
-                return None  # holdout or light group changed: the instance is added anew
+            if ((holdout_of(inst, view_layer), lightgroup_of(inst, groups), shadow_catcher_of(inst))
+                    != flags.get(key, (False, 0, False))):
+                return None  # holdout, light group or shadow catcher changed: the instance is added anew
             core_id, old = entry
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             if core_id is not None and not np.array_equal(matrix, old):

@@ -387,6 +387,8 @@ class LANTERN_VIEWLAYER_PT_passes_light(LanternButtonsPanel, Panel):
         col.prop(view_layer, "use_pass_emit", text="Emission")
         col.prop(view_layer, "use_pass_environment")
         col.prop(view_layer, "use_pass_ambient_occlusion", text="Ambient Occlusion")
+        if cycles_view_layer is not None:  # Cycles' toggle; off: Combined approximates the shadows
+            col.prop(cycles_view_layer, "use_pass_shadow_catcher")
 
 
 class LANTERN_VIEWLAYER_PT_passes_crypto(LanternButtonsPanel, Panel):
@@ -437,6 +439,11 @@ class LANTERN_OBJECT_PT_visibility(LanternButtonsPanel, Panel):
             col.prop(ob, "visible_transmission", text="Transmission")
             if ob.type != 'LIGHT':
                 col.prop(ob, "visible_shadow", text="Shadow")
+
+        if ob.type in {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'CURVES', 'POINTCLOUD', 'VOLUME'}:
+            col = layout.column(heading="Mask")  # as Cycles' Object > Visibility > Mask
+            col.prop(ob, "is_shadow_catcher")
+            col.prop(ob, "is_holdout")
 
 
 class LANTERN_LIGHT_PT_light(LanternButtonsPanel, Panel):

@@ -61,8 +61,8 @@ TEST(ApiExr, WritesEveryPassAndReadsBackTheSameCombined) {
 
   // Size: more than a header, less than the uncompressed channels (4 + 1 + 3 + 3 + 3 + 1 = 15
   // floats per pixel, and the light and data passes: 13 RGB, Position, UV, Mist and the two
-  // indices, 48) plus a generous header and line-offset table.
-  const int kChannels = 15 + 48;
+  // indices, 48, and the Shadow Catcher pass, 3) plus a generous header and line-offset table.
+  const int kChannels = 15 + 48 + 3;
   const auto bytes = std::filesystem::file_size(path);
   EXPECT_GT(bytes, 500u);
   EXPECT_LT(bytes, size_t(W) * H * kChannels * 4 + 16384);

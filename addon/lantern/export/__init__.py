@@ -40,6 +40,12 @@ def holdout_of(inst, view_layer):
     return bool(owner.holdout_get(view_layer=view_layer))
 
 
+def shadow_catcher_of(inst):
+    """Cycles' shadow catcher object: its own Object.is_shadow_catcher or its instancer's."""
+    return bool(inst.object.is_shadow_catcher or (inst.is_instance and inst.parent is not None
+                                                   and inst.parent.is_shadow_catcher))
+
+
 def lightgroup_indices(view_layer):
     """{name: k} of the view layer's light groups, k = 1 + the group's index (the core's 0 is none):
     an emitter naming a group the view layer does not list is in none, as in Cycles."""
@@ -120,22 +126,25 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     instances = {}  # instance_key -> (core instance id or None for no geometry, matrix)
     has_mesh_instance = set()
     hair = 0
-    flags = {}  # instance_key -> (holdout, light group) where not (False, 0), for viewport updates
+    flags = {}  # instance_key -> (holdout, light group, shadow catcher) where not (False, 0, False)
+    catchers = 0
     view_layer = depsgraph.view_layer_eval
     for inst in depsgraph.object_instances:
         obj = inst.object
         t = obj.type
         holdout = holdout_of(inst, view_layer)
         lightgroup = lightgroup_of(inst, groups)
-        if holdout or lightgroup:
-            flags[instance_key(inst)] = (holdout, lightgroup)
+        catcher = shadow_catcher_of(inst)
+        catchers += catcher and inst.show_self and (t in ('MESH', 'CURVES', 'POINTCLOUD') or t in CONVERTIBLE_TYPES)
+        if holdout or lightgroup or catcher:
+            flags[instance_key(inst)] = (holdout, lightgroup, catcher)
         if t == 'MESH' and inst.show_particles and hair_systems(obj):
             if not hair:
                 warn_curve_shape(depsgraph, report)
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             key = instance_key(inst) + ('hair',)
             instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR', holdout=holdout,
-                                                                 lightgroup=lightgroup), matrix)
+                                                            shadow_catcher=catcher, lightgroup=lightgroup), matrix)
             hair += 1
         if not inst.show_self:  # e.g. a particle emitter set not to render itself
             continue
@@ -150,16 +159,18 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, random_id=random_id,
                                                                     key=instance_key(inst),
                                                                     deform=not inst.is_instance,
-                                                                    holdout=holdout, lightgroup=lightgroup), matrix)
+                                                                    holdout=holdout, shadow_catcher=catcher,
+                                                                    lightgroup=lightgroup), matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
                 instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False,
                                                                         random_id=inst.random_id,
                                                                         key=instance_key(inst),
-                                                                        holdout=holdout, lightgroup=lightgroup),
+                                                                        holdout=holdout, shadow_catcher=catcher,
+                                                                        lightgroup=lightgroup),
                                                  matrix)
             else:
-                deferred.append((obj, matrix, instance_key(inst), holdout, lightgroup))
+                deferred.append((obj, matrix, instance_key(inst), holdout, lightgroup, catcher))
         elif t == 'LIGHT':
             if export_light(obj, matrix, core_scene, report, lightgroup):
                 lights += 1
@@ -172,21 +183,22 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             hair += t == 'CURVES'
             random_id = inst.random_id if inst.is_instance else None
             instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id,
-                                                                           holdout=holdout, lightgroup=lightgroup),
+                                                                           holdout=holdout, shadow_catcher=catcher,
+                                                                           lightgroup=lightgroup),
                                              matrix)
         elif t not in skipped_types:
             skipped_types.add(t)
             report({'WARNING'}, "Objects of type %s are not supported yet, skipped (e.g. '%s')"
                    % (t, obj.name))
-    for obj, matrix, key, holdout, lightgroup in deferred:
+    for obj, matrix, key, holdout, lightgroup, catcher in deferred:
         if obj.original.as_pointer() not in has_mesh_instance:
             # e.g. a curve without bevel
             instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key, holdout=holdout,
-                                                     lightgroup=lightgroup), matrix)
+                                                     shadow_catcher=catcher, lightgroup=lightgroup), matrix)
     if state is not None:
         state.update(materials=materials, instances=instances, flags=flags)
 
-    summary.update(meshes=meshes.mesh_count, instances=meshes.instance_count,
+    summary.update(shadow_catchers=catchers, meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()
                                                             if v is not None),
                    image_files=images.from_files,

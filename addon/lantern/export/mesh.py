@@ -272,7 +272,7 @@ class MeshExporter:
         return [self.materials.export(m) for m in mats]
 
     def export_instance(self, obj, matrix_world, warn_empty=True, random_id=None, key=None, deform=False,
-                        holdout=False, lightgroup=0):
+                        holdout=False, lightgroup=0, shadow_catcher=False):
         """obj: an evaluated object of a mesh or convertible type; random_id: the depsgraph
         instance's (None for an object that is no instance); key: its instance_key, for motion
         blur; deform: whether its mesh may deform over the shutter (an object, not an instance);
@@ -299,12 +299,14 @@ class MeshExporter:
                              pass_index=obj.pass_index, random_id=random_id,
                              attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion,
                              cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
+                             shadow_catcher=shadow_catcher,
                              lightgroup=lightgroup)
         if instance is not None:
             self.instance_count += 1
         return instance
 
-    def export_curves_instance(self, obj, matrix_world, kind, random_id=None, holdout=False, lightgroup=0):
+    def export_curves_instance(self, obj, matrix_world, kind, random_id=None, holdout=False, lightgroup=0,
+                               shadow_catcher=False):
         """Curves or spheres of obj as an instance: kind 'HAIR' (the object's particle hair),
         'CURVES' (a Curves object) or 'POINTCLOUD'. Returns the core instance id or None."""
         from .hair import curves_arrays, particle_hair_arrays, pointcloud_arrays
@@ -337,6 +339,7 @@ class MeshExporter:
                              pass_index=obj.pass_index, random_id=random_id,
                              attributes=object_values(obj, self.materials.attributes.object_keys()),
                              cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
+                             shadow_catcher=shadow_catcher,
                              lightgroup=lightgroup)
         if instance is not None:
             self.instance_count += 1

@@ -45,7 +45,9 @@ extern "C" {
  * lt_render_read_aov_rows); 17: the AO and Vector passes (LT_PASS_AO, LT_PASS_VECTOR,
  * lt_render_settings.ao_distance and motion_pass); the Mirror Ball and Fisheye Lens Polynomial
  * panoramas (lt_camera_desc.fisheye_polynomial); panoramas in the viewport (panorama_viewplane,
- * panorama_frame_aspect). */
+ * panorama_frame_aspect); the shadow catcher
+ * (lt_instance_desc.shadow_catcher, lt_render_settings.shadow_catcher_approximate,
+ * LT_PASS_SHADOW_CATCHER). */
 #define LT_ABI_VERSION 17
 
 enum lt_status {
@@ -274,6 +276,10 @@ typedef struct lt_instance_desc {
   /* The light group of its emission: 0 none, k > 0 the render's light group k - 1
    * (lt_render_settings.lightgroup_count); the same in lt_light_desc. */
   int lightgroup;
+  /* Nonzero: a shadow catcher (Object.is_shadow_catcher, or its instancer's), which PATH and
+   * VOLPATH render as Cycles 3.4: Combined becomes the catchers' matte and LT_PASS_SHADOW_CATCHER
+   * their shadows (BIDIRECTIONAL renders catchers as ordinary objects). */
+  int shadow_catcher;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 
@@ -586,6 +592,12 @@ typedef struct lt_render_settings {
    * sample is taken at the centre step, nothing blurs. 0 (default): motion steps span the shutter
    * (motion blur) and LT_PASS_VECTOR stays zero, as Cycles' Vector pass with motion blur on. */
   int motion_pass;
+  /* With shadow catchers in the scene (lt_instance_desc.shadow_catcher), Cycles' Combined is the
+   * matte of the other objects: nonzero (Cycles with the Shadow Catcher pass off, its
+   * use_approximate_shadow_catcher) composites the approximated shadow into it, over the world
+   * seen behind the catchers unless the background is transparent; zero leaves the catchers
+   * transparent, their shadows in LT_PASS_SHADOW_CATCHER. Default 1. */
+  int shadow_catcher_approximate;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -683,7 +695,10 @@ enum lt_pass {
    * film to the previous frame (x, y: previous - now) and from the next (z, w: now - next), the
    * mean over the samples that hit a surface (0 elsewhere); needs motion_pass (zero without). */
   LT_PASS_VECTOR = 29,
-  LT_PASS_COUNT = 30
+  /* 3 channels: Cycles' Shadow Catcher pass (the catchers' light with the other objects divided by
+   * their light without them; 1 where no catcher was seen), kept when the scene has a catcher. */
+  LT_PASS_SHADOW_CATCHER = 30,
+  LT_PASS_COUNT = 31
 };
 LT_API int lt_pass_channels(int pass);
 

@@ -123,6 +123,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_instance_desc, cryptomatte_asset),
     LT_FIELD(lt_instance_desc, holdout),
     LT_FIELD(lt_instance_desc, lightgroup),
+    LT_FIELD(lt_instance_desc, shadow_catcher),
 
     LT_CONST(lt_light_type, LT_LIGHT_POINT),
     LT_CONST(lt_light_type, LT_LIGHT_SPOT),
@@ -292,6 +293,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_settings, pass_alpha_threshold),
     LT_FIELD(lt_render_settings, ao_distance),
     LT_FIELD(lt_render_settings, motion_pass),
+    LT_FIELD(lt_render_settings, shadow_catcher_approximate),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),
@@ -348,6 +350,7 @@ const lt_abi_entry kLayout[] = {
     LT_CONST(lt_pass, LT_PASS_MATERIAL_INDEX),
     LT_CONST(lt_pass, LT_PASS_AO),
     LT_CONST(lt_pass, LT_PASS_VECTOR),
+    LT_CONST(lt_pass, LT_PASS_SHADOW_CATCHER),
     LT_CONST(lt_pass, LT_PASS_COUNT),
 };
 

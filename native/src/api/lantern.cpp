@@ -508,6 +508,7 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
     }
     inst.visibility = d->visibility & LT_VISIBLE_ALL;
     inst.holdout = d->holdout != 0;
+    inst.shadow_catcher = d->shadow_catcher != 0;
     require(d->lightgroup >= 0 && d->lightgroup <= kMaxLightgroups, "instance light group out of range");
     inst.lightgroup = d->lightgroup - 1;
     require(finite_array(d->color, 4), "instance colour must be finite");
@@ -864,6 +865,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->pass_alpha_threshold = 0.5f;
   s->ao_distance = 10;
   s->motion_pass = 0;
+  s->shadow_catcher_approximate = 1;
 }
 
 namespace {
@@ -998,6 +1000,10 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     require(std::isfinite(s->ao_distance) && s->ao_distance >= 0, "AO distance must be finite and >= 0");
     is.ao_distance = s->ao_distance;
     rs.motion_pass = s->motion_pass != 0;
+    is.shadow_catcher_approximate = s->shadow_catcher_approximate != 0;
+    // Bidirectional does not split its camera subpaths: catchers render there as ordinary objects.
+    is.shadow_catcher = scene->scene.geometry.has_shadow_catcher() &&
+                        (s->integrator == LT_INTEGRATOR_PATH || s->integrator == LT_INTEGRATOR_VOLPATH);
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;

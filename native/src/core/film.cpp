@@ -187,9 +187,10 @@ size_t FilmLayout::bytes_per_pixel() const {
   for (int t = 0; t < kCryptoTypes; ++t)
     if ((cryptomatte >> t) & 1u) floats += 2 * size_t(cryptomatte_slots());
   floats += size_t(lightgroups) * (splats ? 6 : 3) + size_t(aovs) * 4;
+  if (shadow_catcher) floats += 3 + 4 + 1 + 3;
   const unsigned kept = with_dependencies(passes);
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p)
-    if (kept & pass_bit(Pass(p))) {
+    if ((kept & pass_bit(Pass(p))) && Pass(p) != Pass::ShadowCatcher) {
       floats += summed_floats(Pass(p));
       if (splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p))) floats += 3;
     }
@@ -219,8 +220,14 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
     splat_half_.assign(3 * n, 0.0f);
   }
   layout_.passes = with_dependencies(layout_.passes);
+  if (layout_.shadow_catcher) {
+    catcher_.assign(3 * n, 0.0f);
+    matte_.assign(4 * n, 0.0f);
+    splits_.assign(n, 0.0f);
+    background_.assign(3 * n, 0.0f);
+  }
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p) {
-    if (!has(Pass(p))) continue;
+    if (!has(Pass(p)) || Pass(p) == Pass::ShadowCatcher) continue;
     sums_[p - kFirstSummedPass].assign(summed_floats(Pass(p)) * n, 0.0f);
     if (layout_.splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p)))
       light_splat_[p - kFirstSummedPass].assign(3 * n, 0.0f);
@@ -302,6 +309,15 @@ void Film::add(int x, int y, const SampleValue& s) {
   if (!aov_.empty() && s.aovs) {
     float* a = &aov_[size_t(layout_.aovs) * 4 * i];
     for (int j = 0; j < 4 * layout_.aovs; ++j) a[j] += s.aovs[j];
+  }
+  if (!catcher_.empty()) {
+    for (int k = 0; k < 3; ++k) {
+      catcher_[3 * i + k] += s.catcher[k];
+      matte_[4 * i + k] += s.matte[k];
+      background_[3 * i + k] += s.background[k];
+    }
+    matte_[4 * i + 3] += s.matte_transparent;
+    splits_[i] += s.catcher_split;
   }
   alpha_[i] += s.alpha;
   if (!depth_.empty()) depth_[i] = std::min(depth_[i], s.depth);
@@ -437,8 +453,83 @@ double Film::pixel_variance(int x, int y) const {
   return v;
 }
 
+void catcher_pass(const CatcherPixel& m, double* o) {
+  o[0] = o[1] = o[2] = 1.0;
+  if (m.split == 0) return;
+  // The catchers' light with the other objects (Combined less the matte) over their light without
+  // them, each channel 1 where the divisor is 0 (Cycles' safe_divide_shadow_catcher); then over
+  // white by Combined's alpha, which hides the edges of catchers against a transparent film.
+  const double alpha = std::clamp(m.alpha, 0.0, 1.0);
+  for (int k = 0; k < 3; ++k) {
+    const double ratio = m.catcher[k] != 0 ? (m.combined[k] - m.matte[k]) / m.catcher[k] : 1.0;
+    o[k] = (1 - alpha) + alpha * ratio;
+  }
+}
+
+void catcher_combined(const CatcherPixel& m, bool approximate, bool transparent, float* o) {
+  const double alpha = std::clamp(1.0 - m.matte[3], 0.0, 1.0);
+  for (int k = 0; k < 3; ++k) o[k] = float(m.matte[k]);
+  o[3] = float(alpha);
+  if (!approximate) return;
+  // The shadow is 1 - the pass's average, the coverage of what the matte does not cover.
+  double sc[3];
+  catcher_pass(m, sc);
+  const double alpha_matte = (1.0 - alpha) * (1.0 - std::clamp((sc[0] + sc[1] + sc[2]) / 3.0, 0.0, 1.0)) + alpha;
+  if (transparent) {
+    o[3] = float(alpha_matte);
+    return;
+  }
+  for (int k = 0; k < 3; ++k) o[k] = float(m.matte[k] + m.background[k] * (1.0 - alpha_matte));
+  o[3] = 1.0f;
+}
+
+const char* catcher_part_name(int part) {
+  static const char* const kNames[] = {"CatcherCombined", "CatcherLight", "CatcherMatte", "CatcherSplit",
+                                       "CatcherBackground"};
+  return part >= 0 && part < kCatcherParts ? kNames[part] : nullptr;
+}
+
+const char* catcher_part_letters(int part) {
+  static const char* const kLetters[] = {"RGBA", "RGB", "RGBA", "X", "RGB"};
+  return part >= 0 && part < kCatcherParts ? kLetters[part] : nullptr;
+}
+
+CatcherPixel Film::catcher_pixel(size_t i) const {
+  CatcherPixel m;
+  const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+  for (int k = 0; k < 3; ++k) {
+    m.combined[k] = mean_[3 * i + k];
+    m.catcher[k] = catcher_[3 * i + k] * inv;
+    m.background[k] = background_[3 * i + k] * inv;
+  }
+  for (int k = 0; k < 4; ++k) m.matte[k] = matte_[4 * i + k] * inv;
+  m.alpha = alpha_[i] * inv;
+  m.split = splits_[i] * inv;
+  return m;
+}
+
+bool Film::read_catcher_part(int part, float* out) const {
+  std::unique_lock<std::mutex> lock = lock_accumulators();
+  if (catcher_.empty() || part < 0 || part >= kCatcherParts) return false;
+  const size_t n = count_.size();
+  for (size_t i = 0; i < n; ++i) {
+    const CatcherPixel m = catcher_pixel(i);
+    const double* src[] = {m.combined, m.catcher, m.matte, &m.split, m.background};
+    const int c = int(std::strlen(catcher_part_letters(part)));
+    for (int k = 0; k < c; ++k) out[c * i + k] = float(part == kCatcherCombined && k == 3 ? m.alpha : src[part][k]);
+  }
+  return true;
+}
+
 void Film::resolve_combined(size_t i, float* o) const {
   const double inv = count_[i] ? 1.0 / count_[i] : 0.0;
+  if (!catcher_.empty()) {
+    if (count_[i])
+      catcher_combined(catcher_pixel(i), layout_.catcher_approximate, layout_.transparent, o);
+    else
+      o[0] = o[1] = o[2] = o[3] = 0.0f;
+    return;
+  }
   const double splat_scale = light_paths_ && !splat_.empty() ? 1.0 / double(light_paths_) : 0.0;
   for (int k = 0; k < 3; ++k)
     o[k] = splat_scale > 0 ? float(double(mean_[3 * i + k]) + splat_[3 * i + k] * splat_scale) : mean_[3 * i + k];
@@ -498,13 +589,14 @@ const char* exr_pass_name(Pass p) {
   static const char* const kNames[] = {"DiffDir",   "DiffInd",  "DiffCol",  "GlossDir", "GlossInd",
                                        "GlossCol",  "TransDir", "TransInd", "TransCol", "VolumeDir",
                                        "VolumeInd", "Emit",     "Env",      "Position", "UV",
-                                       "Mist",      "IndexOB",  "IndexMA",  "AO",       "Vector"};
+                                       "Mist",      "IndexOB",  "IndexMA",  "AO",       "Vector",
+                                       "ShadowCatcher"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(kSummedPasses), "a name per pass");
   return int(p) >= kFirstSummedPass && p < Pass::Count ? kNames[int(p) - kFirstSummedPass] : nullptr;
 }
 
 const char* exr_channel_letters(Pass p) {
-  if (is_light_pass(p)) return "RGB";
+  if (is_light_pass(p) || p == Pass::ShadowCatcher) return "RGB";
   switch (p) {
     case Pass::Position:
       return "XYZ";
@@ -725,7 +817,8 @@ const char* pass_name(Pass p) {
                                        "IndexOB",
                                        "IndexMA",
                                        "AO",
-                                       "Vector"};
+                                       "Vector",
+                                       "Shadow Catcher"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(Pass::Count), "a name per pass");
   return unsigned(p) < unsigned(Pass::Count) ? kNames[int(p)] : "?";
 }
@@ -759,7 +852,8 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
         switch (pass) {
           case Pass::Combined:
             resolve_combined(i, o);
-            if (!denoised_.empty())
+            // The denoiser sees the full image: a matte (shadow catchers) is read as rendered.
+            if (!denoised_.empty() && catcher_.empty())
               for (int k = 0; k < 3; ++k) o[k] = denoised_[3 * i + k];
             break;
           case Pass::NoisyImage:
@@ -792,6 +886,12 @@ void Film::read_rows(Pass pass, int y0, int rows, float* out, bool labels) const
           case Pass::SampleCount:
             o[0] = float(count_[i]);
             break;
+          case Pass::ShadowCatcher: {
+            double sc[3] = {1, 1, 1};
+            if (!catcher_.empty()) catcher_pass(catcher_pixel(i), sc);
+            for (int k = 0; k < 3; ++k) o[k] = float(sc[k]);
+            break;
+          }
           case Pass::Count:
             break;
           default:

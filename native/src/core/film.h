@@ -94,6 +94,13 @@ struct SampleValue {
   // Shader AOVs: 4 floats per AOV of FilmLayout::aovs (ShadingContext::aovs), zeroed by the render
   // job (CameraSample::aovs); null when the film keeps none.
   float* aovs = nullptr;
+  // Shadow catcher (Cycles' catcher split, integrators/path.cpp), when FilmLayout::shadow_catcher:
+  // the light of the catcher-only path (PASS_SHADOW_CATCHER), the light and transparency of the
+  // camera path before it met a catcher (PASS_SHADOW_CATCHER_MATTE; the throughput there counts as
+  // transparency), 1 when it met one (PASS_SHADOW_CATCHER_SAMPLE_COUNT), and the world the camera
+  // ray sees directly or behind the catcher (PASS_BACKGROUND, for the approximate Combined).
+  Spectrum catcher{0.0f}, matte{0.0f}, background{0.0f};
+  float matte_transparent = 0, catcher_split = 0;
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
@@ -130,7 +137,9 @@ enum class Pass {
   MaterialIndex = 27,
   AO = 28,
   Vector = 29,
-  Count = 30
+  // Cycles' Shadow Catcher pass, read from the film's catcher accumulators (not a sum of its own).
+  ShadowCatcher = 30,
+  Count = 31
 };
 constexpr int kFirstSummedPass = int(Pass::DiffuseDirect);
 constexpr int kSummedPasses = int(Pass::Count) - kFirstSummedPass;
@@ -154,6 +163,25 @@ constexpr unsigned kDenoisingFeatures =
     pass_bit(Pass::DenoisingNormal) | pass_bit(Pass::DenoisingAlbedo) | pass_bit(Pass::DenoisingDepth);
 // Per pixel, the features a denoiser reads: camera-space normal (3), albedo (3), distance (1).
 constexpr int kFeatureChannels = 7;
+
+// Shadow catchers: a pixel's means over its samples of what Cycles' catcher passes hold (SampleValue
+// ::catcher ...), and Combined's (RGB and alpha), from which Combined and the Shadow Catcher pass are
+// read (the film, and io/merge.cpp for merged parts).
+struct CatcherPixel {
+  double combined[3] = {0, 0, 0}, alpha = 0;
+  double catcher[3] = {0, 0, 0}, matte[4] = {0, 0, 0, 0}, split = 0, background[3] = {0, 0, 0};
+};
+// Cycles' film_calculate_shadow_catcher (film/read.h): 1 where no sample split.
+void catcher_pass(const CatcherPixel& m, double* rgb);
+// Cycles' Combined with catchers: the matte pass (Film::get_actual_display_pass), `approximate`: with
+// the shadow composited in (film_calculate_shadow_catcher_matte_with_shadow), over the world behind
+// unless `transparent`.
+void catcher_combined(const CatcherPixel& m, bool approximate, bool transparent, float* rgba);
+// The EXR channels of the catcher means (CatcherPixel order, "CatcherCombined.R" ...): parts keep
+// them so that merges recompute Combined and the Shadow Catcher pass exactly.
+enum CatcherPart { kCatcherCombined, kCatcherLight, kCatcherMatte, kCatcherSplit, kCatcherBackground, kCatcherParts };
+const char* catcher_part_name(int part);
+const char* catcher_part_letters(int part);
 
 // A film's two half images (see ErrorEstimate) of Combined and of the denoising features, the
 // means of each half per pixel: what a denoiser reads (denoise/). Pixels without a sample in
@@ -180,6 +208,10 @@ struct FilmLayout {
   int cryptomatte_slots() const { return cryptomatte ? 2 * cryptomatte_layers(cryptomatte_levels) : 0; }
   int lightgroups = 0;  // light group passes (Combined_<group>), RGB each
   int aovs = 0;         // shader AOV passes, 4 floats each
+  // Shadow catchers (SampleValue::catcher ...): kept when the scene has one and the integrator
+  // splits paths there; Combined then reads as Cycles' matte, approximated (the catchers' shadows
+  // composited in, over the world behind them unless `transparent`) or not.
+  bool shadow_catcher = false, catcher_approximate = true, transparent = false;
   // Bytes per pixel of the accumulators and the published image.
   size_t bytes_per_pixel() const;
 };
@@ -311,6 +343,9 @@ class Film {
   // The Vector pass's coverage, per pixel the share of its samples that wrote a vector (what a
   // merge weights the parts' vectors by); false when the film does not keep the pass.
   bool read_vector_coverage(float* out) const;
+  // A catcher part's means (CatcherPart; channels as catcher_part_letters) for every pixel; false
+  // when the film keeps no catcher sums. Between passes, as read().
+  bool read_catcher_part(int part, float* out) const;
   uint64_t total_samples() const;
   // The half images (the rendering thread, once the last pass is done); needs the features.
   HalfImages half_images() const;
@@ -324,6 +359,7 @@ class Film {
 
  private:
   void resolve_combined(size_t i, float* o) const;
+  CatcherPixel catcher_pixel(size_t i) const;
   void read_summed(Pass pass, size_t i, float* o) const;  // a pass from DiffuseDirect on, pixel i
   // Pixel i's means of Combined RGB over half A, half B and all its samples (count >= 2), light
   // tracing's splats split the same way and normalised by each half's light paths.
@@ -357,6 +393,9 @@ class Film {
   std::vector<float> crypto_[kCryptoTypes];
   std::vector<float> lightgroup_, lightgroup_splat_;  // per pixel, per group, RGB sums
   std::vector<float> aov_;                            // per pixel, per AOV, 4 sums
+  // Shadow catcher sums (FilmLayout::shadow_catcher): catcher-only light (RGB), matte (RGB and
+  // transparency), splits, world behind (RGB).
+  std::vector<float> catcher_, matte_, splits_, background_;
   uint64_t light_paths_ = 0, light_paths_half_ = 0, published_light_paths_ = 0;
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;

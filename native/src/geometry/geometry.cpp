@@ -344,8 +344,12 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
   ++meshes_[size_t(inst.mesh)].users;
   instances_.push_back(inst);
   baked_.emplace_back();
-  instance_visibility_.push_back(inst.visibility & 31u);
-  if ((inst.visibility & 31u) != 31u) partial_visibility_ = true;
+  // A shadow catcher is also seen by the catcher-only rays (catcher_only_visibility), as Cycles'
+  // SHADOW_CATCHER_OBJECT_VISIBILITY.
+  const unsigned vis = inst.visibility & 31u;
+  instance_visibility_.push_back(inst.shadow_catcher ? vis | catcher_only_visibility(vis) : vis);
+  if (vis != 31u || inst.shadow_catcher) partial_visibility_ = true;
+  has_shadow_catcher_ = has_shadow_catcher_ || inst.shadow_catcher;
   return id;
 }
 

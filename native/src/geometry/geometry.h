@@ -83,13 +83,18 @@ struct InstanceAttribute {
   float value[4] = {0, 0, 0, 0};
 };
 
+// The visibility mask of a ray that sees only shadow catchers (Cycles' PATH_RAY_SHADOW_CATCHER_PASS
+// rays, SHADOW_CATCHER_PATH_VISIBILITY): the kinds shifted past the 5 lt_visibility bits.
+constexpr unsigned catcher_only_visibility(unsigned visibility) { return visibility << 8; }
+
 // xf (the Pose) is the transform at the shutter's centre (time 0.5).
 struct Instance : Pose {
   int mesh = -1;
   std::vector<int> materials;  // material id per slot
   unsigned visibility = 31;
-  bool holdout = false;  // camera rays see it as Cycles' holdout objects (integrators/path_state.h)
-  int lightgroup = -1;   // the light group of its emission (-1: none)
+  bool holdout = false;         // camera rays see it as Cycles' holdout objects (integrators/path_state.h)
+  bool shadow_catcher = false;  // Cycles' Object.is_shadow_catcher (integrators/path.cpp's catcher split)
+  int lightgroup = -1;          // the light group of its emission (-1: none)
   // Object Info: Object.color, pass_index, and Cycles' random number of the instance.
   float color[4] = {1, 1, 1, 1};
   float pass_index = 0, random = 0;
@@ -174,6 +179,8 @@ class Geometry {
   size_t instance_count() const { return instances_.size(); }
   const Mesh& mesh(int i) const { return meshes_[i]; }
   const Instance& instance(int i) const { return instances_[i]; }
+  // Whether some instance is a shadow catcher: only then do integrators split paths.
+  bool has_shadow_catcher() const { return has_shadow_catcher_; }
   // The ray kinds (lt_visibility bits) that see an instance.
   unsigned instance_visibility(int i) const {
     return i >= 0 && size_t(i) < instance_visibility_.size() ? instance_visibility_[size_t(i)] : 31u;
@@ -201,6 +208,7 @@ class Geometry {
   std::vector<Baked> baked_;  // per instance
   Bounds bounds_;
   bool partial_visibility_ = false;
+  bool has_shadow_catcher_ = false;
   bool committed_ = false, top_dirty_ = false;
   uint64_t mesh_builds_ = 0, top_builds_ = 0;
   size_t motion_instances_ = 0, motion_meshes_ = 0;

@@ -52,6 +52,9 @@ struct IntegratorSettings {
   // and the Vector pass (the scene's motion steps are the neighbouring frames: render.h).
   bool ao_pass = false, vector_pass = false;
   float ao_distance = 10;
+  // Shadow catchers: split camera paths at them (Cycles' catcher split; set when the scene has one
+  // and the integrator splits: path and volumetric path) and Cycles' use_approximate_shadow_catcher.
+  bool shadow_catcher = false, shadow_catcher_approximate = true;
 };
 
 // The Mist pass's value for a sample whose camera path scatters first at p with throughput beta

@@ -5,6 +5,13 @@
 // function and from surfaces with transmittance through invisible boundaries, MIS against
 // phase/BSDF sampling, and Cycles' volume bounce limit (0: single scattering). One template, so a
 // scene without media runs none of the media code (make_integrator picks kMedia = false for it).
+// Shadow catchers as Cycles 3.4 (integrator/shadow_catcher.h, intersect_closest.h): a camera path
+// (through transparent passes) that meets a catcher splits there: the path goes on as usual, its
+// light before the split also filed as the matte, and a second path from the same state and the
+// same random numbers sees only catchers (catcher_only_visibility; lamps, the world and catchers'
+// own emission light it), its light filed apart (SampleValue::catcher); the film divides them.
+#include <optional>
+
 #include "integrators/light_passes.h"
 #include "integrators/media_transport.h"
 #include "integrators/path_state.h"
@@ -41,21 +48,61 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   VolumeStack stack;
   if (kMedia && scene.has_boundaries()) init_volume_stack(scene, camera_ray, &stack, stats);
   Bsdf bsdf;
+  // Shadow catchers: whether the path has split (Cycles' PATH_RAY_SHADOW_CATCHER_HIT), whether this
+  // is the catcher-only path (PATH_RAY_SHADOW_CATCHER_PASS), and the state at the start of the
+  // camera segment that met the catcher, which that path starts from.
+  const bool catchers = s.shadow_catcher;
+  bool split = false, catcher_leg = false;
+  float matte_transparent = 0;
+  struct Snapshot {
+    Ray ray;
+    Spectrum beta;
+    unsigned visibility;
+    Bounces b;
+    int nulls;
+    float prev_pdf, t_prev, footprint;
+    bool prev_delta;
+    Vec3 prev_p, prev_n;
+    VolumeStack stack;
+    Sampler sampler;
+  };
+  std::optional<Snapshot> snap;
+  // The world the camera ray sees along `r` (Cycles' background pass, for the approximate matte).
+  auto add_background = [&](const Ray& r, const Spectrum& w, unsigned vis) {
+    if (!catchers || !s.shadow_catcher_approximate || s.transparent_background) return;
+    if (lights.world_light() < 0 || !scene.world.camera_visible) return;
+    ShadingContext wc = world_context(r.d);
+    describe_ray(b, vis, &wc);
+    out.background += w * scene.world.radiance(wc);
+  };
 
   // Light passes (light_passes.h): the first scattering vertex's split, and at the vertex being
   // lit, the split towards the light sampled (first vertex only).
   FirstBounce first, nee_first;
   // An emitter of light group `group` reached (environment: the world) and a next-event estimate
   // from the current vertex.
+  // After a split neither path writes light passes, nor the light groups of light samples (Cycles'
+  // film_write_direct_light and film_write_emission_or_background_pass).
   auto add = [&](const Spectrum& c, int group, bool environment = false) {
     const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
+    if (catcher_leg) {
+      out.catcher += v;
+      return;
+    }
     L += v;
+    if (catchers && !split) out.matte += v;
     out.add_lightgroup(group, v);
-    if (s.light_passes) add_light_part(out.light, v, b.total, first, environment);
+    if (s.light_passes && !split) add_light_part(out.light, v, b.total, first, environment);
   };
   auto add_nee = [&](const Spectrum& c, int group) {
     const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
+    if (catcher_leg) {
+      out.catcher += v;
+      return;
+    }
     L += v;
+    if (split) return;
+    if (catchers) out.matte += v;
     out.add_lightgroup(group, v);
     if (s.light_passes) add_light_part(out.light, v, b.total + 1, b.total == 0 ? nee_first : first, false);
   };
@@ -75,6 +122,11 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     LightSample ls;
     if (li < 0 || !(pmf > 0) || !lights.sample(scene, li, p, u, &ls, time) || !(ls.pdf > 0) || is_black(ls.radiance))
       return;
+    // The catcher-only path leaves out the emission of other objects (Cycles' light_distribution_sample).
+    if (catcher_leg && lights.light(li).type == LightType::Triangle &&
+        !scene.geometry.instance(lights.light(li).instance).shadow_catcher)
+      return;
+    const unsigned shadow_vis = catcher_leg ? catcher_only_visibility(kVisShadow) : kVisShadow;
     float scatter_pdf;
     Spectrum fv = f(ls.wi, &scatter_pdf, excluded_kinds(scene.light_visibility(li)));
     if (is_black(fv)) return;
@@ -83,9 +135,11 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;
       if (sp) leave_surface(scene, *sp, side, ls.wi, &shadow_stack);
-      T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats, s.transparent_bounces);
+      T = shadow_transmittance(scene, shadow_stack, shadow, sampler, est, step, stats, s.transparent_bounces,
+                               shadow_vis);
     } else {
-      T = shadow_transmittance(scene, VolumeStack{}, shadow, sampler, est, step, stats, s.transparent_bounces);
+      T = shadow_transmittance(scene, VolumeStack{}, shadow, sampler, est, step, stats, s.transparent_bounces,
+                               shadow_vis);
     }
     if (is_black(T)) return;
     float light_pdf = pmf * ls.pdf;
@@ -94,199 +148,236 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   };
 
   for (;;) {
-    Hit hit;
-    ++stats.rays;
-    bool found = scene.geometry.intersect(ray, visibility, &hit);
-    const float t_end = found ? hit.t : ray.tmax;
-
-    // Free flight through the media along [tmin, t_end]. A ray that escapes (even a camera ray cut
-    // by the clip distance) crosses the media to infinity, as in Cycles 3.4: a World volume with
-    // sigma_t > 0 hides the background completely (docs/volumes.md).
-    const Spectrum beta_before = beta;
-    MediumInteraction mi;
-    int medium = -1;
-    // Volume emission along the whole segment (closed form; before the free flight decides where
-    // the path goes on, as Cycles 3.4 does).
-    if (kMedia && scene.has_emissive_media() && stack.size > 0)
-      add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step), -1);
-    if constexpr (kMedia)
-      medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
-    const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;
-    // Lamps with a size are hit by rays but never occlude (as in Cycles); weighted as the segment
-    // before the collision (exact for grey media).
-    if (lights.has_hittable()) {
-      Ray r = ray;
-      r.tmax = t_seg;
-      lights.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
-        add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t),
-            lights.lightgroup(h.light));
-      });
-    }
-    if (kMedia && !is_finite(beta)) break;  // free-flight weights
-
-    if (medium >= 0) {
-      // A real collision: beta already holds sigma_s T / pdf (medium.h).
-      if (is_black(beta) || b.of(BounceKind::Volume) > s.volume_bounces || b.total > s.max_bounces) break;
-      const Phase& phase = scene.media[medium].phase();
-      const Vec3 wo = normalize(-ray.d);
-      if (b.total == 0) nee_first.set_volume();
-      if (!lights.empty())
-        next_event(mi.p, nullptr, Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf, unsigned) {
-          float p = phase.eval(wo, wi);
-          *pdf = p;
-          return Spectrum(p);
-        });
-      Vec3 wi;
-      float pdf;
-      if (!phase.sample(wo, sampler.next_2d(), &wi, &pdf) || !(pdf > 0)) break;
-      if (b.total == 0) first.set_volume();
-      b.add(BounceKind::Volume);
-      visibility = kVisDiffuse;
-      prev_pdf = pdf;
-      prev_delta = false;
-      prev_p = mi.p;
-      prev_n = Vec3(0.0f);
-      t_prev = 0;
-      ray.o = mi.p;
-      ray.d = wi;
-      ray.tmin = 0;
-      ray.tmax = INFINITY;
-    } else if (!found) {
-      bool background = b.from_camera();
-      // Film > Transparent: the camera ray, through transparent passes too, ends transparent.
-      const bool transparent_background = b.total == 0 && s.transparent_background;
-      if (transparent_background) transparent += average(beta);
-      if (!transparent_background) {
-        if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
-          ShadingContext wc = world_context(ray.d);
-          describe_ray(b, visibility, &wc);
-          add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY),
-              lights.lightgroup(lights.world_light()), true);
+    for (;;) {
+      Hit hit;
+      ++stats.rays;
+      // Only a scene with catchers keeps the state of each camera segment, for a split.
+      if (catchers && !split && b.total == 0)
+        snap = Snapshot{ray,    beta,      visibility, b,      nulls, prev_pdf,
+                        t_prev, footprint, prev_delta, prev_p, prev_n, stack, sampler};
+      bool found = scene.geometry.intersect(ray, catcher_leg ? catcher_only_visibility(visibility) : visibility, &hit);
+      const float t_end = found ? hit.t : ray.tmax;
+      // Cycles' integrator_split_shadow_catcher: before the segment's volume and the surface are
+      // shaded; the throughput there is the matte's transparency (film_write_shadow_catcher_bounce_data).
+      if (catchers && !split && found && b.total == 0) {
+        const Instance& hit_instance = scene.geometry.instance(hit.instance);
+        if (hit_instance.shadow_catcher && !hit_instance.holdout) {
+          split = true;
+          out.catcher_split = 1;
+          matte_transparent = transparent + average(beta);
+          add_background(ray, beta, visibility);
         }
-        lights.escaped_suns(ray.d, visibility, [&](int i, const Spectrum& radiance) {
-          add(beta * radiance * mis_emitter(i, ray.d, INFINITY), lights.lightgroup(i));
+      }
+
+      // Free flight through the media along [tmin, t_end]. A ray that escapes (even a camera ray cut
+      // by the clip distance) crosses the media to infinity, as in Cycles 3.4: a World volume with
+      // sigma_t > 0 hides the background completely (docs/volumes.md).
+      const Spectrum beta_before = beta;
+      MediumInteraction mi;
+      int medium = -1;
+      // Volume emission along the whole segment (closed form; before the free flight decides where
+      // the path goes on, as Cycles 3.4 does).
+      if (kMedia && scene.has_emissive_media() && stack.size > 0)
+        add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step), -1);
+      if constexpr (kMedia)
+        medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
+      const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;
+      // Lamps with a size are hit by rays but never occlude (as in Cycles); weighted as the segment
+      // before the collision (exact for grey media).
+      if (lights.has_hittable()) {
+        Ray r = ray;
+        r.tmax = t_seg;
+        lights.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
+          add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t),
+              lights.lightgroup(h.light));
         });
       }
-      break;
-    } else {
-      SurfacePoint sp = scene.geometry.surface(hit);
-      if (kMedia && scene.null_surface(sp.material)) {
-        // An invisible medium boundary: update the stack and continue along the same line.
-        if (!pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
-        t_prev += hit.t * length(ray.d);
-        continue;
-      }
-      ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
-      describe_ray(b, visibility, &ctx);
-      if (b.total == 0 && !aovs_done) write_aovs_at(&ctx, cs.aovs, s);
-      const float footprint_here = footprint + ctx.ray_length * cs.dD;
-      const Vec3 ng = ctx.Ng;
-      ShadingFrame sf{ctx.N};
-      const Material& material = scene.material(sp.material);
-      if (material.needs_differentials()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
-      if (material.traces_rays()) add_tracing(scene.geometry, sp, sampler, &ctx);
-      Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
-      if (b.total == 0 && !aovs_done)
-        aovs_done = single_pass_done(material.may_be_transparent(), bsdf, s.pass_alpha_threshold);
-      if (b.total == 0 && !hold_out(scene.geometry.instance(sp.instance).holdout, &bsdf, &emitted, beta, &transparent))
-        break;
-      bsdf.sample_below_shading(true);
-      if (!is_black(sf.smooth)) ctx.N = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
-      const Frame frame = local_frame(sf, ng);
-      const Vec3 ns = frame.n;
-      if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
-      if (b.from_camera()) {
-        out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
-      }
-      if (!is_black(emitted)) {
-        int li = lights.triangle_light(sp.instance, sp.primitive);
-        add(beta * emitted *
-                (li >= 0 ? mis_emitter(li, ray.d, kMedia || t_prev > 0 ? t_prev + hit.t * length(ray.d) : hit.t)
-                         : 1.0f),
-            scene.geometry.instance(sp.instance).lightgroup);
-      }
-      // A transparent pass continues the line as an invisible boundary does: the MIS state stays
-      // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.
-      if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta, b.from_camera())) {
-        b.add(BounceKind::None);
-        if (b.of(BounceKind::None) > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls))
-          break;
-        t_prev += hit.t * length(ray.d);
-        footprint = footprint_here;
-        continue;
-      }
-      if (b.from_camera()) {
-        out.normal = ns;
-        out.albedo = bsdf.albedo();
-      }
-      const Vec3 wo = frame.to_local(-ray.d);
-      // Colours and data passes at the surface a camera path first scatters from (Cycles writes
-      // them at every surface before the first bounce, transparent layers weighted by their
-      // opacity; the choice to pass a layer above has that expectation).
-      if (b.total == 0) {
-        if (s.light_passes) add_light_colors(&out, bsdf, wo, beta);
-        if (s.data_passes) write_data_passes(scene, camera, s, sp, beta, &out);
-        if (s.ao_pass)
-          out.ao = beta * ambient_occlusion(scene, s, sp, ns, ng, kMedia ? &stack : nullptr, sampler, stats);
-        if (s.vector_pass && motion_vector(scene, camera, sp, out.vector)) out.vector_weight = 1;
-      }
-      if (bsdf.count() == 0) break;
-      if (b.exceeded(s)) break;
+      if (kMedia && !is_finite(beta)) break;  // free-flight weights
 
-      if (bsdf.has_non_delta() && !lights.empty())
-        next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf, unsigned excluded) {
-          Vec3 wi = frame.to_local(wi_world);
-          Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
-          // The geometric normal decides which side the light is on; shading normals only shade.
-          if ((dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
-          if (s.light_passes && b.total == 0) {
-            Spectrum kinds[3];
-            bsdf.eval_kinds(wo, wi, kinds);
-            for (int k = 0; k < 3; ++k)
-              if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
-            nee_first.set_surface(kinds);
+      if (medium >= 0) {
+        // A real collision: beta already holds sigma_s T / pdf (medium.h).
+        if (is_black(beta) || b.of(BounceKind::Volume) > s.volume_bounces || b.total > s.max_bounces) break;
+        const Phase& phase = scene.media[medium].phase();
+        const Vec3 wo = normalize(-ray.d);
+        if (b.total == 0) nee_first.set_volume();
+        if (!lights.empty())
+          next_event(mi.p, nullptr, Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf, unsigned) {
+            float p = phase.eval(wo, wi);
+            *pdf = p;
+            return Spectrum(p);
+          });
+        Vec3 wi;
+        float pdf;
+        if (!phase.sample(wo, sampler.next_2d(), &wi, &pdf) || !(pdf > 0)) break;
+        if (b.total == 0) first.set_volume();
+        b.add(BounceKind::Volume);
+        visibility = kVisDiffuse;
+        prev_pdf = pdf;
+        prev_delta = false;
+        prev_p = mi.p;
+        prev_n = Vec3(0.0f);
+        t_prev = 0;
+        ray.o = mi.p;
+        ray.d = wi;
+        ray.tmin = 0;
+        ray.tmax = INFINITY;
+      } else if (!found) {
+        bool background = b.from_camera();
+        // Film > Transparent: the camera ray, through transparent passes too, ends transparent.
+        const bool transparent_background = b.total == 0 && s.transparent_background;
+        if (transparent_background && !catcher_leg) transparent += average(beta);
+        if (b.total == 0 && !split) add_background(ray, beta, visibility);
+        if (!transparent_background) {
+          if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
+            ShadingContext wc = world_context(ray.d);
+            describe_ray(b, visibility, &wc);
+            add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY),
+                lights.lightgroup(lights.world_light()), true);
           }
-          return f * std::abs(wi.z);
-        });
-
-      // Continue the path by sampling the BSDF.
-      BsdfSample bs;
-      float u_lobe = sampler.next_1d();
-      Vec2 u = sampler.next_2d();
-      if (!bsdf.sample(wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
-      Vec3 wi = frame.to_world(bs.wi);
-      bool reflect_geo = dot(wi, ng) > 0;
-      if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;  // shading normal would leak light
-      beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
-      if (!is_finite(beta)) break;
-      if (s.light_passes && b.total == 0) {
-        if (bs.flags & (kLobeSpecular | kLobeBelowShading)) {  // the sampled lobe's alone: eval() has none
-          first.set_kind(flags_pass_kind(bs.flags));
-        } else {
-          Spectrum kinds[3];
-          bsdf.eval_kinds(wo, bs.wi, kinds);
-          first.set_surface(kinds);
+          lights.escaped_suns(ray.d, visibility, [&](int i, const Spectrum& radiance) {
+            add(beta * radiance * mis_emitter(i, ray.d, INFINITY), lights.lightgroup(i));
+          });
         }
+        break;
+      } else {
+        SurfacePoint sp = scene.geometry.surface(hit);
+        if (kMedia && scene.null_surface(sp.material)) {
+          // An invisible medium boundary: update the stack and continue along the same line.
+          if (!pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls)) break;
+          t_prev += hit.t * length(ray.d);
+          continue;
+        }
+        ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, (hit.t - ray.tmin) * length(ray.d));
+        describe_ray(b, visibility, &ctx);
+        if (b.total == 0 && !aovs_done && !catcher_leg) write_aovs_at(&ctx, cs.aovs, s);
+        const float footprint_here = footprint + ctx.ray_length * cs.dD;
+        const Vec3 ng = ctx.Ng;
+        ShadingFrame sf{ctx.N};
+        const Material& material = scene.material(sp.material);
+        if (material.needs_differentials()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
+        if (material.traces_rays()) add_tracing(scene.geometry, sp, sampler, &ctx);
+        Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
+        if (b.total == 0 && !aovs_done && !catcher_leg)
+          aovs_done = single_pass_done(material.may_be_transparent(), bsdf, s.pass_alpha_threshold);
+        if (b.total == 0 && !catcher_leg &&
+            !hold_out(scene.geometry.instance(sp.instance).holdout, &bsdf, &emitted, beta, &transparent))
+          break;
+        bsdf.sample_below_shading(true);
+        if (!is_black(sf.smooth)) ctx.N = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
+        const Frame frame = local_frame(sf, ng);
+        const Vec3 ns = frame.n;
+        if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
+        if (b.from_camera() && !catcher_leg) {
+          out.depth = hit.t;  // distance along the camera ray; the caller converts it to Z depth
+        }
+        if (!is_black(emitted)) {
+          int li = lights.triangle_light(sp.instance, sp.primitive);
+          add(beta * emitted *
+                  (li >= 0 ? mis_emitter(li, ray.d, kMedia || t_prev > 0 ? t_prev + hit.t * length(ray.d) : hit.t)
+                           : 1.0f),
+              scene.geometry.instance(sp.instance).lightgroup);
+        }
+        // A transparent pass continues the line as an invisible boundary does: the MIS state stays
+        // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.
+        if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta, b.from_camera())) {
+          b.add(BounceKind::None);
+          if (b.of(BounceKind::None) > s.transparent_bounces ||
+              !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls))
+            break;
+          t_prev += hit.t * length(ray.d);
+          footprint = footprint_here;
+          continue;
+        }
+        if (b.from_camera() && !catcher_leg) {
+          out.normal = ns;
+          out.albedo = bsdf.albedo();
+        }
+        const Vec3 wo = frame.to_local(-ray.d);
+        // Colours and data passes at the surface a camera path first scatters from (Cycles writes
+        // them at every surface before the first bounce, transparent layers weighted by their
+        // opacity; the choice to pass a layer above has that expectation).
+        if (b.total == 0 && !catcher_leg) {
+          if (s.light_passes) add_light_colors(&out, bsdf, wo, beta);
+          if (s.data_passes) write_data_passes(scene, camera, s, sp, beta, &out);
+          if (s.ao_pass)
+            out.ao = beta * ambient_occlusion(scene, s, sp, ns, ng, kMedia ? &stack : nullptr, sampler, stats);
+          if (s.vector_pass && motion_vector(scene, camera, sp, out.vector)) out.vector_weight = 1;
+        }
+        if (bsdf.count() == 0) break;
+        if (b.exceeded(s)) break;
+
+        if (bsdf.has_non_delta() && !lights.empty())
+          next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf, unsigned excluded) {
+            Vec3 wi = frame.to_local(wi_world);
+            Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
+            // The geometric normal decides which side the light is on; shading normals only shade.
+            if ((dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
+            if (s.light_passes && b.total == 0) {
+              Spectrum kinds[3];
+              bsdf.eval_kinds(wo, wi, kinds);
+              for (int k = 0; k < 3; ++k)
+                if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
+              nee_first.set_surface(kinds);
+            }
+            return f * std::abs(wi.z);
+          });
+
+        // Continue the path by sampling the BSDF.
+        BsdfSample bs;
+        float u_lobe = sampler.next_1d();
+        Vec2 u = sampler.next_2d();
+        if (!bsdf.sample(wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
+        Vec3 wi = frame.to_world(bs.wi);
+        bool reflect_geo = dot(wi, ng) > 0;
+        if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;  // shading normal would leak light
+        beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
+        if (!is_finite(beta)) break;
+        if (s.light_passes && b.total == 0) {
+          if (bs.flags & (kLobeSpecular | kLobeBelowShading)) {  // the sampled lobe's alone: eval() has none
+            first.set_kind(flags_pass_kind(bs.flags));
+          } else {
+            Spectrum kinds[3];
+            bsdf.eval_kinds(wo, bs.wi, kinds);
+            first.set_surface(kinds);
+          }
+        }
+        if (kMedia && !reflect_geo) cross_boundary(scene, sp, wi, &stack);  // refraction into / out of a medium
+
+        b.count(bs, &visibility);
+        prev_pdf = bs.pdf;
+        prev_delta = (bs.flags & kLobeSpecular) != 0;
+        prev_p = sp.p;
+        prev_n = ng;
+        t_prev = 0;
+        footprint = footprint_here;
+        ray.o = spawn_origin(sp, wi);
+        ray.d = wi;
+        ray.tmin = 0;
+        ray.tmax = INFINITY;
       }
-      if (kMedia && !reflect_geo) cross_boundary(scene, sp, wi, &stack);  // refraction into / out of a medium
 
-      b.count(bs, &visibility);
-      prev_pdf = bs.pdf;
-      prev_delta = (bs.flags & kLobeSpecular) != 0;
-      prev_p = sp.p;
-      prev_n = ng;
-      t_prev = 0;
-      footprint = footprint_here;
-      ray.o = spawn_origin(sp, wi);
-      ray.d = wi;
-      ray.tmin = 0;
-      ray.tmax = INFINITY;
+      if (!russian_roulette(b.total, &beta, sampler)) break;
     }
-
-    if (!russian_roulette(b.total, &beta, sampler)) break;
+    if (!split || catcher_leg) break;
+    // The catcher-only path, from the segment that met the catcher.
+    catcher_leg = true;
+    ray = snap->ray;
+    beta = snap->beta;
+    visibility = snap->visibility;
+    b = snap->b;
+    nulls = snap->nulls;
+    prev_pdf = snap->prev_pdf;
+    t_prev = snap->t_prev;
+    footprint = snap->footprint;
+    prev_delta = snap->prev_delta;
+    prev_p = snap->prev_p;
+    prev_n = snap->prev_n;
+    stack = snap->stack;
+    sampler = snap->sampler;
   }
   out.radiance = L;
   out.alpha = 1 - transparent;
+  out.matte_transparent = split ? matte_transparent : transparent;
   return out;
 }
 

@@ -232,6 +232,16 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
     else
       add_channels(channels, buf, n, {name + ".X"});
   }
+  // Shadow catchers: the means Combined and the Shadow Catcher pass are read from (film.h), so that
+  // merges recompute both exactly.
+  for (int part = 0; part < kCatcherParts; ++part) {
+    const std::string letters = catcher_part_letters(part);
+    std::vector<float> buf(n * letters.size());
+    if (!job.film().read_catcher_part(part, buf.data())) break;
+    std::vector<std::string> names;
+    for (char c : letters) names.push_back(std::string(catcher_part_name(part)) + "." + c);
+    add_channels(channels, buf, n, names);
+  }
   std::vector<float> light(n * 3);
   if (job.film().read_light_tracing(light.data()))
     add_channels(channels, light, n, {"LightTracing.R", "LightTracing.G", "LightTracing.B"});
@@ -245,6 +255,10 @@ void write_render_exr(const std::string& path, const RenderJob& job, const std::
       std::to_string(s.sample_offset) + "-" + std::to_string(s.sample_offset + st.passes_started);
   if (uint64_t lp = job.film().published_light_paths()) attrs["lantern/light_paths"] = std::to_string(lp);
   attrs["lantern/seed"] = std::to_string(s.seed);
+  if (job.film().layout().shadow_catcher) {
+    attrs["lantern/shadow_catcher"] = s.integrator_settings.shadow_catcher_approximate ? "approximate" : "matte";
+    attrs["lantern/transparent"] = s.integrator_settings.transparent_background ? "1" : "0";
+  }
   attrs["lantern/integrator"] = integrator_name(s.integrator);
   attrs["lantern/sample_pattern"] = s.pattern == SamplePattern::SobolOwen ? "SOBOL_OWEN" : "INDEPENDENT";
   attrs["lantern/resolution"] = std::to_string(s.width) + "x" + std::to_string(s.height);

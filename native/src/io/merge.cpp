@@ -55,6 +55,49 @@ std::string join_ranges(std::vector<Range> r) {
   return out;
 }
 
+// Combined (R, G, B, A) and the Shadow Catcher pass of merged shadow catcher means (film.h's
+// CatcherPart channels), as the film reads them.
+void recompute_catcher_passes(const ExrImage& ref, const std::vector<double>& count, std::vector<ExrChannel>* out) {
+  auto merged = [&](const std::string& name) -> std::vector<float>* {
+    for (ExrChannel& ch : *out)
+      if (ch.name == name) return &ch.pixels;
+    return nullptr;
+  };
+  const auto mode = ref.attributes.find("lantern/shadow_catcher");
+  const auto transparent = ref.attributes.find("lantern/transparent");
+  const bool approximate = mode != ref.attributes.end() && mode->second == "approximate";
+  const bool transparent_film = transparent != ref.attributes.end() && transparent->second == "1";
+  std::vector<const std::vector<float>*> in[kCatcherParts];
+  for (int part = 0; part < kCatcherParts; ++part)
+    for (const char* c = catcher_part_letters(part); *c; ++c) {
+      const std::vector<float>* v = merged(std::string(catcher_part_name(part)) + "." + *c);
+      if (!v)
+        throw InvalidArgument(std::string("the shadow catcher channels lack ") + catcher_part_name(part) + "." + *c);
+      in[part].push_back(v);
+    }
+  std::vector<float>* combined[4] = {merged("R"), merged("G"), merged("B"), merged("A")};
+  std::vector<float>* pass[3] = {merged("ShadowCatcher.R"), merged("ShadowCatcher.G"), merged("ShadowCatcher.B")};
+  for (size_t i = 0; i < count.size(); ++i) {
+    CatcherPixel m;
+    for (int k = 0; k < 3; ++k) {
+      m.combined[k] = (*in[kCatcherCombined][k])[i];
+      m.catcher[k] = (*in[kCatcherLight][k])[i];
+      m.background[k] = (*in[kCatcherBackground][k])[i];
+    }
+    m.alpha = (*in[kCatcherCombined][3])[i];
+    for (int k = 0; k < 4; ++k) m.matte[k] = (*in[kCatcherMatte][k])[i];
+    m.split = (*in[kCatcherSplit][0])[i];
+    float rgba[4] = {0, 0, 0, 0};
+    if (count[i] > 0) catcher_combined(m, approximate, transparent_film, rgba);
+    for (int k = 0; k < 4; ++k)
+      if (combined[k]) (*combined[k])[i] = rgba[k];
+    double sc[3];
+    catcher_pass(m, sc);
+    for (int k = 0; k < 3; ++k)
+      if (pass[k]) (*pass[k])[i] = float(sc[k]);
+  }
+}
+
 std::string channel_list(const ExrImage& img) {
   std::string s;
   for (const ExrChannel& c : img.channels) s += (s.empty() ? "" : " ") + c.name;
@@ -150,6 +193,7 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   const ExrImage& ref = parts[0];
   const size_t n = size_t(ref.width) * ref.height, nc = ref.channels.size(), np = parts.size();
   const bool light = ref.find("LightTracing.R") != nullptr;
+  const bool catcher = ref.find(std::string(catcher_part_name(kCatcherCombined)) + ".R") != nullptr;
   long long total_samples = 0, total_light_paths = 0;
   for (long long s : samples) total_samples += s;
   for (long long l : light_paths) total_light_paths += l;
@@ -250,9 +294,11 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
     const ExrImage img = read_exr(paths[p]);
     if (img.channels.size() != nc) throw IoError(paths[p] + " changed while merging");
     const float* c_p = img.find("SampleCount.X")->pixels.data();
-    const float* rgb[3] = {img.find("R") ? img.find("R")->pixels.data() : nullptr,
-                           img.find("G") ? img.find("G")->pixels.data() : nullptr,
-                           img.find("B") ? img.find("B")->pixels.data() : nullptr};
+    // With shadow catchers R, G, B are the matte (film.h): Combined's own means pool the variance.
+    const std::string rgb_prefix = catcher ? std::string(catcher_part_name(kCatcherCombined)) + "." : "";
+    const float* rgb[3] = {};
+    for (int c = 0; c < 3; ++c)
+      if (const ExrChannel* ch = img.find(rgb_prefix + "RGB"[c])) rgb[c] = ch->pixels.data();
     const float* lt[3] = {};
     const float* var[3] = {};
     for (int c = 0; c < 3; ++c) {
@@ -418,6 +464,9 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
     }
     out.push_back(std::move(oc));
   }
+
+  // Shadow catchers: Combined and the Shadow Catcher pass again from the merged means (film.h).
+  if (catcher) recompute_catcher_passes(ref, count, &out);
 
   // Header: what all parts agree on, then the merged counts.
   std::map<std::string, std::string> attrs;

@@ -67,6 +67,9 @@ FilmLayout RenderJob::film_layout(const RenderSettings& s) {
   l.cryptomatte_levels = s.cryptomatte_levels;
   l.lightgroups = s.integrator_settings.lightgroups;
   l.aovs = s.integrator_settings.aovs;
+  l.shadow_catcher = s.integrator_settings.shadow_catcher;
+  l.catcher_approximate = s.integrator_settings.shadow_catcher_approximate;
+  l.transparent = s.integrator_settings.transparent_background;
   return l;
 }
 
