@@ -141,6 +141,29 @@ static ScenePtr door_slabs();
 // sample the same path sum to 1 (power, balance and uniform heuristics), each weight times the
 // strategy's bounce-kind factor over the factor of the strategy that made the path (the factor
 // is the path's: the same for every strategy).
+// Over `paths` camera samples of ctx's image (pixels in turn, fixed seed): how many paths the
+// strategies' MIS weight sums were checked on, and the largest |sum - 1| (1e9 for a non-finite one).
+static std::pair<int, double> worst_mis_sum(const lt::RenderContext& ctx, int paths) {
+  const int w = ctx.width, h = ctx.height;
+  int checked = 0;
+  double worst = 0;
+  for (int i = 0; i < paths; ++i) {
+    int px = i % w, py = (i / w) % h;
+    lt::Sampler sampler(7, uint32_t(py * w + px), uint32_t(i));
+    float ox = ctx.filter.sample(sampler.next_1d()), oy = ctx.filter.sample(sampler.next_1d());
+    lt::CameraSample cs;
+    cs.pixel_center = {px + 0.5f, py + 0.5f};
+    cs.film = {px + 0.5f + ox, py + 0.5f + oy};
+    if (ctx.camera.has_lens()) cs.lens = sampler.next_2d();
+    if (!ctx.camera.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray)) continue;  // outside a fisheye's circle
+    for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
+      ++checked;
+      worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
+    }
+  }
+  return {checked, worst};
+}
+
 TEST(Bdpt, MisWeightsSumToOne) {
   for (int scene_index = 0; scene_index < 5; ++scene_index) {
     const Lights lights = scene_index >= 3 ? Lights::Area : Lights(scene_index);
@@ -157,21 +180,7 @@ TEST(Bdpt, MisWeightsSumToOne) {
       is.max_light_length = h == lt::MisHeuristic::Balance ? 3 : 64;  // a light subpath limit must keep the sums too
       is.mis = h;
       lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
-      int checked = 0;
-      double worst = 0;
-      for (int i = 0; i < (scene_index == 4 ? 12000 : 4000); ++i) {  // door_slabs: few paths connect
-        int px = i % size, py = (i / size) % size;
-        lt::Sampler sampler(7, uint32_t(py * size + px), uint32_t(i));
-        float ox = filter.sample(sampler.next_1d()), oy = filter.sample(sampler.next_1d());
-        lt::CameraSample cs;
-        cs.pixel_center = {px + 0.5f, py + 0.5f};
-        cs.film = {px + 0.5f + ox, py + 0.5f + oy};
-        camera.generate(cs.film.x, cs.film.y, &cs.ray);
-        for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
-          ++checked;
-          worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
-        }
-      }
+      const auto [checked, worst] = worst_mis_sum(ctx, scene_index == 4 ? 12000 : 4000);  // door_slabs: few connect
       EXPECT_GT(checked, 1000) << "too few connected paths to test";
       EXPECT_LT(worst, 1e-3) << "scene " << scene_index << " heuristic " << int(h) << ": " << checked << " paths";
     }
@@ -669,22 +678,7 @@ static void expect_mis_weights_sum_to_one(const lt_camera_desc& desc, const std:
     is.max_bounces = 8;
     is.mis = h;
     lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
-    int checked = 0;
-    double worst = 0;
-    for (int i = 0; i < 3000; ++i) {
-      int px = i % size, py = (i / size) % size;
-      lt::Sampler sampler(7, uint32_t(py * size + px), uint32_t(i));
-      float ox = filter.sample(sampler.next_1d()), oy = filter.sample(sampler.next_1d());
-      lt::CameraSample cs;
-      cs.pixel_center = {px + 0.5f, py + 0.5f};
-      cs.film = {px + 0.5f + ox, py + 0.5f + oy};
-      cs.lens = sampler.next_2d();
-      if (!camera.generate(cs.film.x, cs.film.y, cs.lens, &cs.ray)) continue;  // outside a fisheye's circle
-      for (float sum : lt::bdpt_mis_weight_sums(ctx, cs, sampler)) {
-        ++checked;
-        worst = std::max(worst, std::isfinite(sum) ? std::abs(sum - 1.0) : 1e9);
-      }
-    }
+    const auto [checked, worst] = worst_mis_sum(ctx, 3000);
     EXPECT_GT(checked, 1000) << label << ": too few connected paths to test";
     EXPECT_LT(worst, 1e-3) << label << " heuristic " << int(h) << ": " << checked << " paths";
   }
