@@ -153,8 +153,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       ++stats.rays;
       // Only a scene with catchers keeps the state of each camera segment, for a split.
       if (catchers && !split && b.total == 0)
-        snap = Snapshot{ray,    beta,      visibility, b,      nulls, prev_pdf,
-                        t_prev, footprint, prev_delta, prev_p, prev_n, stack, sampler};
+        snap = Snapshot{ray,       beta,       visibility, b,      nulls, prev_pdf, t_prev,
+                        footprint, prev_delta, prev_p,     prev_n, stack, sampler};
       bool found = scene.geometry.intersect(ray, catcher_leg ? catcher_only_visibility(visibility) : visibility, &hit);
       const float t_end = found ? hit.t : ray.tmax;
       // Cycles' integrator_split_shadow_catcher: before the segment's volume and the surface are
@@ -281,8 +281,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         // the last scattering's (as Cycles' transparent bounces), which shadow rays see through.
         if (material.may_be_transparent() && bsdf.pass_transparent(sampler.next_1d(), &beta, b.from_camera())) {
           b.add(BounceKind::None);
-          if (b.of(BounceKind::None) > s.transparent_bounces ||
-              !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls))
+          if (b.of(BounceKind::None) > s.transparent_bounces || !pass_boundary(scene, sp, hit.t, &ray, &stack, &nulls))
             break;
           t_prev += hit.t * length(ray.d);
           footprint = footprint_here;
