@@ -586,11 +586,10 @@ std::unique_lock<std::mutex> Film::lock_accumulators() const {
 }
 
 const char* exr_pass_name(Pass p) {
-  static const char* const kNames[] = {"DiffDir",   "DiffInd",  "DiffCol",  "GlossDir", "GlossInd",
-                                       "GlossCol",  "TransDir", "TransInd", "TransCol", "VolumeDir",
-                                       "VolumeInd", "Emit",     "Env",      "Position", "UV",
-                                       "Mist",      "IndexOB",  "IndexMA",  "AO",       "Vector",
-                                       "ShadowCatcher"};
+  static const char* const kNames[] = {"DiffDir",  "DiffInd",  "DiffCol",      "GlossDir",  "GlossInd",  "GlossCol",
+                                       "TransDir", "TransInd", "TransCol",     "VolumeDir", "VolumeInd", "Emit",
+                                       "Env",      "Position", "UV",           "Mist",      "IndexOB",   "IndexMA",
+                                       "AO",       "Vector",   "ShadowCatcher"};
   static_assert(sizeof(kNames) / sizeof(kNames[0]) == size_t(kSummedPasses), "a name per pass");
   return int(p) >= kFirstSummedPass && p < Pass::Count ? kNames[int(p) - kFirstSummedPass] : nullptr;
 }
