@@ -11,6 +11,7 @@ from . import core
 from .export import export_scene
 from .export import cryptomatte
 from .export.motion import collect as collect_motion
+from .export.world import ao_distance
 from .export.camera import export_camera
 from .scene_sync import SceneSync
 from .viewport import ViewportSession, view_camera, with_camera_lens, with_camera_panorama
@@ -207,12 +208,6 @@ def mist_settings(world):
         return dict(mist_start=5.0, mist_depth=25.0, mist_falloff=2.0)
     m = world.mist_settings
     return dict(mist_start=m.start, mist_depth=m.depth, mist_falloff=MIST_FALLOFF.get(m.falloff, 2.0))
-
-
-def ao_distance(world):
-    """The AO pass's ray length, World > Light Settings > Distance (Blender's default 10 without a
-    world)."""
-    return 10.0 if world is None else world.light_settings.distance
 
 
 def vector_from_frames(scene, view_layer):

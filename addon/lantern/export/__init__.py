@@ -9,7 +9,7 @@ from .light import export_light
 from .material import ImageExporter, MaterialExporter
 from .mesh import CONVERTIBLE_TYPES, MeshExporter
 from .volume import export_volume
-from .world import export_world, export_world_volume
+from .world import ao_distance, export_world, export_world_volume
 
 # Object types that are not rendered (or not yet): skipped silently.
 _IGNORED_TYPES = {'CAMERA', 'EMPTY', 'ARMATURE', 'LATTICE', 'SPEAKER', 'LIGHT_PROBE', 'GPENCIL'}
@@ -95,8 +95,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
 
     images = ImageExporter(core_scene, report)
     materials = MaterialExporter(core_scene, report, images)
-    if depsgraph.scene_eval.world is not None:
-        materials.ao_distance = depsgraph.scene_eval.world.light_settings.distance
+    materials.ao_distance = ao_distance(depsgraph.scene_eval.world)
     if state is None or camera_object is not None:
         materials.camera = camera_table(depsgraph, camera_object)
     meshes = MeshExporter(depsgraph, core_scene, report, materials, motion)

@@ -86,3 +86,9 @@ def export_world_volume(depsgraph, core_scene, report):
         return 0
     core_scene.set_world_volume(volume)
     return 1
+
+
+def ao_distance(world):
+    """World > Light Settings > Distance: the AO pass's ray length and the Ambient Occlusion node's
+    for a Distance of 0 (Blender's default 10 without a world)."""
+    return 10.0 if world is None else world.light_settings.distance
