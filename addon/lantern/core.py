@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 17
+ABI_VERSION = 18
 
 # lt_status
 OK = 0
@@ -31,6 +31,8 @@ _STATUS_NAMES = {
 # lt_interpolation, lt_extension
 INTERP_LINEAR, INTERP_CLOSEST, INTERP_CUBIC = 0, 1, 2
 EXTENSION_REPEAT, EXTENSION_EXTEND, EXTENSION_CLIP = 0, 1, 2
+# lt_displacement_method (Cycles' Material > Settings > Displacement).
+DISPLACEMENT_BUMP, DISPLACEMENT_TRUE, DISPLACEMENT_BOTH = 0, 1, 2
 ALPHA_IGNORE, ALPHA_STRAIGHT, ALPHA_PREMULTIPLIED, ALPHA_CHANNEL_PACKED = 0, 1, 2, 3
 
 # lt_node_type
@@ -195,6 +197,7 @@ class MeshDesc(ctypes.Structure):
         ("motion_positions", _f_p),
         ("motion_corner_normals", _f_p),
         ("motion_step_count", ctypes.c_int),
+        ("flat_triangles", ctypes.POINTER(ctypes.c_uint8)),
     ]
 
 
@@ -470,6 +473,7 @@ def _declare(lib, layout=True):
         "lt_scene_commit": ([scene_p], c_int),
         "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
         "lt_scene_set_material": ([scene_p, c_int, P(ShaderProgram)], c_int),
+        "lt_scene_set_material_displacement": ([scene_p, c_int, P(ShaderProgram), c_int], c_int),
         "lt_scene_clear_lights": ([scene_p], c_int),
         "lt_scene_get_stats": ([scene_p, P(SceneStats)], c_int),
         "lt_render_settings_default": ([P(RenderSettings)], None),
@@ -783,6 +787,13 @@ class Scene:
         _check(self._lib.lt_scene_set_material_cryptomatte(self.handle, int(material), int(name_hash) & 0xFFFFFFFF),
                "lt_scene_set_material_cryptomatte")
 
+    def set_material_displacement(self, material, program, method):
+        """True displacement (before commit): program (as add_material's) giving the Material
+        Output's Displacement, method DISPLACEMENT_TRUE or DISPLACEMENT_BOTH."""
+        d, _keep = _program(program)
+        _check(self._lib.lt_scene_set_material_displacement(self.handle, int(material), ctypes.byref(d), int(method)),
+               "lt_scene_set_material_displacement")
+
     def set_material_pass_index(self, material, pass_index):
         """Material.pass_index, for the Material Index pass."""
         _check(self._lib.lt_scene_set_material_pass_index(self.handle, int(material), int(pass_index)),
@@ -790,10 +801,11 @@ class Scene:
 
     def add_mesh(self, positions, triangles, corner_normals=None, corner_uvs=None,
                  material_slots=None, texspace_location=(0.0, 0.0, 0.0), texspace_size=(0.0, 0.0, 0.0),
-                 attributes=(), motion_positions=None, motion_corner_normals=None):
+                 attributes=(), motion_positions=None, motion_corner_normals=None, flat_triangles=None):
         """attributes: (id, components, per-corner values) for the mesh's named attributes;
         motion_positions (and motion_corner_normals): a deforming mesh's positions (and corner
-        normals) at each motion step, step by step."""
+        normals) at each motion step, step by step; flat_triangles: with corner_normals, a bool
+        per triangle, True for flat-shaded ones."""
         pos = _f32(positions, "positions", 3)
         tri = _i32(triangles, "triangles")
         if tri.size % 3:
@@ -808,6 +820,12 @@ class Scene:
                 raise ValueError("%s: %d values for %d triangles" % (what, a.size, ntri))
         d = MeshDesc(_fptr(pos), pos.size // 3, _iptr(tri), ntri, _fptr(nrm), _fptr(uvs), _iptr(mat),
                      (ctypes.c_float * 3)(*texspace_location), (ctypes.c_float * 3)(*texspace_size))
+        flat = None
+        if flat_triangles is not None and nrm is not None:
+            flat = np.ascontiguousarray(np.asarray(flat_triangles, dtype=np.uint8).reshape(-1))
+            if flat.size != ntri:
+                raise ValueError("flat triangles: %d values for %d triangles" % (flat.size, ntri))
+            d.flat_triangles = flat.ctypes.data_as(ctypes.POINTER(ctypes.c_uint8))
         attrs = [(int(i), int(n), _f32(v, "attribute %d" % int(i))) for i, n, v in attributes]
         if attrs:
             table = (MeshAttribute * len(attrs))(*[MeshAttribute(i, n, _fptr(v), v.size) for i, n, v in attrs])

@@ -268,6 +268,18 @@ def without_emission(components):
     return out
 
 
+# Cycles' displacement methods that move vertices -> lt_displacement_method.
+_DISPLACEMENT_METHODS = {'DISPLACEMENT': core.DISPLACEMENT_TRUE, 'BOTH': core.DISPLACEMENT_BOTH}
+
+
+def _program_key(displaced):
+    """A comparable form of (program, method) or None."""
+    if displaced is None:
+        return None
+    (code, constants, registers), method = displaced
+    return tuple(code), tuple(float(k) for k in constants), registers, method
+
+
 class MaterialExporter:
     """Translates each material once; `export(material)` returns its core id."""
 
@@ -280,6 +292,8 @@ class MaterialExporter:
         self.images = images
         self.ids = {}
         self.volumes = {}  # material key -> (volume keywords or None, null surface) as exported
+        self.displacements = {}  # material key -> its true displacement as exported (_program_key)
+        self._displaced = None
         self.volume_names = {}  # core id -> name, of the materials with a medium
         self.media = 0  # materials with a Volume output
         self.emissive_media = 0  # of those, volumes that emit
@@ -309,6 +323,8 @@ class MaterialExporter:
                 self.core_scene.set_material_pass_index(mat_id, material.pass_index)
             if mat_id >= 0:
                 self.core_scene.set_material_cryptomatte(mat_id, self.cryptomatte.material(material))
+            if mat_id >= 0 and self._displaced is not None:
+                self.core_scene.set_material_displacement(mat_id, *self._displaced)
         if mat_id < 0:
             volume, null_surface = None, False
         elif volume:
@@ -323,6 +339,7 @@ class MaterialExporter:
                                                 null_surface=True)
         self.ids[key] = mat_id
         self.volumes[key] = (volume, null_surface)
+        self.displacements[key] = _program_key(self._displaced if mat_id >= 0 else None)
         if volume:
             self.volume_names[mat_id] = material.name
         return mat_id
@@ -343,18 +360,40 @@ class MaterialExporter:
         program, volume, null_surface = self._translate(material)
         if self._bad or program is None or self.ids[key] < 0 or self.volumes.get(key) != (volume, null_surface):
             return False  # a new scene, whose export reports the bad values
+        if _program_key(self._displaced) != self.displacements.get(key):
+            return False  # vertices move at the first commit only
         self.core_scene.set_material(self.ids[key], program)
         return True
 
-    def _translate(self, material):
-        """(program or None, volume keywords or None, null surface) of a material."""
-        self._material = material
-        self._bad = []  # the inputs whose values are not finite ("'Strength' of 'Emission'")
-        volume, null_surface = None, False
+    def _compiler(self, material):
         c = nodes.Compiler(material.name, self.images, self._warn, camera=self.camera)
         c.attributes = self.attributes  # one numbering of attribute names per scene
         c.material_pass_index = material.pass_index
         c.ao_distance = self.ao_distance
+        return c
+
+    def _displacement(self, material, output, method):
+        """(program, core method) of the material's true displacement (methods Displacement Only
+        and Displacement and Bump with the Displacement linked), or None."""
+        method = _DISPLACEMENT_METHODS.get(method)
+        disp = output.inputs.get("Displacement")
+        if method is None or disp is None:
+            return None
+        c = self._compiler(material)
+        if not c.linked(disp):
+            return None
+        program = c.compile_displacement(output)
+        self._bad += c.bad
+        return program, method
+
+    def _translate(self, material):
+        """(program or None, volume keywords or None, null surface) of a material; its true
+        displacement in self._displaced ((program, method) or None)."""
+        self._material = material
+        self._bad = []  # the inputs whose values are not finite ("'Strength' of 'Emission'")
+        self._displaced = None
+        volume, null_surface = None, False
+        c = self._compiler(material)
         try:
             if material.use_nodes and material.node_tree is not None:
                 volume = self.volume(material)
@@ -370,8 +409,9 @@ class MaterialExporter:
                 elif output is None:
                     self._warn("no active Material Output node, rendered black")
                 else:
-                    cycles = getattr(material, "cycles", None)
-                    c.compile_surface(output, getattr(cycles, "displacement_method", 'BUMP'))
+                    method = getattr(getattr(material, "cycles", None), "displacement_method", 'BUMP')
+                    c.compile_surface(output, method)
+                    self._displaced = self._displacement(material, output, method)
                 self._compile_aovs(c, material.node_tree)
             else:
                 c.closure(nodes.ops.DIFFUSE, [c.const((1.0, 1.0, 1.0)), c.const((0.0, 0.0, 0.0)),
@@ -379,7 +419,7 @@ class MaterialExporter:
         except nodes.Unsupported as e:
             self._warn("%s; the material is left out (default surface)" % e)
             return None, None, False
-        self._bad = c.bad
+        self._bad += c.bad
         return c.program(), volume, null_surface
 
     def _compile_aovs(self, c, tree):

@@ -164,7 +164,7 @@ def mesh_arrays(mesh, requests=(), warn=lambda _t: None):
     except (AttributeError, TypeError, RuntimeError):
         smooth[:] = True  # newer Blender: its corner normals are flat on flat faces anyway
     has_custom = getattr(mesh, "has_custom_normals", False)
-    corner_normals = None
+    corner_normals = flat_triangles = None
     if smooth.any() or has_custom:
         if hasattr(mesh, "calc_normals_split"):  # Blender < 4.1; later versions keep them current
             mesh.calc_normals_split()
@@ -182,6 +182,7 @@ def mesh_arrays(mesh, requests=(), warn=lambda _t: None):
             n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
             n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
             corner_normals.reshape(nt, 3, 3)[flat] = n[:, None, :]
+            flat_triangles = flat  # true displacement gives them their displaced face normal
         corner_normals = corner_normals.reshape(-1)
 
     corner_uvs = None
@@ -197,7 +198,7 @@ def mesh_arrays(mesh, requests=(), warn=lambda _t: None):
     # Generated coordinates live in the mesh's texture space (automatic: its bounds).
     texspace = dict(texspace_location=tuple(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0))),
                     texspace_size=tuple(getattr(mesh, "texspace_size", (0.0, 0.0, 0.0))))
-    return dict(positions=positions, triangles=triangles, corner_normals=corner_normals,
+    return dict(positions=positions, triangles=triangles, corner_normals=corner_normals, flat_triangles=flat_triangles,
                 corner_uvs=corner_uvs, material_slots=material_slots, attributes=attributes, **texspace)
 
 
@@ -292,6 +293,7 @@ class MeshExporter:
             self.report({'WARNING'}, "Object '%s' has zero scale on an axis: rendered as the flat shape it "
                         "becomes (Cycles 3.4 renders such objects black)" % obj.name)
         self._check_closed(obj, material_ids)
+        self._check_adaptive(obj)
         if random_id is None:
             random_id = object_random_id(obj.name)
         instance = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_instance",
@@ -344,6 +346,15 @@ class MeshExporter:
         if instance is not None:
             self.instance_count += 1
         return instance
+
+    def _check_adaptive(self, obj):
+        """Cycles' experimental adaptive subdivision (dicing by screen size) is not done."""
+        scene = self.depsgraph.scene
+        if (getattr(getattr(obj, "cycles", None), "use_adaptive_subdivision", False)
+                and getattr(getattr(scene, "cycles", None), "feature_set", "") == 'EXPERIMENTAL'):
+            self.report({'WARNING'}, "Object '%s': adaptive subdivision (Cycles' experimental feature) is not "
+                        "supported; the mesh renders as the depsgraph evaluates it (true displacement moves its "
+                        "vertices)" % obj.name)
 
     def _check_closed(self, obj, material_ids):
         """Warns when a mesh carrying a volume material is open: the volume stack enters a medium

@@ -47,8 +47,9 @@ extern "C" {
  * panoramas (lt_camera_desc.fisheye_polynomial); panoramas in the viewport (panorama_viewplane,
  * panorama_frame_aspect); the shadow catcher
  * (lt_instance_desc.shadow_catcher, lt_render_settings.shadow_catcher_approximate,
- * LT_PASS_SHADOW_CATCHER). */
-#define LT_ABI_VERSION 17
+ * LT_PASS_SHADOW_CATCHER); 18: true displacement (lt_scene_set_material_displacement,
+ * lt_displacement_method, lt_mesh_desc.flat_triangles). */
+#define LT_ABI_VERSION 18
 
 enum lt_status {
   LT_OK = 0,
@@ -173,6 +174,18 @@ LT_API int lt_scene_add_material(lt_scene* scene, const lt_shader_program* progr
 /* Material.pass_index, for LT_PASS_MATERIAL_INDEX (kept by lt_scene_set_material). */
 LT_API int lt_scene_set_material_pass_index(lt_scene* scene, int material, int pass_index);
 
+/* True displacement (Cycles' Material > Settings > Displacement: Displacement Only, Displacement
+ * and Bump). `program` gives the Material Output's Displacement through its SetDisplacement
+ * instruction (shading/inputs.h), a world-space offset; at the first lt_scene_commit each mesh's
+ * vertices move by it, evaluated once per vertex with the mesh's first instance (its transform
+ * and material slots) at the vertex's corner of the first triangle (in index order) whose material
+ * displaces (Cycles' mesh_displace.cpp). TRUE then recomputes the smooth normals of the triangles
+ * of its materials; BOTH keeps the undisplaced smooth normals for the surface program's bump.
+ * LT_DISPLACEMENT_BUMP (program NULL) removes it. Before the first commit only. */
+enum lt_displacement_method { LT_DISPLACEMENT_BUMP = 0, LT_DISPLACEMENT_TRUE = 1, LT_DISPLACEMENT_BOTH = 2 };
+LT_API int lt_scene_set_material_displacement(lt_scene* scene, int material, const lt_shader_program* program,
+                                              int method);
+
 /* Cryptomatte (docs/passes.md): MurmurHash3_x86_32 (seed 0) of `length` bytes (a name in UTF-8),
  * the hash the Cryptomatte specification and Cycles give names. The core takes a name's hash and
  * writes the id the specification makes of it (uint32_to_float32). Hash 0 stands for no id. */
@@ -215,6 +228,9 @@ typedef struct lt_mesh_desc {
   const float* motion_positions;
   const float* motion_corner_normals;
   int motion_step_count;
+  /* With corner_normals: one per triangle, nonzero for a flat-shaded triangle (its corner normals
+   * are its face normal), which true displacement gives its displaced face normal; NULL: none. */
+  const uint8_t* flat_triangles;
 } lt_mesh_desc;
 LT_API int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* desc, int* out_id);
 

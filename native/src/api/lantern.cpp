@@ -342,8 +342,27 @@ int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program
     lt::Material m = to_material(scene, program);  // validated before anything changes
     m.set_pass_index(scene->scene.materials[material].pass_index());
     m.set_crypto_id(scene->scene.materials[material].crypto_id());
+    m.keep_displacement_of(scene->scene.materials[material]);
     begin_edit(scene);
     scene->scene.materials[material] = std::move(m);
+  });
+}
+
+int lt_scene_set_material_displacement(lt_scene* scene, int material, const lt_shader_program* program,
+                                       int method) {
+  return guarded([&] {
+    require(scene, "lt_scene_set_material_displacement: NULL argument");
+    scene->scene.require_editable();  // meshes are displaced once, at the first commit
+    require(material >= 0 && material < int(scene->scene.materials.size()),
+            "material " + std::to_string(material) + " does not exist");
+    require(method >= LT_DISPLACEMENT_BUMP && method <= LT_DISPLACEMENT_BOTH,
+            "unknown displacement method " + std::to_string(method));
+    require((method == LT_DISPLACEMENT_BUMP) == (program == nullptr),
+            "a displacement program goes with the methods TRUE and BOTH, and only with them");
+    std::shared_ptr<const lt::Program> p;
+    if (program) p = std::make_shared<const lt::Program>(to_program(scene, program));
+    scene->scene.materials[material].set_displacement(
+        std::move(p), method == LT_DISPLACEMENT_TRUE ? lt::DisplacementMethod::True : lt::DisplacementMethod::Both);
   });
 }
 
@@ -373,6 +392,10 @@ int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* d, int* out_id) {
       for (size_t c = 0; c < corners; ++c)
         m.corner_normals[c] =
             lt::Vec3(d->corner_normals[3 * c], d->corner_normals[3 * c + 1], d->corner_normals[3 * c + 2]);
+    }
+    if (d->flat_triangles && !m.corner_normals.empty()) {
+      m.flat.assign(d->flat_triangles, d->flat_triangles + d->triangle_count);
+      for (uint8_t& f : m.flat) f = f != 0;
     }
     if (d->corner_uvs && corners) {
       m.corner_uvs.resize(corners);

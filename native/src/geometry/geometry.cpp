@@ -113,6 +113,7 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
           std::copy_n(&a.values[(3 * t + c) * a.components], a.components, &a.values[(3 * kept + c) * a.components]);
       }
       if (!mesh.slots.empty()) mesh.slots[kept] = mesh.slots[t];
+      if (!mesh.flat.empty()) mesh.flat[kept] = mesh.flat[t];
     }
     ++kept;
   }
@@ -129,6 +130,7 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
     if (!mesh.corner_uvs.empty()) mesh.corner_uvs.resize(3 * kept);
     for (MeshAttribute& a : mesh.attributes) a.values.resize(3 * kept * a.components);
     if (!mesh.slots.empty()) mesh.slots.resize(kept);
+    if (!mesh.flat.empty()) mesh.flat.resize(kept);
   }
   // Non-finite corner normals would poison shading: fall back to flat shading for the mesh.
   for (const Vec3& cn : mesh.corner_normals)
@@ -137,6 +139,7 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
       mesh.corner_normals.clear();
       break;
     }
+  if (mesh.corner_normals.empty()) mesh.flat.clear();
   for (Vec3& cn : mesh.corner_normals) cn = normalize(cn);
   if (mesh.corner_normals.empty()) mesh.motion_corner_normals.clear();
   for (Vec3& cn : mesh.motion_corner_normals)
@@ -351,6 +354,20 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
   if (vis != 31u || inst.shadow_catcher) partial_visibility_ = true;
   has_shadow_catcher_ = has_shadow_catcher_ || inst.shadow_catcher;
   return id;
+}
+
+void Geometry::set_displaced(int id, std::vector<Vec3> positions, std::vector<Vec3> motion_positions,
+                             std::vector<Vec3> corner_normals, std::vector<Vec3> motion_corner_normals) {
+  if (committed_) throw StateError("the scene is committed; meshes can no longer be displaced");
+  Mesh& mesh = meshes_.at(size_t(id));
+  mesh.undisplaced = std::move(mesh.positions);
+  mesh.positions = std::move(positions);
+  mesh.motion_positions = std::move(motion_positions);
+  mesh.corner_normals = std::move(corner_normals);
+  mesh.motion_corner_normals = std::move(motion_corner_normals);
+  if (mesh.rtc) rtcReleaseScene(mesh.rtc);
+  mesh.rtc = mesh.motion_steps > 1 ? triangle_scene(mesh.motion_positions, mesh.indices, mesh.motion_steps)
+                                   : triangle_scene(mesh.positions, mesh.indices);
 }
 
 void Geometry::set_instance_transform(int instance, const Transform& xf) {
@@ -641,7 +658,7 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
   sp.p = pose.xf.point(sp.po);
   sp.time = hit.time;
   sp.bary = {b1, b2};
-  const Vec3 g = (sp.po - m.texspace_location) / (2.0f * m.texspace_size);
+  const Vec3 g = (undisplaced_point(m, t, b1, b2, sp.po) - m.texspace_location) / (2.0f * m.texspace_size);
   sp.generated = Vec3(g.x + 0.5f, g.y + 0.5f, g.z + 0.5f);
   sp.ng = normalize(pose.normal_to_world(cross(p1 - p0, p2 - p0)));
   if (!m.corner_normals.empty()) {

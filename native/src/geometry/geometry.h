@@ -53,6 +53,12 @@ struct Mesh {
   std::vector<Vec3> corner_normals;  // 3 per triangle, or empty (flat)
   std::vector<Vec2> corner_uvs;      // 3 per triangle, or empty
   std::vector<int> slots;            // per triangle, or empty
+  // Per triangle with corner_normals: 1 for a flat-shaded one (its corners hold its face normal);
+  // empty: none. True displacement recomputes them (shading/displacement.h).
+  std::vector<uint8_t> flat;
+  // True displacement (Geometry::set_displaced): the positions before it, which Generated reads
+  // (Cycles' generated attribute is the undisplaced mesh's); empty otherwise.
+  std::vector<Vec3> undisplaced;
   // Texture space (Blender's texspace_location and texspace_size): Generated = (p - loc) / (2 size) + 0.5.
   Vec3 texspace_location{0.0f}, texspace_size{1.0f};
   std::vector<MeshAttribute> attributes;
@@ -76,6 +82,14 @@ struct Mesh {
   // components 0, alpha 1); false (out zero) when the mesh lacks it.
   bool interpolate(int id, int t, float b1, float b2, float out[4], int* components = nullptr) const;
 };
+
+// The object-space point at barycentrics (b1, b2) of triangle t before true displacement (what
+// Generated reads); `displaced` (the point now) when the mesh was not displaced.
+inline Vec3 undisplaced_point(const Mesh& m, int t, float b1, float b2, const Vec3& displaced) {
+  if (m.undisplaced.empty()) return displaced;
+  const uint32_t* i = &m.indices[3 * size_t(t)];
+  return m.undisplaced[i[0]] * (1 - b1 - b2) + m.undisplaced[i[1]] * b1 + m.undisplaced[i[2]] * b2;
+}
 
 // Values an object carries for the Object Info and Attribute (object type) nodes.
 struct InstanceAttribute {
@@ -148,6 +162,10 @@ class Geometry {
   // Curves with a non-finite key or fewer than 2 keys, and non-finite or zero-radius points, are
   // dropped and counted in warnings; negative or non-finite radii become 0.
   int add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::vector<std::string>& warnings);
+  // True displacement, before the first commit: the mesh's new positions (and motion steps') and
+  // corner normals (shading/displacement.h); it keeps its old positions in Mesh::undisplaced.
+  void set_displaced(int mesh, std::vector<Vec3> positions, std::vector<Vec3> motion_positions,
+                     std::vector<Vec3> corner_normals, std::vector<Vec3> motion_corner_normals);
   // Moves an instance (also after commit): the next commit rebuilds only the top-level BVH over
   // the meshes' existing BVHs.
   void set_instance_transform(int instance, const Transform& xf);

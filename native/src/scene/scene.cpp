@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "scene/lights/triangle.h"
+#include "shading/displacement.h"
 
 namespace lt {
 
@@ -13,6 +14,7 @@ void Scene::require_editable() const {
 
 void Scene::commit() {
   if (committed_ && !edited_) return;
+  if (!committed_) displace_meshes(geometry, materials, images);  // before the meshes' BVHs
   geometry.commit();
   has_transparent_shadows_ = false;
   for (size_t m = 0; m < materials.size(); ++m)

@@ -543,6 +543,8 @@ void point_info(const Instr& in, Machine& m) {
 const OpSignature* inputs_family_signature(uint32_t op) {
   if (op >= kFamilyCurveInputsBegin && op < kFamilyCurveInputsEnd)
     return op == kOpHairInfo ? &kCurveSignatures[0] : (op == kOpPointInfo ? &kCurveSignatures[1] : nullptr);
+  static const OpSignature kSetDisplacement = {"v", "", "", false};
+  if (op == kOpSetDisplacement) return &kSetDisplacement;
   if (op < kOpTexCoord || op > kOpAmbientOcclusion) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
@@ -671,6 +673,9 @@ void exec_inputs_family(const Instr& in, Machine& m) {
       break;
     case kOpVectorDisplacement:
       vector_displacement(in, m);
+      break;
+    case kOpSetDisplacement:
+      if (m.displacement) *m.displacement += m.v(in.in[0]);
       break;
     case kOpLightFalloff: {
       float strength = m.f(in.in[0]);

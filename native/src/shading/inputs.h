@@ -87,6 +87,10 @@ enum InputOp : uint32_t {
   // color v (times ao), ao f (the fraction of `samples` cosine-distributed rays within distance
   // that reach nothing); params: samples, flags (1 only local, 2 inside).
   kOpAmbientOcclusion,
+  // The Material Output's Displacement in a true-displacement program (Cycles'
+  // svm_node_set_displacement: sd->P += dP): in: the world-space offset v, added to
+  // Machine::displacement (Program::displacement; elsewhere nothing).
+  kOpSetDisplacement = 58,
 };
 
 // Curve and point inputs: numbers 100-107 (program.cpp hands them to this family).

@@ -90,7 +90,10 @@ void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float f
     o.bary = det != 0 ? Vec2{(a22 * r1 - a12 * r2) / det, (a11 * r2 - a12 * r1) / det} : Vec2{0, 0};
     // Object space: the same move through the inverse transform, i.e. barycentrics in object space.
     o.object_P = (q[1] - q[0]) * o.bary.x + (q[2] - q[0]) * o.bary.y;
-    o.generated = o.object_P / size;
+    // Generated: the undisplaced triangle's (Mesh::undisplaced).
+    o.generated = (undisplaced_point(mesh, sp.primitive, o.bary.x, o.bary.y, q[0] + o.object_P) -
+                   undisplaced_point(mesh, sp.primitive, 0, 0, q[0])) /
+                  size;
     if (!mesh.corner_uvs.empty()) {
       const Vec2* uv = &mesh.corner_uvs[3 * size_t(sp.primitive)];
       o.uv = {(uv[1].x - uv[0].x) * o.bary.x + (uv[2].x - uv[0].x) * o.bary.y,

@@ -13,6 +13,11 @@
 
 namespace lt {
 
+// Cycles' displacement methods beyond Bump (Material > Settings > Displacement): the mesh's
+// vertices move by the Material Output's Displacement at scene commit (shading/displacement.h);
+// True recomputes the smooth normals, Both keeps them and the surface program bumps them.
+enum class DisplacementMethod : uint8_t { None, True, Both };
+
 class Material {
  public:
   explicit Material(Program program);
@@ -43,9 +48,22 @@ class Material {
   // Cryptomatte id of the material's name (cryptomatte_id; 0: none).
   float crypto_id() const { return crypto_id_; }
   void set_crypto_id(float v) { crypto_id_ = v; }
+  // True displacement: the program giving the Material Output's Displacement (SetDisplacement).
+  void set_displacement(std::shared_ptr<const Program> program, DisplacementMethod method) {
+    displacement_ = std::move(program);
+    displacement_method_ = displacement_ ? method : DisplacementMethod::None;
+  }
+  const Program* displacement() const { return displacement_.get(); }
+  void keep_displacement_of(const Material& other) {
+    displacement_ = other.displacement_;
+    displacement_method_ = other.displacement_method_;
+  }
+  DisplacementMethod displacement_method() const { return displacement_method_; }
 
  private:
   Program program_;
+  std::shared_ptr<const Program> displacement_;
+  DisplacementMethod displacement_method_ = DisplacementMethod::None;
   float pass_index_ = 0, crypto_id_ = 0;
   bool emissive_ = false;
   float emission_estimate_ = 0;

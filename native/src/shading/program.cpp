@@ -157,6 +157,17 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
 
 Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
                       ShadingFrame* frame) const {
+  return execute_all(ctx, images, bsdf, frame, nullptr);
+}
+
+Vec3 Program::displacement(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images) const {
+  Vec3 d(0.0f);
+  execute_all(ctx, images, nullptr, nullptr, &d);
+  return d;
+}
+
+Spectrum Program::execute_all(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
+                              ShadingFrame* frame, Vec3* displacement) const {
   float regs[kMaxRegisters];  // left uninitialised: validation guarantees every read follows a write
   Machine m;
   m.r = regs;
@@ -164,6 +175,7 @@ Spectrum Program::run(const ShadingContext& ctx, const std::vector<std::unique_p
   m.ctx = &ctx;
   m.images = &images;
   m.bsdf = bsdf;
+  m.displacement = displacement;
   ShadingContext moved[2];
   if (uses_bump_) {
     for (int k = 0; k < 2; ++k) {

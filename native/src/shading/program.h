@@ -103,6 +103,8 @@ struct Machine {
   // (bumped) it updates too; null while folding constants.
   std::optional<ShadingContext>* displaced = nullptr;
   ShadingContext* moved = nullptr;
+  // Where SetDisplacement adds the Material Output's Displacement (Program::displacement only).
+  Vec3* displacement = nullptr;
   const ShadingContext& at(uint32_t bump) const {
     return bump == 0 || bump > 2 || !bumped[bump - 1] ? *ctx : *bumped[bump - 1];
   }
@@ -187,6 +189,8 @@ class Program {
   // frame (may be null): the normal set by a closure's Normal input, the anisotropic tangent.
   Spectrum run(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
                ShadingFrame* frame) const;
+  // Runs a true-displacement program (its SetDisplacement): the world-space offset at ctx.
+  Vec3 displacement(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images) const;
   size_t instruction_count() const { return count_; }
   // Whether the program may emit, and a rough scalar for how bright (for picking lights by power):
   // exact for constant emission, 1 where a texture or a node decides it.
@@ -208,6 +212,8 @@ class Program {
   std::vector<uint32_t> environment_images() const;
 
  private:
+  Spectrum execute_all(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,
+                       ShadingFrame* frame, Vec3* displacement) const;
   std::vector<uint32_t> code_;
   std::vector<float> constants_;
   int registers_ = 0;

@@ -355,21 +355,25 @@ class Compiler:
         self.emit(op, inputs, params=params)
 
     def compile_surface(self, output_node, displacement_method='BUMP'):
-        """The program for a Material (or World) Output's Surface input, after its Displacement as bump."""
+        """The program for a Material (or World) Output's Surface input, after its Displacement as
+        bump (Cycles bumps for the methods Bump and Both, not for Displacement Only)."""
         disp = output_node.inputs.get("Displacement")
-        if disp is not None and self.linked(disp):
-            self.displacement_bump(disp, displacement_method)
+        if disp is not None and self.linked(disp) and displacement_method != 'DISPLACEMENT':
+            self.displacement_bump(disp)
         self.shader(output_node.inputs["Surface"], self.const((1.0, 1.0, 1.0)))
         return self.program()
 
-    def displacement_bump(self, socket, method):
+    def compile_displacement(self, output_node):
+        """The true-displacement program (Cycles' SHADER_TYPE_DISPLACEMENT): the Material Output's
+        Displacement, a world-space offset, into SetDisplacement (the core moves vertices by it)."""
+        self.emit(ops.SET_DISPLACEMENT, [self.vector(output_node.inputs["Displacement"])])
+        return self.program()
+
+    def displacement_bump(self, socket):
         """Cycles 3.4's bump from displacement (scene/shader_graph.cpp bump_from_displacement): the
         displacement's component along the normal (its dot with Geometry's Normal) at the point and
         moved by each differential, into a Bump of Distance 1 and Strength 1 whose normal becomes
         the shading point's (SetNormal) for everything the surface compiles after it."""
-        if method != 'BUMP':
-            self.warn("displacement method '%s': true displacement is not supported; the "
-                      "displacement is rendered as bump" % method)
         from .converters import VECTOR_MATH_OPS
         normal = self.geometry()["Normal"]
 
