@@ -1252,6 +1252,68 @@ def build_displaced(scene):
     add_camera(scene, (0, -4.0, 1.8), (0, 0.2, 0.4), lens=40.0)
 
 
+def true_displacement_material(name, color, method, vector=False, scale=0.3, noise_scale=4.0, coords=None):
+    """Noise Texture -> Displacement (its Fac as Height, Midlevel 0.5) or, with `vector`, its Color
+    -> Vector Displacement (object space, Midlevel 0.5) -> the Material Output's Displacement
+    beside a Principled BSDF; Material > Settings > Displacement `method` ('DISPLACEMENT' or
+    'BOTH'). coords: a Texture Coordinate output for the noise (None: its default, Generated)."""
+    mat, nt, out = _material(name)
+    mat.cycles.displacement_method = method
+    noise = nt.nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = noise_scale
+    noise.inputs["Detail"].default_value = 2.0
+    if coords is not None:
+        tc = nt.nodes.new("ShaderNodeTexCoord")
+        nt.links.new(tc.outputs[coords], noise.inputs["Vector"])
+    if vector:
+        disp = nt.nodes.new("ShaderNodeVectorDisplacement")
+        disp.space = "OBJECT"
+        nt.links.new(noise.outputs["Color"], disp.inputs["Vector"])
+    else:
+        disp = nt.nodes.new("ShaderNodeDisplacement")
+        nt.links.new(noise.outputs["Fac"], disp.inputs["Height"])
+    disp.inputs["Midlevel"].default_value = 0.5
+    disp.inputs["Scale"].default_value = scale
+    bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Base Color"].default_value = (*color, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.5
+    nt.links.new(disp.outputs["Displacement"], out.inputs["Displacement"])
+    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def build_true_displaced(scene):
+    """Cycles 3.4's true displacement (mesh_displace.cpp): a flat-shaded plane made a grid by a
+    Simple Subdivision Surface modifier, Displacement Only from a Noise Texture's Fac; a smooth
+    sphere (a Catmull-Clark level on top) with Displacement and Bump from its Color through
+    Vector Displacement (object space); a smooth pebble with Displacement Only (its smooth normals
+    recomputed); under a low sun and a sky: silhouettes, cast shadows, recomputed and bumped
+    normals."""
+    set_world(scene, (0.2, 0.25, 0.35), 1.0)
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 4.0))
+    sub = ground.modifiers.new("Grid", "SUBSURF")
+    sub.subdivision_type = "SIMPLE"
+    sub.levels = sub.render_levels = 5
+    assign(ground, true_displacement_material("TrueDisplacedGround", (0.6, 0.55, 0.5), "DISPLACEMENT", scale=0.4))
+    sphere = add_object(scene, "Sphere", mesh_sphere("Sphere", 0.5, 32, 16), (0.2, 0.0, 0.7), (20, 10, 30))
+    sub = sphere.modifiers.new("Smooth", "SUBSURF")
+    sub.levels = sub.render_levels = 1
+    assign(sphere, true_displacement_material("TrueDisplacedSphere", (0.3, 0.6, 0.8), "BOTH", vector=True,
+                                              scale=0.25, noise_scale=3.0, coords="Object"))
+    pebble = add_object(scene, "Pebble", mesh_sphere("Pebble", 0.3, 24, 12), (-0.9, 0.3, 0.35))
+    sub = pebble.modifiers.new("Smooth", "SUBSURF")
+    sub.levels = sub.render_levels = 1
+    assign(pebble, true_displacement_material("TrueDisplacedPebble", (0.8, 0.5, 0.3), "DISPLACEMENT", scale=0.3,
+                                              noise_scale=2.5))
+    # Cycles' shadow terminator geometry offset (default 0.1) moves shadow rays off smooth
+    # triangles whose normals lean away from their faces, as Displacement and Bump's undisplaced
+    # normals do on displaced faces; Lantern does not (README): off here.
+    for obj in (ground, sphere, pebble):
+        obj.cycles.shadow_terminator_geometry_offset = 0.0
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(60, 0, 40), angle=math.radians(1.0))
+    add_camera(scene, (0, -3.6, 2.2), (0, 0.2, 0.4), lens=40.0)
+
+
 def build_instanced(scene):
     set_world(scene, (0.05, 0.05, 0.05), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
@@ -1991,6 +2053,7 @@ SCENES = {
     "normal_mapped": (build_normal_mapped, (96, 96), 128),
     "tilted_metal": (build_tilted_metal, (96, 48), 128),
     "displaced": (build_displaced, (96, 96), 128),
+    "true_displaced": (build_true_displaced, (96, 96), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),

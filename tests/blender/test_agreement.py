@@ -176,6 +176,15 @@ def test_displaced_scene_agrees_with_cycles(integrator, scene_factory, outdir):
     assert report == "", report
 
 
+def test_true_displacement_agrees_with_cycles(scene_factory, outdir):
+    """Cycles 3.4's true displacement (scenes: true_displaced): Displacement Only of a subdivided
+    flat plane by a Noise Texture through a Displacement node, Displacement and Bump of a smooth
+    subdivided sphere through Vector Displacement; path traced, per tile and in the image mean."""
+    both = lantern_and_cycles(scene_factory, "true_displaced", "PATH")
+    report, _ = ru.agreement_report("true_displaced", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
 @pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
 def test_every_new_shader_node_agrees_with_cycles_when_lit(integrator, scene_factory, outdir):
     """Issue 13: "agreement with Cycles in lit scenes for PATH and BIDIRECTIONAL" of each BSDF

@@ -217,25 +217,87 @@ void object_info(const Instr& in, Machine& m) {
   m.set(in.out[4], inst->random);
 }
 
+// The inverse of an instance's linear part applied to v (rows of the inverse: the columns' cross
+// products over the determinant); v itself when singular.
+Vec3 inverse_linear(const Transform& t, const Vec3& v) {
+  const Vec3 c0 = t.column(0), c1 = t.column(1), c2 = t.column(2);
+  const float det = t.determinant();
+  if (!(std::abs(det) > 0)) return v;
+  return Vec3(dot(cross(c1, c2), v), dot(cross(c2, c0), v), dot(cross(c0, c1), v)) / det;
+}
+
 // Cycles 3.4's svm_node_set_bump (Mikkelsen's bump mapping from finite differences): the heights at
 // the point and moved by the footprint's two differentials in the surface, scaled by Distance.
 void bump(const Instr& in, Machine& m) {
   const ShadingContext& c = *m.ctx;
-  const Vec3 n_in = normal_or_default(m, in.in[5]);
+  Vec3 n_in = normal_or_default(m, in.in[5]);
   Vec3 dx, dy;
   orthonormals(c.Ng, &dx, &dy);
   dx *= c.footprint;
   dy *= c.footprint;
+  const bool object_space = (in.param[0] & 2) && c.instance;
+  if (object_space) {
+    n_in = normalized_or_zero(c.pose.normal_to_object(n_in));
+    dx = inverse_linear(c.pose.xf, dx);
+    dy = inverse_linear(c.pose.xf, dy);
+  }
   const Vec3 rx = cross(dy, n_in), ry = cross(n_in, dx);
   const float hc = m.f(in.in[2]), hx = m.f(in.in[3]), hy = m.f(in.in[4]);
   const float det = dot(dx, rx);
   const Vec3 surfgrad = (hx - hc) * rx + (hy - hc) * ry;
-  const float scale = in.param[0] ? -m.f(in.in[1]) : m.f(in.in[1]);
+  const float scale = (in.param[0] & 1) ? -m.f(in.in[1]) : m.f(in.in[1]);
   const float strength = std::max(m.f(in.in[0]), 0.0f);
   Vec3 out = std::abs(det) * n_in - scale * (det < 0 ? -1.0f : (det > 0 ? 1.0f : 0.0f)) * surfgrad;
   const float len = length(out);
   out = len > 0 && std::isfinite(len) ? normalize(strength * (out / len) + (1 - strength) * n_in) : n_in;
+  if (object_space) out = normalized_or_zero(c.pose.normal_to_world(out));
   m.set(in.out[0], ensure_valid_reflection(c.Ng, c.I, out));
+}
+
+// Cycles' svm_node_enter_bump_eval: P at the undisplaced mesh's point (its position attribute
+// ATTR_STD_POSITION_UNDISPLACED), dP the compact footprint of that attribute's differentials
+// (the same barycentric moves over the undisplaced triangle); the moved copies follow.
+void bump_eval(const Instr& in, Machine& m) {
+  if (!m.undisplaced) return;
+  if (in.param[0] == 1) {
+    if (m.entered[0]) {
+      m.ctx = m.entered[0];
+      for (int k = 0; k < 2; ++k) m.bumped[k] = m.entered[k + 1];
+      m.entered[0] = nullptr;
+    }
+    return;
+  }
+  const ShadingContext& c = *m.ctx;
+  if (m.entered[0] || !c.mesh || c.mesh->undisplaced.empty() || c.primitive < 0 || !c.mesh->is_triangles()) return;
+  const Mesh& mesh = *c.mesh;
+  const uint32_t* tri = &mesh.indices[3 * size_t(c.primitive)];
+  const Vec3 u0 = mesh.undisplaced[tri[0]], e1 = mesh.undisplaced[tri[1]] - u0, e2 = mesh.undisplaced[tri[2]] - u0;
+  ShadingContext* u = m.undisplaced;
+  u[0] = c;
+  u[0].object_P = u0 + e1 * c.bary.x + e2 * c.bary.y;
+  u[0].P = c.pose.xf.point(u[0].object_P);
+  float footprint = 0;
+  for (int k = 0; k < 2; ++k) {
+    const Vec2& b = c.offset[k].bary;
+    footprint += 0.5f * length(c.pose.xf.vector(e1 * b.x + e2 * b.y));
+  }
+  const float ratio = c.footprint > 0 ? footprint / c.footprint : 0.0f;
+  u[0].footprint = footprint;
+  for (int k = 0; k < 2; ++k) {
+    u[0].offset[k].P = c.offset[k].P * ratio;  // along the displaced surface's frame, as Cycles'
+    u[0].offset[k].object_P = c.offset[k].object_P * ratio;
+  }
+  m.entered[0] = m.ctx;
+  m.ctx = &u[0];
+  for (int k = 0; k < 2; ++k) {
+    m.entered[k + 1] = m.bumped[k];
+    if (!m.bumped[k]) continue;
+    u[k + 1] = *m.bumped[k];
+    u[k + 1].P = u[0].P + u[0].offset[k].P;
+    u[k + 1].object_P = u[0].object_P + u[0].offset[k].object_P;
+    u[k + 1].footprint = footprint;
+    m.bumped[k] = &u[k + 1];
+  }
 }
 
 // Cycles' svm_node_tex_image_box: the object-space normal's components pick (and near the edges of
@@ -307,15 +369,6 @@ void image_sphere_tube(const Instr& in, Machine& m) {
   }
   m.set(in.out[0], image.lookup(uv, in.param[1] != 0));
   m.set(in.out[1], image.lookup_alpha(uv));
-}
-
-// The inverse of an instance's linear part applied to v (rows of the inverse: the columns' cross
-// products over the determinant); v itself when singular.
-Vec3 inverse_linear(const Transform& t, const Vec3& v) {
-  const Vec3 c0 = t.column(0), c1 = t.column(1), c2 = t.column(2);
-  const float det = t.determinant();
-  if (!(std::abs(det) > 0)) return v;
-  return Vec3(dot(cross(c1, c2), v), dot(cross(c2, c0), v), dot(cross(c0, c1), v)) / det;
 }
 
 // Cycles' svm_node_vector_transform (normals are transformed as directions, then normalised).
@@ -543,8 +596,9 @@ void point_info(const Instr& in, Machine& m) {
 const OpSignature* inputs_family_signature(uint32_t op) {
   if (op >= kFamilyCurveInputsBegin && op < kFamilyCurveInputsEnd)
     return op == kOpHairInfo ? &kCurveSignatures[0] : (op == kOpPointInfo ? &kCurveSignatures[1] : nullptr);
-  static const OpSignature kSetDisplacement = {"v", "", "", false};
+  static const OpSignature kSetDisplacement = {"v", "", "", false}, kBumpEval = {"", "", "i", false};
   if (op == kOpSetDisplacement) return &kSetDisplacement;
+  if (op == kOpBumpEval) return &kBumpEval;
   if (op < kOpTexCoord || op > kOpAmbientOcclusion) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
@@ -676,6 +730,9 @@ void exec_inputs_family(const Instr& in, Machine& m) {
       break;
     case kOpSetDisplacement:
       if (m.displacement) *m.displacement += m.v(in.in[0]);
+      break;
+    case kOpBumpEval:
+      bump_eval(in, m);
       break;
     case kOpLightFalloff: {
       float strength = m.f(in.in[0]);

@@ -44,7 +44,8 @@ enum InputOp : uint32_t {
   // f, random f (Material Index is a constant of the material).
   kOpObjectInfo,
   // Bump (Cycles' svm_node_set_bump): in: strength f, distance f, height f, height at the dx
-  // offset f, at the dy offset f, normal v; out: normal v; param: invert. The add-on compiles the
+  // offset f, at the dy offset f, normal v; out: normal v; param: flags (1 invert, 2 in object
+  // space: Cycles' use_object_space, the bump of the method Displacement and Bump). The add-on compiles the
   // Height input three times, the copies' position-reading ops with bump params 1 and 2.
   kOpBump,
   // Camera Data (Cycles' svm_node_camera): out: view vector v, view Z depth f, view distance f;
@@ -91,6 +92,10 @@ enum InputOp : uint32_t {
   // svm_node_set_displacement: sd->P += dP): in: the world-space offset v, added to
   // Machine::displacement (Program::displacement; elsewhere nothing).
   kOpSetDisplacement = 58,
+  // Cycles' svm_node_enter_bump_eval / leave_bump_eval (the method Displacement and Bump): param
+  // 0 enter: the point (and its bump-moved copies) as if undisplaced, at the displaced mesh's
+  // Mesh::undisplaced position with the footprint of its differentials; 1 leave: back.
+  kOpBumpEval = 59,
 };
 
 // Curve and point inputs: numbers 100-107 (program.cpp hands them to this family).

@@ -1,5 +1,6 @@
 #include "shading/program.h"
 
+#include <array>
 #include <cstring>
 #include <string>
 
@@ -146,6 +147,7 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
       uses_wireframe_ |= in.op == kOpWireframe;
       traces_rays_ |= in.op == kOpAmbientOcclusion;
       sets_normal_ |= in.op == kOpSetNormal;
+      bump_eval_ |= in.op == kOpBumpEval;
     }
     pos += words_of(in);
     ++index;
@@ -192,6 +194,8 @@ Spectrum Program::execute_all(const ShadingContext& ctx, const std::vector<std::
   }
   std::optional<ShadingContext> displaced;  // constructed by a SetNormal only
   if (sets_normal_) m.displaced = &displaced;
+  std::optional<std::array<ShadingContext, 3>> undisplaced;
+  if (bump_eval_) m.undisplaced = undisplaced.emplace().data();
   m.emitted = Spectrum(0.0f);
   if (bsdf) bsdf->clear();
   const uint32_t* w = code_.data();

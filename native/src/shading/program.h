@@ -105,6 +105,10 @@ struct Machine {
   ShadingContext* moved = nullptr;
   // Where SetDisplacement adds the Material Output's Displacement (Program::displacement only).
   Vec3* displacement = nullptr;
+  // BumpEval's room for the undisplaced point and its moved copies (3), and the contexts it
+  // replaced (ctx, bumped) until it leaves; null while folding constants.
+  ShadingContext* undisplaced = nullptr;
+  const ShadingContext* entered[3] = {nullptr, nullptr, nullptr};
   const ShadingContext& at(uint32_t bump) const {
     return bump == 0 || bump > 2 || !bumped[bump - 1] ? *ctx : *bumped[bump - 1];
   }
@@ -219,7 +223,7 @@ class Program {
   int registers_ = 0;
   size_t count_ = 0;
   bool uses_bump_ = false, uses_wireframe_ = false, traces_rays_ = false;
-  bool sets_normal_ = false;
+  bool sets_normal_ = false, bump_eval_ = false;
 };
 
 }  // namespace lt

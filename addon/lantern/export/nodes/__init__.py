@@ -359,7 +359,7 @@ class Compiler:
         bump (Cycles bumps for the methods Bump and Both, not for Displacement Only)."""
         disp = output_node.inputs.get("Displacement")
         if disp is not None and self.linked(disp) and displacement_method != 'DISPLACEMENT':
-            self.displacement_bump(disp)
+            self.displacement_bump(disp, undisplaced=displacement_method == 'BOTH')
         self.shader(output_node.inputs["Surface"], self.const((1.0, 1.0, 1.0)))
         return self.program()
 
@@ -369,12 +369,16 @@ class Compiler:
         self.emit(ops.SET_DISPLACEMENT, [self.vector(output_node.inputs["Displacement"])])
         return self.program()
 
-    def displacement_bump(self, socket):
+    def displacement_bump(self, socket, undisplaced=False):
         """Cycles 3.4's bump from displacement (scene/shader_graph.cpp bump_from_displacement): the
         displacement's component along the normal (its dot with Geometry's Normal) at the point and
         moved by each differential, into a Bump of Distance 1 and Strength 1 whose normal becomes
-        the shading point's (SetNormal) for everything the surface compiles after it."""
+        the shading point's (SetNormal) for everything the surface compiles after it. undisplaced
+        (the method Displacement and Bump, on a mesh whose vertices moved): Cycles evaluates it
+        at the undisplaced point (svm_node_enter_bump_eval) and bumps in object space."""
         from .converters import VECTOR_MATH_OPS
+        if undisplaced:
+            self.emit(ops.BUMP_EVAL, [], params=[0])
         normal = self.geometry()["Normal"]
 
         def height(s):
@@ -385,7 +389,9 @@ class Compiler:
         heights = self.heights(socket, height)
         one = self.const(1.0)
         bumped = self.emit(ops.BUMP, [one, one] + heights + [self.const((0.0, 0.0, 0.0))], [("Normal", 3)],
-                           params=[0])
+                           params=[2 if undisplaced else 0])
+        if undisplaced:
+            self.emit(ops.BUMP_EVAL, [], params=[1])
         self.emit(ops.SET_NORMAL, [bumped["Normal"]])
         # Nodes the surface shares with the displacement see the new normal: compile them anew
         # (Cycles copies the displacement's nodes for its bump).

@@ -49,6 +49,7 @@ ENVIRONMENT = 52
 WIREFRAME = 53
 AMBIENT_OCCLUSION = 54
 SET_DISPLACEMENT = 58
+BUMP_EVAL = 59
 
 # curve and point inputs (inputs.h, numbers 100-107)
 HAIR_INFO = 100
