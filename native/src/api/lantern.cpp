@@ -348,8 +348,7 @@ int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program
   });
 }
 
-int lt_scene_set_material_displacement(lt_scene* scene, int material, const lt_shader_program* program,
-                                       int method) {
+int lt_scene_set_material_displacement(lt_scene* scene, int material, const lt_shader_program* program, int method) {
   return guarded([&] {
     require(scene, "lt_scene_set_material_displacement: NULL argument");
     scene->scene.require_editable();  // meshes are displaced once, at the first commit

@@ -31,7 +31,8 @@ std::vector<Vec3> vertex_normals(const Mesh& m) {
     corners_of(m, m.positions, t, q);
     const Vec3 fn = normalized_or(cross(q[1] - q[0], q[2] - q[0]), Vec3(0.0f));
     for (int c = 0; c < 3; ++c) {
-      const Vec3 a = normalized_or(q[(c + 1) % 3] - q[c], Vec3(0.0f)), b = normalized_or(q[(c + 2) % 3] - q[c], Vec3(0.0f));
+      const Vec3 a = normalized_or(q[(c + 1) % 3] - q[c], Vec3(0.0f)),
+                 b = normalized_or(q[(c + 2) % 3] - q[c], Vec3(0.0f));
       n[m.indices[3 * t + size_t(c)]] += fn * std::acos(clamp(dot(a, b), -1.0f, 1.0f));
     }
   }
@@ -166,7 +167,8 @@ void displace_meshes(Geometry& geometry, const std::vector<Material>& materials,
     std::vector<Vec3> motion_normals;
     if (!mesh.motion_corner_normals.empty()) {
       for (int s = 0; s < mesh.motion_steps; ++s) {
-        const std::vector<Vec3> p(motion_positions.begin() + long(s * nv), motion_positions.begin() + long((s + 1) * nv));
+        const std::vector<Vec3> p(motion_positions.begin() + long(s * nv),
+                                  motion_positions.begin() + long((s + 1) * nv));
         const std::vector<Vec3> cn(mesh.motion_corner_normals.begin() + long(3 * s * nt),
                                    mesh.motion_corner_normals.begin() + long(3 * (s + 1) * nt));
         const std::vector<Vec3> n = displaced_corner_normals(mesh, p, cn, true_triangles);
