@@ -210,3 +210,32 @@ def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
     assert any("ShaderNodeBevel" in line for line in missing), out
     assert any("ShaderNodeSubsurfaceScattering" in line for line in missing), out
     assert len(missing) == 2, out
+
+
+def test_true_displacement_compiles_a_vertex_program_and_needs_a_new_scene_when_changed():
+    """Displacement Only and Displacement and Bump: a displacement program (ending in
+    SetDisplacement) beside the surface, without the old 'not supported' warning; the surface
+    bumps for Both (at the undisplaced point: BumpEval) and not for Displacement Only; a viewport
+    edit of the displacement asks for a new scene (vertices move at the first commit only)."""
+    from types import SimpleNamespace
+
+    from lantern.export.material import ImageExporter, MaterialExporter
+
+    def ops(code):
+        return [op for op, _, _ in _instructions(SimpleNamespace(code=list(code)))]
+    for method, bumps in (("DISPLACEMENT", False), ("BOTH", True)):
+        mat = bs.true_displacement_material("TrueDisp" + method, (0.5, 0.5, 0.5), method)
+        warnings = []
+        scene = core.Scene()
+        materials = MaterialExporter(scene, lambda _k, t: warnings.append(t), ImageExporter(scene, print))
+        assert materials.export(mat) >= 0
+        assert not warnings, warnings
+        program, method_id = materials._displaced
+        assert method_id == (core.DISPLACEMENT_TRUE if method == "DISPLACEMENT" else core.DISPLACEMENT_BOTH)
+        assert ops(program[0])[-1] == opcodes.SET_DISPLACEMENT
+        surface = ops(materials._translate(mat)[0][0])
+        assert (opcodes.BUMP_EVAL in surface) == bumps and (opcodes.SET_NORMAL in surface) == bumps
+        assert materials.update(mat)  # unchanged: an edit the committed scene takes
+        mat.node_tree.nodes["Displacement"].inputs["Scale"].default_value = 0.7
+        assert not materials.update(mat)
+        scene.close()
