@@ -12,6 +12,7 @@
 
 #include "program_builder.h"
 #include "scene/scene.h"
+#include "scene_builders.h"
 #include "shading/displacement.h"
 
 namespace lt {
@@ -201,3 +202,27 @@ TEST(Displacement, FlatTrianglesAndMotionSteps) {
 
 }  // namespace
 }  // namespace lt
+
+namespace lt_test {
+
+// The ABI's checks: method and program go together, the material exists, and vertices move at the
+// first commit only (later settings are refused).
+TEST(Displacement, AbiRefusesWhatItCannotDo) {
+  ScenePtr s = new_scene();
+  const int mat = add_diffuse(s.get(), {0.5f, 0.5f, 0.5f});
+  ShaderCode c;
+  c.emit(lt::kOpSetDisplacement, {c.c3({0, 0, 1})}, {});
+  const lt_shader_program p = c.desc();
+  EXPECT_EQ(lt_scene_set_material_displacement(s.get(), mat, &p, 7), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_material_displacement(s.get(), mat, nullptr, LT_DISPLACEMENT_TRUE), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_material_displacement(s.get(), mat, &p, LT_DISPLACEMENT_BUMP), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_material_displacement(s.get(), mat + 1, &p, LT_DISPLACEMENT_TRUE), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_material_displacement(s.get(), mat, &p, LT_DISPLACEMENT_TRUE), LT_OK);
+  EXPECT_EQ(lt_scene_set_material_displacement(s.get(), mat, nullptr, LT_DISPLACEMENT_BUMP), LT_OK);
+  EXPECT_EQ(lt_scene_set_material_displacement(s.get(), mat, &p, LT_DISPLACEMENT_BOTH), LT_OK);
+  add_object(s.get(), plane(1, 1), mat);
+  EXPECT_EQ(lt_scene_commit(s.get()), LT_OK);
+  EXPECT_EQ(lt_scene_set_material_displacement(s.get(), mat, &p, LT_DISPLACEMENT_TRUE), LT_ERROR_STATE);
+}
+
+}  // namespace lt_test
