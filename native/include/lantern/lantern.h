@@ -470,7 +470,7 @@ LT_API int lt_scene_commit(lt_scene* scene);
  * Meshes' BVHs are never rebuilt: a changed mesh needs a new scene. */
 LT_API int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float transform[12]);
 /* Replaces material `material`'s surface program (as lt_scene_add_material); its volume
- * (lt_scene_set_material_volume) is kept. */
+ * (lt_scene_set_material_volume) and displacement (lt_scene_set_material_displacement) are kept. */
 LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program* program);
 /* Removes every light added with lt_scene_add_light (to add the edited set again). */
 LT_API int lt_scene_clear_lights(lt_scene* scene);

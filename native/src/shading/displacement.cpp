@@ -133,6 +133,13 @@ std::vector<Vec3> displaced_corner_normals(const Mesh& m, const std::vector<Vec3
 
 void displace_meshes(Geometry& geometry, const std::vector<Material>& materials,
                      const std::vector<std::unique_ptr<Image>>& images) {
+  auto displaces = [&](int mat) {
+    return mat >= 0 && mat < int(materials.size()) &&
+           materials[size_t(mat)].displacement_method() != DisplacementMethod::None;
+  };
+  bool any_material = false;
+  for (size_t m = 0; m < materials.size(); ++m) any_material = any_material || displaces(int(m));
+  if (!any_material) return;  // the common case: nothing to look at
   std::vector<int> first(geometry.mesh_count(), -1);
   for (size_t i = 0; i < geometry.instance_count(); ++i) {
     int& f = first[size_t(geometry.instance(int(i)).mesh)];
@@ -142,15 +149,17 @@ void displace_meshes(Geometry& geometry, const std::vector<Material>& materials,
     const Mesh& mesh = geometry.mesh(int(id));
     if (first[id] < 0 || !mesh.is_triangles() || !mesh.rtc) continue;
     const Instance& inst = geometry.instance(first[id]);
+    bool any_slot = false;
+    for (int mat : inst.materials) any_slot = any_slot || displaces(mat);
+    if (!any_slot) continue;
     const size_t nt = mesh.triangle_count();
     std::vector<const Material*> displacing(nt, nullptr);
     std::vector<uint8_t> true_triangles(nt, 0);
     bool any = false;
     for (size_t t = 0; t < nt; ++t) {
       const int mat = inst.material_for(mesh.slots.empty() ? 0 : mesh.slots[t]);
-      if (mat < 0 || mat >= int(materials.size())) continue;
+      if (!displaces(mat)) continue;
       const Material& m = materials[size_t(mat)];
-      if (m.displacement_method() == DisplacementMethod::None) continue;
       displacing[t] = &m;
       true_triangles[t] = m.displacement_method() == DisplacementMethod::True;
       any = true;

@@ -17,8 +17,8 @@ namespace lt {
 // Object-space offsets of a mesh's vertices (zero where no triangle displaces), evaluated as
 // Cycles: the mesh's first instance gives the object (transform, material slots); each vertex is
 // evaluated once, at its corner of the first triangle (in index order) whose material displaces,
-// with that material's program and that corner's normal, UV and attributes. `material_of(t)`:
-// the material of triangle t, or null.
+// with that material's program and that corner's normal, UV and attributes.
+// triangle_materials: each triangle's displacing material, or null.
 std::vector<Vec3> displacement_offsets(const Mesh& mesh, const Instance& instance,
                                        const std::vector<const Material*>& triangle_materials,
                                        const std::vector<std::unique_ptr<Image>>& images);
@@ -31,8 +31,8 @@ std::vector<Vec3> displaced_corner_normals(const Mesh& mesh, const std::vector<V
                                            const std::vector<Vec3>& corner_normals,
                                            const std::vector<uint8_t>& true_triangles);
 
-// Displaces every mesh that needs it (a mesh without displacing materials costs one scan of its
-// triangles' materials).
+// Displaces every mesh that needs it: one run of a displacement program per vertex of a mesh whose
+// first instance has a displacing material; other meshes cost a look at their instance's slots.
 void displace_meshes(Geometry& geometry, const std::vector<Material>& materials,
                      const std::vector<std::unique_ptr<Image>>& images);
 
