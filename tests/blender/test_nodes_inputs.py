@@ -728,3 +728,73 @@ def test_ambient_occlusion_agrees_with_cycles(outdir):
     bs.add_camera(scene, (0.0, -3.6, 2.0), (0.0, 0.0, 0.3), lens=35.0)
     report, _ = ru.two_seed_agreement(scene, 64, "PATH", "ao_node", outdir)
     assert report == "", report
+
+
+def _bevel_material(name, radius, samples=8, emit=False, normal_from=None):
+    """Bevel's Normal as a colour (n / 2 + 1/2) on an Emission (emit), else into a Diffuse's Normal;
+    normal_from: a Geometry output linked to the Bevel's Normal input."""
+    mat = bpy_material(name)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    bevel = node(nt, "ShaderNodeBevel", {"samples": samples}, Radius=radius)
+    if normal_from:
+        nt.links.new(node(nt, "ShaderNodeNewGeometry").outputs[normal_from], bevel.inputs["Normal"])
+    if emit:
+        half = node(nt, "ShaderNodeVectorMath", {"operation": "MULTIPLY_ADD"})
+        half.inputs[1].default_value = (0.5, 0.5, 0.5)
+        half.inputs[2].default_value = (0.5, 0.5, 0.5)
+        nt.links.new(bevel.outputs["Normal"], half.inputs[0])
+        shader = nt.nodes.new("ShaderNodeEmission")
+        nt.links.new(half.outputs[0], shader.inputs["Color"])
+    else:
+        shader = node(nt, "ShaderNodeBsdfDiffuse", Color=(0.8, 0.8, 0.8, 1.0))
+        nt.links.new(bevel.outputs["Normal"], shader.inputs["Normal"])
+    nt.links.new(shader.outputs[0], nt.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    return mat
+
+
+def _bevel_scene(name, emit):
+    """A flat-shaded box turned towards the camera and a flat-shaded, coarse sphere (its facets'
+    edges rounded too), with Bevel; the sphere's keeps a linked Normal (Geometry's True Normal)."""
+    bs.reset_file()
+    scene = bs.new_scene(name, resolution=(64, 48), samples=64)
+    bs.assign(bs.add_object(scene, "Box", bs.mesh_box("Box", (1.0, 1.0, 1.0)), (-0.55, 0.3, 0.0), (0, 0, 35)),
+              _bevel_material("BevelBox", 0.25, emit=emit))
+    bs.assign(bs.add_object(scene, "Ball", bs.mesh_sphere("Ball", 0.45, 12, 6, smooth=False), (0.7, -0.1, 0.55)),
+              _bevel_material("BevelBall", 0.1, samples=4, emit=emit, normal_from="True Normal"))
+    bs.add_camera(scene, (0.0, -3.6, 2.2), (0.0, 0.0, 0.4), lens=40.0)
+    return scene
+
+
+def test_bevel_normal_agrees_with_cycles(outdir):
+    """Bevel's Normal output seen through emission: rounded edges on a box and on a faceted sphere
+    (a linked Normal keeps the bevel's change) where camera rays see them; on a diffuse floor, the
+    light they emit as a diffuse bounce and light samples see it, unbevelled (Cycles' min_ray_pdf,
+    and its light evaluations without ray tracing). Random per sample: the agreement rule of
+    test_agreement.py, two seeds each."""
+    scene = _bevel_scene("bevel_normal", emit=True)
+    scene.cycles.max_bounces = 1
+    bs.set_world(scene, (0.0, 0.0, 0.0), 1.0)
+    bs.assign(bs.add_object(scene, "Floor", bs.mesh_plane("Floor", 8.0)), bs.diffuse("Floor", (0.8, 0.8, 0.8)))
+    report, _ = ru.two_seed_agreement(scene, 64, "PATH", "bevel_normal", outdir)
+    assert report == "", report
+
+
+def test_bevel_lit_agrees_with_cycles(outdir):
+    """A bevelled box and sphere (Diffuse with Bevel's normal) on a mirror floor under an area
+    light and a dim world: bevelled where the camera sees them and in the mirror (a sharp bounce
+    keeps Cycles' min_ray_pdf), not where diffuse light reaches them (Cycles' blurry paths). PATH
+    only: BIDIRECTIONAL departs (README)."""
+    scene = _bevel_scene("bevel_lit", emit=False)
+    bs.set_world(scene, (0.2, 0.2, 0.25), 1.0)
+    scene.cycles.max_bounces = 4
+    floor = bs.add_object(scene, "Floor", bs.mesh_plane("Floor", 8.0))
+    mirror = bpy_material("Mirror")
+    nt = mirror.node_tree
+    nt.nodes.clear()
+    glossy = node(nt, "ShaderNodeBsdfGlossy", {"distribution": "SHARP"}, Color=(0.7, 0.7, 0.7, 1.0))
+    nt.links.new(glossy.outputs[0], nt.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    bs.assign(floor, mirror)
+    bs.add_light(scene, "Key", "AREA", 150.0, (-1.5, -1.5, 2.5), (40, 0, -35), size=1.0)
+    report, _ = ru.two_seed_agreement(scene, 128, "PATH", "bevel_lit", outdir)
+    assert report == "", report

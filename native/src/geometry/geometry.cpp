@@ -498,6 +498,47 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   return true;
 }
 
+bool Geometry::intersect_instance(const Ray& ray, int instance, Hit* hit) const {
+  if (!traceable(ray) || instance < 0 || size_t(instance) >= instances_.size()) return false;
+  // The instance's own scene: its mesh's in object space (the ray taken there by the pose's inverse,
+  // which keeps t), or the copy baked into world space.
+  RTCScene scene = size_t(instance) < baked_.size() ? baked_[size_t(instance)].rtc : nullptr;
+  Vec3 o = ray.o, d = ray.d;
+  if (!scene) {
+    scene = meshes_[size_t(instances_[size_t(instance)].mesh)].rtc;
+    const Transform inv = affine_inverse(pose(instance, ray.time).xf);
+    o = inv.point(o);
+    d = inv.vector(d);
+  }
+  if (!scene) return false;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh;
+  rh.ray.org_x = o.x;
+  rh.ray.org_y = o.y;
+  rh.ray.org_z = o.z;
+  rh.ray.dir_x = d.x;
+  rh.ray.dir_y = d.y;
+  rh.ray.dir_z = d.z;
+  rh.ray.tnear = ray.tmin;
+  rh.ray.tfar = ray.tmax;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.flags = 0;
+  rh.ray.time = ray.time;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  hit->t = rh.ray.tfar;
+  hit->instance = instance;
+  hit->primitive = int(rh.hit.primID);
+  hit->u = rh.hit.u;
+  hit->v = rh.hit.v;
+  hit->time = ray.time;
+  hit->p = ray.o + ray.d * rh.ray.tfar;
+  return true;
+}
+
 bool Geometry::occluded(const Ray& ray, unsigned visibility) const {
   if (!traceable(ray)) return true;
   VisibilityContext c;

@@ -87,6 +87,10 @@ enum InputOp : uint32_t {
   // color v (times ao), ao f (the fraction of `samples` cosine-distributed rays within distance
   // that reach nothing); params: samples, flags (1 only local, 2 inside).
   kOpAmbientOcclusion,
+  // Bevel (Cycles' svm_node_bevel / svm_bevel): in: radius f, normal v (zero: unlinked); out: normal
+  // v (the normals of the same object's surface within radius, weighted by a cubic falloff);
+  // params: samples.
+  kOpBevel,
 };
 
 // Curve and point inputs: numbers 100-107 (program.cpp hands them to this family).

@@ -48,6 +48,7 @@ VECTOR_DISPLACEMENT = 51
 ENVIRONMENT = 52
 WIREFRAME = 53
 AMBIENT_OCCLUSION = 54
+BEVEL = 55
 
 # curve and point inputs (inputs.h, numbers 100-107)
 HAIR_INFO = 100
