@@ -798,3 +798,26 @@ def test_bevel_lit_agrees_with_cycles(outdir):
     bs.add_light(scene, "Key", "AREA", 150.0, (-1.5, -1.5, 2.5), (40, 0, -35), size=1.0)
     report, _ = ru.two_seed_agreement(scene, 128, "PATH", "bevel_lit", outdir)
     assert report == "", report
+
+
+@pytest.mark.parametrize("output", ["Color", "Alpha"])
+def test_shader_to_rgb_as_cycles(output, outdir):
+    """Shader to RGB (an EEVEE node) fed by a Diffuse BSDF: Cycles 3.4 drops its links, and the
+    sockets it feeds keep their own values (a Mix's second colour, a Math node's second value) over a
+    pattern from the object's X; so does Lantern, with a warning."""
+    def build(nt, coords):
+        s2r = node(nt, "ShaderNodeShaderToRGB")
+        nt.links.new(node(nt, "ShaderNodeBsdfDiffuse", Color=(0.9, 0.1, 0.1)).outputs[0], s2r.inputs["Shader"])
+        uv = node(nt, "ShaderNodeSeparateXYZ")
+        nt.links.new(coords, uv.inputs[0])
+        if output == "Color":
+            mix = node(nt, "ShaderNodeMixRGB", Color1=(0.1, 0.2, 0.9), Color2=(0.2, 0.7, 0.3))
+            nt.links.new(uv.outputs["X"], mix.inputs["Fac"])
+            nt.links.new(s2r.outputs["Color"], mix.inputs["Color2"])
+            return mix.outputs[0]
+        add = node(nt, "ShaderNodeMath", {"operation": "ADD"})
+        add.inputs[1].default_value = 0.3
+        nt.links.new(uv.outputs["X"], add.inputs[0])
+        nt.links.new(s2r.outputs["Alpha"], add.inputs[1])
+        return add.outputs[0]
+    compare_view(build, "shader_to_rgb_" + output.lower(), outdir)
