@@ -821,3 +821,30 @@ def test_shader_to_rgb_as_cycles(output, outdir):
         nt.links.new(s2r.outputs["Alpha"], add.inputs[1])
         return add.outputs[0]
     compare_view(build, "shader_to_rgb_" + output.lower(), outdir)
+
+
+@pytest.mark.parametrize("space", ["Filmic Log", "Filmic sRGB", "Linear ACES", "Linear ACEScg", "XYZ"])
+@pytest.mark.parametrize("channels", [3, 1])
+def test_image_file_colour_space_as_cycles(space, channels, tmp_path, outdir):
+    """An 8-bit PNG (RGB or grey, every byte value present) in each of Blender 3.4's other input
+    colour spaces: converted to scene linear with OpenColorIO as Cycles converts it (half floats),
+    pixel by pixel against Cycles (Closest texels, 6 pixels each)."""
+    import bpy
+    import numpy as np
+
+    rng = np.random.default_rng(11)
+    values = np.concatenate([np.arange(256), rng.integers(0, 256, 16 * 16 * channels - 256)]) / 255.0
+    path = str(tmp_path / "texels.png")
+    _write_png(path, rng.permutation(values).reshape(16, 16, channels), 8)
+
+    def build(nt, coords):
+        img = bpy.data.images.load(path)
+        img.colorspace_settings.name = space
+        tex = _image_node(nt, img, interpolation="Closest", extension="EXTEND")
+        shift = node(nt, "ShaderNodeVectorMath", {"operation": "MULTIPLY_ADD"})
+        nt.links.new(coords, shift.inputs[0])
+        shift.inputs[1].default_value = (1.0, 1.0, 1.0)
+        shift.inputs[2].default_value = (0.5, 0.5, 0.5)
+        nt.links.new(shift.outputs[0], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+    compare_view(build, "image_space_%s_%d" % (space.replace(" ", "_"), channels), outdir)
