@@ -16,8 +16,8 @@ TEST(ColorSpace, CyclesHalvesTruncateFlushAndClamp) {
   EXPECT_EQ(cycles_float_to_half(-2.0f), 0xc000);
   // Truncated, not rounded: the largest float below 1 + 2^-10 stays at 1.
   EXPECT_EQ(cycles_float_to_half(std::nextafter(1.0f + 0x1p-10f, 0.0f)), 0x3c00);
-  EXPECT_EQ(cycles_float_to_half(0x1p-15f), 0);        // below the normal range: 0
-  EXPECT_EQ(cycles_float_to_half(1e9f), 0x7bff);       // clamped to 65504
+  EXPECT_EQ(cycles_float_to_half(0x1p-15f), 0);   // below the normal range: 0
+  EXPECT_EQ(cycles_float_to_half(1e9f), 0x7bff);  // clamped to 65504
   EXPECT_EQ(cycles_half_to_float(0x3c00), 1.0f);
   EXPECT_EQ(cycles_half_to_float(0x3555), 0x1.554p-2f);
   EXPECT_EQ(cycles_half_to_float(0), 0x1p-15f);  // Cycles' reading of a zero half

@@ -109,6 +109,8 @@ def ocio_config():
     if env and os.path.isfile(env):
         return env
     return os.path.join(bpy.utils.system_resource('DATAFILES'), "colormanagement", "config.ocio")
+
+
 # Blender's Image.alpha_mode as lt_alpha_mode names.
 _ALPHA_MODES = {'STRAIGHT': "STRAIGHT", 'PREMUL': "PREMULTIPLIED", 'CHANNEL_PACKED': "CHANNEL_PACKED",
                 'NONE': "NONE"}

@@ -41,7 +41,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
   float prev_pdf = 0;
   bool prev_delta = true;
-  float min_pdf = INFINITY;  // Cycles' min_ray_pdf: the smallest pdf of the bounces so far (Bevel)
+  float min_pdf = INFINITY;           // Cycles' min_ray_pdf: the smallest pdf of the bounces so far (Bevel)
   Vec3 prev_p = ray.o, prev_n(0.0f);  // prev_n: the geometric normal there (zero in a medium)
   float t_prev = 0;                   // distance from prev_p to ray.o (the ray crossed invisible boundaries)
   // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
@@ -154,8 +154,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       ++stats.rays;
       // Only a scene with catchers keeps the state of each camera segment, for a split.
       if (catchers && !split && b.total == 0)
-        snap = Snapshot{ray,     beta,       visibility, b,      nulls,  prev_pdf, t_prev, footprint,
-                        min_pdf, prev_delta, prev_p,     prev_n, stack, sampler};
+        snap = Snapshot{ray,       beta,    visibility, b,      nulls,  prev_pdf, t_prev,
+                        footprint, min_pdf, prev_delta, prev_p, prev_n, stack,    sampler};
       bool found = scene.geometry.intersect(ray, catcher_leg ? catcher_only_visibility(visibility) : visibility, &hit);
       const float t_end = found ? hit.t : ray.tmax;
       // Cycles' integrator_split_shadow_catcher: before the segment's volume and the surface are

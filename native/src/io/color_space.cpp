@@ -17,8 +17,8 @@ namespace OCIO = OCIO_NAMESPACE;
 
 float cycles_half_to_float(uint16_t h) {
   // half_to_float_image: the exponent rebiased without a denormal case (0 reads as 2^-15).
-  const uint32_t x = (uint32_t(h & 0x8000u) << 16) | ((uint32_t(h & 0x7c00u) + 0x1c000u) << 13) |
-                     (uint32_t(h & 0x03ffu) << 13);
+  const uint32_t x =
+      (uint32_t(h & 0x8000u) << 16) | ((uint32_t(h & 0x7c00u) + 0x1c000u) << 13) | (uint32_t(h & 0x03ffu) << 13);
   float f;
   std::memcpy(&f, &x, sizeof f);
   return f;
@@ -49,8 +49,7 @@ OCIO::ConstCPUProcessorRcPtr processor(const std::string& config, const std::str
   if (it != cache.end()) return it->second;
   try {
     OCIO::ConstConfigRcPtr c = OCIO::Config::CreateFromFile(config.c_str());
-    OCIO::ConstCPUProcessorRcPtr p =
-        c->getProcessor(space.c_str(), OCIO::ROLE_SCENE_LINEAR)->getDefaultCPUProcessor();
+    OCIO::ConstCPUProcessorRcPtr p = c->getProcessor(space.c_str(), OCIO::ROLE_SCENE_LINEAR)->getDefaultCPUProcessor();
     return cache[key] = p;
   } catch (const OCIO::Exception& e) {
     throw InvalidArgument("colour space '" + space + "' of '" + config + "': " + e.what());
@@ -70,7 +69,8 @@ void halves_to_scene_linear(const std::string& config, const std::string& space,
     const size_t count = std::min(kChunk, n - start);
     uint16_t* px = pixels + start * size_t(channels);
     for (size_t i = 0; i < count; ++i)
-      for (int k = 0; k < 3; ++k) rgb[3 * i + k] = cycles_half_to_float(px[i * size_t(channels) + (channels == 3 ? k : 0)]);
+      for (int k = 0; k < 3; ++k)
+        rgb[3 * i + k] = cycles_half_to_float(px[i * size_t(channels) + (channels == 3 ? k : 0)]);
     OCIO::PackedImageDesc desc(rgb.data(), long(count), 1, 3);
     p->apply(desc);
     for (size_t i = 0; i < count; ++i) {
