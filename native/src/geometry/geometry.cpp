@@ -461,6 +461,36 @@ namespace {
 bool traceable(const Ray& r) {
   return within_traceable_range(r.o) && within_traceable_range(r.d) && !std::isnan(r.tmin) && !std::isnan(r.tmax);
 }
+
+// The closest hit in `scene` along (o, d) over the ray's extent at its time: t (the same along
+// (o, d) as along the ray), Embree's instance id (none in a mesh's own scene), primitive,
+// barycentrics, and the world position along `ray`.
+bool closest_hit(RTCScene scene, RTCIntersectContext* ctx, const Ray& ray, const Vec3& o, const Vec3& d, Hit* hit) {
+  RTCRayHit rh;
+  rh.ray.org_x = o.x;
+  rh.ray.org_y = o.y;
+  rh.ray.org_z = o.z;
+  rh.ray.dir_x = d.x;
+  rh.ray.dir_y = d.y;
+  rh.ray.dir_z = d.z;
+  rh.ray.tnear = ray.tmin;
+  rh.ray.tfar = ray.tmax;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.flags = 0;
+  rh.ray.time = ray.time;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene, ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  hit->t = rh.ray.tfar;
+  hit->instance = int(rh.hit.instID[0]);
+  hit->primitive = int(rh.hit.primID);
+  hit->u = rh.hit.u;
+  hit->v = rh.hit.v;
+  hit->time = ray.time;
+  hit->p = ray.o + ray.d * rh.ray.tfar;
+  return true;
+}
 }  // namespace
 
 bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
@@ -472,30 +502,7 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
     c.visibility = instance_visibility_.data();
     c.mask = visibility;
   }
-  RTCRayHit rh;
-  rh.ray.org_x = ray.o.x;
-  rh.ray.org_y = ray.o.y;
-  rh.ray.org_z = ray.o.z;
-  rh.ray.dir_x = ray.d.x;
-  rh.ray.dir_y = ray.d.y;
-  rh.ray.dir_z = ray.d.z;
-  rh.ray.tnear = ray.tmin;
-  rh.ray.tfar = ray.tmax;
-  rh.ray.mask = 0xffffffffu;
-  rh.ray.flags = 0;
-  rh.ray.time = ray.time;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(top_, &c.ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-  hit->t = rh.ray.tfar;
-  hit->instance = int(rh.hit.instID[0]);
-  hit->primitive = int(rh.hit.primID);
-  hit->u = rh.hit.u;
-  hit->v = rh.hit.v;
-  hit->time = ray.time;
-  hit->p = ray.o + ray.d * rh.ray.tfar;
-  return true;
+  return closest_hit(top_, &c.ctx, ray, ray.o, ray.d, hit);
 }
 
 bool Geometry::intersect_instance(const Ray& ray, int instance, Hit* hit) const {
@@ -513,29 +520,8 @@ bool Geometry::intersect_instance(const Ray& ray, int instance, Hit* hit) const 
   if (!scene) return false;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  RTCRayHit rh;
-  rh.ray.org_x = o.x;
-  rh.ray.org_y = o.y;
-  rh.ray.org_z = o.z;
-  rh.ray.dir_x = d.x;
-  rh.ray.dir_y = d.y;
-  rh.ray.dir_z = d.z;
-  rh.ray.tnear = ray.tmin;
-  rh.ray.tfar = ray.tmax;
-  rh.ray.mask = 0xffffffffu;
-  rh.ray.flags = 0;
-  rh.ray.time = ray.time;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(scene, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-  hit->t = rh.ray.tfar;
+  if (!closest_hit(scene, &ctx, ray, o, d, hit)) return false;
   hit->instance = instance;
-  hit->primitive = int(rh.hit.primID);
-  hit->u = rh.hit.u;
-  hit->v = rh.hit.v;
-  hit->time = ray.time;
-  hit->p = ray.o + ray.d * rh.ray.tfar;
   return true;
 }
 
