@@ -26,6 +26,16 @@ void visibility_filter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// A query's context: with per-instance visibility (null: every instance seen), visibility_filter
+// keeps the instances rays of kind `mask` see.
+void init_visibility(VisibilityContext* c, const unsigned* visibility, unsigned mask) {
+  rtcInitIntersectContext(&c->ctx);
+  if (!visibility) return;
+  c->ctx.filter = visibility_filter;
+  c->visibility = visibility;
+  c->mask = mask;
+}
+
 // Curves and spheres are entered, never left: a hit where the ray leaves the tube (the normal
 // along the ray) comes from a ray that started inside it, off the same strand (hair's
 // transmission); Cycles skips the strand it starts on the same way (its self-intersection test).
@@ -496,12 +506,7 @@ bool closest_hit(RTCScene scene, RTCIntersectContext* ctx, const Ray& ray, const
 bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   if (!traceable(ray)) return false;
   VisibilityContext c;
-  rtcInitIntersectContext(&c.ctx);
-  if (partial_visibility_) {
-    c.ctx.filter = visibility_filter;
-    c.visibility = instance_visibility_.data();
-    c.mask = visibility;
-  }
+  init_visibility(&c, partial_visibility_ ? instance_visibility_.data() : nullptr, visibility);
   return closest_hit(top_, &c.ctx, ray, ray.o, ray.d, hit);
 }
 
@@ -528,12 +533,7 @@ bool Geometry::intersect_instance(const Ray& ray, int instance, Hit* hit) const 
 bool Geometry::occluded(const Ray& ray, unsigned visibility) const {
   if (!traceable(ray)) return true;
   VisibilityContext c;
-  rtcInitIntersectContext(&c.ctx);
-  if (partial_visibility_) {
-    c.ctx.filter = visibility_filter;
-    c.visibility = instance_visibility_.data();
-    c.mask = visibility;
-  }
+  init_visibility(&c, partial_visibility_ ? instance_visibility_.data() : nullptr, visibility);
   RTCRay r;
   r.org_x = ray.o.x;
   r.org_y = ray.o.y;
