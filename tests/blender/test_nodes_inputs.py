@@ -766,17 +766,18 @@ def _bevel_scene(name, emit):
     return scene
 
 
-def test_bevel_normal_agrees_with_cycles(outdir):
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_bevel_normal_agrees_with_cycles(integrator, outdir):
     """Bevel's Normal output seen through emission: rounded edges on a box and on a faceted sphere
     (a linked Normal keeps the bevel's change) where camera rays see them; on a diffuse floor, the
     light they emit as a diffuse bounce and light samples see it, unbevelled (Cycles' min_ray_pdf,
-    and its light evaluations without ray tracing). Random per sample: the agreement rule of
-    test_agreement.py, two seeds each."""
+    and its light evaluations without ray tracing; BIDIRECTIONAL's light subpaths start there).
+    Random per sample: the agreement rule of test_agreement.py, two seeds each."""
     scene = _bevel_scene("bevel_normal", emit=True)
     scene.cycles.max_bounces = 1
     bs.set_world(scene, (0.0, 0.0, 0.0), 1.0)
     bs.assign(bs.add_object(scene, "Floor", bs.mesh_plane("Floor", 8.0)), bs.diffuse("Floor", (0.8, 0.8, 0.8)))
-    report, _ = ru.two_seed_agreement(scene, 64, "PATH", "bevel_normal", outdir)
+    report, _ = ru.two_seed_agreement(scene, 64, integrator, "bevel_normal_" + integrator.lower(), outdir)
     assert report == "", report
 
 
