@@ -1470,18 +1470,18 @@ def build_caustic(scene):
 
 
 def build_unsupported_node(scene):
-    """Nodes Lantern does not render: Bevel → Diffuse normal (material "BevelMaterial") and a
-    Subsurface Scattering ("SubsurfaceMaterial")."""
+    """Nodes Lantern does not render: Point Density → Diffuse colour (material
+    "PointDensityMaterial") and a Subsurface Scattering ("SubsurfaceMaterial")."""
     set_world(scene, (0.1, 0.1, 0.1), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
     assign(floor, diffuse("FloorGrey", (0.6, 0.6, 0.6)))
-    mat, nt, out = _material("BevelMaterial")
-    bevel = nt.nodes.new("ShaderNodeBevel")
-    bevel.name = bevel.label = "Bevel"
+    mat, nt, out = _material("PointDensityMaterial")
+    density = nt.nodes.new("ShaderNodeTexPointDensity")
+    density.name = density.label = "Point Density"
     bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    nt.links.new(bevel.outputs["Normal"], bsdf.inputs["Normal"])
+    nt.links.new(density.outputs["Color"], bsdf.inputs["Color"])
     nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
-    assign(add_object(scene, "BevelSphere", mesh_sphere("BevelSphere", 0.5), (-0.6, 0, 0.5)), mat)
+    assign(add_object(scene, "DensitySphere", mesh_sphere("DensitySphere", 0.5), (-0.6, 0, 0.5)), mat)
     sss = _bsdf_material("SubsurfaceMaterial", "ShaderNodeSubsurfaceScattering", (0.8, 0.3, 0.3))
     assign(add_object(scene, "SubsurfaceSphere", mesh_sphere("SubsurfaceSphere", 0.5), (0.6, 0, 0.5)), sss)
     add_light(scene, "AreaLight", "AREA", 100.0, (0, -1.0, 3.0), shape="SQUARE", size=1.0)

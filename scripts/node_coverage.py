@@ -35,6 +35,8 @@ def supported(node, in_world):
     t = node.type
     if t in STRUCTURAL or t in nodes.VALUE_NODES or t in nodes.SHADER_NODES or t in VOLUME:
         return True
+    if t in nodes.CYCLES_DROPS:  # rendered as Cycles renders them (their links dropped)
+        return True
     return in_world and t in WORLD
 
 

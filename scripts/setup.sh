@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-PACKAGES=(blender cmake g++ make libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev libopenvdb-dev libnanovdb-dev
+PACKAGES=(blender cmake g++ make libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev libopencolorio-dev libopenvdb-dev libnanovdb-dev
           libboost-iostreams-dev libgtest-dev libbenchmark-dev python3-numpy python3-pytest
           # the farm end-to-end test (tests/blender/test_farm.py)
           slurmctld slurmd slurm-client munge

@@ -146,6 +146,8 @@ class ImageFileDesc(ctypes.Structure):
         ("use_alpha", ctypes.c_int),
         ("interpolation", ctypes.c_int),
         ("extension", ctypes.c_int),
+        ("ocio_config", ctypes.c_char_p),
+        ("ocio_space", ctypes.c_char_p),
     ]
 
 
@@ -761,14 +763,16 @@ class Scene:
         return out.value
 
     def add_image_file(self, path, color_space, alpha_mode, use_alpha=False,
-                       interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT):
+                       interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT, ocio=None):
         """Adds an image the core reads from its file (lt_scene_add_image_file): color_space and
-        alpha_mode are lt_color_space / lt_alpha_mode names ("SRGB", "STRAIGHT", ...). Returns the
-        image id; raises LanternError (status ERROR_INVALID_ARGUMENT: a file the core leaves to
+        alpha_mode are lt_color_space / lt_alpha_mode names ("SRGB", "STRAIGHT", ...); ocio: the
+        (configuration file, colour space name) an "OTHER" colour space is converted from. Returns
+        the image id; raises LanternError (status ERROR_INVALID_ARGUMENT: a file the core leaves to
         Blender, ERROR_IO: unreadable)."""
+        config, space = (os.fsencode(ocio[0]), ocio[1].encode()) if ocio else (None, None)
         d = ImageFileDesc(os.fsencode(path), enum_value("lt_color_space", color_space),
                           enum_value("lt_alpha_mode", alpha_mode), int(bool(use_alpha)),
-                          int(interpolation), int(extension))
+                          int(interpolation), int(extension), config, space)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_image_file(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_image_file")

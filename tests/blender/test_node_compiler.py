@@ -190,14 +190,26 @@ def test_unsupported_node_passes_its_input_through_and_names_itself():
     node would), with a warning naming the node."""
     bs.reset_file()
     mat, nt, em = _emission_material("Unknown")
-    odd = nt.nodes.new("ShaderNodeBevel")  # a vector node Lantern does not compile
-    nt.links.new(odd.outputs[0], em.inputs["Color"])
+    odd = nt.nodes.new("ShaderNodeTexPointDensity")  # a texture node Lantern does not compile
+    nt.links.new(odd.outputs["Color"], em.inputs["Color"])
     c, warnings = _compile(mat)
-    assert any("ShaderNodeBevel" in w and "Bevel" in w for w in warnings), warnings
+    assert any("ShaderNodeTexPointDensity" in w and "Point Density" in w for w in warnings), warnings
+
+
+def test_shader_to_rgb_is_dropped_as_cycles_drops_it():
+    """Shader to RGB: its link dropped (the Emission's own Color stays), with a warning saying that
+    Cycles does not render it."""
+    bs.reset_file()
+    mat, nt, em = _emission_material("ShaderToRGB")
+    s2r = nt.nodes.new("ShaderNodeShaderToRGB")
+    nt.links.new(nt.nodes.new("ShaderNodeBsdfDiffuse").outputs[0], s2r.inputs["Shader"])
+    nt.links.new(s2r.outputs["Color"], em.inputs["Color"])
+    c, warnings = _compile(mat)
+    assert any("ShaderNodeShaderToRGB" in w and "Cycles does not render" in w for w in warnings), warnings
 
 
 def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
-    """scripts/node_coverage.py on the unsupported_node scene: it names the Bevel and the
+    """scripts/node_coverage.py on the unsupported_node scene: it names the Point Density and the
     Subsurface Scattering and nothing Lantern renders."""
     import importlib.util
     scene_factory("unsupported_node")
@@ -207,7 +219,7 @@ def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
     coverage.main()
     out = capsys.readouterr().out
     missing = [line for line in out.splitlines() if "NOT SUPPORTED" in line]
-    assert any("ShaderNodeBevel" in line for line in missing), out
+    assert any("ShaderNodeTexPointDensity" in line for line in missing), out
     assert any("ShaderNodeSubsurfaceScattering" in line for line in missing), out
     assert len(missing) == 2, out
 

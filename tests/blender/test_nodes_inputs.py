@@ -728,3 +728,124 @@ def test_ambient_occlusion_agrees_with_cycles(outdir):
     bs.add_camera(scene, (0.0, -3.6, 2.0), (0.0, 0.0, 0.3), lens=35.0)
     report, _ = ru.two_seed_agreement(scene, 64, "PATH", "ao_node", outdir)
     assert report == "", report
+
+
+def _bevel_material(name, radius, samples=8, emit=False, normal_from=None):
+    """Bevel's Normal as a colour (n / 2 + 1/2) on an Emission (emit), else into a Diffuse's Normal;
+    normal_from: a Geometry output linked to the Bevel's Normal input."""
+    mat = bpy_material(name)
+    nt = mat.node_tree
+    nt.nodes.clear()
+    bevel = node(nt, "ShaderNodeBevel", {"samples": samples}, Radius=radius)
+    if normal_from:
+        nt.links.new(node(nt, "ShaderNodeNewGeometry").outputs[normal_from], bevel.inputs["Normal"])
+    if emit:
+        half = node(nt, "ShaderNodeVectorMath", {"operation": "MULTIPLY_ADD"})
+        half.inputs[1].default_value = (0.5, 0.5, 0.5)
+        half.inputs[2].default_value = (0.5, 0.5, 0.5)
+        nt.links.new(bevel.outputs["Normal"], half.inputs[0])
+        shader = nt.nodes.new("ShaderNodeEmission")
+        nt.links.new(half.outputs[0], shader.inputs["Color"])
+    else:
+        shader = node(nt, "ShaderNodeBsdfDiffuse", Color=(0.8, 0.8, 0.8, 1.0))
+        nt.links.new(bevel.outputs["Normal"], shader.inputs["Normal"])
+    nt.links.new(shader.outputs[0], nt.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    return mat
+
+
+def _bevel_scene(name, emit):
+    """A flat-shaded box turned towards the camera and a flat-shaded, coarse sphere (its facets'
+    edges rounded too), with Bevel; the sphere's keeps a linked Normal (Geometry's True Normal)."""
+    bs.reset_file()
+    scene = bs.new_scene(name, resolution=(64, 48), samples=64)
+    bs.assign(bs.add_object(scene, "Box", bs.mesh_box("Box", (1.0, 1.0, 1.0)), (-0.55, 0.3, 0.0), (0, 0, 35)),
+              _bevel_material("BevelBox", 0.25, emit=emit))
+    bs.assign(bs.add_object(scene, "Ball", bs.mesh_sphere("Ball", 0.45, 12, 6, smooth=False), (0.7, -0.1, 0.55)),
+              _bevel_material("BevelBall", 0.1, samples=4, emit=emit, normal_from="True Normal"))
+    bs.add_camera(scene, (0.0, -3.6, 2.2), (0.0, 0.0, 0.4), lens=40.0)
+    return scene
+
+
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_bevel_normal_agrees_with_cycles(integrator, outdir):
+    """Bevel's Normal output seen through emission: rounded edges on a box and on a faceted sphere
+    (a linked Normal keeps the bevel's change) where camera rays see them; on a diffuse floor, the
+    light they emit as a diffuse bounce and light samples see it, unbevelled (Cycles' min_ray_pdf,
+    and its light evaluations without ray tracing; BIDIRECTIONAL's light subpaths start there).
+    Random per sample: the agreement rule of test_agreement.py, two seeds each."""
+    scene = _bevel_scene("bevel_normal", emit=True)
+    scene.cycles.max_bounces = 1
+    bs.set_world(scene, (0.0, 0.0, 0.0), 1.0)
+    bs.assign(bs.add_object(scene, "Floor", bs.mesh_plane("Floor", 8.0)), bs.diffuse("Floor", (0.8, 0.8, 0.8)))
+    report, _ = ru.two_seed_agreement(scene, 64, integrator, "bevel_normal_" + integrator.lower(), outdir)
+    assert report == "", report
+
+
+def test_bevel_lit_agrees_with_cycles(outdir):
+    """A bevelled box and sphere (Diffuse with Bevel's normal) on a mirror floor under an area
+    light and a dim world: bevelled where the camera sees them and in the mirror (a sharp bounce
+    keeps Cycles' min_ray_pdf), not where diffuse light reaches them (Cycles' blurry paths). PATH
+    only: BIDIRECTIONAL departs (README)."""
+    scene = _bevel_scene("bevel_lit", emit=False)
+    bs.set_world(scene, (0.2, 0.2, 0.25), 1.0)
+    scene.cycles.max_bounces = 4
+    floor = bs.add_object(scene, "Floor", bs.mesh_plane("Floor", 8.0))
+    mirror = bpy_material("Mirror")
+    nt = mirror.node_tree
+    nt.nodes.clear()
+    glossy = node(nt, "ShaderNodeBsdfGlossy", {"distribution": "SHARP"}, Color=(0.7, 0.7, 0.7, 1.0))
+    nt.links.new(glossy.outputs[0], nt.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    bs.assign(floor, mirror)
+    bs.add_light(scene, "Key", "AREA", 150.0, (-1.5, -1.5, 2.5), (40, 0, -35), size=1.0)
+    report, _ = ru.two_seed_agreement(scene, 128, "PATH", "bevel_lit", outdir)
+    assert report == "", report
+
+
+@pytest.mark.parametrize("output", ["Color", "Alpha"])
+def test_shader_to_rgb_as_cycles(output, outdir):
+    """Shader to RGB (an EEVEE node) fed by a Diffuse BSDF: Cycles 3.4 drops its links, and the
+    sockets it feeds keep their own values (a Mix's second colour, a Math node's second value) over a
+    pattern from the object's X; so does Lantern, with a warning."""
+    def build(nt, coords):
+        s2r = node(nt, "ShaderNodeShaderToRGB")
+        nt.links.new(node(nt, "ShaderNodeBsdfDiffuse", Color=(0.9, 0.1, 0.1)).outputs[0], s2r.inputs["Shader"])
+        uv = node(nt, "ShaderNodeSeparateXYZ")
+        nt.links.new(coords, uv.inputs[0])
+        if output == "Color":
+            mix = node(nt, "ShaderNodeMixRGB", Color1=(0.1, 0.2, 0.9), Color2=(0.2, 0.7, 0.3))
+            nt.links.new(uv.outputs["X"], mix.inputs["Fac"])
+            nt.links.new(s2r.outputs["Color"], mix.inputs["Color2"])
+            return mix.outputs[0]
+        add = node(nt, "ShaderNodeMath", {"operation": "ADD"})
+        add.inputs[1].default_value = 0.3
+        nt.links.new(uv.outputs["X"], add.inputs[0])
+        nt.links.new(s2r.outputs["Alpha"], add.inputs[1])
+        return add.outputs[0]
+    compare_view(build, "shader_to_rgb_" + output.lower(), outdir)
+
+
+@pytest.mark.parametrize("space", ["Filmic Log", "Filmic sRGB", "Linear ACES", "Linear ACEScg", "XYZ"])
+@pytest.mark.parametrize("channels", [3, 1])
+def test_image_file_colour_space_as_cycles(space, channels, tmp_path, outdir):
+    """An 8-bit PNG (RGB or grey, every byte value present) in each of Blender 3.4's other input
+    colour spaces: converted to scene linear with OpenColorIO as Cycles converts it (half floats),
+    pixel by pixel against Cycles (Closest texels, 6 pixels each)."""
+    import bpy
+    import numpy as np
+
+    rng = np.random.default_rng(11)
+    values = np.concatenate([np.arange(256), rng.integers(0, 256, 16 * 16 * channels - 256)]) / 255.0
+    path = str(tmp_path / "texels.png")
+    _write_png(path, rng.permutation(values).reshape(16, 16, channels), 8)
+
+    def build(nt, coords):
+        img = bpy.data.images.load(path)
+        img.colorspace_settings.name = space
+        tex = _image_node(nt, img, interpolation="Closest", extension="EXTEND")
+        shift = node(nt, "ShaderNodeVectorMath", {"operation": "MULTIPLY_ADD"})
+        nt.links.new(coords, shift.inputs[0])
+        shift.inputs[1].default_value = (1.0, 1.0, 1.0)
+        shift.inputs[2].default_value = (0.5, 0.5, 0.5)
+        nt.links.new(shift.outputs[0], tex.inputs["Vector"])
+        return tex.outputs["Color"]
+    compare_view(build, "image_space_%s_%d" % (space.replace(" ", "_"), channels), outdir)

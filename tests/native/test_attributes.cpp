@@ -13,6 +13,7 @@
 #include "scene_builders.h"
 #include "shading/bsdf.h"
 #include "shading/inputs.h"
+#include "shading/material.h"
 
 namespace lt {
 namespace {
@@ -129,6 +130,84 @@ TEST(Attributes, AttributeNodeOutputsByComponentCount) {
   o = r.exec(kOpAttribute, {}, {5, 1, 0});
   EXPECT_FLOAT_EQ(o[1], 0.4f);
   EXPECT_FLOAT_EQ(o[4], 0.8f);
+}
+
+// A 2 x 2 x 2 box at the origin (flat: face normals), as one instance.
+struct BevelBox {
+  Geometry g;
+  BevelBox() {
+    Mesh m;
+    for (int i = 0; i < 8; ++i)
+      m.positions.push_back(Vec3(i & 1 ? 1.0f : -1.0f, i & 2 ? 1.0f : -1.0f, i & 4 ? 1.0f : -1.0f));
+    // Each face's two triangles, wound outwards.
+    m.indices = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    std::vector<std::string> warnings;
+    Instance inst;
+    static_cast<Pose&>(inst) = Pose::of(Transform());
+    inst.mesh = g.add_mesh(std::move(m), warnings);
+    inst.materials = {0};
+    g.add_instance(std::move(inst), warnings);
+    g.commit();
+  }
+  // The shading point a ray straight down meets at (x, y) on the top face.
+  ShadingContext top(float x, float y) const {
+    Ray r;
+    r.o = Vec3(x, y, 3);
+    r.d = Vec3(0, 0, -1);
+    r.tmin = 0;
+    r.tmax = 10;
+    Hit hit;
+    EXPECT_TRUE(g.intersect(r, 31u, &hit));
+    ShadingContext c = shading_context(g, g.surface(hit), r.d, hit.t);
+    c.geometry = &g;
+    c.trace_seed = 12345;
+    return c;
+  }
+};
+
+TEST(Bevel, NormalOfTheSurfaceWithinTheRadius) {
+  BevelBox box;
+  Bench r;
+  r.ctx = box.top(0, 0);
+  const std::vector<float> unlinked = {0, 0, 0};
+  // Far from the edges every hit is the top face's: its normal exactly.
+  EXPECT_EQ(r.exec(kOpBevel, {{0.3f}, unlinked}, {64}), (std::vector<float>{0, 0, 1}));
+  // On the edge at x = 1 the faces x and z weigh alike (Cycles' estimator, by symmetry): 45
+  // degrees, up to the noise of 1024 samples.
+  r.ctx = box.top(0.999f, 0.0f);
+  std::vector<float> n = r.exec(kOpBevel, {{0.3f}, unlinked}, {1024});
+  EXPECT_NEAR(n[0], std::sqrt(0.5f), 0.03f);
+  EXPECT_NEAR(n[1], 0.0f, 0.03f);
+  EXPECT_NEAR(n[2], std::sqrt(0.5f), 0.03f);
+  EXPECT_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0f, 1e-5f);
+  // Inside the radius the side face pulls less the further from it.
+  r.ctx = box.top(0.85f, 0.0f);
+  const std::vector<float> near = r.exec(kOpBevel, {{0.3f}, unlinked}, {1024});
+  EXPECT_GT(near[0], 0.05f);
+  EXPECT_LT(near[0], n[0] - 0.1f);
+  // A linked Normal keeps the bevel's change: ref + (bevel - N), normalised.
+  r.ctx = box.top(0.999f, 0.0f);
+  const std::vector<float> ref = {0.0f, 0.6f, 0.8f};
+  std::vector<float> kept = r.exec(kOpBevel, {{0.3f}, ref}, {1024});
+  const Vec3 expected = normalize(Vec3(ref[0], ref[1], ref[2]) + Vec3(n[0], n[1], n[2]) - Vec3(0, 0, 1));
+  EXPECT_NEAR(kept[0], expected.x, 1e-5f);
+  EXPECT_NEAR(kept[1], expected.y, 1e-5f);
+  EXPECT_NEAR(kept[2], expected.z, 1e-5f);
+}
+
+TEST(Bevel, TracesNothingWhereCyclesDoesNot) {
+  BevelBox box;
+  Bench r;
+  const std::vector<float> unlinked = {0, 0, 0}, ref = {0.0f, 0.6f, 0.8f};
+  r.ctx = box.top(0.999f, 0.0f);
+  r.ctx.min_ray_pdf = 7.9f;  // a blurry bounce before: the shading normal, a linked Normal kept
+  EXPECT_EQ(r.exec(kOpBevel, {{0.3f}, unlinked}, {64}), (std::vector<float>{0, 0, 1}));
+  EXPECT_EQ(r.exec(kOpBevel, {{0.3f}, ref}, {64}), ref);
+  r.ctx.min_ray_pdf = INFINITY;
+  EXPECT_EQ(r.exec(kOpBevel, {{0.0f}, unlinked}, {64}), (std::vector<float>{0, 0, 1}));  // no radius
+  r.ctx.geometry = nullptr;  // light samples and shadow rays: the shading normal, unblended
+  EXPECT_EQ(r.exec(kOpBevel, {{0.3f}, ref}, {64}), (std::vector<float>{0, 0, 1}));
 }
 
 TEST(Attributes, NormalMapInTangentSpace) {

@@ -56,21 +56,19 @@ class ImageExporter:
                                      % (where, extension))
             ext = core.EXTENSION_REPEAT
         space = image.colorspace_settings.name
-        unsupported_space = ("%s: image '%s' colour space '%s' is not supported, its values are "
-                             "used as linear" % (where, image.name, space))
+        unsupported_space = ("%s: image '%s' colour space '%s' is converted only for 8-bit RGB or grey "
+                             "files Lantern reads itself; its values are used as linear" % (where, image.name, space))
         path = image_file(image)
         if path is not None:
+            other = _color_space(image) == "OTHER"
             try:
                 image_id = self.core_scene.add_image_file(
                     path, _color_space(image), _ALPHA_MODES.get(image.alpha_mode, "STRAIGHT"),
-                    use_alpha=alpha, interpolation=interp, extension=ext)
+                    use_alpha=alpha, interpolation=interp, extension=ext,
+                    ocio=(ocio_config(), space) if other else None)
             except core.LanternError as e:  # left to Blender (the reason is printed)
                 print("Lantern: image '%s' is loaded through Blender: %s" % (image.name, e.detail))
             else:
-                # The core takes a float file only in Linear or a data space: another colour
-                # space here was an 8-bit file, whose values are used as they are.
-                if space not in _SPACES_USED:
-                    self.report({'WARNING'}, unsupported_space)
                 self.ids[key] = image_id
                 self.from_files += 1
                 return image_id
@@ -99,8 +97,20 @@ class ImageExporter:
         return image_id
 
 
-# Colour spaces whose byte values are used without a warning (sRGB decoded, the others as linear).
-_SPACES_USED = {'sRGB', 'Non-Color', 'Linear', 'Raw', 'Linear ACES'}
+# Colour spaces whose byte values Image.pixels gives usable (sRGB decoded, the others as linear); the
+# core converts the others (OpenColorIO) only in files it reads itself.
+_SPACES_USED = {'sRGB', 'Non-Color', 'Linear', 'Raw'}
+
+
+def ocio_config():
+    """The OpenColorIO configuration Blender and Cycles use (Blender's colormanagement_init): the
+    OCIO environment variable's file, else Blender's own."""
+    env = os.environ.get("OCIO")
+    if env and os.path.isfile(env):
+        return env
+    return os.path.join(bpy.utils.system_resource('DATAFILES'), "colormanagement", "config.ocio")
+
+
 # Blender's Image.alpha_mode as lt_alpha_mode names.
 _ALPHA_MODES = {'STRAIGHT': "STRAIGHT", 'PREMUL': "PREMULTIPLIED", 'CHANNEL_PACKED': "CHANNEL_PACKED",
                 'NONE': "NONE"}

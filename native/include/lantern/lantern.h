@@ -48,7 +48,8 @@ extern "C" {
  * panorama_frame_aspect); the shadow catcher
  * (lt_instance_desc.shadow_catcher, lt_render_settings.shadow_catcher_approximate,
  * LT_PASS_SHADOW_CATCHER); 18: true displacement (lt_scene_set_material_displacement,
- * lt_displacement_method, lt_mesh_desc.flat_triangles). */
+ * lt_displacement_method, lt_mesh_desc.flat_triangles; the Bevel node;
+ * lt_image_file_desc.ocio_config and ocio_space: OpenColorIO colour spaces). */
 #define LT_ABI_VERSION 18
 
 enum lt_status {
@@ -139,7 +140,7 @@ enum lt_color_space {
   LT_COLOR_SPACE_SRGB = 0,
   LT_COLOR_SPACE_LINEAR = 1, /* scene linear */
   LT_COLOR_SPACE_DATA = 2,   /* Non-Color, Raw (ColorManagedInputColorspaceSettings.is_data) */
-  LT_COLOR_SPACE_OTHER = 3   /* another: 8-bit values are used as they are */
+  LT_COLOR_SPACE_OTHER = 3   /* another: ocio_space of ocio_config (below) */
 };
 enum lt_alpha_mode { /* Blender's Image.alpha_mode */
                      LT_ALPHA_MODE_STRAIGHT = 0,
@@ -154,6 +155,13 @@ typedef struct lt_image_file_desc {
   int use_alpha;     /* != 0: keep the alpha as Cycles reads it (image textures), else drop it */
   int interpolation; /* lt_interpolation */
   int extension;     /* lt_extension */
+  /* LT_COLOR_SPACE_OTHER: the OpenColorIO configuration file and the colour space's name in it.
+   * 8-bit RGB(A) and grey files are converted to scene linear as Cycles 3.4 converts them (half
+   * floats through OpenColorIO's processor to the scene_linear role) and held as half floats; other
+   * files are refused (LT_ERROR_INVALID_ARGUMENT). NULL (ABI 17's callers): 8-bit values are used
+   * as they are. */
+  const char* ocio_config;
+  const char* ocio_space;
 } lt_image_file_desc;
 LT_API int lt_scene_add_image_file(lt_scene* scene, const lt_image_file_desc* desc, int* out_id);
 

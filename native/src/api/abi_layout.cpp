@@ -67,6 +67,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_image_file_desc, use_alpha),
     LT_FIELD(lt_image_file_desc, interpolation),
     LT_FIELD(lt_image_file_desc, extension),
+    LT_FIELD(lt_image_file_desc, ocio_config),
+    LT_FIELD(lt_image_file_desc, ocio_space),
 
     LT_STRUCT(lt_shader_program),
     LT_FIELD(lt_shader_program, code),

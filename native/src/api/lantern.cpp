@@ -293,6 +293,12 @@ int lt_scene_add_image_file(lt_scene* scene, const lt_image_file_desc* d, int* o
     r.use_alpha = d->use_alpha != 0;
     r.interp = interpolation(d->interpolation);
     r.ext = lt::Extension(d->extension);
+    if (d->color_space == LT_COLOR_SPACE_OTHER && d->ocio_space && *d->ocio_space) {
+      require(d->ocio_config && *d->ocio_config,
+              "colour space '" + std::string(d->ocio_space) + "' without a configuration");
+      r.ocio_config = d->ocio_config;
+      r.ocio_space = d->ocio_space;
+    }
     std::unique_ptr<lt::Image> image;
     try {
       image = lt::read_image_file(r);

@@ -26,6 +26,16 @@ void visibility_filter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// A query's context: with per-instance visibility (null: every instance seen), visibility_filter
+// keeps the instances rays of kind `mask` see.
+void init_visibility(VisibilityContext* c, const unsigned* visibility, unsigned mask) {
+  rtcInitIntersectContext(&c->ctx);
+  if (!visibility) return;
+  c->ctx.filter = visibility_filter;
+  c->visibility = visibility;
+  c->mask = mask;
+}
+
 // Curves and spheres are entered, never left: a hit where the ray leaves the tube (the normal
 // along the ray) comes from a ray that started inside it, off the same strand (hair's
 // transmission); Cycles skips the strand it starts on the same way (its self-intersection test).
@@ -478,24 +488,18 @@ namespace {
 bool traceable(const Ray& r) {
   return within_traceable_range(r.o) && within_traceable_range(r.d) && !std::isnan(r.tmin) && !std::isnan(r.tmax);
 }
-}  // namespace
 
-bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
-  if (!traceable(ray)) return false;
-  VisibilityContext c;
-  rtcInitIntersectContext(&c.ctx);
-  if (partial_visibility_) {
-    c.ctx.filter = visibility_filter;
-    c.visibility = instance_visibility_.data();
-    c.mask = visibility;
-  }
+// The closest hit in `scene` along (o, d) over the ray's extent at its time: t (the same along
+// (o, d) as along the ray), Embree's instance id (none in a mesh's own scene), primitive,
+// barycentrics, and the world position along `ray`.
+bool closest_hit(RTCScene scene, RTCIntersectContext* ctx, const Ray& ray, const Vec3& o, const Vec3& d, Hit* hit) {
   RTCRayHit rh;
-  rh.ray.org_x = ray.o.x;
-  rh.ray.org_y = ray.o.y;
-  rh.ray.org_z = ray.o.z;
-  rh.ray.dir_x = ray.d.x;
-  rh.ray.dir_y = ray.d.y;
-  rh.ray.dir_z = ray.d.z;
+  rh.ray.org_x = o.x;
+  rh.ray.org_y = o.y;
+  rh.ray.org_z = o.z;
+  rh.ray.dir_x = d.x;
+  rh.ray.dir_y = d.y;
+  rh.ray.dir_z = d.z;
   rh.ray.tnear = ray.tmin;
   rh.ray.tfar = ray.tmax;
   rh.ray.mask = 0xffffffffu;
@@ -503,7 +507,7 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   rh.ray.time = ray.time;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(top_, &c.ctx, &rh);
+  rtcIntersect1(scene, ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   hit->t = rh.ray.tfar;
   hit->instance = int(rh.hit.instID[0]);
@@ -514,16 +518,39 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   hit->p = ray.o + ray.d * rh.ray.tfar;
   return true;
 }
+}  // namespace
+
+bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
+  if (!traceable(ray)) return false;
+  VisibilityContext c;
+  init_visibility(&c, partial_visibility_ ? instance_visibility_.data() : nullptr, visibility);
+  return closest_hit(top_, &c.ctx, ray, ray.o, ray.d, hit);
+}
+
+bool Geometry::intersect_instance(const Ray& ray, int instance, Hit* hit) const {
+  if (!traceable(ray) || instance < 0 || size_t(instance) >= instances_.size()) return false;
+  // The instance's own scene: its mesh's in object space (the ray taken there by the pose's inverse,
+  // which keeps t), or the copy baked into world space.
+  RTCScene scene = size_t(instance) < baked_.size() ? baked_[size_t(instance)].rtc : nullptr;
+  Vec3 o = ray.o, d = ray.d;
+  if (!scene) {
+    scene = meshes_[size_t(instances_[size_t(instance)].mesh)].rtc;
+    const Transform inv = affine_inverse(pose(instance, ray.time).xf);
+    o = inv.point(o);
+    d = inv.vector(d);
+  }
+  if (!scene) return false;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  if (!closest_hit(scene, &ctx, ray, o, d, hit)) return false;
+  hit->instance = instance;
+  return true;
+}
 
 bool Geometry::occluded(const Ray& ray, unsigned visibility) const {
   if (!traceable(ray)) return true;
   VisibilityContext c;
-  rtcInitIntersectContext(&c.ctx);
-  if (partial_visibility_) {
-    c.ctx.filter = visibility_filter;
-    c.visibility = instance_visibility_.data();
-    c.mask = visibility;
-  }
+  init_visibility(&c, partial_visibility_ ? instance_visibility_.data() : nullptr, visibility);
   RTCRay r;
   r.org_x = ray.o.x;
   r.org_y = ray.o.y;

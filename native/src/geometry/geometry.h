@@ -183,6 +183,19 @@ class Geometry {
   // Any hit among instances visible to rays of the given visibility bit (default: those that cast
   // shadows).
   bool occluded(const Ray& ray, unsigned visibility = 16u) const;
+  // The hits of a ray on one instance alone, nearest first, whatever else the ray meets (Cycles'
+  // scene_intersect_local: the object's own BVH; hits at the same distance count once); stops
+  // when visit(hit) returns false or after 256 hits.
+  template <class Visit>
+  void local_hits(Ray ray, int instance, Visit visit) const {
+    Hit hit;
+    for (int k = 0; k < 256 && intersect_instance(ray, instance, &hit); ++k) {
+      if (!visit(hit)) return;
+      ray.tmin = std::nextafter(hit.t, ray.tmax);
+    }
+  }
+  // Closest hit on one instance alone (local_hits' step).
+  bool intersect_instance(const Ray& ray, int instance, Hit* hit) const;
   // The hit's surface at the hit's time.
   SurfacePoint surface(const Hit& hit) const;
   // The instance's transform at time (0 .. 1 over the shutter).

@@ -265,6 +265,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   // as its length limit does (pbrt-v4's maxDepth in RandomWalk): it is where the work on vertices
   // no strategy can use is saved, and it changes no estimate.
   Bounces kinds;
+  // Cycles' min_ray_pdf along the walk (Bevel traces nothing on a path that was blurry before); a
+  // light subpath's walk keeps its own, as if it were a camera path starting at its first vertex.
+  float min_pdf = INFINITY;
   std::vector<Crossed>& crossed = scratch_.crossed;
   for (;;) {
     PathVertex& prev = path[count - 1];
@@ -359,7 +362,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       const Material& material = scene_.material(sp.material);
       const float footprint_here = mode == Mode::Radiance ? footprint + ctx.ray_length * cs_.dD : light_footprint(sp.p);
       if (material.needs_differentials()) add_differentials(scene_.geometry, sp, footprint_here, &ctx);
-      if (material.traces_rays()) add_tracing(scene_.geometry, sp, sampler_, &ctx);
+      if (material.traces_rays()) add_tracing(scene_.geometry, sp, min_pdf, sampler_, &ctx);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
       if (aovs_here)
         first->aovs_done = single_pass_done(material.may_be_transparent(), v.bsdf, s_.pass_alpha_threshold);
@@ -442,6 +445,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     if (medium >= 0) {
       float pdf_dir;  // HG sampling is exact: beta *= p / pdf = 1
       if (!phase(v).sample(v.wo, sampler_.next_2d(), &wi, &pdf_dir) || !(pdf_dir > 0)) break;
+      min_pdf = std::min(min_pdf, pdf_dir);
       if (mode == Mode::Radiance && count == 2) first_walk_.set_volume();
       visibility = kVisDiffuse;
       ray.o = mi.p;
@@ -454,6 +458,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       const bool reflect_geo = dot(wi, v.n) > 0;
       if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;
       v.delta = (bs.flags & kLobeSpecular) != 0;
+      if (!v.delta) min_pdf = std::min(min_pdf, bs.pdf);
       Spectrum fv = bs.f;
       // The light subpath's first bounce leaves out the lobes its light excludes (excluded_kinds).
       if (mode == Mode::Importance && count == 2 && excluded_kinds(path[0].vis))

@@ -41,6 +41,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
   float prev_pdf = 0;
   bool prev_delta = true;
+  float min_pdf = INFINITY;           // Cycles' min_ray_pdf: the smallest pdf of the bounces so far (Bevel)
   Vec3 prev_p = ray.o, prev_n(0.0f);  // prev_n: the geometric normal there (zero in a medium)
   float t_prev = 0;                   // distance from prev_p to ray.o (the ray crossed invisible boundaries)
   // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
@@ -60,7 +61,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     unsigned visibility;
     Bounces b;
     int nulls;
-    float prev_pdf, t_prev, footprint;
+    float prev_pdf, t_prev, footprint, min_pdf;
     bool prev_delta;
     Vec3 prev_p, prev_n;
     VolumeStack stack;
@@ -153,8 +154,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       ++stats.rays;
       // Only a scene with catchers keeps the state of each camera segment, for a split.
       if (catchers && !split && b.total == 0)
-        snap = Snapshot{ray,       beta,       visibility, b,      nulls, prev_pdf, t_prev,
-                        footprint, prev_delta, prev_p,     prev_n, stack, sampler};
+        snap = Snapshot{ray,       beta,    visibility, b,      nulls,  prev_pdf, t_prev,
+                        footprint, min_pdf, prev_delta, prev_p, prev_n, stack,    sampler};
       bool found = scene.geometry.intersect(ray, catcher_leg ? catcher_only_visibility(visibility) : visibility, &hit);
       const float t_end = found ? hit.t : ray.tmax;
       // Cycles' integrator_split_shadow_catcher: before the segment's volume and the surface are
@@ -214,6 +215,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         visibility = kVisDiffuse;
         prev_pdf = pdf;
         prev_delta = false;
+        min_pdf = std::min(min_pdf, pdf);
         prev_p = mi.p;
         prev_n = Vec3(0.0f);
         t_prev = 0;
@@ -255,7 +257,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         ShadingFrame sf{ctx.N};
         const Material& material = scene.material(sp.material);
         if (material.needs_differentials()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
-        if (material.traces_rays()) add_tracing(scene.geometry, sp, sampler, &ctx);
+        if (material.traces_rays()) add_tracing(scene.geometry, sp, min_pdf, sampler, &ctx);
         Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
         if (b.total == 0 && !aovs_done && !catcher_leg)
           aovs_done = single_pass_done(material.may_be_transparent(), bsdf, s.pass_alpha_threshold);
@@ -345,6 +347,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         b.count(bs, &visibility);
         prev_pdf = bs.pdf;
         prev_delta = (bs.flags & kLobeSpecular) != 0;
+        if (!prev_delta) min_pdf = std::min(min_pdf, bs.pdf);
         prev_p = sp.p;
         prev_n = ng;
         t_prev = 0;
@@ -368,6 +371,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     prev_pdf = snap->prev_pdf;
     t_prev = snap->t_prev;
     footprint = snap->footprint;
+    min_pdf = snap->min_pdf;
     prev_delta = snap->prev_delta;
     prev_p = snap->prev_p;
     prev_n = snap->prev_n;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "io/color_space.h"
 
 namespace lt {
 
@@ -260,6 +261,16 @@ std::unique_ptr<Image> read_image_file(const ImageFileRequest& r) {
   const FileAlphaMode mode = r.alpha_mode;
   const bool data = r.space == FileColorSpace::Data;
 
+  if (spec.format == OIIO::TypeDesc::UINT8 && format != "openexr" && r.space == FileColorSpace::Other &&
+      !r.ocio_space.empty()) {
+    // Cycles reads an 8-bit file in another colour space as half floats and converts them to scene
+    // linear (ImageMetaData::detect_colorspace): held so, 2 bytes per channel.
+    if (c != 1 && c != 3) throw unsupported("an 8-bit file with alpha in colour space '" + r.ocio_space + "'");
+    HalfBuffer px(n * c);
+    read_rows(*in, r.path, OIIO::TypeDesc::HALF, c, px.data());
+    halves_to_scene_linear(r.ocio_config, r.ocio_space, px.data(), n, c);
+    return std::make_unique<Image>(w, h, c, std::move(px), r.interp, r.ext, ImageAlpha::Ignore);
+  }
   if (spec.format == OIIO::TypeDesc::UINT8 && format != "openexr") {
     if (c < 1 || c > 4) throw unsupported(std::to_string(c) + " channels");
     ByteBuffer px(n * c);

@@ -21,7 +21,8 @@
 namespace lt {
 
 // The image datablock's colour space: sRGB, the scene-linear Linear, a data space (Non-Color,
-// Raw: is_data), or another (byte values then used as they are, as the add-on's own path does).
+// Raw: is_data), or another: ocio_space of ocio_config (io/color_space.h; without them, byte values
+// are used as they are).
 enum class FileColorSpace { Srgb, Linear, Data, Other };
 // Blender's Image.alpha_mode.
 enum class FileAlphaMode { Straight, Premultiplied, ChannelPacked, None };
@@ -33,6 +34,7 @@ struct ImageFileRequest {
   bool use_alpha = false;  // the texture's alpha is read (image textures); else dropped
   Interpolation interp = Interpolation::Linear;
   Extension ext = Extension::Repeat;
+  std::string ocio_config, ocio_space;  // FileColorSpace::Other
 };
 
 // A file this reader does not take (the caller loads it another way); the message says why.

@@ -39,6 +39,7 @@ const OpSignature kSignatures[] = {
     {"v", "vf", "gii", false},          // environment
     {"f", "f", "ii", false},            // wireframe
     {"vfv", "vf", "ii", false},         // ambient occlusion
+    {"fv", "v", "i", false},            // bevel
 };
 
 Vec3 normal_or_default(const Machine& m, uint32_t operand) {
@@ -526,15 +527,10 @@ void wireframe(const Instr& in, Machine& m) {
   m.set(in.out[0], f);
 }
 
-// Whether a ray meets the instance `instance` before its end (Cycles' scene_intersect_local): the
-// hits along the ray, other instances' stepped over.
-bool occluded_by(const Geometry& g, Ray ray, int instance) {
+// Whether a ray meets the instance `instance` before its end.
+bool occluded_by(const Geometry& g, const Ray& ray, int instance) {
   Hit hit;
-  for (int k = 0; k < 256 && g.intersect(ray, 31u, &hit); ++k) {
-    if (hit.instance == instance) return true;
-    ray.tmin = std::nextafter(hit.t, ray.tmax);
-  }
-  return false;
+  return g.intersect_instance(ray, instance, &hit);
 }
 
 // Cycles' svm_ao: `samples` rays cosine-distributed about the normal (flipped: Inside), within the
@@ -563,6 +559,110 @@ float ambient_occlusion(const Instr& in, Machine& m) {
     if (!(local ? occluded_by(*c.geometry, ray, instance) : c.geometry->occluded(ray))) ++unoccluded;
   }
   return float(unoccluded) / float(samples);
+}
+
+// Cycles' svm_bevel_cubic_eval: the planar cubic BSSRDF falloff 10 (R - r)^3 / (pi R^5), which is
+// also the density of its disk samples.
+float bevel_cubic(float radius, float r) {
+  if (r >= radius) return 0.0f;
+  const float f = radius - r;
+  return 10.0f * f * f * f / (radius * radius * radius * radius * radius * kPi);
+}
+
+// Cycles' svm_bevel_cubic_quintic_root_find: x with 10x^2 - 20x^3 + 15x^4 - 4x^5 = xi (the
+// falloff's radial CDF at x R), by Newton's method from 0.25 as Cycles iterates it.
+float bevel_cubic_root(float xi) {
+  float x = 0.25f;
+  for (int i = 0; i < 10; ++i) {
+    const float x2 = x * x, x3 = x2 * x, nx = 1 - x;
+    const float f = 10 * x2 - 20 * x3 + 15 * x2 * x2 - 4 * x2 * x3 - xi;
+    const float df = 20 * (x * nx) * (nx * nx);
+    if (std::abs(f) < 1e-6f || df == 0) break;
+    x = clamp(x - f / df, 0.0f, 1.0f);
+  }
+  return x;
+}
+
+// Cycles' svm_bevel (kernel/svm/bevel.h; the sampling of King et al., "BSSRDF Importance
+// Sampling", 2013): rays through a disk around the point along the normal or one of two tangents,
+// hitting the same object within the falloff, the hits' normals weighted by the falloff over the
+// sample's density (power heuristic over the three axes). The shading normal where nothing is
+// traced (no object, no radius, a path that was blurry before: Cycles' min_ray_pdf < 8).
+Vec3 bevel_normal(const ShadingContext& c, float radius, int samples) {
+  if (!(radius > 0) || samples < 1 || !c.instance || c.primitive < 0 || !c.mesh || !c.mesh->is_triangles() ||
+      c.min_ray_pdf < 8)
+    return c.N;
+  constexpr int kMaxHits = 4;  // Cycles' LOCAL_MAX_HITS: a uniform subset of the hits beyond it
+  const int instance = int(c.instance - &c.geometry->instance(0));
+  const uint64_t seed = mix_u64(c.trace_seed ^ 0x64c6a40eULL);
+  Pcg32 subset(seed, 0x2545f4914f6cdd1dULL);
+  Vec3 sum(0.0f);
+  for (int k = 0; k < samples; ++k) {
+    Vec2 u = sobol_owen_2d(reverse_bits(uint32_t(k)), seed);
+    // The disk's normal and its two tangents, each with its chance of being picked as the normal:
+    // Ng half the time, the tangents a quarter each.
+    Vec3 axes[3];
+    axes[0] = c.Ng;
+    orthonormals(axes[0], &axes[1], &axes[2]);
+    float pick[3] = {0.5f, 0.25f, 0.25f};
+    int axis = 0;
+    if (u.x < 0.5f) {
+      u.x *= 2;
+    } else if (u.x < 0.75f) {
+      axis = 1;
+      u.x = (u.x - 0.5f) * 4;
+    } else {
+      axis = 2;
+      u.x = (u.x - 0.75f) * 4;
+    }
+    std::swap(axes[0], axes[axis]);
+    std::swap(pick[0], pick[axis]);
+    const float phi = 2 * kPi * u.x;
+    const float disk_r = bevel_cubic_root(u.y) * radius;
+    const float height = std::sqrt(std::max(radius * radius - disk_r * disk_r, 0.0f));
+    const float disk_pdf = bevel_cubic(radius, disk_r);
+    if (!(disk_pdf > 0)) continue;
+    Ray ray;
+    ray.o = c.P + axes[0] * height + (axes[1] * std::cos(phi) + axes[2] * std::sin(phi)) * disk_r;
+    ray.d = -axes[0];
+    ray.tmin = 0;
+    ray.tmax = 2 * height;
+    ray.time = c.time;
+    SurfacePoint kept[kMaxHits];
+    int hits = 0;
+    c.geometry->local_hits(ray, instance, [&](const Hit& hit) {
+      // Reservoir sampling as Cycles' local intersection keeps at most kMaxHits of them.
+      const int slot = hits < kMaxHits ? hits : int(subset.next_u32() % uint32_t(hits + 1));
+      ++hits;
+      if (slot < kMaxHits) kept[slot] = c.geometry->surface(hit);
+      return true;
+    });
+    for (int h = 0; h < std::min(hits, kMaxHits); ++h) {
+      const SurfacePoint& sp = kept[h];
+      float pdf[3];
+      for (int a = 0; a < 3; ++a) pdf[a] = pick[a] * std::abs(dot(axes[a], sp.ng));
+      float w = pdf[0] / (pdf[0] * pdf[0] + pdf[1] * pdf[1] + pdf[2] * pdf[2]);
+      if (hits > kMaxHits) w *= float(hits) / float(kMaxHits);
+      w *= bevel_cubic(radius, length(sp.p - c.P)) / disk_pdf;
+      if (std::isfinite(w)) sum += sp.ns * w;
+    }
+  }
+  const float l = length(sum);
+  if (!(l > 0) || !std::isfinite(l)) return c.N;
+  return c.backfacing ? -sum / l : sum / l;
+}
+
+// Bevel: light samples and shadow rays (no geometry to trace) see the shading normal, unblended,
+// as Cycles' shadow and light evaluations, which leave out its ray-tracing nodes.
+Vec3 bevel(const Instr& in, Machine& m) {
+  const ShadingContext& c = *m.ctx;
+  if (!c.geometry) return c.N;
+  const Vec3 n = bevel_normal(c, m.f(in.in[0]), int(std::min<uint32_t>(in.param[0], 1024)));
+  const Vec3 ref = m.v(in.in[1]);
+  if (dot(ref, ref) == 0) return n;
+  const Vec3 blended = ref + (n - c.N);  // Cycles keeps a linked Normal: the bevel's change added
+  const float l = length(blended);
+  return l > 0 ? blended / l : c.N;
 }
 
 // Point Info on points (zero elsewhere, as Cycles).
@@ -599,7 +699,7 @@ const OpSignature* inputs_family_signature(uint32_t op) {
   static const OpSignature kSetDisplacement = {"v", "", "", false}, kBumpEval = {"", "", "i", false};
   if (op == kOpSetDisplacement) return &kSetDisplacement;
   if (op == kOpBumpEval) return &kBumpEval;
-  if (op < kOpTexCoord || op > kOpAmbientOcclusion) return nullptr;
+  if (op < kOpTexCoord || op > kOpBevel) return nullptr;
   return &kSignatures[op - kOpTexCoord];
 }
 
@@ -620,6 +720,10 @@ void exec_inputs_family(const Instr& in, Machine& m) {
     const float ao = ambient_occlusion(in, m);
     m.set(in.out[0], m.v(in.in[0]) * ao);
     m.set(in.out[1], ao);
+    return;
+  }
+  if (in.op == kOpBevel) {
+    m.set(in.out[0], bevel(in, m));
     return;
   }
   if (in.op == kOpToFloat) {

@@ -88,6 +88,10 @@ enum InputOp : uint32_t {
   // color v (times ao), ao f (the fraction of `samples` cosine-distributed rays within distance
   // that reach nothing); params: samples, flags (1 only local, 2 inside).
   kOpAmbientOcclusion,
+  // Bevel (Cycles' svm_node_bevel / svm_bevel): in: radius f, normal v (zero: unlinked); out: normal
+  // v (the normals of the same object's surface within radius, weighted by a cubic falloff);
+  // params: samples.
+  kOpBevel,
   // The Material Output's Displacement in a true-displacement program (Cycles'
   // svm_node_set_displacement: sd->P += dP): in: the world-space offset v, added to
   // Machine::displacement (Program::displacement; elsewhere nothing).

@@ -52,8 +52,10 @@ void set_shading_normal(ShadingContext* c, const Vec3& n) {
   c->tangent = is_finite(tangent) ? tangent : Vec3(0.0f);
 }
 
-void add_tracing(const Geometry& geometry, const SurfacePoint& sp, Sampler& sampler, ShadingContext* ctx) {
+void add_tracing(const Geometry& geometry, const SurfacePoint& sp, float min_ray_pdf, Sampler& sampler,
+                 ShadingContext* ctx) {
   ctx->geometry = &geometry;
+  ctx->min_ray_pdf = min_ray_pdf;
   ctx->time = sp.time;
   ctx->trace_seed = mix_u64(uint64_t(sampler.next_1d() * 0x1p32f) ^ 0x2545f4914f6cdd1dULL);
 }

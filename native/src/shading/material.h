@@ -88,8 +88,10 @@ void set_shading_normal(ShadingContext* ctx, const Vec3& n);
 // the point (Cycles' compact dP: the camera's dP plus its dD times the path's length), the shading
 // point moved by it along the surface, and the triangle's corners in world space.
 void add_differentials(const Geometry& geometry, const SurfacePoint& sp, float footprint, ShadingContext* ctx);
-// What Ambient Occlusion needs at a path's vertex: the scene to trace, the point's time and one
-// number from the path's sampler for its rays (drawn only by materials that trace).
-void add_tracing(const Geometry& geometry, const SurfacePoint& sp, Sampler& sampler, ShadingContext* ctx);
+// What Ambient Occlusion and Bevel need at a path's vertex: the scene to trace, the point's time,
+// one number from the path's sampler for their rays (drawn only by materials that trace) and the
+// smallest pdf of the path's bounces so far (Cycles' min_ray_pdf).
+void add_tracing(const Geometry& geometry, const SurfacePoint& sp, float min_ray_pdf, Sampler& sampler,
+                 ShadingContext* ctx);
 
 }  // namespace lt

@@ -145,7 +145,7 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
       ++count_;
       uses_bump_ |= in.op == kOpBump;
       uses_wireframe_ |= in.op == kOpWireframe;
-      traces_rays_ |= in.op == kOpAmbientOcclusion;
+      traces_rays_ |= in.op == kOpAmbientOcclusion || in.op == kOpBevel;
       sets_normal_ |= in.op == kOpSetNormal;
       bump_eval_ |= in.op == kOpBumpEval;
     }

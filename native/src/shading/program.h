@@ -77,11 +77,14 @@ struct ShadingContext {
   // aov_count), set only where Cycles writes them (a camera path before its first opaque surface).
   float* aovs = nullptr;
   int aov_count = 0;
-  // Ambient Occlusion's rays (add_tracing): the scene they meet (null: AO is 1, as Cycles' light
-  // and shadow evaluations), the ray's time and a number scrambling the node's ray pattern.
+  // Ambient Occlusion's and Bevel's rays (add_tracing): the scene they meet (null: AO is 1 and
+  // Bevel the normal, as Cycles' light and shadow evaluations), the ray's time, a number scrambling
+  // the nodes' ray patterns, and the smallest pdf of the bounces before (Cycles' min_ray_pdf; delta
+  // lobes infinite): Bevel traces nothing below 8, on paths that were blurry.
   const Geometry* geometry = nullptr;
   float time = 0.5f;
   uint64_t trace_seed = 0;
+  float min_ray_pdf = INFINITY;
 };
 
 // The machine an instruction runs on: read inputs, write outputs.

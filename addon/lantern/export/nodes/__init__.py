@@ -23,6 +23,10 @@ LUMA = (0.2126, 0.7152, 0.0722)
 
 VALUE_NODES = {}
 SHADER_NODES = {}
+# Nodes whose outgoing links Cycles 3.4 drops (EEVEE-only nodes it has no node for): the inputs they
+# feed keep their own values, in Cycles and here (measured: an Emission's Color and Strength fed
+# by Shader to RGB's Color and Alpha render with their socket defaults).
+CYCLES_DROPS = {'SHADERTORGB'}
 
 
 def register(*types):
@@ -190,6 +194,10 @@ class Compiler:
                     return scope, None, None
                 socket = nxt
                 continue
+            if node.type in CYCLES_DROPS:
+                self.warn("'%s' (%s) is an EEVEE node that Cycles does not render: the sockets it feeds "
+                          "keep their own values, as in Cycles" % (node.name, node.bl_idname))
+                return scope, None, socket
             if node.type == 'GROUP':
                 tree = node.node_tree
                 group_out = _group_output(tree)

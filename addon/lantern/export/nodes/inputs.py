@@ -63,6 +63,14 @@ def ambient_occlusion(c, node, want):
                                                      int(node.only_local) | 2 * int(node.inside)])
 
 
+@register('BEVEL')
+def bevel(c, node, want):
+    """Cycles' Bevel: the normals of the object's surface within Radius, from Samples rays at the
+    path's vertices (light samples and shadow rays see the shading normal, as in Cycles)."""
+    return c.emit(ops.BEVEL, [c.float(node.inputs["Radius"]), c.normal(node.inputs["Normal"])], [("Normal", 3)],
+                  params=[max(1, min(int(node.samples), 128))])
+
+
 @register('CAMERA')
 def camera_data(c, node, want):
     if c.camera is None:
