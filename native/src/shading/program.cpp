@@ -7,6 +7,8 @@
 #include "shading/bsdf.h"
 #include "shading/inputs.h"
 #include "shading/shaders.h"
+#include "shading/sky.h"
+#include "shading/textures.h"
 
 namespace lt {
 
@@ -86,6 +88,8 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
       throw InvalidArgument(where + " (opcode " + std::to_string(in.op) + ") has the wrong operand count");
     std::vector<uint32_t> words(code.begin() + long(pos), code.begin() + long(pos + words_of(in)));
     uint32_t* ins = words.data() + 2;
+    if (in.op >= kFamilyTexturesBegin && in.op < kOpEnd)
+      prepare_textures_family(in.op, ins + in.n_in + in.n_out, &constants);
     bool all_constant = true;
     for (int k = 0; k < in.n_in; ++k) {
       uint32_t w = ins[k];
@@ -245,6 +249,19 @@ std::vector<uint32_t> Program::environment_images() const {
     if (in.op == kOpEnvironment) ids.push_back(in.param[0]);
   }
   return ids;
+}
+
+std::vector<Program::SunDisc> Program::sun_discs() const {
+  std::vector<SunDisc> discs;
+  for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
+    Instr in = decode(w);
+    w += words_of(in);
+    SunDisc d;
+    if (in.op == kOpTexSky &&
+        sky::sun_disc(in.param[0], constants_.data() + in.param[1 + sky::kSettings] + 1, &d.dir, &d.half_angle))
+      discs.push_back(d);
+  }
+  return discs;
 }
 
 bool Program::emission_estimate(float* estimate) const {

@@ -31,6 +31,32 @@ void World::set_program(std::shared_ptr<const Program> program, int map_resoluti
   built_ = false;
 }
 
+void World::supersample_sun_discs(std::vector<float>* f, int w, int h) const {
+  // A sky's sun disc is smaller than a map pixel or two: pixel centres alone would miss it or give
+  // its pixels the disc's full radiance. Pixels that may overlap a disc get the mean of a grid of
+  // the program's values over them instead (in the disc's frame as the node sees an unmapped
+  // direction; a disc mapped elsewhere stays point-sampled, still unbiased with MIS).
+  constexpr int kGrid = 8;
+  const float reach = kPi / h + 2 * kPi / w;  // a bound on a pixel's angular radius, doubled
+  for (const Program::SunDisc& disc : program_->sun_discs()) {
+    const float cos_reach = std::cos(std::min(disc.half_angle + reach, kPi));
+    tbb::parallel_for(0, h, [&](int y) {
+      const float sin_theta = std::sin(kPi * (y + 0.5f) / h);
+      for (int x = 0; x < w; ++x) {
+        if (dot(equirectangular_to_direction({(x + 0.5f) / w, (y + 0.5f) / h}), disc.dir) < cos_reach) continue;
+        double a = 0;
+        for (int j = 0; j < kGrid; ++j)
+          for (int i = 0; i < kGrid; ++i) {
+            const Vec2 uv{(x + (i + 0.5f) / kGrid) / w, (y + (j + 0.5f) / kGrid) / h};
+            const float v = average(abs(radiance(equirectangular_to_direction(uv))));
+            if (std::isfinite(v)) a += v;
+          }
+        (*f)[size_t(y) * w + x] = float(a / (kGrid * kGrid)) * sin_theta;
+      }
+    });
+  }
+}
+
 void World::build(const std::vector<std::unique_ptr<Image>>& images) {
   images_ = &images;
   if (built_) return;
@@ -73,6 +99,7 @@ void World::build(const std::vector<std::unique_ptr<Image>>& images) {
       f[size_t(y) * w + x] = std::isfinite(a) ? a * sin_theta : 0.0f;
     }
   });
+  supersample_sun_discs(&f, w, h);
   double sum = 0, weight = 0;
   for (int y = 0; y < h; ++y) {
     const double sin_theta = std::sin(kPi * (y + 0.5) / h);

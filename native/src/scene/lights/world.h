@@ -56,6 +56,7 @@ class World {
   float map_pdf(Vec2 uv) const { return distribution_.pdf(uv); }
 
  private:
+  void supersample_sun_discs(std::vector<float>* f, int w, int h) const;
   Spectrum color_{0.0f};
   std::shared_ptr<const Program> program_;
   int map_resolution_ = 0;
