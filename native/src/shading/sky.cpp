@@ -27,13 +27,13 @@ constexpr int kWavelengths = 21;  // 380 nm to 780 nm
 constexpr float kStepLambda = 20.0f;
 // Sun irradiance at the top of the atmosphere (W m^-2 nm^-1), Rayleigh scattering and ozone
 // absorption coefficients (1/m), per wavelength.
-constexpr float kIrradiance[kWavelengths] = {
-    1.45756829855592995315f, 1.56596305559738380175f, 1.65148449067670455293f, 1.71496242737209314555f,
-    1.75797983805020541226f, 1.78256407885924539336f, 1.79095108475838560302f, 1.78541550133410664714f,
-    1.76815554864306845317f, 1.74122069647250410362f, 1.70647127164943679389f, 1.66556087452739887134f,
-    1.61993437242451854274f, 1.57083597368892080581f, 1.51932335059305478886f, 1.46628494965214395407f,
-    1.41245852740172450623f, 1.35844961970384092709f, 1.30474913844739281998f, 1.25174963272610817455f,
-    1.19975998755420620867f};
+constexpr float kIrradiance[kWavelengths] = {1.45756829855592995315f, 1.56596305559738380175f, 1.65148449067670455293f,
+                                             1.71496242737209314555f, 1.75797983805020541226f, 1.78256407885924539336f,
+                                             1.79095108475838560302f, 1.78541550133410664714f, 1.76815554864306845317f,
+                                             1.74122069647250410362f, 1.70647127164943679389f, 1.66556087452739887134f,
+                                             1.61993437242451854274f, 1.57083597368892080581f, 1.51932335059305478886f,
+                                             1.46628494965214395407f, 1.41245852740172450623f, 1.35844961970384092709f,
+                                             1.30474913844739281998f, 1.25174963272610817455f, 1.19975998755420620867f};
 constexpr float kRayleighCoeff[kWavelengths] = {
     0.00005424820087636473f, 0.00004418549866505454f, 0.00003635151910165377f, 0.00003017929012024763f,
     0.00002526320226989157f, 0.00002130859310621843f, 0.00001809838025320633f, 0.00001547057129129042f,
@@ -41,13 +41,13 @@ constexpr float kRayleighCoeff[kWavelengths] = {
     0.00000765513700977967f, 0.00000674217203751443f, 0.00000596134125832052f, 0.00000529034598065810f,
     0.00000471115687557433f, 0.00000420910481110487f, 0.00000377218381260133f, 0.00000339051255477280f,
     0.00000305591531679811f};
-constexpr float kOzoneCoeff[kWavelengths] = {
-    0.00000000325126849861f, 0.00000000585395365047f, 0.00000001977191155085f, 0.00000007309568762914f,
-    0.00000020084561514287f, 0.00000040383958096161f, 0.00000063551335912363f, 0.00000096707041180970f,
-    0.00000154797400424410f, 0.00000209038647223331f, 0.00000246128056164565f, 0.00000273551299461512f,
-    0.00000215125863128643f, 0.00000159051840791988f, 0.00000112356197979857f, 0.00000073527551487574f,
-    0.00000046450130357806f, 0.00000033096079921048f, 0.00000022512612292678f, 0.00000014879129266490f,
-    0.00000016828623364192f};
+constexpr float kOzoneCoeff[kWavelengths] = {0.00000000325126849861f, 0.00000000585395365047f, 0.00000001977191155085f,
+                                             0.00000007309568762914f, 0.00000020084561514287f, 0.00000040383958096161f,
+                                             0.00000063551335912363f, 0.00000096707041180970f, 0.00000154797400424410f,
+                                             0.00000209038647223331f, 0.00000246128056164565f, 0.00000273551299461512f,
+                                             0.00000215125863128643f, 0.00000159051840791988f, 0.00000112356197979857f,
+                                             0.00000073527551487574f, 0.00000046450130357806f, 0.00000033096079921048f,
+                                             0.00000022512612292678f, 0.00000014879129266490f, 0.00000016828623364192f};
 // CIE 1931 colour matching functions at the same wavelengths.
 constexpr float kCmf[kWavelengths][3] = {
     {0.00136800000f, 0.00003900000f, 0.00645000100f}, {0.01431000000f, 0.00039600000f, 0.06785001000f},
@@ -117,7 +117,8 @@ Vec3 optical_depth(const Vec3& p, const Vec3& d) {
   const float span = length(leave_atmosphere(p, d) - p);
   const Vec3 segment = d * span;
   Vec3 depth(0.0f);
-  for (int i = 0; i < kQuadrature; ++i) depth += densities(length(p + segment * kQuadNodes[i]) - kEarthRadius) * kQuadWeights[i];
+  for (int i = 0; i < kQuadrature; ++i)
+    depth += densities(length(p + segment * kQuadNodes[i]) - kEarthRadius) * kQuadWeights[i];
   return depth * span;
 }
 
@@ -173,8 +174,7 @@ std::shared_ptr<const std::vector<float>> cached_texture(float elevation, float 
   std::lock_guard<std::mutex> lock(mutex);
   if (auto hit = cache[key].lock()) return hit;
   for (auto it = cache.begin(); it != cache.end();) it = it->second.expired() ? cache.erase(it) : std::next(it);
-  auto table =
-      std::make_shared<const std::vector<float>>(nishita_texture(elevation, altitude, air, dust, ozone));
+  auto table = std::make_shared<const std::vector<float>>(nishita_texture(elevation, altitude, air, dust, ozone));
   cache[key] = table;
   return table;
 }
@@ -196,7 +196,8 @@ Vec3 texture_lookup(const float* texels, float x, float y) {
     const float* t = texels + 3 * (size_t(iy) * kNishitaWidth + ix);
     return Vec3(t[0], t[1], t[2]);
   };
-  return (at(x0, y0) * (1 - tx) + at(x0 + 1, y0) * tx) * (1 - ty) + (at(x0, y0 + 1) * (1 - tx) + at(x0 + 1, y0 + 1) * tx) * ty;
+  return (at(x0, y0) * (1 - tx) + at(x0 + 1, y0) * tx) * (1 - ty) +
+         (at(x0, y0 + 1) * (1 - tx) + at(x0 + 1, y0 + 1) * tx) * ty;
 }
 
 Vec3 rgb_clamped(const Vec3& xyz) { return vmax(xyz_to_rgb(xyz), Vec3(0.0f)); }
@@ -237,7 +238,8 @@ Vec3 nishita(const float* t, const Vec3& dir) {
 
 float perez(const float* lam, float theta, float gamma) {
   const float cg = std::cos(gamma);
-  return (1.0f + lam[0] * std::exp(lam[1] / std::cos(theta))) * (1.0f + lam[2] * std::exp(lam[3] * gamma) + lam[4] * cg * cg);
+  return (1.0f + lam[0] * std::exp(lam[1] / std::cos(theta))) *
+         (1.0f + lam[2] * std::exp(lam[3] * gamma) + lam[4] * cg * cg);
 }
 
 Vec3 preetham(const float* t, const Vec3& dir) {

@@ -2,11 +2,11 @@
 // files named at each section; the operation order is kept where it changes the float result.
 #include "shading/textures.h"
 
-#include "shading/sky.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+
+#include "shading/sky.h"
 
 namespace lt {
 
