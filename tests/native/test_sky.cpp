@@ -120,6 +120,11 @@ TEST(Sky, LoaderComputesTheTableWhateverTheProgramSays) {
   ShaderCode p = sky_program(sky::kSkyNishita, {1, 0.1f, 1, 0.5f, 0, 1, 1, 1, 1});
   p.code[p.code.size() - 1 - 5] = 123456;  // the sky's table word (the Background's 5 words follow)
   EXPECT_NO_THROW(Program(p.code, p.k, p.registers, 0));
+  // An unknown type renders Preetham's sky (the op's documented default), finite.
+  const ShaderCode odd = sky_program(7, {0.2f, -0.5f, 0.6f, 2.0f, 0, 0, 0, 0, 0});
+  const Program odd_prog(odd.code, odd.k, odd.registers, 0);
+  const Spectrum v = eval(odd_prog, normalize(Vec3(0.1f, 0.2f, 0.9f)));
+  EXPECT_TRUE(std::isfinite(v.x) && v.y > 0.0f);
   // Non-finite settings are refused.
   const ShaderCode bad = sky_program(sky::kSkyNishita, {1, 0.1f, 1, NAN, 0, 1, 1, 1, 1});
   EXPECT_THROW(Program(bad.code, bad.k, bad.registers, 0), InvalidArgument);
