@@ -209,9 +209,11 @@ def test_sky(case, outdir):
 
 # The World's sky seen whole through an equirectangular camera (the node's unlinked Vector: the
 # direction): the sun disc with its limb darkening, rising and high, the sky, the horizon, the
-# ground's fade to black. The sun is widened to a few pixels so that its inside is compared too.
+# ground's fade to black. The sun is widened to a few pixels (to 20 in "nishita_wide_sun", where its
+# limb darkening must be Cycles' within the bound) so that its inside is compared too.
 WORLD_SKY_CASES = {
     "nishita_default": dict(sun_size=0.2),
+    "nishita_wide_sun": dict(sun_size=0.5, sun_elevation=0.4, sun_rotation=0.7),
     "nishita_rising_sun": dict(sun_size=0.25, sun_elevation=0.05, sun_rotation=2.0, sun_intensity=0.5),
     "nishita_high_sun": dict(sun_size=0.15, sun_elevation=1.2, sun_rotation=-1.0, altitude=2500.0, air_density=2.0,
                              dust_density=0.5, ozone_density=3.0),

@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "program_builder.h"
+#include "scene/scene.h"
 #include "shading/image.h"
 #include "shading/nodes_math.h"
 #include "shading/sky.h"
@@ -128,6 +129,43 @@ TEST(Sky, LoaderComputesTheTableWhateverTheProgramSays) {
   // Non-finite settings are refused.
   const ShaderCode bad = sky_program(sky::kSkyNishita, {1, 0.1f, 1, NAN, 0, 1, 1, 1, 1});
   EXPECT_THROW(Program(bad.code, bad.k, bad.registers, 0), InvalidArgument);
+}
+
+TEST(Sky, WorldMapFindsASunDiscBetweenItsPixelCentres) {
+  // A sun 0.3 degrees across centred on a corner of the 1024 x 512 map's pixels: no pixel centre
+  // sees it, yet the map must give it its share of samples (World::build's supersampling).
+  const int w = 1024, h = 512;
+  const Vec3 sun = equirectangular_to_direction({300.0f / w, 380.0f / h});
+  const float elevation = std::asin(sun.z), azimuth = std::atan2(sun.y, sun.x);
+  const float size = 0.3f * kPi / 180;
+  const ShaderCode p = sky_program(sky::kSkyNishita, {1, size, 1, elevation, 2.5f * kPi - azimuth, 1, 1, 1, 1});
+  Scene scene;
+  scene.world.set_program(std::make_shared<const Program>(p.code, p.k, p.registers, 0), w);
+  scene.world_set = true;
+  scene.commit();
+  ASSERT_TRUE(scene.world.has_map());
+  const Spectrum centre = scene.world.radiance(sun);
+  ASSERT_GT(centre.y, 1e3f);  // the disc, not the sky
+  for (int i = 0; i < 2; ++i)  // the nearest pixel centres see the sky
+    EXPECT_LT(average(scene.world.radiance(equirectangular_to_direction({(300 - i + 0.5f) / w, 380.5f / h}))),
+              1e-2f * average(centre));
+  // Its share of the world's power, and the fraction of samples landing in it.
+  const float omega = 2 * kPi * (1 - std::cos(size / 2));
+  const float share = 0.8f * average(centre) * omega / (scene.world.mean() * 4 * kPi);  // limb: 2/3 x 0.6
+  ASSERT_GT(share, 0.5f);
+  int inside = 0;
+  const int n = 20000;
+  for (int i = 0; i < n; ++i) {
+    LightSample ls;
+    if (world_sample(scene.world, Vec2{(i + 0.5f) / n, std::fmod(i * 0.6180339887f, 1.0f)}, &ls) &&
+        dot(ls.wi, sun) > std::cos(size / 2))
+      ++inside;
+  }
+  // Samples fall in the four pixels around the disc with its share, uniformly within them: the
+  // disc's part of their solid angle lands in it.
+  const float pixels = 4 * (2 * kPi / w) * (kPi / h) * std::sqrt(1 - sun.z * sun.z);
+  EXPECT_GT(float(inside) / n, 0.8f * share * omega / pixels);
+  EXPECT_GT(world_pdf(scene.world, sun), 1e3f * world_pdf(scene.world, Vec3(0, 0, 1)));
 }
 
 TEST(Sky, PreethamFollowsTheSun) {
