@@ -145,7 +145,7 @@ TEST(Sky, WorldMapFindsASunDiscBetweenItsPixelCentres) {
   scene.commit();
   ASSERT_TRUE(scene.world.has_map());
   const Spectrum centre = scene.world.radiance(sun);
-  ASSERT_GT(centre.y, 1e3f);  // the disc, not the sky
+  ASSERT_GT(centre.y, 1e3f);   // the disc, not the sky
   for (int i = 0; i < 2; ++i)  // the nearest pixel centres see the sky
     EXPECT_LT(average(scene.world.radiance(equirectangular_to_direction({(300 - i + 0.5f) / w, 380.5f / h}))),
               1e-2f * average(centre));
