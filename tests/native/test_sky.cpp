@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <random>
 #include <vector>
 
 #include "core/error.h"
@@ -166,6 +167,61 @@ TEST(Sky, WorldMapFindsASunDiscBetweenItsPixelCentres) {
   const float pixels = 4 * (2 * kPi / w) * (kPi / h) * std::sqrt(1 - sun.z * sun.z);
   EXPECT_GT(float(inside) / n, 0.8f * share * omega / pixels);
   EXPECT_GT(world_pdf(scene.world, sun), 1e3f * world_pdf(scene.world, Vec3(0, 0, 1)));
+}
+
+// Mean and squared standard error of a sample.
+struct Estimate {
+  double mean, se2;
+};
+template <class F>
+Estimate estimate(int n, F sample) {
+  double s = 0, s2 = 0;
+  for (int i = 0; i < n; ++i) {
+    const double v = sample();
+    s += v;
+    s2 += v * v;
+  }
+  const double m = s / n;
+  return {m, std::max(s2 / n - m * m, 0.0) / n};
+}
+
+TEST(Sky, WorldSamplingMixesTheSunConeWithoutBias) {
+  // world_sample draws the disc's cone or the map, world_pdf gives their mixture: E[L / pdf] over
+  // its samples is the integral of L over the sphere, here computed apart: the cone by uniform
+  // samples in it, the rest by uniform samples of the sphere (fixed seeds; 4.5 standard errors).
+  const float size = 0.02f, elevation = 0.4f;
+  const ShaderCode p = sky_program(sky::kSkyNishita, {1, size, 1, elevation, 1.0f, 1, 1, 1, 1});
+  Scene scene;
+  scene.world.set_program(std::make_shared<const Program>(p.code, p.k, p.registers, 0), 256);
+  scene.world_set = true;
+  scene.commit();
+  const World& w = scene.world;
+  ASSERT_GT(w.sun_probability(), 0.2f);
+  const Vec3 sun = Program(p.code, p.k, p.registers, 0).sun_discs().at(0).dir;
+  const float one_minus_cos = 2 * std::sin(size / 4) * std::sin(size / 4);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> uni(0.0f, 1.0f);
+  auto u2 = [&] { return Vec2{uni(rng), uni(rng)}; };
+  auto lum = [&](const Vec3& d) { return double(average(w.radiance(d))); };
+  const int n = 200000;
+  const Estimate cone = estimate(n, [&] {
+    const float t = uni(rng) * one_minus_cos, phi = 2 * kPi * uni(rng), st = std::sqrt(t * (2 - t));
+    return lum(Frame(sun).to_world(Vec3(st * std::cos(phi), st * std::sin(phi), 1 - t))) * 2 * kPi * one_minus_cos;
+  });
+  const Estimate rest = estimate(n, [&] {
+    const Vec3 d = sample_uniform_sphere(u2());
+    return 0.5f * length_squared(d - sun) <= one_minus_cos ? 0.0 : lum(d) * 4 * kPi;
+  });
+  const Estimate sampled = estimate(n, [&] {
+    LightSample ls;
+    if (!world_sample(w, u2(), &ls)) return 0.0;
+    EXPECT_NEAR(ls.pdf, world_pdf(w, ls.wi), 1e-4f * ls.pdf);
+    return double(average(ls.radiance)) / ls.pdf;
+  });
+  const double truth = cone.mean + rest.mean;
+  EXPECT_GT(cone.mean, rest.mean);  // the sun dominates
+  EXPECT_LT(std::abs(sampled.mean - truth), 4.5 * std::sqrt(cone.se2 + rest.se2 + sampled.se2))
+      << sampled.mean << " vs " << truth;
 }
 
 TEST(Sky, PreethamFollowsTheSun) {
