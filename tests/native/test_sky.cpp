@@ -24,14 +24,15 @@ uint32_t bits(float f) {
   return w;
 }
 
-// A program: the Sky Texture of Texture Coordinate's Generated (a world's direction) into a Background of strength 1.
-ShaderCode sky_program(uint32_t type, const std::vector<float>& settings) {
+// A program: the Sky Texture of Texture Coordinate's output `coord` (0: Generated, a world's
+// direction) into a Background of strength 1.
+ShaderCode sky_program(uint32_t type, const std::vector<float>& settings, int coord = 0) {
   ShaderCode p;
   const std::vector<uint32_t> tc = p.tex_coord();
   std::vector<uint32_t> params = {type};
   for (float s : settings) params.push_back(bits(s));
   params.push_back(0);  // the table: the loader's
-  const uint32_t color = p.emit(kOpTexSky, {tc[0]}, {3}, params)[0];
+  const uint32_t color = p.emit(kOpTexSky, {tc[size_t(coord)]}, {3}, params)[0];
   p.emit_color(p.one(), color);
   return p;
 }
@@ -91,6 +92,9 @@ TEST(Sky, ProgramShowsTheSunDiscWithLimbDarkening) {
   ASSERT_EQ(discs.size(), 1u);
   EXPECT_NEAR(dot(discs[0].dir, dir_at(0.5f, azimuth)), 1.0f, 1e-6f);
   EXPECT_FLOAT_EQ(discs[0].half_angle, 0.05f);
+  // A sky reading other coordinates (Normal here) has its disc elsewhere: the world ignores it.
+  const ShaderCode mapped = sky_program(sky::kSkyNishita, s, 1);
+  EXPECT_TRUE(Program(mapped.code, mapped.k, mapped.registers, 0).sun_discs().empty());
   Vec3 bottom, top;
   sky::nishita_sun(0.5f, 0.1f, 10.0f, 1, 1, &bottom, &top);
   const Vec3 centre = xyz_to_rgb((bottom + top) * 0.5f) * 2.0f;

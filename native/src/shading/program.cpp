@@ -1,5 +1,6 @@
 #include "shading/program.h"
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 
@@ -253,11 +254,14 @@ std::vector<uint32_t> Program::environment_images() const {
 
 std::vector<Program::SunDisc> Program::sun_discs() const {
   std::vector<SunDisc> discs;
+  std::vector<uint32_t> generated;  // Texture Coordinate's Generated outputs: a world's direction
   for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
     Instr in = decode(w);
     w += words_of(in);
+    if (in.op == kOpTexCoord) generated.push_back(in.out[0]);
     SunDisc d;
-    if (in.op == kOpTexSky &&
+    // Only a sky that sees the direction unmapped has its disc where sun_disc says.
+    if (in.op == kOpTexSky && std::find(generated.begin(), generated.end(), in.in[0]) != generated.end() &&
         sky::sun_disc(in.param[0], constants_.data() + in.param[1 + sky::kSettings] + 1, &d.dir, &d.half_angle))
       discs.push_back(d);
   }

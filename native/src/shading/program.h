@@ -209,8 +209,8 @@ class Program {
   bool constant_emission(const std::vector<std::unique_ptr<Image>>& images, Spectrum* emitted) const;
   // The images its Environment Texture instructions read (a world's automatic map resolution).
   std::vector<uint32_t> environment_images() const;
-  // The sun discs of its Sky Texture instructions, in the node's own frame (the direction the
-  // node's Vector input must be to see the disc's centre) with half their angular diameter.
+  // The sun discs of its Sky Texture instructions that read Texture Coordinate's Generated (a
+  // world's direction, unmapped): their directions and half their angular diameters.
   struct SunDisc {
     Vec3 dir;
     float half_angle;

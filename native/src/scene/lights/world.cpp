@@ -143,8 +143,9 @@ bool world_sample(const World& w, Vec2 u, LightSample* s) {
       const Vec2 uv = w.sample_map(Vec2{q > 0 ? std::min((u.x - q) / (1 - q), kOneMinusEpsilon) : u.x, u.y}, &pdf_uv);
       if (!(std::sin(kPi * (1 - uv.y)) > 0) || !(pdf_uv > 0)) return false;
       s->wi = equirectangular_to_direction(uv);
+      if (q == 0) s->pdf = pdf_uv / (2 * kPi * kPi * std::sin(kPi * (1 - uv.y)));
     }
-    s->pdf = world_pdf(w, s->wi);
+    if (q > 0) s->pdf = world_pdf(w, s->wi);  // the mixture's
     if (!(s->pdf > 0)) return false;
   } else {
     s->wi = sample_uniform_sphere(u);

@@ -3,7 +3,8 @@
 // from a direction, or, when it folds to a constant, one colour. As Cycles does, a non-constant
 // world is importance sampled from a map of the program baked on an equirectangular grid (weights
 // average(|rgb|) x sin(theta), kernel/light/background.h), while the radiance is always the
-// program's at the exact direction: the map decides only the pdf.
+// program's at the exact direction: the map decides only the pdf. A Sky Texture's sun disc (far
+// smaller than a map pixel) has its pixels supersampled and its cone sampled beside the map.
 #pragma once
 
 #include <memory>
