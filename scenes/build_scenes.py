@@ -1179,6 +1179,18 @@ def build_procedural_world(scene):
     _world_objects(scene)
 
 
+def build_nishita_world(scene):
+    """Issue 13's Sky Texture lighting a scene: Blender's default Nishita sky with its sun disc
+    (0.545 degrees across) at 35 degrees, behind the camera on its left, into a Background of
+    strength 0.05 (the sun gives an irradiance of about 10 there), over _world_objects."""
+    world, nt, out = _world_nodes(scene, "Nishita")
+    sky = _node(nt, "ShaderNodeTexSky", {}, sky_type="NISHITA", sun_disc=True, sun_elevation=math.radians(35.0),
+                sun_rotation=math.radians(212.0))
+    bg = _node(nt, "ShaderNodeBackground", {"Color": sky.outputs["Color"], "Strength": 0.05})
+    nt.links.new(bg.outputs[0], out.inputs["Surface"])
+    _world_objects(scene)
+
+
 def build_textured(scene):
     set_world(scene, (0.1, 0.1, 0.1), 1.0)
     checker = packed_image("Checker", checker_pixels(), "sRGB")
@@ -2049,6 +2061,7 @@ SCENES = {
     "hdri_world": (build_hdri_world, (96, 64), 128),
     "light_path_world": (build_light_path_world, (96, 64), 128),
     "procedural_world": (build_procedural_world, (96, 64), 128),
+    "nishita_world": (build_nishita_world, (96, 64), 128),
     "instanced": (build_instanced, (96, 96), 128),
     "normal_mapped": (build_normal_mapped, (96, 96), 128),
     "tilted_metal": (build_tilted_metal, (96, 48), 128),

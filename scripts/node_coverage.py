@@ -31,8 +31,14 @@ VOLUME = {'PRINCIPLED_VOLUME', 'VOLUME_SCATTER', 'VOLUME_ABSORPTION'}
 WORLD = {'BACKGROUND', 'TEX_ENVIRONMENT', 'MAPPING', 'TEX_COORD'}
 
 
+# Nodes the compiler takes with a mode it renders otherwise (and warns about).
+UNSUPPORTED_MODE = {'TEX_SKY': lambda node: node.sky_type == 'HOSEK_WILKIE'}
+
+
 def supported(node, in_world):
     t = node.type
+    if t in UNSUPPORTED_MODE and UNSUPPORTED_MODE[t](node):
+        return False
     if t in STRUCTURAL or t in nodes.VALUE_NODES or t in nodes.SHADER_NODES or t in VOLUME:
         return True
     if t in nodes.CYCLES_DROPS:  # rendered as Cycles renders them (their links dropped)

@@ -191,6 +191,8 @@ def view_scene(build, negate=False, shape="plane", displacement=None):
     c.max_bounces = 0
     c.film_exposure = 1.0
     scene.render.film_transparent = True  # alpha marks what the object covers
+    if shape == "world":
+        return world_view_scene(scene, build)
     if shape == "points":
         bs.add_camera(scene, (0.3, -3.2, 1.1), (0, 0, 0), lens=50.0)
         grid = bs.mesh_plane("points", 2.4, matrix=Matrix.Rotation(1.2, 4, "X"))
@@ -244,6 +246,23 @@ def view_scene(build, negate=False, shape="plane", displacement=None):
         tree.links.new(to_points.outputs[0], set_mat.inputs["Geometry"])
         tree.links.new(set_mat.outputs[0], tree.nodes.new("NodeGroupOutput").inputs[0])
         obj.modifiers.new("Points", "NODES").node_group = tree
+    return scene
+
+
+def world_view_scene(scene, build):
+    """shape "world": the World's node tree shown by `build(nt, coords)` (coords: Texture
+    Coordinate's Generated, the direction) seen whole through an equirectangular panorama (every
+    direction, 2 RES x RES pixels), nothing else."""
+    scene.render.resolution_x, scene.render.resolution_y = 2 * RES, RES
+    scene.render.film_transparent = False
+    cam = bs.add_camera(scene, (0, 0, 0), (0, 1, 0))
+    cam.data.type = "PANO"
+    cam.data.cycles.panorama_type = "EQUIRECTANGULAR"
+    world, nt, out = bs._world_nodes(scene, "view")
+    shown = build(nt, nt.nodes.new("ShaderNodeTexCoord").outputs["Generated"])
+    bg = node(nt, "ShaderNodeBackground", Strength=1.0)
+    nt.links.new(shown, bg.inputs["Color"])
+    nt.links.new(bg.outputs[0], out.inputs["Surface"])
     return scene
 
 

@@ -138,6 +138,17 @@ def test_alpha_mapped_leaf_cards_agree_with_cycles(integrator, scene_factory, ou
     assert report == "", report
 
 
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_nishita_sky_world_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Issue 13's Sky Texture as a World (nishita_world: the Nishita sky and its small, bright sun
+    disc lighting a ground, a diffuse and a glossy sphere): the world's map finds the disc
+    (World::build supersamples the pixels it may cover), per tile and in the image mean as above."""
+    both = lantern_and_cycles(scene_factory, "nishita_world", integrator)
+    report, _ = ru.agreement_report("nishita_world_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
 # Open: BDPT's light subpaths shade bumped normals against the light's direction. Cycles tilts a
 # closure's normal for the viewing direction (ensure_valid_reflection), which a light vertex does
 # not know until it is connected: BDPT's strategies then see different BSDFs at one vertex (image

@@ -251,3 +251,33 @@ def test_true_displacement_compiles_a_vertex_program_and_needs_a_new_scene_when_
         mat.node_tree.nodes["Displacement"].inputs["Scale"].default_value = 0.7
         assert not materials.update(mat)
         scene.close()
+
+
+def test_hosek_wilkie_sky_warns_and_coverage_lists_it(capsys):
+    """The Sky Texture's Hosek / Wilkie model is not carried: compiling it warns naming the node
+    (the export prefixes the material) and renders Preetham's sky (same opcode, type 0), and the
+    coverage script lists it; a Nishita sky compiles silently and is not listed."""
+    import importlib.util
+    from lantern.export.nodes import opcodes as ops
+    bs.reset_file()
+    for kind in ("HOSEK_WILKIE", "NISHITA"):
+        mat, nt, em = _emission_material("Sky_" + kind)
+        sky = nt.nodes.new("ShaderNodeTexSky")
+        sky.name = "MySky"
+        sky.sky_type = kind
+        nt.links.new(sky.outputs[0], em.inputs["Color"])
+        c, warnings = _compile(mat)
+        code = c.program()[0]
+        at = code.index(ops.TEX_SKY)
+        n_in, n_out = code[at + 1] & 0xff, (code[at + 1] >> 8) & 0xff
+        assert code[at + 2 + n_in + n_out] == (0 if kind == "HOSEK_WILKIE" else 2)
+        if kind == "HOSEK_WILKIE":
+            assert any("MySky" in w and "Hosek" in w for w in warnings), warnings
+        else:
+            assert warnings == [], warnings
+    spec = importlib.util.spec_from_file_location("node_coverage", os.path.join(ROOT, "scripts", "node_coverage.py"))
+    coverage = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(coverage)
+    coverage.main()
+    missing = [line for line in capsys.readouterr().out.splitlines() if "NOT SUPPORTED" in line]
+    assert len(missing) == 1 and "Sky_HOSEK_WILKIE" in missing[0] and "MySky" in missing[0], missing

@@ -176,6 +176,7 @@ TEST(Textures, UnknownModesDoNotCrash) {
   float in[24] = {0.3f, 0.2f, 0.1f, 0.5f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f,
                   1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
   for (uint32_t op = kFamilyTexturesBegin; op < kTexturesFamilyEnd; op++) {
+    if (op == kOpTexSky) continue;  // its table exists only through the loader: test_sky.cpp
     std::vector<uint32_t> params(std::strlen(textures_family_signature(op)->params), 7u);
     ASSERT_LE(input_floats(op), 24);
     for (float v : run(op, params, in)) EXPECT_FALSE(std::isnan(v)) << op;

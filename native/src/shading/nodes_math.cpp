@@ -645,10 +645,13 @@ Vec3 wavelength_rgb(float nm) {
     ii -= static_cast<float>(i);
     xyz = interp(Vec3(kCie[i][0], kCie[i][1], kCie[i][2]), Vec3(kCie[i + 1][0], kCie[i + 1][1], kCie[i + 1][2]), ii);
   }
-  Vec3 rgb(kXyzToRgb[0][0] * xyz.x + kXyzToRgb[0][1] * xyz.y + kXyzToRgb[0][2] * xyz.z,
-           kXyzToRgb[1][0] * xyz.x + kXyzToRgb[1][1] * xyz.y + kXyzToRgb[1][2] * xyz.z,
-           kXyzToRgb[2][0] * xyz.x + kXyzToRgb[2][1] * xyz.y + kXyzToRgb[2][2] * xyz.z);
-  return vmax(rgb * (1.0f / 2.52f), Vec3());
+  return vmax(xyz_to_rgb(xyz) * (1.0f / 2.52f), Vec3());
+}
+
+Vec3 xyz_to_rgb(const Vec3& xyz) {
+  return {kXyzToRgb[0][0] * xyz.x + kXyzToRgb[0][1] * xyz.y + kXyzToRgb[0][2] * xyz.z,
+          kXyzToRgb[1][0] * xyz.x + kXyzToRgb[1][1] * xyz.y + kXyzToRgb[1][2] * xyz.z,
+          kXyzToRgb[2][0] * xyz.x + kXyzToRgb[2][1] * xyz.y + kXyzToRgb[2][2] * xyz.z};
 }
 
 // util/transform.h euler_to_transform (R = Rz Ry Rx) applied to v, or its transpose.

@@ -189,6 +189,8 @@ Vec3 rgb_to_hsl(const Vec3& rgb);
 Vec3 hsl_to_rgb(const Vec3& hsl);
 Vec3 blackbody_rgb(float temperature);
 Vec3 wavelength_rgb(float nm);
+// CIE XYZ to the scene linear RGB (Cycles' xyz_to_rgb with Blender's config).
+Vec3 xyz_to_rgb(const Vec3& xyz);
 Vec3 euler_rotate(const Vec3& euler, const Vec3& v, bool transposed);
 
 }  // namespace lt

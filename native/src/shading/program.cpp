@@ -1,5 +1,6 @@
 #include "shading/program.h"
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <string>
@@ -8,6 +9,8 @@
 #include "shading/bsdf.h"
 #include "shading/inputs.h"
 #include "shading/shaders.h"
+#include "shading/sky.h"
+#include "shading/textures.h"
 
 namespace lt {
 
@@ -87,6 +90,8 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
       throw InvalidArgument(where + " (opcode " + std::to_string(in.op) + ") has the wrong operand count");
     std::vector<uint32_t> words(code.begin() + long(pos), code.begin() + long(pos + words_of(in)));
     uint32_t* ins = words.data() + 2;
+    if (in.op >= kFamilyTexturesBegin && in.op < kOpEnd)
+      prepare_textures_family(in.op, ins + in.n_in + in.n_out, &constants);
     bool all_constant = true;
     for (int k = 0; k < in.n_in; ++k) {
       uint32_t w = ins[k];
@@ -261,6 +266,22 @@ std::vector<uint32_t> Program::environment_images() const {
     if (in.op == kOpEnvironment) ids.push_back(in.param[0]);
   }
   return ids;
+}
+
+std::vector<Program::SunDisc> Program::sun_discs() const {
+  std::vector<SunDisc> discs;
+  std::vector<uint32_t> generated;  // Texture Coordinate's Generated outputs: a world's direction
+  for (const uint32_t* w = code_.data(); w < code_.data() + code_.size();) {
+    Instr in = decode(w);
+    w += words_of(in);
+    if (in.op == kOpTexCoord) generated.push_back(in.out[0]);
+    SunDisc d;
+    // Only a sky that sees the direction unmapped has its disc where sun_disc says.
+    if (in.op == kOpTexSky && std::find(generated.begin(), generated.end(), in.in[0]) != generated.end() &&
+        sky::sun_disc(in.param[0], constants_.data() + in.param[1 + sky::kSettings] + 1, &d.dir, &d.half_angle))
+      discs.push_back(d);
+  }
+  return discs;
 }
 
 bool Program::emission_estimate(float* estimate) const {

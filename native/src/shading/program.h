@@ -174,6 +174,9 @@ const OpSignature* math_family_signature(uint32_t op);
 void exec_math_family(const Instr& in, Machine& m);
 const OpSignature* textures_family_signature(uint32_t op);
 void exec_textures_family(const Instr& in, Machine& m);
+// At load, before validation: an instruction whose table the core computes (the Sky Texture's)
+// gets it appended to the pool and its 't' param pointed at it.
+void prepare_textures_family(uint32_t op, uint32_t* params, std::vector<float>* pool);
 
 // The frame a program shades in: the normal (the shading point's unless a closure brings its own)
 // and, for anisotropic lobes, the tangent (zero: none).
@@ -217,6 +220,13 @@ class Program {
   bool constant_emission(const std::vector<std::unique_ptr<Image>>& images, Spectrum* emitted) const;
   // The images its Environment Texture instructions read (a world's automatic map resolution).
   std::vector<uint32_t> environment_images() const;
+  // The sun discs of its Sky Texture instructions that read Texture Coordinate's Generated (a
+  // world's direction, unmapped): their directions and half their angular diameters.
+  struct SunDisc {
+    Vec3 dir;
+    float half_angle;
+  };
+  std::vector<SunDisc> sun_discs() const;
 
  private:
   Spectrum execute_all(const ShadingContext& ctx, const std::vector<std::unique_ptr<Image>>& images, Bsdf* bsdf,

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "shading/sky.h"
+
 namespace lt {
 
 namespace {
@@ -856,6 +858,7 @@ const OpSignature kSignatures[] = {
     {"vvvvffffff", "vf", "iiii", true},  // brick (the amounts are float bits: any word is valid)
     {"v", "vf", "i", true},              // gradient
     {"vf", "fv", "i", true},             // white noise
+    {"v", "v", "iiiiiiiiiit", true},     // sky (settings as float bits; the table the loader's)
 };
 static_assert(sizeof(kSignatures) / sizeof(kSignatures[0]) == kTexturesFamilyEnd - kFamilyTexturesBegin,
               "one signature per texture opcode");
@@ -1026,9 +1029,24 @@ void exec_textures_family(const Instr& in, Machine& m) {
       m.set(o[1], hash_n_to_3(n, p));
       return;
     }
+    case kOpTexSky: {  // sky.h svm_node_tex_sky
+      m.set(o[0], sky::radiance(prm[0], m.k + prm[1 + sky::kSettings] + 1, m.v(a[0])));
+      return;
+    }
     default:
       return;
   }
+}
+
+void prepare_textures_family(uint32_t op, uint32_t* prm, std::vector<float>* pool) {
+  if (op != kOpTexSky) return;
+  float settings[sky::kSettings];
+  std::memcpy(settings, prm + 1, sizeof settings);
+  // The table is the core's, whatever the program said: the op reads it blindly.
+  const std::vector<float> table = sky::make_table(prm[0], settings);
+  prm[1 + sky::kSettings] = uint32_t(pool->size());
+  pool->push_back(float(table.size()));
+  pool->insert(pool->end(), table.begin(), table.end());
 }
 
 }  // namespace lt

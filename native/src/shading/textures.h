@@ -43,6 +43,10 @@ enum TextureOp : uint32_t {
   kOpTexGradient,
   // White Noise. in: vector v, w f; out: value f, color v; params: dimensions (1-4).
   kOpTexWhiteNoise,
+  // Sky (shading/sky.h). in: vector v; out: color v; params: type (sky::SkyType; unknown types and
+  // Hosek are Preetham), the node's settings as float bits (sky::kSettings words), table (the
+  // loader computes it: prepare_textures_family).
+  kOpTexSky,
   kTexturesFamilyEnd,
 };
 

@@ -1,5 +1,5 @@
 """Procedural textures (textures.h in the core): Cycles 3.4's Noise, Voronoi, Musgrave, Wave, Magic,
-Checker, Brick, Gradient and White Noise, one instruction each, modes as params."""
+Checker, Brick, Gradient, White Noise and Sky, one instruction each, modes as params."""
 
 import struct
 
@@ -127,3 +127,29 @@ def white_noise(c, node, want):
     ins = [c.vector(node.inputs["Vector"]), c.float(node.inputs["W"])]
     return c.emit(ops.TEX_WHITE_NOISE, ins, [("Value", 1), ("Color", 3)],
                   params=[_mode(c, node, DIMENSIONS, "noise_dimensions")])
+
+
+SKY_TYPE = {'PREETHAM': 0, 'HOSEK_WILKIE': 1, 'NISHITA': 2}  # Cycles' NodeSkyType
+
+
+@register('TEX_SKY')
+def sky(c, node, want):
+    """The core precomputes the sky from the settings when it loads the program (shading/sky.h)."""
+    kind = SKY_TYPE.get(node.sky_type, SKY_TYPE['NISHITA'])
+    if node.sky_type == 'HOSEK_WILKIE':
+        # Hosek and Wilkie's model needs their fitted dataset, which the core does not carry.
+        c.warn("%s '%s': the Hosek / Wilkie sky is not supported; Preetham's sky with the same sun "
+               "direction and turbidity is rendered instead" % (node.bl_label, node.name))
+        kind = SKY_TYPE['PREETHAM']
+    if kind == SKY_TYPE['NISHITA']:
+        settings = (1.0 if node.sun_disc else 0.0, node.sun_size, node.sun_intensity, node.sun_elevation,
+                    node.sun_rotation, node.altitude, node.air_density, node.dust_density, node.ozone_density)
+    else:
+        settings = tuple(node.sun_direction) + (node.turbidity, 0.0, 0.0, 0.0, 0.0, 0.0)
+    params = [kind] + [float_bits(x) for x in settings] + [0]  # the last: the table, the core's
+    # Blender disables the Vector input of a Nishita sky with its sun disc: Cycles then reads the
+    # Generated coordinates (a world's direction), whatever was linked.
+    sock = node.inputs["Vector"]
+    _check_mapping(c, node)
+    vector = c.vector(sock) if sock.enabled and c.linked(sock) else c.texcoord("Generated")
+    return c.emit(ops.TEX_SKY, [vector], [("Color", 3)], params=params)

@@ -3,7 +3,8 @@
 // from a direction, or, when it folds to a constant, one colour. As Cycles does, a non-constant
 // world is importance sampled from a map of the program baked on an equirectangular grid (weights
 // average(|rgb|) x sin(theta), kernel/light/background.h), while the radiance is always the
-// program's at the exact direction: the map decides only the pdf.
+// program's at the exact direction: the map decides only the pdf. A Sky Texture's sun disc (far
+// smaller than a map pixel) has its pixels supersampled and its cone sampled beside the map.
 #pragma once
 
 #include <memory>
@@ -54,8 +55,21 @@ class World {
 
   Vec2 sample_map(Vec2 u, float* pdf_uv) const { return distribution_.sample(u, pdf_uv); }
   float map_pdf(Vec2 uv) const { return distribution_.pdf(uv); }
+  // A Sky Texture's sun discs (Program::sun_discs) are sampled apart, uniformly in their cones,
+  // with this probability (0: none); world_sample and world_pdf mix them with the map.
+  float sun_probability() const { return sun_probability_; }
+  Vec3 sample_sun(Vec2 u) const;
+  float sun_pdf(const Vec3& wi) const;  // solid-angle density of sample_sun (wi unit)
 
  private:
+  // Returns the map's weight in the pixels it supersampled.
+  double supersample_sun_discs(std::vector<float>* f, int w, int h) const;
+  struct SunCone {
+    Vec3 dir;
+    float one_minus_cos;  // of the half angle
+  };
+  std::vector<SunCone> suns_;
+  float sun_probability_ = 0;
   Spectrum color_{0.0f};
   std::shared_ptr<const Program> program_;
   int map_resolution_ = 0;
