@@ -367,11 +367,13 @@ lt_volume_desc volume(int node, float density, float color, float g) {
   return d;
 }
 
-int add_volume_material(lt_scene* s, const lt_volume_desc& d) {
+int add_volume_material(lt_scene* s, const lt_volume_desc& d) { return add_volume_material(s, &d, 1); }
+
+int add_volume_material(lt_scene* s, const lt_volume_desc* components, int count) {
   ShaderCode p;
   p.transparent(p.one(), {1, 1, 1});
   int id = add_material(s, p);
-  check(lt_scene_set_material_volume(s, id, &d, 1, 1), "set_material_volume");
+  check(lt_scene_set_material_volume(s, id, components, count, 1), "set_material_volume");
   return id;
 }
 

@@ -108,6 +108,7 @@ lt_volume_desc volume(int node, float density, float color = 1, float g = 0);
 // A material whose only output is a volume: a Transparent surface for PATH, an invisible boundary
 // for the integrators that render media.
 int add_volume_material(lt_scene* s, const lt_volume_desc& d);
+int add_volume_material(lt_scene* s, const lt_volume_desc* components, int count);  // their sum
 
 // A committed scene that exercises most of the path tracer: diffuse, glossy, glass and emissive
 // surfaces, an area light, a soft point light, a sun and the world; with fog, a fog box around the

@@ -117,4 +117,80 @@ TEST(Lightgroups, AnUngroupedEmitterIsInNone) {
   EXPECT_EQ(plain.combined, g.passes.combined);
 }
 
+// Volume emission in light groups (Cycles files it under the emitting volume's object,
+// shade_volume.h): a scattering and emitting box (group `box_group`, 0: none) around a diffuse
+// sphere, a second emitting box overlapping it (group 2, twice the emission) and an area light
+// (group 2). Everything else is black.
+ScenePtr emissive_volume_scene(int box_group) {
+  ScenePtr s = new_scene();
+  set_world(s.get(), {0, 0, 0}, 0);
+  add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.7f, 0.7f, 0.7f}));
+  add_object(s.get(), uv_sphere(0.4f, 24, 12, true), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), translate({0, 0, 0.6f}));
+  auto emissive_box = [&](const lt_volume_desc& scatter, float strength, const float color[3], float x0, float x1,
+                          int group) {
+    lt_volume_desc c[2] = {scatter, volume(LT_VOLUME_EMISSION, 0.0f)};
+    c[1].emission_strength = strength;
+    std::copy(color, color + 3, c[1].emission_color);
+    const int mat = add_volume_material(s.get(), c, 2);
+    lt_instance_desc d{};
+    d.mesh = add_mesh(s.get(), box({x0, -1, 0}, {x1, 1, 1.5f}));
+    const Xform xf = identity();
+    std::copy(xf.begin(), xf.end(), d.transform);
+    d.materials = &mat;
+    d.material_count = 1;
+    d.visibility = LT_VISIBLE_ALL;
+    d.lightgroup = group;
+    int id = -1;
+    check(lt_scene_add_instance(s.get(), &d, &id), "lt_scene_add_instance");
+  };
+  const float warm[3] = {1.0f, 0.6f, 0.3f}, cool[3] = {0.3f, 0.6f, 1.0f};
+  emissive_box(volume(LT_VOLUME_SCATTER, 0.4f), 0.5f, warm, -1.2f, 0.6f, box_group);
+  emissive_box(volume(LT_VOLUME_ABSORPTION, 0.2f), 1.0f, cool, 0.2f, 1.4f, 2);
+  lt_light_desc a = area_light(LT_AREA_SQUARE, 1, 1, translate({-1, -1, 3}), 100);
+  a.lightgroup = 2;
+  add_light(s.get(), a);
+  set_camera(s.get(), perspective_camera(look_at({0, -5, 2.5f}, {0, 0, 0.5f})));
+  check(lt_scene_commit(s.get()), "lt_scene_commit");
+  return s;
+}
+
+TEST(Lightgroups, VolumeEmissionIsInItsObjectsGroup) {
+  const int width = 24, height = 18;
+  for (int integrator : {LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    SCOPED_TRACE("integrator " + std::to_string(integrator));
+    // Every emitter grouped: the groups sum to Combined per pixel, overlap of the boxes included.
+    ScenePtr s = emissive_volume_scene(1);
+    lt_render_settings rs = render_settings(width, height, 8, 5);
+    rs.integrator = integrator;
+    const GroupedRender g = render_groups(s.get(), rs);
+    ASSERT_EQ(g.passes.first_non_finite(), "");
+    double key = 0;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const size_t i = (size_t(y) * width + x) * 3 + c;
+          const float combined = g.passes.rgba(x, y)[c], sum = g.group[0][i] + g.group[1][i];
+          ASSERT_NEAR(sum, combined, 1e-4f * std::abs(combined) + 1e-6f) << "pixel " << x << ", " << y;
+          key += g.group[0][i];
+        }
+    // Group 1 holds the first box's emission alone: the same render with the box in no group has
+    // the same Combined (light groups draw no random number) and the box's light in neither
+    // group, so its Combined minus its groups is group 1 here.
+    ScenePtr u = emissive_volume_scene(0);
+    const GroupedRender h = render_groups(u.get(), rs);
+    EXPECT_EQ(h.passes.combined, g.passes.combined);
+    double rest = 0;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const size_t i = (size_t(y) * width + x) * 3 + c;
+          EXPECT_EQ(h.group[0][i], 0.0f);
+          EXPECT_EQ(h.group[1][i], g.group[1][i]);
+          rest += h.passes.rgba(x, y)[c] - h.group[1][i];
+        }
+    EXPECT_GT(key, 0.0);
+    EXPECT_NEAR(rest, key, 1e-4 * key);
+  }
+}
+
 }  // namespace

@@ -55,6 +55,15 @@ enum LightPart {
   kLightParts
 };
 
+// A contribution several light groups share (the volume emission of overlapping media): share[i]
+// of it, per channel, goes to group[i] (-1: none); the shares sum to 1.
+struct LightgroupShares {
+  static constexpr int kMax = 8;  // VolumeStack::kCapacity
+  int n = 0;
+  int group[kMax];
+  Spectrum share[kMax];
+};
+
 struct SampleValue {
   Spectrum radiance{0.0f};
   float alpha = 0;
@@ -90,6 +99,9 @@ struct SampleValue {
   Spectrum* lightgroups = nullptr;
   void add_lightgroup(int group, const Spectrum& c) {
     if (lightgroups && group >= 0) lightgroups[group] += c;
+  }
+  void add_lightgroup(const LightgroupShares& g, const Spectrum& c) {
+    for (int i = 0; lightgroups && i < g.n; ++i) add_lightgroup(g.group[i], c * g.share[i]);
   }
   // Shader AOVs: 4 floats per AOV of FilmLayout::aovs (ShadingContext::aovs), zeroed by the render
   // job (CameraSample::aovs); null when the film keeps none.
