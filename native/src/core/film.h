@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/cryptomatte.h"
+#include "core/fresh_pages.h"
 #include "core/math.h"
 
 namespace lt {
@@ -200,10 +201,10 @@ const char* catcher_part_letters(int part);
 // both halves are not valid (their values are zero).
 struct HalfImages {
   int width = 0, height = 0;
-  std::vector<float> color[2];     // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
-  std::vector<float> variance[2];  // RGB: variance of each half's mean, (A - B)^2 / (1/n_A + 1/n_B) / n_h
-  std::vector<float> feature[2];   // kFeatureChannels per pixel
-  std::vector<uint8_t> valid;
+  FreshVector<float> color[2];     // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
+  FreshVector<float> variance[2];  // RGB: variance of each half's mean, (A - B)^2 / (1/n_A + 1/n_B) / n_h
+  FreshVector<float> feature[2];   // kFeatureChannels per pixel
+  FreshVector<uint8_t> valid;
 };
 
 // What a film keeps: the passes (Combined and Sample Count always), and whether it keeps the sum

@@ -15,10 +15,6 @@
 #include <new>
 #include <utility>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 namespace lt {
 
 namespace {
@@ -61,44 +57,7 @@ bool finite(const float* v, int n) {
   return true;
 }
 
-// Zeroed memory for image-wide planes, from fresh anonymous pages: zero without a pass over them,
-// and in 2 MB pages where the kernel gives them (a page fault per 2 MB rather than per 4 KB; the
-// faults and the zeroing passes were a fifth of the denoiser's time). Elsewhere, calloc.
-class ZeroedFloats {
- public:
-  explicit ZeroedFloats(size_t n) : bytes_(std::max<size_t>(n, 1) * sizeof(float)) {
-#if defined(__linux__)
-    void* p = mmap(nullptr, bytes_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p != MAP_FAILED) {
-      madvise(p, bytes_, MADV_HUGEPAGE);  // a hint: refused, the pages stay small
-      data_ = static_cast<float*>(p);
-      mapped_ = true;
-      return;
-    }
-#endif
-    data_ = static_cast<float*>(std::calloc(bytes_ / sizeof(float), sizeof(float)));
-    if (!data_) throw std::bad_alloc();
-  }
-  ~ZeroedFloats() {
-#if defined(__linux__)
-    if (mapped_) {
-      munmap(data_, bytes_);
-      return;
-    }
-#endif
-    std::free(data_);
-  }
-  ZeroedFloats(const ZeroedFloats&) = delete;
-  ZeroedFloats& operator=(const ZeroedFloats&) = delete;
-  float* data() const { return data_; }
-
- private:
-  size_t bytes_;
-  float* data_ = nullptr;
-  bool mapped_ = false;
-};
-
-// One image-wide plane of floats (one per pixel), a part of a ZeroedFloats.
+// One image-wide plane of floats (one per pixel), a part of a FreshVector (zero at first).
 struct Plane {
   float* p = nullptr;
   float* data() const { return p; }
@@ -108,7 +67,8 @@ struct Plane {
 // The inputs as planes (one float per pixel each) so that the inner loops run along rows.
 struct Planes {
   static constexpr int kCount = 2 * 3 + 2 * 3 + kFeatureChannels + 1;
-  explicit Planes(size_t n) : memory(kCount * n) {
+  explicit Planes(size_t n) {
+    memory.resize(kCount * n);
     Plane* all[kCount];
     int k = 0;
     for (int j = 0; j < 2; ++j)
@@ -118,7 +78,7 @@ struct Planes {
     for (int i = 0; i < kCount; ++i) all[i]->p = memory.data() + size_t(i) * n;
   }
   int w = 0, h = 0;
-  ZeroedFloats memory;
+  FreshVector<float> memory;
   Plane color[2][3];  // each half's RGB
   Plane var[2][3];    // each half's variance, smoothed
   Plane feature[kFeatureChannels];
@@ -187,13 +147,14 @@ void prepare(const HalfImages& in, Planes& pl) {
 // that reach the pixel (RGB) and their weights, zero at first. Tiles add into them in a fixed
 // order (denoise()).
 struct Sums {
-  explicit Sums(size_t n) : memory(8 * n) {
+  explicit Sums(size_t n) {
+    memory.resize(8 * n);
     for (int j = 0; j < 2; ++j) {
       for (int c = 0; c < 3; ++c) value[j][c].p = memory.data() + size_t(4 * j + c) * n;
       weight[j].p = memory.data() + size_t(4 * j + 3) * n;
     }
   }
-  ZeroedFloats memory;
+  FreshVector<float> memory;
   Plane value[2][3], weight[2];
 };
 
