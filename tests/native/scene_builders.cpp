@@ -258,13 +258,14 @@ int add_mesh(lt_scene* s, const MeshData& m) {
   return id;
 }
 
-int add_instance(lt_scene* s, int mesh, int material, const Xform& xf, unsigned visibility) {
+int add_instance(lt_scene* s, int mesh, int material, const Xform& xf, unsigned visibility, int lightgroup) {
   lt_instance_desc d{};
   d.mesh = mesh;
   std::copy(xf.begin(), xf.end(), d.transform);
   d.materials = &material;
   d.material_count = 1;
   d.visibility = visibility;
+  d.lightgroup = lightgroup;
   int id = -1;
   check(lt_scene_add_instance(s, &d, &id), "lt_scene_add_instance");
   return id;

@@ -78,7 +78,7 @@ int add_emission(lt_scene* s, V3 color, float strength);
 int add_glossy(lt_scene* s, V3 color, float roughness);  // GGX
 int add_mesh(lt_scene* s, const MeshData& m);
 int add_instance(lt_scene* s, int mesh, int material, const Xform& xf = identity(),
-                 unsigned visibility = LT_VISIBLE_ALL);
+                 unsigned visibility = LT_VISIBLE_ALL, int lightgroup = 0);  // lightgroup: k + 1, 0 none
 // add_mesh + add_instance.
 int add_object(lt_scene* s, const MeshData& m, int material, const Xform& xf = identity(),
                unsigned visibility = LT_VISIBLE_ALL);

@@ -19,17 +19,9 @@ ScenePtr grouped_scene(bool fog, bool ungrouped) {
   add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.7f, 0.7f, 0.7f}));
   add_object(s.get(), uv_sphere(0.6f, 24, 12, true), add_glossy(s.get(), {0.9f, 0.8f, 0.6f}, 0.2f),
              translate({0, 0, 0.6f}));
-  lt_instance_desc d{};
-  const Xform lamp = compose(translate({1.2f, 0.5f, 1.5f}), rotate({1, 0, 0}, 3.14159f));
-  d.mesh = add_mesh(s.get(), plane(0.4f, 0.4f));
-  std::copy(lamp.begin(), lamp.end(), d.transform);
-  const int emission = add_emission(s.get(), {1, 0.8f, 0.6f}, 20);
-  d.materials = &emission;
-  d.material_count = 1;
-  d.visibility = LT_VISIBLE_ALL;
-  d.lightgroup = 2;
-  int id = -1;
-  check(lt_scene_add_instance(s.get(), &d, &id), "lt_scene_add_instance");
+  const int lamp_mesh = add_mesh(s.get(), plane(0.4f, 0.4f)), emission = add_emission(s.get(), {1, 0.8f, 0.6f}, 20);
+  add_instance(s.get(), lamp_mesh, emission, compose(translate({1.2f, 0.5f, 1.5f}), rotate({1, 0, 0}, 3.14159f)),
+               LT_VISIBLE_ALL, 2);
   lt_light_desc a = area_light(LT_AREA_SQUARE, 1, 1, translate({-1, -1, 3}), 150);
   a.lightgroup = 1;
   add_light(s.get(), a);
@@ -66,6 +58,21 @@ GroupedRender render_groups(lt_scene* s, lt_render_settings rs) {
   return out;
 }
 
+// Per pixel, the two groups sum to Combined's RGB; totals: each group's sum over the image.
+void expect_groups_sum_to_combined(const GroupedRender& g, int width, int height, double totals[2]) {
+  ASSERT_EQ(g.passes.first_non_finite(), "");
+  totals[0] = totals[1] = 0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const size_t i = (size_t(y) * width + x) * 3 + c;
+        const float combined = g.passes.rgba(x, y)[c], sum = g.group[0][i] + g.group[1][i];
+        ASSERT_NEAR(sum, combined, 1e-4f * std::abs(combined) + 1e-6f) << "pixel " << x << ", " << y;
+        totals[0] += g.group[0][i];
+        totals[1] += g.group[1][i];
+      }
+}
+
 TEST(Lightgroups, SumToCombinedPerPixelForEveryIntegrator) {
   const int width = 24, height = 18;
   for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
@@ -74,17 +81,8 @@ TEST(Lightgroups, SumToCombinedPerPixelForEveryIntegrator) {
     lt_render_settings rs = render_settings(width, height, 8, 5);
     rs.integrator = integrator;
     GroupedRender g = render_groups(s.get(), rs);
-    ASSERT_EQ(g.passes.first_non_finite(), "");
-    double total[2] = {0, 0};
-    for (int y = 0; y < height; ++y)
-      for (int x = 0; x < width; ++x)
-        for (int c = 0; c < 3; ++c) {
-          const size_t i = (size_t(y) * width + x) * 3 + c;
-          const float combined = g.passes.rgba(x, y)[c], sum = g.group[0][i] + g.group[1][i];
-          ASSERT_NEAR(sum, combined, 1e-4f * std::abs(combined) + 1e-6f) << "pixel " << x << ", " << y;
-          total[0] += g.group[0][i];
-          total[1] += g.group[1][i];
-        }
+    double total[2];
+    expect_groups_sum_to_combined(g, width, height, total);
     EXPECT_GT(total[0], 0.0);  // both groups light the image
     EXPECT_GT(total[1], 0.0);
   }
@@ -131,17 +129,9 @@ ScenePtr emissive_volume_scene(int box_group) {
     lt_volume_desc c[2] = {scatter, volume(LT_VOLUME_EMISSION, 0.0f)};
     c[1].emission_strength = strength;
     std::copy(color, color + 3, c[1].emission_color);
-    const int mat = add_volume_material(s.get(), c, 2);
-    lt_instance_desc d{};
-    d.mesh = add_mesh(s.get(), box({x0, -1, 0}, {x1, 1, 1.5f}));
-    const Xform xf = identity();
-    std::copy(xf.begin(), xf.end(), d.transform);
-    d.materials = &mat;
-    d.material_count = 1;
-    d.visibility = LT_VISIBLE_ALL;
-    d.lightgroup = group;
-    int id = -1;
-    check(lt_scene_add_instance(s.get(), &d, &id), "lt_scene_add_instance");
+    const int material = add_volume_material(s.get(), c, 2);
+    add_instance(s.get(), add_mesh(s.get(), box({x0, -1, 0}, {x1, 1, 1.5f})), material, identity(), LT_VISIBLE_ALL,
+                 group);
   };
   const float warm[3] = {1.0f, 0.6f, 0.3f}, cool[3] = {0.3f, 0.6f, 1.0f};
   emissive_box(volume(LT_VOLUME_SCATTER, 0.4f), 0.5f, warm, -1.2f, 0.6f, box_group);
@@ -163,16 +153,9 @@ TEST(Lightgroups, VolumeEmissionIsInItsObjectsGroup) {
     lt_render_settings rs = render_settings(width, height, 8, 5);
     rs.integrator = integrator;
     const GroupedRender g = render_groups(s.get(), rs);
-    ASSERT_EQ(g.passes.first_non_finite(), "");
-    double key = 0;
-    for (int y = 0; y < height; ++y)
-      for (int x = 0; x < width; ++x)
-        for (int c = 0; c < 3; ++c) {
-          const size_t i = (size_t(y) * width + x) * 3 + c;
-          const float combined = g.passes.rgba(x, y)[c], sum = g.group[0][i] + g.group[1][i];
-          ASSERT_NEAR(sum, combined, 1e-4f * std::abs(combined) + 1e-6f) << "pixel " << x << ", " << y;
-          key += g.group[0][i];
-        }
+    double total[2];
+    expect_groups_sum_to_combined(g, width, height, total);
+    const double key = total[0];
     // Group 1 holds the first box's emission alone: the same render with the box in no group has
     // the same Combined (light groups draw no random number) and the box's light in neither
     // group, so its Combined minus its groups is group 1 here.
