@@ -482,6 +482,61 @@ def build_aovs(scene):
     add_camera(scene, (0.0, -3.5, 1.6), (0.0, 0.0, 0.5), lens=40.0)
 
 
+def _aov_group(name, aov_name, value=None):
+    """A node group holding an AOV Output `aov_name`: fed by the group's colour input (which it also
+    passes to its output), or a constant `value` (a group with no sockets)."""
+    g = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    aov = g.nodes.new("ShaderNodeOutputAOV")
+    aov.name = aov_name
+    if value is not None:
+        aov.inputs["Value"].default_value = value
+        return g
+    gi, go = g.nodes.new("NodeGroupInput"), g.nodes.new("NodeGroupOutput")
+    g.inputs.new("NodeSocketColor", "Color")
+    g.outputs.new("NodeSocketColor", "Color")
+    g.links.new(gi.outputs[0], aov.inputs["Color"])
+    g.links.new(gi.outputs[0], go.inputs[0])
+    return g
+
+
+def build_aovs_world(scene):
+    """Issue 16's World AOVs and AOV Outputs in node groups, with the view layer AOVs of `aovs`: a
+    World whose AOV Outputs write "paint" (0.9, 0.5, 0.1), "coords" (Texture Coordinate's
+    Generated: the escaping direction) and "mask" 0.5 where a camera ray escapes; a ground whose
+    Diffuse colour goes through a group holding the "paint" AOV Output (Cycles flattens groups),
+    and a group linked to nothing holding the "mask" one (0.8); the card of `aovs` (alpha 0.3,
+    its AOV Outputs at the top level) in front of the sky."""
+    world = set_world(scene, (0.3, 0.35, 0.4), 1.0)
+    nt = world.node_tree
+    coords = nt.nodes.new("ShaderNodeTexCoord")
+    for aov_name, source in (("paint", (0.9, 0.5, 0.1, 1.0)), ("coords", coords.outputs["Generated"]),
+                             ("mask", 0.5)):
+        aov = nt.nodes.new("ShaderNodeOutputAOV")
+        aov.name = aov_name
+        if isinstance(source, float):
+            aov.inputs["Value"].default_value = source
+        elif isinstance(source, tuple):
+            aov.inputs["Color"].default_value = source
+        else:
+            nt.links.new(source, aov.inputs["Color"])
+    for name, kind in (("paint", 'COLOR'), ("coords", 'COLOR'), ("mask", 'VALUE')):
+        aov = scene.view_layers[0].aovs.add()
+        aov.name, aov.type = name, kind
+    ground = diffuse("AovGround", WHITE)
+    gnt = ground.node_tree
+    bsdf = next(n for n in gnt.nodes if n.type == 'BSDF_DIFFUSE')
+    paint = gnt.nodes.new("ShaderNodeGroup")
+    paint.node_tree = _aov_group("PaintAov", "paint")
+    paint.inputs[0].default_value = (0.2, 0.6, 0.3, 1.0)
+    gnt.links.new(paint.outputs[0], bsdf.inputs["Color"])
+    gnt.nodes.new("ShaderNodeGroup").node_tree = _aov_group("MaskAov", "mask", value=0.8)
+    assign(add_object(scene, "Ground", mesh_plane("Ground", 4.0)), ground)
+    card = add_object(scene, "Card", mesh_plane("Card", 0.9), (0.5, 1.2, 0.95), (80, 0, 0))  # in one 16 px tile
+    assign(card, _aov_material("Card", GREEN, transparent=0.7))
+    add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(40, 0, 30))
+    add_camera(scene, (0.0, -3.5, 1.0), (0.0, 0.0, 0.9), lens=40.0)
+
+
 def checker_pixels(size=64, squares=8):
     """sRGB-encoded colour checker: warm/cool squares, brightness ramping along U."""
     y, x = np.mgrid[0:size, 0:size]
@@ -2075,6 +2130,7 @@ SCENES = {
     "shadow_catcher": (build_shadow_catcher, (48, 36), 128),
     "light_groups": (build_light_groups, (80, 60), 128),
     "aovs": (build_aovs, (64, 48), 64),
+    "aovs_world": (build_aovs_world, (64, 48), 64),
     "gltf_pbr": (build_gltf_pbr, (80, 80), 256),
     "wide_sun": (build_wide_sun, (64, 48), 128),
     "ray_visibility": (build_ray_visibility, (96, 64), 256),

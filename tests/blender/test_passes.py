@@ -154,9 +154,40 @@ def test_light_groups_agree_with_cycles(scene_factory, outdir):
         assert report == "", report
 
 
-def test_shader_aovs_agree_with_cycles(scene_factory, outdir):
+@pytest.mark.parametrize("integrator", ["VOLPATH", "BIDIRECTIONAL"])
+def test_volume_emission_is_in_its_objects_light_group(integrator, scene_factory, outdir):
+    """Cycles files volume emission under the emitting volume object's light group
+    (integrator/shade_volume.h): scene volume_emission (an emissive Principled Volume cube in the
+    Cornell box under a dim area light, no world) with the cube in group "glow" and the light in
+    "key". Combined_glow and Combined_key against Cycles' by test_agreement.py's rule, and, every
+    emitter being in a group, their sum is Combined."""
+    runs = {}
+    for engine in (ru.CYCLES, ru.LANTERN):
+        for seed in (0, 1):
+            scene = scene_factory("volume_emission", resolution=(48, 48))
+            scene.cycles.volume_bounces = 1
+            for name in ("glow", "key"):
+                scene.view_layers[0].lightgroups.add(name=name)
+            bpy.data.objects["VolumeCube"].lightgroup = "glow"
+            bpy.data.objects["AreaLight"].lightgroup = "key"
+            runs.setdefault(engine, []).append(ru.render(scene, engine, 64, seed=seed, integrator=integrator))
+    r = runs[ru.LANTERN][0]
+    total = r["Combined_glow"][..., :3] + r["Combined_key"][..., :3]
+    assert np.allclose(total, r.combined[..., :3], rtol=1e-4, atol=1e-6), np.abs(total - r.combined[..., :3]).max()
+    for name in ("Combined_glow", "Combined_key"):
+        cycles = [c[name][..., :3] for c in runs[ru.CYCLES]]
+        assert cycles[0].sum() > 0, "%s is empty in Cycles' render: the check would say nothing" % name
+        lantern = [c[name][..., :3] for c in runs[ru.LANTERN]]
+        report, _ = ru.agreement_report("volume_light_groups_%s_%s" % (integrator, name), lantern, cycles, outdir,
+                                        16, 1e-5)
+        assert report == "", report
+
+
+@pytest.mark.parametrize("scene_name", ["aovs", "aovs_world"])
+def test_shader_aovs_agree_with_cycles(scene_name, scene_factory, outdir):
     """Shader AOVs (scenes: aovs; AOV Output of a constant colour, of Texture Coordinate's Generated
-    and of a constant value, through a card of alpha 0.3): each AOV, as an image, by
+    and of a constant value, through a card of alpha 0.3; aovs_world: the World's AOV Outputs where
+    camera rays escape, and AOV Outputs inside node groups): each AOV, as an image, by
     test_agreement.py's rule; a colour AOV's alpha (the share of samples that wrote it) too.
     Behind a transparent surface the expectation is the chance the path passes it (Cycles picks
     the Transparent closure by its sample weight): the card is a Mix Shader, whose choice both
@@ -166,15 +197,20 @@ def test_shader_aovs_agree_with_cycles(scene_factory, outdir):
     runs = {}
     for engine in (ru.CYCLES, ru.LANTERN):
         for seed in (0, 1):
-            scene = scene_factory("aovs")
+            scene = scene_factory(scene_name)
             scene.cycles.pixel_filter_type = 'GAUSSIAN'
             scene.cycles.filter_width = 0.01
             runs.setdefault(engine, []).append(ru.render(scene, engine, 64, seed=seed))
+    if scene_name == "aovs_world":  # the world's mask (0.5) and the unlinked group's (0.8) are written
+        for value in (0.5, 0.8):
+            for engine in (ru.CYCLES, ru.LANTERN):
+                assert np.isclose(runs[engine][0]["mask"][..., 0], value).any(), (engine, value)
     for name, channels in (("paint", [0, 1, 2]), ("paint", [3, 3, 3]), ("coords", [0, 1, 2]), ("mask", [0, 0, 0])):
         assert name in runs[ru.LANTERN][0], "Lantern wrote no %s (has %s)" % (name, sorted(runs[ru.LANTERN][0]))
         lantern = [r[name][..., channels] for r in runs[ru.LANTERN]]
         cycles = [r[name][..., channels] for r in runs[ru.CYCLES]]
-        report, _ = ru.agreement_report("aovs_%s_%d" % (name, channels[0]), lantern, cycles, outdir, 16, 1e-5)
+        report, _ = ru.agreement_report("%s_%s_%d" % (scene_name, name, channels[0]), lantern, cycles, outdir, 16,
+                                        1e-5)
         assert report == "", report
 
 

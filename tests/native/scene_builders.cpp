@@ -258,13 +258,14 @@ int add_mesh(lt_scene* s, const MeshData& m) {
   return id;
 }
 
-int add_instance(lt_scene* s, int mesh, int material, const Xform& xf, unsigned visibility) {
+int add_instance(lt_scene* s, int mesh, int material, const Xform& xf, unsigned visibility, int lightgroup) {
   lt_instance_desc d{};
   d.mesh = mesh;
   std::copy(xf.begin(), xf.end(), d.transform);
   d.materials = &material;
   d.material_count = 1;
   d.visibility = visibility;
+  d.lightgroup = lightgroup;
   int id = -1;
   check(lt_scene_add_instance(s, &d, &id), "lt_scene_add_instance");
   return id;
@@ -367,11 +368,13 @@ lt_volume_desc volume(int node, float density, float color, float g) {
   return d;
 }
 
-int add_volume_material(lt_scene* s, const lt_volume_desc& d) {
+int add_volume_material(lt_scene* s, const lt_volume_desc& d) { return add_volume_material(s, &d, 1); }
+
+int add_volume_material(lt_scene* s, const lt_volume_desc* components, int count) {
   ShaderCode p;
   p.transparent(p.one(), {1, 1, 1});
   int id = add_material(s, p);
-  check(lt_scene_set_material_volume(s, id, &d, 1, 1), "set_material_volume");
+  check(lt_scene_set_material_volume(s, id, components, count, 1), "set_material_volume");
   return id;
 }
 

@@ -78,7 +78,7 @@ int add_emission(lt_scene* s, V3 color, float strength);
 int add_glossy(lt_scene* s, V3 color, float roughness);  // GGX
 int add_mesh(lt_scene* s, const MeshData& m);
 int add_instance(lt_scene* s, int mesh, int material, const Xform& xf = identity(),
-                 unsigned visibility = LT_VISIBLE_ALL);
+                 unsigned visibility = LT_VISIBLE_ALL, int lightgroup = 0);  // lightgroup: k + 1, 0 none
 // add_mesh + add_instance.
 int add_object(lt_scene* s, const MeshData& m, int material, const Xform& xf = identity(),
                unsigned visibility = LT_VISIBLE_ALL);
@@ -108,6 +108,7 @@ lt_volume_desc volume(int node, float density, float color = 1, float g = 0);
 // A material whose only output is a volume: a Transparent surface for PATH, an invisible boundary
 // for the integrators that render media.
 int add_volume_material(lt_scene* s, const lt_volume_desc& d);
+int add_volume_material(lt_scene* s, const lt_volume_desc* components, int count);  // their sum
 
 // A committed scene that exercises most of the path tracer: diffuse, glossy, glass and emissive
 // surfaces, an area light, a soft point light, a sun and the world; with fog, a fog box around the

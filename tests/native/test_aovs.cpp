@@ -112,4 +112,58 @@ TEST(Aovs, WrittenThroughTransparentSurfacesUpToTheAlphaThreshold) {
   }
 }
 
+// The World's AOV Outputs (Cycles evaluates the background shader, AOVs included, where a camera
+// ray escapes through transparent passes; shade_background.h, svm_node_aov_check): the plane of
+// aov_scene on the left half only, over the sky on the right the card, which the camera passes
+// to the world with probability p; the world writes (0.9, 0.5, 0.1) and 0.3. Not through an opaque
+// surface, not with a transparent film (Cycles does not evaluate the world there).
+TEST(Aovs, TheWorldWritesWhereTheCameraRayEscapes) {
+  ScenePtr s = new_scene();
+  ShaderCode w;
+  w.emission(w.one(), {0.2f, 0.2f, 0.2f}, 1);
+  w.emit(lt::kOpAovColor, {w.c3({0.9f, 0.5f, 0.1f})}, {}, {0});
+  w.emit(lt::kOpAovValue, {w.c1(0.3f)}, {}, {1});
+  const lt_shader_program world = w.desc();
+  check(lt_scene_set_world_program(s.get(), &world, 0, LT_VISIBLE_CAMERA), "lt_scene_set_world_program");
+  add_object(s.get(), plane(4, 8), aov_material(s.get(), {0.2f, 0.4f, 0.6f}, 0.7f, 0), translate({-2, 0, 0}));
+  add_object(s.get(), plane(4, 8), aov_material(s.get(), {1, 0, 0}, 0.25f, 0.7f), translate({2, 0, 0.5f}));
+  add_light(s.get(), area_light(LT_AREA_SQUARE, 2, 2, translate({0, 0, 3}), 100));
+  set_camera(s.get(), perspective_camera(look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0})));
+  check(lt_scene_commit(s.get()), "lt_scene_commit");
+  const int width = 32, height = 16, margin = 3;
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    SCOPED_TRACE("integrator " + std::to_string(integrator));
+    lt_render_settings rs = render_settings(width, height, 16, 9);
+    rs.integrator = integrator;
+    for (bool film_transparent : {false, true}) {
+      rs.transparent_background = film_transparent;
+      const AovRender a = render_aovs(s.get(), rs);
+      double escaped = 0;
+      int card = 0;
+      for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width / 2 - margin; ++x) {  // the opaque plane: its own AOVs alone
+          const float* c = &a.colour[(size_t(y) * width + x) * 4];
+          ASSERT_NEAR(c[0], 0.2f, 1e-6f);
+          ASSERT_EQ(c[3], 1.0f);
+          ASSERT_NEAR(a.value[size_t(y) * width + x], 0.7f, 1e-6f);
+        }
+        for (int x = width / 2 + margin; x < width; ++x) {
+          const float* c = &a.colour[(size_t(y) * width + x) * 4];
+          const float passed = c[3] - 1;  // the share of samples that escaped past the card
+          if (film_transparent) ASSERT_EQ(passed, 0.0f);
+          ASSERT_NEAR(c[0], 1 + 0.9f * passed, 1e-5f);
+          ASSERT_NEAR(c[1], 0.5f * passed, 1e-5f);
+          ASSERT_NEAR(c[2], 0.1f * passed, 1e-5f);
+          ASSERT_NEAR(a.value[size_t(y) * width + x], 0.25f + 0.3f * passed, 1e-5f);
+          escaped += passed;
+          ++card;
+        }
+      }
+      if (film_transparent) continue;
+      const double p = 0.7 / (0.7 + 0.3 * 0.8), se = std::sqrt(p * (1 - p) / (16.0 * card));  // as above
+      EXPECT_NEAR(escaped / card, p, 5 * se);
+    }
+  }
+}
+
 }  // namespace

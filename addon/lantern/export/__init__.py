@@ -99,8 +99,10 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     if state is None or camera_object is not None:
         materials.camera = camera_table(depsgraph, camera_object)
     meshes = MeshExporter(depsgraph, core_scene, report, materials, motion)
+    materials.aovs = aov_indices(depsgraph.view_layer_eval)
     try:
-        summary["world"] = export_world(depsgraph, core_scene, report, images, camera=materials.camera)
+        summary["world"] = export_world(depsgraph, core_scene, report, images, camera=materials.camera,
+                                        aovs=materials.aovs)
     except core.LanternError as e:  # a value the core refuses (not finite): no world, the render goes on
         if e.status != core.ERROR_INVALID_ARGUMENT:
             raise
@@ -108,7 +110,6 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=1)
         summary["world"] = "none (left out)"
     groups = lightgroup_indices(depsgraph.view_layer_eval)
-    materials.aovs = aov_indices(depsgraph.view_layer_eval)
     world = depsgraph.scene_eval.world
     if world is not None and groups.get(world.lightgroup, 0):
         core_scene.set_world_lightgroup(groups[world.lightgroup])

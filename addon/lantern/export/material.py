@@ -422,7 +422,7 @@ class MaterialExporter:
                     method = getattr(getattr(material, "cycles", None), "displacement_method", 'BUMP')
                     c.compile_surface(output, method)
                     self._displaced = self._displacement(material, output, method)
-                self._compile_aovs(c, material.node_tree)
+                c.compile_aovs(material.node_tree, self.aovs)
             else:
                 c.closure(nodes.ops.DIFFUSE, [c.const((1.0, 1.0, 1.0)), c.const((0.0, 0.0, 0.0)),
                                               c.const(tuple(material.diffuse_color[:3])), c.const(0.0)])
@@ -431,22 +431,6 @@ class MaterialExporter:
             return None, None, False
         self._bad += c.bad
         return c.program(), volume, null_surface
-
-    def _compile_aovs(self, c, tree):
-        """Cycles' AOV Output nodes of the material's tree: each writes the view-layer AOV of its name
-        (Blender 3.4 keeps it in the node's `name`), its Color input for a colour AOV, its Value for
-        a value one; one naming no AOV of the view layer writes nothing, as in Cycles."""
-        for node in tree.nodes:
-            if node.type != 'OUTPUT_AOV' or node.mute:
-                continue
-            found = self.aovs.get(getattr(node, "aov_name", node.name))
-            if found is None:
-                continue
-            index, colour = found
-            if colour:
-                c.emit(nodes.ops.AOV_COLOR, [c.color(node.inputs["Color"])], params=[index])
-            else:
-                c.emit(nodes.ops.AOV_VALUE, [c.float(node.inputs["Value"])], params=[index])
 
     def volume(self, material):
         """The material's Volume output as set_material_volume's components, [] (unusable) or None."""

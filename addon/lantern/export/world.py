@@ -29,9 +29,10 @@ def _map_resolution(world):
     return int(settings.sample_map_resolution)
 
 
-def export_world(depsgraph, core_scene, report, images, camera=None):
+def export_world(depsgraph, core_scene, report, images, camera=None, aovs=None):
     """Sets the world; returns a short description of what was exported. camera: the camera
-    table of Texture Coordinate's Camera and Window outputs (camera.camera_table), or None."""
+    table of Texture Coordinate's Camera and Window outputs (camera.camera_table), or None; aovs:
+    the view layer's AOVs (aov_indices) its AOV Output nodes write, where a camera ray escapes."""
     world = depsgraph.scene_eval.world
     if world is None:
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=1)
@@ -55,6 +56,10 @@ def export_world(depsgraph, core_scene, report, images, camera=None):
             warn("%s; the world is left out (black)" % e)
             core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=visibility)
             return "none"
+    try:
+        c.compile_aovs(world.node_tree, aovs or {})
+    except nodes.Unsupported as e:
+        warn("%s; its AOV Outputs are left out" % e)
     if c.bad:
         warn("left out: %s not finite; rendered black" % ", ".join(c.bad))
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=visibility)

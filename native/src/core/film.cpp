@@ -403,12 +403,12 @@ HalfImages Film::half_images() const {
   h.width = width_;
   h.height = height_;
   const size_t n = count_.size();
-  for (int j = 0; j < 2; ++j) {
-    h.color[j].assign(3 * n, 0.0f);
-    h.variance[j].assign(3 * n, 0.0f);
-    h.feature[j].assign(kFeatureChannels * n, 0.0f);
+  for (int j = 0; j < 2; ++j) {  // zero (fresh pages), written in parallel below
+    h.color[j].resize(3 * n);
+    h.variance[j].resize(3 * n);
+    h.feature[j].resize(kFeatureChannels * n);
   }
-  h.valid.assign(n, 0);
+  h.valid.resize(n);
   const SplatScales sc = splat_scales();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {

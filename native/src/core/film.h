@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/cryptomatte.h"
+#include "core/fresh_pages.h"
 #include "core/math.h"
 
 namespace lt {
@@ -55,6 +56,15 @@ enum LightPart {
   kLightParts
 };
 
+// A contribution several light groups share (the volume emission of overlapping media): share[i]
+// of it, per channel, goes to group[i] (-1: none); the shares sum to 1.
+struct LightgroupShares {
+  static constexpr int kMax = 8;  // VolumeStack::kCapacity
+  int n = 0;
+  int group[kMax];
+  Spectrum share[kMax];
+};
+
 struct SampleValue {
   Spectrum radiance{0.0f};
   float alpha = 0;
@@ -90,6 +100,9 @@ struct SampleValue {
   Spectrum* lightgroups = nullptr;
   void add_lightgroup(int group, const Spectrum& c) {
     if (lightgroups && group >= 0) lightgroups[group] += c;
+  }
+  void add_lightgroup(const LightgroupShares& g, const Spectrum& c) {
+    for (int i = 0; lightgroups && i < g.n; ++i) add_lightgroup(g.group[i], c * g.share[i]);
   }
   // Shader AOVs: 4 floats per AOV of FilmLayout::aovs (ShadingContext::aovs), zeroed by the render
   // job (CameraSample::aovs); null when the film keeps none.
@@ -188,10 +201,10 @@ const char* catcher_part_letters(int part);
 // both halves are not valid (their values are zero).
 struct HalfImages {
   int width = 0, height = 0;
-  std::vector<float> color[2];     // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
-  std::vector<float> variance[2];  // RGB: variance of each half's mean, (A - B)^2 / (1/n_A + 1/n_B) / n_h
-  std::vector<float> feature[2];   // kFeatureChannels per pixel
-  std::vector<uint8_t> valid;
+  FreshVector<float> color[2];     // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
+  FreshVector<float> variance[2];  // RGB: variance of each half's mean, (A - B)^2 / (1/n_A + 1/n_B) / n_h
+  FreshVector<float> feature[2];   // kFeatureChannels per pixel
+  FreshVector<uint8_t> valid;
 };
 
 // What a film keeps: the passes (Combined and Sample Count always), and whether it keeps the sum

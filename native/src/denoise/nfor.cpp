@@ -6,10 +6,14 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
+#include <new>
+#include <utility>
 
 namespace lt {
 
@@ -22,18 +26,29 @@ constexpr int kTile = 32;                        // pixels per task side (a row'
 // solvable where a feature is constant over the window (a flat wall's normal).
 constexpr double kRidge = 1e-3;
 
-// e^-x for x >= 0 (NL-means weights), vectorisable: 2^(-x log2 e) from the exponent bits and a
+// Eight floats (GCC's vector extension, which clang shares): loops the vectoriser leaves scalar
+// (it will not if-convert a float-to-int conversion) written as vector operations, compiled for
+// whatever the tile function's clone targets (AVX2 or twice SSE2).
+typedef float f8 __attribute__((vector_size(32)));
+typedef int32_t i8 __attribute__((vector_size(32)));
+
+inline f8 load8(const float* p) {
+  f8 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline f8 select8(i8 mask, f8 a, f8 b) { return f8((i8(a) & mask) | (i8(b) & ~mask)); }
+
+// e^-x for x >= 0 (NL-means weights), per lane: 2^(-x log2 e) from the exponent bits and a
 // degree-5 polynomial for the fraction (relative error below 2e-6; the same bits on every thread).
-inline float exp_neg(float x) {
-  const float t = std::min(x, 80.0f) * -1.44269504f;  // in [-115.4, 0]
-  const float fl = std::floor(t), f = t - fl;         // f in [0, 1)
-  const float p = 1.0f + f * (0.693147f + f * (0.240227f + f * (0.0555041f + f * (0.00961813f + f * 0.00133336f))));
-  int32_t bits;
-  std::memcpy(&bits, &p, 4);
-  bits += int32_t(fl) * (1 << 23);  // a multiply: shifting a negative value is undefined
-  float r;
-  std::memcpy(&r, &bits, 4);
-  return r;
+inline f8 exp_neg(f8 x) {
+  const f8 t = select8(x < 80.0f, x, f8{} + 80.0f) * -1.44269504f;  // in [-115.4, 0]
+  // floor(t): truncation rounds up where t (<= 0) is not whole (the mask is -1 there).
+  const i8 ti = __builtin_convertvector(t, i8);
+  const i8 fi = ti + (__builtin_convertvector(ti, f8) > t);
+  const f8 f = t - __builtin_convertvector(fi, f8);  // in [0, 1)
+  const f8 p = 1.0f + f * (0.693147f + f * (0.240227f + f * (0.0555041f + f * (0.00961813f + f * 0.00133336f))));
+  return f8(i8(p) + fi * (1 << 23));  // a multiply: shifting a negative value is undefined
 }
 
 bool finite(const float* v, int n) {
@@ -42,28 +57,39 @@ bool finite(const float* v, int n) {
   return true;
 }
 
-// The inputs as planes (one float per pixel each) so that the inner loops run along rows.
-struct Planes {
-  int w = 0, h = 0;
-  std::vector<float> color[2][3];  // each half's RGB
-  std::vector<float> var[2][3];    // each half's variance, smoothed
-  std::vector<float> feature[kFeatureChannels];
-  std::vector<float> valid;  // 1 or 0
+// One image-wide plane of floats (one per pixel), a part of a FreshVector (zero at first).
+struct Plane {
+  float* p = nullptr;
+  float* data() const { return p; }
+  float& operator[](size_t i) const { return p[i]; }
 };
 
-Planes prepare(const HalfImages& in) {
-  Planes pl;
+// The inputs as planes (one float per pixel each) so that the inner loops run along rows.
+struct Planes {
+  static constexpr int kCount = 2 * 3 + 2 * 3 + kFeatureChannels + 1;
+  explicit Planes(size_t n) {
+    memory.resize(kCount * n);
+    Plane* all[kCount];
+    int k = 0;
+    for (int j = 0; j < 2; ++j)
+      for (int c = 0; c < 3; ++c) all[k++] = &color[j][c], all[k++] = &var[j][c];
+    for (Plane& f : feature) all[k++] = &f;
+    all[k++] = &valid;
+    for (int i = 0; i < kCount; ++i) all[i]->p = memory.data() + size_t(i) * n;
+  }
+  int w = 0, h = 0;
+  FreshVector<float> memory;
+  Plane color[2][3];  // each half's RGB
+  Plane var[2][3];    // each half's variance, smoothed
+  Plane feature[kFeatureChannels];
+  Plane valid;  // 1 or 0
+};
+
+void prepare(const HalfImages& in, Planes& pl) {
   pl.w = in.width;
   pl.h = in.height;
   const int w = in.width, h = in.height;
   const size_t n = size_t(w) * h;
-  for (int j = 0; j < 2; ++j)
-    for (int c = 0; c < 3; ++c) {
-      pl.color[j][c].assign(n, 0.0f);
-      pl.var[j][c].assign(n, 0.0f);
-    }
-  for (auto& f : pl.feature) f.assign(n, 0.0f);
-  pl.valid.assign(n, 0.0f);
   // Sanitise: a pixel with any non-finite input is left out (valid 0, values 0), so it cannot spread.
   tbb::parallel_for(0, h, [&](int y) {
     for (size_t i = size_t(y) * w; i < size_t(y + 1) * w; ++i) {
@@ -114,14 +140,22 @@ Planes prepare(const HalfImages& in) {
     count += row_count[y];
   }
   const float scale = count > 0 && sum > 0 ? float(count / sum) : 1.0f;
-  for (float& d : pl.feature[kFeatureChannels - 1]) d *= scale;
-  return pl;
+  for (size_t i = 0; i < n; ++i) pl.feature[kFeatureChannels - 1][i] *= scale;
 }
 
 // The reconstruction's sums per pixel, over the whole image: for each half j, the weighted fits
-// that reach the pixel (RGB) and their weights. Tiles add into them in a fixed order (denoise()).
+// that reach the pixel (RGB) and their weights, zero at first. Tiles add into them in a fixed
+// order (denoise()).
 struct Sums {
-  std::vector<float> value[2][3], weight[2];
+  explicit Sums(size_t n) {
+    memory.resize(8 * n);
+    for (int j = 0; j < 2; ++j) {
+      for (int c = 0; c < 3; ++c) value[j][c].p = memory.data() + size_t(4 * j + c) * n;
+      weight[j].p = memory.data() + size_t(4 * j + 3) * n;
+    }
+  }
+  FreshVector<float> memory;
+  Plane value[2][3], weight[2];
 };
 
 // A task's buffers, reused across its tiles; per-pixel arrays are tile-local (ty * kTile + tx).
@@ -129,18 +163,51 @@ struct Scratch {
   std::vector<float> term[2], vsum[2], psum[2];          // an offset's distance terms and patch sums
   std::vector<float> weight[2];                          // per offset and pixel: the NL-means weight of guide g
   std::vector<float> acc[2][kPairs], rhs[2][kDims * 3];  // a row's normal equations per half
-  std::vector<float> coef[2][kDims * 3];                 // each half's fit per pixel: coefficient d, channel c at d*3+c
+  // A row's gathered offsets: design rows (features' differences), each half's weighted design
+  // rows (the weight, the weight times each difference) and colours; [offset][dimension][lane].
+  std::vector<float> gx, gw[2], gy[2];
+  std::vector<float> coef[2][kDims * 3];  // each half's fit per pixel: coefficient d, channel c at d*3+c
 };
 
 // The packed index of the symmetric normal matrix's entry (a, b), a <= b (the order in which the
 // tile accumulates them).
 constexpr int packed(int a, int b) { return a * kDims - a * (a - 1) / 2 + (b - a); }
 
+// Row a of a row's normal equations, lanes [i0, i0 + 8): the pairs (a, b), b >= a, and the
+// right-hand sides (a, c) summed over the n gathered offsets (gw, gx, gy: Scratch's), in registers.
+template <int A>
+__attribute__((always_inline)) inline void accumulate_row(int n, const float* gw, const float* gx, const float* gy,
+                                                          int i0, std::vector<float>* acc, std::vector<float>* rhs) {
+  constexpr int kB = kDims - A;
+  f8 pair[kB] = {}, right[3] = {};
+  for (int q = 0; q < n; ++q) {
+    const f8 wa = load8(gw + (size_t(q) * kDims + A) * kTile + i0);
+    for (int b = 0; b < kB; ++b) {
+      if (A + b == 0)
+        pair[b] += wa;
+      else
+        pair[b] += wa * load8(gx + (size_t(q) * kFeatureChannels + A + b - 1) * kTile + i0);
+    }
+    for (int c = 0; c < 3; ++c) right[c] += wa * load8(gy + (size_t(q) * 3 + c) * kTile + i0);
+  }
+  for (int b = 0; b < kB; ++b) std::memcpy(acc[packed(A, A + b)].data() + i0, &pair[b], sizeof(f8));
+  for (int c = 0; c < 3; ++c) std::memcpy(rhs[A * 3 + c].data() + i0, &right[c], sizeof(f8));
+}
+
+template <int... A>
+__attribute__((always_inline)) inline void accumulate_rows(int n, const float* gw, const float* gx, const float* gy,
+                                                           int i0, std::vector<float>* acc, std::vector<float>* rhs,
+                                                           std::integer_sequence<int, A...>) {
+  (accumulate_row<A>(n, gw, gx, gy, i0, acc, rhs), ...);
+}
+
 // Each lane's first-order fit for a row of kTile pixels: (A + ridge) b = r by Cholesky in double,
 // vectorised across the lanes (a lane that fails takes the zeroth-order fit). Inputs: the packed
 // normal matrices and right-hand sides (r[d * 3 + c]); output b[d * 3 + c], coefficient d of
 // channel c, and has[i] = 0 where a lane has no valid neighbour (no fit at all).
-inline void solve_row(const float* const* a_in, const float* const* r_in, float* const* out, float* has) {
+// Inlined into the tile function's clones; every loop runs across the lanes, innermost.
+__attribute__((always_inline)) inline void solve_row(const float* const* a_in, const float* const* r_in,
+                                                     float* const* out, float* has) {
   alignas(32) double l[kPairs][kTile], inv[kDims][kTile], y[kDims][kTile], b[kDims][kTile], ok[kTile], wsum[kTile];
   auto L = [&](int i, int j) -> double* { return l[packed(j, i)]; };  // lower factor L(i, j), j <= i
   for (int i = 0; i < kTile; ++i) {
@@ -149,42 +216,50 @@ inline void solve_row(const float* const* a_in, const float* const* r_in, float*
   }
   for (int j = 0; j < kDims; ++j) {
     double* ljj = L(j, j);
+    // Ridge on the features' diagonal, relative to the weight sum.
+    for (int i = 0; i < kTile; ++i) ljj[i] = double(a_in[packed(j, j)][i]) + (j > 0 ? kRidge * wsum[i] : 0.0);
+    for (int k = 0; k < j; ++k) {
+      const double* ljk = L(j, k);
+      for (int i = 0; i < kTile; ++i) ljj[i] -= ljk[i] * ljk[i];
+    }
     for (int i = 0; i < kTile; ++i) {
-      // Ridge on the features' diagonal, relative to the weight sum.
-      double d = double(a_in[packed(j, j)][i]) + (j > 0 ? kRidge * wsum[i] : 0.0);
-      for (int k = 0; k < j; ++k) d -= L(j, k)[i] * L(j, k)[i];
+      const double d = ljj[i];
       ok[i] = d > 0 ? ok[i] : 0.0;
       ljj[i] = std::sqrt(d > 0 ? d : 1.0);
       inv[j][i] = 1.0 / ljj[i];
     }
     for (int m = j + 1; m < kDims; ++m) {
       double* lmj = L(m, j);
-      for (int i = 0; i < kTile; ++i) {
-        double sum = a_in[packed(j, m)][i];
-        for (int k = 0; k < j; ++k) sum -= L(m, k)[i] * L(j, k)[i];
-        lmj[i] = sum * inv[j][i];
+      for (int i = 0; i < kTile; ++i) lmj[i] = a_in[packed(j, m)][i];
+      for (int k = 0; k < j; ++k) {
+        const double *lmk = L(m, k), *ljk = L(j, k);
+        for (int i = 0; i < kTile; ++i) lmj[i] -= lmk[i] * ljk[i];
       }
+      for (int i = 0; i < kTile; ++i) lmj[i] *= inv[j][i];
     }
   }
   for (int c = 0; c < 3; ++c) {
-    for (int m = 0; m < kDims; ++m)
-      for (int i = 0; i < kTile; ++i) {
-        double sum = r_in[m * 3 + c][i];
-        for (int k = 0; k < m; ++k) sum -= L(m, k)[i] * y[k][i];
-        y[m][i] = sum * inv[m][i];
+    for (int m = 0; m < kDims; ++m) {
+      for (int i = 0; i < kTile; ++i) y[m][i] = r_in[m * 3 + c][i];
+      for (int k = 0; k < m; ++k) {
+        const double* lmk = L(m, k);
+        for (int i = 0; i < kTile; ++i) y[m][i] -= lmk[i] * y[k][i];
       }
-    for (int m = kDims - 1; m >= 0; --m)
-      for (int i = 0; i < kTile; ++i) {
-        double sum = y[m][i];
-        for (int k = m + 1; k < kDims; ++k) sum -= L(k, m)[i] * b[k][i];
-        b[m][i] = sum * inv[m][i];
-      }
-    // A fit whose value at the pixel is negative (a non-negative image) or not finite fails.
-    for (int i = 0; i < kTile; ++i) {
-      bool fine = b[0][i] >= 0;
-      for (int m = 0; m < kDims; ++m) fine = fine && std::isfinite(b[m][i]);
-      ok[i] = fine ? ok[i] : 0.0;
+      for (int i = 0; i < kTile; ++i) y[m][i] *= inv[m][i];
     }
+    for (int m = kDims - 1; m >= 0; --m) {
+      for (int i = 0; i < kTile; ++i) b[m][i] = y[m][i];
+      for (int k = m + 1; k < kDims; ++k) {
+        const double* lkm = L(k, m);
+        for (int i = 0; i < kTile; ++i) b[m][i] -= lkm[i] * b[k][i];
+      }
+      for (int i = 0; i < kTile; ++i) b[m][i] *= inv[m][i];
+    }
+    // A fit whose value at the pixel is negative (a non-negative image) or not finite fails (a
+    // NaN fails every comparison).
+    for (int i = 0; i < kTile; ++i) ok[i] = b[0][i] >= 0 ? ok[i] : 0.0;
+    for (int m = 0; m < kDims; ++m)
+      for (int i = 0; i < kTile; ++i) ok[i] = std::abs(b[m][i]) <= DBL_MAX ? ok[i] : 0.0;
     for (int m = 0; m < kDims; ++m)
       for (int i = 0; i < kTile; ++i) out[m * 3 + c][i] = float(b[m][i]);
   }
@@ -271,25 +346,37 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
         float* wt = weight + size_t(ty) * kTile;
         const int ilo = std::max(x0, -dx) - x0, ihi = std::min(x1, w - dx) - x0;
         // Neighbours outside the image and lanes past the tile: weight 0.
-        if (qy < 0 || qy >= h || ilo > 0 || ihi < kTile) std::fill(wt, wt + kTile, 0.0f);
-        if (qy < 0 || qy >= h) continue;
+        if (qy < 0 || qy >= h) {
+          std::fill(wt, wt + kTile, 0.0f);
+          continue;
+        }
         const float* ps = &s.psum[g][size_t(ty) * kTile];
-        for (int i = ilo; i < ihi; ++i) wt[i] = exp_neg(std::max(0.0f, ps[i] * inv_patch));
+        for (int i = 0; i < kTile; i += 8) {  // every lane, then those outside set to 0
+          const f8 d = load8(ps + i) * inv_patch, e = exp_neg(select8(d > 0.0f, d, f8{}));
+          std::memcpy(wt + i, &e, sizeof e);
+        }
+        std::fill(wt, wt + std::min(ilo, kTile), 0.0f);
+        std::fill(wt + std::max(ihi, 0), wt + kTile, 0.0f);
       }
     }
   }
   // Half j's normal equations with the weights of guide 1 - j (cross-filtering), a row of pixels
-  // at a time over all offsets (its sums stay in the L1 cache), kTile lanes wide (fixed-length
-  // loops; lanes outside the image or the tile have weight 0). The design row: 1 and the
-  // features' differences from the pixel's.
-  alignas(32) float xr[kFeatureChannels][kTile], wa[kDims][kTile], yr[3][kTile];
+  // at a time, kTile lanes wide (lanes outside the image or the tile have weight 0). The design
+  // row: 1 and the features' differences from the pixel's. First each offset's design rows,
+  // weights and colours are gathered (s.gx, s.gw, s.gy), then each sum runs over the offsets in
+  // registers, eight lanes at a time (accumulate_row): in the offsets' order, as adding them into
+  // arrays offset by offset would, without the arrays' loads and stores.
+  const size_t gx_size = size_t(offsets) * kFeatureChannels * kTile, gw_size = size_t(offsets) * kDims * kTile,
+               gy_size = size_t(offsets) * 3 * kTile;
+  s.gx.resize(gx_size);
+  for (int j = 0; j < 2; ++j) {
+    s.gw[j].resize(gw_size);
+    s.gy[j].resize(gy_size);
+  }
   for (int ty = 0; ty < th; ++ty) {
     const int y = y0 + ty;
     const size_t o = size_t(ty) * kTile;
-    for (int j = 0; j < 2; ++j) {
-      for (auto& a : s.acc[j]) std::fill(a.begin(), a.end(), 0.0f);
-      for (auto& a : s.rhs[j]) std::fill(a.begin(), a.end(), 0.0f);
-    }
+    int active = 0;  // offsets whose neighbours are in the image, gathered at 0, 1, ...
     for (int oi = 0; oi < offsets; ++oi) {
       const int dy = oi / side - r, dx = oi % side - r, qy = y + dy;
       if (qy < 0 || qy >= h) continue;
@@ -297,38 +384,33 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
       if (ilo >= ihi) continue;
       const ptrdiff_t row = ptrdiff_t(y) * w + x0, qrow = ptrdiff_t(qy) * w + dx + x0;
       const bool partial = ilo > 0 || ihi < kTile;  // lanes outside: zero (else all are written)
+      const int n = active++;
+      float* xr = &s.gx[size_t(n) * kFeatureChannels * kTile];
       for (int k = 0; k < kFeatureChannels; ++k) {
         const float* fe = pl.feature[k].data();
-        if (partial) std::fill(xr[k], xr[k] + kTile, 0.0f);
-        for (int i = ilo; i < ihi; ++i) xr[k][i] = fe[qrow + i] - fe[row + i];
+        float* xk = xr + k * kTile;
+        if (partial) std::fill(xk, xk + kTile, 0.0f);
+        for (int i = ilo; i < ihi; ++i) xk[i] = fe[qrow + i] - fe[row + i];
       }
       for (int j = 0; j < 2; ++j) {
         const float* wsrc = &s.weight[1 - j][size_t(oi) * tn + o];
-        if (partial) std::fill(wa[0], wa[0] + kTile, 0.0f);
-        for (int i = ilo; i < ihi; ++i) wa[0][i] = wsrc[i] * valid[qrow + i];
+        float* wa = &s.gw[j][size_t(n) * kDims * kTile];
+        if (partial) std::fill(wa, wa + kTile, 0.0f);
+        for (int i = ilo; i < ihi; ++i) wa[i] = wsrc[i] * valid[qrow + i];
+        float* yr = &s.gy[j][size_t(n) * 3 * kTile];
         for (int c = 0; c < 3; ++c) {
           const float* yq = pl.color[j][c].data() + qrow;
-          if (partial) std::fill(yr[c], yr[c] + kTile, 0.0f);
-          for (int i = ilo; i < ihi; ++i) yr[c][i] = yq[i];
+          if (partial) std::fill(yr + c * kTile, yr + (c + 1) * kTile, 0.0f);
+          for (int i = ilo; i < ihi; ++i) yr[c * kTile + i] = yq[i];
         }
         for (int k = 0; k < kFeatureChannels; ++k)
-          for (int i = 0; i < kTile; ++i) wa[1 + k][i] = wa[0][i] * xr[k][i];
-        for (int a = 0, pair = 0; a < kDims; ++a) {
-          for (int b = a; b < kDims; ++b, ++pair) {
-            float* __restrict acc = s.acc[j][pair].data();
-            if (b == 0) {
-              for (int i = 0; i < kTile; ++i) acc[i] += wa[0][i];
-            } else {
-              for (int i = 0; i < kTile; ++i) acc[i] += wa[a][i] * xr[b - 1][i];
-            }
-          }
-          for (int c = 0; c < 3; ++c) {
-            float* __restrict rhs = s.rhs[j][a * 3 + c].data();
-            for (int i = 0; i < kTile; ++i) rhs[i] += wa[a][i] * yr[c][i];
-          }
-        }
+          for (int i = 0; i < kTile; ++i) wa[(1 + k) * kTile + i] = wa[i] * xr[k * kTile + i];
       }
     }
+    for (int j = 0; j < 2; ++j)
+      for (int i0 = 0; i0 < kTile; i0 += 8)
+        accumulate_rows(active, s.gw[j].data(), s.gx.data(), s.gy[j].data(), i0, s.acc[j], s.rhs[j],
+                        std::make_integer_sequence<int, kDims>());
     // The row's fits per half (solve_row: where a fit fails, the zeroth-order one). A pixel without
     // any valid neighbour has no fit: its weights are set to 0 for the reconstruction.
     alignas(32) float has[kTile];
@@ -347,7 +429,7 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
   // Collaborative reconstruction (NFOR, sec. 4.2): every pixel's fit, evaluated at each neighbour
   // q of its window, adds into q's sums with the pixel's NL-means weight for q. At an invalid q
   // (features not known) the fit's value at the pixel.
-  alignas(32) float fit[kTile];
+  alignas(32) float fit[kTile], xr[kFeatureChannels][kTile];
   for (int oi = 0; oi < offsets; ++oi) {
     const int dy = oi / side - r, dx = oi % side - r;
     for (int ty = 0; ty < th; ++ty) {
@@ -386,17 +468,14 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
 }  // namespace
 
 std::vector<float> denoise(const HalfImages& in, const DenoiseParams& params) {
-  const Planes pl = prepare(in);
   const int w = in.width, h = in.height;
   const size_t n = size_t(w) * h;
+  Planes pl(n);
+  prepare(in, pl);
   DenoiseParams p = params;
   // A tile's sums reach the window's radius beyond it: tiles two apart never share a pixel.
   p.window = std::min(p.window, kTile - 1);
-  Sums sums;
-  for (int j = 0; j < 2; ++j) {
-    for (auto& v : sums.value[j]) v.assign(n, 0.0f);
-    sums.weight[j].assign(n, 0.0f);
-  }
+  Sums sums(n);
   tbb::enumerable_thread_specific<Scratch> scratch;
   const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
   // Four rounds, one per tile parity (tx % 2, ty % 2): within a round no two tiles add into the

@@ -201,7 +201,7 @@ void Bdpt::add_emitters_reached(std::vector<PathVertex>& camera, int nt) {
       // takes it with MIS weight 1, within the same depth and per-kind limits as an emitter there.
       if (at - 1 > max_depth()) continue;
       const float kinds_within = kind_limit_factor(camera, camera, 0, at + 1);
-      if (kinds_within > 0) add(c.le * kinds_within, 0, at + 1, -1);
+      if (kinds_within > 0) add(c.le * kinds_within, 0, at + 1, c.groups);
     }
     if (at < nt && !is_black(camera[at].le)) emitter_reached(camera, at + 1, nullptr, camera[at].le);
   }
@@ -284,7 +284,10 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       c.at = count;
       c.le = beta * media_emission(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_,
                                    s_.volume_estimator, s_.volume_step);
-      if (!is_black(c.le)) crossed.push_back(c);
+      if (!is_black(c.le)) {
+        if (out_.lightgroups) c.groups = media_emission_groups(scene_, stack);
+        crossed.push_back(c);
+      }
     }
     if (media_)
       medium = sample_media(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_, s_.volume_estimator,
@@ -333,6 +336,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
             b.total = bounces;
             describe_ray(b, visibility, &wc);
             wc.transparent_depth = transparent;
+            if (background && first && !first->aovs_done) write_aovs_at(&wc, cs_.aovs, s_);  // as path.cpp
             escape(lights_.world_light(), scene_.world.radiance(wc));
           }
           lights_.escaped_suns(ray.d, visibility, escape);

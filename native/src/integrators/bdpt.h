@@ -26,6 +26,7 @@ struct Crossed {
   Vec3 p, n;
   Spectrum beta{1.0f}, le{0.0f};  // the walk's throughput up to it, and its radiance towards the walk
   float pdf_fwd = 0;              // the density of reaching it from camera[at - 1] (area measure)
+  LightgroupShares groups;        // volume emission (light -1): the light groups it is filed under
 };
 
 // Per-thread scratch, allocated once and reused: no heap allocation per sample.
@@ -242,7 +243,8 @@ class Bdpt {
   // Adds a strategy's weighted contribution to the sample and to the strategy view.
   // Light passes: s + t - 2 scattering vertices; the first is camera[1] (t >= 2), whose split
   // is the walk's sampled direction's (t >= 3) or the connection's (t = 2, set by connect()).
-  void add(const Spectrum& c, int s, int t, int group, bool environment = false) {
+  template <class Group>  // int, or LightgroupShares
+  void add(const Spectrum& c, int s, int t, const Group& group, bool environment = false) {
     L_ += c;
     out_.add_lightgroup(group, c);
     if (s_.light_passes) add_light_part(out_.light, c, s + t - 2, t == 2 ? first_connect_ : first_walk_, environment);

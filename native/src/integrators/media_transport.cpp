@@ -33,7 +33,7 @@ void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* s
       for (int k = 0; k < n_decided; ++k) seen = seen || decided[k] == m;
       if (!seen && n_decided < int(sizeof(decided) / sizeof(int))) {
         decided[n_decided++] = m;
-        if (dot(r.d, sp.ng) > 0) stack->cross(m, true);  // first met from inside
+        if (dot(r.d, sp.ng) > 0) stack->cross(m, true, scene.geometry.instance(sp.instance).lightgroup);  // from inside
       }
     }
     r.o = spawn_origin(sp, r.d);
@@ -42,7 +42,7 @@ void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* s
 
 void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir, VolumeStack* stack) {
   int m = scene.medium_of(sp.material);
-  if (m >= 0) stack->cross(m, dot(dir, sp.ng) < 0);
+  if (m >= 0) stack->cross(m, dot(dir, sp.ng) < 0, scene.geometry.instance(sp.instance).lightgroup);
 }
 
 bool pass_boundary(const Scene& scene, const SurfacePoint& sp, float hit_t, Ray* ray, VolumeStack* stack,
@@ -118,6 +118,30 @@ Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray&
   });
   for (int k = 0; k < 3; ++k) L[k] = float(E[k] * std::exp(-double(sigma[k]) * s) * T_het[k] / pdf);
   return L;
+}
+
+LightgroupShares media_emission_groups(const Scene& scene, const VolumeStack& stack) {
+  LightgroupShares g;
+  Spectrum E(0.0f);
+  for (int i = 0; i < stack.size; ++i) {
+    const Medium& m = scene.media[stack.media[i]];
+    if (!m.emissive()) continue;
+    E += m.emission();
+    int k = 0;
+    while (k < g.n && g.group[k] != stack.groups[i]) ++k;
+    if (k == g.n) {
+      g.group[g.n] = stack.groups[i];
+      g.share[g.n++] = Spectrum(0.0f);
+    }
+    g.share[k] += m.emission();
+  }
+  if (g.n == 1) {
+    g.share[0] = Spectrum(1.0f);  // exactly the whole, the common case
+  } else {
+    for (int k = 0; k < g.n; ++k)
+      for (int c = 0; c < 3; ++c) g.share[k][c] = E[c] > 0 ? g.share[k][c] / E[c] : 0.0f;
+  }
+  return g;
 }
 
 int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1, Sampler& sampler,

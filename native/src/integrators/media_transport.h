@@ -54,6 +54,12 @@ int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, f
 Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
                         Sampler& sampler, VolumeEstimator est, float step);
 
+// The light groups media_emission's value for `stack` belongs to: each emitting medium's share
+// E_m / E per channel (the estimate is linear in the emission) goes to the group of the object
+// whose boundary entered it (Cycles files a segment's emission under one object's group,
+// shade_volume.h: the same where one emitting volume is around the ray).
+LightgroupShares media_emission_groups(const Scene& scene, const VolumeStack& stack);
+
 // Transmittance of a shadow ray (ray.tmax: distance to the light) through invisible boundaries
 // (updating a copy of the stack), media and transparent surfaces (the weights of their Transparent
 // lobes, Cycles' transparent shadows; more than max_transparent of them block, as Cycles'

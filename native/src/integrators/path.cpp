@@ -84,7 +84,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   // from the current vertex.
   // After a split neither path writes light passes, nor the light groups of light samples (Cycles'
   // film_write_direct_light and film_write_emission_or_background_pass).
-  auto add = [&](const Spectrum& c, int group, bool environment = false) {
+  auto add = [&](const Spectrum& c, const auto& group, bool environment = false) {  // group: int or shares
     const Spectrum v = clamp_contribution(c, b.total == 0 ? s.clamp_direct : s.clamp_indirect);
     if (catcher_leg) {
       out.catcher += v;
@@ -179,7 +179,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       // Volume emission along the whole segment (closed form; before the free flight decides where
       // the path goes on, as Cycles 3.4 does).
       if (kMedia && scene.has_emissive_media() && stack.size > 0)
-        add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step), -1);
+        add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step),
+            out.lightgroups ? media_emission_groups(scene, stack) : LightgroupShares{});
       if constexpr (kMedia)
         medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
       const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;
@@ -233,6 +234,9 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
           if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
             ShadingContext wc = world_context(ray.d);
             describe_ray(b, visibility, &wc);
+            // The World's AOV Outputs write where a camera ray escapes (Cycles' background shader
+            // with PATH_RAY_TRANSPARENT_BACKGROUND, not PATH_RAY_SINGLE_PASS_DONE).
+            if (b.total == 0 && !aovs_done && !catcher_leg) write_aovs_at(&wc, cs.aovs, s);
             add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY),
                 lights.lightgroup(lights.world_light()), true);
           }

@@ -7,20 +7,27 @@ namespace lt {
 struct VolumeStack {
   static constexpr int kCapacity = 8;
   int media[kCapacity];
+  int groups[kCapacity];  // the light group of the object whose boundary entered each (its emission's)
   int size = 0;
 
-  // Front face (ray against the geometric normal): enter; back face: leave one occurrence.
-  void cross(int medium, bool entering) {
+  // Front face (ray against the geometric normal): enter; back face: leave one occurrence (of the
+  // same object's group if there is one).
+  void cross(int medium, bool entering, int group = -1) {
     if (medium < 0) return;
     if (entering) {
-      if (size < kCapacity) media[size++] = medium;  // deeper nesting is ignored
+      if (size < kCapacity) {  // deeper nesting is ignored
+        groups[size] = group;
+        media[size++] = medium;
+      }
       return;
     }
+    int found = -1;
     for (int i = size - 1; i >= 0; --i)
-      if (media[i] == medium) {
-        media[i] = media[--size];
-        return;
-      }
+      if (media[i] == medium && (found < 0 || (groups[i] == group && groups[found] != group))) found = i;
+    if (found < 0) return;
+    --size;
+    media[found] = media[size];
+    groups[found] = groups[size];
   }
   bool contains(int medium) const {
     for (int i = 0; i < size; ++i)

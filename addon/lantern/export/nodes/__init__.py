@@ -377,6 +377,33 @@ class Compiler:
         self.emit(ops.SET_DISPLACEMENT, [self.vector(output_node.inputs["Displacement"])])
         return self.program()
 
+    def compile_aovs(self, tree, aovs, scope=()):
+        """Cycles' AOV Output nodes of `tree`, at its top level and inside its node groups (Cycles
+        flattens the groups, blender/shader.cpp, and keeps every AOV Output with what feeds it):
+        each adds the view-layer AOV of its name (aovs: name -> (index, colour), aov_indices;
+        Blender 3.4 keeps the name in the node's `name`), its Color input for a colour AOV, its Value
+        for a value one; one naming no AOV of the view layer writes nothing, as in Cycles."""
+        for node in tree.nodes:
+            if node.mute:
+                continue
+            if node.type == 'GROUP':
+                if node.node_tree is not None and len(scope) < 64:  # Blender refuses recursive groups
+                    self.compile_aovs(node.node_tree, aovs, scope + (node,))
+                continue
+            found = aovs.get(getattr(node, "aov_name", node.name)) if node.type == 'OUTPUT_AOV' else None
+            if found is None:
+                continue
+            index, colour = found
+            saved = self._scope
+            self._scope = scope
+            try:
+                if colour:
+                    self.emit(ops.AOV_COLOR, [self.color(node.inputs["Color"])], params=[index])
+                else:
+                    self.emit(ops.AOV_VALUE, [self.float(node.inputs["Value"])], params=[index])
+            finally:
+                self._scope = saved
+
     def displacement_bump(self, socket, undisplaced=False):
         """Cycles 3.4's bump from displacement (scene/shader_graph.cpp bump_from_displacement): the
         displacement's component along the normal (its dot with Geometry's Normal) at the point and
