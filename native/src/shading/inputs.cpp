@@ -235,7 +235,12 @@ void bump(const Instr& in, Machine& m) {
   Vec3 out = std::abs(det) * n_in - scale * (det < 0 ? -1.0f : (det > 0 ? 1.0f : 0.0f)) * surfgrad;
   const float len = length(out);
   out = len > 0 && std::isfinite(len) ? normalize(strength * (out / len) + (1 - strength) * n_in) : n_in;
-  m.set(in.out[0], ensure_valid_reflection(c.Ng, c.I, out));
+  const Vec3 tilted = ensure_valid_reflection(c.Ng, c.I, out);
+  m.set(in.out[0], tilted);
+  if (m.bumps < Machine::kMaxBumps) {
+    m.bump_out[m.bumps] = tilted;
+    m.bump_raw[m.bumps++] = out;
+  }
 }
 
 // Cycles' svm_node_tex_image_box: the object-space normal's components pick (and near the edges of
@@ -355,6 +360,7 @@ void set_normal(const Instr& in, Machine& m) {
   const Vec3 n = m.v(in.in[0]);
   if (!m.displaced || !(dot(n, n) > 0) || !is_finite(n)) return;
   const Vec3 N = normalize(n);
+  m.displaced_raw = normalize(m.untilted(n));
   m.displaced->emplace(*m.ctx);
   set_shading_normal(&**m.displaced, N);
   m.ctx = &**m.displaced;
