@@ -339,6 +339,7 @@ BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_l
 # test; 0.9971 +- 0.0006 with the lamp out of frame), while every internal check agrees (light
 # lengths, heuristics, BDPT against VOLPATH in a closed fog box). Its image-mean check is the
 # strict expected failure below, so that the gap stays visible and a fix turns it into an error.
+# Still 0.9945 (0.089 % standard error) with the view frames and zero-density MIS of bdpt.h.
 MEAN_GAPS = ["world_fog"]
 K = 12
 
