@@ -185,6 +185,15 @@ def add_light(scene, name, kind, energy, location, rotation=(0, 0, 0), color=(1,
 
 
 def _mesh(name, bm):
+    # Some bmesh primitives (create_uvsphere, welding its seam) order their faces as they lie in
+    # memory, which differs from session to session: the same sphere then shades and renders
+    # with other bits (Blender's normals are sums in face order; its triangles, the BVH). Faces
+    # sorted by their vertices make every build of a scene the same mesh.
+    bm.verts.index_update()
+    bm.faces.index_update()
+    order = sorted(bm.faces, key=lambda f: sorted(v.index for v in f.verts))
+    rank = {f.index: k for k, f in enumerate(order)}
+    bm.faces.sort(key=lambda f: rank[f.index])
     me = bpy.data.meshes.new(name)
     bm.to_mesh(me)
     bm.free()

@@ -86,13 +86,14 @@ struct ShaderCode {
   }
   void transparent(uint32_t weight, Rgb color) { emit(lt::kOpTransparent, {weight, c3(color)}, {}); }
   // Principled BSDF with these inputs and Blender's defaults for the others.
+  // normal: its Normal input (world space; zero: the shading point's).
   void principled(uint32_t weight, Rgb base, float metallic, float roughness, float specular = 0.5f,
-                  float transmission = 0, float ior = 1.45f, float transmission_roughness = 0) {
+                  float transmission = 0, float ior = 1.45f, float transmission_roughness = 0, Rgb normal = {0, 0, 0}) {
     const uint32_t z3 = c3({0, 0, 0}), z = c1(0);
     // Operand order of kOpPrincipled (shading/shaders.h).
     emit(lt::kOpPrincipled,
          {weight,
-          z3,
+          c3(normal),
           c3(base),
           z,
           c3({1, 0.2f, 0.1f}),

@@ -49,14 +49,19 @@ enum class Lights { Area, PointSpot, AreaAndSun };
 // glass sphere and a diffuse block; an opening in the ceiling lets the sun in for AreaAndSun.
 // With media: fog (albedo 0.8, g 0.4, optical depth about 1 across) in the lower half of the room
 // behind an invisible boundary, a medium inside the glass sphere and a thin world volume.
-ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1.0f, bool media = false) {
+// bent_floor: the floor a Principled BSDF whose Normal leans 50 degrees from the floor's, which
+// Cycles tilts for each viewer (ensure_valid_reflection).
+ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1.0f, bool media = false,
+              bool bent_floor = false) {
   ScenePtr s = new_scene();
   lt_scene* sc = s.get();
   int white = add_diffuse(sc, {0.7f, 0.7f, 0.7f});
+  ShaderCode bent;
+  bent.principled(bent.one(), {0.7f, 0.7f, 0.7f}, 0, 0.4f, 0.5f, 0, 1.45f, 0, {0.766f, 0, 0.643f});
   int red = add_diffuse(sc, {0.7f, 0.15f, 0.1f});
   int green = add_diffuse(sc, {0.15f, 0.6f, 0.1f});
   MeshData floor = plane(2, 2);
-  add_object(sc, floor, white);
+  add_object(sc, floor, bent_floor ? add_material(sc, bent) : white);
   MeshData ceiling = plane(2, 2);
   flip_winding(ceiling);
   if (lights != Lights::AreaAndSun) add_object(sc, ceiling, white, translate({0, 0, 2}));
@@ -165,10 +170,11 @@ static std::pair<int, double> worst_mis_sum(const lt::RenderContext& ctx, int pa
 }
 
 TEST(Bdpt, MisWeightsSumToOne) {
-  for (int scene_index = 0; scene_index < 5; ++scene_index) {
+  for (int scene_index = 0; scene_index < 6; ++scene_index) {
     const Lights lights = scene_index >= 3 ? Lights::Area : Lights(scene_index);
-    // The fourth: with media; the fifth: door_slabs (walls of two lobe kinds, Cycles' limits).
-    ScenePtr s = scene_index == 4 ? door_slabs() : room(lights, 0.2f, 1.0f, scene_index == 3);
+    // The fourth: with media; the fifth: door_slabs (walls of two lobe kinds, Cycles' limits); the
+    // sixth: a bent floor normal, whose frames differ with the direction a walk arrives from.
+    ScenePtr s = scene_index == 4 ? door_slabs() : room(lights, 0.2f, 1.0f, scene_index == 3, scene_index == 5);
     const lt::Scene& scene = s->scene;
     const int size = 32;
     lt::Camera camera(scene.camera, size, size);
@@ -732,5 +738,28 @@ TEST(Bdpt, DepthOfFieldAndPanoramasAgreeWithPathTracing) {
   for (int type : {LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_EQUIRECTANGULAR}) {
     set_camera(s.get(), room_panorama(type));
     EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, 4, 16), "") << "full BDPT, panorama " << type;
+  }
+}
+
+// The same seed gives the same image, bit for bit, on any number of threads and in any run: a world
+// and a sun (room with AreaAndSun) and door_slabs, each rendered on 1 thread, then twice on 4.
+TEST(Bdpt, RendersAreDeterministic) {
+  for (int scene_index = 0; scene_index < 2; ++scene_index) {
+    ScenePtr s = scene_index == 0 ? room(Lights::AreaAndSun) : door_slabs();
+    lt_render_settings r = settings(LT_INTEGRATOR_BIDIRECTIONAL, 32, 4, 9, 64);
+    r.threads = 1;
+    const Passes one = render(s.get(), r);
+    r.threads = 4;
+    for (int run = 0; run < 2; ++run) {
+      const Passes many = render(s.get(), r);
+      size_t differ = 0;
+      double worst = 0;
+      for (size_t i = 0; i < one.combined.size(); ++i)
+        if (std::memcmp(&one.combined[i], &many.combined[i], sizeof(float)) != 0) {
+          ++differ;
+          worst = std::max(worst, double(std::abs(one.combined[i] - many.combined[i])));
+        }
+      EXPECT_EQ(differ, 0u) << "scene " << scene_index << ", run " << run << ": largest difference " << worst;
+    }
   }
 }

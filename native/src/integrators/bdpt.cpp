@@ -151,7 +151,8 @@ bool Bdpt::mixed_kind(const PathVertex& v, const Vec3& camera_side, const Vec3& 
                       float* p) const {
   const Vec3 wo_w = normalize(camera_side - v.p), wi_w = normalize(light_side - v.p);
   const bool transmit = (dot(wo_w, v.n) > 0) != (dot(wi_w, v.n) > 0);
-  const Vec3 wo = v.frame.to_local(wo_w), wi = v.frame.to_local(wi_w);
+  const Frame fr = view_frame(v, wo_w).frame;  // the path tracer's, reached from the camera side
+  const Vec3 wo = fr.to_local(wo_w), wi = fr.to_local(wi_w);
   float part[kMaxLobes];
   float total = 0;
   if (delta) {
@@ -412,6 +413,11 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (length_squared(v.frame.n - facing_normal(smooth_n, v.n)) > 0)
         v.bsdf.set_bump(v.frame.to_local(smooth_n), mode == Mode::Importance);
       v.wo = v.frame.to_local(-ray.d);
+      v.raw_n = is_black(sf.raw) ? sf.n : sf.raw;
+      v.smooth_n = smooth_n;
+      v.tangent = sf.tangent;
+      // Hair lobes keep their tangent in this frame; an untilted normal along Ng never tilts.
+      v.tilts = sp.curve < 0 && !(v.raw_n.x == v.n.x && v.raw_n.y == v.n.y && v.raw_n.z == v.n.z);
     }
     v.pdf_fwd = density_of(count, v);
     reverse_density(count, v);
@@ -463,13 +469,22 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;
       v.delta = (bs.flags & kLobeSpecular) != 0;
       if (!v.delta) min_pdf = std::min(min_pdf, bs.pdf);
-      Spectrum fv = bs.f;
-      // The light subpath's first bounce leaves out the lobes its light excludes (excluded_kinds).
-      if (mode == Mode::Importance && count == 2 && excluded_kinds(path[0].vis))
-        fv = v.delta ? ((1u << int(flags_pass_kind(bs.flags))) & excluded_kinds(path[0].vis) ? Spectrum(0.0f) : fv)
-                     : v.bsdf.eval(v.wo, bs.wi, nullptr, excluded_kinds(path[0].vis));
-      beta *= fv * (std::abs(bs.wi.z) / bs.pdf);
-      if (mode == Mode::Importance) beta *= shading_correction(v, -ray.d, wi);
+      if (mode == Mode::Radiance) {
+        beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
+      } else {
+        // The light subpath's first bounce leaves out the lobes its light excludes (excluded_kinds).
+        const unsigned excluded = count == 2 ? excluded_kinds(path[0].vis) : 0;
+        if (v.delta) {
+          // A delta lobe's direction is the one it sampled in v.frame (kept so where the camera
+          // side would tilt the normal otherwise), with the shading-normal correction there.
+          const float cos_l = std::abs(dot(ray.d, v.n)), cos_s = std::abs(dot(ray.d, v.frame.n));
+          const float correction = cos_l > 0 ? cos_s * std::abs(dot(wi, v.n)) / cos_l : 0.0f;
+          beta *= (1u << int(flags_pass_kind(bs.flags))) & excluded ? Spectrum(0.0f) : bs.f * (correction / bs.pdf);
+        } else {
+          // Sampled in the light side's frame, weighed with the BSDF the camera side sees (f_cos).
+          beta *= f_cos(v, wi, Mode::Importance, excluded) / bs.pdf;
+        }
+      }
       if (s_.light_passes && mode == Mode::Radiance && count == 2) {
         if (v.delta)
           first_walk_.set_kind(flags_pass_kind(bs.flags));
@@ -619,6 +634,15 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light);
   };
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
+  // A zero reverse density stands for a delta vertex sampling (remapped to 1, pbrt's remap0; the
+  // strategies it would count are skipped below) or for a strategy that cannot sample the path:
+  // the frames of one vertex differ with the walk's direction (view_frame), so a direction one
+  // walk reaches can lie outside the other's hemisphere. That strategy and every one beyond it
+  // (they all sample that vertex from the same side) have weight 0; remapped, they took a share
+  // of the path that no sample of theirs ever brings back.
+  auto ratio_of = [&](const PathVertex& v, bool from_delta) {
+    return v.pdf_rev == 0 && !from_delta ? 0.0 : double(remap0(v.pdf_rev)) / remap0(v.pdf_fwd);
+  };
   // The light endpoint's densities above hold the light subpaths' power pick (pdf_light_origin);
   // strategy s' = 1 picks it with the light tree from x[1] instead (pick_nee), so its ratio takes
   // the factor lambda = pick_nee / pick_power, and when s = 1 is the strategy weighed, every
@@ -639,7 +663,7 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     if (as_light > 0 && !((c.vis & kVisLightRay) && (as_light > 1 || (c.vis & kVisShadow)))) break;
     // A light nothing picks (a constant World, LightSet::build) ends only strategy s = 0's paths.
     if (as_light == 0 && !(c.light >= 0 && lights_.pmf(c.light) > 0)) break;
-    r *= remap0(c.pdf_rev) / remap0(c.pdf_fwd);
+    r *= ratio_of(c, i < t - 1 && C(i + 1).delta);
     if (!c.delta && !C(i - 1).delta && exists(s + t - i, i)) sum += heuristic(float(ratio(r, s + t - i)));
   }
   const double camera_sum = sum;
@@ -647,7 +671,7 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   for (int i = s - 1; i >= 0; --i) {
     const PathVertex& l = L(i);
     if (!(l.vis & (t == 1 && i == s - 1 ? kVisCamera : kVisLightRay))) break;
-    r *= remap0(l.pdf_rev) / remap0(l.pdf_fwd);
+    r *= ratio_of(l, (i < s - 1 && L(i + 1).delta) || (i == 0 && is_delta_light(l)));
     bool delta_light_vertex = i > 0 ? L(i - 1).delta : is_delta_light(l);
     if (!l.delta && !delta_light_vertex && exists(i, s + t - i)) sum += heuristic(float(ratio(r, i)));
   }
@@ -684,7 +708,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
     sampled.n = ls.n;
     sampled.beta = ls.radiance / (pmf * ls.pdf);
-    Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis)) * sampled.beta * cos_at(pt, ls.wi);
+    Spectrum c = pt.beta * f_cos(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis)) * sampled.beta;
     if (is_black(c)) return c;
     c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls, time_),
                        kVisShadow);
@@ -700,10 +724,10 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   float d2 = length_squared(d);
   if (!(d2 > 0)) return Spectrum(0.0f);
   Vec3 w = d / std::sqrt(d2);  // from the light vertex towards the camera vertex
-  Spectrum c = qs.beta * f(qs, w, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) *
-               f(pt, -w, Mode::Radiance) * pt.beta;
+  Spectrum c = qs.beta * f_cos(qs, w, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) *
+               f_cos(pt, -w, Mode::Radiance) * pt.beta;
   if (is_black(c)) return c;
-  c *= cos_at(qs, w) * cos_at(pt, w) / d2;
+  c /= d2;
   if (is_black(c)) return c;
   c *= transmittance(qs, pt, kVisLightRay);  // the camera walk's kind of ray
   if (is_black(c)) return c;
@@ -729,7 +753,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   if (!cam.project(lens, qs.p, ctx_.filter.radius(), &pr, time_)) return;
   const Vec3 dir = pr.dir;
   const float dist = pr.distance;
-  Spectrum base = qs.beta * f(qs, -dir, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) * kinds;
+  Spectrum base = qs.beta * f_cos(qs, -dir, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) * kinds;
   if (is_black(base)) return;
   // Light passes: qs is the path's first bounce seen from the camera (towards -dir), lit from its
   // predecessor on the light subpath (qs.wo).
@@ -739,7 +763,9 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
       first.set_volume();
     } else {
       Spectrum k[3];
-      qs.bsdf.eval_kinds(qs.frame.to_local(-dir), qs.wo, k);
+      const ViewFrame vf = view_frame(qs, -dir);
+      std::optional<Bsdf> copy;
+      bsdf_in(qs, vf, &copy).eval_kinds(vf.frame.to_local(-dir), vf.frame.to_local(qs.frame.to_world(qs.wo)), k);
       first.set_surface(k);
     }
   }
@@ -750,11 +776,11 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   // Pixel j's estimate is the integral over the film of its filter h_j times the radiance of the
   // film position's ray; over directions instead, h_j times the film's importance J (pixels per
   // steradian, summed over the film positions that see the direction: film_density), and over
-  // qs's surface d omega = cos_qs dA / d^2 (pbrt-v4's PerspectiveCamera::We and SampleWi: for a
+  // qs's surface d omega = cos_qs dA / d^2 (f_cos holds cos_qs; pbrt-v4's PerspectiveCamera::We and SampleWi: for a
   // perspective camera J = 1 / (a cos^3), a the view-plane area of a pixel; with a lens, seen
   // from the lens point, whose density 1 / A_lens cancels We's). The film divides the sum of
   // splats by the number of light paths.
-  base *= cos_at(qs, dir) / (dist * dist);
+  base /= dist * dist;
   const float r = ctx_.filter.radius();
   // The MIS weight depends on the pixel only through the camera's density at qs, which is the
   // pixel's film_density times a common factor; that density is a factor of every ratio on the

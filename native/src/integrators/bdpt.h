@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <optional>
 #include <vector>
 
 #include "integrators/integrator.h"
@@ -84,9 +85,12 @@ class Bdpt {
           ctx_.filter.pdf(pr.at[k].film.x - pixel.x) * ctx_.filter.pdf(pr.at[k].film.y - pixel.y) * pr.at[k].importance;
     return sum;
   }
+  // The density of sampling to_next at v reached from to_prev: in the frame the path tracer shades
+  // v in when it arrives from to_prev (either walk's; view_frame).
   float bsdf_pdf(const PathVertex& v, const Vec3& to_prev, const Vec3& to_next) const {
     if (v.type == VertexType::Medium) return phase(v).pdf(to_prev, to_next);
-    return v.bsdf.pdf(v.frame.to_local(to_prev), v.frame.to_local(to_next));
+    const ViewFrame vf = view_frame(v, to_prev);
+    return v.bsdf.pdf(vf.frame.to_local(to_prev), vf.frame.to_local(to_next));
   }
   const Phase& phase(const PathVertex& v) const { return scene_.media[v.medium].phase(); }
   // Density (area measure at `next`) that vertex v samples `next`, having been reached from prev
@@ -141,26 +145,56 @@ class Bdpt {
   }
 
   // ---- scattering ----------------------------------------------------------------------------
-  // BSDF towards `to` at a vertex, with pbrt's shading-normal correction for importance transport.
-  // excluded: lobes the light the path ends on leaves out (excluded_kinds; at the vertex next to it).
-  Spectrum f(const PathVertex& v, const Vec3& to_world, Mode mode, unsigned excluded = 0) const {
-    if (v.type == VertexType::Medium) return Spectrum(phase(v).eval(v.wo, to_world));
+  // Cycles tilts a shading normal for its viewer (ensure_valid_reflection with sd->I, the
+  // direction a camera path arrives from; kernel/closure/bsdf_util.h), so a surface's BSDF depends
+  // on the camera-side direction, which a light vertex learns only when connected. Each walk
+  // shades its vertices for the side it reached them from (v.frame); every f is taken in the frame
+  // for its camera-side direction (the path tracer's BSDF, for every strategy) and every density
+  // in the frame for the direction the sampling walk arrived from (bsdf_pdf), both from view_frame.
+  struct ViewFrame {
+    Frame frame;
+    bool own;  // v.frame itself (v.bsdf's bump normal is in it)
+  };
+  // The frame the program would have made at v for a ray arriving from `view` (world, unit, away
+  // from v): the untilted normal tilted for it, on the side of view (Cycles flips N and Ng for a
+  // back face), z then turned to v's side as v.frame's.
+  ViewFrame view_frame(const PathVertex& v, const Vec3& view) const {
+    if (!v.tilts) return {v.frame, true};
+    const float side = dot(view, v.n) < 0 ? -1.0f : 1.0f;
+    Vec3 n = ensure_valid_reflection(side * v.n, view, side * v.raw_n);
+    if (!is_finite(n)) n = side * v.raw_n;
+    n = facing_normal(side * n, v.n);
+    if (n.x == v.frame.n.x && n.y == v.frame.n.y && n.z == v.frame.n.z) return {v.frame, true};
+    return {is_black(v.tangent) ? Frame(n) : Frame(n, v.tangent), false};
+  }
+  // v's BSDF in vf: v.bsdf, or for another frame a copy with its bump normal moved there.
+  static const Bsdf& bsdf_in(const PathVertex& v, const ViewFrame& vf, std::optional<Bsdf>* copy) {
+    if (vf.own) return v.bsdf;
+    copy->emplace(v.bsdf);
+    (*copy)->set_smooth(length_squared(vf.frame.n - facing_normal(v.smooth_n, v.n)) > 0, vf.frame.to_local(v.smooth_n));
+    return **copy;
+  }
+  // f at v times the cosine the path tracer weighs it with, towards `to` (world), in the frame for
+  // the camera side. Radiance: v is on the camera's walk (v.wo the camera side), `to` the light
+  // side: f |cos_s(to)|. Importance: v is on the light's walk (v.wo the light side, l), `to` the
+  // camera side, with pbrt's shading-normal correction for importance transport:
+  // f |cos_s(l)| |cos_g(to)| / |cos_g(l)| (pbrt 3, sec. 16.1). excluded: lobes the light the path
+  // ends on leaves out (excluded_kinds; at the vertex next to it).
+  Spectrum f_cos(const PathVertex& v, const Vec3& to, Mode mode, unsigned excluded = 0) const {
+    if (v.type == VertexType::Medium) return Spectrum(phase(v).eval(v.wo, to));
     if (v.type != VertexType::Surface) return Spectrum(0.0f);
-    Vec3 wi = v.frame.to_local(to_world);
-    if ((dot(to_world, v.n) > 0) != (wi.z > 0)) return Spectrum(0.0f);  // shading normal would leak
-    Spectrum r = v.bsdf.eval(v.wo, wi, nullptr, excluded);
-    if (mode == Mode::Importance) r *= shading_correction(v, v.frame.to_world(v.wo), to_world);
-    return r;
-  }
-  static float shading_correction(const PathVertex& v, const Vec3& wo, const Vec3& wi) {
-    float num = std::abs(dot(wo, v.frame.n)) * std::abs(dot(wi, v.n));
-    float den = std::abs(dot(wo, v.n)) * std::abs(dot(wi, v.frame.n));
-    return den > 0 ? num / den : 0.0f;
-  }
-  float cos_at(const PathVertex& v, const Vec3& w) const {
-    if (v.type == VertexType::Surface) return std::abs(dot(v.frame.n, w));
-    if (v.type == VertexType::Light && v.on_surface()) return std::abs(dot(v.n, w));
-    return 1.0f;
+    const bool camera_walk = mode == Mode::Radiance;
+    const ViewFrame vf = camera_walk ? ViewFrame{v.frame, true} : view_frame(v, to);
+    const Vec3 light_side = camera_walk ? to : v.frame.to_world(v.wo);
+    const Vec3 l = vf.frame.to_local(light_side);
+    // The geometric normal decides which side the light is on; shading normals only shade.
+    if ((dot(light_side, v.n) > 0) != (l.z > 0)) return Spectrum(0.0f);
+    std::optional<Bsdf> copy;
+    const Bsdf& bsdf = bsdf_in(v, vf, &copy);
+    if (camera_walk) return bsdf.eval(v.wo, l, nullptr, excluded) * std::abs(l.z);
+    const float cos_l = std::abs(dot(light_side, v.n));
+    if (!(cos_l > 0)) return Spectrum(0.0f);
+    return bsdf.eval(l, vf.frame.to_local(to), nullptr, excluded) * (std::abs(l.z) * std::abs(dot(to, v.n)) / cos_l);
   }
   // Transmittance of the segment from a to b: 0 or 1 without media; with media the product of
   // the media's transmittances (through invisible boundaries), 0 if a surface is in the way.

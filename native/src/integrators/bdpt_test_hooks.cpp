@@ -17,8 +17,8 @@ std::vector<float> Bdpt::weight_sums() {
       if (s + t - 2 > max_depth()) break;
       PathVertex &qs = light[s - 1], &pt = camera[t - 1];
       if (!scatters(pt) || !scatters(qs) || is_black(transmittance(qs, pt, kVisLightRay))) continue;
-      if (is_black(f(qs, normalize(pt.p - qs.p), Mode::Importance)) ||
-          is_black(f(pt, normalize(qs.p - pt.p), Mode::Radiance)))
+      if (is_black(f_cos(qs, normalize(pt.p - qs.p), Mode::Importance)) ||
+          is_black(f_cos(pt, normalize(qs.p - pt.p), Mode::Radiance)))
         continue;
       // The full path x[0] = camera ... x[k] = light, with both densities of every vertex:
       // cam[i] (sampled from x[i-1]) and lig[i] (sampled from x[i+1]).
@@ -75,6 +75,13 @@ std::vector<float> Bdpt::weight_sums() {
           if (!a_ok || !b_ok) continue;
         }
         if (s2 == 0 && is_delta_light(x[k])) continue;
+        // Nor do strategies whose walks cannot reach one of its vertices (a zero density not
+        // due to a delta vertex sampling it): the frames of a vertex differ with the direction
+        // a walk arrives from (Bdpt::view_frame).
+        bool reaches = true;
+        for (int i = 2; i < t2 && reaches; ++i) reaches = cam[i] != 0 || x[i - 1].delta;
+        for (int i = t2; i < k && reaches; ++i) reaches = lig[i] != 0 || x[i + 1].delta;
+        if (!reaches) continue;
         if (t2 == 1 && x[1].delta) continue;
         const PathVertex* sampled = s2 == 1 ? &l2[0] : (t2 == 1 ? &c2[0] : nullptr);
         PathVertex sampled_copy;

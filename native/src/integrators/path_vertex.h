@@ -39,6 +39,11 @@ struct PathVertex {
   Vec3 n;       // geometric normal (zero for points in space: point lights, camera, media)
   Frame frame;  // shading frame, z facing the side the vertex was reached from
   Vec3 wo;      // direction towards the predecessor: local (surfaces), world (media)
+  // Surfaces: Cycles tilts the shading normal for the viewer (ensure_valid_reflection), so the
+  // frame depends on the direction a path arrives from (Bdpt::view_frame): the normal untilted
+  // (ShadingFrame::raw), the smooth normal of the bump term and the tangent; tilts: it may.
+  Vec3 raw_n, smooth_n, tangent;
+  bool tilts = false;
   SurfacePoint sp;
   Bsdf bsdf;
   int medium = -1;  // Medium vertices: the medium whose phase function scatters

@@ -194,6 +194,12 @@ class Bsdf {
     smooth_ = smooth_local;
     light_is_wo_ = light_is_wo;
   }
+  // The bump's smooth normal in another local frame (BDPT's frames for other viewers, bdpt.h);
+  // bumped false: none there.
+  void set_smooth(bool bumped, const Vec3& smooth_local) {
+    bumped_ = bumped;
+    smooth_ = smooth_local;
+  }
   // Cycles 3.4's microfacet sampling (bsdf_microfacet_ggx_sample, _beckmann_sample) keeps a
   // reflection that lands below the shading normal if it is above the geometric one, weighted by
   // G1(wi) computed with cos^2 (so positive), while its eval() is zero there: with a bent normal

@@ -252,7 +252,12 @@ void bump(const Instr& in, Machine& m) {
   const float len = length(out);
   out = len > 0 && std::isfinite(len) ? normalize(strength * (out / len) + (1 - strength) * n_in) : n_in;
   if (object_space) out = normalized_or_zero(c.pose.normal_to_world(out));
-  m.set(in.out[0], ensure_valid_reflection(c.Ng, c.I, out));
+  const Vec3 tilted = ensure_valid_reflection(c.Ng, c.I, out);
+  m.set(in.out[0], tilted);
+  if (m.bumps < Machine::kMaxBumps) {
+    m.bump_out[m.bumps] = tilted;
+    m.bump_raw[m.bumps++] = out;
+  }
 }
 
 // Cycles' svm_node_enter_bump_eval: P at the undisplaced mesh's point (its position attribute
@@ -409,6 +414,7 @@ void set_normal(const Instr& in, Machine& m) {
   const Vec3 n = m.v(in.in[0]);
   if (!m.displaced || !(dot(n, n) > 0) || !is_finite(n)) return;
   const Vec3 N = normalize(n);
+  m.displaced_raw = normalize(m.untilted(n));
   m.displaced->emplace(*m.ctx);
   set_shading_normal(&**m.displaced, N);
   m.ctx = &**m.displaced;

@@ -211,12 +211,15 @@ Spectrum Program::execute_all(const ShadingContext& ctx, const std::vector<std::
     w += words_of(in);
   }
   if (frame) {
+    frame->raw = frame->n;
     if (m.ctx != &ctx) {
       frame->smooth = m.ctx->N;
       if (!m.has_shading_normal) frame->n = m.ctx->N;
+      frame->raw = m.displaced_raw;
     }
     if (m.has_shading_normal) {
       frame->n = m.shading_normal;
+      frame->raw = m.shading_normal_raw;
     } else if (bsdf && bsdf->count() > 0) {
       // Cycles' closure nodes pass an unlinked Normal (sd->N) through ensure_valid_reflection too:
       // a smooth-shaded silhouette's normal tilts so that its mirror direction leaves the surface.

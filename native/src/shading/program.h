@@ -97,6 +97,18 @@ struct Machine {
   Spectrum emitted;
   Vec3 shading_normal;  // set by closures with a Normal input (one normal per shading point)
   bool has_shading_normal = false;
+  // Cycles' ensure_valid_reflection tilts normals for the viewer (ctx->I) in Bump and in the
+  // closures; ShadingFrame::raw keeps the normal untilted. Bump outputs and their untilted values:
+  static constexpr int kMaxBumps = 4;
+  Vec3 bump_out[kMaxBumps], bump_raw[kMaxBumps];
+  int bumps = 0;
+  Vec3 shading_normal_raw, displaced_raw;  // the untilted shading_normal and SetNormal's normal
+  // n untilted if a Bump made it (an unchanged copy of its output), else n.
+  Vec3 untilted(const Vec3& n) const {
+    for (int k = 0; k < bumps; ++k)
+      if (bump_out[k].x == n.x && bump_out[k].y == n.y && bump_out[k].z == n.z) return bump_raw[k];
+    return n;
+  }
   Vec3 shading_tangent{0.0f};  // set by anisotropic closures: the frame's +X
 
   // The context moved by each bump differential (set when the program has a Bump node): ops that
@@ -186,6 +198,9 @@ struct ShadingFrame {
   // The shading point's normal as the material's displacement bumped it (Cycles' SetNormal: the
   // sd->N closures and the bump shadowing term compare with); zero without one.
   Vec3 smooth{0.0f};
+  // n before Cycles' ensure_valid_reflection tilted it for the viewer (ShadingContext::I): BDPT
+  // tilts it again for each direction a camera path could arrive from (bdpt.h, view_frame).
+  Vec3 raw{0.0f};
 };
 
 class Program {

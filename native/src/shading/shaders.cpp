@@ -27,6 +27,7 @@ constexpr float kClosureCutoff = 1e-5f;  // Cycles' CLOSURE_WEIGHT_CUTOFF
 void take_normal(Machine& m, const Vec3& n, const Vec3& weight) {
   if (m.has_shading_normal || is_black(weight) || !(dot(n, n) > 0) || !is_finite(n)) return;
   Vec3 N = normalize(n);
+  m.shading_normal_raw = normalize(m.untilted(n));
   if (m.ctx) {
     const Vec3 valid = ensure_valid_reflection(m.ctx->Ng, m.ctx->I, N);
     N = is_finite(valid) ? valid : N;
