@@ -6,6 +6,8 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(blender cmake g++ make libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev libopencolorio-dev libopenvdb-dev libnanovdb-dev
           libboost-iostreams-dev libgtest-dev libbenchmark-dev python3-numpy python3-pytest
+          # Pillow: the image-file tests write CMYK JPEG and palette TIFF/TGA files Blender cannot
+          python3-pil
           # the farm end-to-end test (tests/blender/test_farm.py)
           slurmctld slurmd slurm-client munge
           # the UI test: a windowed Blender under a virtual X server with Mesa's software OpenGL
