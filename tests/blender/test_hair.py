@@ -1,12 +1,14 @@
-"""Particle hair export (issue 15): the path cache read in bulk (export/particle_cache.py) gives the
+"""Particle hair (issue 15): the path cache read in bulk (export/particle_cache.py) gives the
 strands ParticleSystem.co_hair gives, key by key, in a render's depsgraph (object space, as Cycles
-brings them back)."""
+brings them back), and Cycles' simple Hair BSDF on it against Cycles."""
 import bpy
 import numpy as np
 import pytest
 
 import build_scenes
+import render_utils as ru
 from lantern.export import hair, particle_cache
+from test_agreement import ROUNDING, TILE
 
 
 class _KeysEngine(bpy.types.RenderEngine):
@@ -95,3 +97,45 @@ def test_unreadable_cache_exports_through_co_hair(monkeypatch):
     for a, b in zip(fast, slow):
         assert a.shape == b.shape
     assert np.abs(fast[0] - slow[0]).max() <= 4 * np.spacing(np.float32(np.abs(slow[0]).max()))
+
+
+def lantern_and_cycles(scene_factory, name):
+    """Two renders (seeds 0 and 1) of one build by each engine, PATH."""
+    scene = scene_factory(name)
+    spp = build_scenes.SCENES[name][2]
+    return {engine: [ru.render(scene, engine, spp, seed=seed).combined for seed in (0, 1)]
+            for engine in (ru.LANTERN, ru.CYCLES)}
+
+
+@pytest.mark.parametrize("name", ["hair_ball_hair_bsdf_sun", "hair_ball_hair_bsdf_tangent_sun"])
+def test_hair_bsdf_agrees_with_cycles_under_the_sun_alone(name, scene_factory, outdir):
+    """Cycles' simple Hair BSDF on particle hair: its Reflection and Transmission added, each with
+    an Offset and RoughnessU != RoughnessV, and (_tangent) the Reflection's Tangent linked to a
+    constant direction. Lit by a sun alone with the hair hidden from indirect rays, Cycles' image
+    comes from its light samples, weighed by its eval(), which Lantern's lobes are: per tile and
+    the image mean (test_agreement's rule)."""
+    both = lantern_and_cycles(scene_factory, name)
+    report, _ = ru.agreement_report(name, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
+@pytest.mark.xfail(strict=True, reason="Cycles 3.4's sample() of the Hair BSDF departs from its eval(), which "
+                   "Lantern follows (README: Hair and points)")
+def test_hair_bsdf_departs_from_cycles_when_lit_indirectly(scene_factory, outdir):
+    """The same hair under an area light, a world and over a floor: Cycles draws the reflection's
+    azimuth with RoughnessV but states its pdf as for 1, and the transmission's on half the range
+    its eval() covers, weighing every BSDF sample by 1; so its indirect light is not the rendering
+    of its eval() and Lantern, unbiased for eval(), differs (measured: image mean 0.89 of Cycles').
+    Strict, so a change shows."""
+    both = lantern_and_cycles(scene_factory, "hair_ball_hair_bsdf")
+    report, _ = ru.agreement_report("hair_ball_hair_bsdf", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
+def test_moving_hair_agrees_with_cycles(scene_factory, outdir):
+    """Hair moves with its object's transform under motion blur, as in Cycles: particle hair on a
+    translating, turning sphere and a translating Curves object; per tile and the image mean, PATH."""
+    both = lantern_and_cycles(scene_factory, "hair_motion")
+    report, _ = ru.agreement_report("hair_motion", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report

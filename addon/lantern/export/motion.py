@@ -22,7 +22,8 @@ import numpy as np
 
 # Blender's frame range (MAXFRAME): sub-frames beyond it cannot be evaluated.
 MAX_FRAME = 1048574
-_MESH_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
+# What moves with its object's transform: geometry, particle hair on meshes, Curves and point clouds.
+_MESH_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'CURVES', 'POINTCLOUD'}
 
 
 def _cycles(idblock):
@@ -164,7 +165,7 @@ class Motion:
 def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
     """Records, at relative time rel, the matrices and vertices of what has a step there."""
     for inst in depsgraph.object_instances:
-        if not inst.show_self:
+        if not (inst.show_self or inst.show_particles):  # an emitter hidden from render keeps its hair
             continue
         obj = inst.object
         key = _key(inst)
@@ -243,7 +244,7 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
             motion.camera_steps = min(motion.camera_steps, 3)
     times = set()
     for inst in depsgraph.object_instances:
-        if not inst.show_self or inst.object.type not in _MESH_TYPES:
+        if not (inst.show_self or inst.show_particles) or inst.object.type not in _MESH_TYPES:
             continue
         obj = inst.object
         parent = inst.parent if inst.is_instance else None

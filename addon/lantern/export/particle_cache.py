@@ -166,6 +166,8 @@ def object_keys(obj, psys, first, count, steps):
     co = co @ imat[:3, :3]
     co += imat[3, :3]
     # co_hair leaves a step beyond the path's segments unwritten: Cycles then repeats the key before.
+    if segments.min() >= steps - 1:
+        return co
     last = np.minimum(np.arange(steps)[None, :], segments[:, None])
     co = np.take_along_axis(co, np.maximum(last, 0)[:, :, None], axis=1)
     if (last < 0).any():  # a path with no keys: every call unwritten, Cycles' keys at the world's origin
