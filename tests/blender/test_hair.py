@@ -7,6 +7,7 @@ import pytest
 
 import build_scenes
 import render_utils as ru
+from lantern import engine
 from lantern.export import hair, particle_cache
 from test_agreement import ROUNDING, TILE
 
@@ -139,3 +140,22 @@ def test_moving_hair_agrees_with_cycles(scene_factory, outdir):
     both = lantern_and_cycles(scene_factory, "hair_motion")
     report, _ = ru.agreement_report("hair_motion", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
     assert report == "", report
+
+
+def test_deforming_strands_are_reported_rigid_ones_are_not(scene_factory):
+    """Lantern moves strands and points with their object's transform only: a hair ball whose
+    emitter swells over the shutter (a shape key: the roots move) is reported by name, while the
+    rigidly moving hair and Curves of hair_motion are not."""
+    scene = scene_factory("hair_motion", resolution=(16, 16))
+    ru.render(scene, ru.LANTERN, 1)
+    assert "change shape over the shutter" not in engine.LAST_RENDER["report"]
+    ball = bpy.data.objects["Ball"]
+    ball.shape_key_add(name="Basis")
+    swell = ball.shape_key_add(name="Swell")
+    for v, k in zip(ball.data.vertices, swell.data):
+        k.co = v.co * 1.3
+    build_scenes._keyframes(swell, "value", [0.0, 1.0], owner=ball.data.shape_keys)
+    ru.render(scene, ru.LANTERN, 1)
+    report = engine.LAST_RENDER["report"]
+    assert "Object 'Ball': its hair, curves or points change shape over the shutter" in report
+    assert "RandomCurves" not in report
