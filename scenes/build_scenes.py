@@ -2030,10 +2030,10 @@ SCENES = {
     "hair_ball_hair_bsdf": (lambda scene: build_hair_ball(scene, 300, hair_mat=hair_bsdf_material("HairBsdf")),
                             (48, 48), 128),
     "hair_ball_hair_bsdf_sun": (lambda scene: build_hair_ball(
-        scene, 300, hair_mat=hair_bsdf_material("HairBsdf"), sun_only=True), (48, 48), 128),
+        scene, 300, hair_mat=hair_bsdf_material("HairBsdf"), sun_only=True), (48, 48), 256),
     "hair_ball_hair_bsdf_tangent_sun": (lambda scene: build_hair_ball(
-        scene, 300, hair_mat=hair_bsdf_material("HairBsdfTangent", tangent=True), sun_only=True), (48, 48), 128),
-    "hair_motion": (build_hair_motion, (64, 64), 128),
+        scene, 300, hair_mat=hair_bsdf_material("HairBsdfTangent", tangent=True), sun_only=True), (48, 48), 256),
+    "hair_motion": (build_hair_motion, (48, 48), 128),
     "point_cloud": (build_point_cloud, (96, 96), 128),
     "lamps500": (build_lamps500, (160, 120), 64),
     "cornell_area": (build_cornell_area, (96, 96), 128),
