@@ -55,7 +55,8 @@ def strand_keys(obj, psys, first, count, steps, report):
     inverse = np.linalg.inv(np.array(obj.matrix_world, dtype=np.float64))
 
     def from_co_hair(first, count):
-        return co_hair_keys(obj, psys, first, count, steps) @ inverse[:3, :3].T + inverse[:3, 3]
+        co = co_hair_keys(obj, psys, first, count, steps)
+        return (co.reshape(-1, 3) @ inverse[:3, :3].T).reshape(co.shape) + inverse[:3, 3]
     co = particle_cache.object_keys(obj, psys, first, count, steps)
     if not isinstance(co, str):
         sample = np.unique(np.linspace(0, count - 1, CHECKED_STRANDS).astype(np.int64))
@@ -75,8 +76,8 @@ def particle_hair_arrays(obj, report):
 
     As Cycles: children replace their parents when the system has any; each strand has
     2^render_step + 1 keys (plus kink_extra_steps for spiral kinks) as ParticleSystem.co_hair gives
-    them in world space, brought into object space (strand_keys); radius from the settings' root and tip radius times
-    radius_scale / 2 along the distance travelled, 0 at the tip with Close Tip.
+    them in world space, brought into object space (strand_keys); radius from the settings' root
+    and tip radius times radius_scale / 2 along the distance travelled, 0 at the tip with Close Tip.
     """
     points, offsets, slots = [], [0], []
     n_slots = max(len(obj.material_slots), 1)
@@ -92,7 +93,8 @@ def particle_hair_arrays(obj, report):
         if count <= 0:
             continue
         co = strand_keys(obj, psys, first, count, steps, report)
-        seg = np.linalg.norm(np.diff(co, axis=1), axis=2)
+        d = np.diff(co, axis=1)
+        seg = np.sqrt(np.einsum("ijk,ijk->ij", d, d))
         time = np.concatenate([np.zeros((count, 1)), np.cumsum(seg, axis=1)], axis=1)
         length = time[:, -1:]
         with np.errstate(invalid='ignore', divide='ignore'):
@@ -101,8 +103,10 @@ def particle_hair_arrays(obj, report):
         radius = _shape_radius(s.shape, scale * s.root_radius, scale * s.tip_radius, np.clip(t, 0.0, 1.0))
         if s.use_close_tip:
             radius[:, -1] = 0.0
-        pts = np.concatenate([co, radius[:, :, None]], axis=2).reshape(-1, 4)
-        points.append(pts.astype(np.float32))
+        pts = np.empty((count, steps, 4), dtype=np.float32)
+        pts[:, :, :3] = co
+        pts[:, :, 3] = radius
+        points.append(pts.reshape(-1, 4))
         base = offsets[-1]
         offsets.extend(base + steps * np.arange(1, count + 1))
         slots.append(np.full(count, min(max(s.material - 1, 0), n_slots - 1), dtype=np.int32))

@@ -163,14 +163,14 @@ def object_keys(obj, psys, first, count, steps):
     # co_hair: the system's imat (Blender's column-major m[column][row]) into world space, then the
     # object's matrix; Cycles applies the object's inverse: imat alone brings the key home.
     imat = _view(base + layout["imat"], 64, np.float32).reshape(4, 4).astype(np.float64)
-    co = co @ imat[:3, :3]
+    co = (co.reshape(-1, 3) @ imat[:3, :3]).reshape(count, steps, 3)  # one matrix product, not count
     co += imat[3, :3]
     # co_hair leaves a step beyond the path's segments unwritten: Cycles then repeats the key before.
-    if segments.min() >= steps - 1:
-        return co
-    last = np.minimum(np.arange(steps)[None, :], segments[:, None])
-    co = np.take_along_axis(co, np.maximum(last, 0)[:, :, None], axis=1)
-    if (last < 0).any():  # a path with no keys: every call unwritten, Cycles' keys at the world's origin
-        inverse = np.linalg.inv(np.array(obj.matrix_world, dtype=np.float64))
-        co[last < 0] = inverse[:3, 3]
+    short = np.flatnonzero(segments < steps - 1)
+    if short.size:
+        last = np.minimum(np.arange(steps)[None, :], segments[short, None])
+        co[short] = np.take_along_axis(co[short], np.maximum(last, 0)[:, :, None], axis=1)
+        if (last < 0).any():  # a path with no keys: every call unwritten, Cycles' keys at the world's origin
+            inverse = np.linalg.inv(np.array(obj.matrix_world, dtype=np.float64))
+            co[short[(last < 0).any(axis=1)]] = inverse[:3, 3]
     return co
