@@ -151,26 +151,28 @@ def object_keys(obj, psys, first, count, steps):
         return "path stride %d is not a whole number of %d-byte keys" % (stride, KEY_BYTES)
     keys = stride // KEY_BYTES
     read = min(keys, steps)
-    co = np.zeros((count, steps, 3), dtype=np.float64)
-    segments = np.empty(count, dtype=np.int64)
-    starts = np.flatnonzero(np.diff(paths) != stride) + 1
-    for a, b in zip(np.concatenate([[0], starts]), np.concatenate([starts, [count]])):
-        run = _view(int(paths[a]), int(b - a) * stride, np.float32).reshape(b - a, keys, KEY_FIELDS)
-        co[a:b, :read] = run[:, :read, :3]
-        segments[a:b] = run[:, 0, SEGMENTS_FIELD].view(np.int32)
-    if children:  # co_hair: a child cut off (segments < 0) still gives its first key
-        np.maximum(segments, 0, out=segments)
     # co_hair: the system's imat (Blender's column-major m[column][row]) into world space, then the
     # object's matrix; Cycles applies the object's inverse: imat alone brings the key home.
     imat = _view(base + layout["imat"], 64, np.float32).reshape(4, 4).astype(np.float64)
-    co = (co.reshape(-1, 3) @ imat[:3, :3]).reshape(count, steps, 3)  # one matrix product, not count
-    co += imat[3, :3]
+    co = np.empty((count, steps, 3), dtype=np.float64)
+    segments = np.empty(count, dtype=np.int64)
+    starts = np.flatnonzero(np.diff(paths) != stride) + 1
+    for a, b in zip(np.concatenate([[0], starts]), np.concatenate([starts, [count]])):
+        # One buffer's run at a time: its temporaries stay small.
+        run = _view(int(paths[a]), int(b - a) * stride, np.float32).reshape(b - a, keys, KEY_FIELDS)
+        out = co[a:b, :read]
+        out[...] = imat[3, :3]
+        for i in range(3):  # elementwise: a 3x3 product through BLAS costs more than it does
+            out += run[:, :read, i:i + 1] * imat[i, :3]
+        segments[a:b] = run[:, 0, SEGMENTS_FIELD].view(np.int32)
+    if children:  # co_hair: a child cut off (segments < 0) still gives its first key
+        np.maximum(segments, 0, out=segments)
+    np.minimum(segments, read - 1, out=segments)  # a path holds `keys` keys: co_hair reads no further
     # co_hair leaves a step beyond the path's segments unwritten: Cycles then repeats the key before.
-    short = np.flatnonzero(segments < steps - 1)
-    if short.size:
-        last = np.minimum(np.arange(steps)[None, :], segments[short, None])
-        co[short] = np.take_along_axis(co[short], np.maximum(last, 0)[:, :, None], axis=1)
-        if (last < 0).any():  # a path with no keys: every call unwritten, Cycles' keys at the world's origin
-            inverse = np.linalg.inv(np.array(obj.matrix_world, dtype=np.float64))
-            co[short[(last < 0).any(axis=1)]] = inverse[:3, 3]
+    for j in range(1, steps):
+        unwritten = segments < j
+        if unwritten.any():
+            co[unwritten, j] = co[unwritten, j - 1]
+    if (segments < 0).any():  # a path with no keys: every call unwritten, Cycles' keys at the world's origin
+        co[segments < 0] = np.linalg.inv(np.array(obj.matrix_world, dtype=np.float64))[:3, 3]
     return co
