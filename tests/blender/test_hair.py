@@ -125,9 +125,9 @@ def test_hair_bsdf_agrees_with_cycles_under_the_sun_alone(name, scene_factory, o
 def test_hair_bsdf_departs_from_cycles_when_lit_indirectly(scene_factory, outdir):
     """The same hair under an area light, a world and over a floor: Cycles draws the reflection's
     azimuth with density cos(phi / 2v) / 4v (v the RoughnessV) but states cos(phi / 2) / 4v, and
-    the transmission's on half the range its eval() covers, weighing every BSDF sample by 1; so its indirect light is not the rendering
-    of its eval() and Lantern, unbiased for eval(), differs (measured: image mean 0.950 of Cycles'
-    at 128 samples, standard error 0.3 %).
+    the transmission's on half the range its eval() covers, weighing every BSDF sample by 1; so
+    its indirect light is not the rendering of its eval() and Lantern, unbiased for eval(),
+    differs (measured: image mean 0.950 of Cycles' at 128 samples, standard error 0.3 %).
     Strict, so a change shows."""
     both = lantern_and_cycles(scene_factory, "hair_ball_hair_bsdf")
     report, _ = ru.agreement_report("hair_ball_hair_bsdf", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
