@@ -365,7 +365,7 @@ void Geometry::commit() {
     for (auto& m : meshes_) {
       if (!m.rtc) continue;
       // Strands: Embree's compact curve leaves (indices into the control points, not copies of
-      // them): measured 42 against 118 bytes a segment of 9-key strands (bench/README.md, hair).
+      // them), as Cycles' memory implies: 42 against 118 bytes a segment (bench/README.md, hair).
       const int compact = m.kind == GeometryKind::Curves ? RTC_SCENE_FLAG_COMPACT : RTC_SCENE_FLAG_NONE;
       rtcSetSceneFlags(m.rtc, RTCSceneFlags(compact | (partial_visibility_ ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION
                                                                            : RTC_SCENE_FLAG_NONE)));
