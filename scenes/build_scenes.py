@@ -2034,18 +2034,49 @@ def hair_material(name, melanin=0.5, redness=0.3, roughness=0.3, radial=0.3, ran
     return mat
 
 
-def build_hair_ball(scene, strands=600, children=4, principled=True):
+def hair_bsdf_material(name, tangent=False):
+    """Cycles' simple Hair BSDF: its Reflection (Offset 6 degrees, RoughnessU 0.15, RoughnessV 0.5)
+    added to its Transmission (Offset -4 degrees, RoughnessU 0.3, RoughnessV 0.7), each tinted;
+    tangent: the Reflection's Tangent linked to a constant direction (Cycles then takes it as
+    given instead of the strand's direction)."""
+    mat, nt, out = _material(name)
+    add = nt.nodes.new("ShaderNodeAddShader")
+    for k, (component, color, offset, ru, rv) in enumerate(
+            (("Reflection", (0.9, 0.7, 0.5, 1.0), 6.0, 0.15, 0.5),
+             ("Transmission", (0.4, 0.6, 0.9, 1.0), -4.0, 0.3, 0.7))):
+        node = nt.nodes.new("ShaderNodeBsdfHair")
+        node.component = component
+        node.inputs["Color"].default_value = color
+        node.inputs["Offset"].default_value = math.radians(offset)
+        node.inputs["RoughnessU"].default_value = ru
+        node.inputs["RoughnessV"].default_value = rv
+        nt.links.new(node.outputs[0], add.inputs[k])
+        if tangent and component == "Reflection":
+            direction = nt.nodes.new("ShaderNodeCombineXYZ")
+            for axis, value in zip("XYZ", (0.3, -0.2, 0.9)):
+                direction.inputs[axis].default_value = value
+            nt.links.new(direction.outputs[0], node.inputs["Tangent"])
+    nt.links.new(add.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def build_hair_ball(scene, strands=600, children=4, principled=True, hair_mat=None, sun_only=False):
     """A sphere with particle hair (Principled Hair BSDF, melanin) under an area light, above a
     grey floor: `strands` parents, each replaced by `children` interpolated children as Cycles
     renders them, 2^3 + 1 keys per strand, radius 5 mm at the root tapering to 0 (Close Tip).
     Cycles' curve shape is 3D curves (THICK), as Lantern's. principled=False: a Diffuse BSDF on
-    the strands instead (the curves' geometry and export alone)."""
+    the strands instead (the curves' geometry and export alone); hair_mat: that material instead.
+    sun_only: lit by a sun alone, no floor, no world, the ball and its hair hidden from indirect
+    rays (all light through Cycles' light samples)."""
     scene.cycles_curves.shape = "THICK"
-    floor = add_object(scene, "Floor", mesh_plane("Floor", 6.0))
-    assign(floor, diffuse("Floor", (0.5, 0.5, 0.5)))
-    ball = add_object(scene, "Ball", mesh_sphere("Ball", 0.5, segments=32, rings=16), location=(0, 0, 0.6))
+    if not sun_only:
+        floor = add_object(scene, "Floor", mesh_plane("Floor", 6.0))
+        assign(floor, diffuse("Floor", (0.5, 0.5, 0.5)))
+    visibility = dict(diffuse=False, glossy=False, transmission=False) if sun_only else {}
+    ball = add_object(scene, "Ball", mesh_sphere("Ball", 0.5, segments=32, rings=16), location=(0, 0, 0.6),
+                      **visibility)
     assign(ball, diffuse("Scalp", (0.3, 0.2, 0.15)),
-           hair_material("Hair") if principled else diffuse("HairDiffuse", (0.6, 0.4, 0.3)))
+           hair_mat or (hair_material("Hair") if principled else diffuse("HairDiffuse", (0.6, 0.4, 0.3))))
     ball.modifiers.new("Hair", "PARTICLE_SYSTEM")
     psys = ball.particle_systems[0]
     psys.seed = 1  # a new system draws a random seed: fix it so that every build has the same strands
@@ -2067,9 +2098,38 @@ def build_hair_ball(scene, strands=600, children=4, principled=True):
     s.child_nbr = min(children, 4)
     s.child_length = 0.9
     s.roughness_2 = 0.05
-    add_light(scene, "AreaLight", "AREA", 300.0, (0.8, -0.6, 2.6), rotation=(20, 15, 0), shape="SQUARE", size=1.0)
-    set_world(scene, (0.05, 0.06, 0.08), 1.0)
+    if sun_only:
+        add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(50, 0, 30), angle=math.radians(3.0))
+        set_world(scene, (0.05, 0.06, 0.08), 0.0)
+    else:
+        add_light(scene, "AreaLight", "AREA", 300.0, (0.8, -0.6, 2.6), rotation=(20, 15, 0), shape="SQUARE",
+                  size=1.0)
+        set_world(scene, (0.05, 0.06, 0.08), 1.0)
     add_camera(scene, (0.0, -3.0, 1.2), (0.0, 0.0, 0.6), lens=50.0)
+
+
+def build_hair_motion(scene):
+    """Moving hair under motion blur (a shutter of 1 frame centred on frame 1, 3 motion steps): the
+    hair ball (a Diffuse BSDF on 300 x 4 strands) translating 0.6 m a frame and turning 40 degrees
+    a frame about its vertical axis, and a Curves object (500 random curves, Blender's
+    curves_random_add) translating upward 0.5 m a frame."""
+    build_hair_ball(scene, strands=300, principled=False)
+    ball = scene.objects["Ball"]
+    _keyframes(ball, "location", [(-0.6, 0.0, 0.6), (0.6, 0.0, 0.6)])
+    _keyframes(ball, "rotation_euler", [(0.0, 0.0, math.radians(-40.0)), (0.0, 0.0, math.radians(40.0))])
+    bpy.ops.object.curves_random_add()  # into the context's scene: moved to this one
+    curves = bpy.context.active_object
+    for c in list(curves.users_collection):
+        c.objects.unlink(curves)
+    scene.collection.objects.link(curves)
+    curves.name = "RandomCurves"
+    curves.data.materials.append(diffuse("CurvesOrange", (0.8, 0.4, 0.1)))
+    curves.scale = (0.8, 0.8, 0.8)
+    _keyframes(curves, "location", [(0.9, -0.6, 0.2), (0.9, -0.6, 1.2)])
+    scene.frame_current = 1
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 1.0
+    scene.cycles.motion_blur_position = "CENTER"
 
 
 def build_point_cloud(scene):
@@ -2105,6 +2165,13 @@ def build_point_cloud(scene):
 SCENES = {
     "hair_ball": (build_hair_ball, (96, 96), 128),
     "hair_ball_diffuse": (lambda scene: build_hair_ball(scene, principled=False), (96, 96), 128),
+    "hair_ball_hair_bsdf": (lambda scene: build_hair_ball(scene, 300, hair_mat=hair_bsdf_material("HairBsdf")),
+                            (48, 48), 128),
+    "hair_ball_hair_bsdf_sun": (lambda scene: build_hair_ball(
+        scene, 300, hair_mat=hair_bsdf_material("HairBsdf"), sun_only=True), (48, 48), 256),
+    "hair_ball_hair_bsdf_tangent_sun": (lambda scene: build_hair_ball(
+        scene, 300, hair_mat=hair_bsdf_material("HairBsdfTangent", tangent=True), sun_only=True), (48, 48), 256),
+    "hair_motion": (build_hair_motion, (48, 48), 128),
     "point_cloud": (build_point_cloud, (96, 96), 128),
     "lamps500": (build_lamps500, (160, 120), 64),
     "cornell_area": (build_cornell_area, (96, 96), 128),

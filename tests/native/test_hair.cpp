@@ -56,6 +56,36 @@ TEST(Curves, RayHitsStrandWhereExpected) {
   EXPECT_GT(s.g.surface(hit).ng.y, 0.85f);
 }
 
+// A strand on a moving instance (object motion blur of hair): hit at the shutter's end, where the
+// instance has moved 1 along +Y, the normal points from the moved axis to the hit, and the object
+// space point is the strand's own.
+TEST(Curves, MovingStrandShadesWhereItIsAtTheRaysTime) {
+  Geometry g;
+  std::vector<std::string> warnings;
+  Mesh m;
+  m.kind = GeometryKind::Curves;
+  for (float x : {-1.0f, -1.0f / 3, 1.0f / 3, 1.0f}) m.curves.cps.insert(m.curves.cps.end(), {x, 0, 0, 0.1f});
+  m.curves.random = {0.5f};
+  Instance inst;
+  inst.mesh = g.add_curves(std::move(m), {0, 4}, warnings);
+  for (float y : {-1.0f, 0.0f, 1.0f}) {
+    Transform xf;
+    xf.m[7] = y;
+    inst.motion.push_back(xf);
+  }
+  g.add_instance(inst, warnings);
+  g.commit();
+  Ray r = ray({0.3f, 1.0f, 5.0f}, {0, 0, -1});
+  r.time = 1.0f;
+  Hit hit;
+  ASSERT_TRUE(g.intersect(r, 31, &hit));
+  const SurfacePoint sp = g.surface(hit);
+  EXPECT_NEAR(sp.ng.z, 1.0f, 1e-3f);
+  EXPECT_NEAR(sp.po.y, 0.0f, 1e-3f);
+  EXPECT_NEAR(sp.po.z, 0.1f, 1e-3f);
+  EXPECT_EQ(sp.time, 1.0f);
+}
+
 // Transmission through a strand (hair's TT lobe) starts inside the tube: Embree's round curves
 // report no exit hit there, as Cycles relies on, so light passes through.
 TEST(Curves, RayFromInsideLeavesTheStrand) {

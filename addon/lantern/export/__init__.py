@@ -144,7 +144,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             key = instance_key(inst) + ('hair',)
             instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR', holdout=holdout,
-                                                            shadow_catcher=catcher, lightgroup=lightgroup), matrix)
+                                                            shadow_catcher=catcher, lightgroup=lightgroup,
+                                                            key=instance_key(inst)), matrix)
             hair += 1
         if not inst.show_self:  # e.g. a particle emitter set not to render itself
             continue
@@ -184,7 +185,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             random_id = inst.random_id if inst.is_instance else None
             instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id,
                                                                            holdout=holdout, shadow_catcher=catcher,
-                                                                           lightgroup=lightgroup),
+                                                                           lightgroup=lightgroup,
+                                                                           key=instance_key(inst)),
                                              matrix)
         elif t not in skipped_types:
             skipped_types.add(t)

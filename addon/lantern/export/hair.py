@@ -4,6 +4,8 @@ objects and point clouds, into the core's round Catmull-Rom curves and spheres
 
 import numpy as np
 
+from . import particle_cache
+
 # Cycles' radii when a Curves object or point cloud has no radius attribute.
 CURVES_DEFAULT_RADIUS = 0.005
 POINTS_DEFAULT_RADIUS = 0.01
@@ -25,15 +27,58 @@ def _shape_radius(shape, root, tip, time):
     return r * (root - tip) + tip
 
 
+def co_hair_keys(obj, psys, first, count, steps):
+    """World-space keys (count, steps, 3) of strands first..first+count-1 from co_hair, one key a
+    call, as Cycles' blender/curves.cpp reads them from C++: a step beyond the strand's cached
+    path (a child shortened by Length, for one) is left unwritten, and Cycles repeats the key
+    before; from Python an unwritten key reads as the origin."""
+    co_hair = psys.co_hair
+    flat = []
+    extend = flat.extend
+    for k in range(first, first + count):
+        for j in range(steps):
+            extend(co_hair(obj, particle_no=k, step=j))
+    co = np.array(flat, dtype=np.float64).reshape(count, steps, 3)
+    for j in range(1, steps):
+        unwritten = ~co[:, j].any(axis=1)
+        co[unwritten, j] = co[unwritten, j - 1]
+    return co
+
+
+# Strands checked against co_hair before the path cache read in bulk is used.
+CHECKED_STRANDS = 8
+
+
+def strand_keys(obj, psys, first, count, steps, report):
+    """Object-space keys of the strands: the path cache read in bulk when it reads as co_hair
+    gives it on sampled strands, co_hair otherwise (with a warning: slower, same strands)."""
+    inverse = np.linalg.inv(np.array(obj.matrix_world, dtype=np.float64))
+
+    def from_co_hair(first, count):
+        co = co_hair_keys(obj, psys, first, count, steps)
+        return (co.reshape(-1, 3) @ inverse[:3, :3].T).reshape(co.shape) + inverse[:3, 3]
+    co = particle_cache.object_keys(obj, psys, first, count, steps)
+    if not isinstance(co, str):
+        sample = np.unique(np.linspace(0, count - 1, CHECKED_STRANDS).astype(np.int64))
+        expect = np.stack([from_co_hair(first + int(k), 1)[0] for k in sample])
+        # co_hair works in float32; a wrong layout reads other numbers entirely.
+        if np.abs(co[sample] - expect).max() <= 1e-5 * (1.0 + np.abs(expect).max()):
+            return co
+        co = "the cache read disagrees with co_hair"
+    if count >= 2:
+        report({'WARNING'}, "Particle hair of '%s' (%s) exported key by key through co_hair, slower: %s"
+               % (obj.name, psys.name, co))
+    return from_co_hair(first, count)
+
+
 def particle_hair_arrays(obj, report):
     """(points (n, 4), offsets, slots) of the object's hair systems, object space, or None.
 
     As Cycles: children replace their parents when the system has any; each strand has
-    2^render_step + 1 keys (plus kink_extra_steps for spiral kinks) from ParticleSystem.co_hair in
-    world space, brought into object space; radius from the settings' root and tip radius times
-    radius_scale / 2 along the distance travelled, 0 at the tip with Close Tip.
+    2^render_step + 1 keys (plus kink_extra_steps for spiral kinks) as ParticleSystem.co_hair gives
+    them in world space, brought into object space (strand_keys); radius from the settings' root
+    and tip radius times radius_scale / 2 along the distance travelled, 0 at the tip with Close Tip.
     """
-    inverse = np.linalg.inv(np.array(obj.matrix_world, dtype=np.float64))
     points, offsets, slots = [], [0], []
     n_slots = max(len(obj.material_slots), 1)
     for psys in hair_systems(obj):
@@ -47,14 +92,9 @@ def particle_hair_arrays(obj, report):
         count = total + children - first
         if count <= 0:
             continue
-        co = np.empty((count, steps, 3), dtype=np.float64)
-        co_hair = psys.co_hair
-        for k in range(count):
-            row = co[k]
-            for j in range(steps):
-                row[j] = co_hair(obj, particle_no=first + k, step=j)
-        co = co @ inverse[:3, :3].T + inverse[:3, 3]
-        seg = np.linalg.norm(np.diff(co, axis=1), axis=2)
+        co = strand_keys(obj, psys, first, count, steps, report)
+        d = np.diff(co, axis=1)
+        seg = np.sqrt(np.einsum("ijk,ijk->ij", d, d))
         time = np.concatenate([np.zeros((count, 1)), np.cumsum(seg, axis=1)], axis=1)
         length = time[:, -1:]
         with np.errstate(invalid='ignore', divide='ignore'):
@@ -63,8 +103,10 @@ def particle_hair_arrays(obj, report):
         radius = _shape_radius(s.shape, scale * s.root_radius, scale * s.tip_radius, np.clip(t, 0.0, 1.0))
         if s.use_close_tip:
             radius[:, -1] = 0.0
-        pts = np.concatenate([co, radius[:, :, None]], axis=2).reshape(-1, 4)
-        points.append(pts.astype(np.float32))
+        pts = np.empty((count, steps, 4), dtype=np.float32)
+        pts[:, :, :3] = co
+        pts[:, :, 3] = radius
+        points.append(pts.reshape(-1, 4))
         base = offsets[-1]
         offsets.extend(base + steps * np.arange(1, count + 1))
         slots.append(np.full(count, min(max(s.material - 1, 0), n_slots - 1), dtype=np.int32))

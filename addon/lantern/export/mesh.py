@@ -308,18 +308,20 @@ class MeshExporter:
         return instance
 
     def export_curves_instance(self, obj, matrix_world, kind, random_id=None, holdout=False, lightgroup=0,
-                               shadow_catcher=False):
+                               shadow_catcher=False, key=None):
         """Curves or spheres of obj as an instance: kind 'HAIR' (the object's particle hair),
-        'CURVES' (a Curves object) or 'POINTCLOUD'. Returns the core instance id or None."""
+        'CURVES' (a Curves object) or 'POINTCLOUD'; key: the object instance's instance_key, for
+        its transform's motion (the strands keep the shutter centre's shape). Returns the core
+        instance id or None."""
         from .hair import curves_arrays, particle_hair_arrays, pointcloud_arrays
         problem = transform_problem(matrix_world)
         if problem is not None:
             self.report({'WARNING'}, "Object '%s' left out: %s" % (obj.name, problem))
             return None
         material_ids = self._material_ids(obj)
-        key = (kind, obj.original.as_pointer() if kind == 'HAIR' else self._geometry_key(obj))
+        geometry = (kind, obj.original.as_pointer() if kind == 'HAIR' else self._geometry_key(obj))
         subject = "Object '%s'%s" % (obj.name, " (particle hair)" if kind == 'HAIR' else "")
-        if key not in self.mesh_ids:
+        if geometry not in self.mesh_ids:
             if kind == 'HAIR':
                 arrays = particle_hair_arrays(obj, self.report)
                 args = arrays and (arrays[0], arrays[1], arrays[2])
@@ -329,17 +331,20 @@ class MeshExporter:
             else:
                 points = pointcloud_arrays(obj.data)
                 args = None if points is None else (points, None, None)
-            self.mesh_ids[key] = None if args is None else core_call(self.core_scene, self.report, subject,
-                                                                     "add_curves", *args)
-        mesh_id = self.mesh_ids[key]
+            self.mesh_ids[geometry] = None if args is None else core_call(self.core_scene, self.report, subject,
+                                                                          "add_curves", *args)
+        mesh_id = self.mesh_ids[geometry]
         if mesh_id is None:
             return None
         if random_id is None:
             random_id = object_random_id(obj.name)
+        motion = None
+        if self.motion is not None and key is not None:
+            motion = self.motion.transforms(key, matrix_world, obj.name)
         instance = core_call(self.core_scene, self.report, subject, "add_instance",
                              mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
                              pass_index=obj.pass_index, random_id=random_id,
-                             attributes=object_values(obj, self.materials.attributes.object_keys()),
+                             attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion,
                              cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
                              shadow_catcher=shadow_catcher,
                              lightgroup=lightgroup)

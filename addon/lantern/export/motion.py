@@ -22,7 +22,8 @@ import numpy as np
 
 # Blender's frame range (MAXFRAME): sub-frames beyond it cannot be evaluated.
 MAX_FRAME = 1048574
-_MESH_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
+# What moves with its object's transform: geometry, particle hair on meshes, Curves and point clouds.
+_MESH_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'CURVES', 'POINTCLOUD'}
 
 
 def _cycles(idblock):
@@ -103,6 +104,10 @@ class Motion:
         self.moving_instances = self.deforming_meshes = 0
         self.camera_moves = False
         self.vector_pass = False  # the steps are the neighbouring frames, for the Vector pass
+        # Strands and points have no vertex motion in Lantern: what Cycles would blur by
+        # deformation is found (and reported) instead.
+        self.strands = {}      # object pointer -> (name, its strands' or points' arrays at the centre)
+        self.deformed_strands = set()  # names of those whose arrays differ at some step
 
     def transforms(self, key, centre, name):
         """The instance's transforms at its motion steps, or None when it does not move."""
@@ -164,7 +169,7 @@ class Motion:
 def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
     """Records, at relative time rel, the matrices and vertices of what has a step there."""
     for inst in depsgraph.object_instances:
-        if not inst.show_self:
+        if not (inst.show_self or inst.show_particles):  # an emitter hidden from render keeps its hair
             continue
         obj = inst.object
         key = _key(inst)
@@ -176,6 +181,11 @@ def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
         if inst.is_instance:
             continue
         ptr = obj.original.as_pointer()
+        if ptr in motion.strands and steps >= 3:
+            name, centre = motion.strands[ptr]
+            now = _strand_arrays(obj)
+            if now is None or now.shape != centre.shape or not np.allclose(now, centre, rtol=1e-5, atol=1e-6):
+                motion.deformed_strands.add(name)
         dsteps = motion.deform.get(ptr, 0)
         if dsteps >= 3:
             s = round((rel + 1.0) * 0.5 * (dsteps - 1))
@@ -191,6 +201,21 @@ def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
         if abs(relative_time(s, motion.camera_steps) - rel) < 1e-6:
             cam = camera_object.evaluated_get(depsgraph)
             motion.camera_matrices[s] = np.array(cam.matrix_world, dtype=np.float32)
+
+
+def _strand_arrays(obj):
+    """Object-space strand or point arrays (x, y, z, radius) of obj: its particle hair, Curves or
+    point cloud, or None."""
+    from . import hair
+    if obj.type == 'MESH':
+        arrays = hair.particle_hair_arrays(obj, lambda *a: None) if hair.hair_systems(obj) else None
+    elif obj.type == 'CURVES':
+        arrays = hair.curves_arrays(obj.data)
+    elif obj.type == 'POINTCLOUD':
+        arrays = (hair.pointcloud_arrays(obj.data),)
+    else:
+        return None
+    return None if arrays is None or arrays[0] is None else arrays[0]
 
 
 def collect(engine, depsgraph, camera_object, report, vector_pass=False):
@@ -243,7 +268,7 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
             motion.camera_steps = min(motion.camera_steps, 3)
     times = set()
     for inst in depsgraph.object_instances:
-        if not inst.show_self or inst.object.type not in _MESH_TYPES:
+        if not (inst.show_self or inst.show_particles) or inst.object.type not in _MESH_TYPES:
             continue
         obj = inst.object
         parent = inst.parent if inst.is_instance else None
@@ -257,6 +282,11 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
             if co is not None:
                 motion.deform[obj.original.as_pointer()] = steps
                 motion.centre_co[obj.original.as_pointer()] = co
+        if not inst.is_instance and not frames and _uses_deform(obj.original) and \
+                (obj.type in ('CURVES', 'POINTCLOUD') or (inst.show_particles and obj.type == 'MESH')):
+            arrays = _strand_arrays(obj)
+            if arrays is not None:
+                motion.strands[obj.original.as_pointer()] = (obj.name, arrays)
     if motion.camera_steps >= 3:
         times.update(relative_time(s, motion.camera_steps) for s in range(motion.camera_steps))
     times.discard(0.0)
@@ -270,4 +300,8 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
             _sample(depsgraph, motion, rel, camera, mesh_arrays)
     finally:
         go(centre_time)
+    for name in sorted(motion.deformed_strands):
+        report({'WARNING'}, "Object '%s': its hair, curves or points change shape over the shutter; Lantern "
+                            "moves them with the object's transform only (Cycles also blurs their "
+                            "deformation)" % name)
     return motion, restore
