@@ -297,7 +297,8 @@ std::vector<uint8_t> seed_cameras() {
   r.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
   render(w, r);
   for (int panorama : {LT_PANORAMA_EQUIRECTANGULAR, LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_FISHEYE_EQUISOLID,
-                       LT_PANORAMA_MIRRORBALL, LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL}) {
+                       LT_PANORAMA_MIRRORBALL, LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL,
+                       LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE}) {
     camera_lens(w, LT_CAMERA_PANORAMA, true, panorama);
     render(w, r);
   }

@@ -48,7 +48,7 @@ extern "C" {
  * panorama_frame_aspect); the shadow catcher
  * (lt_instance_desc.shadow_catcher, lt_render_settings.shadow_catcher_approximate,
  * LT_PASS_SHADOW_CATCHER). */
-#define LT_ABI_VERSION 17
+#define LT_ABI_VERSION 18
 
 enum lt_status {
   LT_OK = 0,
@@ -308,7 +308,8 @@ enum lt_panorama_type {
   LT_PANORAMA_FISHEYE_EQUIDISTANT = 1,
   LT_PANORAMA_FISHEYE_EQUISOLID = 2,
   LT_PANORAMA_MIRRORBALL = 3,
-  LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL = 4
+  LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL = 4,
+  LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE = 5
 };
 typedef struct lt_camera_desc {
   int type;
