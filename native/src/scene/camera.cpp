@@ -60,6 +60,10 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : d_(desc), width_
   connectable_ = !(desc.panorama && desc.aperture_radius > 0) && !degenerate;
   centre_ = basis_of(desc.xf);
   if (desc.motion.size() >= 2) motion_ = decompose_motion(desc.motion);
+  rigid_motion_ = true;
+  for (const DecomposedTransform& d : motion_)
+    for (int i = 0; i < 3; ++i)
+      rigid_motion_ = rigid_motion_ && d.scale[i] > 0 && std::abs(d.skew[i]) <= 1e-6f * d.scale[0];
   generation_ = next_motion_generation();
   d_.motion.clear();  // the decomposed steps are kept
 }
@@ -73,11 +77,24 @@ Camera::Basis Camera::moving_basis(float time) const {
     Basis basis;
   } last;
   if (last.generation != generation_ || last.time != time) {
-    last.basis = basis_of(interpolate_motion(motion_, time));
+    last.basis = interpolated_basis(time);
     last.generation = generation_;
     last.time = time;
   }
   return last.basis;
+}
+
+// Without skew (to rounding) and with positive scales, the normalised columns of R S (basis_of)
+// are R's: read from the quaternion, without the matrix product and the normalisations (motion
+// blur's cost per camera sample).
+Camera::Basis Camera::interpolated_basis(float time) const {
+  const DecomposedTransform d = interpolate_decomposed(motion_, time);
+  if (!rigid_motion_) return basis_of(recompose(d));
+  const float x = d.q[0], y = d.q[1], z = d.q[2], w = d.q[3];
+  return {d.translation,
+          {1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)},
+          {2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)},
+          {2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}};
 }
 
 Camera::Basis Camera::basis_of(const Transform& xf) {
@@ -372,7 +389,7 @@ void Camera::panorama_preimages(const Vec3& w, float margin, Projection* out) co
 
 bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
   const Vec2 pp = plane_point(x, y);
-  const Basis b = basis(time);
+  const Basis b = motion_.empty() ? centre_ : interpolated_basis(time);
   r->time = time;
   if (d_.panorama) {
     Vec3 d = panorama_direction(x, y);

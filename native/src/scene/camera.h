@@ -174,9 +174,12 @@ class Camera {
     Vec3 to_world(const Vec3& local) const { return right * local.x + up * local.y + forward_neg * local.z; }
   };
   static Basis basis_of(const Transform& xf);
-  // At a shutter time: the centre's, or interpolated between the motion steps.
+  // At a shutter time: the centre's, or interpolated between the motion steps (moving_basis keeps
+  // the last one per thread, for BDPT's many questions at one time; interpolated_basis does not,
+  // for generate(), which asks once per sample).
   Basis basis(float time) const { return motion_.empty() ? centre_ : moving_basis(time); }
   Basis moving_basis(float time) const;
+  Basis interpolated_basis(float time) const;
   // project() for an orthographic camera.
   bool project_orthographic(const Basis& b, const Vec3& o, const Vec3& p, float margin, Projection* out) const;
 
@@ -191,6 +194,7 @@ class Camera {
   bool connectable_ = true;
   Basis centre_;
   std::vector<DecomposedTransform> motion_;
+  bool rigid_motion_ = false;  // every step without skew and with positive scales (interpolated_basis)
   uint64_t generation_ = 0;  // moving_basis()'s per-thread cache key (copies share the contents)
 };
 
