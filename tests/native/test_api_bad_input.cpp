@@ -445,9 +445,8 @@ TEST(ApiBadInput, UnknownEnumValuesListTheValidNames) {
     lt_camera_desc c = panorama_camera(identity(), LT_PANORAMA_EQUIRECTANGULAR);
     c.panorama_type = type;
     std::string msg = EXPECT_INVALID(lt_scene_set_camera(s, &c));
-    for (const char* name :
-         {"EQUIRECTANGULAR", "FISHEYE_EQUIDISTANT", "FISHEYE_EQUISOLID", "MIRRORBALL", "FISHEYE_LENS_POLYNOMIAL",
-          "EQUIANGULAR_CUBEMAP_FACE"})
+    for (const char* name : {"EQUIRECTANGULAR", "FISHEYE_EQUIDISTANT", "FISHEYE_EQUISOLID", "MIRRORBALL",
+                             "FISHEYE_LENS_POLYNOMIAL", "EQUIANGULAR_CUBEMAP_FACE"})
       EXPECT_CONTAINS(msg, name);
   }
   {

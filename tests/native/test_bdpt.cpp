@@ -743,7 +743,8 @@ TEST(Bdpt, DepthOfFieldAndPanoramasAgreeWithPathTracing) {
   set_camera(s.get(), room_lens(6, 1.5f));
   EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, K, tile), "") << "full BDPT, 6 blades, anamorphic";
   pa.width = pb.width = pa.height = pb.height = 32;
-  for (int type : {LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_EQUIRECTANGULAR, LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE}) {
+  for (int type :
+       {LT_PANORAMA_FISHEYE_EQUIDISTANT, LT_PANORAMA_EQUIRECTANGULAR, LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE}) {
     set_camera(s.get(), room_panorama(type));
     EXPECT_EQ(differing_tiles_k(s.get(), pa, pb, 4, 16), "") << "full BDPT, panorama " << type;
   }

@@ -85,8 +85,8 @@ int redundant_vertex_stride(const Mesh& m) {
 // One Embree scene holding one triangle geometry (not committed: commit() or the caller does),
 // with `steps` vertex buffers for deformation motion (Embree interpolates them linearly, as
 // Cycles' motion triangles).
-RTCScene Geometry::triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices,
-                                  int steps, int stride) const {
+RTCScene Geometry::triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices, int steps,
+                                  int stride) const {
   RTCScene scene = rtcNewScene(device_);
   RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
   const size_t n = positions.size() / size_t(steps);
@@ -346,10 +346,12 @@ bool same_rotation(const std::vector<DecomposedTransform>& steps) {
 
 void set_transform(Instance& inst, const Transform& xf) { static_cast<Pose&>(inst) = Pose::of(xf); }
 
-// Steps a constant velocity makes redundant (a translation, a spin, a linear shape key: Cycles'
-// 3 steps by default) are left out, to float rounding: Embree's motion BVHs and traversal cost
-// more with every time segment, and the motion between the steps kept is the same.
+// Steps a constant velocity makes redundant (a translation, a linear shape key: Cycles' 3 steps
+// by default) are left out, to float rounding: Embree's motion BVHs and traversal cost more with
+// every time segment, and the motion between the steps kept is the same. Not for a turning
+// object, whose bounds over a longer segment grow (a slower BVH).
 void drop_redundant_steps(Instance& inst) {
+  if (!same_rotation(inst.motion_decomposed)) return;
   const int stride = redundant_stride(int(inst.motion.size()), [&](int a, int k, int b) {
     const Transform mid = interpolate_motion(decompose_motion({inst.motion[size_t(a)], inst.motion[size_t(b)]}), 0.5f);
     const Transform& m = inst.motion[size_t(k)];
@@ -363,6 +365,7 @@ void drop_redundant_steps(Instance& inst) {
   std::vector<Transform> kept;
   for (size_t s = 0; s < inst.motion.size(); s += size_t(stride)) kept.push_back(inst.motion[s]);
   inst.motion = std::move(kept);
+  inst.motion_decomposed = decompose_motion(inst.motion);
 }
 }  // namespace
 
@@ -374,8 +377,8 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
     bool usable = inst.motion.size() >= 2 && finite_transform(inst.xf) && invertible(inst.xf);
     for (const Transform& m : inst.motion) usable = usable && finite_transform(m) && invertible(m);
     if (usable) {
-      drop_redundant_steps(inst);
       inst.motion_decomposed = decompose_motion(inst.motion);
+      drop_redundant_steps(inst);
       ++motion_instances_;
     } else {
       warnings.push_back("instance " + std::to_string(id) +

@@ -216,8 +216,8 @@ class Geometry {
   void build_top();
   // steps sets of positions (vertex_count each, step by step): Embree's vertex motion, from
   // every stride-th step.
-  RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices,
-                          int steps = 1, int stride = 1) const;
+  RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices, int steps = 1,
+                          int stride = 1) const;
   RTCScene curve_scene(const Mesh& mesh) const;
   SurfacePoint curve_surface(const Hit& hit, const Instance& inst, const Mesh& m) const;
   RTCScene baked_scene(int instance);

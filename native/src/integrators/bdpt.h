@@ -63,12 +63,11 @@ class Bdpt {
     return pdf / d2;
   }
   // Solid-angle density (orthographic: per area across the rays) with which the camera, for the
-  // pixel centred at `pixel`, shoots from the lens point o towards p, as MIS must see it: the filter's density at each film position whose
-  // ray passes through p times the film's importance there (pixels per steradian,
-  // Camera::project), summed over those positions. Each pixel has spp camera samples but
-  // N * spp light paths (N pixels in the region), so the camera's per-pixel density is divided by
-  // N (Veach's sample-count-weighted heuristics; it equals pbrt's density normalised over the
-  // whole film). The lens point's own density (uniform over the aperture) is the same for every
+  // pixel centred at `pixel`, shoots from the lens point o towards p, as MIS must see it: the filter's density at each
+  // film position whose ray passes through p times the film's importance there (pixels per steradian, Camera::project),
+  // summed over those positions. Each pixel has spp camera samples but N * spp light paths (N pixels in the region), so
+  // the camera's per-pixel density is divided by N (Veach's sample-count-weighted heuristics; it equals pbrt's density
+  // normalised over the whole film). The lens point's own density (uniform over the aperture) is the same for every
   // strategy (t = 1 samples it as the camera does) and no strategy moves it, so MIS leaves it out.
   float camera_pdf_dir(const Vec3& o, const Vec3& p, const Vec2& pixel) const {
     Camera::Projection& pr = scratch_.projection;

@@ -127,7 +127,7 @@ class Camera {
   };
   static constexpr int kMaxPreimages = 48;  // radial: 4 monotonic pieces x 2 sides x 6 turns
   struct Projection {
-    Vec3 dir;        // unit, from the lens point to the point
+    Vec3 dir;               // unit, from the lens point to the point
     float distance;         // from the lens point
     bool parallel = false;  // orthographic: importance per area across the rays
     int count = 0;
@@ -195,7 +195,7 @@ class Camera {
   Basis centre_;
   std::vector<DecomposedTransform> motion_;
   bool rigid_motion_ = false;  // every step without skew and with positive scales (interpolated_basis)
-  uint64_t generation_ = 0;  // moving_basis()'s per-thread cache key (copies share the contents)
+  uint64_t generation_ = 0;    // moving_basis()'s per-thread cache key (copies share the contents)
 };
 
 }  // namespace lt
