@@ -463,7 +463,7 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out
     panorama_preimages(w, margin, out);
     return out->count > 0;
   }
-  if (d_.orthographic) return project_orthographic(b, o, p, margin, out);
+  if (d_.orthographic) return project_orthographic(b, o, margin, out);
   float z = -dot(v, b.forward_neg);
   if (!(z > 0)) return false;
   float px = dot(v, b.right) / z, py = dot(v, b.up) / z;
@@ -506,10 +506,10 @@ Vec3 Camera::connection_point(const Vec3& p, Vec2 u, float time) const {
 }
 
 // The camera's rays from one lens offset l are parallel, direction d = (-l, -focus) normalised:
-// over the film's plane area A, a ray's density per area across the rays is that per plane area
-// over cos(d, axis); the film's pixels cover the plane linearly (pixel_area_ each). The film
-// position is o's on the plane less l, which the direction gives: l = focus * d_xy / d_z.
-bool Camera::project_orthographic(const Basis& b, const Vec3& o, const Vec3& p, float margin, Projection* out) const {
+// the film's pixels cover its plane linearly (pixel_area_ each), and an area across the rays is
+// cos(d, axis) times the plane's. The film position is o's on the plane less l, which the
+// direction (out->dir, from o) gives: l = focus * d_xy / d_z.
+bool Camera::project_orthographic(const Basis& b, const Vec3& o, float margin, Projection* out) const {
   const Vec3 local{dot(out->dir, b.right), dot(out->dir, b.up), -dot(out->dir, b.forward_neg)};  // z forward
   if (!(local.z > 0)) return false;
   const float along_ray = has_lens() ? out->distance : out->distance * local.z;

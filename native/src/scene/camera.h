@@ -181,7 +181,7 @@ class Camera {
   Basis moving_basis(float time) const;
   Basis interpolated_basis(float time) const;
   // project() for an orthographic camera.
-  bool project_orthographic(const Basis& b, const Vec3& o, const Vec3& p, float margin, Projection* out) const;
+  bool project_orthographic(const Basis& b, const Vec3& o, float margin, Projection* out) const;
 
   CameraDesc d_;
   int width_ = 1, height_ = 1;
