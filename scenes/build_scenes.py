@@ -696,6 +696,7 @@ PANORAMAS = {
     "FISHEYE_LENS_POLYNOMIAL": dict(fisheye_fov=math.radians(126.0), fisheye_polynomial_k0=0.0,
                                     fisheye_polynomial_k1=-0.06, fisheye_polynomial_k2=3e-4,
                                     fisheye_polynomial_k3=-1e-5, fisheye_polynomial_k4=0.0),
+    "EQUIANGULAR_CUBEMAP_FACE": {},
 }
 
 
@@ -2186,6 +2187,7 @@ SCENES = {
     "pano_fisheye_equisolid": (lambda scene: build_panorama(scene, "FISHEYE_EQUISOLID"), (48, 32), 128),
     "pano_mirrorball": (lambda scene: build_panorama(scene, "MIRRORBALL"), (32, 32), 128),
     "pano_fisheye_polynomial": (lambda scene: build_panorama(scene, "FISHEYE_LENS_POLYNOMIAL"), (32, 32), 128),
+    "pano_cubemap_face": (lambda scene: build_panorama(scene, "EQUIANGULAR_CUBEMAP_FACE"), (40, 32), 128),
     "sun_world": (build_sun_world, (96, 96), 128),
     "world_spheres": (build_world_spheres, (96, 64), 128),
     "textured": (build_textured, (96, 96), 128),

@@ -535,7 +535,7 @@ class LANTERN_CAMERA_PT_panorama(Panel):
             col.prop(ccam, "fisheye_fov")
             for i in range(5):
                 col.prop(ccam, "fisheye_polynomial_k%d" % i, text="K%d" % i)
-        elif ccam.panorama_type != 'MIRRORBALL':
+        elif ccam.panorama_type not in ('MIRRORBALL', 'EQUIANGULAR_CUBEMAP_FACE'):
             col.label(text="Not supported by Lantern: rendered as perspective", icon='ERROR')
 
 

@@ -44,7 +44,7 @@ PATH_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_li
 # tracing to panoramas is held to path tracing by tests/native/test_bdpt.cpp (a 400-degree
 # fisheye and an equirectangular film: K BDPT renders here would cost about 18 s).
 PANORAMA_SCENES = ["pano_equirectangular", "pano_fisheye_equidistant", "pano_fisheye_equisolid", "pano_mirrorball",
-                   "pano_fisheye_polynomial"]
+                   "pano_fisheye_polynomial", "pano_cubemap_face"]
 TILE = 16
 ROUNDING = 1e-5  # float32 accumulation and EXR round trip
 
@@ -97,8 +97,9 @@ def test_volumetric_path_tracer_agrees_with_cycles_and_path_without_media(name, 
 @pytest.mark.parametrize("name", PANORAMA_SCENES)
 def test_panoramic_cameras_agree_with_cycles(name, scene_factory, outdir):
     """Equirectangular (reduced ranges), the fisheyes (equidistant over 200 degrees, equisolid
-    with its lens and sensor, a lens polynomial cut by its field of view) and the mirror ball, each
-    with a shift: per 8 x 8 tile (these images are small) and in the image mean as above. The film
+    with its lens and sensor, a lens polynomial cut by its field of view), the mirror ball and the
+    equiangular cubemap face (on a 40 x 32 film: its angles stretch apart in u and v), each with a
+    shift: per 8 x 8 tile (these images are small) and in the image mean as above. The film
     outside a fisheye's or the mirror ball's circle is black (and opaque) in both."""
     both = lantern_and_cycles(scene_factory, name, "PATH")
     report, _ = ru.agreement_report(name, both[ru.LANTERN], both[ru.CYCLES], outdir, 8, ROUNDING)

@@ -31,9 +31,9 @@ def test_focus_object_distance_is_along_the_view_axis(scene_factory):
 
 
 def test_camera_settings_lantern_cannot_render_are_reported(scene_factory):
-    """A focus distance of 0 (the plane in focus at the lens) renders without depth of field, a
-    equiangular cubemap face as perspective; both with a warning naming the camera, and a finite
-    image."""
+    """A focus distance of 0 (the plane in focus at the lens) renders without depth of field, with
+    a warning naming the camera, and a finite image; an equiangular cubemap face renders as itself,
+    with no warning."""
     scene = scene_factory("cornell_dof", resolution=(24, 24))
     cam = scene.camera.data
     cam.dof.focus_object = None
@@ -44,7 +44,7 @@ def test_camera_settings_lantern_cannot_render_are_reported(scene_factory):
     cam.type = 'PANO'
     cam.cycles.panorama_type = 'EQUIANGULAR_CUBEMAP_FACE'
     reports = ru.export(scene)[1]
-    assert any("EQUIANGULAR_CUBEMAP_FACE" in r and "MIRRORBALL" in r for r in reports), reports
+    assert not any("Camera" in r for r in reports), reports
     assert np.isfinite(ru.render(scene, ru.LANTERN, 2, seed=0).combined).all()
 
 
@@ -61,7 +61,8 @@ def test_depth_of_field_and_panorama_panels_show_for_lantern(scene_factory):
         cam.type = kind
         assert bool(panel.poll(types.SimpleNamespace(engine=engine_id, camera=cam))) == visible
     cam.type = 'PANO'
-    for kind in ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'FISHEYE_LENS_POLYNOMIAL'):
+    for kind in ('EQUIRECTANGULAR', 'FISHEYE_EQUIDISTANT', 'FISHEYE_EQUISOLID', 'FISHEYE_LENS_POLYNOMIAL',
+                 'EQUIANGULAR_CUBEMAP_FACE', 'MIRRORBALL'):
         cam.cycles.panorama_type = kind
         drawn = []
 
@@ -72,7 +73,8 @@ def test_depth_of_field_and_panorama_panels_show_for_lantern(scene_factory):
             def __getattr__(self, name):
                 return lambda *a, **kw: Layout()
         panel.draw(types.SimpleNamespace(layout=Layout()), types.SimpleNamespace(camera=cam))
-        assert ("panorama_type" in [n for _, n in drawn]) and len(drawn) >= 2, (kind, drawn)
+        assert "panorama_type" in [n for _, n in drawn], (kind, drawn)
+        assert len(drawn) >= 2 or kind in ('EQUIANGULAR_CUBEMAP_FACE', 'MIRRORBALL'), (kind, drawn)
         for data, name in drawn:
             assert name in data.bl_rna.properties, name
 

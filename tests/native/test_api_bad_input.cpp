@@ -441,12 +441,12 @@ TEST(ApiBadInput, UnknownEnumValuesListTheValidNames) {
     std::string msg = EXPECT_INVALID(lt_scene_set_camera(s, &c));
     for (const char* name : {"PERSPECTIVE", "ORTHOGRAPHIC", "PANORAMA"}) EXPECT_CONTAINS(msg, name);
   }
-  for (int type : {-1, 5, 1000}) {
+  for (int type : {-1, 6, 1000}) {
     lt_camera_desc c = panorama_camera(identity(), LT_PANORAMA_EQUIRECTANGULAR);
     c.panorama_type = type;
     std::string msg = EXPECT_INVALID(lt_scene_set_camera(s, &c));
-    for (const char* name :
-         {"EQUIRECTANGULAR", "FISHEYE_EQUIDISTANT", "FISHEYE_EQUISOLID", "MIRRORBALL", "FISHEYE_LENS_POLYNOMIAL"})
+    for (const char* name : {"EQUIRECTANGULAR", "FISHEYE_EQUIDISTANT", "FISHEYE_EQUISOLID", "MIRRORBALL",
+                             "FISHEYE_LENS_POLYNOMIAL", "EQUIANGULAR_CUBEMAP_FACE"})
       EXPECT_CONTAINS(msg, name);
   }
   {

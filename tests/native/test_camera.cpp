@@ -209,6 +209,76 @@ TEST(Camera, DirectionalDensityIntegratesToOne) {
   }
 }
 
+// Orthographic cameras (BDPT's t = 1 as a sun seen backwards): a camera ray's points, within its
+// clipping range, connect (Camera::connection_point, from the ray's lens sample) to the ray's
+// origin and project back to its film position; beyond the range they do not.
+TEST(Camera, OrthographicRaysProjectBackToTheirFilmPosition) {
+  lt_camera_desc pin = orthographic_camera(kView, 4);
+  pin.clip_start = 0.5f;
+  pin.clip_end = 20;
+  pin.shift_x = 0.1f;
+  for (const lt_camera_desc& d : {pin, with_dof(pin, 3, 0.4f, 6, 0.3f, 1.6f)}) {
+    const lt::Camera cam = camera_of(d);
+    ASSERT_TRUE(cam.connectable());
+    lt::Sampler sampler(6, 0, 0);
+    for (int i = 0; i < 2000; ++i) {
+      const float x = sampler.next_1d() * kW, y = sampler.next_1d() * kH;
+      const lt::Vec2 u = sampler.next_2d();
+      lt::Ray r;
+      ASSERT_TRUE(cam.generate(x, y, u, &r));
+      const float t = r.tmin * 1.001f + (r.tmax * 0.999f - r.tmin * 1.001f) * std::pow(sampler.next_1d(), 3.0f);
+      const lt::Vec3 p = r.o + r.d * t;
+      const lt::Vec3 o = cam.connection_point(p, u);
+      EXPECT_LT(dist(o, r.o), 2e-5f * (1 + t));
+      lt::Camera::Projection pr;
+      ASSERT_TRUE(cam.project(o, p, 0, &pr)) << t;
+      ASSERT_EQ(pr.count, 1);
+      EXPECT_TRUE(pr.parallel);
+      EXPECT_NEAR(pr.at[0].film.x, x, 2e-3f * (1 + t));
+      EXPECT_NEAR(pr.at[0].film.y, y, 2e-3f * (1 + t));
+      EXPECT_NEAR(pr.distance, t, 1e-4f * t);
+      for (float beyond : {r.tmin * 0.98f, r.tmax * 1.02f}) {
+        const lt::Vec3 q = r.o + r.d * beyond;
+        EXPECT_FALSE(cam.project(cam.connection_point(q, u), q, 1, &pr));
+      }
+    }
+  }
+}
+
+// An orthographic camera's importance (pixels per unit area across its parallel rays) integrated
+// over a plane across the rays of one lens sample is the film's area in pixels: Monte Carlo over
+// a square that holds the film's footprint (4 standard errors). It holds the importance
+// (1 / (a cos) for a plane area a per pixel and rays at angle acos(cos) from the axis) and the
+// film mapping to the camera's rays.
+TEST(Camera, OrthographicImportanceIntegratesToTheFilm) {
+  lt_camera_desc pin = orthographic_camera(kView, 3);
+  pin.shift_y = -0.05f;
+  for (const lt_camera_desc& d : {pin, with_dof(pin, 2, 0.3f, 5, 0.2f, 1.3f)}) {
+    const lt::Camera cam = camera_of(d);
+    for (lt::Vec2 u : {lt::Vec2{0.5f, 0.5f}, lt::Vec2{0.97f, 0.4f}}) {
+      lt::Ray centre;
+      ASSERT_TRUE(cam.generate(kW / 2.0f, kH / 2.0f, u, &centre));
+      const lt::Frame f(centre.d);
+      const lt::Vec3 c = centre.o + centre.d * 4.0f;
+      const float half = 3;  // the film's 3 x 2.25 footprint, and more
+      constexpr int kN = 200000;
+      lt::Sampler sampler(9, 0, 0);
+      double sum = 0, sum2 = 0;
+      for (int n = 0; n < kN; ++n) {
+        const lt::Vec2 ab = sampler.next_2d();
+        const lt::Vec3 p = c + f.s * ((2 * ab.x - 1) * half) + f.t * ((2 * ab.y - 1) * half);
+        lt::Camera::Projection pr;
+        double v = 0;
+        if (cam.project(cam.connection_point(p, u), p, 0, &pr)) v = pr.at[0].importance * (4 * half * half);
+        sum += v;
+        sum2 += v * v;
+      }
+      const double mean = sum / kN, se = std::sqrt((sum2 / kN - mean * mean) / kN);
+      EXPECT_NEAR(mean, double(kW) * kH, 4 * se + 1e-3 * kW * kH) << "lens sample " << u.x << " " << u.y;
+    }
+  }
+}
+
 // Blender's F-stop 0 (its minimum) is Cycles' 1e-5: a finite, huge aperture; a negative F-stop,
 // a focus distance of 0 with depth of field and a non-positive aperture ratio are refused.
 TEST(Camera, BadDepthOfFieldInput) {
@@ -229,7 +299,7 @@ TEST(Camera, BadDepthOfFieldInput) {
   const lt::Camera ortho = camera_of(with_dof(orthographic_camera(kView, 4), 3, 5));
   const lt::Camera ortho_pin = camera_of(orthographic_camera(kView, 4));
   EXPECT_NEAR(lt::length(ortho.lens_point({1, 0.5f}) - ortho.position()), 0.1f, 1e-5f);
-  EXPECT_FALSE(ortho.connectable());
+  EXPECT_TRUE(ortho.connectable());
   lt::Ray centre, r, p;
   ASSERT_TRUE(ortho_pin.generate(kW / 2.0f, kH / 2.0f, &centre));
   ASSERT_TRUE(ortho_pin.generate(10, 40, &p));
@@ -268,6 +338,28 @@ TEST(Camera, EquirectangularDirections) {
   EXPECT_LT(dist(dir(200, 0), {1, 0, 0}), 1e-5f);
   EXPECT_LT(dist(dir(0, 100), {0, 0, 1}), 1e-5f);
   // Depth is the distance from the camera for panoramas (Cycles' camera_z_depth).
+  EXPECT_NEAR(cam.depth({3, -4, 0}), 5, 1e-5f);
+}
+
+// Equiangular cubemap face (Cycles' equiangular_cubemap_face_to_direction): a 90-degree face whose
+// film steps in equal angles; the centre looks forward, the edges 45 degrees aside, a quarter of
+// the way from the centre to the right edge 22.5 degrees right. Depth: the distance.
+TEST(Camera, EquiangularCubemapFaceDirections) {
+  const Xform view = look_at({0, 0, 0}, {0, 1, 0});  // forward +Y, right +X, up +Z
+  lt::Camera cam = camera_of(panorama_camera(view, LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE), 200, 100);
+  EXPECT_TRUE(cam.connectable());
+  auto dir = [&](float x, float y) {
+    lt::Ray r;
+    EXPECT_TRUE(cam.generate(x, y, &r));
+    return r.d;
+  };
+  const float q = float(M_PI / 8);
+  EXPECT_LT(dist(dir(100, 50), {0, 1, 0}), 1e-5f);
+  EXPECT_LT(dist(dir(200, 50), lt::normalize(lt::Vec3(1, 1, 0))), 1e-5f);
+  EXPECT_LT(dist(dir(0, 50), lt::normalize(lt::Vec3(-1, 1, 0))), 1e-5f);
+  EXPECT_LT(dist(dir(150, 50), {std::sin(q), std::cos(q), 0}), 1e-5f);
+  EXPECT_LT(dist(dir(100, 75), {0, std::cos(q), std::sin(q)}), 1e-5f);  // v on the frame's own axis
+  EXPECT_LT(dist(dir(200, 100), lt::normalize(lt::Vec3(1, 1, 1))), 1e-5f);
   EXPECT_NEAR(cam.depth({3, -4, 0}), 5, 1e-5f);
 }
 
@@ -365,6 +457,12 @@ std::vector<PanoramaCase> panorama_cases() {
   add("equisolid", LT_PANORAMA_FISHEYE_EQUISOLID,
       [](lt_camera_desc& d) { d.fisheye_lens = 9, d.fisheye_fov = 2.97f, d.shift_x = 0.05f; });
   add("mirror ball", LT_PANORAMA_MIRRORBALL, [](lt_camera_desc& d) { d.shift_y = 0.06f; });
+  add("cubemap face", LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE, [](lt_camera_desc& d) { d.shift_x = 0.04f; });
+  // A viewport's region beyond the face: past u = 1.5 and v = -0.5 the film sees it again.
+  add("cubemap face beyond", LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE, [](lt_camera_desc& d) {
+    const float vp[4] = {-0.3f, 1.9f, -0.7f, 1.1f};
+    std::copy(vp, vp + 4, d.panorama_viewplane);
+  });
   add("polynomial", LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL, [](lt_camera_desc& d) { d.fisheye_fov = 2.6f; });
   add("polynomial turning", LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL, [](lt_camera_desc& d) {
     // theta = -0.05 + 0.08 r - 2e-4 r^3: rises to 0.56 at r = 11.5 mm, then falls below 0.
@@ -402,7 +500,8 @@ TEST(Camera, PanoramaRaysProjectBackToTheirFilmPosition) {
       ++checked;
     }
     EXPECT_GT(checked, 1000) << c.name;
-    if (std::string(c.name) == "equidistant 400" || std::string(c.name) == "polynomial turning")
+    if (std::string(c.name) == "equidistant 400" || std::string(c.name) == "polynomial turning" ||
+        std::string(c.name) == "cubemap face beyond")
       EXPECT_GT(several, 100) << c.name << ": directions seen twice";
   }
 }

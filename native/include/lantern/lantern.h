@@ -49,7 +49,8 @@ extern "C" {
  * (lt_instance_desc.shadow_catcher, lt_render_settings.shadow_catcher_approximate,
  * LT_PASS_SHADOW_CATCHER); 18: true displacement (lt_scene_set_material_displacement,
  * lt_displacement_method, lt_mesh_desc.flat_triangles; the Bevel node;
- * lt_image_file_desc.ocio_config and ocio_space: OpenColorIO colour spaces). */
+ * lt_image_file_desc.ocio_config and ocio_space: OpenColorIO colour spaces;
+ * the Equiangular Cubemap Face panorama). */
 #define LT_ABI_VERSION 18
 
 enum lt_status {
@@ -332,7 +333,8 @@ enum lt_panorama_type {
   LT_PANORAMA_FISHEYE_EQUIDISTANT = 1,
   LT_PANORAMA_FISHEYE_EQUISOLID = 2,
   LT_PANORAMA_MIRRORBALL = 3,
-  LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL = 4
+  LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL = 4,
+  LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE = 5
 };
 typedef struct lt_camera_desc {
   int type;

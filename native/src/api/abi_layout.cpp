@@ -161,6 +161,7 @@ const lt_abi_entry kLayout[] = {
     LT_CONST(lt_panorama_type, LT_PANORAMA_FISHEYE_EQUISOLID),
     LT_CONST(lt_panorama_type, LT_PANORAMA_MIRRORBALL),
     LT_CONST(lt_panorama_type, LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL),
+    LT_CONST(lt_panorama_type, LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE),
     LT_CONST(lt_sensor_fit, LT_SENSOR_AUTO),
     LT_CONST(lt_sensor_fit, LT_SENSOR_HORIZONTAL),
     LT_CONST(lt_sensor_fit, LT_SENSOR_VERTICAL),

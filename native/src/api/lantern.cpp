@@ -691,10 +691,10 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     }
     if (d->type == LT_CAMERA_PANORAMA) {
       require(
-          d->panorama_type >= LT_PANORAMA_EQUIRECTANGULAR && d->panorama_type <= LT_PANORAMA_FISHEYE_LENS_POLYNOMIAL,
+          d->panorama_type >= LT_PANORAMA_EQUIRECTANGULAR && d->panorama_type <= LT_PANORAMA_EQUIANGULAR_CUBEMAP_FACE,
           "unknown panorama type " + std::to_string(d->panorama_type) +
               "; valid types are EQUIRECTANGULAR, FISHEYE_EQUIDISTANT, FISHEYE_EQUISOLID, MIRRORBALL, "
-              "FISHEYE_LENS_POLYNOMIAL");
+              "FISHEYE_LENS_POLYNOMIAL, EQUIANGULAR_CUBEMAP_FACE");
       require(d->fisheye_fov > 0 && d->fisheye_lens > 0, "camera fisheye field of view and lens must be positive");
     }
     lt::CameraDesc c = scene->scene.camera;  // assigned only once valid: a refused call changes nothing

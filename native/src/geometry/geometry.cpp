@@ -70,20 +70,43 @@ Geometry::~Geometry() {
   rtcReleaseDevice(device_);
 }
 
+namespace {
+// Steps a constant velocity makes redundant are left out to this relative tolerance (float
+// rounding; drop_redundant_steps).
+constexpr float kMidpointTolerance = 1e-6f;
+// A deforming mesh's vertex steps the same way (Embree interpolates them linearly); its normals
+// keep every step (they need not be linear when the positions are).
+int redundant_vertex_stride(const Mesh& m) {
+  const size_t n = m.positions.size();
+  float scale = 1;
+  for (const Vec3& p : m.motion_positions) scale = std::max({scale, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  return redundant_stride(m.motion_steps, [&](int a, int k, int b) {
+    const Vec3 *pa = &m.motion_positions[size_t(a) * n], *pk = &m.motion_positions[size_t(k) * n],
+               *pb = &m.motion_positions[size_t(b) * n];
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3 d = (pa[i] + pb[i]) * 0.5f - pk[i];
+      if (!(std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) <= kMidpointTolerance * scale)) return false;
+    }
+    return true;
+  });
+}
+}  // namespace
+
 // One Embree scene holding one triangle geometry (not committed: commit() or the caller does),
 // with `steps` vertex buffers for deformation motion (Embree interpolates them linearly, as
 // Cycles' motion triangles).
-RTCScene Geometry::triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices,
-                                  int steps) const {
+RTCScene Geometry::triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices, int steps,
+                                  int stride) const {
   RTCScene scene = rtcNewScene(device_);
   RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
   const size_t n = positions.size() / size_t(steps);
-  if (steps > 1) rtcSetGeometryTimeStepCount(g, unsigned(steps));
-  for (int s = 0; s < steps; ++s) {
+  const int kept = (steps - 1) / stride + 1;
+  if (kept > 1) rtcSetGeometryTimeStepCount(g, unsigned(kept));
+  for (int s = 0; s < kept; ++s) {
     float* v = static_cast<float*>(
         rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, unsigned(s), RTC_FORMAT_FLOAT3, 3 * sizeof(float), n));
     for (size_t i = 0; i < n; ++i) {
-      const Vec3& p = positions[size_t(s) * n + i];
+      const Vec3& p = positions[size_t(s * stride) * n + i];
       v[3 * i] = p.x;
       v[3 * i + 1] = p.y;
       v[3 * i + 2] = p.z;
@@ -165,7 +188,7 @@ int Geometry::add_mesh(Mesh mesh, std::vector<std::string>& warnings) {
 
   if (mesh.motion_steps > 1) {
     ++motion_meshes_;
-    mesh.rtc = triangle_scene(mesh.motion_positions, mesh.indices, mesh.motion_steps);
+    mesh.rtc = triangle_scene(mesh.motion_positions, mesh.indices, mesh.motion_steps, redundant_vertex_stride(mesh));
   } else {
     mesh.rtc = triangle_scene(mesh.positions, mesh.indices);
   }
@@ -335,6 +358,28 @@ bool same_rotation(const std::vector<DecomposedTransform>& steps) {
 }
 
 void set_transform(Instance& inst, const Transform& xf) { static_cast<Pose&>(inst) = Pose::of(xf); }
+
+// Steps a constant velocity makes redundant (a translation, a linear shape key: Cycles' 3 steps
+// by default) are left out, to float rounding: Embree's motion BVHs and traversal cost more with
+// every time segment, and the motion between the steps kept is the same. Not for a turning
+// object, whose bounds over a longer segment grow (a slower BVH).
+void drop_redundant_steps(Instance& inst) {
+  if (!same_rotation(inst.motion_decomposed)) return;
+  const int stride = redundant_stride(int(inst.motion.size()), [&](int a, int k, int b) {
+    const Transform mid = interpolate_motion(decompose_motion({inst.motion[size_t(a)], inst.motion[size_t(b)]}), 0.5f);
+    const Transform& m = inst.motion[size_t(k)];
+    float scale = 1;
+    for (float x : m.m) scale = std::max(scale, std::abs(x));
+    for (int i = 0; i < 12; ++i)
+      if (!(std::abs(mid.m[i] - m.m[i]) <= kMidpointTolerance * scale)) return false;
+    return true;
+  });
+  if (stride == 1) return;
+  std::vector<Transform> kept;
+  for (size_t s = 0; s < inst.motion.size(); s += size_t(stride)) kept.push_back(inst.motion[s]);
+  inst.motion = std::move(kept);
+  inst.motion_decomposed = decompose_motion(inst.motion);
+}
 }  // namespace
 
 int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
@@ -346,6 +391,7 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
     for (const Transform& m : inst.motion) usable = usable && finite_transform(m) && invertible(m);
     if (usable) {
       inst.motion_decomposed = decompose_motion(inst.motion);
+      drop_redundant_steps(inst);
       ++motion_instances_;
     } else {
       warnings.push_back("instance " + std::to_string(id) +

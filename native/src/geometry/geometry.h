@@ -245,9 +245,10 @@ class Geometry {
   size_t motion_instances_ = 0, motion_meshes_ = 0;
   uint64_t generation_;  // pose()'s per-thread cache key: new for each geometry and edit
   void build_top();
-  // steps sets of positions (vertex_count each, step by step): Embree's vertex motion.
-  RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices,
-                          int steps = 1) const;
+  // steps sets of positions (vertex_count each, step by step): Embree's vertex motion, from
+  // every stride-th step.
+  RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices, int steps = 1,
+                          int stride = 1) const;
   RTCScene curve_scene(const Mesh& mesh) const;
   SurfacePoint curve_surface(const Hit& hit, const Instance& inst, const Mesh& m) const;
   RTCScene baked_scene(int instance);

@@ -138,6 +138,10 @@ std::vector<DecomposedTransform> decompose_motion(const std::vector<Transform>& 
 }
 
 Transform interpolate_motion(const std::vector<DecomposedTransform>& steps, float time) {
+  return recompose(interpolate_decomposed(steps, time));
+}
+
+DecomposedTransform interpolate_decomposed(const std::vector<DecomposedTransform>& steps, float time) {
   int step;
   float t;
   motion_step(int(steps.size()), time, &step, &t);
@@ -149,7 +153,7 @@ Transform interpolate_motion(const std::vector<DecomposedTransform>& steps, floa
     d.scale[i] = (1 - t) * a.scale[i] + t * b.scale[i];
     d.skew[i] = (1 - t) * a.skew[i] + t * b.skew[i];
   }
-  return recompose(d);
+  return d;
 }
 
 }  // namespace lt

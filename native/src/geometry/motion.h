@@ -50,6 +50,21 @@ Transform recompose(const DecomposedTransform& d);
 std::vector<DecomposedTransform> decompose_motion(const std::vector<Transform>& steps);
 // The transform at time (0 .. 1, clamped) between equally spaced steps (at least 2).
 Transform interpolate_motion(const std::vector<DecomposedTransform>& steps, float time);
+// Motion steps that add nothing (motion blur's cost): the stride, a power of two, at which the n
+// steps can be taken instead, while every step at an odd multiple of it is, by midpoint(a, k, b),
+// half way between its neighbours a and b as the interpolation goes (a constant velocity).
+template <class Midpoint>
+int redundant_stride(int n, Midpoint midpoint) {
+  int stride = 1;
+  while (n >= 3 && (n - 1) % (2 * stride) == 0) {
+    for (int k = stride; k < n - 1; k += 2 * stride)
+      if (!midpoint(k - stride, k, k + stride)) return stride;
+    stride *= 2;
+  }
+  return stride;
+}
+// The same before recomposing: the interpolated quaternion, translation, scale and skew.
+DecomposedTransform interpolate_decomposed(const std::vector<DecomposedTransform>& steps, float time);
 // A process-wide unique number (never 0), for per-thread caches keyed by an object's contents:
 // an object's address may be reused by a later one, its number never is.
 uint64_t next_motion_generation();

@@ -7,8 +7,9 @@
 // Strategies: s = 0 (the camera subpath reaches an emitter: a mesh light, a lamp, the sun or the
 // world, or crosses an emitting medium: volume emission, found by s = 0 only, weight 1), s = 1 (a
 // fresh light sample at the camera vertex, as next-event estimation), s >= 2, and t = 1 (a light
-// vertex connected to the pinhole, or to a point sampled on the lens, and splatted through the
-// pixel filter; not for orthographic and panoramic cameras, which are not connectable).
+// vertex connected to the pinhole, or to a point sampled on the lens, or for an orthographic
+// camera to the point of its plane whose ray passes through it, and splatted through the pixel
+// filter; not for panoramas with depth of field, which are not connectable).
 //
 // Media (scenes with volumes; pbrt 3, section 16.3): both walks sample free flights along every
 // segment as the volumetric path tracer does and scatter at medium vertices with the phase
@@ -512,8 +513,8 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   z0 = PathVertex();
   z0.type = VertexType::Camera;
   z0.p = cs_.ray.o;
-  // On the lens (camera_sample_perspective's ray origin). Orthographic cameras (a delta direction)
-  // and panoramas are not connectable: t = 1 cannot reach them (Camera::connectable).
+  // On the lens (camera_sample_perspective's ray origin), or the orthographic camera's plane.
+  // Panoramas with a lens are not connectable: t = 1 cannot reach them (Camera::connectable).
   z0.delta = !ctx_.camera.connectable();
   if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, cs_.ray, &z0.stack, stats_);
   FirstSegment first;
@@ -747,8 +748,9 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   const Camera& cam = ctx_.camera;
   if (!cam.connectable() || !(qs.vis & kVisCamera)) return;  // a camera ray would pass through qs
   // A point on the lens, uniform over the aperture as the camera's rays sample it (pbrt-v4's
-  // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were.
-  const Vec3 lens = cam.has_lens() ? cam.lens_point(sampler_.next_2d(), time_) : cam.position(time_);
+  // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were. An
+  // orthographic camera's lens sample fixes its rays' direction, and the vertex is on its plane.
+  const Vec3 lens = cam.connection_point(qs.p, cam.has_lens() ? sampler_.next_2d() : Vec2{0.5f, 0.5f}, time_);
   Camera::Projection& pr = scratch_.splat;
   if (!cam.project(lens, qs.p, ctx_.filter.radius(), &pr, time_)) return;
   const Vec3 dir = pr.dir;
@@ -779,8 +781,9 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   // qs's surface d omega = cos_qs dA / d^2 (f_cos holds cos_qs; pbrt-v4's PerspectiveCamera::We and SampleWi: for a
   // perspective camera J = 1 / (a cos^3), a the view-plane area of a pixel; with a lens, seen
   // from the lens point, whose density 1 / A_lens cancels We's). The film divides the sum of
-  // splats by the number of light paths.
-  base /= dist * dist;
+  // splats by the number of light paths. An orthographic camera's importance is per area across
+  // its parallel rays, cos_qs dA: a sun's measure, without the distance (Projection::parallel).
+  if (!pr.parallel) base /= dist * dist;
   const float r = ctx_.filter.radius();
   // The MIS weight depends on the pixel only through the camera's density at qs, which is the
   // pixel's film_density times a common factor; that density is a factor of every ratio on the

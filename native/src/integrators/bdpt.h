@@ -64,13 +64,12 @@ class Bdpt {
     if (to.on_surface()) pdf *= std::abs(dot(to.n, w)) / std::sqrt(d2);
     return pdf / d2;
   }
-  // Solid-angle density with which the camera, for the pixel centred at `pixel`, shoots from the
-  // lens point o towards p, as MIS must see it: the filter's density at each film position whose
-  // ray passes through p times the film's importance there (pixels per steradian,
-  // Camera::project), summed over those positions. Each pixel has spp camera samples but
-  // N * spp light paths (N pixels in the region), so the camera's per-pixel density is divided by
-  // N (Veach's sample-count-weighted heuristics; it equals pbrt's density normalised over the
-  // whole film). The lens point's own density (uniform over the aperture) is the same for every
+  // Solid-angle density (orthographic: per area across the rays) with which the camera, for the
+  // pixel centred at `pixel`, shoots from the lens point o towards p, as MIS must see it: the filter's density at each
+  // film position whose ray passes through p times the film's importance there (pixels per steradian, Camera::project),
+  // summed over those positions. Each pixel has spp camera samples but N * spp light paths (N pixels in the region), so
+  // the camera's per-pixel density is divided by N (Veach's sample-count-weighted heuristics; it equals pbrt's density
+  // normalised over the whole film). The lens point's own density (uniform over the aperture) is the same for every
   // strategy (t = 1 samples it as the camera does) and no strategy moves it, so MIS leaves it out.
   float camera_pdf_dir(const Vec3& o, const Vec3& p, const Vec2& pixel) const {
     Camera::Projection& pr = scratch_.projection;
@@ -102,6 +101,8 @@ class Bdpt {
     float p;
     if (v.type == VertexType::Camera) {
       p = camera_pdf_dir(v.p, next.p, pixel);
+      // An orthographic camera's is per area across its parallel rays: as a sun's (pdf_light).
+      if (ctx_.camera.orthographic()) return next.on_surface() ? p * std::abs(dot(next.n, normalize(wn))) : p;
     } else {
       Vec3 wp = normalize(prev->p - v.p);
       p = bsdf_pdf(v, wp, normalize(wn));

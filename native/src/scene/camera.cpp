@@ -57,9 +57,13 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : d_(desc), width_
       ((desc.panorama_type == PanoramaType::Equirectangular &&
         (desc.latitude_max == desc.latitude_min || desc.longitude_max == desc.longitude_min)) ||
        (desc.panorama_type == PanoramaType::FisheyeLensPolynomial && k[1] == 0 && k[2] == 0 && k[3] == 0 && k[4] == 0));
-  connectable_ = !desc.orthographic && !(desc.panorama && desc.aperture_radius > 0) && !degenerate;
+  connectable_ = !(desc.panorama && desc.aperture_radius > 0) && !degenerate;
   centre_ = basis_of(desc.xf);
   if (desc.motion.size() >= 2) motion_ = decompose_motion(desc.motion);
+  rigid_motion_ = true;
+  for (const DecomposedTransform& d : motion_)
+    for (int i = 0; i < 3; ++i)
+      rigid_motion_ = rigid_motion_ && d.scale[i] > 0 && std::abs(d.skew[i]) <= 1e-6f * d.scale[0];
   generation_ = next_motion_generation();
   d_.motion.clear();  // the decomposed steps are kept
 }
@@ -73,11 +77,24 @@ Camera::Basis Camera::moving_basis(float time) const {
     Basis basis;
   } last;
   if (last.generation != generation_ || last.time != time) {
-    last.basis = basis_of(interpolate_motion(motion_, time));
+    last.basis = interpolated_basis(time);
     last.generation = generation_;
     last.time = time;
   }
   return last.basis;
+}
+
+// Without skew (to rounding) and with positive scales, the normalised columns of R S (basis_of)
+// are R's: read from the quaternion, without the matrix product and the normalisations (motion
+// blur's cost per camera sample).
+Camera::Basis Camera::interpolated_basis(float time) const {
+  const DecomposedTransform d = interpolate_decomposed(motion_, time);
+  if (!rigid_motion_) return basis_of(recompose(d));
+  const float x = d.q[0], y = d.q[1], z = d.q[2], w = d.q[3];
+  return {d.translation,
+          {1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)},
+          {2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)},
+          {2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}};
 }
 
 Camera::Basis Camera::basis_of(const Transform& xf) {
@@ -231,6 +248,16 @@ Vec3 Camera::panorama_direction(float x, float y) const {
     const float c = std::cos(lat);
     return {c * std::sin(lon), std::sin(lat), -c * std::cos(lon)};
   }
+  if (d_.panorama_type == PanoramaType::EquiangularCubemapFace) {
+    // Cycles' equiangular_cubemap_face_to_direction: a 90-degree face whose film steps in equal
+    // angles, tan(pi/2 u - pi/4) to the right and upwards on the plane at unit distance (Cycles'
+    // (1, tan(pi/4 - pi/2 u), tan(pi/2 v - pi/4)) in Blender's camera axes). Periodic: the film
+    // beyond u or v of 1.5 (or -0.5) sees the face again; exactly there nothing.
+    const float x = std::tan(uv.x * (0.5f * kPi) - 0.25f * kPi), y = std::tan(uv.y * (0.5f * kPi) - 0.25f * kPi);
+    const Vec3 d(x, y, -1.0f);
+    const float len2 = length_squared(d);
+    return std::isfinite(len2) ? d / std::sqrt(len2) : Vec3(0.0f);
+  }
   if (d_.panorama_type == PanoramaType::MirrorBall) {
     // Cycles' mirrorball_to_direction: the film's inscribed circle is a mirror sphere seen from
     // infinitely far behind the camera, the view reflected off it (the centre sees forward, the
@@ -287,6 +314,19 @@ void Camera::panorama_preimages(const Vec3& w, float margin, Projection* out) co
       for (double k = std::ceil(ka); k <= std::floor(kb) && k - std::ceil(ka) < 8; ++k)
         add(float((l0 + 2 * pi * k) / dlon), float(v), importance);
     }
+    return;
+  }
+  if (d_.panorama_type == PanoramaType::EquiangularCubemapFace) {
+    // x = tan a, y = tan b on the plane at unit distance, a and b linear in u and v (pi/2 per
+    // unit): d omega = dx dy / (1 + x^2 + y^2)^(3/2) and dx = (1 + x^2) da. A forward direction
+    // is seen at u = 2 a / pi + 1/2 (and v), and again every 2 units of u or v.
+    if (!(w.z < 0)) return;
+    const double x = double(w.x) / -w.z, y = double(w.y) / -w.z, s = 1 + x * x + y * y;
+    const double quarter = 0.5 * 3.14159265358979323846;
+    const double importance = uv_to_pixels * s * std::sqrt(s) / (quarter * quarter * (1 + x * x) * (1 + y * y));
+    const double u0 = std::atan(x) / quarter + 0.5, v0 = std::atan(y) / quarter + 0.5;
+    for (double u = u0 + 2 * std::ceil((u_lo - u0) / 2); u <= u_hi; u += 2)
+      for (double v = v0 + 2 * std::ceil((v_lo - v0) / 2); v <= v_hi; v += 2) add(float(u), float(v), importance);
     return;
   }
   if (d_.panorama_type == PanoramaType::MirrorBall) {
@@ -349,7 +389,7 @@ void Camera::panorama_preimages(const Vec3& w, float margin, Projection* out) co
 
 bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
   const Vec2 pp = plane_point(x, y);
-  const Basis b = basis(time);
+  const Basis b = motion_.empty() ? centre_ : interpolated_basis(time);
   r->time = time;
   if (d_.panorama) {
     Vec3 d = panorama_direction(x, y);
@@ -408,6 +448,7 @@ bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
 
 bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out, float time) const {
   out->count = 0;
+  out->parallel = false;
   if (!connectable()) return false;
   const Basis b = basis(time);
   Vec3 v = p - o;
@@ -422,6 +463,7 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out
     panorama_preimages(w, margin, out);
     return out->count > 0;
   }
+  if (d_.orthographic) return project_orthographic(b, o, margin, out);
   float z = -dot(v, b.forward_neg);
   if (!(z > 0)) return false;
   float px = dot(v, b.right) / z, py = dot(v, b.up) / z;
@@ -444,6 +486,44 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out
   // ray's length).
   const float c = z / dist;
   out->at[0] = {film, 1 / (pixel_area_ * c * c * c)};
+  out->count = 1;
+  return true;
+}
+
+// The lens offset l (camera x, y) makes the direction (-l, -focus) (generate()), the same for every
+// film position: the connection point is p moved back along it to the camera's plane.
+Vec3 Camera::connection_point(const Vec3& p, Vec2 u, float time) const {
+  if (!d_.orthographic) return has_lens() ? lens_point(u, time) : position(time);
+  const Basis b = basis(time);
+  const Vec3 v = p - b.origin;
+  const float depth = -dot(v, b.forward_neg);
+  Vec2 along{0, 0};  // the plane's offset per unit of depth
+  if (has_lens()) {
+    const Vec2 l = aperture_offset(u);
+    along = {-l.x / d_.focus_distance, -l.y / d_.focus_distance};
+  }
+  return b.origin + b.right * (dot(v, b.right) - along.x * depth) + b.up * (dot(v, b.up) - along.y * depth);
+}
+
+// The camera's rays from one lens offset l are parallel, direction d = (-l, -focus) normalised:
+// the film's pixels cover its plane linearly (pixel_area_ each), and an area across the rays is
+// cos(d, axis) times the plane's. The film position is o's on the plane less l, which the
+// direction (out->dir, from o) gives: l = focus * d_xy / d_z.
+bool Camera::project_orthographic(const Basis& b, const Vec3& o, float margin, Projection* out) const {
+  const Vec3 local{dot(out->dir, b.right), dot(out->dir, b.up), -dot(out->dir, b.forward_neg)};  // z forward
+  if (!(local.z > 0)) return false;
+  const float along_ray = has_lens() ? out->distance : out->distance * local.z;
+  if (along_ray < d_.clip_start || along_ray > d_.clip_end) return false;
+  const Vec3 on_plane = o - b.origin;
+  float px = dot(on_plane, b.right), py = dot(on_plane, b.up);
+  if (has_lens()) {
+    px += d_.focus_distance * local.x / local.z;  // minus l
+    py += d_.focus_distance * local.y / local.z;
+  }
+  const Vec2 film{(px - x0_) / (x1_ - x0_) * width_, (py - y0_) / (y1_ - y0_) * height_};
+  if (film.x < -margin || film.x > width_ + margin || film.y < -margin || film.y > height_ + margin) return false;
+  out->parallel = true;
+  out->at[0] = {film, 1 / (pixel_area_ * (has_lens() ? local.z : 1.0f))};
   out->count = 1;
   return true;
 }

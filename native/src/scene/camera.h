@@ -1,8 +1,8 @@
 // Blender's camera model: sensor fit, focal length, shift, orthographic scale and clipping planes
 // (BKE_camera_params_compute_viewplane), looking down local -Z with +Y up; Cycles' thin lens
 // (depth of field: circular or polygonal aperture, anamorphic ratio) and its panoramic projections
-// (equirectangular, fisheye equidistant, equisolid and lens polynomial, mirror ball;
-// kernel/camera/camera.h and projection.h).
+// (equirectangular, fisheye equidistant, equisolid and lens polynomial, mirror ball, equiangular
+// cubemap face; kernel/camera/camera.h and projection.h).
 #pragma once
 
 #include <vector>
@@ -18,7 +18,8 @@ enum class PanoramaType {
   FisheyeEquidistant = 1,
   FisheyeEquisolid = 2,
   MirrorBall = 3,
-  FisheyeLensPolynomial = 4
+  FisheyeLensPolynomial = 4,
+  EquiangularCubemapFace = 5
 };
 
 struct CameraDesc {
@@ -98,13 +99,18 @@ class Camera {
   int width() const { return width_; }  // the film: the full frame in pixels
   int height() const { return height_; }
 
-  // Whether a point can be connected to the camera (BDPT's t = 1): a perspective camera, with or
-  // without a lens, and a panorama without one. Orthographic cameras (every ray has the same
-  // direction: a delta) and panoramas with depth of field (the lens turns with the direction, so
-  // a lens point does not fix the ray) are not: their connection strategy has density 0 and MIS
-  // leaves it out. So is a panorama whose map is degenerate (an empty latitude or longitude
-  // range, a lens polynomial of k0 alone: one direction for a whole area of film, a delta too).
+  // Whether a point can be connected to the camera (BDPT's t = 1): a perspective or orthographic
+  // camera, with or without a lens, and a panorama without one. Panoramas with depth of field (the
+  // lens turns with the direction, so a lens point does not fix the ray) are not: their
+  // connection strategy has density 0 and MIS leaves it out. Nor is a panorama whose map is
+  // degenerate (an empty latitude or longitude range, a lens polynomial of k0 alone: one
+  // direction for a whole area of film, a delta).
   bool connectable() const { return connectable_; }
+  // BDPT's t = 1: the camera vertex a point p is connected to, for the lens sample u (drawn only
+  // when has_lens()): the lens point of a perspective camera, the camera's position for a pinhole
+  // or a panorama; for an orthographic camera, whose rays from one lens point are parallel (a sun
+  // seen backwards), the point of its plane whose ray passes through p.
+  Vec3 connection_point(const Vec3& p, Vec2 u, float time = 0.5f) const;
 
   // The film positions whose camera rays (from one lens point) have a given direction, with the
   // film's importance there: pixels of film per unit solid angle of direction (the inverse of
@@ -112,23 +118,27 @@ class Camera {
   // over cos^4 and the lens area for a perspective camera). A perspective camera has one such
   // position; a panorama can have several (a fisheye of more than 360 degrees, an equirectangular
   // film's seam and poles in the pixel filter's margin, a polynomial that is not monotonic), and
-  // importance sums over them.
+  // importance sums over them. An orthographic camera's rays from a lens point are parallel: its
+  // importance is pixels per unit area across them (the measure a sun's emission has), with no
+  // distance falloff (Projection::parallel).
   struct Preimage {
     Vec2 film;         // full-frame pixels, y up
-    float importance;  // pixels per steradian
+    float importance;  // pixels per steradian (orthographic: per square metre across the rays)
   };
   static constexpr int kMaxPreimages = 48;  // radial: 4 monotonic pieces x 2 sides x 6 turns
   struct Projection {
-    Vec3 dir;        // unit, from the lens point to the point
-    float distance;  // from the lens point
+    Vec3 dir;               // unit, from the lens point to the point
+    float distance;         // from the lens point
+    bool parallel = false;  // orthographic: importance per area across the rays
     int count = 0;
     Preimage at[kMaxPreimages];
   };
-  // For connecting a point p to the lens point o (the camera's position for a pinhole): the
-  // direction and distance from o to p, and every film position within `margin` pixels of the
-  // frame (margin at most the frame's larger side) whose camera ray from o passes through p.
-  // False if the camera is not connectable, or p is outside the rays' clipping range or seen by
-  // no film position there (behind a perspective camera, outside a fisheye's circle).
+  // For connecting a point p to the camera vertex o (connection_point(); or a camera ray's
+  // origin): the direction and distance from o to p, and every film position within `margin`
+  // pixels of the frame (margin at most the frame's larger side) whose camera ray from o passes
+  // through p. False if the camera is not connectable, or p is outside the rays' clipping range or
+  // seen by no film position there (behind a perspective camera, outside a fisheye's circle).
+  // An orthographic camera's film position is o's on its plane (o must be p's connection_point).
   bool project(const Vec3& o, const Vec3& p, float margin, Projection* out, float time = 0.5f) const;
   // The full-frame film position (pixels, y up) a world point projects to, seen by the camera at
   // shutter time `time` (the pinhole; no clipping, the film's bounds not checked), as Cycles'
@@ -157,15 +167,21 @@ class Camera {
   std::vector<double> radial_pieces() const;  // radial_ends_, at construction
   // Camera-space direction (unit) to the panorama's film positions (project()).
   void panorama_preimages(const Vec3& w, float margin, Projection* out) const;
+
   // The camera's position and axes (forward_neg: local +Z; the camera looks down -Z).
   struct Basis {
     Vec3 origin, right, up, forward_neg;
     Vec3 to_world(const Vec3& local) const { return right * local.x + up * local.y + forward_neg * local.z; }
   };
   static Basis basis_of(const Transform& xf);
-  // At a shutter time: the centre's, or interpolated between the motion steps.
+  // At a shutter time: the centre's, or interpolated between the motion steps (moving_basis keeps
+  // the last one per thread, for BDPT's many questions at one time; interpolated_basis does not,
+  // for generate(), which asks once per sample).
   Basis basis(float time) const { return motion_.empty() ? centre_ : moving_basis(time); }
   Basis moving_basis(float time) const;
+  Basis interpolated_basis(float time) const;
+  // project() for an orthographic camera.
+  bool project_orthographic(const Basis& b, const Vec3& o, float margin, Projection* out) const;
 
   CameraDesc d_;
   int width_ = 1, height_ = 1;
@@ -178,7 +194,8 @@ class Camera {
   bool connectable_ = true;
   Basis centre_;
   std::vector<DecomposedTransform> motion_;
-  uint64_t generation_ = 0;  // moving_basis()'s per-thread cache key (copies share the contents)
+  bool rigid_motion_ = false;  // every step without skew and with positive scales (interpolated_basis)
+  uint64_t generation_ = 0;    // moving_basis()'s per-thread cache key (copies share the contents)
 };
 
 }  // namespace lt
