@@ -184,6 +184,7 @@ void Bdpt::add_emitters_reached(std::vector<PathVertex>& camera, int nt) {
     // The segment before camera[at], then that vertex.
     for (; r < crossed.size() && crossed[r].at == at; ++r) {
       const Crossed& c = crossed[r];
+      pre_split_ = !split_ || r < split_->crossed;  // crossed before the segment that met a catcher
       if (c.light >= 0) {
         PathVertex& v = endpoint(VertexType::Light);
         v.light = c.light;
@@ -203,8 +204,10 @@ void Bdpt::add_emitters_reached(std::vector<PathVertex>& camera, int nt) {
       const float kinds_within = kind_limit_factor(camera, camera, 0, at + 1);
       if (kinds_within > 0) add(c.le * kinds_within, 0, at + 1, -1);
     }
+    pre_split_ = !split_;
     if (at < nt && !is_black(camera[at].le)) emitter_reached(camera, at + 1, nullptr, camera[at].le);
   }
+  pre_split_ = !split_;
 }
 
 void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, PathVertex* crossed, const Spectrum& le) {
@@ -258,6 +261,18 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   // its dD per unit of path length); a light subpath's vertex takes the one a camera ray reaching
   // it straight from the camera's centre would have (Cycles has no light paths).
   float footprint = mode == Mode::Radiance ? cs_.dP : 0.0f;
+  // A camera ray's count, for the Light Path node of the world it sees (catcher_background).
+  auto camera_bounces = [&] {
+    Bounces b;
+    b.n[int(BounceKind::None)] = transparent;
+    return b;
+  };
+  // The catcher-only camera walk resumes the first segment where the full walk met the catcher.
+  if (catcher_leg_ && mode == Mode::Radiance) {
+    nulls = split_->nulls;
+    transparent = split_->transparent;
+    footprint = split_->footprint;
+  }
   const float beta_start = max_abs_component(beta);
   // Bounce kinds counted so far towards Cycles' per-kind limits (path_state.h): the walk stops
   // where every strategy using its further vertices would fail them (kind_limit_factor 0; only
@@ -271,7 +286,17 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     PathVertex& v = path[count];
     Hit hit;
     ++stats_.rays;
-    bool found = scene_.geometry.intersect(ray, visibility, &hit);
+    bool found = scene_.geometry.intersect(ray, vis(visibility), &hit);
+    // Shadow catchers: the camera ray (through transparent passes) meeting a catcher splits the
+    // sample before the segment's media and the surface are shaded, as path.cpp (Cycles'
+    // integrator_split_shadow_catcher); the throughput there is the matte's transparency.
+    if (first && count == 1 && found && s_.shadow_catcher && !split_) {
+      const Instance& in = scene_.geometry.instance(hit.instance);
+      if (in.shadow_catcher && !in.holdout) {
+        split_ = CatcherSplit{ray, beta, footprint, first->transparent, nulls, transparent, crossed.size(), sampler_};
+        out_.background += beta * catcher_background(scene_, s_, ray.d, camera_bounces(), kVisCamera);
+      }
+    }
     // Free flight through the media, as the volumetric path tracer (path.cpp) samples it.
     const Spectrum beta_before = beta;
     MediumInteraction mi;
@@ -320,6 +345,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (!found && medium < 0) {
         bool background = count == 1;
         if (background && first && s_.transparent_background) first->transparent += average(beta);
+        if (background && first && !split_)
+          out_.background += beta * catcher_background(scene_, s_, ray.d, camera_bounces(), kVisCamera);
         if (!(background && s_.transparent_background)) {
           auto escape = [&](int light, const Spectrum& le) {
             reach(light, true, prev.p + ray.d, Vec3(0.0f), beta, le);
@@ -497,6 +524,8 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   const int count = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, z0.stack, path, &first);
   // The data passes, from the first vertex (Cycles': none behind a medium vertex).
   out_.alpha = 1 - first.transparent;
+  out_.matte_transparent = split_ ? split_->film_transparent + average(split_->beta) : first.transparent;
+  out_.catcher_split = split_ ? 1.0f : 0.0f;
   if (count >= 2) {
     if (path[1].type == VertexType::Surface) {
       out_.depth = first.t;
@@ -513,6 +542,14 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   return count;
 }
 
+int Bdpt::generate_catcher_subpath(std::vector<PathVertex>& path) {
+  // The media around the segment's start in a scene of catchers alone (Cycles re-inits the stack).
+  VolumeStack stack;
+  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, split_->ray, &stack, stats_, vis(kVisAll));
+  scratch_.crossed.clear();
+  return random_walk(split_->ray, split_->beta, camera_depth(), Mode::Radiance, stack, path, nullptr);
+}
+
 int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   // Without a subpath light[0] is an empty light vertex, of no light (none of a previous sample).
   PathVertex& y0 = path[0];
@@ -523,6 +560,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
   Vec2 up = sampler_.next_2d(), ud = sampler_.next_2d();
   if (li < 0) return 0;
+  if (catcher_leg_ && !lights_catchers(scene_, li)) return 0;  // the emission of an absent object
   const Light& l = lights_.light(li);
   if (l.faces_receiver()) return 0;
   // Light arriving from infinity through a World volume is gone (as for s = 0 and s = 1, which
@@ -544,7 +582,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   Ray ray = e.ray;
   ray.tmin = 0;
   if (y0.on_surface()) ray.o = offset_ray_origin(e.ray.o, e.n);
-  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, ray, &y0.stack, stats_);
+  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, ray, &y0.stack, stats_, vis(kVisAll));
   // No strategy uses more than max_depth() + 2 light vertices (t = 1: s - 1 <= max_depth()).
   int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, y0.stack,
                           path, nullptr);
@@ -606,8 +644,10 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   // subpaths (s' >= 2) never start on a lamp that faces its receiver.
   const PathVertex& light_end = s > 1 ? light[0] : (s == 1 ? *qs : *pt);
   const bool subpaths_from_light = light_end.light < 0 || !lights_.light(light_end.light).faces_receiver();
+  // With shadow catchers light tracing (t = 1) is left out: its splats would need the matte's.
   auto exists = [&](int s2, int t2) {
-    return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light);
+    return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light) &&
+           (t2 > 1 || !s_.shadow_catcher);
   };
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
   // The light endpoint's densities above hold the light subpaths' power pick (pdf_light_origin);
@@ -663,7 +703,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     Vec2 u = sampler_.next_2d();
     LightSample ls;
     if (li < 0 || !(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls, time_) || !(ls.pdf > 0) ||
-        is_black(ls.radiance))
+        is_black(ls.radiance) || (catcher_leg_ && !lights_catchers(scene_, li)))
       return Spectrum(0.0f);
     const Light& l = lights_.light(li);
     PathVertex& sampled = endpoint(VertexType::Light);
@@ -801,7 +841,25 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
 
   int nt = generate_camera_subpath(camera);
   int ns = generate_light_subpath(light);
+  connect_all(camera, nt, light, ns);
+  if (!s_.shadow_catcher)  // t = 1 is left out with shadow catchers (mis_weight)
+    for (int s = 2; s <= ns; ++s)
+      if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
+  out_.radiance = L_;
+  // Shadow catchers: the catcher-only estimate, a BDPT sample of the scene with the other objects
+  // absent, from the segment that met the catcher with the random numbers the full one had there.
+  if (split_) {
+    catcher_leg_ = true;
+    sampler_ = *split_->sampler;
+    nt = generate_catcher_subpath(camera);
+    ns = generate_light_subpath(light);
+    connect_all(camera, nt, light, ns);
+    catcher_leg_ = false;
+  }
+  return out_;
+}
 
+void Bdpt::connect_all(std::vector<PathVertex>& camera, int nt, std::vector<PathVertex>& light, int ns) {
   add_emitters_reached(camera, nt);
   // s = 1 takes a fresh light sample and needs no light subpath (there is none when the picked
   // lamp faces its receiver, or emission sampling failed); a scene without lights has no s >= 1
@@ -814,10 +872,6 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
       Spectrum c = connect(light, camera, s, t);
       if (!is_black(c)) add(c, s, t, connect_group_);
     }
-  for (int s = 2; s <= ns; ++s)
-    if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
-  out_.radiance = L_;
-  return out_;
 }
 
 void Bdpt::run_light_tracing(std::vector<Splat>& splats) {
@@ -858,7 +912,7 @@ class BdptIntegrator final : public Integrator {
   }
   void trace_unseen(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
                     std::vector<Splat>& splats) const override {
-    if (!ctx_.camera.connectable()) return;
+    if (!ctx_.camera.connectable() || ctx_.settings.shadow_catcher) return;  // t = 1 only (mis_weight)
     Bdpt b(ctx_, cs, sampler, stats);
     b.run_light_tracing(splats);
   }

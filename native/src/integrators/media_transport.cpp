@@ -16,7 +16,8 @@ void for_each_medium(const Scene& scene, const VolumeStack& stack, F f) {
 
 }  // namespace
 
-void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* stack, SampleStats& stats) {
+void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* stack, SampleStats& stats,
+                       unsigned visibility) {
   stack->size = 0;
   Ray r = camera_ray;
   r.tmin = 0;
@@ -25,7 +26,7 @@ void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* s
   for (int i = 0; i < kMaxBoundaryCrossings; ++i) {
     Hit hit;
     ++stats.rays;
-    if (!scene.geometry.intersect(r, kVisAll, &hit)) break;
+    if (!scene.geometry.intersect(r, visibility, &hit)) break;
     SurfacePoint sp = scene.geometry.surface(hit);
     int m = scene.medium_of(sp.material);
     if (m >= 0) {
