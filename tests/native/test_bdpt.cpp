@@ -184,6 +184,16 @@ TEST(Bdpt, MisWeightsSumToOne) {
       EXPECT_GT(checked, 1000) << "too few connected paths to test";
       EXPECT_LT(worst, 1e-3) << "scene " << scene_index << " heuristic " << int(h) << ": " << checked << " paths";
     }
+    // With shadow catchers light tracing (t = 1) is left out: the other strategies' weights still
+    // sum to one.
+    lt::IntegratorSettings is;
+    is.max_bounces = 8;
+    is.volume_bounces = 8;
+    is.shadow_catcher = true;
+    lt::RenderContext ctx{scene, camera, filter, is, 0, 0, size, size};
+    const auto [checked, worst] = worst_mis_sum(ctx, scene_index == 4 ? 12000 : 4000);
+    EXPECT_GT(checked, 1000) << "too few connected paths to test";
+    EXPECT_LT(worst, 1e-3) << "scene " << scene_index << " with shadow catchers: " << checked << " paths";
   }
 }
 

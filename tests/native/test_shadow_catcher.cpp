@@ -165,23 +165,26 @@ std::string differing_catcher_tiles(lt_scene* s, lt_render_settings a, lt_render
   return out;
 }
 
-// Bidirectional's catcher split (bdpt.cpp) against the path tracer's, with the occluder seen by
-// the camera (the matte holds it): Combined (catcher transparent, or its shadow approximated into
-// alpha or over the world) and the Shadow Catcher pass agree per tile and over the image.
+// Bidirectional's catcher split (bdpt.cpp) against the path tracer's, with the occluder hidden
+// from the camera (the pass holds its whole shadow) or seen (the matte holds it): Combined
+// (catcher transparent, or its shadow approximated into alpha or over the world) and the Shadow
+// Catcher pass agree per tile and over the image.
 TEST(ShadowCatcher, BidirectionalAgreesWithPathTracing) {
-  ScenePtr s = catcher_scene(true, false, true, true);
+  ScenePtr hidden = catcher_scene(true, false), seen = catcher_scene(true, false, true, true);
   struct Case {
+    lt_scene* scene;
     int approximate, transparent;
   };
-  for (Case c : {Case{0, 0}, Case{1, 1}, Case{1, 0}}) {
-    SCOPED_TRACE("approximate " + std::to_string(c.approximate) + " transparent " + std::to_string(c.transparent));
+  for (Case c : {Case{hidden.get(), 0, 0}, Case{seen.get(), 0, 0}, Case{seen.get(), 1, 1}, Case{hidden.get(), 1, 0}}) {
+    SCOPED_TRACE(std::string(c.scene == seen.get() ? "occluder seen" : "occluder hidden") + ", approximate " +
+                 std::to_string(c.approximate) + ", transparent " + std::to_string(c.transparent));
     lt_render_settings pt = render_settings(32, 16, 64);
     pt.passes |= 1u << LT_PASS_SHADOW_CATCHER;
     pt.shadow_catcher_approximate = c.approximate;
     pt.transparent_background = c.transparent;
     lt_render_settings bd = pt;
     bd.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
-    EXPECT_EQ(differing_catcher_tiles(s.get(), pt, bd, 6, 8), "");
+    EXPECT_EQ(differing_catcher_tiles(c.scene, pt, bd, 6, 8), "");
   }
 }
 
