@@ -155,8 +155,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       Hit hit;
       ++stats.rays;
       // Only a scene with catchers keeps the state of each camera segment, for a split.
-      if (catchers && !split && b.total == 0)
-        snap = Snapshot{state, sampler};
+      if (catchers && !split && b.total == 0) snap = Snapshot{state, sampler};
       bool found = scene.geometry.intersect(ray, catcher_leg ? catcher_only_visibility(visibility) : visibility, &hit);
       const float t_end = found ? hit.t : ray.tmax;
       // Cycles' integrator_split_shadow_catcher: before the segment's volume and the surface are
@@ -366,7 +365,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     sampler = snap->sampler;
     // The media around the segment's start in a scene of catchers alone (Cycles re-inits the stack
     // at the split): a non-catcher volume around the camera is no longer there.
-    if (kMedia && scene.has_boundaries()) init_volume_stack(scene, ray, &stack, stats, catcher_only_visibility(kVisAll));
+    if (kMedia && scene.has_boundaries())
+      init_volume_stack(scene, ray, &stack, stats, catcher_only_visibility(kVisAll));
   }
   out.radiance = L;
   out.alpha = 1 - transparent;
