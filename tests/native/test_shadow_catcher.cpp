@@ -14,36 +14,44 @@ namespace {
 
 using namespace lt_test;
 
+// Adds a plane w x h m at `at` of one material, seen by the rays of `visibility`.
+void add_plane(lt_scene* s, float w, float h, V3 at, int material, unsigned visibility, bool catcher) {
+  lt_instance_desc d{};
+  d.mesh = add_mesh(s, plane(w, h));
+  const Xform xf = translate(at);
+  std::copy(xf.begin(), xf.end(), d.transform);
+  d.materials = &material;
+  d.material_count = 1;
+  d.visibility = visibility;
+  d.shadow_catcher = catcher;
+  int out = -1;
+  check(lt_scene_add_instance(s, &d, &out), "lt_scene_add_instance");
+}
+
 // occluder_seen: the occluder is grey and seen by the camera too (the matte then holds it).
 ScenePtr catcher_scene(bool catcher, bool fog, bool occluder = true, bool occluder_seen = false) {
   ScenePtr s = new_scene();
   set_world(s.get(), {0.1f, 0.1f, 0.1f}, 1);
-  const int white = add_diffuse(s.get(), {0.8f, 0.8f, 0.8f});
-  lt_instance_desc d{};
-  d.mesh = add_mesh(s.get(), plane(8, 8));
-  const Xform id = translate({0, 0, 0});
-  std::copy(id.begin(), id.end(), d.transform);
-  d.materials = &white;
-  d.material_count = 1;
-  d.visibility = LT_VISIBLE_ALL;
-  d.shadow_catcher = catcher;
-  int out = -1;
-  check(lt_scene_add_instance(s.get(), &d, &out), "lt_scene_add_instance");
-  d.mesh = add_mesh(s.get(), plane(2, 4));
-  if (!occluder) d.visibility = 0;  // there but seen by no ray
-  const Xform above = translate({-1.0f, 0, 1});
-  std::copy(above.begin(), above.end(), d.transform);
-  const int black = add_diffuse(s.get(), occluder_seen ? V3{0.5f, 0.5f, 0.5f} : V3{0, 0, 0});
-  d.materials = &black;
-  if (occluder) d.visibility = occluder_seen ? LT_VISIBLE_ALL : LT_VISIBLE_ALL & ~LT_VISIBLE_CAMERA;
-  d.shadow_catcher = 0;
-  check(lt_scene_add_instance(s.get(), &d, &out), "lt_scene_add_instance");
+  add_plane(s.get(), 8, 8, {0, 0, 0}, add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), LT_VISIBLE_ALL, catcher);
+  const unsigned occluder_visibility =
+      !occluder ? 0u : (occluder_seen ? LT_VISIBLE_ALL : LT_VISIBLE_ALL & ~LT_VISIBLE_CAMERA);  // 0: seen by no ray
+  add_plane(s.get(), 2, 4, {-1.0f, 0, 1}, add_diffuse(s.get(), occluder_seen ? V3{0.5f, 0.5f, 0.5f} : V3{0, 0, 0}),
+            occluder_visibility, false);
   add_light(s.get(), area_light(LT_AREA_SQUARE, 0.5f, 0.5f, translate({0, 0, 3}), 100));
   if (fog)
     add_object(s.get(), box({40, 40, 0}, {41, 41, 1}), add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, 1)));
   set_camera(s.get(), perspective_camera(look_at({0, 0, 5}, {0, 0, 0}, {0, 1, 0})));
   check(lt_scene_commit(s.get()), "lt_scene_commit");
   return s;
+}
+
+// Settings of a render with the Shadow Catcher pass on (the catcher transparent in Combined).
+lt_render_settings pass_settings(int width, int height, int samples, unsigned seed, int integrator) {
+  lt_render_settings rs = render_settings(width, height, samples, seed);
+  rs.integrator = integrator;
+  rs.passes |= 1u << LT_PASS_SHADOW_CATCHER;
+  rs.shadow_catcher_approximate = 0;
+  return rs;
 }
 
 // Mean of channel c of a 3-channel pass over columns [x0, x1).
@@ -60,10 +68,7 @@ TEST(ShadowCatcher, MatteIsTransparentAndThePassHoldsTheShadow) {
     SCOPED_TRACE("integrator " + std::to_string(integrator));
     const bool fog = integrator != LT_INTEGRATOR_PATH;  // BDPT: with media, walks and stacks
     ScenePtr s = catcher_scene(true, fog);
-    lt_render_settings rs = render_settings(width, height, 32, 3);
-    rs.integrator = integrator;
-    rs.passes |= 1u << LT_PASS_SHADOW_CATCHER;
-    rs.shadow_catcher_approximate = 0;
+    lt_render_settings rs = pass_settings(width, height, 32, 3, integrator);
     Passes p = render(s.get(), rs);
     ASSERT_EQ(p.first_non_finite(), "");
     // Only the catcher is seen: the matte is empty and fully transparent.
@@ -178,8 +183,7 @@ TEST(ShadowCatcher, BidirectionalAgreesWithPathTracing) {
   for (Case c : {Case{hidden.get(), 0, 0}, Case{seen.get(), 0, 0}, Case{seen.get(), 1, 1}, Case{hidden.get(), 1, 0}}) {
     SCOPED_TRACE(std::string(c.scene == seen.get() ? "occluder seen" : "occluder hidden") + ", approximate " +
                  std::to_string(c.approximate) + ", transparent " + std::to_string(c.transparent));
-    lt_render_settings pt = render_settings(32, 16, 64);
-    pt.passes |= 1u << LT_PASS_SHADOW_CATCHER;
+    lt_render_settings pt = pass_settings(32, 16, 64, 0, LT_INTEGRATOR_PATH);
     pt.shadow_catcher_approximate = c.approximate;
     pt.transparent_background = c.transparent;
     lt_render_settings bd = pt;
@@ -195,17 +199,7 @@ TEST(ShadowCatcher, BidirectionalAgreesWithPathTracing) {
 // slant there adds under 0.5 %). Keeping the camera's stack dims both alike: the pass was 1.
 TEST(ShadowCatcher, CatcherOnlyPathLeavesOutVolumesAroundTheCamera) {
   ScenePtr s = new_scene();
-  const int white = add_diffuse(s.get(), {0.8f, 0.8f, 0.8f});
-  lt_instance_desc d{};
-  d.mesh = add_mesh(s.get(), plane(8, 8));
-  const Xform id = translate({0, 0, 0});
-  std::copy(id.begin(), id.end(), d.transform);
-  d.materials = &white;
-  d.material_count = 1;
-  d.visibility = LT_VISIBLE_ALL;
-  d.shadow_catcher = 1;
-  int out = -1;
-  check(lt_scene_add_instance(s.get(), &d, &out), "lt_scene_add_instance");
+  add_plane(s.get(), 8, 8, {0, 0, 0}, add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), LT_VISIBLE_ALL, true);
   add_light(s.get(), area_light(LT_AREA_SQUARE, 0.5f, 0.5f, translate({0, 0, 3}), 100));
   add_object(s.get(), box({-10, -10, -1}, {10, 10, 5.5f}),
              add_volume_material(s.get(), volume(LT_VOLUME_ABSORPTION, 0.1f, 0)));
@@ -214,11 +208,7 @@ TEST(ShadowCatcher, CatcherOnlyPathLeavesOutVolumesAroundTheCamera) {
   const int size = 32;
   for (int integrator : {LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
     SCOPED_TRACE("integrator " + std::to_string(integrator));
-    lt_render_settings rs = render_settings(size, size, 64, 5);
-    rs.integrator = integrator;
-    rs.passes |= 1u << LT_PASS_SHADOW_CATCHER;
-    rs.shadow_catcher_approximate = 0;
-    Passes p = render(s.get(), rs);
+    Passes p = render(s.get(), pass_settings(size, size, 64, 5, integrator));
     ASSERT_EQ(p.first_non_finite(), "");
     const std::vector<float>& sc = p.pass(LT_PASS_SHADOW_CATCHER);
     double sum = 0;
