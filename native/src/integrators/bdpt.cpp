@@ -543,9 +543,7 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
 }
 
 int Bdpt::generate_catcher_subpath(std::vector<PathVertex>& path) {
-  // The media around the segment's start in a scene of catchers alone (Cycles re-inits the stack).
-  VolumeStack stack;
-  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, split_->ray, &stack, stats_, vis(kVisAll));
+  const VolumeStack stack = media_ ? catcher_volume_stack(scene_, split_->ray, stats_) : VolumeStack{};
   scratch_.crossed.clear();
   return random_walk(split_->ray, split_->beta, camera_depth(), Mode::Radiance, stack, path, nullptr);
 }
@@ -565,7 +563,8 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   if (l.faces_receiver()) return 0;
   // Light arriving from infinity through a World volume is gone (as for s = 0 and s = 1, which
   // cross it to infinity); a subpath from the scene's bounding disk would cross a finite stretch.
-  if (l.infinite() && scene_.has_world_volume()) return 0;
+  // The catcher-only estimate has no World volume.
+  if (l.infinite() && scene_.has_world_volume() && !catcher_leg_) return 0;
   EmissionSample e;
   if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e, time_) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
     return 0;
@@ -582,7 +581,10 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   Ray ray = e.ray;
   ray.tmin = 0;
   if (y0.on_surface()) ray.o = offset_ray_origin(e.ray.o, e.n);
-  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, ray, &y0.stack, stats_, vis(kVisAll));
+  if (media_ && catcher_leg_)
+    y0.stack = catcher_volume_stack(scene_, ray, stats_);
+  else if (media_ && scene_.has_boundaries())
+    init_volume_stack(scene_, ray, &y0.stack, stats_);
   // No strategy uses more than max_depth() + 2 light vertices (t = 1: s - 1 <= max_depth()).
   int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, y0.stack,
                           path, nullptr);

@@ -11,7 +11,8 @@ template <class F>
 void for_each_medium(const Scene& scene, const VolumeStack& stack, F f) {
   for (int i = 0; i < stack.size; ++i)
     if (!scene.media[stack.media[i]].empty()) f(stack.media[i]);
-  for (int m : scene.global_media) f(m);
+  if (stack.global)
+    for (int m : scene.global_media) f(m);
 }
 
 }  // namespace
@@ -39,6 +40,13 @@ void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* s
     }
     r.o = spawn_origin(sp, r.d);
   }
+}
+
+VolumeStack catcher_volume_stack(const Scene& scene, const Ray& ray, SampleStats& stats) {
+  VolumeStack stack;
+  if (scene.has_boundaries()) init_volume_stack(scene, ray, &stack, stats, catcher_only_visibility(kVisAll));
+  stack.global = false;
+  return stack;
 }
 
 void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir, VolumeStack* stack) {

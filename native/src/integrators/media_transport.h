@@ -19,6 +19,10 @@ constexpr int kMaxBoundaryCrossings = 1024;
 // catcher-only path: catchers' alone, as Cycles' integrator_volume_stack_init).
 void init_volume_stack(const Scene& scene, const Ray& ray, VolumeStack* stack, SampleStats& stats,
                        unsigned visibility = kVisAll);
+// The stack of a shadow catcher's catcher-only path (or light subpath) from ray.o: the media of
+// catchers alone, no global media (Cycles re-inits the stack at the split, without the world's
+// volume): volumes of other objects, even one around the camera, are not there.
+VolumeStack catcher_volume_stack(const Scene& scene, const Ray& ray, SampleStats& stats);
 
 // Applies a boundary crossing at a surface point by a ray leaving towards `dir` (enter when dir
 // goes against the geometric normal's outside, i.e. into the closed mesh).

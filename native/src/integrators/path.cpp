@@ -363,10 +363,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     catcher_leg = true;
     state = snap->state;
     sampler = snap->sampler;
-    // The media around the segment's start in a scene of catchers alone (Cycles re-inits the stack
-    // at the split): a non-catcher volume around the camera is no longer there.
-    if (kMedia && scene.has_boundaries())
-      init_volume_stack(scene, ray, &stack, stats, catcher_only_visibility(kVisAll));
+    if constexpr (kMedia) stack = catcher_volume_stack(scene, ray, stats);
   }
   out.radiance = L;
   out.alpha = 1 - transparent;

@@ -8,6 +8,10 @@ struct VolumeStack {
   static constexpr int kCapacity = 8;
   int media[kCapacity];
   int size = 0;
+  // Whether the scene's global media (Volume objects, the World volume) fill the ray's space too: not
+  // on a shadow catcher's catcher-only path, in a scene without the other objects and the world's
+  // volume (Cycles' integrator_volume_stack_init for SHADOW_CATCHER_PASS paths).
+  bool global = true;
 
   // Front face (ray against the geometric normal): enter; back face: leave one occurrence.
   void cross(int medium, bool entering) {
