@@ -290,12 +290,9 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     // Shadow catchers: the camera ray (through transparent passes) meeting a catcher splits the
     // sample before the segment's media and the surface are shaded, as path.cpp (Cycles'
     // integrator_split_shadow_catcher); the throughput there is the matte's transparency.
-    if (first && count == 1 && found && s_.shadow_catcher && !split_) {
-      const Instance& in = scene_.geometry.instance(hit.instance);
-      if (in.shadow_catcher && !in.holdout) {
-        split_ = CatcherSplit{ray, beta, footprint, first->transparent, nulls, transparent, crossed.size(), sampler_};
-        out_.background += beta * catcher_background(scene_, s_, ray.d, camera_bounces(), kVisCamera);
-      }
+    if (first && count == 1 && found && !split_ && splits_on(hit.instance)) {
+      split_ = CatcherSplit{ray, beta, footprint, first->transparent, nulls, transparent, crossed.size(), sampler_};
+      out_.background += beta * catcher_background(scene_, s_, ray.d, camera_bounces(), kVisCamera);
     }
     // Free flight through the media, as the volumetric path tracer (path.cpp) samples it.
     const Spectrum beta_before = beta;
@@ -646,10 +643,13 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   // subpaths (s' >= 2) never start on a lamp that faces its receiver.
   const PathVertex& light_end = s > 1 ? light[0] : (s == 1 ? *qs : *pt);
   const bool subpaths_from_light = light_end.light < 0 || !lights_.light(light_end.light).faces_receiver();
-  // With shadow catchers light tracing (t = 1) is left out: its splats would need the matte's.
+  // Light tracing (t = 1) is left out for paths that split at a catcher (splat_t1 makes none): its
+  // splats would need catcher sums of their own. Whether a path splits is the camera ray's, the
+  // same for every strategy.
+  const bool splits = t >= 2 && split_;
   auto exists = [&](int s2, int t2) {
     return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light) &&
-           (t2 > 1 || !s_.shadow_catcher);
+           (t2 > 1 || !splits);
   };
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
   // The light endpoint's densities above hold the light subpaths' power pick (pdf_light_origin);
@@ -758,6 +758,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   // A point on the lens, uniform over the aperture as the camera's rays sample it (pbrt-v4's
   // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were.
   const Vec3 lens = cam.has_lens() ? cam.lens_point(sampler_.next_2d(), time_) : cam.position(time_);
+  if (splits_towards(lens, qs)) return;  // the path meets a catcher: no t = 1 (mis_weight)
   Camera::Projection& pr = scratch_.splat;
   if (!cam.project(lens, qs.p, ctx_.filter.radius(), &pr, time_)) return;
   const Vec3 dir = pr.dir;
@@ -844,9 +845,8 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
   int nt = generate_camera_subpath(camera);
   int ns = generate_light_subpath(light);
   connect_all(camera, nt, light, ns);
-  if (!s_.shadow_catcher)  // t = 1 is left out with shadow catchers (mis_weight)
-    for (int s = 2; s <= ns; ++s)
-      if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
+  for (int s = 2; s <= ns; ++s)
+    if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
   out_.radiance = L_;
   // Shadow catchers: the catcher-only estimate, a BDPT sample of the scene with the other objects
   // absent, from the segment that met the catcher with the random numbers the full one had there.
@@ -914,7 +914,7 @@ class BdptIntegrator final : public Integrator {
   }
   void trace_unseen(const CameraSample& cs, Sampler& sampler, SampleStats& stats,
                     std::vector<Splat>& splats) const override {
-    if (!ctx_.camera.connectable() || ctx_.settings.shadow_catcher) return;  // t = 1 only (mis_weight)
+    if (!ctx_.camera.connectable()) return;
     Bdpt b(ctx_, cs, sampler, stats);
     b.run_light_tracing(splats);
   }

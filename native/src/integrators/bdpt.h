@@ -331,6 +331,19 @@ class Bdpt {
   bool catcher_leg_ = false;  // the catcher-only estimate is running: rays see catchers alone
   bool pre_split_ = true;     // add(): the contribution's path met no catcher (or not yet)
   unsigned vis(unsigned visibility) const { return catcher_leg_ ? catcher_only_visibility(visibility) : visibility; }
+  // Whether a camera ray meeting this instance splits there (a catcher, no holdout).
+  bool splits_on(int instance) const {
+    const Instance& in = scene_.geometry.instance(instance);
+    return s_.shadow_catcher && in.shadow_catcher && !in.holdout;
+  }
+  // Whether the path of a t = 1 strategy splits: the camera ray from `lens` to its first vertex qs
+  // meets a catcher (qs itself, or one it passes through). A walk's path splits as the walk found.
+  bool splits_towards(const Vec3& lens, const PathVertex& qs) const {
+    if (!s_.shadow_catcher) return false;
+    if (qs.type == VertexType::Surface && splits_on(qs.sp.instance)) return true;
+    const Vec3 to = qs.type == VertexType::Surface ? spawn_origin(qs.sp, normalize(lens - qs.p)) : qs.p;
+    return scene_.geometry.occluded(spawn_ray_to(lens, to, time_), catcher_only_visibility(kVisCamera));
+  }
   FirstBounce first_walk_, first_connect_;
   // The split of a scattering vertex between its predecessor (v.wo) and direction `to`.
   FirstBounce split_at(const PathVertex& v, const Vec3& to) const {

@@ -75,7 +75,7 @@ std::vector<float> Bdpt::weight_sums() {
           if (!a_ok || !b_ok) continue;
         }
         if (s2 == 0 && is_delta_light(x[k])) continue;
-        if (t2 == 1 && (x[1].delta || s_.shadow_catcher)) continue;  // no light tracing with catchers
+        if (t2 == 1 && (x[1].delta || split_)) continue;  // none where the camera ray meets a catcher
         const PathVertex* sampled = s2 == 1 ? &l2[0] : (t2 == 1 ? &c2[0] : nullptr);
         PathVertex sampled_copy;
         if (sampled) sampled_copy = *sampled;
