@@ -57,16 +57,8 @@ ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1
   int white = add_diffuse(sc, {0.7f, 0.7f, 0.7f});
   int red = add_diffuse(sc, {0.7f, 0.15f, 0.1f});
   int green = add_diffuse(sc, {0.15f, 0.6f, 0.1f});
-  lt_instance_desc floor{};
-  floor.mesh = add_mesh(sc, plane(2, 2));
-  const Xform id = identity();
-  std::copy(id.begin(), id.end(), floor.transform);
-  floor.materials = &white;
-  floor.material_count = 1;
-  floor.visibility = LT_VISIBLE_ALL;
-  floor.shadow_catcher = catcher_floor;
-  int floor_id = -1;
-  check(lt_scene_add_instance(sc, &floor, &floor_id), "lt_scene_add_instance");
+  MeshData floor = plane(2, 2);
+  add_object(sc, floor, white, identity(), LT_VISIBLE_ALL, catcher_floor);
   MeshData ceiling = plane(2, 2);
   flip_winding(ceiling);
   if (lights != Lights::AreaAndSun) add_object(sc, ceiling, white, translate({0, 0, 2}));

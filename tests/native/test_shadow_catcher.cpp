@@ -14,29 +14,15 @@ namespace {
 
 using namespace lt_test;
 
-// Adds a plane w x h m at `at` of one material, seen by the rays of `visibility`.
-void add_plane(lt_scene* s, float w, float h, V3 at, int material, unsigned visibility, bool catcher) {
-  lt_instance_desc d{};
-  d.mesh = add_mesh(s, plane(w, h));
-  const Xform xf = translate(at);
-  std::copy(xf.begin(), xf.end(), d.transform);
-  d.materials = &material;
-  d.material_count = 1;
-  d.visibility = visibility;
-  d.shadow_catcher = catcher;
-  int out = -1;
-  check(lt_scene_add_instance(s, &d, &out), "lt_scene_add_instance");
-}
-
 // occluder_seen: the occluder is grey and seen by the camera too (the matte then holds it).
 ScenePtr catcher_scene(bool catcher, bool fog, bool occluder = true, bool occluder_seen = false) {
   ScenePtr s = new_scene();
   set_world(s.get(), {0.1f, 0.1f, 0.1f}, 1);
-  add_plane(s.get(), 8, 8, {0, 0, 0}, add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), LT_VISIBLE_ALL, catcher);
+  add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), identity(), LT_VISIBLE_ALL, catcher);
   const unsigned occluder_visibility =
       !occluder ? 0u : (occluder_seen ? LT_VISIBLE_ALL : LT_VISIBLE_ALL & ~LT_VISIBLE_CAMERA);  // 0: seen by no ray
-  add_plane(s.get(), 2, 4, {-1.0f, 0, 1}, add_diffuse(s.get(), occluder_seen ? V3{0.5f, 0.5f, 0.5f} : V3{0, 0, 0}),
-            occluder_visibility, false);
+  add_object(s.get(), plane(2, 4), add_diffuse(s.get(), occluder_seen ? V3{0.5f, 0.5f, 0.5f} : V3{0, 0, 0}),
+             translate({-1.0f, 0, 1}), occluder_visibility);
   add_light(s.get(), area_light(LT_AREA_SQUARE, 0.5f, 0.5f, translate({0, 0, 3}), 100));
   if (fog)
     add_object(s.get(), box({40, 40, 0}, {41, 41, 1}), add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, 1)));
@@ -202,7 +188,7 @@ TEST(ShadowCatcher, BidirectionalAgreesWithPathTracing) {
 TEST(ShadowCatcher, CatcherOnlyPathLeavesOutVolumesAroundTheCamera) {
   for (bool world : {false, true}) {
     ScenePtr s = new_scene();
-    add_plane(s.get(), 8, 8, {0, 0, 0}, add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), LT_VISIBLE_ALL, true);
+    add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), identity(), LT_VISIBLE_ALL, true);
     add_light(s.get(), area_light(LT_AREA_SQUARE, 0.5f, 0.5f, translate({0, 0, 3}), 100));
     const lt_volume_desc fog = volume(LT_VOLUME_ABSORPTION, 0.1f, 0);
     if (world)
