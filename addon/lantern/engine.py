@@ -586,10 +586,6 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             # Cycles approximates the catchers' shadow into Combined unless the pass is on (blender/sync.cpp).
             settings["shadow_catcher_approximate"] = int(not _pass_enabled(scene, view_layer,
                                                                            "cycles.use_pass_shadow_catcher"))
-            if summary.get("shadow_catchers") and scene.lantern.integrator == 'BIDIRECTIONAL':
-                report({'WARNING'}, "Bidirectional does not split paths at shadow catchers: %d shadow "
-                       "catcher(s) render as ordinary objects and the Shadow Catcher pass is white; use "
-                       "Path Tracing or Volumetric Path" % summary["shadow_catchers"])
             if self.is_preview:  # material preview: small, few samples, no debug views
                 settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0)
             if scene.render.use_multiview and not self.is_preview:

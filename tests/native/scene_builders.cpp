@@ -258,7 +258,8 @@ int add_mesh(lt_scene* s, const MeshData& m) {
   return id;
 }
 
-int add_instance(lt_scene* s, int mesh, int material, const Xform& xf, unsigned visibility, int lightgroup) {
+int add_instance(lt_scene* s, int mesh, int material, const Xform& xf, unsigned visibility, int lightgroup,
+                 bool shadow_catcher) {
   lt_instance_desc d{};
   d.mesh = mesh;
   std::copy(xf.begin(), xf.end(), d.transform);
@@ -266,13 +267,15 @@ int add_instance(lt_scene* s, int mesh, int material, const Xform& xf, unsigned 
   d.material_count = 1;
   d.visibility = visibility;
   d.lightgroup = lightgroup;
+  d.shadow_catcher = shadow_catcher;
   int id = -1;
   check(lt_scene_add_instance(s, &d, &id), "lt_scene_add_instance");
   return id;
 }
 
-int add_object(lt_scene* s, const MeshData& m, int material, const Xform& xf, unsigned visibility) {
-  return add_instance(s, add_mesh(s, m), material, xf, visibility);
+int add_object(lt_scene* s, const MeshData& m, int material, const Xform& xf, unsigned visibility,
+               bool shadow_catcher) {
+  return add_instance(s, add_mesh(s, m), material, xf, visibility, 0, shadow_catcher);
 }
 
 lt_camera_desc perspective_camera(const Xform& xf, float focal_mm, float sensor_mm) {

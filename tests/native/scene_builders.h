@@ -78,10 +78,11 @@ int add_emission(lt_scene* s, V3 color, float strength);
 int add_glossy(lt_scene* s, V3 color, float roughness);  // GGX
 int add_mesh(lt_scene* s, const MeshData& m);
 int add_instance(lt_scene* s, int mesh, int material, const Xform& xf = identity(),
-                 unsigned visibility = LT_VISIBLE_ALL, int lightgroup = 0);  // lightgroup: k + 1, 0 none
+                 unsigned visibility = LT_VISIBLE_ALL, int lightgroup = 0,  // lightgroup: k + 1, 0 none
+                 bool shadow_catcher = false);
 // add_mesh + add_instance.
 int add_object(lt_scene* s, const MeshData& m, int material, const Xform& xf = identity(),
-               unsigned visibility = LT_VISIBLE_ALL);
+               unsigned visibility = LT_VISIBLE_ALL, bool shadow_catcher = false);
 
 lt_camera_desc perspective_camera(const Xform& xf, float focal_mm = 50, float sensor_mm = 36);
 lt_camera_desc orthographic_camera(const Xform& xf, float ortho_scale);

@@ -50,9 +50,9 @@ enum class Lights { Area, PointSpot, AreaAndSun };
 // With media: fog (albedo 0.8, g 0.4, optical depth about 1 across) in the lower half of the room
 // behind an invisible boundary, a medium inside the glass sphere and a thin world volume.
 // bent_floor: the floor a Principled BSDF whose Normal leans 50 degrees from the floor's, which
-// Cycles tilts for each viewer (ensure_valid_reflection).
+// Cycles tilts for each viewer (ensure_valid_reflection). catcher_floor: the floor is a shadow catcher.
 ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1.0f, bool media = false,
-              bool bent_floor = false) {
+              bool bent_floor = false, bool catcher_floor = false) {
   ScenePtr s = new_scene();
   lt_scene* sc = s.get();
   int white = add_diffuse(sc, {0.7f, 0.7f, 0.7f});
@@ -61,7 +61,7 @@ ScenePtr room(Lights lights, float glass_roughness = 0.2f, float light_scale = 1
   int red = add_diffuse(sc, {0.7f, 0.15f, 0.1f});
   int green = add_diffuse(sc, {0.15f, 0.6f, 0.1f});
   MeshData floor = plane(2, 2);
-  add_object(sc, floor, bent_floor ? add_material(sc, bent) : white);
+  add_object(sc, floor, bent_floor ? add_material(sc, bent) : white, identity(), LT_VISIBLE_ALL, catcher_floor);
   MeshData ceiling = plane(2, 2);
   flip_winding(ceiling);
   if (lights != Lights::AreaAndSun) add_object(sc, ceiling, white, translate({0, 0, 2}));
@@ -190,6 +190,21 @@ TEST(Bdpt, MisWeightsSumToOne) {
       EXPECT_GT(checked, 1000) << "too few connected paths to test";
       EXPECT_LT(worst, 1e-3) << "scene " << scene_index << " heuristic " << int(h) << ": " << checked << " paths";
     }
+  }
+  // With the floor a shadow catcher, paths whose camera ray meets it have no light tracing (t = 1):
+  // the other strategies' weights still sum to one, and all of them for the other paths.
+  for (bool media : {false, true}) {
+    ScenePtr s = room(Lights::Area, 0.2f, 1.0f, media, false, true);
+    lt::Camera camera(s->scene.camera, 32, 32);
+    lt::FilterSampler filter(lt::FilterType::BlackmanHarris, 1.5f);
+    lt::IntegratorSettings is;
+    is.max_bounces = 8;
+    is.volume_bounces = 8;
+    is.shadow_catcher = true;
+    lt::RenderContext ctx{s->scene, camera, filter, is, 0, 0, 32, 32};
+    const auto [checked, worst] = worst_mis_sum(ctx, 4000);
+    EXPECT_GT(checked, 1000) << "too few connected paths to test";
+    EXPECT_LT(worst, 1e-3) << "catcher floor, media " << media << ": " << checked << " paths";
   }
 }
 

@@ -218,27 +218,29 @@ INSTANTIATE_TEST_SUITE_P(Integrators, MergeExactness,
 // and the Shadow Catcher pass are recomputed from the parts' merged catcher means.
 TEST(MergeShadowCatcher, CombinedAndThePassMergeIntoTheFullRender) {
   ScenePtr s = merge_scene(false, true);
-  for (int approximate : {0, 1})
-    for (int transparent : {0, 1}) {
-      TempDir dir;
-      const std::string full = dir.path + "/full.exr", a = dir.path + "/a.exr", b = dir.path + "/b.exr",
-                        out = dir.path + "/merged.exr";
-      auto settings = [&](int offset, int samples) {
-        lt_render_settings rs = settings_for(LT_INTEGRATOR_PATH, offset, samples);
-        rs.passes |= 1u << LT_PASS_SHADOW_CATCHER;
-        rs.shadow_catcher_approximate = approximate;
-        rs.transparent_background = transparent;
-        return rs;
-      };
-      render_part(s.get(), settings(0, 32), full);
-      render_part(s.get(), settings(0, 16), a);
-      render_part(s.get(), settings(16, 16), b);
-      ASSERT_EQ(merge(out, {a, b}), LT_OK) << lt_last_error();
-      const lt::ExrImage f = lt::read_exr(full);
-      ASSERT_NE(f.find("ShadowCatcher.R"), nullptr);
-      ASSERT_NE(f.find("CatcherMatte.A"), nullptr);
-      expect_merged_equals_full(lt::read_exr(out), f, approximate ? "approximate" : "matte");
-    }
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL})
+    for (int approximate : {0, 1})
+      for (int transparent : {0, 1}) {
+        SCOPED_TRACE("integrator " + std::to_string(integrator));
+        TempDir dir;
+        const std::string full = dir.path + "/full.exr", a = dir.path + "/a.exr", b = dir.path + "/b.exr",
+                          out = dir.path + "/merged.exr";
+        auto settings = [&](int offset, int samples) {
+          lt_render_settings rs = settings_for(integrator, offset, samples);
+          rs.passes |= 1u << LT_PASS_SHADOW_CATCHER;
+          rs.shadow_catcher_approximate = approximate;
+          rs.transparent_background = transparent;
+          return rs;
+        };
+        render_part(s.get(), settings(0, 32), full);
+        render_part(s.get(), settings(0, 16), a);
+        render_part(s.get(), settings(16, 16), b);
+        ASSERT_EQ(merge(out, {a, b}), LT_OK) << lt_last_error();
+        const lt::ExrImage f = lt::read_exr(full);
+        ASSERT_NE(f.find("ShadowCatcher.R"), nullptr);
+        ASSERT_NE(f.find("CatcherMatte.A"), nullptr);
+        expect_merged_equals_full(lt::read_exr(out), f, approximate ? "approximate" : "matte");
+      }
 }
 
 TEST(MergeRefusals, EveryMismatchIsRefusedAndNothingIsOverwritten) {

@@ -1029,9 +1029,10 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     is.ao_distance = s->ao_distance;
     rs.motion_pass = s->motion_pass != 0;
     is.shadow_catcher_approximate = s->shadow_catcher_approximate != 0;
-    // Bidirectional does not split its camera subpaths: catchers render there as ordinary objects.
+    // The integrators that split camera paths at catchers (the volume debug view does not).
     is.shadow_catcher = scene->scene.geometry.has_shadow_catcher() &&
-                        (s->integrator == LT_INTEGRATOR_PATH || s->integrator == LT_INTEGRATOR_VOLPATH);
+                        (s->integrator == LT_INTEGRATOR_PATH || s->integrator == LT_INTEGRATOR_VOLPATH ||
+                         s->integrator == LT_INTEGRATOR_BIDIRECTIONAL);
     rs.threads = s->threads;
     rs.filter = lt::FilterType(s->filter);
     rs.filter_width = s->filter_width;

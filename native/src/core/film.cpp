@@ -468,7 +468,7 @@ void catcher_pass(const CatcherPixel& m, double* o) {
 
 void catcher_combined(const CatcherPixel& m, bool approximate, bool transparent, float* o) {
   const double alpha = std::clamp(1.0 - m.matte[3], 0.0, 1.0);
-  for (int k = 0; k < 3; ++k) o[k] = float(m.matte[k]);
+  for (int k = 0; k < 3; ++k) o[k] = float(m.matte[k] + m.splat[k]);
   o[3] = float(alpha);
   if (!approximate) return;
   // The shadow is 1 - the pass's average, the coverage of what the matte does not cover.
@@ -479,7 +479,7 @@ void catcher_combined(const CatcherPixel& m, bool approximate, bool transparent,
     o[3] = float(alpha_matte);
     return;
   }
-  for (int k = 0; k < 3; ++k) o[k] = float(m.matte[k] + m.background[k] * (1.0 - alpha_matte));
+  for (int k = 0; k < 3; ++k) o[k] = float(m.matte[k] + m.splat[k] + m.background[k] * (1.0 - alpha_matte));
   o[3] = 1.0f;
 }
 
@@ -503,6 +503,8 @@ CatcherPixel Film::catcher_pixel(size_t i) const {
     m.background[k] = background_[3 * i + k] * inv;
   }
   for (int k = 0; k < 4; ++k) m.matte[k] = matte_[4 * i + k] * inv;
+  if (light_paths_ && !splat_.empty())
+    for (int k = 0; k < 3; ++k) m.splat[k] = splat_[3 * i + k] / double(light_paths_);
   m.alpha = alpha_[i] * inv;
   m.split = splits_[i] * inv;
   return m;

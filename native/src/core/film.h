@@ -183,6 +183,9 @@ constexpr int kFeatureChannels = 7;
 struct CatcherPixel {
   double combined[3] = {0, 0, 0}, alpha = 0;
   double catcher[3] = {0, 0, 0}, matte[4] = {0, 0, 0, 0}, split = 0, background[3] = {0, 0, 0};
+  // BDPT's light-tracing splats (over the light paths): light of paths that met no catcher, so
+  // the matte's and Combined's alike (bdpt.cpp splats none onto a catcher the camera sees).
+  double splat[3] = {0, 0, 0};
 };
 // Cycles' film_calculate_shadow_catcher (film/read.h): 1 where no sample split.
 void catcher_pass(const CatcherPixel& m, double* rgb);

@@ -186,6 +186,7 @@ void Bdpt::add_emitters_reached(std::vector<PathVertex>& camera, int nt) {
     // The segment before camera[at], then that vertex.
     for (; r < crossed.size() && crossed[r].at == at; ++r) {
       const Crossed& c = crossed[r];
+      pre_split_ = !split_ || r < split_->crossed;  // crossed before the segment that met a catcher
       if (c.light >= 0) {
         PathVertex& v = endpoint(VertexType::Light);
         v.light = c.light;
@@ -205,8 +206,10 @@ void Bdpt::add_emitters_reached(std::vector<PathVertex>& camera, int nt) {
       const float kinds_within = kind_limit_factor(camera, camera, 0, at + 1);
       if (kinds_within > 0) add(c.le * kinds_within, 0, at + 1, c.groups);
     }
+    pre_split_ = !split_;
     if (at < nt && !is_black(camera[at].le)) emitter_reached(camera, at + 1, nullptr, camera[at].le);
   }
+  pre_split_ = !split_;
 }
 
 void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, PathVertex* crossed, const Spectrum& le) {
@@ -260,6 +263,18 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
   // its dD per unit of path length); a light subpath's vertex takes the one a camera ray reaching
   // it straight from the camera's centre would have (Cycles has no light paths).
   float footprint = mode == Mode::Radiance ? cs_.dP : 0.0f;
+  // A camera ray's count, for the Light Path node of the world it sees (catcher_background).
+  auto camera_bounces = [&] {
+    Bounces b;
+    b.n[int(BounceKind::None)] = transparent;
+    return b;
+  };
+  // The catcher-only camera walk resumes the first segment where the full walk met the catcher.
+  if (catcher_leg_ && mode == Mode::Radiance) {
+    nulls = split_->nulls;
+    transparent = split_->transparent;
+    footprint = split_->footprint;
+  }
   const float beta_start = max_abs_component(beta);
   // Bounce kinds counted so far towards Cycles' per-kind limits (path_state.h): the walk stops
   // where every strategy using its further vertices would fail them (kind_limit_factor 0; only
@@ -276,7 +291,14 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     PathVertex& v = path[count];
     Hit hit;
     ++stats_.rays;
-    bool found = scene_.geometry.intersect(ray, visibility, &hit);
+    bool found = scene_.geometry.intersect(ray, vis(visibility), &hit);
+    // Shadow catchers: the camera ray (through transparent passes) meeting a catcher splits the
+    // sample before the segment's media and the surface are shaded, as path.cpp (Cycles'
+    // integrator_split_shadow_catcher); the throughput there is the matte's transparency.
+    if (first && count == 1 && found && !split_ && splits_on(hit.instance)) {
+      split_ = CatcherSplit{ray, beta, footprint, first->transparent, nulls, transparent, crossed.size(), sampler_};
+      out_.background += beta * catcher_background(scene_, s_, ray.d, camera_bounces(), kVisCamera);
+    }
     // Free flight through the media, as the volumetric path tracer (path.cpp) samples it.
     const Spectrum beta_before = beta;
     MediumInteraction mi;
@@ -328,6 +350,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (!found && medium < 0) {
         bool background = count == 1;
         if (background && first && s_.transparent_background) first->transparent += average(beta);
+        if (background && first && !split_)
+          out_.background += beta * catcher_background(scene_, s_, ray.d, camera_bounces(), kVisCamera);
         if (!(background && s_.transparent_background)) {
           auto escape = [&](int light, const Spectrum& le) {
             reach(light, true, prev.p + ray.d, Vec3(0.0f), beta, le);
@@ -522,6 +546,8 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   const int count = random_walk(cs_.ray, Spectrum(1.0f), camera_depth(), Mode::Radiance, z0.stack, path, &first);
   // The data passes, from the first vertex (Cycles': none behind a medium vertex).
   out_.alpha = 1 - first.transparent;
+  out_.matte_transparent = split_ ? split_->film_transparent + average(split_->beta) : first.transparent;
+  out_.catcher_split = split_ ? 1.0f : 0.0f;
   if (count >= 2) {
     if (path[1].type == VertexType::Surface) {
       out_.depth = first.t;
@@ -538,6 +564,12 @@ int Bdpt::generate_camera_subpath(std::vector<PathVertex>& path) {
   return count;
 }
 
+int Bdpt::generate_catcher_subpath(std::vector<PathVertex>& path) {
+  const VolumeStack stack = media_ ? catcher_volume_stack(scene_, split_->ray, stats_) : VolumeStack{};
+  scratch_.crossed.clear();
+  return random_walk(split_->ray, split_->beta, camera_depth(), Mode::Radiance, stack, path, nullptr);
+}
+
 int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   // Without a subpath light[0] is an empty light vertex, of no light (none of a previous sample).
   PathVertex& y0 = path[0];
@@ -548,11 +580,13 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
   Vec2 up = sampler_.next_2d(), ud = sampler_.next_2d();
   if (li < 0) return 0;
+  if (catcher_leg_ && !lights_catchers(scene_, li)) return 0;  // the emission of an absent object
   const Light& l = lights_.light(li);
   if (l.faces_receiver()) return 0;
   // Light arriving from infinity through a World volume is gone (as for s = 0 and s = 1, which
   // cross it to infinity); a subpath from the scene's bounding disk would cross a finite stretch.
-  if (l.infinite() && scene_.has_world_volume()) return 0;
+  // The catcher-only estimate has no World volume.
+  if (l.infinite() && scene_.has_world_volume() && !catcher_leg_) return 0;
   EmissionSample e;
   if (!(pmf > 0) || !lights_.sample_emission(scene_, li, up, ud, &e, time_) || !(e.pdf_pos > 0) || !(e.pdf_dir > 0))
     return 0;
@@ -569,7 +603,10 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   Ray ray = e.ray;
   ray.tmin = 0;
   if (y0.on_surface()) ray.o = offset_ray_origin(e.ray.o, e.n);
-  if (media_ && scene_.has_boundaries()) init_volume_stack(scene_, ray, &y0.stack, stats_);
+  if (media_ && catcher_leg_)
+    y0.stack = catcher_volume_stack(scene_, ray, stats_);
+  else if (media_ && scene_.has_boundaries())
+    init_volume_stack(scene_, ray, &y0.stack, stats_);
   // No strategy uses more than max_depth() + 2 light vertices (t = 1: s - 1 <= max_depth()).
   int count = random_walk(ray, beta, std::min(s_.max_light_length - 1, max_depth() + 1), Mode::Importance, y0.stack,
                           path, nullptr);
@@ -631,8 +668,13 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   // subpaths (s' >= 2) never start on a lamp that faces its receiver.
   const PathVertex& light_end = s > 1 ? light[0] : (s == 1 ? *qs : *pt);
   const bool subpaths_from_light = light_end.light < 0 || !lights_.light(light_end.light).faces_receiver();
+  // Light tracing (t = 1) is left out for paths that split at a catcher (splat_t1 makes none): its
+  // splats would need catcher sums of their own. Whether a path splits is the camera ray's, the
+  // same for every strategy.
+  const bool splits = t >= 2 && split_;
   auto exists = [&](int s2, int t2) {
-    return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light);
+    return s2 <= s_.max_light_length && t2 - 1 <= camera_depth() && (s2 <= 1 || subpaths_from_light) &&
+           (t2 > 1 || !splits);
   };
   auto remap0 = [](float f) { return f != 0 ? f : 1.0f; };
   // A zero reverse density stands for a delta vertex sampling (remapped to 1, pbrt's remap0; the
@@ -697,7 +739,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     Vec2 u = sampler_.next_2d();
     LightSample ls;
     if (li < 0 || !(pmf > 0) || !lights_.sample(scene_, li, pt.p, u, &ls, time_) || !(ls.pdf > 0) ||
-        is_black(ls.radiance))
+        is_black(ls.radiance) || (catcher_leg_ && !lights_catchers(scene_, li)))
       return Spectrum(0.0f);
     const Light& l = lights_.light(li);
     PathVertex& sampled = endpoint(VertexType::Light);
@@ -751,6 +793,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were. An
   // orthographic camera's lens sample fixes its rays' direction, and the vertex is on its plane.
   const Vec3 lens = cam.connection_point(qs.p, cam.has_lens() ? sampler_.next_2d() : Vec2{0.5f, 0.5f}, time_);
+  if (splits_towards(lens, qs)) return;  // the path meets a catcher: no t = 1 (mis_weight)
   Camera::Projection& pr = scratch_.splat;
   if (!cam.project(lens, qs.p, ctx_.filter.radius(), &pr, time_)) return;
   const Vec3 dir = pr.dir;
@@ -839,7 +882,24 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
 
   int nt = generate_camera_subpath(camera);
   int ns = generate_light_subpath(light);
+  connect_all(camera, nt, light, ns);
+  for (int s = 2; s <= ns; ++s)
+    if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
+  out_.radiance = L_;
+  // Shadow catchers: the catcher-only estimate, a BDPT sample of the scene with the other objects
+  // absent, from the segment that met the catcher with the random numbers the full one had there.
+  if (split_) {
+    catcher_leg_ = true;
+    sampler_ = *split_->sampler;
+    nt = generate_catcher_subpath(camera);
+    ns = generate_light_subpath(light);
+    connect_all(camera, nt, light, ns);
+    catcher_leg_ = false;
+  }
+  return out_;
+}
 
+void Bdpt::connect_all(std::vector<PathVertex>& camera, int nt, std::vector<PathVertex>& light, int ns) {
   add_emitters_reached(camera, nt);
   // s = 1 takes a fresh light sample and needs no light subpath (there is none when the picked
   // lamp faces its receiver, or emission sampling failed); a scene without lights has no s >= 1
@@ -852,10 +912,6 @@ SampleValue Bdpt::run(std::vector<Splat>& splats, Spectrum* strategies) {
       Spectrum c = connect(light, camera, s, t);
       if (!is_black(c)) add(c, s, t, connect_group_);
     }
-  for (int s = 2; s <= ns; ++s)
-    if (s - 1 <= max_depth()) splat_t1(light, camera, s, splats);
-  out_.radiance = L_;
-  return out_;
 }
 
 void Bdpt::run_light_tracing(std::vector<Splat>& splats) {

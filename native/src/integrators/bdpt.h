@@ -218,10 +218,10 @@ class Bdpt {
       VolumeStack stack = a.stack;
       if (a.type == VertexType::Surface) leave_surface(scene_, a.sp, a.n, r.d, &stack);
       return shadow_transmittance(scene_, stack, r, sampler_, s_.volume_estimator, s_.volume_step, stats_,
-                                  s_.transparent_bounces, visibility);
+                                  s_.transparent_bounces, vis(visibility));
     }
     return shadow_transmittance(scene_, VolumeStack{}, r, sampler_, s_.volume_estimator, s_.volume_step, stats_,
-                                s_.transparent_bounces, visibility);
+                                s_.transparent_bounces, vis(visibility));
   }
   // Cycles' compact footprint of a camera ray from the camera's centre to p (bump on light
   // subpaths).
@@ -247,6 +247,10 @@ class Bdpt {
                   FirstSegment* first);
   int generate_camera_subpath(std::vector<PathVertex>& path);
   int generate_light_subpath(std::vector<PathVertex>& path);
+  // The catcher-only camera subpath: camera[0], then a walk from the segment that met the catcher.
+  int generate_catcher_subpath(std::vector<PathVertex>& path);
+  // Every strategy with t >= 2 of the subpaths (s = 0 included); t = 1 is splat_t1.
+  void connect_all(std::vector<PathVertex>& camera, int nt, std::vector<PathVertex>& light, int ns);
 
   // ---- strategies (pbrt-v4's ConnectBDPT and MISWeight) ----------------------------------------
   // Strategy s = 0 for every t, after the walks: the camera subpath's emitting surface vertices
@@ -278,11 +282,19 @@ class Bdpt {
   // Adds a strategy's weighted contribution to the sample and to the strategy view.
   // Light passes: s + t - 2 scattering vertices; the first is camera[1] (t >= 2), whose split
   // is the walk's sampled direction's (t >= 3) or the connection's (t = 2, set by connect()).
+  // Shadow catchers: the catcher-only estimate's light is its own sum; the full estimate's goes to the
+  // matte and the light passes only from paths that did not meet a catcher (as path.cpp files it).
   template <class Group>  // int, or LightgroupShares
   void add(const Spectrum& c, int s, int t, const Group& group, bool environment = false) {
+    if (catcher_leg_) {
+      out_.catcher += c;
+      return;
+    }
     L_ += c;
     out_.add_lightgroup(group, c);
-    if (s_.light_passes) add_light_part(out_.light, c, s + t - 2, t == 2 ? first_connect_ : first_walk_, environment);
+    if (pre_split_ && s_.shadow_catcher) out_.matte += c;
+    if (s_.light_passes && pre_split_)
+      add_light_part(out_.light, c, s + t - 2, t == 2 ? first_connect_ : first_walk_, environment);
     if (strategies_) {
       int cell = strategy_cell(s, t, s_.strategy_depth);
       if (cell >= 0) strategies_[cell] += c;
@@ -339,6 +351,35 @@ class Bdpt {
   Spectrum L_{0.0f};
   Spectrum* strategies_ = nullptr;
   int connect_group_ = -1;  // the light group of connect()'s light endpoint
+  // Shadow catchers (IntegratorSettings::shadow_catcher; docs/passes.md): the camera walk's segment
+  // that met a catcher through transparent passes only, with the walk's state and sampler there
+  // (the catcher-only estimate starts from it with the same random numbers), and the number of
+  // emitters it had crossed before (the matte's).
+  struct CatcherSplit {
+    Ray ray;
+    Spectrum beta{1.0f};
+    float footprint = 0, film_transparent = 0;
+    int nulls = 0, transparent = 0;
+    size_t crossed = 0;
+    std::optional<Sampler> sampler;
+  };
+  std::optional<CatcherSplit> split_;
+  bool catcher_leg_ = false;  // the catcher-only estimate is running: rays see catchers alone
+  bool pre_split_ = true;     // add(): the contribution's path met no catcher (or not yet)
+  unsigned vis(unsigned visibility) const { return catcher_leg_ ? catcher_only_visibility(visibility) : visibility; }
+  // Whether a camera ray meeting this instance splits there (a catcher, no holdout).
+  bool splits_on(int instance) const {
+    const Instance& in = scene_.geometry.instance(instance);
+    return s_.shadow_catcher && in.shadow_catcher && !in.holdout;
+  }
+  // Whether the path of a t = 1 strategy splits: the camera ray from `lens` to its first vertex qs
+  // meets a catcher (qs itself, or one it passes through). A walk's path splits as the walk found.
+  bool splits_towards(const Vec3& lens, const PathVertex& qs) const {
+    if (!s_.shadow_catcher) return false;
+    if (qs.type == VertexType::Surface && splits_on(qs.sp.instance)) return true;
+    const Vec3 to = qs.type == VertexType::Surface ? spawn_origin(qs.sp, normalize(lens - qs.p)) : qs.p;
+    return scene_.geometry.occluded(spawn_ray_to(lens, to, time_), catcher_only_visibility(kVisCamera));
+  }
   FirstBounce first_walk_, first_connect_;
   // The split of a scattering vertex between its predecessor (v.wo) and direction `to`.
   FirstBounce split_at(const PathVertex& v, const Vec3& to) const {

@@ -82,7 +82,7 @@ std::vector<float> Bdpt::weight_sums() {
         for (int i = 2; i < t2 && reaches; ++i) reaches = cam[i] != 0 || x[i - 1].delta;
         for (int i = t2; i < k && reaches; ++i) reaches = lig[i] != 0 || x[i + 1].delta;
         if (!reaches) continue;
-        if (t2 == 1 && x[1].delta) continue;
+        if (t2 == 1 && (x[1].delta || split_)) continue;  // none where the camera ray meets a catcher
         const PathVertex* sampled = s2 == 1 ? &l2[0] : (t2 == 1 ? &c2[0] : nullptr);
         PathVertex sampled_copy;
         if (sampled) sampled_copy = *sampled;

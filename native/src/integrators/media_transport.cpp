@@ -11,12 +11,14 @@ template <class F>
 void for_each_medium(const Scene& scene, const VolumeStack& stack, F f) {
   for (int i = 0; i < stack.size; ++i)
     if (!scene.media[stack.media[i]].empty()) f(stack.media[i]);
-  for (int m : scene.global_media) f(m);
+  if (stack.global)
+    for (int m : scene.global_media) f(m);
 }
 
 }  // namespace
 
-void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* stack, SampleStats& stats) {
+void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* stack, SampleStats& stats,
+                       unsigned visibility) {
   stack->size = 0;
   Ray r = camera_ray;
   r.tmin = 0;
@@ -25,7 +27,7 @@ void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* s
   for (int i = 0; i < kMaxBoundaryCrossings; ++i) {
     Hit hit;
     ++stats.rays;
-    if (!scene.geometry.intersect(r, kVisAll, &hit)) break;
+    if (!scene.geometry.intersect(r, visibility, &hit)) break;
     SurfacePoint sp = scene.geometry.surface(hit);
     int m = scene.medium_of(sp.material);
     if (m >= 0) {
@@ -38,6 +40,13 @@ void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* s
     }
     r.o = spawn_origin(sp, r.d);
   }
+}
+
+VolumeStack catcher_volume_stack(const Scene& scene, const Ray& ray, SampleStats& stats) {
+  VolumeStack stack;
+  if (scene.has_boundaries()) init_volume_stack(scene, ray, &stack, stats, catcher_only_visibility(kVisAll));
+  stack.global = false;
+  return stack;
 }
 
 void cross_boundary(const Scene& scene, const SurfacePoint& sp, const Vec3& dir, VolumeStack* stack) {

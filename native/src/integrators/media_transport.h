@@ -14,8 +14,15 @@ namespace lt {
 constexpr int kMaxBoundaryCrossings = 1024;
 
 // The media containing the ray's origin: the first boundary of each medium met along the ray is a
-// back face (closed meshes; parity as in pbrt's medium interfaces). Follows the ray to infinity.
-void init_volume_stack(const Scene& scene, const Ray& ray, VolumeStack* stack, SampleStats& stats);
+// back face (closed meshes; parity as in pbrt's medium interfaces). Follows the ray to infinity,
+// seeing the boundaries of objects that rays of kind `visibility` see (a shadow catcher's
+// catcher-only path: catchers' alone, as Cycles' integrator_volume_stack_init).
+void init_volume_stack(const Scene& scene, const Ray& ray, VolumeStack* stack, SampleStats& stats,
+                       unsigned visibility = kVisAll);
+// The stack of a shadow catcher's catcher-only path (or light subpath) from ray.o: the media of
+// catchers alone, no global media (Cycles re-inits the stack at the split, without the world's
+// volume): volumes of other objects, even one around the camera, are not there.
+VolumeStack catcher_volume_stack(const Scene& scene, const Ray& ray, SampleStats& stats);
 
 // Applies a boundary crossing at a surface point by a ray leaving towards `dir` (enter when dir
 // goes against the geometric normal's outside, i.e. into the closed mesh).

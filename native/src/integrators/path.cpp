@@ -32,21 +32,39 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   const LightSet& lights = scene.lights;
   const VolumeEstimator est = s.volume_estimator;
   const float step = s.volume_step;
-  Spectrum L(0.0f), beta(1.0f);
+  Spectrum L(0.0f);
   float transparent = 0;  // of the film, 1 - alpha (Cycles accumulates it so; hold_out)
-  Ray ray = camera_ray;
-  unsigned visibility = kVisCamera;
-  Bounces b;
-  int nulls = 0;
-  // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
-  float prev_pdf = 0;
-  bool prev_delta = true;
-  float min_pdf = INFINITY;           // Cycles' min_ray_pdf: the smallest pdf of the bounces so far (Bevel)
-  Vec3 prev_p = ray.o, prev_n(0.0f);  // prev_n: the geometric normal there (zero in a medium)
-  float t_prev = 0;                   // distance from prev_p to ray.o (the ray crossed invisible boundaries)
-  // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
-  float footprint = cs.dP;
-  VolumeStack stack;
+  // The path's state along its segments, in one struct so that a shadow catcher's split copies it
+  // whole (below); the names bind to its members.
+  struct State {
+    Ray ray;
+    Spectrum beta{1.0f};
+    unsigned visibility = kVisCamera;
+    Bounces b;
+    int nulls = 0;
+    // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
+    float prev_pdf = 0;
+    bool prev_delta = true;
+    float min_pdf = INFINITY;  // Cycles' min_ray_pdf: the smallest pdf of the bounces so far (Bevel)
+    Vec3 prev_p, prev_n{0.0f};  // prev_n: the geometric normal there (zero in a medium)
+    float t_prev = 0;           // distance from prev_p to ray.o (the ray crossed invisible boundaries)
+    // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
+    float footprint = 0;
+    VolumeStack stack;
+  } state;
+  state.ray = camera_ray;
+  state.prev_p = camera_ray.o;
+  state.footprint = cs.dP;
+  Ray& ray = state.ray;
+  Spectrum& beta = state.beta;
+  unsigned& visibility = state.visibility;
+  Bounces& b = state.b;
+  int& nulls = state.nulls;
+  float &prev_pdf = state.prev_pdf, &t_prev = state.t_prev, &footprint = state.footprint,
+        &min_pdf = state.min_pdf;
+  bool& prev_delta = state.prev_delta;
+  Vec3 &prev_p = state.prev_p, &prev_n = state.prev_n;
+  VolumeStack& stack = state.stack;
   if (kMedia && scene.has_boundaries()) init_volume_stack(scene, camera_ray, &stack, stats);
   Bsdf bsdf;
   // Shadow catchers: whether the path has split (Cycles' PATH_RAY_SHADOW_CATCHER_HIT), whether this
@@ -56,25 +74,13 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   bool split = false, catcher_leg = false;
   float matte_transparent = 0;
   struct Snapshot {
-    Ray ray;
-    Spectrum beta;
-    unsigned visibility;
-    Bounces b;
-    int nulls;
-    float prev_pdf, t_prev, footprint, min_pdf;
-    bool prev_delta;
-    Vec3 prev_p, prev_n;
-    VolumeStack stack;
+    State state;
     Sampler sampler;
   };
   std::optional<Snapshot> snap;
   // The world the camera ray sees along `r` (Cycles' background pass, for the approximate matte).
   auto add_background = [&](const Ray& r, const Spectrum& w, unsigned vis) {
-    if (!catchers || !s.shadow_catcher_approximate || s.transparent_background) return;
-    if (lights.world_light() < 0 || !scene.world.camera_visible) return;
-    ShadingContext wc = world_context(r.d);
-    describe_ray(b, vis, &wc);
-    out.background += w * scene.world.radiance(wc);
+    if (catchers) out.background += w * catcher_background(scene, s, r.d, b, vis);
   };
 
   // Light passes (light_passes.h): the first scattering vertex's split, and at the vertex being
@@ -124,9 +130,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (li < 0 || !(pmf > 0) || !lights.sample(scene, li, p, u, &ls, time) || !(ls.pdf > 0) || is_black(ls.radiance))
       return;
     // The catcher-only path leaves out the emission of other objects (Cycles' light_distribution_sample).
-    if (catcher_leg && lights.light(li).type == LightType::Triangle &&
-        !scene.geometry.instance(lights.light(li).instance).shadow_catcher)
-      return;
+    if (catcher_leg && !lights_catchers(scene, li)) return;
     const unsigned shadow_vis = catcher_leg ? catcher_only_visibility(kVisShadow) : kVisShadow;
     float scatter_pdf;
     Spectrum fv = f(ls.wi, &scatter_pdf, excluded_kinds(scene.light_visibility(li)));
@@ -153,9 +157,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       Hit hit;
       ++stats.rays;
       // Only a scene with catchers keeps the state of each camera segment, for a split.
-      if (catchers && !split && b.total == 0)
-        snap = Snapshot{ray,       beta,    visibility, b,      nulls,  prev_pdf, t_prev,
-                        footprint, min_pdf, prev_delta, prev_p, prev_n, stack,    sampler};
+      if (catchers && !split && b.total == 0) snap = Snapshot{state, sampler};
       bool found = scene.geometry.intersect(ray, catcher_leg ? catcher_only_visibility(visibility) : visibility, &hit);
       const float t_end = found ? hit.t : ray.tmax;
       // Cycles' integrator_split_shadow_catcher: before the segment's volume and the surface are
@@ -367,20 +369,9 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (!split || catcher_leg) break;
     // The catcher-only path, from the segment that met the catcher.
     catcher_leg = true;
-    ray = snap->ray;
-    beta = snap->beta;
-    visibility = snap->visibility;
-    b = snap->b;
-    nulls = snap->nulls;
-    prev_pdf = snap->prev_pdf;
-    t_prev = snap->t_prev;
-    footprint = snap->footprint;
-    min_pdf = snap->min_pdf;
-    prev_delta = snap->prev_delta;
-    prev_p = snap->prev_p;
-    prev_n = snap->prev_n;
-    stack = snap->stack;
+    state = snap->state;
     sampler = snap->sampler;
+    if constexpr (kMedia) stack = catcher_volume_stack(scene, ray, stats);
   }
   out.radiance = L;
   out.alpha = 1 - transparent;

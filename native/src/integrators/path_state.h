@@ -127,6 +127,24 @@ inline void describe_ray(const Bounces& b, unsigned visibility, ShadingContext* 
   c->transmission_depth = b.of(BounceKind::Transmission);
 }
 
+// Shadow catchers (integrators/path.cpp, bdpt.cpp): the world a camera ray (bounces b, kind
+// `visibility`) sees along `dir`, kept for the approximate matte over an opaque film (Cycles'
+// background pass); zero when that matte does not use it.
+inline Spectrum catcher_background(const Scene& scene, const IntegratorSettings& s, const Vec3& dir, const Bounces& b,
+                                   unsigned visibility) {
+  if (!s.shadow_catcher || !s.shadow_catcher_approximate || s.transparent_background) return Spectrum(0.0f);
+  if (scene.lights.world_light() < 0 || !scene.world.camera_visible) return Spectrum(0.0f);
+  ShadingContext wc = world_context(dir);
+  describe_ray(b, visibility, &wc);
+  return scene.world.radiance(wc);
+}
+// Whether light li shines in the scene a catcher-only path sees: lamps, the world and the
+// emission of catchers, not that of other objects (Cycles' light_distribution_sample).
+inline bool lights_catchers(const Scene& scene, int li) {
+  const Light& l = scene.lights.light(li);
+  return l.type != LightType::Triangle || scene.geometry.instance(l.instance).shadow_catcher;
+}
+
 // Cycles' integrate_surface_holdout (integrator/shade_surface.h): at a surface that a camera path
 // reaches through transparent passes only (Cycles' PATH_RAY_TRANSPARENT_BACKGROUND; with Film >
 // Transparent or not), the holdout weight times the throughput becomes transparency of the film

@@ -77,6 +77,8 @@ void recompute_catcher_passes(const ExrImage& ref, const std::vector<double>& co
     }
   std::vector<float>* combined[4] = {merged("R"), merged("G"), merged("B"), merged("A")};
   std::vector<float>* pass[3] = {merged("ShadowCatcher.R"), merged("ShadowCatcher.G"), merged("ShadowCatcher.B")};
+  // BDPT's splats, merged over the light paths (CatcherPixel::splat).
+  std::vector<float>* splat[3] = {merged("LightTracing.R"), merged("LightTracing.G"), merged("LightTracing.B")};
   for (size_t i = 0; i < count.size(); ++i) {
     CatcherPixel m;
     for (int k = 0; k < 3; ++k) {
@@ -87,6 +89,7 @@ void recompute_catcher_passes(const ExrImage& ref, const std::vector<double>& co
     m.alpha = (*in[kCatcherCombined][3])[i];
     for (int k = 0; k < 4; ++k) m.matte[k] = (*in[kCatcherMatte][k])[i];
     m.split = (*in[kCatcherSplit][0])[i];
+    for (int k = 0; k < 3; ++k) m.splat[k] = splat[k] ? (*splat[k])[i] : 0.0;
     float rgba[4] = {0, 0, 0, 0};
     if (count[i] > 0) catcher_combined(m, approximate, transparent_film, rgba);
     for (int k = 0; k < 4; ++k)
@@ -366,7 +369,8 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
       for (size_t i = 0; i < n; ++i) {
         const double cp = c_p[i];
         if (cp <= 0) continue;
-        const double m = double(rgb[c][i]) - (light ? double(lt[c][i]) : 0.0);
+        // The camera samples' mean: Combined less the splats (CatcherCombined holds none).
+        const double m = double(rgb[c][i]) - (light && !catcher ? double(lt[c][i]) : 0.0);
         const double ss = var[c] && cp > 1 ? (cp - 1) * cp * double(var[c][i]) : 0.0;
         const double before = count[i], after = before + cp, delta = m - cam_mean[3 * i + c];
         cam_mean[3 * i + c] += delta * cp / after;

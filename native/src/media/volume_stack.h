@@ -9,6 +9,10 @@ struct VolumeStack {
   int media[kCapacity];
   int groups[kCapacity];  // the light group of the object whose boundary entered each (its emission's)
   int size = 0;
+  // Whether the scene's global media (Volume objects, the World volume) fill the ray's space too: not
+  // on a shadow catcher's catcher-only path, in a scene without the other objects and the world's
+  // volume (Cycles' integrator_volume_stack_init for SHADOW_CATCHER_PASS paths).
+  bool global = true;
 
   // Front face (ray against the geometric normal): enter; back face: leave one occurrence (of the
   // same object's group if there is one).
