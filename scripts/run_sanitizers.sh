@@ -44,7 +44,8 @@ if [[ " $STEPS " == *" asan "* ]]; then
   # Two shards in parallel (one per core). Left out: the long statistical tests (15-70 s each in
   # Release, several times that under ASan), whose code shorter tests run: BDPT's agreement tests
   # and MIS sums over many paths (MisWeightsSumToOneWithALens, LightTree.BdptMisWeightsSumToOne;
-  # panoramas' projection in DepthOfFieldAndPanoramasAgreeWithPathTracing and the camera tests),
+  # panoramas' projection in DepthOfFieldAndPanoramasAgreeWithPathTracing and the camera tests;
+  # orthographic light tracing in the camera tests; the BDPT catcher in ShadowCatcher's matte test),
   # the lobes' furnace and chi-square loops (BsdfSanity, HairLobes.WhiteFurnace, PhaseHG at
   # g = -0.5 ... 0.5), the rough-metal furnace render (ApiFurnace's other renders).
   SLOW="Bdpt.AgreesWithVolumetricPathTracingInMedia:Bdpt.FullBdptAgreesWithPathTracing"
@@ -52,6 +53,8 @@ if [[ " $STEPS " == *" asan "* ]]; then
   SLOW+=":Bdpt.MisWeightsSumToOne:BsdfFurnace.NewLobesConserveEnergy:HairLobes.SamplesFollowPdf"
   SLOW+=":ApiFurnace.RoughMetalSphereReflectsAsCyclesPerBounce:PhaseHG/PhaseChi2.SamplingFollowsPdf/0"
   SLOW+=":PhaseHG/PhaseChi2.SamplingFollowsPdf/4:Bdpt.MisWeightsSumToOneWithPanoramas"
+  SLOW+=":Bdpt.OrthographicAgreesWithPathTracing:Bdpt.MisWeightsSumToOneWithOrthographicCameras"
+  SLOW+=":ShadowCatcher.BidirectionalAgreesWithPathTracing"
   pids=()
   for shard in 0 1; do
     GTEST_TOTAL_SHARDS=2 GTEST_SHARD_INDEX=$shard "$ASAN_DIR/lantern_tests" --gtest_brief=1 \
