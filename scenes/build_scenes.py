@@ -1252,6 +1252,22 @@ def build_displaced(scene):
     add_camera(scene, (0, -4.0, 1.8), (0, 0.2, 0.4), lens=40.0)
 
 
+def build_terminator(scene):
+    """Cycles' shadow terminator Geometry Offset at its default (0.1): a low-poly smooth UV sphere
+    (16 segments, 8 rings) and a smooth-shaded cube on a floor, lit from low at the side by a small
+    point lamp, so that the camera sees their terminators, where shadow rays from the flat
+    triangles graze their neighbours."""
+    floor = add_object(scene, "TermFloor", mesh_plane("TermFloor", 8.0))
+    assign(floor, diffuse("TermFloorGrey", (0.5, 0.5, 0.5)))
+    sphere = add_object(scene, "TermSphere", mesh_sphere("TermSphere", 0.5, segments=16, rings=8), (-0.6, 0.0, 0.5))
+    assign(sphere, diffuse("TermSphereWhite", (0.8, 0.8, 0.8)))
+    cube = add_object(scene, "TermCube", _smooth(mesh_box("TermCube", (0.7, 0.7, 0.7)), True), (0.65, 0.3, 0.0),
+                      (0, 0, 30))
+    assign(cube, diffuse("TermCubeOrange", (0.8, 0.5, 0.3)))
+    add_light(scene, "TermLamp", "POINT", 600.0, (3.0, -1.5, 0.9), radius=0.1)
+    add_camera(scene, (0.0, -4.0, 1.4), (0.0, 0.0, 0.4), lens=45.0)
+
+
 def build_instanced(scene):
     set_world(scene, (0.05, 0.05, 0.05), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
@@ -1991,6 +2007,7 @@ SCENES = {
     "normal_mapped": (build_normal_mapped, (96, 96), 128),
     "tilted_metal": (build_tilted_metal, (96, 48), 128),
     "displaced": (build_displaced, (96, 96), 128),
+    "terminator": (build_terminator, (96, 64), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),

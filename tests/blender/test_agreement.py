@@ -177,6 +177,30 @@ def test_displaced_scene_agrees_with_cycles(integrator, scene_factory, outdir):
 
 
 @pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_shadow_terminator_offset_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Cycles' per-object shadow terminator Geometry Offset at its default 0.1 (scenes: terminator;
+    a 16-segment smooth sphere and a smooth cube under a low point lamp): per tile and in the image
+    mean as above. BIDIRECTIONAL offsets its s = 1 connections only (README, departures)."""
+    both = lantern_and_cycles(scene_factory, "terminator", integrator)
+    report, _ = ru.agreement_report("terminator_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
+def test_shadow_terminator_scene_needs_the_offset(scene_factory, outdir):
+    """The check above can fail: Lantern with the Geometry Offset 0 on both objects (the shadow
+    rays start on the flat triangles, as before the offset was supported) against Cycles' default."""
+    import bpy
+    scene = scene_factory("terminator")
+    for name in ("TermSphere", "TermCube"):
+        bpy.data.objects[name].cycles.shadow_terminator_geometry_offset = 0.0
+    off = [ru.render(scene, ru.LANTERN, samples_of("terminator"), seed=s).combined for s in (0, 1)]
+    report, _ = ru.agreement_report("terminator_off", off, runs(scene_factory, "terminator", ru.CYCLES), outdir,
+                                    TILE, ROUNDING)
+    assert report != ""
+
+
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
 def test_every_new_shader_node_agrees_with_cycles_when_lit(integrator, scene_factory, outdir):
     """Issue 13: "agreement with Cycles in lit scenes for PATH and BIDIRECTIONAL" of each BSDF
     (bsdf_zoo: Velvet, Translucent, Beckmann glass, Anisotropic GGX, Beckmann and

@@ -641,7 +641,8 @@ void Geometry::object_corner_normals(const Mesh& m, int prim, float time, Vec3 n
   for (int k = 0; k < 3; ++k) n[k] = lerp(u, a[k], b[k]);
 }
 
-Vec3 Geometry::shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& ng, const Vec3& wi) const {
+Vec3 Geometry::shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& ng, const Vec3& wi, bool* moved) const {
+  if (moved) *moved = false;
   const Instance& inst = instances_[size_t(sp.instance)];
   const Mesh& m = meshes_[size_t(inst.mesh)];
   const float cutoff = inst.terminator_geometry;
@@ -674,7 +675,9 @@ Vec3 Geometry::shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& 
     offset = pose.xf.vector(smooth_surface_offset(v, cn, sp.bary.x, sp.bary.y, side_object));
   }
   const Vec3 p = sp.p + offset * amount;
-  return is_finite(p) ? offset_ray_origin(p, dot(wi, sp.ng) >= 0 ? sp.ng : -sp.ng) : spawn_origin(sp, wi);
+  if (!is_finite(p)) return spawn_origin(sp, wi);
+  if (moved) *moved = true;
+  return offset_ray_origin(p, dot(wi, sp.ng) >= 0 ? sp.ng : -sp.ng);
 }
 
 SurfacePoint Geometry::surface(const Hit& hit) const {

@@ -173,8 +173,12 @@ class Geometry {
   // The origin of a next-event shadow ray from sp towards wi: spawn_origin, moved first by the
   // instance's shadow terminator Geometry Offset on smooth-shaded triangles (Cycles'
   // shadow_ray_offset, geometry/terminator.h). n, ng: the shading normal (after a displacement's
-  // bump) and geometric normal facing the incoming ray (Cycles' sd->N, sd->Ng).
-  Vec3 shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& ng, const Vec3& wi) const;
+  // bump) and geometric normal facing the incoming ray (Cycles' sd->N, sd->Ng). *moved: whether
+  // the offset applied; the shadow ray then also decides which side of the triangle's plane the
+  // light may lie on (Cycles evaluates the BSDF without a geometric test): the origin may sit
+  // above the plane of a light just below it, which the offset exists to let through.
+  Vec3 shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& ng, const Vec3& wi,
+                     bool* moved = nullptr) const;
   // The instance's transform at time (0 .. 1 over the shutter).
   Pose pose(int instance, float time) const;
   // Whether anything moves or deforms (the render then draws a time per camera sample), and how

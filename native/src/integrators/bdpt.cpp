@@ -677,12 +677,14 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
     sampled.n = ls.n;
     sampled.beta = ls.radiance / (pmf * ls.pdf);
-    Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis)) * sampled.beta * cos_at(pt, ls.wi);
-    if (is_black(c)) return c;
     // The shadow terminator offset applies here, where the path tracer's next-event estimation
     // would apply it, and to no other connection (README, departures).
+    bool offset = false;
     const Vec3 origin =
-        pt.type == VertexType::Surface ? scene_.geometry.shadow_origin(pt.sp, pt.ns, pt.n, ls.wi) : pt.p;
+        pt.type == VertexType::Surface ? scene_.geometry.shadow_origin(pt.sp, pt.ns, pt.n, ls.wi, &offset) : pt.p;
+    Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis), offset) * sampled.beta *
+                 cos_at(pt, ls.wi);
+    if (is_black(c)) return c;
     c *= transmittance(pt, shadow_ray(origin, ls, time_), kVisShadow);
     if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);

@@ -142,11 +142,12 @@ class Bdpt {
   // ---- scattering ----------------------------------------------------------------------------
   // BSDF towards `to` at a vertex, with pbrt's shading-normal correction for importance transport.
   // excluded: lobes the light the path ends on leaves out (excluded_kinds; at the vertex next to it).
-  Spectrum f(const PathVertex& v, const Vec3& to_world, Mode mode, unsigned excluded = 0) const {
+  // any_side: the shadow ray decides the geometric side (a shadow terminator offset, s = 1).
+  Spectrum f(const PathVertex& v, const Vec3& to_world, Mode mode, unsigned excluded = 0, bool any_side = false) const {
     if (v.type == VertexType::Medium) return Spectrum(phase(v).eval(v.wo, to_world));
     if (v.type != VertexType::Surface) return Spectrum(0.0f);
     Vec3 wi = v.frame.to_local(to_world);
-    if ((dot(to_world, v.n) > 0) != (wi.z > 0)) return Spectrum(0.0f);  // shading normal would leak
+    if (!any_side && (dot(to_world, v.n) > 0) != (wi.z > 0)) return Spectrum(0.0f);  // shading normal would leak
     Spectrum r = v.bsdf.eval(v.wo, wi, nullptr, excluded);
     if (mode == Mode::Importance) r *= shading_correction(v, v.frame.to_world(v.wo), to_world);
     return r;
