@@ -187,6 +187,14 @@ def test_shadow_terminator_offset_agrees_with_cycles(integrator, scene_factory, 
     assert report == "", report
 
 
+def test_shadow_terminator_shading_offset_agrees_with_cycles(scene_factory, outdir):
+    """The Shading Offset (0.6 on both objects of the terminator scene: Cycles' cosine remap with
+    frequency 1 / (1 - 0.3)), path tracing, per tile and in the image mean as above."""
+    both = lantern_and_cycles(scene_factory, "terminator_shading", "PATH")
+    report, _ = ru.agreement_report("terminator_shading", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
 def test_shadow_terminator_scene_needs_the_offset(scene_factory, outdir):
     """The check above can fail: Lantern with the Geometry Offset 0 on both objects (the shadow
     rays start on the flat triangles, as before the offset was supported) against Cycles' default."""

@@ -19,6 +19,7 @@ def terminator_of(obj):
     return (float(getattr(c, "shadow_terminator_geometry_offset", TERMINATOR_DEFAULT[0])),
             float(getattr(c, "shadow_terminator_offset", TERMINATOR_DEFAULT[1])))
 
+
 # Object types Blender can turn into a mesh with to_mesh().
 CONVERTIBLE_TYPES = {'CURVE', 'SURFACE', 'FONT', 'META'}
 

@@ -682,8 +682,8 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     bool offset = false;
     const Vec3 origin =
         pt.type == VertexType::Surface ? scene_.geometry.shadow_origin(pt.sp, pt.ns, pt.n, ls.wi, &offset) : pt.p;
-    Spectrum c = pt.beta * f(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis), offset) * sampled.beta *
-                 cos_at(pt, ls.wi);
+    Spectrum c =
+        pt.beta * f(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis), offset) * sampled.beta * cos_at(pt, ls.wi);
     if (is_black(c)) return c;
     c *= transmittance(pt, shadow_ray(origin, ls, time_), kVisShadow);
     if (is_black(c)) return c;

@@ -112,10 +112,10 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     return power_heuristic(prev_pdf, light_pdf);
   };
   // NEE from p (a medium point when sp is null): one light picked by the light tree at p, MIS-weighted
-  // against the scattering; f(wi, &pdf, excluded, offset) returns the BSDF x cos or phase value. `st` is the volume stack on
-  // the side the path arrived from, whose geometric normal is `side`: a shadow ray leaving
-  // through the surface crosses it (one on that side must not enter the surface's medium again).
-  // n: the shading normal facing the ray there (the shadow terminator offset reads it).
+  // against the scattering; f(wi, &pdf, excluded, offset) returns the BSDF x cos or phase value. `st` is the volume
+  // stack on the side the path arrived from, whose geometric normal is `side`: a shadow ray leaving through the surface
+  // crosses it (one on that side must not enter the surface's medium again). n: the shading normal facing the ray there
+  // (the shadow terminator offset reads it).
   auto next_event = [&](const Vec3& p, const SurfacePoint* sp, const Vec3& side, const Vec3& n, const VolumeStack& st,
                         auto f) {
     float pmf;
@@ -311,21 +311,22 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         if (b.exceeded(s)) break;
 
         if (bsdf.has_non_delta() && !lights.empty())
-          next_event(sp.p, &sp, ng, ctx.N, stack, [&](const Vec3& wi_world, float* pdf, unsigned excluded, bool offset) {
-            Vec3 wi = frame.to_local(wi_world);
-            Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
-            // The geometric normal decides which side the light is on; shading normals only shade
-            // (but for a shadow terminator offset, whose shadow ray decides).
-            if (!offset && (dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
-            if (s.light_passes && b.total == 0) {
-              Spectrum kinds[3];
-              bsdf.eval_kinds(wo, wi, kinds);
-              for (int k = 0; k < 3; ++k)
-                if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
-              nee_first.set_surface(kinds);
-            }
-            return f * std::abs(wi.z);
-          });
+          next_event(sp.p, &sp, ng, ctx.N, stack,
+                     [&](const Vec3& wi_world, float* pdf, unsigned excluded, bool offset) {
+                       Vec3 wi = frame.to_local(wi_world);
+                       Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
+                       // The geometric normal decides which side the light is on; shading normals only shade
+                       // (but for a shadow terminator offset, whose shadow ray decides).
+                       if (!offset && (dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
+                       if (s.light_passes && b.total == 0) {
+                         Spectrum kinds[3];
+                         bsdf.eval_kinds(wo, wi, kinds);
+                         for (int k = 0; k < 3; ++k)
+                           if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
+                         nee_first.set_surface(kinds);
+                       }
+                       return f * std::abs(wi.z);
+                     });
 
         // Continue the path by sampling the BSDF.
         BsdfSample bs;
