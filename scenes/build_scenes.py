@@ -1384,11 +1384,29 @@ def build_true_displaced(scene):
                                               noise_scale=2.5))
     # Cycles' shadow terminator geometry offset (default 0.1) moves shadow rays off smooth
     # triangles whose normals lean away from their faces, as Displacement and Bump's undisplaced
-    # normals do on displaced faces; Lantern does not (README): off here.
+    # normals do on displaced faces; off here, so that the test checks the displacement alone.
     for obj in (ground, sphere, pebble):
         obj.cycles.shadow_terminator_geometry_offset = 0.0
     add_light(scene, "Sun", "SUN", 3.0, (0, 0, 5), rotation=(60, 0, 40), angle=math.radians(1.0))
     add_camera(scene, (0, -3.6, 2.2), (0, 0.2, 0.4), lens=40.0)
+
+
+def build_terminator(scene, shading_offset=None):
+    """Cycles' shadow terminator Geometry Offset at its default (0.1): a low-poly smooth UV sphere
+    (16 segments, 8 rings) and a smooth-shaded cube on a floor, lit from low at the side by a small
+    point lamp, so that the camera sees their terminators, where shadow rays from the flat
+    triangles graze their neighbours. shading_offset: the objects' Shading Offset (default 0)."""
+    floor = add_object(scene, "TermFloor", mesh_plane("TermFloor", 8.0))
+    assign(floor, diffuse("TermFloorGrey", (0.5, 0.5, 0.5)))
+    sphere = add_object(scene, "TermSphere", mesh_sphere("TermSphere", 0.5, segments=16, rings=8), (-0.6, 0.0, 0.5))
+    assign(sphere, diffuse("TermSphereWhite", (0.8, 0.8, 0.8)))
+    cube = add_object(scene, "TermCube", _smooth(mesh_box("TermCube", (0.7, 0.7, 0.7)), True), (0.65, 0.3, 0.0),
+                      (0, 0, 30))
+    assign(cube, diffuse("TermCubeOrange", (0.8, 0.5, 0.3)))
+    if shading_offset is not None:
+        sphere.cycles.shadow_terminator_offset = cube.cycles.shadow_terminator_offset = shading_offset
+    add_light(scene, "TermLamp", "POINT", 600.0, (3.0, -1.5, 0.9), radius=0.1)
+    add_camera(scene, (0.0, -4.0, 1.4), (0.0, 0.0, 0.4), lens=45.0)
 
 
 def build_instanced(scene):
@@ -2200,6 +2218,8 @@ SCENES = {
     "tilted_metal": (build_tilted_metal, (96, 48), 128),
     "displaced": (build_displaced, (96, 96), 128),
     "true_displaced": (build_true_displaced, (96, 96), 128),
+    "terminator": (build_terminator, (96, 64), 128),
+    "terminator_shading": (lambda scene: build_terminator(scene, shading_offset=0.6), (96, 64), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "layered_material": (build_layered_material, (96, 64), 128),

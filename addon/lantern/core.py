@@ -235,6 +235,8 @@ class InstanceDesc(ctypes.Structure):
         ("holdout", ctypes.c_int),
         ("lightgroup", ctypes.c_int),
         ("shadow_catcher", ctypes.c_int),
+        ("shadow_terminator_geometry_offset", ctypes.c_float),
+        ("shadow_terminator_shading_offset", ctypes.c_float),
     ]
 
 
@@ -874,9 +876,10 @@ class Scene:
 
     def add_instance(self, mesh, transform, materials=(), visibility=VISIBLE_ALL, color=(1.0, 1.0, 1.0, 1.0),
                      pass_index=0, random_id=0, attributes=(), motion=None, cryptomatte=(0, 0), holdout=False,
-                     lightgroup=0, shadow_catcher=False):
+                     lightgroup=0, shadow_catcher=False, terminator=(0.0, 0.0)):
         """color: Object.color; random_id: the uint32 Cycles hashes into Object Info's Random;
         holdout: a holdout object (Object.holdout_get); shadow_catcher: Object.is_shadow_catcher;
+        terminator: the shadow terminator's (geometry offset, shading offset), each in [0, 1];
         lightgroup: 0 none, k the light group k - 1;
         attributes: (id, 4 floats) of the object's attributes; motion: the transforms (3x4 or 4x4
         each) at the motion steps over the shutter; cryptomatte: the object's and its asset's
@@ -891,6 +894,7 @@ class Scene:
         d.holdout = int(bool(holdout))
         d.lightgroup = int(lightgroup)
         d.shadow_catcher = int(bool(shadow_catcher))
+        d.shadow_terminator_geometry_offset, d.shadow_terminator_shading_offset = (float(x) for x in terminator)
         if attributes:
             ids = _i32([int(i) for i, _ in attributes], "attribute ids")
             values = _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values")

@@ -9,8 +9,7 @@ import bpy
 import numpy as np
 
 from . import core
-from .export import (export_lights, export_scene, holdout_of, instance_key, lightgroup_indices, lightgroup_of,
-                     shadow_catcher_of)
+from .export import NO_FLAGS, export_lights, export_scene, instance_flags, instance_key, lightgroup_indices
 from .export.camera import camera_table, export_camera
 
 _GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
@@ -141,9 +140,8 @@ class SceneSync:
                     return None  # an instance that was not exported
                 continue
             seen += 1
-            if ((holdout_of(inst, view_layer), lightgroup_of(inst, groups), shadow_catcher_of(inst))
-                    != flags.get(key, (False, 0, False))):
-                return None  # holdout, light group or shadow catcher changed: the instance is added anew
+            if instance_flags(inst, view_layer, groups) != flags.get(key, NO_FLAGS):
+                return None  # holdout, light group, catcher or terminator changed: the instance is added anew
             core_id, old = entry
             matrix = np.array(inst.matrix_world, dtype=np.float32)
             if core_id is not None and not np.array_equal(matrix, old):

@@ -189,6 +189,59 @@ def test_true_displacement_agrees_with_cycles(scene_factory, outdir):
 
 
 @pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
+def test_shadow_terminator_offset_agrees_with_cycles(integrator, scene_factory, outdir):
+    """Cycles' per-object shadow terminator Geometry Offset at its default 0.1 (scenes: terminator;
+    a 16-segment smooth sphere and a smooth cube under a low point lamp): per tile and in the image
+    mean as above. BIDIRECTIONAL offsets its s = 1 connections only (README, departures)."""
+    both = lantern_and_cycles(scene_factory, "terminator", integrator)
+    report, _ = ru.agreement_report("terminator_" + integrator, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
+def test_shadow_terminator_shading_offset_agrees_with_cycles(scene_factory, outdir):
+    """The Shading Offset (0.6 on both objects of the terminator scene: Cycles' cosine remap with
+    frequency 1 / (1 - 0.3)), path tracing, per tile and in the image mean as above."""
+    both = lantern_and_cycles(scene_factory, "terminator_shading", "PATH")
+    report, _ = ru.agreement_report("terminator_shading", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
+def test_shadow_terminator_scene_needs_the_offset(scene_factory, outdir):
+    """The check above can fail: Lantern with the Geometry Offset 0 on both objects (the shadow
+    rays start on the flat triangles, as before the offset was supported) against Cycles' default."""
+    import bpy
+    scene = scene_factory("terminator")
+    for name in ("TermSphere", "TermCube"):
+        bpy.data.objects[name].cycles.shadow_terminator_geometry_offset = 0.0
+    off = [ru.render(scene, ru.LANTERN, samples_of("terminator"), seed=s).combined for s in (0, 1)]
+    report, _ = ru.agreement_report("terminator_off", off, runs(scene_factory, "terminator", ru.CYCLES), outdir,
+                                    TILE, ROUNDING)
+    assert report != ""
+
+
+def test_shadow_terminator_change_between_frames_exports_the_scene_anew(scene_factory, tmp_path):
+    """Persistent Data keeps the core scene between frames (scene_sync.py): a sphere whose
+    Geometry Offset changes there is added anew (as a holdout change is, test_holdout.py)."""
+    import bpy
+    from lantern import engine
+    scene = scene_factory("terminator")
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    settings = scene.objects["TermSphere"].cycles
+    for frame, offset in ((1, 0.1), (2, 0.0)):
+        settings.shadow_terminator_geometry_offset = offset
+        settings.keyframe_insert("shadow_terminator_geometry_offset", frame=frame)
+    scene.frame_start, scene.frame_end = 1, 2
+    ru.configure(scene, ru.LANTERN, 4, 0)
+    ru._exr_settings(scene)
+    scene.render.use_persistent_data = True
+    scene.render.filepath = str(tmp_path / "anim_")
+    bpy.ops.render.render(animation=True, scene=scene.name)
+    scene.render.use_persistent_data = False
+    assert engine.LAST_RENDER["scene_sync"]["full_exports"] == 2, engine.LAST_RENDER["scene_sync"]
+
+
+@pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])
 def test_every_new_shader_node_agrees_with_cycles_when_lit(integrator, scene_factory, outdir):
     """Issue 13: "agreement with Cycles in lit scenes for PATH and BIDIRECTIONAL" of each BSDF
     (bsdf_zoo: Velvet, Translucent, Beckmann glass, Anisotropic GGX, Beckmann and

@@ -7,7 +7,7 @@ from .camera import camera_table, export_camera
 from .hair import hair_systems, warn_curve_shape
 from .light import export_light
 from .material import ImageExporter, MaterialExporter
-from .mesh import CONVERTIBLE_TYPES, MeshExporter
+from .mesh import CONVERTIBLE_TYPES, TERMINATOR_DEFAULT, MeshExporter, terminator_of
 from .volume import export_volume
 from .world import ao_distance, export_world, export_world_volume
 
@@ -38,6 +38,16 @@ def holdout_of(inst, view_layer):
     its own flag or its holdout collection's (Object.holdout_get)."""
     owner = inst.parent if inst.is_instance and inst.parent is not None else inst.object
     return bool(owner.holdout_get(view_layer=view_layer))
+
+
+# What an instance carries besides its geometry, materials and transform (scene_sync adds an
+# instance anew when it changes): holdout, light group, shadow catcher, shadow terminator.
+NO_FLAGS = (False, 0, False, TERMINATOR_DEFAULT)
+
+
+def instance_flags(inst, view_layer, groups):
+    return (holdout_of(inst, view_layer), lightgroup_of(inst, groups), shadow_catcher_of(inst),
+            terminator_of(inst.object))
 
 
 def shadow_catcher_of(inst):
@@ -126,18 +136,17 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     instances = {}  # instance_key -> (core instance id or None for no geometry, matrix)
     has_mesh_instance = set()
     hair = 0
-    flags = {}  # instance_key -> (holdout, light group, shadow catcher) where not (False, 0, False)
+    flags = {}  # instance_key -> instance_flags where not NO_FLAGS
     catchers = 0
     view_layer = depsgraph.view_layer_eval
     for inst in depsgraph.object_instances:
         obj = inst.object
         t = obj.type
-        holdout = holdout_of(inst, view_layer)
-        lightgroup = lightgroup_of(inst, groups)
-        catcher = shadow_catcher_of(inst)
+        inst_flags = instance_flags(inst, view_layer, groups)
+        holdout, lightgroup, catcher, _ = inst_flags
         catchers += catcher and inst.show_self and (t in ('MESH', 'CURVES', 'POINTCLOUD') or t in CONVERTIBLE_TYPES)
-        if holdout or lightgroup or catcher:
-            flags[instance_key(inst)] = (holdout, lightgroup, catcher)
+        if inst_flags != NO_FLAGS:
+            flags[instance_key(inst)] = inst_flags
         if t == 'MESH' and inst.show_particles and hair_systems(obj):
             if not hair:
                 warn_curve_shape(depsgraph, report)

@@ -6,6 +6,20 @@ from .light import visibility_bits
 from .names import core_call, transform_problem
 from .nodes.attributes import object_random_id
 
+# Cycles' defaults of Object.cycles.shadow_terminator_geometry_offset and shadow_terminator_offset.
+TERMINATOR_DEFAULT = (0.1, 0.0)
+
+
+def terminator_of(obj):
+    """Cycles' shadow terminator settings of an object (Object Properties > Shading):
+    (Geometry Offset, Shading Offset), Cycles' defaults where its settings are absent."""
+    c = getattr(obj, "cycles", None)
+    if c is None:
+        return TERMINATOR_DEFAULT
+    return (float(getattr(c, "shadow_terminator_geometry_offset", TERMINATOR_DEFAULT[0])),
+            float(getattr(c, "shadow_terminator_offset", TERMINATOR_DEFAULT[1])))
+
+
 # Object types Blender can turn into a mesh with to_mesh().
 CONVERTIBLE_TYPES = {'CURVE', 'SURFACE', 'FONT', 'META'}
 
@@ -301,7 +315,7 @@ class MeshExporter:
                              pass_index=obj.pass_index, random_id=random_id,
                              attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion,
                              cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
-                             shadow_catcher=shadow_catcher,
+                             shadow_catcher=shadow_catcher, terminator=terminator_of(obj),
                              lightgroup=lightgroup)
         if instance is not None:
             self.instance_count += 1
@@ -346,7 +360,7 @@ class MeshExporter:
                              pass_index=obj.pass_index, random_id=random_id,
                              attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion,
                              cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
-                             shadow_catcher=shadow_catcher,
+                             shadow_catcher=shadow_catcher, terminator=terminator_of(obj),
                              lightgroup=lightgroup)
         if instance is not None:
             self.instance_count += 1

@@ -50,7 +50,7 @@ extern "C" {
  * LT_PASS_SHADOW_CATCHER); 18: true displacement (lt_scene_set_material_displacement,
  * lt_displacement_method, lt_mesh_desc.flat_triangles; the Bevel node;
  * lt_image_file_desc.ocio_config and ocio_space: OpenColorIO colour spaces;
- * the Equiangular Cubemap Face panorama). */
+ * the Equiangular Cubemap Face panorama; lt_instance_desc's shadow terminator offsets). */
 #define LT_ABI_VERSION 18
 
 enum lt_status {
@@ -305,6 +305,12 @@ typedef struct lt_instance_desc {
    * VOLPATH render as Cycles 3.4: Combined becomes the catchers' matte and LT_PASS_SHADOW_CATCHER
    * their shadows (BIDIRECTIONAL renders catchers as ordinary objects). */
   int shadow_catcher;
+  /* Cycles' shadow terminator settings (Object.cycles.shadow_terminator_geometry_offset, Blender's
+   * default 0.1, and shadow_terminator_offset, default 0), each in [0, 1]; 0 turns either off (a
+   * zeroed desc). The geometry offset moves next-event shadow rays from smooth-shaded triangles
+   * onto the surface their normals imply; the shading offset remaps the BSDF's light cosine. */
+  float shadow_terminator_geometry_offset;
+  float shadow_terminator_shading_offset;
 } lt_instance_desc;
 LT_API int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* desc, int* out_id);
 

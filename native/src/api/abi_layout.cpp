@@ -130,6 +130,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_instance_desc, holdout),
     LT_FIELD(lt_instance_desc, lightgroup),
     LT_FIELD(lt_instance_desc, shadow_catcher),
+    LT_FIELD(lt_instance_desc, shadow_terminator_geometry_offset),
+    LT_FIELD(lt_instance_desc, shadow_terminator_shading_offset),
 
     LT_CONST(lt_light_type, LT_LIGHT_POINT),
     LT_CONST(lt_light_type, LT_LIGHT_SPOT),

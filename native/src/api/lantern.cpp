@@ -537,6 +537,12 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
     inst.visibility = d->visibility & LT_VISIBLE_ALL;
     inst.holdout = d->holdout != 0;
     inst.shadow_catcher = d->shadow_catcher != 0;
+    auto unit = [](float x) { return x >= 0 && x <= 1; };
+    require(unit(d->shadow_terminator_geometry_offset) && unit(d->shadow_terminator_shading_offset),
+            "instance shadow terminator offsets must lie in [0, 1]");
+    inst.terminator_geometry = d->shadow_terminator_geometry_offset;
+    // Cycles' scene/object.cpp turns the shading offset into the cosine's frequency multiplier.
+    inst.terminator_frequency = 1 / (1 - 0.5f * d->shadow_terminator_shading_offset);
     require(d->lightgroup >= 0 && d->lightgroup <= kMaxLightgroups, "instance light group out of range");
     inst.lightgroup = d->lightgroup - 1;
     require(finite_array(d->color, 4), "instance colour must be finite");

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "core/error.h"
+#include "geometry/terminator.h"
 
 namespace lt {
 
@@ -722,6 +723,60 @@ SurfacePoint Geometry::curve_surface(const Hit& hit, const Instance& inst, const
   return sp;
 }
 
+void Geometry::object_corner_normals(const Mesh& m, int prim, float time, Vec3 n[3]) const {
+  const Vec3* cn = &m.corner_normals[3 * size_t(prim)];
+  if (m.motion_corner_normals.empty()) {
+    std::copy_n(cn, 3, n);
+    return;
+  }
+  // The steps' normals, interpolated as the positions.
+  int step;
+  float u;
+  motion_step(m.motion_steps, time, &step, &u);
+  const Vec3* a = &m.motion_corner_normals[3 * (size_t(step) * m.triangle_count() + size_t(prim))];
+  const Vec3* b = a + 3 * m.triangle_count();
+  for (int k = 0; k < 3; ++k) n[k] = lerp(u, a[k], b[k]);
+}
+
+Vec3 Geometry::shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& ng, const Vec3& wi, bool* moved) const {
+  if (moved) *moved = false;
+  const Instance& inst = instances_[size_t(sp.instance)];
+  const Mesh& m = meshes_[size_t(inst.mesh)];
+  const float cutoff = inst.terminator_geometry;
+  if (!(cutoff > 0) || !m.is_triangles() || m.corner_normals.empty()) return spawn_origin(sp, wi);
+  Vec3 cn[3];
+  object_corner_normals(m, sp.primitive, sp.time, cn);
+  // Flat faces (the add-on gives their three corners the face's normal) keep the triangle.
+  auto same = [](const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+  if (same(cn[0], cn[1]) && same(cn[1], cn[2])) return spawn_origin(sp, wi);
+  float nl = dot(n, wi);
+  const Vec3 side = nl < 0 ? -ng : ng;
+  const float amount = terminator_offset_amount(cutoff, std::abs(nl), dot(side, wi));
+  if (!(amount > 0)) return spawn_origin(sp, wi);
+  Vec3 v[3];
+  object_corners(m, sp.primitive, sp.time, &v[0], &v[1], &v[2]);
+  const Pose pose = inst.motion.empty() ? Pose(inst) : this->pose(sp.instance, sp.time);
+  Vec3 offset;
+  if (m.users == 1 && inst.motion.empty()) {
+    // Cycles applies a single still user's transform to the mesh: it works in world space.
+    for (int k = 0; k < 3; ++k) {
+      v[k] = pose.xf.point(v[k]);
+      cn[k] = normalize(pose.normal_to_world(cn[k]));
+    }
+    offset = smooth_surface_offset(v, cn, sp.bary.x, sp.bary.y, side);
+  } else {
+    // In object space, the offset then moved as a direction (Cycles' object_dir_transform); the
+    // object-space normal of `side`'s side keeps the sign of its dot with the normals.
+    const Vec3 g = cross(v[1] - v[0], v[2] - v[0]);
+    const Vec3 side_object = dot(pose.normal_to_world(g), side) >= 0 ? g : -g;
+    offset = pose.xf.vector(smooth_surface_offset(v, cn, sp.bary.x, sp.bary.y, side_object));
+  }
+  const Vec3 p = sp.p + offset * amount;
+  if (!is_finite(p)) return spawn_origin(sp, wi);
+  if (moved) *moved = true;
+  return offset_ray_origin(p, dot(wi, sp.ng) >= 0 ? sp.ng : -sp.ng);
+}
+
 SurfacePoint Geometry::surface(const Hit& hit) const {
   SurfacePoint sp;
   const Instance& inst = instances_[hit.instance];
@@ -742,16 +797,9 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
   sp.generated = Vec3(g.x + 0.5f, g.y + 0.5f, g.z + 0.5f);
   sp.ng = normalize(pose.normal_to_world(cross(p1 - p0, p2 - p0)));
   if (!m.corner_normals.empty()) {
-    const Vec3* cn = &m.corner_normals[3 * size_t(t)];
+    Vec3 cn[3];
+    object_corner_normals(m, t, hit.time, cn);
     Vec3 ns = cn[0] * b0 + cn[1] * b1 + cn[2] * b2;
-    if (!m.motion_corner_normals.empty()) {  // the steps' normals, interpolated as the positions
-      int step;
-      float u;
-      motion_step(m.motion_steps, hit.time, &step, &u);
-      const Vec3* a = &m.motion_corner_normals[3 * (size_t(step) * m.triangle_count() + size_t(t))];
-      const Vec3* b = a + 3 * m.triangle_count();
-      ns = lerp(u, a[0], b[0]) * b0 + lerp(u, a[1], b[1]) * b1 + lerp(u, a[2], b[2]) * b2;
-    }
     ns = normalize(pose.normal_to_world(ns));
     sp.ns = is_finite(ns) ? ns : sp.ng;
     if (dot(sp.ns, sp.ng) < 0) sp.ns = -sp.ns;  // keep the shading normal on the geometric side

@@ -109,6 +109,9 @@ struct Instance : Pose {
   bool holdout = false;         // camera rays see it as Cycles' holdout objects (integrators/path_state.h)
   bool shadow_catcher = false;  // Cycles' Object.is_shadow_catcher (integrators/path.cpp's catcher split)
   int lightgroup = -1;          // the light group of its emission (-1: none)
+  // Cycles' shadow terminator settings (geometry/terminator.h): Geometry Offset (0: off) and the
+  // Shading Offset's cosine frequency multiplier 1 / (1 - offset / 2) (1: off).
+  float terminator_geometry = 0, terminator_frequency = 1;
   // Object Info: Object.color, pass_index, and Cycles' random number of the instance.
   float color[4] = {1, 1, 1, 1};
   float pass_index = 0, random = 0;
@@ -198,6 +201,15 @@ class Geometry {
   bool intersect_instance(const Ray& ray, int instance, Hit* hit) const;
   // The hit's surface at the hit's time.
   SurfacePoint surface(const Hit& hit) const;
+  // The origin of a next-event shadow ray from sp towards wi: spawn_origin, moved first by the
+  // instance's shadow terminator Geometry Offset on smooth-shaded triangles (Cycles'
+  // shadow_ray_offset, geometry/terminator.h). n, ng: the shading normal (after a displacement's
+  // bump) and geometric normal facing the incoming ray (Cycles' sd->N, sd->Ng). *moved: whether
+  // the offset applied; the shadow ray then also decides which side of the triangle's plane the
+  // light may lie on (Cycles evaluates the BSDF without a geometric test): the origin may sit
+  // above the plane of a light just below it, which the offset exists to let through.
+  Vec3 shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& ng, const Vec3& wi,
+                     bool* moved = nullptr) const;
   // The instance's transform at time (0 .. 1 over the shutter).
   Pose pose(int instance, float time) const;
   // Whether anything moves or deforms (the render then draws a time per camera sample), and how
@@ -219,6 +231,9 @@ class Geometry {
   Bounds bounds() const { return bounds_; }
   // Object-space corners of a mesh's triangle at time (a deforming mesh's interpolated).
   void object_corners(const Mesh& m, int prim, float time, Vec3* p0, Vec3* p1, Vec3* p2) const;
+  // Object-space corner normals of a triangle of a smooth mesh at time (a deforming mesh's
+  // interpolated, not normalised).
+  void object_corner_normals(const Mesh& m, int prim, float time, Vec3 n[3]) const;
   // World-space triangle corners of an instance's triangle at time (0 .. 1 over the shutter).
   void triangle(int instance, int prim, Vec3* p0, Vec3* p1, Vec3* p2, float time = 0.5f) const;
 

@@ -394,6 +394,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (material.needs_differentials()) add_differentials(scene_.geometry, sp, footprint_here, &ctx);
       if (material.traces_rays()) add_tracing(scene_.geometry, sp, min_pdf, sampler_, &ctx);
       le = material.evaluate(ctx, scene_.images, &v.bsdf, &sf);
+      v.bsdf.set_terminator_frequency(scene_.geometry.instance(sp.instance).terminator_frequency);
       if (aovs_here)
         first->aovs_done = single_pass_done(material.may_be_transparent(), v.bsdf, s_.pass_alpha_threshold);
       // Holdout on the camera's side of the path (light subpaths see surfaces as they are; their
@@ -434,6 +435,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.p = sp.p;
       v.n = backface ? -sp.ng : sp.ng;
       v.frame = local_frame(sf, v.n);
+      v.ns = smooth_n;
       v.bsdf.set_light_is_wo(mode == Mode::Importance);  // light subpaths: the adjoint BSDF
       if (length_squared(v.frame.n - facing_normal(smooth_n, v.n)) > 0)
         v.bsdf.set_bump(v.frame.to_local(smooth_n), mode == Mode::Importance);
@@ -751,10 +753,14 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
     sampled.n = ls.n;
     sampled.beta = ls.radiance / (pmf * ls.pdf);
-    Spectrum c = pt.beta * f_cos(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis)) * sampled.beta;
+    // The shadow terminator offset applies here, where the path tracer's next-event estimation
+    // would apply it, and to no other connection (README, departures).
+    bool offset = false;
+    const Vec3 origin =
+        pt.type == VertexType::Surface ? scene_.geometry.shadow_origin(pt.sp, pt.ns, pt.n, ls.wi, &offset) : pt.p;
+    Spectrum c = pt.beta * f_cos(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis), offset) * sampled.beta;
     if (is_black(c)) return c;
-    c *= transmittance(pt, shadow_ray(pt.type == VertexType::Surface ? spawn_origin(pt.sp, ls.wi) : pt.p, ls, time_),
-                       kVisShadow);
+    c *= transmittance(pt, shadow_ray(origin, ls, time_), kVisShadow);
     if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
     if (s_.light_passes && t == 2) first_connect_ = split_at(pt, ls.wi);

@@ -181,7 +181,8 @@ class Bdpt {
   // camera side, with pbrt's shading-normal correction for importance transport:
   // f |cos_s(l)| |cos_g(to)| / |cos_g(l)| (pbrt 3, sec. 16.1). excluded: lobes the light the path
   // ends on leaves out (excluded_kinds; at the vertex next to it).
-  Spectrum f_cos(const PathVertex& v, const Vec3& to, Mode mode, unsigned excluded = 0) const {
+  // any_side: the shadow ray decides the geometric side (a shadow terminator offset, s = 1).
+  Spectrum f_cos(const PathVertex& v, const Vec3& to, Mode mode, unsigned excluded = 0, bool any_side = false) const {
     if (v.type == VertexType::Medium) return Spectrum(phase(v).eval(v.wo, to));
     if (v.type != VertexType::Surface) return Spectrum(0.0f);
     const bool camera_walk = mode == Mode::Radiance;
@@ -189,7 +190,7 @@ class Bdpt {
     const Vec3 light_side = camera_walk ? to : v.frame.to_world(v.wo);
     const Vec3 l = vf.frame.to_local(light_side);
     // The geometric normal decides which side the light is on; shading normals only shade.
-    if ((dot(light_side, v.n) > 0) != (l.z > 0)) return Spectrum(0.0f);
+    if (!any_side && (dot(light_side, v.n) > 0) != (l.z > 0)) return Spectrum(0.0f);
     std::optional<Bsdf> copy;
     const Bsdf& bsdf = bsdf_in(v, vf, &copy);
     if (camera_walk) return bsdf.eval(v.wo, l, nullptr, excluded) * std::abs(l.z);

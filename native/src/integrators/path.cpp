@@ -119,10 +119,12 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     return power_heuristic(prev_pdf, light_pdf);
   };
   // NEE from p (a medium point when sp is null): one light picked by the light tree at p, MIS-weighted
-  // against the scattering; f(wi, &pdf) returns the BSDF x cos or phase value. `st` is the volume stack on
-  // the side the path arrived from, whose geometric normal is `side`: a shadow ray leaving
-  // through the surface crosses it (one on that side must not enter the surface's medium again).
-  auto next_event = [&](const Vec3& p, const SurfacePoint* sp, const Vec3& side, const VolumeStack& st, auto f) {
+  // against the scattering; f(wi, &pdf, excluded, offset) returns the BSDF x cos or phase value. `st` is the volume
+  // stack on the side the path arrived from, whose geometric normal is `side`: a shadow ray leaving through the surface
+  // crosses it (one on that side must not enter the surface's medium again). n: the shading normal facing the ray there
+  // (the shadow terminator offset reads it).
+  auto next_event = [&](const Vec3& p, const SurfacePoint* sp, const Vec3& side, const Vec3& n, const VolumeStack& st,
+                        auto f) {
     float pmf;
     int li = lights.pick_nee(p, sp ? side : Vec3(0.0f), sampler.next_1d(), &pmf);
     Vec2 u = sampler.next_2d();
@@ -132,10 +134,12 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     // The catcher-only path leaves out the emission of other objects (Cycles' light_distribution_sample).
     if (catcher_leg && !lights_catchers(scene, li)) return;
     const unsigned shadow_vis = catcher_leg ? catcher_only_visibility(kVisShadow) : kVisShadow;
+    bool offset = false;  // the shadow terminator offset moved the origin (Geometry::shadow_origin)
+    const Vec3 origin = sp ? scene.geometry.shadow_origin(*sp, n, side, ls.wi, &offset) : p;
     float scatter_pdf;
-    Spectrum fv = f(ls.wi, &scatter_pdf, excluded_kinds(scene.light_visibility(li)));
+    Spectrum fv = f(ls.wi, &scatter_pdf, excluded_kinds(scene.light_visibility(li)), offset);
     if (is_black(fv)) return;
-    const Ray shadow = shadow_ray(sp ? spawn_origin(*sp, ls.wi) : p, ls, time);
+    const Ray shadow = shadow_ray(origin, ls, time);
     Spectrum T(1.0f);
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;
@@ -205,7 +209,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         const Vec3 wo = normalize(-ray.d);
         if (b.total == 0) nee_first.set_volume();
         if (!lights.empty())
-          next_event(mi.p, nullptr, Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf, unsigned) {
+          next_event(mi.p, nullptr, Vec3(0.0f), Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf, unsigned, bool) {
             float p = phase.eval(wo, wi);
             *pdf = p;
             return Spectrum(p);
@@ -271,6 +275,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
             !hold_out(scene.geometry.instance(sp.instance).holdout, &bsdf, &emitted, beta, &transparent))
           break;
         bsdf.sample_below_shading(true);
+        bsdf.set_terminator_frequency(scene.geometry.instance(sp.instance).terminator_frequency);
         if (!is_black(sf.smooth)) ctx.N = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
         const Frame frame = local_frame(sf, ng);
         const Vec3 ns = frame.n;
@@ -314,20 +319,22 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         if (b.exceeded(s)) break;
 
         if (bsdf.has_non_delta() && !lights.empty())
-          next_event(sp.p, &sp, ng, stack, [&](const Vec3& wi_world, float* pdf, unsigned excluded) {
-            Vec3 wi = frame.to_local(wi_world);
-            Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
-            // The geometric normal decides which side the light is on; shading normals only shade.
-            if ((dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
-            if (s.light_passes && b.total == 0) {
-              Spectrum kinds[3];
-              bsdf.eval_kinds(wo, wi, kinds);
-              for (int k = 0; k < 3; ++k)
-                if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
-              nee_first.set_surface(kinds);
-            }
-            return f * std::abs(wi.z);
-          });
+          next_event(sp.p, &sp, ng, ctx.N, stack,
+                     [&](const Vec3& wi_world, float* pdf, unsigned excluded, bool offset) {
+                       Vec3 wi = frame.to_local(wi_world);
+                       Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
+                       // The geometric normal decides which side the light is on; shading normals only shade
+                       // (but for a shadow terminator offset, whose shadow ray decides).
+                       if (!offset && (dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
+                       if (s.light_passes && b.total == 0) {
+                         Spectrum kinds[3];
+                         bsdf.eval_kinds(wo, wi, kinds);
+                         for (int k = 0; k < 3; ++k)
+                           if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
+                         nee_first.set_surface(kinds);
+                       }
+                       return f * std::abs(wi.z);
+                     });
 
         // Continue the path by sampling the BSDF.
         BsdfSample bs;

@@ -38,6 +38,7 @@ struct PathVertex {
   Vec3 p;
   Vec3 n;       // geometric normal (zero for points in space: point lights, camera, media)
   Frame frame;  // shading frame, z facing the side the vertex was reached from
+  Vec3 ns;      // Surface vertices: the shading normal facing the predecessor (Cycles' sd->N)
   Vec3 wo;      // direction towards the predecessor: local (surfaces), world (media)
   // Surfaces: Cycles tilts the shading normal for the viewer (ensure_valid_reflection), so the
   // frame depends on the direction a path arrives from (Bdpt::view_frame): the normal untilted

@@ -1210,18 +1210,26 @@ float Bsdf::lobe_pdfs(const Vec3& wo, const Vec3& wi, float* part) const {
 // Cycles 3.4's bump_shadowing_term (Chiang, Li and Burley, "Taming the Shadow Terminator"): with
 // the shading normal +Z, g = cos(smooth, light) / (cos(shading, light) cos(smooth, shading)).
 // Cycles' diffuse reflection closures take it (CLOSURE_IS_BSDF_DIFFUSE); Translucent and Velvet
-// do not here.
-float Bsdf::bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const {
+// do not here. Then the Shading Offset's shift_cos_in (kernel/closure/bsdf.h, from appleseed):
+// cos(frequency acos(cos_light)) / cos_light on every lobe lit from above the shading normal
+// (Cycles' bsdf_eval rule, applied to sampled directions too).
+float Bsdf::terminator_terms(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const {
+  const Vec3& l = light_is_wo_ ? wo : wi;
+  float shift = 1;
+  if (frequency_ > 1 && l.z >= 0) {
+    const float c = std::min(l.z, 1.0f);
+    // Towards c = 0 the value goes to 0 for every frequency > 1 (Cycles' 0 / 0 there is NaN).
+    shift = c > 0 ? std::max(std::cos(std::acos(c) * frequency_), 0.0f) / c : 0.0f;
+  }
   const LobeType t = lobe.type;
   if (!bumped_ || (t != LobeType::Diffuse && t != LobeType::PrincipledDiffuse && t != LobeType::Sheen &&
                    t != LobeType::DiffuseToon))
-    return 1.0f;
-  const Vec3& l = light_is_wo_ ? wo : wi;
+    return shift;
   const float den = l.z * smooth_.z;
   const float g = den != 0 ? dot(smooth_, l) / den : 0.0f;
-  if (g >= 1) return 1.0f;
+  if (g >= 1) return shift;
   if (!(g >= 0)) return 0.0f;
-  return -g * g * g + g * g + g;
+  return shift * (-g * g * g + g * g + g);
 }
 
 namespace {
@@ -1251,16 +1259,16 @@ Spectrum Bsdf::eval(const Vec3& wo, const Vec3& wi, float* pdf, unsigned exclude
   if (!pdf) {
     for (int k = 0; k < count_; ++k)
       if (!skip(lobes_[k]))
-        f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);  // zero for delta lobes
+        f += lobe_value(lobes_[k], wo, wi, &pk) * terminator_terms(lobes_[k], wo, wi);  // zero for delta lobes
   } else if (selection_probabilities(*this, wo, p)) {
     for (int k = 0; k < count_; ++k) {
       if (lobe_is_delta(lobes_[k]) || skip(lobes_[k])) continue;
-      f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
+      f += lobe_value(lobes_[k], wo, wi, &pk) * terminator_terms(lobes_[k], wo, wi);
       p_total += p[k] * pk;
     }
   } else {
     for (int k = 0; k < count_; ++k)
-      if (!skip(lobes_[k])) f += lobe_value(lobes_[k], wo, wi, &pk) * bump_term(lobes_[k], wo, wi);
+      if (!skip(lobes_[k])) f += lobe_value(lobes_[k], wo, wi, &pk) * terminator_terms(lobes_[k], wo, wi);
   }
   if (!is_finite(f)) f = Spectrum(0.0f);
   if (pdf) *pdf = std::isfinite(p_total) ? p_total : 0.0f;
@@ -1303,11 +1311,11 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
     // every non-delta lobe's value, so that MIS against light sampling sees one consistent pdf.
     float pdf = p[chosen] * s.pdf;
     if (light_is_wo_ && !lobe_reciprocal(lobes_[chosen])) s.f = lobe_eval(lobes_[chosen], s.wi, wo);
-    s.f *= bump_term(lobes_[chosen], wo, s.wi);
+    s.f *= terminator_terms(lobes_[chosen], wo, s.wi);
     for (int k = 0; k < count_; ++k) {
       if (k == chosen || lobe_is_delta(lobes_[k])) continue;
       float pk;
-      s.f += lobe_value(lobes_[k], wo, s.wi, &pk) * bump_term(lobes_[k], wo, s.wi);
+      s.f += lobe_value(lobes_[k], wo, s.wi, &pk) * terminator_terms(lobes_[k], wo, s.wi);
       pdf += p[k] * pk;
     }
     s.pdf = pdf;
@@ -1396,7 +1404,7 @@ void Bsdf::eval_kinds(const Vec3& wo, const Vec3& wi, Spectrum* out) const {
   const bool transmit = wo.z * wi.z < 0;
   for (int k = 0; k < count_; ++k) {
     if (lobe_is_delta(lobes_[k]) || lobes_[k].type == LobeType::Transparent) continue;
-    const Spectrum f = lobe_eval(lobes_[k], wo, wi) * bump_term(lobes_[k], wo, wi);
+    const Spectrum f = lobe_eval(lobes_[k], wo, wi) * terminator_terms(lobes_[k], wo, wi);
     if (is_finite(f)) out[int(lobe_pass_kind(lobes_[k], transmit))] += f;
   }
 }

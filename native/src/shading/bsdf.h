@@ -172,6 +172,7 @@ class Bsdf {
     holdout_ = Spectrum(0.0f);
     overflowed_ = false;
     bumped_ = false;
+    frequency_ = 1;
     light_is_wo_ = false;
     below_shading_ = false;
   }
@@ -200,6 +201,9 @@ class Bsdf {
     bumped_ = bumped;
     smooth_ = smooth_local;
   }
+  // The object's shadow terminator Shading Offset as Cycles' cosine frequency multiplier (1: off;
+  // Instance::terminator_frequency); clear() resets it, so set it after the material ran.
+  void set_terminator_frequency(float frequency) { frequency_ = frequency; }
   // Cycles 3.4's microfacet sampling (bsdf_microfacet_ggx_sample, _beckmann_sample) keeps a
   // reflection that lands below the shading normal if it is above the geometric one, weighted by
   // G1(wi) computed with cos^2 (so positive), while its eval() is zero there: with a bent normal
@@ -267,7 +271,9 @@ class Bsdf {
   bool overflowed_ = false;
   bool bumped_ = false, light_is_wo_ = false, below_shading_ = false;
   Vec3 smooth_{0.0f, 0.0f, 1.0f};
-  float bump_term(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const;
+  float frequency_ = 1;
+  // The shadow terminator factors of a lobe's value: bump shadowing and the shading offset.
+  float terminator_terms(const Lobe& lobe, const Vec3& wo, const Vec3& wi) const;
   Spectrum lobe_value(const Lobe& lobe, const Vec3& wo, const Vec3& wi, float* pdf) const;
 };
 
