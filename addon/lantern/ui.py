@@ -77,6 +77,22 @@ class LANTERN_RENDER_PT_sampling_viewport(LanternButtonsPanel, Panel):
         _split(self.layout).prop(context.scene.lantern, "viewport_samples", text="Samples")
 
 
+class LANTERN_RENDER_PT_sampling_viewport_denoise(LanternButtonsPanel, Panel):
+    """Cycles' Sampling > Viewport > Denoise with its Start Sample."""
+    bl_label = "Denoise"
+    bl_parent_id = "LANTERN_RENDER_PT_sampling_viewport"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.lantern, "use_preview_denoising", text="")
+
+    def draw(self, context):
+        col = _split(self.layout).column()
+        col.active = context.scene.lantern.use_preview_denoising
+        col.label(text="Denoiser: Lantern NFOR (CPU)")
+        col.prop(context.scene.lantern, "preview_denoising_start_sample", text="Start Sample")
+
+
 class LANTERN_RENDER_PT_sampling_render(LanternButtonsPanel, Panel):
     bl_label = "Render"
     bl_parent_id = "LANTERN_RENDER_PT_sampling"
@@ -99,7 +115,7 @@ class LANTERN_RENDER_PT_sampling_render(LanternButtonsPanel, Panel):
 
 
 class LANTERN_RENDER_PT_sampling_render_denoise(LanternButtonsPanel, Panel):
-    """Cycles' Sampling > Render > Denoise (Lantern's denoiser; no viewport denoising yet)."""
+    """Cycles' Sampling > Render > Denoise (Lantern's denoiser)."""
     bl_label = "Denoise"
     bl_parent_id = "LANTERN_RENDER_PT_sampling_render"
     bl_options = {'DEFAULT_CLOSED'}
@@ -631,6 +647,7 @@ classes = (
     LANTERN_RENDER_PT_sampling,
     LANTERN_RENDER_PT_sampling_viewport,
     LANTERN_RENDER_PT_sampling_render,
+    LANTERN_RENDER_PT_sampling_viewport_denoise,
     LANTERN_RENDER_PT_sampling_render_denoise,
     LANTERN_RENDER_PT_sampling_bidirectional,
     LANTERN_RENDER_PT_sampling_advanced,
