@@ -330,7 +330,8 @@ void RenderJob::run() noexcept {
         if (s + 1 >= denoise_from) {
           // Once the published image is denoised, every later one is (no flicker back to noise):
           // the first at the start sample, then paced by the denoiser's cost.
-          if (s + 1 == denoise_from || since_publish >= std::max(kPublishInterval, kDenoisePace * denoise_seconds_.load())) {
+          if (s + 1 == denoise_from ||
+              since_publish >= std::max(kPublishInterval, kDenoisePace * denoise_seconds_.load())) {
             preview = denoise_film();
             preview_samples = s + 1;
             film_.publish(&preview);
