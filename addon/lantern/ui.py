@@ -77,20 +77,28 @@ class LANTERN_RENDER_PT_sampling_viewport(LanternButtonsPanel, Panel):
         _split(self.layout).prop(context.scene.lantern, "viewport_samples", text="Samples")
 
 
-class LANTERN_RENDER_PT_sampling_viewport_denoise(LanternButtonsPanel, Panel):
-    """Cycles' Sampling > Viewport > Denoise with its Start Sample."""
-    bl_label = "Denoise"
-    bl_parent_id = "LANTERN_RENDER_PT_sampling_viewport"
-    bl_options = {'DEFAULT_CLOSED'}
-
+def _denoise_panel(name, parent, use, doc, start_sample=None):
+    """Cycles' Sampling > Viewport or Render > Denoise: the toggle `use` in the header, the
+    denoiser and (the viewport's) its start sample below."""
     def draw_header(self, context):
-        self.layout.prop(context.scene.lantern, "use_preview_denoising", text="")
+        self.layout.prop(context.scene.lantern, use, text="")
 
     def draw(self, context):
         col = _split(self.layout).column()
-        col.active = context.scene.lantern.use_preview_denoising
+        col.active = getattr(context.scene.lantern, use)
         col.label(text="Denoiser: Lantern NFOR (CPU)")
-        col.prop(context.scene.lantern, "preview_denoising_start_sample", text="Start Sample")
+        if start_sample:
+            col.prop(context.scene.lantern, start_sample, text="Start Sample")
+
+    return type(name, (LanternButtonsPanel, Panel), dict(
+        __doc__=doc, bl_label="Denoise", bl_parent_id=parent, bl_options={'DEFAULT_CLOSED'},
+        draw_header=draw_header, draw=draw))
+
+
+LANTERN_RENDER_PT_sampling_viewport_denoise = _denoise_panel(
+    "LANTERN_RENDER_PT_sampling_viewport_denoise", "LANTERN_RENDER_PT_sampling_viewport",
+    "use_preview_denoising", "Cycles' Sampling > Viewport > Denoise with its Start Sample.",
+    start_sample="preview_denoising_start_sample")
 
 
 class LANTERN_RENDER_PT_sampling_render(LanternButtonsPanel, Panel):
@@ -114,19 +122,9 @@ class LANTERN_RENDER_PT_sampling_render(LanternButtonsPanel, Panel):
         sub.prop(settings, "adaptive")
 
 
-class LANTERN_RENDER_PT_sampling_render_denoise(LanternButtonsPanel, Panel):
-    """Cycles' Sampling > Render > Denoise (Lantern's denoiser)."""
-    bl_label = "Denoise"
-    bl_parent_id = "LANTERN_RENDER_PT_sampling_render"
-    bl_options = {'DEFAULT_CLOSED'}
-
-    def draw_header(self, context):
-        self.layout.prop(context.scene.lantern, "use_denoising", text="")
-
-    def draw(self, context):
-        col = _split(self.layout).column()
-        col.active = context.scene.lantern.use_denoising
-        col.label(text="Denoiser: Lantern NFOR (CPU)")
+LANTERN_RENDER_PT_sampling_render_denoise = _denoise_panel(
+    "LANTERN_RENDER_PT_sampling_render_denoise", "LANTERN_RENDER_PT_sampling_render",
+    "use_denoising", "Cycles' Sampling > Render > Denoise (Lantern's denoiser).")
 
 
 class LANTERN_RENDER_PT_sampling_bidirectional(LanternButtonsPanel, Panel):
