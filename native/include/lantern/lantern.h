@@ -658,8 +658,9 @@ typedef struct lt_render_status {
   int halt_reason;             /* lt_halt_reason */
   uint64_t active_pixels;      /* pixels still sampling (fewer than the region's with adaptive sampling) */
   uint64_t unestimated_pixels; /* pixels left out of rel_error: fewer than 2 finite samples */
-  int denoised;                /* != 0: Combined holds the denoised image (settings.denoise) */
-  double denoise_seconds;      /* the denoiser's time, included in elapsed_seconds */
+  int denoised;                /* != 0: Combined holds the denoised image (settings.denoise); while
+                                * rendering, the image read (denoise_start_sample) */
+  double denoise_seconds;      /* the denoiser's (last run's) time, included in elapsed_seconds */
 } lt_render_status;
 enum lt_halt_reason {
   LT_HALT_NONE = 0, /* still running */
