@@ -355,6 +355,7 @@ class RenderSettings(ctypes.Structure):
         ("ao_distance", ctypes.c_float),
         ("motion_pass", ctypes.c_int),
         ("shadow_catcher_approximate", ctypes.c_int),
+        ("denoise_start_sample", ctypes.c_int),
     ]
 
 

@@ -202,6 +202,13 @@ def render_settings(scene, width, height, border):
     )
 
 
+def viewport_denoise_settings(lt):
+    """The viewport's denoising (Sampling > Viewport > Denoise): in place of the render's. The
+    core's start sample 0 means a final render's denoising; Cycles' 0 denoises from the start."""
+    return dict(denoise=int(lt.use_preview_denoising),
+                denoise_start_sample=max(1, lt.preview_denoising_start_sample))
+
+
 def mist_settings(world):
     """The Mist pass's settings from World > Mist Pass (Blender's defaults without a world)."""
     if world is None:
@@ -758,7 +765,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             settings = render_settings(scene, width, height, [0, 0, 0, 0])
             # The viewport stops at its own samples or the noise target, never by the time limit.
             settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0,
-                            time_limit=0.0)
+                            time_limit=0.0, **viewport_denoise_settings(scene.lantern))
             refining = session.update(settings)
         except core.LanternError as e:
             session.error = str(e)

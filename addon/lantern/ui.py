@@ -77,6 +77,30 @@ class LANTERN_RENDER_PT_sampling_viewport(LanternButtonsPanel, Panel):
         _split(self.layout).prop(context.scene.lantern, "viewport_samples", text="Samples")
 
 
+def _denoise_panel(name, parent, use, doc, start_sample=None):
+    """Cycles' Sampling > Viewport or Render > Denoise: the toggle `use` in the header, the
+    denoiser and (the viewport's) its start sample below."""
+    def draw_header(self, context):
+        self.layout.prop(context.scene.lantern, use, text="")
+
+    def draw(self, context):
+        col = _split(self.layout).column()
+        col.active = getattr(context.scene.lantern, use)
+        col.label(text="Denoiser: Lantern NFOR (CPU)")
+        if start_sample:
+            col.prop(context.scene.lantern, start_sample, text="Start Sample")
+
+    return type(name, (LanternButtonsPanel, Panel), dict(
+        __doc__=doc, bl_label="Denoise", bl_parent_id=parent, bl_options={'DEFAULT_CLOSED'},
+        draw_header=draw_header, draw=draw))
+
+
+LANTERN_RENDER_PT_sampling_viewport_denoise = _denoise_panel(
+    "LANTERN_RENDER_PT_sampling_viewport_denoise", "LANTERN_RENDER_PT_sampling_viewport",
+    "use_preview_denoising", "Cycles' Sampling > Viewport > Denoise with its Start Sample.",
+    start_sample="preview_denoising_start_sample")
+
+
 class LANTERN_RENDER_PT_sampling_render(LanternButtonsPanel, Panel):
     bl_label = "Render"
     bl_parent_id = "LANTERN_RENDER_PT_sampling"
@@ -98,19 +122,9 @@ class LANTERN_RENDER_PT_sampling_render(LanternButtonsPanel, Panel):
         sub.prop(settings, "adaptive")
 
 
-class LANTERN_RENDER_PT_sampling_render_denoise(LanternButtonsPanel, Panel):
-    """Cycles' Sampling > Render > Denoise (Lantern's denoiser; no viewport denoising yet)."""
-    bl_label = "Denoise"
-    bl_parent_id = "LANTERN_RENDER_PT_sampling_render"
-    bl_options = {'DEFAULT_CLOSED'}
-
-    def draw_header(self, context):
-        self.layout.prop(context.scene.lantern, "use_denoising", text="")
-
-    def draw(self, context):
-        col = _split(self.layout).column()
-        col.active = context.scene.lantern.use_denoising
-        col.label(text="Denoiser: Lantern NFOR (CPU)")
+LANTERN_RENDER_PT_sampling_render_denoise = _denoise_panel(
+    "LANTERN_RENDER_PT_sampling_render_denoise", "LANTERN_RENDER_PT_sampling_render",
+    "use_denoising", "Cycles' Sampling > Render > Denoise (Lantern's denoiser).")
 
 
 class LANTERN_RENDER_PT_sampling_bidirectional(LanternButtonsPanel, Panel):
@@ -631,6 +645,7 @@ classes = (
     LANTERN_RENDER_PT_sampling,
     LANTERN_RENDER_PT_sampling_viewport,
     LANTERN_RENDER_PT_sampling_render,
+    LANTERN_RENDER_PT_sampling_viewport_denoise,
     LANTERN_RENDER_PT_sampling_render_denoise,
     LANTERN_RENDER_PT_sampling_bidirectional,
     LANTERN_RENDER_PT_sampling_advanced,

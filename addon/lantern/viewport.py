@@ -142,7 +142,7 @@ class ViewportSession(SceneSync):
         self.shown_stage = None    # the stage the pixels come from (0: reduced resolution)
         self.status = None         # core status of the render the pixels come from
         self.pixel_seconds = None  # measured seconds per pixel and sample at full resolution
-        self._shown = None         # (render serial, samples done) the pixels come from
+        self._shown = None         # (render serial, samples done, state) the pixels come from
         self.changed_at = time.monotonic()
         self.first_image_seconds = None   # from the last change to the first image of it
         self.counters["restarts"] = 0
@@ -200,7 +200,9 @@ class ViewportSession(SceneSync):
         st = self.render.poll()
         if self.stage == 1 and st.samples_done > 0:
             self.pixel_seconds = st.elapsed_seconds / (st.samples_done * self.size[0] * self.size[1])
-        if st.samples_done > 0 and self._shown != (self.counters["restarts"], st.samples_done):
+        # Also once it stops: the final image may be newer than the last published one (a
+        # denoised one, say) at the same sample count.
+        if st.samples_done > 0 and self._shown != (self.counters["restarts"], st.samples_done, st.state):
             self._read(st)
         if st.state != core.STATE_RUNNING and self.stage == 0:
             self.stage = 1
@@ -222,8 +224,9 @@ class ViewportSession(SceneSync):
         s = dict(settings)
         s["passes"] = 1 << core.PASS_COMBINED  # the viewport shows Combined only: no other film memory
         if self.stage == 0:
+            # One sample: nothing to denoise (the film then keeps no denoising features).
             s.update(width=max(1, s["width"] // self.divider), height=max(1, s["height"] // self.divider),
-                     samples=1)
+                     samples=1, denoise=0)
         self.render = core.Render(self.scene, s).start()
         self.counters["restarts"] += 1
 
@@ -236,7 +239,7 @@ class ViewportSession(SceneSync):
         self.samples = (st.samples_done, st.samples_total)
         self.status = st
         self.shown_stage = self.stage
-        self._shown = (self.counters["restarts"], st.samples_done)
+        self._shown = (self.counters["restarts"], st.samples_done, st.state)
         if self.first_image_seconds is None:
             self.first_image_seconds = time.monotonic() - self.changed_at
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from lantern import core
-from lantern.engine import render_settings
+from lantern.engine import format_stats, render_settings, viewport_denoise_settings
 from lantern.export import export_scene
 from lantern.viewport import ViewportSession, view_camera, with_camera_lens, with_camera_panorama
 
@@ -180,3 +180,59 @@ def test_resizing_does_not_leak(scene_factory):
           "resize would be %.0f MB)" % (rss[0], rss[1], growth, leaked_images_mb))
     assert restarts >= 2 * len(sizes), restarts  # every size rendered (two stages each)
     assert growth < 0.25 * leaked_images_mb, (rss, leaked_images_mb)
+
+
+def _refine(session, settings):
+    """Drives the session until its full-resolution render stops; returns (samples, denoised) of
+    every image it read on the way."""
+    seen = []
+    version = session.version
+    while True:
+        refining = session.update(settings)
+        if session.version != version and session.shown_stage == 1:
+            version = session.version
+            seen.append((session.samples[0], bool(session.status.denoised)))
+        if not refining and session.shown_stage == 1:
+            return seen
+        time.sleep(0.002)
+
+
+def test_viewport_denoises_from_the_start_sample(scene_factory):
+    """Sampling > Viewport > Denoise with Start Sample 4: the image drawn before 4 samples is the
+    noisy one (the same pixels as with denoising off), from 4 on the denoised one, closer to a
+    converged image than the noisy one at the same samples; the status line says so."""
+    scene = scene_factory("cornell_area")
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    w, h = 48, 48
+    session = ViewportSession(lambda *m: None)
+    try:
+        session.sync(depsgraph)
+        assert session.error is None, session.error
+        cam = scene.camera.evaluated_get(depsgraph)
+        session.set_view(view_camera(_camera_view(cam, depsgraph, w, h), w, h), w, h)
+        base = dict(render_settings(scene, w, h, [0, 0, 0, 0]), threads=2)
+
+        def drawn(samples, denoise):
+            scene.lantern.use_preview_denoising = denoise
+            scene.lantern.preview_denoising_start_sample = 4
+            seen = _refine(session, dict(base, samples=samples, **viewport_denoise_settings(scene.lantern)))
+            return seen, session.pixels[..., :3].copy(), session.status
+
+        reference = drawn(256, False)[1]
+        noisy3, noisy4 = drawn(3, False)[1], drawn(4, False)[1]
+        seen3, image3, status3 = drawn(3, True)
+        assert not status3.denoised and "denoised" not in format_stats(status3)
+        assert np.array_equal(image3, noisy3)
+        seen4, image4, status4 = drawn(4, True)
+        seen8 = drawn(8, True)[0]
+        assert status4.denoised and "denoised" in format_stats(status4), format_stats(status4)
+        # Every image read while refining: noisy before the start sample, denoised from it on.
+        for samples, denoised in seen3 + seen4 + seen8:
+            assert denoised == (samples >= 4), (samples, denoised, seen3, seen4, seen8)
+        mse = lambda a: float(((a - reference) ** 2).mean())
+        print("viewport MSE against 256 samples at 4 samples: noisy %.3g, denoised %.3g"
+              % (mse(noisy4), mse(image4)))
+        assert mse(image4) < 0.5 * mse(noisy4), (mse(image4), mse(noisy4))
+    finally:
+        session.close()

@@ -9,7 +9,9 @@
 #include <limits>
 #include <random>
 
+#include "api/handles.h"
 #include "denoise/nfor.h"
+#include "render/render.h"
 #include "scene_builders.h"
 
 using namespace lt_test;
@@ -185,4 +187,78 @@ TEST(Denoise, LowersTheErrorAgainstAReference) {
   RecordProperty("relmse_denoised", std::to_string(denoised));
   std::printf("relMSE noisy %.5f denoised %.5f\n", noisy, denoised);
   EXPECT_LT(denoised, 0.5 * noisy);
+}
+
+namespace {
+
+// A render with a denoise start sample (the viewport's), run to `samples`: the image readers saw
+// last while it rendered (the published one) and what they read once it stopped.
+struct Progressive {
+  std::vector<float> published, combined, noisy;
+  bool published_denoised = false, denoised = false;
+};
+
+Progressive progressive(lt_scene* s, int samples, int start_sample, int threads) {
+  const int w = 32, h = 24;
+  lt::RenderSettings rs;
+  rs.width = rs.x1 = w;
+  rs.height = rs.y1 = h;
+  rs.samples = samples;
+  rs.seed = 5;
+  rs.threads = threads;
+  rs.denoise = true;
+  rs.denoise_start_sample = start_sample;
+  lt::RenderJob job(s->scene, rs);
+  job.run();
+  Progressive p;
+  p.published.resize(4 * size_t(w) * h);
+  p.combined.resize(p.published.size());
+  p.noisy.resize(p.published.size());
+  job.film().read_published(p.published.data());
+  job.film().read(lt::Pass::Combined, p.combined.data(), false);
+  job.film().read(lt::Pass::NoisyImage, p.noisy.data(), false);
+  p.published_denoised = job.film().published_denoised();
+  p.denoised = job.status().denoised;
+  return p;
+}
+
+// Pixels (of RGB channels) where a and b differ by more than half-float rounding.
+size_t differing(const std::vector<float>& a, const std::vector<float>& b) {
+  size_t n = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (i % 4 != 3 && std::abs(a[i] - b[i]) > 1e-3f * std::abs(b[i]) + 1e-6f) ++n;
+  return n;
+}
+
+}  // namespace
+
+// Denoising while rendering (lt_render_settings.denoise_start_sample): the published image is
+// noisy before the start sample and denoised from it on, the final image only from there too.
+TEST(Denoise, ProgressiveFromTheStartSampleOn) {
+  ScenePtr s = cornell_scene();
+  // 3 passes, start 4: the last published image (pass 2) is noisy and so is the final one.
+  const Progressive before = progressive(s.get(), 3, 4, 2);
+  EXPECT_FALSE(before.published_denoised);
+  EXPECT_FALSE(before.denoised);
+  EXPECT_EQ(std::memcmp(before.combined.data(), before.noisy.data(), before.noisy.size() * sizeof(float)), 0);
+  // 4 passes: pass 4 is published denoised, and the final image is that one (as half floats).
+  const Progressive at = progressive(s.get(), 4, 4, 2);
+  EXPECT_TRUE(at.published_denoised);
+  EXPECT_TRUE(at.denoised);
+  const size_t channels = 3 * at.noisy.size() / 4;
+  EXPECT_EQ(differing(at.published, at.combined), 0u);
+  EXPECT_GT(differing(at.published, at.noisy), channels / 2);
+  // Start sample 1 is the denoiser's minimum, 2.
+  EXPECT_FALSE(progressive(s.get(), 1, 1, 2).published_denoised);
+  EXPECT_TRUE(progressive(s.get(), 2, 1, 2).published_denoised);
+  // Past the start sample every published image is denoised (the last one paced by time).
+  EXPECT_TRUE(progressive(s.get(), 7, 4, 2).published_denoised);
+}
+
+TEST(Denoise, ProgressiveSameBitsForAnyThreadCount) {
+  ScenePtr s = cornell_scene();
+  const Progressive one = progressive(s.get(), 3, 3, 1), many = progressive(s.get(), 3, 3, 4);
+  ASSERT_TRUE(one.published_denoised && many.published_denoised);
+  EXPECT_EQ(std::memcmp(one.published.data(), many.published.data(), one.published.size() * sizeof(float)), 0);
+  EXPECT_EQ(std::memcmp(one.combined.data(), many.combined.data(), one.combined.size() * sizeof(float)), 0);
 }

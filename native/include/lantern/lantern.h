@@ -50,7 +50,8 @@ extern "C" {
  * LT_PASS_SHADOW_CATCHER); 18: true displacement (lt_scene_set_material_displacement,
  * lt_displacement_method, lt_mesh_desc.flat_triangles; the Bevel node;
  * lt_image_file_desc.ocio_config and ocio_space: OpenColorIO colour spaces;
- * the Equiangular Cubemap Face panorama; lt_instance_desc's shadow terminator offsets). */
+ * the Equiangular Cubemap Face panorama; lt_instance_desc's shadow terminator offsets;
+ * lt_render_settings.denoise_start_sample: the viewport's denoising). */
 #define LT_ABI_VERSION 18
 
 enum lt_status {
@@ -630,6 +631,13 @@ typedef struct lt_render_settings {
    * seen behind the catchers unless the background is transparent; zero leaves the catchers
    * transparent, their shadows in LT_PASS_SHADOW_CATCHER. Default 1. */
   int shadow_catcher_approximate;
+  /* With `denoise`: 0 (default) denoises once rendering stops, as above. N > 0 (Cycles' viewport
+   * denoising, preview_denoising_start_sample) also denoises the image readers see while
+   * rendering: from the pass that completes max(N, 2) samples on, each published image is
+   * denoised (the first at that pass, later ones paced so that denoising takes at most a quarter
+   * of the render's wall time), and lt_render_status.denoised says whether the image being read
+   * is; the image once rendering stops is denoised only with at least max(N, 2) samples. */
+  int denoise_start_sample;
 } lt_render_settings;
 
 LT_API void lt_render_settings_default(lt_render_settings* settings);
@@ -656,8 +664,9 @@ typedef struct lt_render_status {
   int halt_reason;             /* lt_halt_reason */
   uint64_t active_pixels;      /* pixels still sampling (fewer than the region's with adaptive sampling) */
   uint64_t unestimated_pixels; /* pixels left out of rel_error: fewer than 2 finite samples */
-  int denoised;                /* != 0: Combined holds the denoised image (settings.denoise) */
-  double denoise_seconds;      /* the denoiser's time, included in elapsed_seconds */
+  int denoised;                /* != 0: Combined holds the denoised image (settings.denoise); while
+                                * rendering, the image read (denoise_start_sample) */
+  double denoise_seconds;      /* the denoiser's (last run's) time, included in elapsed_seconds */
 } lt_render_status;
 enum lt_halt_reason {
   LT_HALT_NONE = 0, /* still running */

@@ -303,6 +303,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_render_settings, ao_distance),
     LT_FIELD(lt_render_settings, motion_pass),
     LT_FIELD(lt_render_settings, shadow_catcher_approximate),
+    LT_FIELD(lt_render_settings, denoise_start_sample),
 
     LT_CONST(lt_render_state, LT_STATE_RUNNING),
     LT_CONST(lt_render_state, LT_STATE_DONE),

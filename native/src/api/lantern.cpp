@@ -900,6 +900,7 @@ void lt_render_settings_default(lt_render_settings* s) {
   s->ao_distance = 10;
   s->motion_pass = 0;
   s->shadow_catcher_approximate = 1;
+  s->denoise_start_sample = 0;
 }
 
 namespace {
@@ -1049,6 +1050,8 @@ int lt_render_start(lt_scene* scene, const lt_render_settings* s, lt_render** ou
     rs.passes = s->passes;
     rs.pattern = lt::SamplePattern(s->sample_pattern);
     rs.denoise = s->denoise != 0;
+    require(s->denoise_start_sample >= 0, "denoise start sample must be >= 0");
+    rs.denoise_start_sample = s->denoise_start_sample;
     rs.cryptomatte = s->cryptomatte;  // lt_cryptomatte's bits are 1 << CryptomatteType
     rs.cryptomatte_levels = s->cryptomatte_levels;
     // Refuse before allocating, with what it would take, rather than fail (or be killed) later.

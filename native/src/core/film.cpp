@@ -538,18 +538,29 @@ void Film::resolve_combined(size_t i, float* o) const {
   o[3] = float(alpha_[i] * inv);
 }
 
-void Film::publish() {
+void Film::publish(const std::vector<float>* denoised) {
+  if (denoised && denoised->size() != 3 * count_.size()) throw InvalidArgument("denoised image of the wrong size");
   std::lock_guard<std::mutex> lock(mutex_);
   const size_t n = count_.size();
+  // As read(Combined) once denoised: a matte (shadow catchers) is shown as rendered.
+  const float* rgb = denoised && catcher_.empty() ? denoised->data() : nullptr;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       float o[4];
       resolve_combined(i, o);
+      if (rgb)
+        for (int k = 0; k < 3; ++k) o[k] = rgb[3 * i + k];
       for (int k = 0; k < 4; ++k) published_[4 * i + k] = float_to_half(o[k]);
     }
   });
   published_light_paths_ = light_paths_;
   published_valid_ = true;
+  published_denoised_ = denoised != nullptr;  // as denoised() for the final image
+}
+
+void Film::read_published(float* out) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (size_t j = 0; j < published_.size(); ++j) out[j] = published_valid_ ? half_to_float(published_[j]) : 0.0f;
 }
 
 void Film::begin_writing() {

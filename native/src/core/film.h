@@ -326,8 +326,16 @@ class Film {
   // y0, count: only grid rows [y0, y0 + count) (count < 0: to the last), written from out on.
   void read_strategy_grid(int columns, int rows, float* out, int y0 = 0, int count = -1) const;
   // Resolves Combined into the published image readers see while rendering (the rendering
-  // thread, between passes). Allocates nothing.
-  void publish();
+  // thread, between passes). Allocates nothing. `denoised`: the film's denoised RGB (as
+  // set_denoised's) to publish in place of Combined's (its alpha stays the film's).
+  void publish(const std::vector<float>* denoised = nullptr);
+  // Whether the published image is denoised, and the published image itself, RGBA (tests: once
+  // rendering has stopped, read() gives the accumulators).
+  bool published_denoised() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return published_denoised_;
+  }
+  void read_published(float* out) const;
   // The rendering thread writes the accumulators between these (one pass); readers of anything
   // but Combined wait for the end of the pass, and the next pass waits for readers waiting.
   void begin_writing();
@@ -416,7 +424,7 @@ class Film {
   std::vector<float> strategies_, strategy_splats_;
   std::vector<uint8_t> labels_;
   std::vector<uint16_t> published_;  // Combined RGBA, half floats
-  bool published_valid_ = false, finished_ = false, writing_ = false;
+  bool published_valid_ = false, published_denoised_ = false, finished_ = false, writing_ = false;
   mutable int readers_waiting_ = 0;
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <new>
 
 #include "denoise/nfor.h"
@@ -23,6 +24,10 @@ constexpr int kTile = 16;
 constexpr int kAdaptiveTile = 4;
 // Readers see a new image at most this often while rendering (publishing copies the film).
 constexpr double kPublishInterval = 0.25;
+// Denoising the published image (settings.denoise_start_sample): after a denoise of d seconds, the
+// next waits for at least kDenoisePace d seconds of rendering, so that denoising takes at most
+// 1 / (1 + kDenoisePace) of the wall time (a quarter).
+constexpr double kDenoisePace = 3.0;
 
 // The integrator's settings with what the kept passes ask it to fill.
 IntegratorSettings with_passes(const RenderSettings& s) {
@@ -83,6 +88,7 @@ MemoryEstimate RenderJob::estimate_bytes(const RenderSettings& s) {
   // Denoising: the half images, the denoiser's planes, its reconstruction sums (2 x RGB + weight)
   // and its output (denoise/nfor.cpp).
   if (s.denoise) m.other += pixels * (2 * (3 + 3 + kFeatureChannels) + 1 + 12 + kFeatureChannels + 1 + 8 + 6) * 4;
+  if (s.denoise && s.denoise_start_sample > 0) m.other += pixels * 3 * 4;  // the published image's RGB
   return m;
 }
 
@@ -278,6 +284,12 @@ void RenderJob::run() noexcept {
     tbb::task_arena arena(settings_.threads > 0 ? settings_.threads : tbb::task_arena::automatic);
     auto last_publish = std::chrono::steady_clock::now();
     HaltReason halt = HaltReason::Samples;
+    // The published image is denoised from this many samples on (never: INT_MAX).
+    const int denoise_from = settings_.denoise && settings_.denoise_start_sample > 0
+                                 ? std::max(2, settings_.denoise_start_sample)
+                                 : std::numeric_limits<int>::max();
+    std::vector<float> preview;  // the last denoised published image, of preview_samples samples
+    int preview_samples = 0;
     arena.execute([&] {
       for (int s = 0; s < settings_.samples; ++s) {
         if (cancel_.load()) break;
@@ -314,10 +326,20 @@ void RenderJob::run() noexcept {
             update_active(e);
         }
         auto now = std::chrono::steady_clock::now();
-        // Also after passes 1, 2, 4, 8, ...: early passes change the image most, and the viewport
-        // shows the first one as soon as it exists.
-        const bool power_of_two = ((s + 1) & s) == 0;
-        if (power_of_two || std::chrono::duration<double>(now - last_publish).count() >= kPublishInterval) {
+        const double since_publish = std::chrono::duration<double>(now - last_publish).count();
+        if (s + 1 >= denoise_from) {
+          // Once the published image is denoised, every later one is (no flicker back to noise):
+          // the first at the start sample, then paced by the denoiser's cost.
+          if (s + 1 == denoise_from ||
+              since_publish >= std::max(kPublishInterval, kDenoisePace * denoise_seconds_.load())) {
+            preview = denoise_film();
+            preview_samples = s + 1;
+            film_.publish(&preview);
+            last_publish = std::chrono::steady_clock::now();
+          }
+        } else if (((s + 1) & s) == 0 || since_publish >= kPublishInterval) {
+          // Also after passes 1, 2, 4, 8, ...: early passes change the image most, and the
+          // viewport shows the first one as soon as it exists.
           film_.publish();
           last_publish = now;
         }
@@ -330,11 +352,11 @@ void RenderJob::run() noexcept {
       rel_error_.store(e.rel_error);
       unestimated_pixels_.store(e.unestimated_pixels);
       // The denoiser needs both half images; a cancel asks to stop now, so it is not run then.
-      if (settings_.denoise && !cancel_.load() && samples_done_.load() >= 2) {
-        const auto t0 = std::chrono::steady_clock::now();
-        film_.set_denoised(denoise(film_.half_images()));
-        denoise_seconds_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      }
+      // With a start sample, not before it; the last published image is reused when no pass
+      // (not even a cut one) came after it.
+      const int done = samples_done_.load();
+      if (settings_.denoise && !cancel_.load() && done >= 2 && done >= settings_.denoise_start_sample)
+        film_.set_denoised(preview_samples == passes_started_.load() ? std::move(preview) : denoise_film());
     });
     film_.finish();
     finished_elapsed_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
@@ -347,6 +369,13 @@ void RenderJob::run() noexcept {
   } catch (...) {
     fail("unknown error", false);
   }
+}
+
+std::vector<float> RenderJob::denoise_film() {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<float> rgb = denoise(film_.half_images());
+  denoise_seconds_.store(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return rgb;
 }
 
 // Ends the render as Failed. Allocates nothing (the failure may be an allocation's): the film
@@ -376,7 +405,7 @@ RenderStatus RenderJob::status() const {
   st.halt_reason = HaltReason(halt_reason_.load());
   st.active_pixels = active_pixels_.load();
   st.unestimated_pixels = unestimated_pixels_.load();
-  st.denoised = st.state != RenderState::Running && film_.denoised();
+  st.denoised = st.state != RenderState::Running ? film_.denoised() : film_.published_denoised();
   st.denoise_seconds = denoise_seconds_.load();
   if (st.state != RenderState::Running) {
     st.remaining = 0;

@@ -45,6 +45,9 @@ struct RenderSettings {
   // Denoise Combined once rendering stops (denoise/nfor.h; not after a cancel, nor with fewer
   // than 2 passes); the film then keeps the features and Noisy Image.
   bool denoise = false;
+  // With denoise, > 0: also the published image from max(denoise_start_sample, 2) samples on
+  // (lt_render_settings.denoise_start_sample: the viewport's), and the final image only from there.
+  int denoise_start_sample = 0;
   // Cryptomatte types kept (bits 1 << CryptomatteType) and Blender's Levels (FilmLayout).
   unsigned cryptomatte = 0;
   int cryptomatte_levels = 6;
@@ -78,8 +81,9 @@ struct RenderStatus {
   HaltReason halt_reason = HaltReason::None;
   uint64_t active_pixels = 0;       // pixels still sampling (all of them without adaptive sampling)
   uint64_t unestimated_pixels = 0;  // ErrorEstimate::unestimated_pixels of the last estimate
-  bool denoised = false;            // Combined holds the denoised image (Noisy Image the film's)
-  double denoise_seconds = 0;       // the denoiser's time
+  // Combined holds the denoised image (Noisy Image the film's); while rendering, the published one is.
+  bool denoised = false;
+  double denoise_seconds = 0;  // the denoiser's time (its last run's while rendering)
 };
 
 class RenderJob {
@@ -110,6 +114,8 @@ class RenderJob {
   void fail(const char* what, bool out_of_memory) noexcept;
   // Adaptive sampling: clears active_ for pixels whose variance meets their share of the target.
   void update_active(const ErrorEstimate& e);
+  // The denoised RGB of the film as it is (between passes), its time in denoise_seconds_.
+  std::vector<float> denoise_film();
   RenderSettings settings_;
   Camera camera_;
   FilterSampler filter_;
