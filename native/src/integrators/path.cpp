@@ -45,7 +45,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     // The previous scattering vertex, for MIS on emitters the sampled direction reaches.
     float prev_pdf = 0;
     bool prev_delta = true;
-    float min_pdf = INFINITY;  // Cycles' min_ray_pdf: the smallest pdf of the bounces so far (Bevel)
+    float min_pdf = INFINITY;   // Cycles' min_ray_pdf: the smallest pdf of the bounces so far (Bevel)
     Vec3 prev_p, prev_n{0.0f};  // prev_n: the geometric normal there (zero in a medium)
     float t_prev = 0;           // distance from prev_p to ray.o (the ray crossed invisible boundaries)
     // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
@@ -60,8 +60,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
   unsigned& visibility = state.visibility;
   Bounces& b = state.b;
   int& nulls = state.nulls;
-  float &prev_pdf = state.prev_pdf, &t_prev = state.t_prev, &footprint = state.footprint,
-        &min_pdf = state.min_pdf;
+  float &prev_pdf = state.prev_pdf, &t_prev = state.t_prev, &footprint = state.footprint, &min_pdf = state.min_pdf;
   bool& prev_delta = state.prev_delta;
   Vec3 &prev_p = state.prev_p, &prev_n = state.prev_n;
   VolumeStack& stack = state.stack;
