@@ -230,6 +230,7 @@ def test_viewport_denoises_from_the_start_sample(scene_factory):
         # Every image read while refining: noisy before the start sample, denoised from it on.
         for samples, denoised in seen3 + seen4 + seen8:
             assert denoised == (samples >= 4), (samples, denoised, seen3, seen4, seen8)
+
         def mse(a):
             return float(((a - reference) ** 2).mean())
         print("viewport MSE against 256 samples at 4 samples: noisy %.3g, denoised %.3g"
