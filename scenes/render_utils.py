@@ -261,6 +261,24 @@ def _exr_settings(scene, multilayer=True):
     scene.render.use_sequencer = False
 
 
+def render_frames_with_persistent_data(scene, filepath, frames=(1, 2)):
+    """Renders `frames` with Lantern (4 samples) and Persistent Data into multilayer EXRs named
+    filepath + the frame number, as `blender -a` does; returns the add-on's scene_sync counters
+    (an edit a committed scene cannot take shows as a full export)."""
+    import bpy
+    from lantern import engine
+    scene.frame_start, scene.frame_end = frames[0], frames[-1]
+    configure(scene, LANTERN, 4, 0)
+    _exr_settings(scene)
+    scene.render.use_persistent_data = True
+    scene.render.filepath = filepath
+    try:
+        bpy.ops.render.render(animation=True, scene=scene.name)
+    finally:
+        scene.render.use_persistent_data = False
+    return engine.LAST_RENDER["scene_sync"]
+
+
 class RenderOutput(dict):
     """Passes of one render ({name: (h, w, c) float32}) plus .seconds, .path, .status."""
 

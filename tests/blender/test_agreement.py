@@ -223,22 +223,14 @@ def test_shadow_terminator_scene_needs_the_offset(scene_factory, outdir):
 def test_shadow_terminator_change_between_frames_exports_the_scene_anew(scene_factory, tmp_path):
     """Persistent Data keeps the core scene between frames (scene_sync.py): a sphere whose
     Geometry Offset changes there is added anew (as a holdout change is, test_holdout.py)."""
-    import bpy
-    from lantern import engine
     scene = scene_factory("terminator")
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     settings = scene.objects["TermSphere"].cycles
     for frame, offset in ((1, 0.1), (2, 0.0)):
         settings.shadow_terminator_geometry_offset = offset
         settings.keyframe_insert("shadow_terminator_geometry_offset", frame=frame)
-    scene.frame_start, scene.frame_end = 1, 2
-    ru.configure(scene, ru.LANTERN, 4, 0)
-    ru._exr_settings(scene)
-    scene.render.use_persistent_data = True
-    scene.render.filepath = str(tmp_path / "anim_")
-    bpy.ops.render.render(animation=True, scene=scene.name)
-    scene.render.use_persistent_data = False
-    assert engine.LAST_RENDER["scene_sync"]["full_exports"] == 2, engine.LAST_RENDER["scene_sync"]
+    sync = ru.render_frames_with_persistent_data(scene, str(tmp_path / "anim_"))
+    assert sync["full_exports"] == 2, sync
 
 
 @pytest.mark.parametrize("integrator", ["PATH", "BIDIRECTIONAL"])

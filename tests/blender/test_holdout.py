@@ -30,8 +30,6 @@ def test_holdout_agrees_with_cycles(film_transparent, scene_factory, outdir):
 def test_holdout_toggled_between_frames_exports_the_scene_anew(scene_factory, tmp_path):
     """Persistent Data keeps the core scene between frames (scene_sync.py): an object that becomes
     a holdout there is added anew, so frame 2 holds the cube out (alpha 0 at its centre)."""
-    import bpy
-    from lantern import engine
     scene = scene_factory("holdout")
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     cube = scene.objects["HoldoutCube"]
@@ -39,13 +37,7 @@ def test_holdout_toggled_between_frames_exports_the_scene_anew(scene_factory, tm
     cube.keyframe_insert("is_holdout", frame=1)
     cube.is_holdout = True
     cube.keyframe_insert("is_holdout", frame=2)
-    scene.frame_start, scene.frame_end = 1, 2
-    ru.configure(scene, ru.LANTERN, 4, 0)
-    ru._exr_settings(scene)
-    scene.render.use_persistent_data = True
-    scene.render.filepath = str(tmp_path / "anim_")
-    bpy.ops.render.render(animation=True, scene=scene.name)
-    scene.render.use_persistent_data = False
-    assert engine.LAST_RENDER["scene_sync"]["full_exports"] == 2, engine.LAST_RENDER["scene_sync"]
+    sync = ru.render_frames_with_persistent_data(scene, str(tmp_path / "anim_"))
+    assert sync["full_exports"] == 2, sync
     alphas = [ru.read_multilayer_exr(str(tmp_path / ("anim_%04d.exr" % f)))["Combined"][..., 3] for f in (1, 2)]
     assert (alphas[0] - alphas[1]).max() == 1.0  # opaque in frame 1, held out in frame 2
