@@ -43,8 +43,8 @@ def test_world_warnings_name_node_and_world():
     world.name = "Odd Sky"
     nt = world.node_tree
     bg = nt.nodes["Background"]
-    sky = nt.nodes.new("ShaderNodeTexSky")
-    nt.links.new(sky.outputs["Color"], bg.inputs["Color"])
+    density = nt.nodes.new("ShaderNodeTexPointDensity")
+    nt.links.new(density.outputs["Color"], bg.inputs["Color"])
     add = nt.nodes.new("ShaderNodeAddShader")
     diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
     nt.links.new(bg.outputs[0], add.inputs[0])
@@ -53,7 +53,8 @@ def test_world_warnings_name_node_and_world():
     world.cycles_visibility.glossy = False
     summary, reports = ru.export(scene)
     assert any("World 'Odd Sky'" in r and "glossy off" in r for r in reports), reports
-    assert any("World 'Odd Sky'" in r and "'Sky Texture'" in r and "ShaderNodeTexSky" in r for r in reports), reports
+    assert any("World 'Odd Sky'" in r and "'Point Density'" in r and "ShaderNodeTexPointDensity" in r
+               for r in reports), reports
     assert any("World 'Odd Sky'" in r and "'Diffuse BSDF'" in r and "no light" in r for r in reports), reports
 
 
