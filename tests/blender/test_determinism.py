@@ -77,9 +77,10 @@ def test_bidirectional_renders_are_bit_identical(name, scene_factory):
 
 def test_exported_normals_are_blenders_summed_in_a_fixed_order():
     """Smooth meshes without Auto Smooth: the corner normals the exporter computes are Blender's
-    vertex normals (to Blender's single-precision rounding, which on short edges reaches 1e-4; on a UV
-    sphere, a subdivided Suzanne, a cylinder's n-gon caps) and the same bits for every re-evaluation, where Blender's own change (the
-    Suzanne's, 31k faces, differed in each of 10 evaluations on 2026-12-05)."""
+    vertex normals (to Blender's single-precision rounding, which on short edges reaches 1e-4) on
+    a UV sphere, a subdivided Suzanne and a cylinder's n-gon caps, and the same bits for every
+    re-evaluation, where Blender's own change (the Suzanne's, 31k faces, differed in each of 10
+    evaluations on 2026-12-05)."""
     from lantern.export.mesh import mesh_arrays
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24)
