@@ -152,42 +152,36 @@ def object_values(obj, names):
 
 def smooth_vertex_normals(mesh, positions):
     """Blender 3.x's vertex normals (mesh_normals.cc, mesh_calc_normals_poly_and_vertex: each
-    polygon's Newell normal weighted by its corner's angle, summed per vertex, normalised; a
-    zero sum takes the normalised position), summed in a fixed order. Blender sums them with
-    atomic adds over threads, so its normals differ in the last bits from one evaluation to the
-    next (measured: 4 of 6 re-evaluations of a UV sphere in one session), and with them a seed's
-    render; these are the same bits every time."""
+    polygon's normal weighted by its corner's angle, summed per vertex, normalised; a zero sum
+    takes the normalised position), summed in a fixed order. Blender sums them with atomic adds
+    over threads, so its normals differ in the last bits from one evaluation to the next (a
+    subdivided Suzanne's in each of 10), and with them a seed's render; these are the same bits
+    every time. Its polygon normals are computed one polygon at a time: those are taken."""
     n_loops, n_polys = len(mesh.loops), len(mesh.polygons)
     vert = np.empty(n_loops, np.int32)
     mesh.loops.foreach_get("vertex_index", vert)
     start = np.empty(n_polys, np.int32)
     total = np.empty(n_polys, np.int32)
+    face = np.empty(n_polys * 3, np.float32)
     mesh.polygons.foreach_get("loop_start", start)
     mesh.polygons.foreach_get("loop_total", total)
+    mesh.polygons.foreach_get("normal", face)
+    # Each corner's neighbours in its polygon.
+    nxt = np.arange(1, n_loops + 1, dtype=np.int32)
+    nxt[start + total - 1] = start
+    prv = np.arange(-1, n_loops - 1, dtype=np.int32)
+    prv[start] = start + total - 1
     p = positions.reshape(-1, 3)
-    poly = np.repeat(np.arange(n_polys, dtype=np.int32), total)
-    first = start[poly]
-    offset = np.arange(n_loops, dtype=np.int32) - first
     a = p[vert]
-    b = a[first + (offset + 1) % total[poly]]
-    prev = a[first + (offset - 1) % total[poly]]
-    # Newell's method, per polygon: the sum over its edges (a, b) of the terms below.
-    d, s = a - b, a + b
-    terms = np.empty_like(a)
-    np.multiply(d[:, 1], s[:, 2], out=terms[:, 0])
-    np.multiply(d[:, 2], s[:, 0], out=terms[:, 1])
-    np.multiply(d[:, 0], s[:, 1], out=terms[:, 2])
-    face = np.add.reduceat(terms, start, axis=0, dtype=np.float64) if n_polys else terms[:0]
-    _normalise(face, (0.0, 0.0, 1.0))
-    # The corner's angle between its two edges.
-    to_prev, to_next = prev - a, -d
+    to_prev, to_next = p[vert[prv]] - a, p[vert[nxt]] - a
     _normalise(to_prev, 0.0)
     _normalise(to_next, 0.0)
     cosine = np.einsum("ij,ij->i", to_prev, to_next)
     angle = np.arccos(np.clip(cosine, -1.0, 1.0, out=cosine), out=cosine)
+    corner_face = face.reshape(-1, 3)[np.repeat(np.arange(n_polys, dtype=np.int32), total)]
     normals = np.empty((len(p), 3), np.float64)
     for k in range(3):
-        normals[:, k] = np.bincount(vert, face[poly, k] * angle, len(p))
+        normals[:, k] = np.bincount(vert, corner_face[:, k] * angle, len(p))
     zero = _normalise(normals, 0.0)
     normals[zero] = p[zero]  # Blender's fallback for a vertex whose sum is zero
     _normalise(normals, 0.0)
