@@ -16,6 +16,7 @@ namespace lt {
 
 namespace {
 constexpr int kFilterTableSize = 1024;
+constexpr int kGuidePerBin = 8;  // guide cells per bin: the walk after the lookup is short even in the tails
 
 // IEEE half floats for the published image (what a display needs, as Cycles' display buffer):
 // round to nearest even, finite values beyond the range clamped to +-65504.
@@ -85,7 +86,7 @@ FilterSampler::FilterSampler(FilterType type, float width) {
   cdf_.resize(n + 1);
   inv_width_.resize(n);
   density_.resize(n);
-  guide_.resize(n);
+  guide_.resize(size_t(n) * kGuidePerBin);
   for (int i = 0; i <= n; ++i) cdf_[i] = float(cdf[i] / total);
   cdf_[n] = 1.0f;
   for (int i = 0; i < n; ++i) {
@@ -94,8 +95,9 @@ FilterSampler::FilterSampler(FilterType type, float width) {
     // Density per pixel of offset: the bin's probability spread over its width, split by sign.
     density_[i] = float(v[i] / total * n * 0.5 / half_range_);
   }
-  for (int k = 0, i = 0; k < n; ++k) {
-    while (i + 1 < n && cdf_[i + 1] <= float(k) / n) ++i;
+  const int g = int(guide_.size());
+  for (int k = 0, i = 0; k < g; ++k) {
+    while (i + 1 < n && cdf_[i + 1] <= float(k) / g) ++i;
     guide_[k] = uint32_t(i);
   }
 }
@@ -104,8 +106,8 @@ float FilterSampler::sample(float u) const {
   // The profile is symmetric: the first half of u picks the sign.
   const float sign = u < 0.5f ? -1.0f : 1.0f;
   const float r = std::min(u < 0.5f ? 2 * u : 2 * u - 1, kOneMinusEpsilon);
-  const int n = int(guide_.size());
-  int i = int(guide_[std::min(n - 1, int(r * n))]);
+  const int n = int(inv_width_.size()), g = int(guide_.size());
+  int i = int(guide_[std::min(g - 1, int(r * g))]);
   while (i + 1 < n && cdf_[i + 1] <= r) ++i;  // also skips empty bins
   const float t = std::min((r - cdf_[i]) * inv_width_[i], kOneMinusEpsilon);
   return sign * half_range_ * (i + t) / n;

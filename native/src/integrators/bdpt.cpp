@@ -577,7 +577,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   PathVertex& y0 = path[0];
   y0 = PathVertex();
   y0.type = VertexType::Light;
-  if (lights_.empty() || s_.max_light_length <= 0) return 0;
+  if (!lights_.pickable() || s_.max_light_length <= 0) return 0;
   float pmf, u_remapped;
   int li = lights_.pick(sampler_.next_1d(), &pmf, &u_remapped);
   Vec2 up = sampler_.next_2d(), ud = sampler_.next_2d();
@@ -909,8 +909,9 @@ void Bdpt::connect_all(std::vector<PathVertex>& camera, int nt, std::vector<Path
   add_emitters_reached(camera, nt);
   // s = 1 takes a fresh light sample and needs no light subpath (there is none when the picked
   // lamp faces its receiver, or emission sampling failed); a scene without lights has no s >= 1
-  // (fuzz_abi: picking from the empty light set read through a null pointer).
-  const int s_max = s_.max_light_length >= 1 && !lights_.empty() ? std::max(ns, 1) : 0;
+  // (fuzz_abi: picking from the empty light set read through a null pointer), nor one whose only
+  // light is a constant World (never picked).
+  const int s_max = s_.max_light_length >= 1 && lights_.pickable() ? std::max(ns, 1) : 0;
   for (int t = 2; t <= nt; ++t)
     for (int s = 1; s <= s_max; ++s) {
       if (s + t - 2 > max_depth()) break;

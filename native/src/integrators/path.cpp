@@ -207,7 +207,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         const Phase& phase = scene.media[medium].phase();
         const Vec3 wo = normalize(-ray.d);
         if (b.total == 0) nee_first.set_volume();
-        if (!lights.empty())
+        if (lights.pickable())
           next_event(mi.p, nullptr, Vec3(0.0f), Vec3(0.0f), stack, [&](const Vec3& wi, float* pdf, unsigned, bool) {
             float p = phase.eval(wo, wi);
             *pdf = p;
@@ -317,7 +317,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         if (bsdf.count() == 0) break;
         if (b.exceeded(s)) break;
 
-        if (bsdf.has_non_delta() && !lights.empty())
+        if (bsdf.has_non_delta() && lights.pickable())
           next_event(sp.p, &sp, ng, ctx.N, stack,
                      [&](const Vec3& wi_world, float* pdf, unsigned excluded, bool offset) {
                        Vec3 wi = frame.to_local(wi_world);

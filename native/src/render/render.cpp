@@ -52,7 +52,9 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
           s.integrator, RenderContext{scene, camera_, filter_, with_passes(s), s.x0, s.y0, s.x1 - s.x0, s.y1 - s.y0})),
       film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
       active_(size_t(film_.width()) * film_.height(), 1),
-      motion_(!s.motion_pass && (scene.geometry.has_motion() || camera_.has_motion())) {
+      motion_(!s.motion_pass && (scene.geometry.has_motion() || camera_.has_motion())),
+      differentials_(std::any_of(scene.materials.begin(), scene.materials.end(),
+                                 [](const Material& m) { return m.needs_differentials(); })) {
   active_pixels_.store(active_.size());
   film_.set_labels(integrator_->film_labels());
   camera_x_ = normalize(scene.camera.xf.column(0));
@@ -184,7 +186,8 @@ void RenderJob::render_pass(int sample_index) {
               film_.add(x, y, none);
               continue;
             }
-            camera_.differentials(cs.film.x, cs.film.y, &cs.dP, &cs.dD);
+            // Only Bump and Wireframe read the footprint (add_differentials); others skip the cost.
+            if (differentials_) camera_.differentials(cs.film.x, cs.film.y, &cs.dP, &cs.dD);
             if (groups > 0) {  // light groups: a zeroed buffer per sample (nothing when there are none)
               lightgroups.assign(size_t(groups), Spectrum(0.0f));
               cs.lightgroups = lightgroups.data();

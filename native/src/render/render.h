@@ -137,6 +137,7 @@ class RenderJob {
   std::atomic<uint64_t> pass_samples_{0}, pass_samples_half_{0};
   std::vector<uint8_t> active_;  // per pixel of the region: still sampling
   bool motion_ = false;          // something moves: each camera sample draws a shutter time
+  bool differentials_ = false;   // a material reads ray differentials (Bump, Wireframe): samples get them
   std::chrono::steady_clock::time_point start_;
   std::atomic<double> finished_elapsed_{-1};
   // Written without allocating (the failure may be an allocation's).

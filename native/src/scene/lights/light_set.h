@@ -34,6 +34,10 @@ class LightSet {
   size_t size() const { return lights_.size(); }
   const Light& light(int i) const { return lights_[i]; }
   bool empty() const { return lights_.empty(); }
+  // Whether pick and pick_nee can return a light: false without lights, or with only lights of no
+  // power (a constant World alone). Integrators then skip next-event estimation and light
+  // subpaths, which could not find a light, and draw no numbers for them.
+  bool pickable() const { return distribution_.integral() > 0; }
 
   // Picks a light with probability proportional to its estimated power (light subpaths); -1 if
   // none has any (a constant World is never picked: LightSet::build).
