@@ -55,13 +55,12 @@ sys.path.insert(0, os.path.join(REPO, "addon"))
 sys.path.insert(0, os.path.join(REPO, "scenes"))
 
 import build_scenes  # noqa: E402  (the test scenes' builders)
-from curves import interp_loglog  # noqa: E402
+from curves import EPS, interp_loglog, pixel_errors, reference_from_chunks, rgb  # noqa: E402
 from machine import cpu_model  # noqa: E402
 import lantern  # noqa: E402
 import render_utils  # noqa: E402  (render to EXR and read back; PNG writer)
 from lantern import core as lt_core  # noqa: E402
 
-EPS = 1e-2  # relMSE denominator: ref^2 + EPS
 TRIM = 1e-3  # the trimmed relMSE leaves out this fraction of pixels, those of largest error
 SCENES = ("door", "door_bounce", "caustic", "cornell_area")
 # name: (engine, Lantern integrator, Lantern sample pattern); --independent adds the last two
@@ -123,15 +122,6 @@ def git_describe():
                               capture_output=True, text=True, check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return None
-
-
-def rgb(img):
-    return np.asarray(img, np.float64)[..., :3]
-
-
-def pixel_errors(x, ref):
-    """Per pixel, the mean over RGB of (x - ref)^2 / (ref^2 + EPS)."""
-    return ((rgb(x) - ref) ** 2 / (ref * ref + EPS)).mean(axis=-1)
 
 
 def trimmed_mean(e, floor_map, fraction=TRIM):
@@ -256,16 +246,12 @@ def run_scene(name, args, tmpdir):
     chunks, ref_secs, ref_cpu = [], 0.0, 0.0
     for k in range(args.ref_chunks):
         img, sec, cpu = render("BIDIRECTIONAL", chunk_samples, 1 + k)
-        chunks.append(rgb(img))
+        chunks.append(img)
         ref_secs += sec
         ref_cpu += cpu
         print("bench: reference chunk %d: %d spp, %.2f s" % (k + 1, chunk_samples, sec), flush=True)
-    chunks = np.stack(chunks)
-    ref = chunks.mean(axis=0)
+    ref, floor_map, floor = reference_from_chunks(chunks)
     K = args.ref_chunks
-    var_ref = ((chunks - ref) ** 2).sum(axis=0) / (K * (K - 1))
-    floor_map = (var_ref / (ref * ref + EPS)).mean(axis=-1)
-    floor = float(floor_map.mean())
 
     for m in METHODS:
         for r, img in zip(rows[m], images[m]):

@@ -383,6 +383,18 @@ MEAN_Z = 3.0         # standard errors of the two images' combined noise
 MEAN_POWER = 0.005   # that noise must be below this fraction of the mean, else the check is blind
 
 
+def denoise_mean_shift(denoised, noisy, variance):
+    """How far denoising moved the image mean, per RGB channel: (sum denoised - sum noisy) in
+    standard errors of the noisy mean, sqrt(sum of the Variance pass) (the variance of each pixel's
+    mean; camera samples only, so BDPT's splats are not in it); and that standard error as a
+    fraction of the noisy mean (the check's power). The issue's promise and the native test
+    Denoise.KeepsTheMeanWithinTheNoise: within 5 standard errors (the project's bound)."""
+    d, n = (np.asarray(x, np.float64)[..., :3].reshape(-1, 3) for x in (denoised, noisy))
+    se = np.sqrt(np.asarray(variance, np.float64)[..., :3].reshape(-1, 3).sum(axis=0))
+    dsum, nsum = d.sum(axis=0), n.sum(axis=0)
+    return [float(x) for x in (dsum - nsum) / se], [float(x) for x in se / np.maximum(nsum, 1e-30)]
+
+
 def global_mean_report(name, a, b, labels=("Lantern", "Cycles"), rounding=1e-5, z=MEAN_Z):
     """a, b: (image mean, squared standard error) of two engines or integrators. Returns "" when the
     means agree within z combined standard errors (plus `rounding` relative) and that noise is

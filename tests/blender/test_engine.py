@@ -61,6 +61,26 @@ def test_denoising_passes_have_cycles_names_and_are_finite(scene_factory):
     assert "denoised" in engine.format_stats(engine.LAST_RENDER["stats"])
 
 
+@pytest.mark.parametrize("name, integrator", [("textured", "PATH"), ("smoke_box", "VOLPATH")])
+def test_denoised_mean_stays_within_the_noise(scene_factory, name, integrator):
+    """Issue 16 on scenes of bench/denoise_scenes.py beyond the Cornell box (the native
+    Denoise.KeepsTheMeanWithinTheNoise has the box): the denoised image is finite and its mean
+    within 5 standard errors of the noisy one's, that error under MEAN_POWER of the mean (else the
+    check is blind). The doors are in the bench only: with PATH their mean's noise is several
+    percent at a test's cost, and BDPT's splats are not in the Variance pass."""
+    scene = scene_factory(name, resolution=(128, 96))
+    scene.lantern.use_denoising = True
+    scene.view_layers[0].lantern_extra_passes = True
+    out = ru.render(scene, ru.LANTERN, 16, seed=11, integrator=integrator)
+    assert engine.LAST_RENDER["stats"].denoised
+    assert np.isfinite(out["Combined"]).all()
+    shift, power = ru.denoise_mean_shift(out["Combined"], out["Noisy Image"], out["Variance"])
+    print("%s: denoised - noisy image mean, standard errors (R G B): %s; standard error / mean %s" % (
+        name, " ".join("%+.2f" % z for z in shift), " ".join("%.4f" % p for p in power)))
+    assert max(power) <= ru.MEAN_POWER, power
+    assert max(abs(z) for z in shift) <= 5.0, shift
+
+
 def test_transparent_film_gives_alpha_zero_on_background(scene_factory):
     scene = scene_factory("sun_world")
     scene.render.film_transparent = True
