@@ -488,3 +488,14 @@ def test_particle_hair_agrees_with_cycles(name, scene_factory, outdir):
                bdpt_tile_report(name, bdpt, cycles[0], cycles[1], outdir)]
     report = "\n".join(filter(None, reports))
     assert report == "", report
+
+
+@pytest.mark.parametrize("name", ["subsurface", "subsurface_burley"])
+def test_subsurface_scattering_agrees_with_cycles(name, scene_factory, outdir):
+    """Cycles 3.4's BSSRDFs (scenes: subsurface, Random Walk; subsurface_burley, Christensen-
+    Burley): a Principled BSDF's subsurface and the Subsurface Scattering node, through the walk
+    under each object's own surface and the exit point's diffuse, per tile and in the image mean
+    as above."""
+    both = lantern_and_cycles(scene_factory, name, "PATH")
+    report, _ = ru.agreement_report(name, both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
+    assert report == "", report
