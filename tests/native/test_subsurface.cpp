@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "geometry/geometry.h"
+#include "geometry_builders.h"
 #include "integrators/subsurface.h"
 #include "media/phase.h"
 #include "shading/bsdf.h"
@@ -71,13 +72,7 @@ struct SphereScene {
         if (i > 0) m.indices.insert(m.indices.end(), {a, c, b});
         if (i < rings - 1) m.indices.insert(m.indices.end(), {b, c, d});
       }
-    std::vector<std::string> warnings;
-    Instance inst;
-    static_cast<Pose&>(inst) = Pose::of(Transform());
-    inst.mesh = g.add_mesh(std::move(m), warnings);
-    inst.materials = {0};
-    g.add_instance(std::move(inst), warnings);
-    g.commit();
+    lt_test::add_lone_instance(g, std::move(m));
   }
   // The top of the sphere as a ray straight down meets it.
   SurfacePoint top() const {
@@ -152,20 +147,7 @@ TEST(Subsurface, WalkInAClosedMeshConservesEnergy) {
 // A thick slab, 1000 x 1000 x 200 mean free paths, as a box: a half-space for the walk.
 struct SlabScene {
   Geometry g;
-  SlabScene() {
-    Mesh m;
-    for (int i = 0; i < 8; ++i)
-      m.positions.push_back(Vec3(i & 1 ? 500.0f : -500.0f, i & 2 ? 500.0f : -500.0f, i & 4 ? 0.0f : -200.0f));
-    m.indices = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
-    std::vector<std::string> warnings;
-    Instance inst;
-    static_cast<Pose&>(inst) = Pose::of(Transform());
-    inst.mesh = g.add_mesh(std::move(m), warnings);
-    inst.materials = {0};
-    g.add_instance(std::move(inst), warnings);
-    g.commit();
-  }
+  SlabScene() { lt_test::add_lone_instance(g, lt_test::box_mesh(Vec3(-500, -500, -200), Vec3(500, 500, 0))); }
 };
 
 // The same medium walked the plain way (analog: free flights from sigma_t, HG directions, the

@@ -14,11 +14,11 @@ namespace lt {
 
 namespace {
 
-constexpr int kMaxBounces = 256;                // Cycles' BSSRDF_MAX_BOUNCES
-constexpr float kThroughputEpsilon = 1e-6f;     // VOLUME_THROUGHPUT_EPSILON
-constexpr int kSimilarityLevel = 9;             // SUBSURFACE_RANDOM_WALK_SIMILARITY_LEVEL
-constexpr int kMaxDiskHits = 4;                 // BSSRDF_MAX_HITS
-constexpr float kBurleyTruncate = 16.0f;        // BURLEY_TRUNCATE
+constexpr int kMaxBounces = 256;             // Cycles' BSSRDF_MAX_BOUNCES
+constexpr float kThroughputEpsilon = 1e-6f;  // VOLUME_THROUGHPUT_EPSILON
+constexpr int kSimilarityLevel = 9;          // SUBSURFACE_RANDOM_WALK_SIMILARITY_LEVEL
+constexpr int kMaxDiskHits = 4;              // BSSRDF_MAX_HITS
+constexpr float kBurleyTruncate = 16.0f;     // BURLEY_TRUNCATE
 constexpr float kBurleyTruncateCdf = 0.9963790093708328f;
 
 Spectrum exp_neg(const Spectrum& x) { return Spectrum(std::exp(-x.x), std::exp(-x.y), std::exp(-x.z)); }
@@ -199,8 +199,8 @@ float burley_root(float xi) {
 }
 float channels(const Spectrum& radius) { return float((radius.x > 0) + (radius.y > 0) + (radius.z > 0)); }
 
-bool disk(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ng, bool backfacing, const Lobe& l,
-          float time, Sampler& sampler, Spectrum* beta, SubsurfaceExit* exit) {
+bool disk(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ng, bool backfacing, const Lobe& l, float time,
+          Sampler& sampler, Spectrum* beta, SubsurfaceExit* exit) {
   Vec2 u = sampler.next_2d();
   const Spectrum& radius = l.sss_radius;
   // One of three projection axes (the normal half the time), MIS-weighted below.
@@ -300,27 +300,28 @@ bool disk(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ng, bool
 
 void random_walk_remap(float albedo, float d, float g, float* sigma_t, float* alpha) {
   // Wrenninge et al.'s fit of the single-scattering albedo for anisotropy g (Cycles'
-  // subsurface_random_walk_remap, Chiang et al.'s formula at g = 0).
-  const float g2 = g * g, g3 = g2 * g, g4 = g3 * g, g5 = g4 * g, g6 = g5 * g, g7 = g6 * g;
-  const float A = 1.8260523782f - 1.28451056436f * g - 1.79904629312f * g2 + 9.19393289202f * g3 -
-                  22.8215585862f * g4 + 32.0234874259f * g5 - 23.6264803333f * g6 + 7.21067002658f * g7;
-  const float B = 4.98511194385f +
-                  0.127355959438f * std::exp(31.1491581433f * g - 201.847017512f * g2 + 841.576016723f * g3 -
-                                             2018.09288505f * g4 + 2731.71560286f * g5 - 1935.41424244f * g6 +
-                                             559.009054474f * g7);
-  const float C = 1.09686102424f - 0.394704063468f * g + 1.05258115941f * g2 - 8.83963712726f * g3 +
-                  28.8643230661f * g4 - 46.8802913581f * g5 + 38.5402837518f * g6 - 12.7181042538f * g7;
-  const float D = 0.496310210422f + 0.360146581622f * g - 2.15139309747f * g2 + 17.8896899217f * g3 -
-                  55.2984010333f * g4 + 82.065982243f * g5 - 58.5106008578f * g6 + 15.8478295021f * g7;
-  const float E = 4.23190299701f +
-                  0.00310603949088f * std::exp(76.7316253952f * g - 594.356773233f * g2 + 2448.8834203f * g3 -
-                                               5576.68528998f * g4 + 7116.60171912f * g5 - 4763.54467887f * g6 +
-                                               1303.5318055f * g7);
-  const float F = 2.40602999408f - 2.51814844609f * g + 9.18494908356f * g2 - 79.2191708682f * g3 +
-                  259.082868209f * g4 - 403.613804597f * g5 + 302.85712436f * g6 - 87.4370473567f * g7;
+  // subsurface_random_walk_remap; Chiang et al.'s formula at g = 0): six polynomials of degree 7.
+  auto poly = [g](const float(&c)[8]) {
+    float r = 0;
+    for (int k = 7; k >= 0; --k) r = r * g + c[k];
+    return r;
+  };
+  static constexpr float kA[8] = {1.8260523782f,   -1.28451056436f, -1.79904629312f, 9.19393289202f,
+                                  -22.8215585862f, 32.0234874259f,  -23.6264803333f, 7.21067002658f};
+  static constexpr float kB[8] = {0.0f,           31.1491581433f,  -201.847017512f, 841.576016723f, -2018.09288505f,
+                                  2731.71560286f, -1935.41424244f, 559.009054474f};
+  static constexpr float kC[8] = {1.09686102424f, -0.394704063468f, 1.05258115941f, -8.83963712726f,
+                                  28.8643230661f, -46.8802913581f,  38.5402837518f, -12.7181042538f};
+  static constexpr float kD[8] = {0.496310210422f, 0.360146581622f, -2.15139309747f, 17.8896899217f,
+                                  -55.2984010333f, 82.065982243f,   -58.5106008578f, 15.8478295021f};
+  static constexpr float kE[8] = {0.0f,           76.7316253952f,  -594.356773233f, 2448.8834203f, -5576.68528998f,
+                                  7116.60171912f, -4763.54467887f, 1303.5318055f};
+  static constexpr float kF[8] = {2.40602999408f, -2.51814844609f, 9.18494908356f, -79.2191708682f,
+                                  259.082868209f, -403.613804597f, 302.85712436f,  -87.4370473567f};
+  const float A = poly(kA), B = 4.98511194385f + 0.127355959438f * std::exp(poly(kB)), C = poly(kC);
+  const float D = poly(kD), E = 4.23190299701f + 0.00310603949088f * std::exp(poly(kE)), F = poly(kF);
   const float blend = std::pow(albedo, 0.25f);
-  const float a = (1 - blend) * A * std::pow(std::atan(B * albedo), C) +
-                  blend * D * std::pow(std::atan(E * albedo), F);
+  const float a = (1 - blend) * A * std::pow(std::atan(B * albedo), C) + blend * D * std::pow(std::atan(E * albedo), F);
   *alpha = clamp(std::isfinite(a) ? a : 0.0f, 0.0f, 0.999999f);
   *sigma_t = 1 / std::max(d, 1e-16f) / (1 - g);
 }
@@ -338,8 +339,7 @@ Lobe subsurface_exit_lobe(const Lobe& l) {
 bool subsurface_scatter(const Geometry& geometry, const SurfacePoint& sp, const Vec3& n, const Vec3& ng,
                         bool backfacing, const Lobe& l, float time, Sampler& sampler, Spectrum* beta,
                         SubsurfaceExit* exit) {
-  if (l.sss_method == SubsurfaceMethod::Burley)
-    return disk(geometry, sp, ng, backfacing, l, time, sampler, beta, exit);
+  if (l.sss_method == SubsurfaceMethod::Burley) return disk(geometry, sp, ng, backfacing, l, time, sampler, beta, exit);
   return random_walk(geometry, sp, n, ng, l, time, sampler, beta, exit);
 }
 

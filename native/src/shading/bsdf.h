@@ -159,7 +159,7 @@ struct Lobe {
   Vec3 hair_tangent{1.0f, 0.0f, 0.0f};
   Spectrum hair_sigma{0.0f};
   float hair_roughness = 0.3f, hair_radial = 0.3f, hair_m0 = 0.3f, hair_tilt = 0;
-  GlassPart glass_part = GlassPart::Both;  // Dielectric, DielectricBeckmann: the branches kept
+  GlassPart glass_part = GlassPart::Both;        // Dielectric, DielectricBeckmann: the branches kept
   DiffusePart diffuse_part = DiffusePart::Full;  // PrincipledDiffuse
   // Subsurface (see LobeType).
   Spectrum sss_radius{0.0f}, sss_albedo{0.0f};

@@ -81,8 +81,8 @@ SubsurfaceMethod subsurface_method(uint32_t param) {
 // Cycles 3.4's bssrdf_alloc and bssrdf_setup (closure/bssrdf.h): the retro-reflection of the
 // Principled BSDF's diffuse (roughness >= 0; the Subsurface Scattering node has none) beside the
 // BSSRDF, channels of radius below 1e-8 a diffuse of their weight, the rest the Subsurface lobe.
-void add_bssrdf(Machine& m, Vec3 weight, Vec3 radius, const Vec3& albedo, float roughness, float ior,
-                float anisotropy, SubsurfaceMethod method) {
+void add_bssrdf(Machine& m, Vec3 weight, Vec3 radius, const Vec3& albedo, float roughness, float ior, float anisotropy,
+                SubsurfaceMethod method) {
   if (!(std::abs(average(weight)) >= kClosureCutoff)) return;
   if (roughness >= 0) {
     Lobe retro;
@@ -167,8 +167,8 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   const Vec3 mixed = lerp(subsurface, base, non_negative(m.v(in.in[5])));
   if (m.ctx && m.ctx->subsurface && subsurface > kClosureCutoff) {
     if (std::abs(average(mixed)) > kClosureCutoff)
-      add_bssrdf(m, weight * mixed * diffuse_weight, non_negative(m.v(in.in[4]) * subsurface), mixed, r,
-                 m.f(in.in[6]), m.f(in.in[7]), subsurface_method(in.param[1]));
+      add_bssrdf(m, weight * mixed * diffuse_weight, non_negative(m.v(in.in[4]) * subsurface), mixed, r, m.f(in.in[6]),
+                 m.f(in.in[7]), subsurface_method(in.param[1]));
   } else {
     Lobe d;
     d.type = LobeType::PrincipledDiffuse;
