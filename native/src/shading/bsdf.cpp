@@ -1418,6 +1418,8 @@ Spectrum Bsdf::albedo() const {
   for (int k = 0; k < count_; ++k) {
     Spectrum w = vmax(lobes_[k].weight, Spectrum(0.0f));
     const LobeType t = lobes_[k].type;
+    // The BSSRDF's weight holds its retro-reflection's (Cycles' denoising albedo skips it too).
+    if (t == LobeType::PrincipledDiffuse && lobes_[k].diffuse_part == DiffusePart::RetroReflection) continue;
     if (t == LobeType::SpecularGGX || t == LobeType::Clearcoat) {
       Spectrum f0 = t == LobeType::Clearcoat ? kClearcoatF0 : vmin(vmax(lobes_[k].f0, Spectrum(0.0f)), Spectrum(1.0f));
       w *= f0 + (Spectrum(1.0f) - f0) * (1.0f / 21.0f);

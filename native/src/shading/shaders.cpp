@@ -147,8 +147,13 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   }
   const Vec3 normal = m.v(in.in[1]);
   take_normal(m, normal, weight);
-  const Vec3 base = non_negative(m.v(in.in[2]));
   const float subsurface = unit(m.f(in.in[3]));
+  // Cycles 3.4's BSSRDF colour, mix(base, Subsurface Color, Subsurface). Where the closure makes
+  // no BSSRDF (after a diffuse bounce; BDPT: ShadingContext::subsurface) it is the base colour of
+  // every layer, as Cycles' base_color = mixed_ss_base_color under PATH_RAY_DIFFUSE_ANCESTOR.
+  const Vec3 mixed = lerp(subsurface, non_negative(m.v(in.in[2])), non_negative(m.v(in.in[5])));
+  const bool bssrdf = m.ctx && m.ctx->subsurface;
+  const Vec3 base = bssrdf ? non_negative(m.v(in.in[2])) : mixed;
   const float metallic = unit(m.f(in.in[8]));
   const float transmission = unit(m.f(in.in[19])) * (1 - metallic);
   const float r = unit(m.f(in.in[11]));
@@ -162,10 +167,7 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   const Vec3 tint = lum > 0 ? base / lum : Vec3(1.0f);
   const float spec_lum = 0.3f * base.x + 0.6f * base.y + 0.1f * base.z;
   const Vec3 spec_tint = spec_lum > 0 ? base / spec_lum : Vec3(1.0f);
-  // Cycles 3.4's BSSRDF colour, mix(base, Subsurface Color, Subsurface), is also the diffuse's
-  // where it makes none (after a diffuse bounce, or BDPT: ShadingContext::subsurface).
-  const Vec3 mixed = lerp(subsurface, base, non_negative(m.v(in.in[5])));
-  if (m.ctx && m.ctx->subsurface && subsurface > kClosureCutoff) {
+  if (bssrdf && subsurface > kClosureCutoff) {
     if (std::abs(average(mixed)) > kClosureCutoff)
       add_bssrdf(m, weight * mixed * diffuse_weight, non_negative(m.v(in.in[4]) * subsurface), mixed, r, m.f(in.in[6]),
                  m.f(in.in[7]), subsurface_method(in.param[1]));
@@ -173,7 +175,7 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
     Lobe d;
     d.type = LobeType::PrincipledDiffuse;
     d.roughness = r;
-    d.weight = weight * mixed * diffuse_weight;
+    d.weight = weight * base * diffuse_weight;
     m.bsdf->add(d);
   }
   const float sheen = std::max(0.0f, m.f(in.in[14]));
