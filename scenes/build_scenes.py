@@ -2255,6 +2255,7 @@ SCENES = {
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "subsurface": (build_subsurface, (64, 48), 128),
     "subsurface_burley": (lambda scene: build_subsurface(scene, "BURLEY"), (64, 48), 128),
+    "subsurface_fixed": (lambda scene: build_subsurface(scene, "RANDOM_WALK_FIXED_RADIUS"), (64, 48), 128),
     "layered_material": (build_layered_material, (96, 64), 128),
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
     "holdout": (build_holdout, (64, 48), 128),

@@ -491,10 +491,10 @@ def test_particle_hair_agrees_with_cycles(name, scene_factory, outdir):
 
 
 @pytest.mark.parametrize("name, integrator", [("subsurface", "PATH"), ("subsurface_burley", "PATH"),
-                                              ("subsurface", "VOLPATH")])
+                                              ("subsurface_fixed", "PATH"), ("subsurface", "VOLPATH")])
 def test_subsurface_scattering_agrees_with_cycles(name, integrator, scene_factory, outdir):
     """Cycles 3.4's BSSRDFs (scenes: subsurface, Random Walk; subsurface_burley, Christensen-
-    Burley): a Principled BSDF's subsurface and the Subsurface Scattering node, through the walk
+    Burley; subsurface_fixed, Random Walk (Fixed Radius)): a Principled BSDF's subsurface and the Subsurface Scattering node, through the walk
     under each object's own surface and the exit point's diffuse, per tile and in the image mean
     as above."""
     both = lantern_and_cycles(scene_factory, name, integrator)
