@@ -494,9 +494,10 @@ def test_particle_hair_agrees_with_cycles(name, scene_factory, outdir):
                                               ("subsurface_fixed", "PATH"), ("subsurface", "VOLPATH")])
 def test_subsurface_scattering_agrees_with_cycles(name, integrator, scene_factory, outdir):
     """Cycles 3.4's BSSRDFs (scenes: subsurface, Random Walk; subsurface_burley, Christensen-
-    Burley; subsurface_fixed, Random Walk (Fixed Radius)): a Principled BSDF's subsurface and the Subsurface Scattering node, through the walk
-    under each object's own surface and the exit point's diffuse, per tile and in the image mean
-    as above."""
+    Burley; subsurface_fixed, Random Walk (Fixed Radius)): a Principled BSDF's subsurface and the
+    Subsurface Scattering node, through the walk under each object's own surface and the exit
+    point's diffuse, per tile and in the image mean as above. These scenes have no medium: VOLPATH
+    runs the path tracer's media-free instance there (make_integrator)."""
     both = lantern_and_cycles(scene_factory, name, integrator)
     report, _ = ru.agreement_report("%s_%s" % (name, integrator), both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
                                     ROUNDING)
