@@ -789,6 +789,37 @@ def build_principled_ground(scene):
     add_camera(scene, (0, -7.0, 0.7), (0, 0, 0.3), lens=35.0)
 
 
+def build_subsurface(scene, method="RANDOM_WALK"):
+    """Subsurface scattering (Cycles 3.4's BSSRDFs) with the given method on both closures: a
+    skin-like Principled sphere (Subsurface 0.6, radius about a third of the sphere's in red) and a
+    cube of the Subsurface Scattering node (wax-like, anisotropy 0.4 but for Burley), lit by an
+    area light and a grey world over a diffuse floor."""
+    set_world(scene, (0.25, 0.25, 0.3), 1.0)
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 8.0))
+    assign(floor, diffuse("SSSFloor", (0.5, 0.5, 0.5)))
+    skin = principled("Skin", (0.8, 0.55, 0.45), 0.45)
+    bsdf = skin.node_tree.nodes["Principled BSDF"]
+    bsdf.subsurface_method = method
+    bsdf.inputs["Subsurface"].default_value = 0.6
+    bsdf.inputs["Subsurface Radius"].default_value = (0.3, 0.12, 0.06)
+    bsdf.inputs["Subsurface Color"].default_value = (0.9, 0.35, 0.25, 1.0)
+    sphere = add_object(scene, "SkinSphere", mesh_sphere("SkinSphere", 0.5), (-0.55, 0, 0.5))
+    assign(sphere, skin)
+    wax, nt, out = _material("Wax")
+    sss = nt.nodes.new("ShaderNodeSubsurfaceScattering")
+    sss.falloff = method
+    sss.inputs["Color"].default_value = (0.85, 0.75, 0.4, 1.0)
+    sss.inputs["Scale"].default_value = 0.2
+    sss.inputs["Radius"].default_value = (1.0, 0.6, 0.3)
+    sss.inputs["Anisotropy"].default_value = 0.0 if method == "BURLEY" else 0.4
+    nt.links.new(sss.outputs[0], out.inputs["Surface"])
+    cube = add_object(scene, "WaxCube", mesh_box("WaxCube", (0.7, 0.7, 0.7)), (0.6, 0.1, 0.0),
+                      rotation=(0, 0, 30))
+    assign(cube, wax)
+    add_light(scene, "Key", "AREA", 150.0, (1.2, -1.0, 2.2), rotation=(40, 0, 50), size=0.8)
+    add_camera(scene, (0, -3.6, 1.4), (0, 0, 0.4), lens=40.0)
+
+
 def _node_group(name, inputs, outputs, build):
     """A shader node group with (type, name) inputs and outputs; build(tree, group input node)
     returns {output name: socket} to link to the Group Output."""
@@ -1566,7 +1597,7 @@ def build_caustic(scene):
 
 def build_unsupported_node(scene):
     """Nodes Lantern does not render: Point Density → Diffuse colour (material
-    "PointDensityMaterial") and a Subsurface Scattering ("SubsurfaceMaterial")."""
+    "PointDensityMaterial") and EEVEE's Specular BSDF ("SpecularMaterial"; Cycles has no node for it)."""
     set_world(scene, (0.1, 0.1, 0.1), 1.0)
     floor = add_object(scene, "Floor", mesh_plane("Floor", 10.0))
     assign(floor, diffuse("FloorGrey", (0.6, 0.6, 0.6)))
@@ -1577,8 +1608,8 @@ def build_unsupported_node(scene):
     nt.links.new(density.outputs["Color"], bsdf.inputs["Color"])
     nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
     assign(add_object(scene, "DensitySphere", mesh_sphere("DensitySphere", 0.5), (-0.6, 0, 0.5)), mat)
-    sss = _bsdf_material("SubsurfaceMaterial", "ShaderNodeSubsurfaceScattering", (0.8, 0.3, 0.3))
-    assign(add_object(scene, "SubsurfaceSphere", mesh_sphere("SubsurfaceSphere", 0.5), (0.6, 0, 0.5)), sss)
+    spec = _bsdf_material("SpecularMaterial", "ShaderNodeEeveeSpecular", None, **{"Base Color": (0.8, 0.3, 0.3, 1.0)})
+    assign(add_object(scene, "SpecularSphere", mesh_sphere("SpecularSphere", 0.5), (0.6, 0, 0.5)), spec)
     add_light(scene, "AreaLight", "AREA", 100.0, (0, -1.0, 3.0), shape="SQUARE", size=1.0)
     add_camera(scene, (0, -4.0, 1.8), (0, 0, 0.4), lens=40.0)
 
@@ -2222,6 +2253,9 @@ SCENES = {
     "terminator_shading": (lambda scene: build_terminator(scene, shading_offset=0.6), (96, 64), 128),
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
+    "subsurface": (build_subsurface, (64, 48), 128),
+    "subsurface_burley": (lambda scene: build_subsurface(scene, "BURLEY"), (64, 48), 128),
+    "subsurface_fixed": (lambda scene: build_subsurface(scene, "RANDOM_WALK_FIXED_RADIUS"), (64, 48), 128),
     "layered_material": (build_layered_material, (96, 64), 128),
     "leaf_cards": (build_leaf_cards, (96, 64), 128),
     "holdout": (build_holdout, (64, 48), 128),

@@ -573,6 +573,10 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             for w in core_scene.take_warnings():  # those export did not already report by name
                 report({'WARNING'}, w)
             print("Lantern: exported %s in %.2f s" % (summary, time.monotonic() - t0))
+            if summary.get("subsurface") and scene.lantern.integrator == 'BIDIRECTIONAL':
+                report({'WARNING'}, "Bidirectional renders subsurface scattering in its radius-0 limit (a "
+                       "diffuse of the subsurface colour; Path and Volumetric Path render it as Cycles): "
+                       "material(s) %s" % ", ".join("'%s'" % n for n in summary["subsurface"]))
             if summary.get("media") and scene.lantern.integrator == 'PATH':
                 report({'WARNING'}, "The scene has %d participating medium/media, which the Path "
                        "Tracing integrator ignores: use Volumetric Path or Bidirectional"

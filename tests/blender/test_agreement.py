@@ -488,3 +488,30 @@ def test_particle_hair_agrees_with_cycles(name, scene_factory, outdir):
                bdpt_tile_report(name, bdpt, cycles[0], cycles[1], outdir)]
     report = "\n".join(filter(None, reports))
     assert report == "", report
+
+
+@pytest.mark.parametrize("name, integrator", [("subsurface", "PATH"), ("subsurface_burley", "PATH"),
+                                              ("subsurface_fixed", "PATH"), ("subsurface", "VOLPATH")])
+def test_subsurface_scattering_agrees_with_cycles(name, integrator, scene_factory, outdir):
+    """Cycles 3.4's BSSRDFs (scenes: subsurface, Random Walk; subsurface_burley, Christensen-
+    Burley; subsurface_fixed, Random Walk (Fixed Radius)): a Principled BSDF's subsurface and the
+    Subsurface Scattering node, through the walk under each object's own surface and the exit
+    point's diffuse, per tile and in the image mean as above. These scenes have no medium: VOLPATH
+    runs the path tracer's media-free instance there (make_integrator)."""
+    both = lantern_and_cycles(scene_factory, name, integrator)
+    report, _ = ru.agreement_report("%s_%s" % (name, integrator), both[ru.LANTERN], both[ru.CYCLES], outdir, TILE,
+                                    ROUNDING)
+    assert report == "", report
+
+
+def test_bidirectional_renders_subsurface_in_the_radius_0_limit_with_a_warning(scene_factory):
+    """BIDIRECTIONAL keeps subsurface scattering's radius-0 limit (README: departures) and says so,
+    naming the materials; PATH does not warn."""
+    import lantern.engine as engine
+    scene = scene_factory("subsurface")
+    ru.render(scene, ru.LANTERN, 2, seed=0, integrator="PATH")
+    assert "radius-0" not in engine.LAST_RENDER["report"]
+    ru.render(scene, ru.LANTERN, 2, seed=0, integrator="BIDIRECTIONAL")
+    text = engine.LAST_RENDER["report"]
+    assert "Bidirectional renders subsurface scattering in its radius-0 limit" in text, text
+    assert "'Skin'" in text and "'Wax'" in text, text

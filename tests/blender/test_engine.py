@@ -96,7 +96,7 @@ def test_unsupported_nodes_are_reported_and_fall_back(scene_factory):
     scene = scene_factory("unsupported_node")
     reports = ru.export(scene)[1]
     text = "\n".join(reports)
-    assert "SubsurfaceMaterial" in text and "Subsurface Scattering" in text, text
+    assert "SpecularMaterial" in text and "ShaderNodeEeveeSpecular" in text, text
     assert "PointDensityMaterial" in text and "Point Density" in text, text
     # The render still completes with a finite image.
     img = ru.render(scene, ru.LANTERN, 4, seed=0).combined

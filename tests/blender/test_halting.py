@@ -219,5 +219,5 @@ def test_render_report_says_what_the_scene_used(scene_factory):
     text = engine.LAST_RENDER["report"]
     assert "integrator: path tracing" in text
     assert "lights:" in text and "media: none" in text
-    assert "Subsurface Scattering" in text and "Point Density" in text
+    assert "ShaderNodeEeveeSpecular" in text and "Point Density" in text
     assert "Stopped by samples" in text

@@ -210,7 +210,7 @@ def test_shader_to_rgb_is_dropped_as_cycles_drops_it():
 
 def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
     """scripts/node_coverage.py on the unsupported_node scene: it names the Point Density and the
-    Subsurface Scattering and nothing Lantern renders."""
+    EEVEE Specular BSDF and nothing Lantern renders."""
     import importlib.util
     scene_factory("unsupported_node")
     spec = importlib.util.spec_from_file_location("node_coverage", os.path.join(ROOT, "scripts", "node_coverage.py"))
@@ -220,7 +220,7 @@ def test_coverage_script_lists_the_unsupported_nodes(scene_factory, capsys):
     out = capsys.readouterr().out
     missing = [line for line in out.splitlines() if "NOT SUPPORTED" in line]
     assert any("ShaderNodeTexPointDensity" in line for line in missing), out
-    assert any("ShaderNodeSubsurfaceScattering" in line for line in missing), out
+    assert any("ShaderNodeEeveeSpecular" in line for line in missing), out
     assert len(missing) == 2, out
 
 

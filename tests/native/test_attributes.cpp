@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "geometry/geometry.h"
+#include "geometry_builders.h"
 #include "lantern/lantern.h"
 #include "scene_builders.h"
 #include "shading/bsdf.h"
@@ -135,21 +136,7 @@ TEST(Attributes, AttributeNodeOutputsByComponentCount) {
 // A 2 x 2 x 2 box at the origin (flat: face normals), as one instance.
 struct BevelBox {
   Geometry g;
-  BevelBox() {
-    Mesh m;
-    for (int i = 0; i < 8; ++i)
-      m.positions.push_back(Vec3(i & 1 ? 1.0f : -1.0f, i & 2 ? 1.0f : -1.0f, i & 4 ? 1.0f : -1.0f));
-    // Each face's two triangles, wound outwards.
-    m.indices = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
-    std::vector<std::string> warnings;
-    Instance inst;
-    static_cast<Pose&>(inst) = Pose::of(Transform());
-    inst.mesh = g.add_mesh(std::move(m), warnings);
-    inst.materials = {0};
-    g.add_instance(std::move(inst), warnings);
-    g.commit();
-  }
+  BevelBox() { lt_test::add_lone_instance(g, lt_test::box_mesh(Vec3(-1.0f), Vec3(1.0f))); }
   // The shading point a ray straight down meets at (x, y) on the top face.
   ShadingContext top(float x, float y) const {
     Ray r;

@@ -215,7 +215,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                    image_files=images.from_files,
                    lights=lights, light_kinds=light_kinds, volumes=volumes, hair=hair,
                    material_media=materials.media, world_media=world_media,
-                   emissive_media=materials.emissive_media,
+                   emissive_media=materials.emissive_media, subsurface=sorted(materials.subsurface),
                    media=volumes + materials.media + world_media,
                    cryptomatte=materials.cryptomatte.manifests)
     if motion is not None:

@@ -307,6 +307,7 @@ class MaterialExporter:
         self.volume_names = {}  # core id -> name, of the materials with a medium
         self.media = 0  # materials with a Volume output
         self.emissive_media = 0  # of those, volumes that emit
+        self.subsurface = set()  # names of the materials that scatter under their surface
         self.attributes = AttributeRegistry()  # names the programs read (export/mesh.py exports them)
         self.cryptomatte = Names()  # the Cryptomatte names of materials and (export/mesh.py) objects
 
@@ -430,6 +431,8 @@ class MaterialExporter:
             self._warn("%s; the material is left out (default surface)" % e)
             return None, None, False
         self._bad += c.bad
+        if c.subsurface:
+            self.subsurface.add(material.name)
         return c.program(), volume, null_surface
 
     def volume(self, material):

@@ -15,6 +15,7 @@
 #include "integrators/light_passes.h"
 #include "integrators/media_transport.h"
 #include "integrators/path_state.h"
+#include "integrators/subsurface.h"
 
 namespace lt {
 
@@ -51,6 +52,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     // Cycles' compact ray differential: the footprint grows by the camera's dD per unit of path length.
     float footprint = 0;
     VolumeStack stack;
+    bool diffuse_ancestor = false;  // a diffuse bounce before: BSSRDFs are diffuse (Cycles')
   } state;
   state.ray = camera_ray;
   state.prev_p = camera_ray.o;
@@ -262,11 +264,12 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         describe_ray(b, visibility, &ctx);
         if (b.total == 0 && !aovs_done && !catcher_leg) write_aovs_at(&ctx, cs.aovs, s);
         const float footprint_here = footprint + ctx.ray_length * cs.dD;
-        const Vec3 ng = ctx.Ng;
+        Vec3 ng = ctx.Ng;
         ShadingFrame sf{ctx.N};
         const Material& material = scene.material(sp.material);
         if (material.needs_differentials()) add_differentials(scene.geometry, sp, footprint_here, &ctx);
         if (material.traces_rays()) add_tracing(scene.geometry, sp, min_pdf, sampler, &ctx);
+        ctx.subsurface = !state.diffuse_ancestor;
         Spectrum emitted = material.evaluate(ctx, scene.images, &bsdf, &sf);
         if (b.total == 0 && !aovs_done && !catcher_leg)
           aovs_done = single_pass_done(material.may_be_transparent(), bsdf, s.pass_alpha_threshold);
@@ -276,7 +279,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         bsdf.sample_below_shading(true);
         bsdf.set_terminator_frequency(scene.geometry.instance(sp.instance).terminator_frequency);
         if (!is_black(sf.smooth)) ctx.N = sf.smooth;  // a displacement's bump (Cycles' SetNormal)
-        const Frame frame = local_frame(sf, ng);
+        Frame frame = local_frame(sf, ng);
         const Vec3 ns = frame.n;
         if (length_squared(ns - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
         if (b.from_camera() && !catcher_leg) {
@@ -303,7 +306,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
           out.normal = ns;
           out.albedo = bsdf.albedo();
         }
-        const Vec3 wo = frame.to_local(-ray.d);
+        Vec3 wo = frame.to_local(-ray.d);
         // Colours and data passes at the surface a camera path first scatters from (Cycles writes
         // them at every surface before the first bounce, transparent layers weighted by their
         // opacity; the choice to pass a layer above has that expectation).
@@ -317,57 +320,95 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         if (bsdf.count() == 0) break;
         if (b.exceeded(s)) break;
 
-        if (bsdf.has_non_delta() && lights.pickable())
-          next_event(sp.p, &sp, ng, ctx.N, stack,
-                     [&](const Vec3& wi_world, float* pdf, unsigned excluded, bool offset) {
-                       Vec3 wi = frame.to_local(wi_world);
-                       Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
-                       // The geometric normal decides which side the light is on; shading normals only shade
-                       // (but for a shadow terminator offset, whose shadow ray decides).
-                       if (!offset && (dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
-                       if (s.light_passes && b.total == 0) {
-                         Spectrum kinds[3];
-                         bsdf.eval_kinds(wo, wi, kinds);
-                         for (int k = 0; k < 3; ++k)
-                           if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
-                         nee_first.set_surface(kinds);
-                       }
-                       return f * std::abs(wi.z);
-                     });
+        // Once more from a subsurface walk's exit point (Cycles shades it with the exit lobe alone).
+        bool alive = true;
+        for (;;) {
+          if (bsdf.has_non_delta() && lights.pickable())
+            next_event(sp.p, &sp, ng, ctx.N, stack,
+                       [&](const Vec3& wi_world, float* pdf, unsigned excluded, bool offset) {
+                         Vec3 wi = frame.to_local(wi_world);
+                         Spectrum f = bsdf.eval(wo, wi, pdf, excluded);
+                         // The geometric normal decides which side the light is on; shading normals only shade
+                         // (but for a shadow terminator offset, whose shadow ray decides).
+                         if (!offset && (dot(wi_world, ng) > 0) != (wi.z > 0)) return Spectrum(0.0f);
+                         if (s.light_passes && b.total == 0) {
+                           Spectrum kinds[3];
+                           bsdf.eval_kinds(wo, wi, kinds);
+                           for (int k = 0; k < 3; ++k)
+                             if (excluded & (1u << k)) kinds[k] = Spectrum(0.0f);
+                           nee_first.set_surface(kinds);
+                         }
+                         return f * std::abs(wi.z);
+                       });
 
-        // Continue the path by sampling the BSDF.
-        BsdfSample bs;
-        float u_lobe = sampler.next_1d();
-        Vec2 u = sampler.next_2d();
-        if (!bsdf.sample(wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
-        Vec3 wi = frame.to_world(bs.wi);
-        bool reflect_geo = dot(wi, ng) > 0;
-        if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;  // shading normal would leak light
-        beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
-        if (!is_finite(beta)) break;
-        if (s.light_passes && b.total == 0) {
-          if (bs.flags & (kLobeSpecular | kLobeBelowShading)) {  // the sampled lobe's alone: eval() has none
-            first.set_kind(flags_pass_kind(bs.flags));
-          } else {
-            Spectrum kinds[3];
-            bsdf.eval_kinds(wo, bs.wi, kinds);
-            first.set_surface(kinds);
+          // Continue the path by sampling the BSDF.
+          BsdfSample bs;
+          float u_lobe = sampler.next_1d();
+          Vec2 u = sampler.next_2d();
+          alive = false;
+          if (!bsdf.sample(wo, u_lobe, u, &bs) || !(bs.pdf > 0) || is_black(bs.f)) break;
+          if (bs.flags & kLobeSubsurface) {
+            // Cycles' subsurface_bounce and subsurface_scatter: no bounce counted; the exit point
+            // is lit and scatters as a diffuse of weight 1, with no emission and no shader run
+            // (but for its closure's normal where the program sets one: SD_HAS_BSSRDF_BUMP).
+            if (s.light_passes && b.total == 0) first.set_kind(PassKind::Diffuse);
+            beta *= bs.f / bs.pdf;
+            const Lobe bssrdf = bsdf.lobe(bs.lobe);
+            SubsurfaceExit exit;
+            if (!subsurface_scatter(scene.geometry, sp, frame.n, ng, ctx.backfacing, bssrdf, time, sampler, &beta,
+                                    &exit))
+              break;
+            sp = exit.sp;
+            ctx = shading_context(scene.geometry, sp, -exit.wo, 0);
+            ng = ctx.Ng;
+            ShadingFrame exit_frame{ctx.N};
+            const Material& exit_material = scene.material(sp.material);
+            if (exit_material.program().sets_normal()) {
+              ctx.subsurface = true;
+              exit_material.evaluate(ctx, scene.images, &bsdf, &exit_frame);
+            }
+            bsdf.clear();
+            bsdf.add(subsurface_exit_lobe(bssrdf));
+            bsdf.set_terminator_frequency(scene.geometry.instance(sp.instance).terminator_frequency);
+            frame = Frame(facing_normal(exit_frame.n, ng));
+            if (length_squared(frame.n - facing_normal(ctx.N, ng)) > 0) bsdf.set_bump(frame.to_local(ctx.N), false);
+            wo = frame.to_local(exit.wo);
+            alive = true;
+            continue;
           }
-        }
-        if (kMedia && !reflect_geo) cross_boundary(scene, sp, wi, &stack);  // refraction into / out of a medium
+          Vec3 wi = frame.to_world(bs.wi);
+          bool reflect_geo = dot(wi, ng) > 0;
+          if (reflect_geo != ((bs.flags & kLobeReflection) != 0)) break;  // shading normal would leak light
+          beta *= bs.f * (std::abs(bs.wi.z) / bs.pdf);
+          if (!is_finite(beta)) break;
+          if (s.light_passes && b.total == 0) {
+            if (bs.flags & (kLobeSpecular | kLobeBelowShading)) {  // the sampled lobe's alone: eval() has none
+              first.set_kind(flags_pass_kind(bs.flags));
+            } else {
+              Spectrum kinds[3];
+              bsdf.eval_kinds(wo, bs.wi, kinds);
+              first.set_surface(kinds);
+            }
+          }
+          if (kMedia && !reflect_geo) cross_boundary(scene, sp, wi, &stack);  // refraction into / out of a medium
 
-        b.count(bs, &visibility);
-        prev_pdf = bs.pdf;
-        prev_delta = (bs.flags & kLobeSpecular) != 0;
-        if (!prev_delta) min_pdf = std::min(min_pdf, bs.pdf);
-        prev_p = sp.p;
-        prev_n = ng;
-        t_prev = 0;
-        footprint = footprint_here;
-        ray.o = spawn_origin(sp, wi);
-        ray.d = wi;
-        ray.tmin = 0;
-        ray.tmax = INFINITY;
+          b.count(bs, &visibility);
+          if (bs.flags & kLobeDiffuse) state.diffuse_ancestor = true;
+          prev_pdf = bs.pdf;
+          prev_delta = (bs.flags & kLobeSpecular) != 0;
+          if (!prev_delta) min_pdf = std::min(min_pdf, bs.pdf);
+          prev_p = sp.p;
+          prev_n = ng;
+          t_prev = 0;
+          footprint = footprint_here;
+          ray.o = spawn_origin(sp, wi);
+          ray.d = wi;
+          ray.tmin = 0;
+          ray.tmax = INFINITY;
+          alive = true;
+          break;
+        }
+        if (!alive) break;
       }
 
       if (!russian_roulette(b.total, &beta, sampler)) break;

@@ -16,7 +16,8 @@
 //                reflection times interpolate_fresnel_color, f0 (1 - FH) + FH with
 //                FH = (F(wi.m, eta) - F(1, eta)) / (1 - F(1, eta)), F the dielectric Fresnel
 //   Transparent  bsdf_transparent
-//   PrincipledDiffuse  bsdf_principled_diffuse with PRINCIPLED_DIFFUSE_FULL (Burley 2012)
+//   PrincipledDiffuse  bsdf_principled_diffuse (Burley 2012), its components (DiffusePart)
+//   Subsurface   a BSSRDF: no value here; Bsdf::sample hands it to the walk (integrators/subsurface.h)
 //   GlossyBeckmann, DielectricBeckmann  bsdf_microfacet_beckmann: Beckmann D, f with Cycles'
 //                rational G1 (bsdf_beckmann_G1); sampled from the exact visible normals, so the pdf
 //                carries the exact (erf) G1
@@ -138,6 +139,7 @@ bool lobe_is_delta(const Lobe& l) {
     case LobeType::PrincipledHair:
     case LobeType::HairReflection:
     case LobeType::HairTransmission:
+    case LobeType::Subsurface:
       return false;
     case LobeType::GlossyGGX:
     case LobeType::SpecularGGX:
@@ -287,7 +289,12 @@ Spectrum principled_diffuse_eval(const Lobe& l, const Vec3& o, const Vec3& i) {
   const float r = lobe_sigma(l);  // the roughness, clamped to [0, 1] as Cycles' node does
   const float fl = schlick_weight(i.z), fv = schlick_weight(o.z);
   const float rr = r * (1 + dot(i, o));
-  const float f = (1 - 0.5f * fv) * (1 - 0.5f * fl) + rr * (fl + fv + fl * fv * (rr - 1));
+  const float lambert = l.diffuse_part == DiffusePart::LambertExit ? 1 - 0.5f * fl : (1 - 0.5f * fv) * (1 - 0.5f * fl);
+  const float retro = rr * (fl + fv + fl * fv * (rr - 1));
+  // Cycles' bsdf_principled_diffuse_compute_brdf by component.
+  float f = lambert + retro;
+  if (l.diffuse_part == DiffusePart::Lambert || l.diffuse_part == DiffusePart::LambertExit) f = lambert;
+  if (l.diffuse_part == DiffusePart::RetroReflection) f = retro;
   return l.weight * (kInvPi * f);
 }
 
@@ -746,6 +753,7 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
     case LobeType::PrincipledHair:  // hair_eval, without the mirrored frame
     case LobeType::HairReflection:
     case LobeType::HairTransmission:
+    case LobeType::Subsurface:  // no value: the walk (integrators/subsurface.h) carries it
       break;
   }
   return Spectrum(0.0f);
@@ -772,6 +780,11 @@ float selection_estimate(const Lobe& l, const Vec3& wo) {
                   fresnel_principled(kClearcoatF0, kClearcoatIor, 0.5f).x);
   else if (l.type == LobeType::Sheen)
     w *= std::max(schlick_weight(c) * c, schlick_weight(0.5f) * 0.5f);
+  else if (l.type == LobeType::PrincipledDiffuse && l.diffuse_part == DiffusePart::RetroReflection)
+    // bsdf_principled_diffuse_retro_reflection_sample_weight: roughness x schlick(N.I).
+    w *= lobe_sigma(l) * std::max(schlick_weight(c), schlick_weight(0.5f));
+  else if (l.type == LobeType::Subsurface)  // bssrdf_setup: x the channels it scatters
+    w *= float((l.sss_radius.x > 0) + (l.sss_radius.y > 0) + (l.sss_radius.z > 0));
   else if ((l.type == LobeType::DiffuseToon || l.type == LobeType::GlossyToon) && toon_black(l))
     return 0;
   else if (lobe_is_glass(l.type) && l.glass_part != GlassPart::Both) {
@@ -944,6 +957,31 @@ Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i) {
   return vmin(vmax(c0 * (1 - fh) + Spectrum(fh), Spectrum(0.0f)), Spectrum(1.0f));
 }
 
+float bssrdf_alpha_prime(float albedo, float ior) {
+  const float inv = 1 / ior;
+  const float f_dr = inv * (-1.440f * inv + 0.710f) + 0.668f + 0.0636f * ior;
+  const float a43 = (4.0f / 3.0f) * (1 + f_dr) / (1 - f_dr);
+  auto rd = [&](float ap) {  // the dipole's total diffuse reflectance for alpha'
+    const float s = std::sqrt(3 * (1 - ap));
+    return 0.5f * ap * (1 + std::exp(-a43 * s)) * std::exp(-s);
+  };
+  if (!(albedo >= 1e-4f)) return 0;
+  if (albedo >= 0.995f) return 0.999999f;
+  float lo = 0, hi = 1, mid = 0.5f;
+  for (int i = 0; i < 12; ++i) {
+    mid = 0.5f * (lo + hi);
+    (rd(mid) < albedo ? lo : hi) = mid;
+  }
+  return mid;
+}
+
+Spectrum bssrdf_radius(const Spectrum& radius, const Spectrum& albedo, SubsurfaceMethod method, float ior) {
+  if (method != SubsurfaceMethod::RandomWalk) return radius * (0.25f * kInvPi);
+  Spectrum r;
+  for (int k = 0; k < 3; ++k) r[k] = radius[k] * std::sqrt(3 * (1 - bssrdf_alpha_prime(albedo[k], ior)));
+  return r;
+}
+
 float principled_specular_ior(float specular) {
   const float s = std::sqrt(std::isfinite(specular) ? clamp(0.08f * specular, 0.0f, 1.0f) : 0.0f);
   return s < 1 ? 2 / (1 - s) - 1 : INFINITY;
@@ -981,6 +1019,8 @@ uint32_t lobe_flags(const Lobe& l) {
     case LobeType::HairReflection:
     case LobeType::HairTransmission:
       return kLobeGlossy | kLobeReflection | kLobeTransmission;
+    case LobeType::Subsurface:
+      return kLobeSubsurface | kLobeDiffuse;
   }
   return 0;
 }
@@ -1173,6 +1213,7 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
       case LobeType::PrincipledHair:  // sampled above
       case LobeType::HairReflection:
       case LobeType::HairTransmission:
+      case LobeType::Subsurface:  // Bsdf::sample hands it to the caller
         return false;
     }
     // f and pdf from the evaluation path, so that sample() and pdf() agree to the last bit.
@@ -1299,6 +1340,15 @@ bool Bsdf::sample(const Vec3& wo, float u_lobe, Vec2 u, BsdfSample* out) const {
   if (chosen < 0) return false;
   float u_extra = clamp((u_lobe - cdf_chosen) / p[chosen], 0.0f, kOneMinusEpsilon);
   BsdfSample s;
+  if (lobes_[chosen].type == LobeType::Subsurface) {  // Cycles' subsurface_bounce: weight x sum / its share
+    s.flags = lobe_flags(lobes_[chosen]);
+    s.f = lobes_[chosen].weight;
+    s.pdf = p[chosen];
+    s.wi = Vec3(0, 0, -1);
+    s.lobe = chosen;
+    *out = s;
+    return true;
+  }
   if (!lobe_sample(lobes_[chosen], wo, u, u_extra, &s, below_shading_)) return false;
   if (s.flags & kLobeSpecular) {
     s.pdf *= p[chosen];
@@ -1368,6 +1418,8 @@ Spectrum Bsdf::albedo() const {
   for (int k = 0; k < count_; ++k) {
     Spectrum w = vmax(lobes_[k].weight, Spectrum(0.0f));
     const LobeType t = lobes_[k].type;
+    // The BSSRDF's weight holds its retro-reflection's (Cycles' denoising albedo skips it too).
+    if (t == LobeType::PrincipledDiffuse && lobes_[k].diffuse_part == DiffusePart::RetroReflection) continue;
     if (t == LobeType::SpecularGGX || t == LobeType::Clearcoat) {
       Spectrum f0 = t == LobeType::Clearcoat ? kClearcoatF0 : vmin(vmax(lobes_[k].f0, Spectrum(0.0f)), Spectrum(1.0f));
       w *= f0 + (Spectrum(1.0f) - f0) * (1.0f / 21.0f);
@@ -1390,7 +1442,8 @@ PassKind lobe_pass_kind(const Lobe& lobe, bool transmit) {
     case LobeType::Sheen:
     case LobeType::DiffuseToon:
     case LobeType::Translucent:
-      return PassKind::Diffuse;  // Cycles' CLOSURE_IS_BSDF_DIFFUSE range
+    case LobeType::Subsurface:
+      return PassKind::Diffuse;  // Cycles' CLOSURE_IS_BSDF_DIFFUSE range (and BSSRDFs)
     case LobeType::Dielectric:
     case LobeType::DielectricBeckmann:
       return transmit ? PassKind::Transmission : PassKind::Glossy;

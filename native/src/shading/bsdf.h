@@ -26,6 +26,9 @@ enum LobeFlags : uint32_t {
   // A microfacet reflection sampled below the shading normal (but kept by the caller's geometric
   // test): see Bsdf::sample_below_shading. eval() is zero there, so only this sample reaches it.
   kLobeBelowShading = 32,
+  // The Subsurface lobe was picked (Bsdf::sample): no direction; the caller walks under the
+  // surface (integrators/subsurface.h) with weight f / pdf and shades the exit point.
+  kLobeSubsurface = 64,
 };
 
 // Each type with the Cycles 3.4 node (svm_node_closure_bsdf) and parameters that make it. The caller
@@ -94,8 +97,20 @@ enum class LobeType : uint8_t {
   // negated (Cycles' bsdf->offset).
   HairReflection,
   HairTransmission,
+  // A BSSRDF (Cycles 3.4's Bssrdf closure, closure/bssrdf.h): no value and no pdf at the point;
+  // picked by sample() (kLobeSubsurface) with Cycles' sample weight, average(weight) x its channels
+  // of radius >= 1e-8. sss_radius is the radius after bssrdf_setup_radius, sss_albedo the
+  // surface albedo, sss_anisotropy in [0, 0.9], sss_method a SubsurfaceMethod, sss_fresnel the
+  // Principled BSDF's (a Lambert-exit principled diffuse at the exit, else a Lambert one).
+  Subsurface,
 };
-constexpr int kLobeTypeCount = int(LobeType::HairTransmission) + 1;
+constexpr int kLobeTypeCount = int(LobeType::Subsurface) + 1;
+// Subsurface methods (the node's subsurface_method / falloff), as Cycles 3.4's closure types.
+enum class SubsurfaceMethod : uint8_t { Burley = 0, RandomWalkFixedRadius = 1, RandomWalk = 2 };
+// The components of a PrincipledDiffuse lobe (Cycles' PrincipledDiffuseComponents): the whole
+// BRDF; with subsurface scattering its Lambert part at channels of radius below 1e-8, its
+// retro-reflection beside the BSSRDF, and the Lambert part's exit half (1 - F_L / 2) / pi.
+enum class DiffusePart : uint8_t { Full = 0, Lambert = 1, LambertExit = 2, RetroReflection = 3 };
 inline bool lobe_is_hair(LobeType t) {
   return t == LobeType::PrincipledHair || t == LobeType::HairReflection || t == LobeType::HairTransmission;
 }
@@ -144,7 +159,13 @@ struct Lobe {
   Vec3 hair_tangent{1.0f, 0.0f, 0.0f};
   Spectrum hair_sigma{0.0f};
   float hair_roughness = 0.3f, hair_radial = 0.3f, hair_m0 = 0.3f, hair_tilt = 0;
-  GlassPart glass_part = GlassPart::Both;  // Dielectric, DielectricBeckmann: the branches kept
+  GlassPart glass_part = GlassPart::Both;        // Dielectric, DielectricBeckmann: the branches kept
+  DiffusePart diffuse_part = DiffusePart::Full;  // PrincipledDiffuse
+  // Subsurface (see LobeType).
+  Spectrum sss_radius{0.0f}, sss_albedo{0.0f};
+  float sss_anisotropy = 0;
+  SubsurfaceMethod sss_method = SubsurfaceMethod::RandomWalk;
+  bool sss_fresnel = false;
 };
 // A glass lobe that only refracts (its bounces are transmissions) or that reflects and refracts.
 inline bool glass_only_refracts(const Lobe& l) {
@@ -160,6 +181,7 @@ struct BsdfSample {
   float pdf = 0;       // solid-angle pdf of the whole mixture, or the discrete probability if delta
   uint32_t flags = 0;  // the sampled lobe's LobeFlags
   float eta = 1;       // relative IOR crossed (1 for reflection)
+  int lobe = -1;       // kLobeSubsurface: the index of the Subsurface lobe picked
 };
 
 constexpr int kMaxLobes = 8;
@@ -320,6 +342,12 @@ Vec3 ensure_valid_reflection(const Vec3& Ng, const Vec3& I, const Vec3& N);
 // Cycles 3.4's Principled v1 specular Fresnel (interpolate_fresnel_color): f0 blended to 1 by the
 // dielectric Fresnel of IOR eta at cos_i, renormalised to [0, 1]; f0 (cspec0) clamped to [0, 1].
 Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i);
+// Cycles 3.4's bssrdf_setup_radius (closure/bssrdf.h): Burley and Random Walk (Fixed Radius)
+// scale the radius by 1/(4 pi); Random Walk by sqrt(3 (1 - alpha')), alpha' the single-scattering
+// albedo whose dipole reflectance (bssrdf_dipole_compute_Rd, Jensen's F_dr at IOR ior) is the
+// surface albedo: bssrdf_alpha_prime inverts it by 12 bisections, as Cycles does.
+float bssrdf_alpha_prime(float albedo, float ior);
+Spectrum bssrdf_radius(const Spectrum& radius, const Spectrum& albedo, SubsurfaceMethod method, float ior);
 // The IOR Cycles 3.4 derives from the Principled BSDF's Specular input: 2 / (1 - sqrt(0.08 s)) - 1
 // (1.5 at the default 0.5); infinite from s = 12.5 on, where Cycles' own value is not finite.
 float principled_specular_ior(float specular);

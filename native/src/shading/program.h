@@ -85,6 +85,11 @@ struct ShadingContext {
   float time = 0.5f;
   uint64_t trace_seed = 0;
   float min_ray_pdf = INFINITY;
+  // Subsurface scattering closures make a BSSRDF (LobeType::Subsurface) only where the path
+  // tracers set this: a path with no diffuse bounce before (Cycles turns them into a diffuse of
+  // their colour after one, PATH_RAY_DIFFUSE_ANCESTOR). Elsewhere (BDPT, AO, displacement) that
+  // diffuse, the radius-0 limit.
+  bool subsurface = false;
 };
 
 // The machine an instruction runs on: read inputs, write outputs.

@@ -74,6 +74,66 @@ LobeType glossy_type(uint32_t distribution) {
   }
 }
 
+SubsurfaceMethod subsurface_method(uint32_t param) {
+  return param <= uint32_t(SubsurfaceMethod::RandomWalk) ? SubsurfaceMethod(param) : SubsurfaceMethod::RandomWalk;
+}
+
+// Cycles 3.4's bssrdf_alloc and bssrdf_setup (closure/bssrdf.h): the retro-reflection of the
+// Principled BSDF's diffuse (roughness >= 0; the Subsurface Scattering node has none) beside the
+// BSSRDF, channels of radius below 1e-8 a diffuse of their weight, the rest the Subsurface lobe.
+void add_bssrdf(Machine& m, Vec3 weight, Vec3 radius, const Vec3& albedo, float roughness, float ior, float anisotropy,
+                SubsurfaceMethod method) {
+  if (!(std::abs(average(weight)) >= kClosureCutoff)) return;
+  if (roughness >= 0) {
+    Lobe retro;
+    retro.type = LobeType::PrincipledDiffuse;
+    retro.diffuse_part = DiffusePart::RetroReflection;
+    retro.roughness = roughness;
+    retro.weight = weight;
+    m.bsdf->add(retro);
+  }
+  Vec3 small(0.0f);
+  for (int k = 0; k < 3; ++k)
+    if (!(radius[k] >= 1e-8f)) {
+      small[k] = weight[k];
+      weight[k] = radius[k] = 0;
+    }
+  if (!is_black(small)) {
+    Lobe d;
+    d.type = roughness >= 0 ? LobeType::PrincipledDiffuse : LobeType::Diffuse;
+    d.diffuse_part = DiffusePart::Lambert;
+    d.weight = small;
+    m.bsdf->add(d);
+  }
+  if (is_black(weight)) return;
+  Lobe l;
+  l.type = LobeType::Subsurface;
+  l.weight = weight;
+  l.sss_albedo = albedo;
+  l.sss_method = method;
+  l.sss_fresnel = roughness >= 0;
+  // Clamps protecting against extreme values, as Cycles'.
+  const float eta = clamp(std::isfinite(ior) ? ior : 1.4f, 1.01f, 3.8f);
+  l.sss_anisotropy = clamp(std::isfinite(anisotropy) ? anisotropy : 0.0f, 0.0f, 0.9f);
+  l.sss_radius = bssrdf_radius(radius, albedo, method, eta);
+  m.bsdf->add(l);
+}
+
+// Cycles 3.4 svm_node_closure_bsdf, CLOSURE_BSSRDF_*_ID: the Subsurface Scattering node.
+void subsurface_node(const Instr& in, Machine& m, const Vec3& weight) {
+  take_normal(m, m.v(in.in[1]), weight);
+  const Vec3 color = non_negative(m.v(in.in[2]));
+  if (!m.ctx || !m.ctx->subsurface) {  // after a diffuse bounce: Cycles' diffuse of the colour
+    Lobe d;
+    d.weight = weight * color;
+    m.bsdf->add(d);
+    return;
+  }
+  const float scale = m.f(in.in[3]);
+  const Vec3 radius = non_negative(m.v(in.in[4]) * (std::isfinite(scale) ? scale : 0.0f));
+  add_bssrdf(m, weight * color, radius, color, -1, m.f(in.in[5]), m.f(in.in[6]), subsurface_method(in.param[0]));
+}
+
 void principled(const Instr& in, Machine& m, Vec3 weight) {
   // Cycles 3.4 svm_node_closure_principled. Alpha below 1 makes the rest of the closure partly
   // transparent.
@@ -87,8 +147,13 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   }
   const Vec3 normal = m.v(in.in[1]);
   take_normal(m, normal, weight);
-  const Vec3 base = non_negative(m.v(in.in[2]));
   const float subsurface = unit(m.f(in.in[3]));
+  // Cycles 3.4's BSSRDF colour, mix(base, Subsurface Color, Subsurface). Where the closure makes
+  // no BSSRDF (after a diffuse bounce; BDPT: ShadingContext::subsurface) it is the base colour of
+  // every layer, as Cycles' base_color = mixed_ss_base_color under PATH_RAY_DIFFUSE_ANCESTOR.
+  const Vec3 mixed = lerp(subsurface, non_negative(m.v(in.in[2])), non_negative(m.v(in.in[5])));
+  const bool bssrdf = m.ctx && m.ctx->subsurface;
+  const Vec3 base = bssrdf ? non_negative(m.v(in.in[2])) : mixed;
   const float metallic = unit(m.f(in.in[8]));
   const float transmission = unit(m.f(in.in[19])) * (1 - metallic);
   const float r = unit(m.f(in.in[11]));
@@ -102,14 +167,17 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   const Vec3 tint = lum > 0 ? base / lum : Vec3(1.0f);
   const float spec_lum = 0.3f * base.x + 0.6f * base.y + 0.1f * base.z;
   const Vec3 spec_tint = spec_lum > 0 ? base / spec_lum : Vec3(1.0f);
-  // Subsurface scattering is rendered in its radius-0 limit (README: departures): the diffuse
-  // takes the colour Cycles gives its BSSRDF, mix(base, Subsurface Color, Subsurface).
-  const Vec3 diffuse_color = lerp(subsurface, base, non_negative(m.v(in.in[5])));
-  Lobe d;
-  d.type = LobeType::PrincipledDiffuse;
-  d.roughness = r;
-  d.weight = weight * diffuse_color * diffuse_weight;
-  m.bsdf->add(d);
+  if (bssrdf && subsurface > kClosureCutoff) {
+    if (std::abs(average(mixed)) > kClosureCutoff)
+      add_bssrdf(m, weight * mixed * diffuse_weight, non_negative(m.v(in.in[4]) * subsurface), mixed, r, m.f(in.in[6]),
+                 m.f(in.in[7]), subsurface_method(in.param[1]));
+  } else {
+    Lobe d;
+    d.type = LobeType::PrincipledDiffuse;
+    d.roughness = r;
+    d.weight = weight * base * diffuse_weight;
+    m.bsdf->add(d);
+  }
   const float sheen = std::max(0.0f, m.f(in.in[14]));
   if (sheen > kClosureCutoff && diffuse_weight > kClosureCutoff) {
     Lobe s;
@@ -196,6 +264,7 @@ const OpSignature kSignatures[] = {
 };
 
 const OpSignature kRefractionSignature = {"vvvff", "", "i", false};
+const OpSignature kSubsurfaceSignature = {"vvvfvff", "", "i", false};
 
 const OpSignature kHairSignatures[] = {
     {"vvffvvffffffff", "", "ii", false},  // principled hair
@@ -310,6 +379,7 @@ void hair_bsdf(const Instr& in, Machine& m, const Vec3& weight) {
 const OpSignature* shaders_family_signature(uint32_t op) {
   if (op >= kOpPrincipledHair && op <= kOpHairBsdf) return &kHairSignatures[op - kOpPrincipledHair];
   if (op == kOpRefraction) return &kRefractionSignature;
+  if (op == kOpSubsurface) return &kSubsurfaceSignature;
   if (op < kOpEmission || op > kOpAovColor) return nullptr;
   return &kSignatures[op - kOpEmission];
 }
@@ -418,6 +488,9 @@ void exec_shaders_family(const Instr& in, Machine& m) {
       break;
     case kOpHoldout:
       m.bsdf->add_holdout(weight);
+      return;
+    case kOpSubsurface:
+      subsurface_node(in, m, weight);
       return;
     default:
       return;

@@ -39,6 +39,13 @@ enum RefractionShaderOp : uint32_t {
   kOpRefraction = kFamilyShadersBegin + 16,
 };
 
+// Subsurface Scattering node (number 22 of the family): in: weight v, normal v, color v, scale f,
+// radius v, ior f, anisotropy f; param: falloff (a SubsurfaceMethod, bsdf.h). The Principled
+// BSDF's second param is its subsurface_method the same way.
+enum SubsurfaceShaderOp : uint32_t {
+  kOpSubsurface = kFamilyShadersBegin + 22,
+};
+
 // Hair closures (numbers 20-27 of the family): lobes on curves (bsdf_hair.cpp).
 enum HairShaderOp : uint32_t {
   // in: weight v, color v, melanin f, melanin redness f, tint v, absorption coefficient v,

@@ -88,6 +88,7 @@ class Compiler:
         self.bump = 0
         self._warned = set()
         self.bad = []  # non-finite socket values ("'Strength' of 'Emission' (inf)")
+        self.subsurface = False  # a closure scatters under the surface (BIDIRECTIONAL: radius 0)
 
     # -- program building -----------------------------------------------------------------------
 

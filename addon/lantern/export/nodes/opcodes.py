@@ -23,6 +23,11 @@ HAIR_BSDF = 21
 HAIR_REFLECTANCE = 0
 HAIR_MELANIN = 1
 HAIR_ABSORPTION = 2
+# Subsurface Scattering (shaders.h, number 22) and the subsurface methods (bsdf.h SubsurfaceMethod)
+SUBSURFACE = 22
+SSS_BURLEY = 0
+SSS_RANDOM_WALK_FIXED_RADIUS = 1
+SSS_RANDOM_WALK = 2
 
 # inputs.h
 TEX_COORD = 32

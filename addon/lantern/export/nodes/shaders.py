@@ -140,8 +140,7 @@ def principled(c, node, weight):
         c.warn("Principled BSDF '%s': %s not supported, ignored" % (node.name, ", ".join(ignored)))
     sss = socket("Subsurface")
     if sss is not None and (c.linked(sss) or sss.default_value > 0):
-        c.warn("Principled BSDF '%s': subsurface scattering is rendered in its radius-0 limit (a diffuse "
-               "of the subsurface colour)" % node.name)
+        c.subsurface = True
     _ior_warning(c, node)
     operands = [weight, c.normal(inp.get("Normal"))]
     for name, size in _PRINCIPLED:
@@ -153,7 +152,23 @@ def principled(c, node, weight):
         operands.append(c._value(s, size) if s is not None else c.const(0.0 if size == 1 else (0.0,) * 3))
     operands.append(c.normal(inp.get("Clearcoat Normal")))
     operands.append(c.normal(inp.get("Tangent")))
-    c.closure(ops.PRINCIPLED, operands, params=[_distribution(c, node), 0])
+    c.closure(ops.PRINCIPLED, operands,
+              params=[_distribution(c, node), _SSS_METHODS.get(getattr(node, "subsurface_method", ""),
+                                                               ops.SSS_RANDOM_WALK)])
+
+
+# Cycles 3.4's subsurface methods (Principled subsurface_method, Subsurface Scattering falloff).
+_SSS_METHODS = {'BURLEY': ops.SSS_BURLEY, 'RANDOM_WALK_FIXED_RADIUS': ops.SSS_RANDOM_WALK_FIXED_RADIUS,
+                'RANDOM_WALK': ops.SSS_RANDOM_WALK}
+
+
+@register_shader('SUBSURFACE_SCATTERING')
+def subsurface_scattering(c, node, weight):
+    i = node.inputs
+    c.subsurface = True
+    c.closure(ops.SUBSURFACE, [weight, c.normal(i.get("Normal")), c.color(i["Color"]), c.float(i["Scale"]),
+                               c.vector(i["Radius"]), c.float(i["IOR"]), c.float(i["Anisotropy"])],
+              params=[_SSS_METHODS.get(node.falloff, ops.SSS_RANDOM_WALK)])
 
 
 _HAIR_PARAMETRIZATIONS = {'COLOR': ops.HAIR_REFLECTANCE, 'MELANIN': ops.HAIR_MELANIN,
