@@ -186,7 +186,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                 lights += 1
                 light_kinds[obj.data.type] = light_kinds.get(obj.data.type, 0) + 1
         elif t == 'VOLUME':
-            volumes += export_volume(obj, matrix, core_scene, report, materials)
+            volumes += export_volume(obj, matrix, core_scene, report, materials, lightgroup)
         elif t in ('CURVES', 'POINTCLOUD'):
             if t == 'CURVES' and not hair:
                 warn_curve_shape(depsgraph, report)

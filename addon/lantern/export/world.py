@@ -3,7 +3,7 @@ materials are), its importance map resolution and camera visibility; the World O
 as a medium filling the scene."""
 
 from . import nodes
-from .material import emissive_nodes, volume_keywords, without_emission
+from .material import volume_keywords
 
 _CAMERA_DEFAULT = 1
 
@@ -73,7 +73,7 @@ def export_world_volume(depsgraph, core_scene, report):
 
     As in Cycles, escaped rays and shadow rays to sun and world lights cross it to infinity: the
     background and suns are fully attenuated; the Volumetric Path and Bidirectional integrators
-    render it."""
+    render it, with its emission (in no light group, as Cycles)."""
     world = depsgraph.scene_eval.world
     if world is None or not world.use_nodes or world.node_tree is None:
         return 0
@@ -82,11 +82,6 @@ def export_world_volume(depsgraph, core_scene, report):
         report({'WARNING'}, "World '%s': %s" % (world.name, msg))
 
     volume = volume_keywords(world.node_tree.get_output_node('CYCLES'), warn)
-    emitting = emissive_nodes(volume)
-    if emitting:
-        warn("volume emission (%s) is supported in material volumes only; the World volume's "
-             "emission is left out" % ", ".join("'%s'" % n for n in emitting))
-        volume = without_emission(volume)
     if not volume:
         return 0
     core_scene.set_world_volume(volume)

@@ -74,6 +74,7 @@ void Scene::commit() {
     has_boundaries_ = has_boundaries_ || m >= 0;
     has_emissive_media_ = has_emissive_media_ || (m >= 0 && media[m].emissive());
   }
+  for (int m : global_media) has_emissive_media_ = has_emissive_media_ || media[m].emissive();
   has_media_ = has_boundaries_ || !global_media.empty();
   committed_ = true;
   edited_ = false;
