@@ -176,4 +176,61 @@ TEST(Lightgroups, VolumeEmissionIsInItsObjectsGroup) {
   }
 }
 
+// A Volume object's emission (fire.vdb: Emission Strength from its 'flame' grid, blackbody from
+// 'temperature') is in the group its object is put in (lt_scene_set_volume_grid_lightgroup; 0:
+// none), here overlapping an emitting mesh volume of group 2.
+ScenePtr emissive_grid_scene(int grid_group) {
+  ScenePtr s = new_scene();
+  set_world(s.get(), {0, 0, 0}, 0);
+  add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.7f, 0.7f, 0.7f}));
+  lt_volume_desc fire = volume(LT_VOLUME_PRINCIPLED, 2.0f, 0.5f);
+  fire.emission_strength = 1.0f;
+  fire.emission_strength_grid = "flame";
+  const float orange[3] = {1.0f, 0.45f, 0.1f}, white[3] = {1, 1, 1};
+  std::copy(orange, orange + 3, fire.emission_color);
+  fire.blackbody_intensity = 1.0f;
+  std::copy(white, white + 3, fire.blackbody_tint);
+  fire.temperature = 1500.0f;
+  fire.temperature_attribute = "temperature";
+  Xform xf = identity();
+  int id = -1;
+  check(lt_scene_add_volume_grid(s.get(), (std::string(LANTERN_TEST_VDB_DIR) + "/fire.vdb").c_str(), "density",
+                                 xf.data(), 0, &fire, 1, &id),
+        "lt_scene_add_volume_grid");
+  check(lt_scene_set_volume_grid_lightgroup(s.get(), id, grid_group), "lt_scene_set_volume_grid_lightgroup");
+  lt_volume_desc c[2] = {volume(LT_VOLUME_ABSORPTION, 0.2f), volume(LT_VOLUME_EMISSION, 0.0f)};
+  c[1].emission_strength = 0.3f;
+  add_instance(s.get(), add_mesh(s.get(), box({0.1f, -1, 0}, {1.4f, 1, 1.5f})), add_volume_material(s.get(), c, 2),
+               identity(), LT_VISIBLE_ALL, 2);
+  set_camera(s.get(), perspective_camera(look_at({0, -5, 1.5f}, {0, 0, 0.7f})));
+  check(lt_scene_commit(s.get()), "lt_scene_commit");
+  return s;
+}
+
+TEST(Lightgroups, VolumeObjectEmissionIsInItsObjectsGroup) {
+  const int width = 24, height = 18;
+  for (int integrator : {LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    SCOPED_TRACE("integrator " + std::to_string(integrator));
+    ScenePtr s = emissive_grid_scene(1);
+    lt_render_settings rs = render_settings(width, height, 8, 5);
+    rs.integrator = integrator;
+    const GroupedRender g = render_groups(s.get(), rs);
+    double total[2];
+    expect_groups_sum_to_combined(g, width, height, total);
+    ScenePtr u = emissive_grid_scene(0);
+    const GroupedRender h = render_groups(u.get(), rs);
+    EXPECT_EQ(h.passes.combined, g.passes.combined);
+    double rest = 0;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const size_t i = (size_t(y) * width + x) * 3 + c;
+          EXPECT_EQ(h.group[0][i], 0.0f);
+          rest += h.passes.rgba(x, y)[c] - h.group[1][i];
+        }
+    EXPECT_GT(total[0], 0.0);
+    EXPECT_NEAR(rest, total[0], 1e-4 * total[0]);
+  }
+}
+
 }  // namespace
