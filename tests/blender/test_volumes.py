@@ -340,6 +340,7 @@ def test_vdb_fire_agrees_with_cycles(integrator, estimator, scene_factory, outdi
     scene.lantern.volume_estimator = estimator
     summary, text = _export(scene)
     assert text == "", text
+    assert summary["emissive_media"] == 1
     import build_scenes
     report, mean_l = ru.two_seed_agreement(scene, build_scenes.SCENES["vdb_fire"][2], integrator,
                                            "vdb_fire_%s_%s" % (integrator, estimator.lower()), outdir, TILE,
@@ -356,8 +357,30 @@ def test_emitting_world_volume_agrees_with_cycles(integrator, scene_factory, out
     scene = scene_factory("world_glow")
     summary, text = _export(scene)
     assert text == "", text
+    assert summary["emissive_media"] == 1 and summary["world_media"] == 1
     import build_scenes
     report, mean_l = ru.two_seed_agreement(scene, build_scenes.SCENES["world_glow"][2], integrator,
                                            "world_glow_%s" % integrator, outdir, TILE, ROUNDING)
     assert mean_l.min() > 0
     assert report == "", report
+
+
+def test_vdb_fire_grid_uses_that_are_not_supported_are_reported(scene_factory):
+    """A grid the file lacks reads 0 (Cycles' Attribute node), a missing Temperature Attribute
+    leaves the Temperature constant, and a Color Attribute grid is not supported: each is reported
+    by name; the volume still renders."""
+    _need_vdb("fire.vdb")
+    scene = scene_factory("vdb_fire")
+    nt = bpy.data.materials["FireVolume"].node_tree
+    vol = nt.nodes["Principled Volume"]
+    nt.nodes["Attribute"].attribute_name = "fuel"
+    vol.inputs["Temperature Attribute"].default_value = "heat"
+    vol.inputs["Color Attribute"].default_value = "flame"
+    summary, text = _export(scene)
+    assert "'fuel', which the file does not have" in text, text
+    assert "no 'heat' grid (Temperature Attribute)" in text and "1500 K is used everywhere" in text, text
+    assert "grid 'flame' (Color Attribute), which is not supported" in text, text
+    assert "left out" not in text, text
+    assert summary["volumes"] == 1 and summary["emissive_media"] == 1
+    img = ru.render(scene, ru.LANTERN, 2, seed=0, integrator="VOLPATH").combined
+    assert np.isfinite(img).all()

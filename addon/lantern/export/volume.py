@@ -4,7 +4,7 @@ import bpy
 from mathutils import Matrix, Vector
 
 from .. import core
-from .material import follow
+from .material import emissive_nodes, follow
 
 # Cycles' default volume shader for a Volume object without material: Principled Volume defaults.
 _DEFAULT = dict(node=core.VOLUME_PRINCIPLED, color=(0.5, 0.5, 0.5), density=1.0,
@@ -96,8 +96,9 @@ def _resolve_grids(desc, names, warn):
 
 
 def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0):
-    """Adds the object's density grid and the grids its emission reads; returns 1 if added, 0 if
-    left out (with a report). lightgroup: its emission's (core numbering)."""
+    """Adds the object's density grid and the grids its emission reads; returns (1, whether it
+    emits) if added, (0, False) if left out (with a report). lightgroup: its emission's (core
+    numbering)."""
     volume = obj.data
     material = obj.active_material
     path = _vdb_path(obj)
@@ -129,7 +130,7 @@ def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0):
     desc, used = _resolve_grids(desc, names, lambda m: report({'WARNING'}, "Volume '%s': %s" % (obj.name, m)))
     if not desc:
         report({'WARNING'}, "Volume '%s' left out: its material has no usable volume shader" % obj.name)
-        return 0
+        return 0, False
     # Render space Object (Blender's default): density and step size are per object-space unit, so
     # a Volume scaled by 1/50 is as dense as unscaled; Cycles scales them by the length of the
     # object's transform applied to a unit diagonal (BKE_volume_density_scale). World: per metre.
@@ -151,8 +152,8 @@ def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0):
         core_scene.add_volume_grid(path, grid_name, matrix, desc, step=step, lightgroup=lightgroup)
     except core.LanternError as e:
         report({'WARNING'}, "Volume '%s' left out: %s" % (obj.name, e.detail))
-        return 0
+        return 0, False
     finally:
         for w in core_scene.take_warnings():
             report({'WARNING'}, "Volume '%s': %s" % (obj.name, w))
-    return 1
+    return 1, bool(emissive_nodes(desc))
