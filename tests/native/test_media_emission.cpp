@@ -91,8 +91,8 @@ struct Fire {
 
 // Simpson quadrature (m intervals) of integral E(s) T(t0, s) T_o(s) |d| dt over [t0, t1], T from the
 // reference density, T_o = exp(-sigma_other (t - t0) |d|) x other_rate's exp(-other_rate (t - t0)).
-Spectrum reference(const Fire& f, const Ray& r, double t0, double t1, const Spectrum& sigma_other,
-                   double other_rate, int m = 8000) {
+Spectrum reference(const Fire& f, const Ray& r, double t0, double t1, const Spectrum& sigma_other, double other_rate,
+                   int m = 8000) {
   const double len = length(r.d), h = (t1 - t0) / m;
   const Spectrum st = f.sigma_a + f.sigma_s;
   auto rho = [&](double t) { return f.density.world_density(r.o.x + t * r.d.x, r.o.y + t * r.d.y, r.o.z + t * r.d.z); };
@@ -136,7 +136,9 @@ TEST(MediaEmission, TrackingMatchesQuadrature) {
       const Ray r = fire_rays()[k];
       const float t0 = 0.2f / length(r.d), t1 = 3.8f / length(r.d);
       const Spectrum expect = reference(fire, r, t0, t1, o.sigma_other, o.other_rate);
-      std::function<Spectrum(float)> other = [&](float t) { return Spectrum(float(std::exp(-o.other_rate * (t - t0)))); };
+      std::function<Spectrum(float)> other = [&](float t) {
+        return Spectrum(float(std::exp(-o.other_rate * (t - t0))));
+      };
       Mean mean[3];
       for (int i = 0; i < 40000; ++i) {
         const Spectrum L = m.emission_integral(r, t0, t1, s, VolumeEstimator::Tracking, 0, o.sigma_other,
@@ -163,7 +165,9 @@ TEST(MediaEmission, RayMarchingConvergesToQuadrature) {
       const Ray r = fire_rays()[k];
       const float t0 = 0.2f / length(r.d), t1 = 3.8f / length(r.d);
       const Spectrum expect = reference(fire, r, t0, t1, o.sigma_other, o.other_rate);
-      std::function<Spectrum(float)> other = [&](float t) { return Spectrum(float(std::exp(-o.other_rate * (t - t0)))); };
+      std::function<Spectrum(float)> other = [&](float t) {
+        return Spectrum(float(std::exp(-o.other_rate * (t - t0))));
+      };
       double coarse = 0;
       for (float step : {4.0f, 2.0f, 1.0f, 0.5f, 0.25f}) {
         const float h = step / 16;  // voxels -> world
@@ -178,7 +182,7 @@ TEST(MediaEmission, RayMarchingConvergesToQuadrature) {
                     step, err);
         if (step == 4.0f) coarse = err;
         if (step == 0.5f) EXPECT_LT(err, 0.2 * coarse) << "ray " << k;  // measured: 0.004 to 0.017 x
-        if (step == 0.25f) EXPECT_LT(err, 1e-3) << "ray " << k;          // measured: at most 1.5e-4
+        if (step == 0.25f) EXPECT_LT(err, 1e-3) << "ray " << k;         // measured: at most 1.5e-4
       }
     }
 }

@@ -347,7 +347,8 @@ TEST(VolPath, VolumeEmissionIntegratesInClosedForm) {
     Passes p = render(w.get(), rs);
     for (int ch = 0; ch < 3; ++ch) {
       const double expected = 2.0 * color[ch] / sigma;
-      EXPECT_NEAR(p.rgba(4, 4)[ch], expected, 1e-4 * expected) << "world, integrator " << integrator << " channel " << ch;
+      EXPECT_NEAR(p.rgba(4, 4)[ch], expected, 1e-4 * expected)
+          << "world, integrator " << integrator << " channel " << ch;
     }
   }
   // Grids are read by Volume objects only.

@@ -135,8 +135,8 @@ lt::VolumeMix to_volume_mix(const lt_volume_desc* d, int count, bool grids_allow
   for (int i = 0; i < count; ++i) {
     c.push_back(to_volume(d + i));
     for (const char* g : grid_names(d[i]))
-      require(grids_allowed || !named(g), "volume grids are read by Volume objects only (grid '" +
-                                              std::string(named(g) ? g : "") + "')");
+      require(grids_allowed || !named(g),
+              "volume grids are read by Volume objects only (grid '" + std::string(named(g) ? g : "") + "')");
   }
   return lt::sum_volume_components(c.data(), count);
 }

@@ -1,8 +1,8 @@
 #include "integrators/media_transport.h"
 
-#include "integrators/path_state.h"
-
 #include <functional>
+
+#include "integrators/path_state.h"
 
 namespace lt {
 
@@ -191,7 +191,8 @@ Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray&
       });
       return T;
     };
-    const Spectrum L = m.emission_integral(ray, t0, t1, sampler, est, step, sigma, heterogeneous > 1 ? &others : nullptr);
+    const Spectrum L =
+        m.emission_integral(ray, t0, t1, sampler, est, step, sigma, heterogeneous > 1 ? &others : nullptr);
     total += L;
     if (groups && !is_black(L)) add_share(groups, emitters[k].group, L);
   }

@@ -48,8 +48,7 @@ GridEmission::Lookup::~Lookup() = default;
 
 Spectrum GridEmission::Lookup::operator()(const Vec3& q) {
   float v[kMaxGrids];
-  for (size_t g = 0; g < samplers_.size(); ++g)
-    v[g] = samplers_[g](e_->same_space_[g] ? q : e_->to_grid_[g].point(q));
+  for (size_t g = 0; g < samplers_.size(); ++g) v[g] = samplers_[g](e_->same_space_[g] ? q : e_->to_grid_[g].point(q));
   auto param = [&](const EmissionParam& p) { return p.grid < 0 ? p.value : p.value * v[p.grid]; };
   Spectrum E(0.0f);
   for (const EmissionComponent& c : e_->components_) {

@@ -61,7 +61,7 @@ class GridEmission {
  private:
   std::vector<std::shared_ptr<const GridData>> grids_;
   std::vector<EmissionComponent> components_;
-  std::vector<Transform> to_grid_;  // density index -> grid index
+  std::vector<Transform> to_grid_;   // density index -> grid index
   std::vector<uint8_t> same_space_;  // to_grid_ is the identity
 };
 
