@@ -127,10 +127,10 @@ struct Overlap {
 };
 const Overlap kOverlaps[] = {{Spectrum(0.0f), 0.0}, {Spectrum(0.3f, 0.6f, 0.1f), 0.7}};
 
-TEST(MediaEmission, TrackingMatchesQuadrature) {
-  const Fire fire;
-  const Medium m = fire.medium();
-  Sampler s(media_test::seed(71), 0, 0);
+// Calls f(ray index, overlap, ray, t0, t1, reference, estimate) for every ray and overlap setting;
+// estimate(estimator, step) is one call of emission_integral on the case.
+template <class F>
+void for_each_case(const Fire& fire, const Medium& m, Sampler& s, F&& f) {
   for (const Overlap& o : kOverlaps)
     for (size_t k = 0; k < fire_rays().size(); ++k) {
       const Ray r = fire_rays()[k];
@@ -139,18 +139,29 @@ TEST(MediaEmission, TrackingMatchesQuadrature) {
       std::function<Spectrum(float)> other = [&](float t) {
         return Spectrum(float(std::exp(-o.other_rate * (t - t0))));
       };
-      Mean mean[3];
-      for (int i = 0; i < 40000; ++i) {
-        const Spectrum L = m.emission_integral(r, t0, t1, s, VolumeEstimator::Tracking, 0, o.sigma_other,
-                                               o.other_rate > 0 ? &other : nullptr);
-        ASSERT_TRUE(is_finite(L) && L.x >= 0 && L.y >= 0 && L.z >= 0);
-        for (int c = 0; c < 3; ++c) mean[c].add(L[c]);
-      }
-      for (int c = 0; c < 3; ++c)
-        EXPECT_TRUE(within_se(mean[c], expect[c]))
-            << "ray " << k << " channel " << c << " overlap " << o.other_rate << " (reference " << expect[c] << ")";
-      EXPECT_GT(expect.x, 1e-3f) << "ray " << k << ": the ray must see emission";
+      auto estimate = [&](VolumeEstimator e, float step) {
+        return m.emission_integral(r, t0, t1, s, e, step, o.sigma_other, o.other_rate > 0 ? &other : nullptr);
+      };
+      f(k, o, expect, estimate);
     }
+}
+
+TEST(MediaEmission, TrackingMatchesQuadrature) {
+  const Fire fire;
+  const Medium m = fire.medium();
+  Sampler s(media_test::seed(71), 0, 0);
+  for_each_case(fire, m, s, [&](size_t k, const Overlap& o, const Spectrum& expect, auto&& estimate) {
+    Mean mean[3];
+    for (int i = 0; i < 40000; ++i) {
+      const Spectrum L = estimate(VolumeEstimator::Tracking, 0.0f);
+      ASSERT_TRUE(is_finite(L) && L.x >= 0 && L.y >= 0 && L.z >= 0);
+      for (int c = 0; c < 3; ++c) mean[c].add(L[c]);
+    }
+    for (int c = 0; c < 3; ++c)
+      EXPECT_TRUE(within_se(mean[c], expect[c]))
+          << "ray " << k << " channel " << c << " overlap " << o.other_rate << " (reference " << expect[c] << ")";
+    EXPECT_GT(expect.x, 1e-3f) << "ray " << k << ": the ray must see emission";
+  });
 }
 
 // Ray marching (Cycles' per-step integration): deterministic, its error against quadrature falls
@@ -160,31 +171,21 @@ TEST(MediaEmission, RayMarchingConvergesToQuadrature) {
   const Fire fire;
   const Medium m = fire.medium();
   Sampler s(media_test::seed(72), 0, 0);
-  for (const Overlap& o : kOverlaps)
-    for (size_t k = 0; k < fire_rays().size(); ++k) {
-      const Ray r = fire_rays()[k];
-      const float t0 = 0.2f / length(r.d), t1 = 3.8f / length(r.d);
-      const Spectrum expect = reference(fire, r, t0, t1, o.sigma_other, o.other_rate);
-      std::function<Spectrum(float)> other = [&](float t) {
-        return Spectrum(float(std::exp(-o.other_rate * (t - t0))));
-      };
-      double coarse = 0;
-      for (float step : {4.0f, 2.0f, 1.0f, 0.5f, 0.25f}) {
-        const float h = step / 16;  // voxels -> world
-        const Spectrum L = m.emission_integral(r, t0, t1, s, VolumeEstimator::RayMarching, h, o.sigma_other,
-                                               o.other_rate > 0 ? &other : nullptr);
-        const Spectrum again = m.emission_integral(r, t0, t1, s, VolumeEstimator::RayMarching, h, o.sigma_other,
-                                                   o.other_rate > 0 ? &other : nullptr);
-        for (int c = 0; c < 3; ++c) EXPECT_EQ(L[c], again[c]);
-        double err = 0;
-        for (int c = 0; c < 3; ++c) err = std::max(err, std::abs(double(L[c]) - expect[c]) / expect[c]);
-        std::printf("[ emission ] ray %zu overlap %.1f step %.2f voxel: max relative error %.2e\n", k, o.other_rate,
-                    step, err);
-        if (step == 4.0f) coarse = err;
-        if (step == 0.5f) EXPECT_LT(err, 0.2 * coarse) << "ray " << k;  // measured: 0.004 to 0.017 x
-        if (step == 0.25f) EXPECT_LT(err, 1e-3) << "ray " << k;         // measured: at most 1.5e-4
-      }
+  for_each_case(fire, m, s, [&](size_t k, const Overlap& o, const Spectrum& expect, auto&& estimate) {
+    double coarse = 0;
+    for (float step : {4.0f, 2.0f, 1.0f, 0.5f, 0.25f}) {
+      const float h = step / 16;  // voxels -> world
+      const Spectrum L = estimate(VolumeEstimator::RayMarching, h), again = estimate(VolumeEstimator::RayMarching, h);
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(L[c], again[c]);
+      double err = 0;
+      for (int c = 0; c < 3; ++c) err = std::max(err, std::abs(double(L[c]) - expect[c]) / expect[c]);
+      std::printf("[ emission ] ray %zu overlap %.1f step %.2f voxel: max relative error %.2e\n", k, o.other_rate, step,
+                  err);
+      if (step == 4.0f) coarse = err;
+      if (step == 0.5f) EXPECT_LT(err, 0.2 * coarse) << "ray " << k;  // measured: 0.004 to 0.017 x
+      if (step == 0.25f) EXPECT_LT(err, 1e-3) << "ray " << k;         // measured: at most 1.5e-4
     }
+  });
 }
 
 TEST(MediaEmission, OnlyGridMediaTakeGridEmissionAndNonEmittersAddNothing) {
