@@ -1779,16 +1779,19 @@ def build_vdb_smoke(scene):
 def build_vdb_fire(scene):
     """fire.vdb (density, flame, temperature; 24x24x32 voxels of 5 cm) as a Volume object whose
     Principled Volume emits from its grids: Emission Strength from an Attribute node 'flame'
-    (orange), blackbody from the Temperature Attribute 'temperature' x 1500 K; grey smoke of
-    density 3 around it, a dim blue world, one volume bounce."""
-    set_world(scene, (0.04, 0.05, 0.08), 1.0)
+    (orange, colour above 1), blackbody (intensity 0.05) from the Temperature Attribute
+    'temperature' x 6000 K; grey smoke of density 2 around it, a dark blue world, one volume bounce.
+    The temperature is high so that the T^4-weighted blackbody below 1900 K, where Cycles 3.4's
+    Principled Volume emits negative green and blue and Lantern clamps them to 0 (docs/volumes.md),
+    is below 0.5 % of the peak's."""
+    set_world(scene, (0.01, 0.012, 0.02), 1.0)
     mat, nt, out = _material("FireVolume")
     vol = nt.nodes.new("ShaderNodeVolumePrincipled")
-    vol.inputs["Density"].default_value = 3.0
+    vol.inputs["Density"].default_value = 2.0
     vol.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
-    vol.inputs["Emission Color"].default_value = (1.0, 0.45, 0.1, 1.0)
-    vol.inputs["Blackbody Intensity"].default_value = 1.0
-    vol.inputs["Temperature"].default_value = 1500.0
+    vol.inputs["Emission Color"].default_value = (6.0, 2.7, 0.6, 1.0)
+    vol.inputs["Blackbody Intensity"].default_value = 0.05
+    vol.inputs["Temperature"].default_value = 6000.0
     vol.inputs["Temperature Attribute"].default_value = "temperature"
     flame = nt.nodes.new("ShaderNodeAttribute")
     flame.attribute_name = "flame"

@@ -332,12 +332,16 @@ def test_unsupported_world_volume_node_is_reported(scene_factory):
 def test_vdb_fire_agrees_with_cycles(integrator, estimator, scene_factory, outdir):
     """vdb_fire: a Volume object whose Principled Volume emits from its grids, Emission Strength
     from an Attribute node 'flame' and blackbody from the Temperature Attribute 'temperature' x
-    1500 K, in grey smoke (one volume bounce), against Cycles (ray marching at a quarter voxel),
+    6000 K, in grey smoke (one volume bounce), against Cycles (ray marching at a quarter voxel),
     test_agreement.py's rule. Cycles does not scale the emission by density; Lantern's tracking
     scores it at every tentative collision (unbiased), its marcher integrates it per step."""
     _need_vdb("fire.vdb")
     scene = scene_factory("vdb_fire")
     scene.lantern.volume_estimator = estimator
+    if estimator == "RAY_MARCHING":
+        # Cycles' step (a quarter voxel, volume_step_rate 0.25); at Lantern's default of one voxel
+        # the marcher's O(h^2) bias puts the fire's tile 1.0 % (1.5 bounds) below Cycles' in blue.
+        scene.lantern.volume_step = 0.05 * 0.25
     summary, text = _export(scene)
     assert text == "", text
     assert summary["emissive_media"] == 1
@@ -378,7 +382,7 @@ def test_vdb_fire_grid_uses_that_are_not_supported_are_reported(scene_factory):
     vol.inputs["Color Attribute"].default_value = "flame"
     summary, text = _export(scene)
     assert "'fuel', which the file does not have" in text, text
-    assert "no 'heat' grid (Temperature Attribute)" in text and "1500 K is used everywhere" in text, text
+    assert "no 'heat' grid (Temperature Attribute)" in text and "6000 K is used everywhere" in text, text
     assert "grid 'flame' (Color Attribute), which is not supported" in text, text
     assert "left out" not in text, text
     assert summary["volumes"] == 1 and summary["emissive_media"] == 1
