@@ -317,12 +317,13 @@ def test_world_volume_hides_background_and_sun(scene_factory):
 
 
 def test_unsupported_world_volume_node_is_reported(scene_factory):
+    """A surface shader on the World's Volume input (an Emission node is a volume emitter now)."""
     scene = scene_factory("world_fog")
     nt = scene.world.node_tree
-    emission = nt.nodes.new("ShaderNodeEmission")
-    nt.links.new(emission.outputs[0], nt.get_output_node('CYCLES').inputs["Volume"])
+    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    nt.links.new(diffuse.outputs[0], nt.get_output_node('CYCLES').inputs["Volume"])
     summary, text = _export(scene)
-    assert scene.world.name in text and emission.name in text, text
+    assert scene.world.name in text and diffuse.name in text and "not supported" in text, text
     assert summary["media"] == 0, summary
 
 
