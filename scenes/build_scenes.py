@@ -1779,19 +1779,17 @@ def build_vdb_smoke(scene):
 def build_vdb_fire(scene):
     """fire.vdb (density, flame, temperature; 24x24x32 voxels of 5 cm) as a Volume object whose
     Principled Volume emits from its grids: Emission Strength from an Attribute node 'flame'
-    (orange, colour above 1), blackbody (intensity 0.05) from the Temperature Attribute
-    'temperature' x 6000 K; grey smoke of density 2 around it, a dark blue world, one volume bounce.
-    The temperature is high so that the T^4-weighted blackbody below 1900 K, where Cycles 3.4's
-    Principled Volume emits negative green and blue and Lantern clamps them to 0 (docs/volumes.md),
-    is below 0.5 % of the peak's."""
+    (orange, colour above 1), blackbody from the Temperature Attribute 'temperature' x 2000 K (so
+    0 to 2400 K, mostly below 1900 K, where Cycles 3.4's Principled Volume emits negative green and
+    blue); grey smoke of density 2 around it, a dark blue world, one volume bounce."""
     set_world(scene, (0.01, 0.012, 0.02), 1.0)
     mat, nt, out = _material("FireVolume")
     vol = nt.nodes.new("ShaderNodeVolumePrincipled")
     vol.inputs["Density"].default_value = 2.0
     vol.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
     vol.inputs["Emission Color"].default_value = (6.0, 2.7, 0.6, 1.0)
-    vol.inputs["Blackbody Intensity"].default_value = 0.05
-    vol.inputs["Temperature"].default_value = 6000.0
+    vol.inputs["Blackbody Intensity"].default_value = 1.0
+    vol.inputs["Temperature"].default_value = 2000.0
     vol.inputs["Temperature Attribute"].default_value = "temperature"
     flame = nt.nodes.new("ShaderNodeAttribute")
     flame.attribute_name = "flame"

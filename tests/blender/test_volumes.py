@@ -127,6 +127,20 @@ def test_emissive_principled_volume_agrees_with_cycles(name, integrator, scene_f
     assert report == "", report
 
 
+def test_cold_blackbody_emits_negative_green_and_blue_as_cycles(scene_factory, outdir):
+    """Cycles 3.4's Principled Volume uses the blackbody colour unclamped: at 1200 K its blue is
+    -0.09 and the emission's blue channel negative (a tint of (1, 5, 30) makes it visible against
+    the box's light). volume_blackbody at 1200 K, VOLPATH, test_agreement.py's rule; with the
+    colour clamped to 0 (Cycles' Blackbody node) the cube's tiles are too blue."""
+    scene = scene_factory("volume_blackbody")
+    scene.cycles.volume_bounces = 1
+    vol = bpy.data.materials["GlowVolume"].node_tree.nodes["Principled Volume"]
+    vol.inputs["Temperature"].default_value = 1200.0
+    vol.inputs["Blackbody Tint"].default_value = (1.0, 5.0, 30.0, 1.0)
+    report, _ = ru.two_seed_agreement(scene, SAMPLES, "VOLPATH", "volume_blackbody_cold", outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
 def test_volume_only_material_with_unusable_volume_stays_invisible(scene_factory, outdir):
     """A volume-only material whose volume cannot be used keeps its invisible boundary: the scene
     renders as without the cube (never an opaque black box), and the export says so, naming the
@@ -333,7 +347,7 @@ def test_unsupported_world_volume_node_is_reported(scene_factory):
 def test_vdb_fire_agrees_with_cycles(integrator, estimator, scene_factory, outdir):
     """vdb_fire: a Volume object whose Principled Volume emits from its grids, Emission Strength
     from an Attribute node 'flame' and blackbody from the Temperature Attribute 'temperature' x
-    6000 K, in grey smoke (one volume bounce), against Cycles (ray marching at a quarter voxel),
+    2000 K (negative green and blue below 1900 K, as Cycles), in grey smoke (one volume bounce), against Cycles (ray marching at a quarter voxel),
     test_agreement.py's rule. Cycles does not scale the emission by density; Lantern's tracking
     scores it at every tentative collision (unbiased), its marcher integrates it per step."""
     _need_vdb("fire.vdb")
@@ -383,7 +397,7 @@ def test_vdb_fire_grid_uses_that_are_not_supported_are_reported(scene_factory):
     vol.inputs["Color Attribute"].default_value = "flame"
     summary, text = _export(scene)
     assert "'fuel', which the file does not have" in text, text
-    assert "no 'heat' grid (Temperature Attribute)" in text and "6000 K is used everywhere" in text, text
+    assert "no 'heat' grid (Temperature Attribute)" in text and "2000 K is used everywhere" in text, text
     assert "grid 'flame' (Color Attribute), which is not supported" in text, text
     assert "left out" not in text, text
     assert summary["volumes"] == 1 and summary["emissive_media"] == 1

@@ -199,7 +199,7 @@ Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray&
   if (groups) {
     for (int k = 0; k < groups->n; ++k)
       for (int c = 0; c < 3; ++c)
-        groups->share[k][c] = total[c] > 0 ? std::min(1.0f, groups->share[k][c] / total[c]) : 0.0f;
+        groups->share[k][c] = total[c] != 0 ? groups->share[k][c] / total[c] : 0.0f;  // may be negative (blackbody)
     if (groups->n == 1) groups->share[0] = Spectrum(1.0f);  // exactly the whole, the common case
   }
   return total;

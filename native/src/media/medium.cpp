@@ -184,7 +184,8 @@ Medium& Medium::operator=(const Medium& o) {
 }
 
 void Medium::set_emission(const Spectrum& e) {
-  if (!valid_coefficients(e)) throw InvalidArgument("medium emission must be finite and >= 0");
+  // Negative channels are allowed: Cycles' blackbody below ~1900 K (volume_material.h).
+  if (!is_finite(e)) throw InvalidArgument("medium emission must be finite");
   if (grid_ && !is_black(e)) throw InvalidArgument("emission is supported for homogeneous media only");
   emission_ = e;
   emissive_ = !is_black(e);

@@ -98,8 +98,9 @@ class Medium {
   const Phase& phase() const { return phase_; }
   // A mixture of HG lobes (volume shader mixes; media/volume_material.h) replaces the single lobe.
   void set_phase(const Phase& p) { phase_ = p; }
-  // Emitted radiance per unit length (Cycles' volume emission, not scaled by density); homogeneous
-  // media only (throws InvalidArgument otherwise, or for negative / non-finite values). Emission is
+  // Emitted radiance per unit length (Cycles' volume emission, not scaled by density; a channel may
+  // be negative, as Cycles' blackbody below ~1900 K); homogeneous media only (throws
+  // InvalidArgument otherwise, or for non-finite values). Emission is
   // light no estimator samples: the integrators add its closed-form integral along each segment.
   void set_emission(const Spectrum& e);
   const Spectrum& emission() const { return emission_; }
