@@ -422,7 +422,8 @@ LT_API int lt_scene_set_world_lightgroup(lt_scene* scene, int lightgroup);
  * Emission (Principled and Emission nodes) is radiance per unit length, not scaled by density:
  * emission_strength x emission_color, plus for Principled Volume with blackbody_intensity > 0:
  * blackbody_tint x (Stefan-Boltzmann / pi x 1e-6) x mix(1, T^4, blackbody_intensity) x the
- * unit-luminance blackbody colour of `temperature` kelvin (Cycles' formula). Fields after
+ * unit-luminance blackbody colour of `temperature` kelvin (Cycles' formula; unclamped as Cycles'
+ * Principled Volume: negative green and blue below ~1900 K). Fields after
  * `anisotropy` may be left zero: no emission. Volume objects (lt_scene_add_volume_grid) may read
  * parameters from float grids of their file, as Cycles' volume attributes (an Attribute node
  * feeding the socket): emission_strength_grid, blackbody_intensity_grid and temperature_grid
