@@ -348,8 +348,9 @@ def test_vdb_fire_agrees_with_cycles(integrator, estimator, scene_factory, outdi
     """vdb_fire: a Volume object whose Principled Volume emits from its grids, Emission Strength
     from an Attribute node 'flame' and blackbody from the Temperature Attribute 'temperature' x
     2000 K (negative green and blue below 1900 K, as Cycles), in grey smoke (one volume bounce),
-    against Cycles (ray marching at a quarter voxel), test_agreement.py's rule. Cycles does not scale the emission by density; Lantern's tracking
-    scores it at every tentative collision (unbiased), its marcher integrates it per step."""
+    against Cycles (ray marching at a quarter voxel), test_agreement.py's rule. Cycles does not
+    scale the emission by density; Lantern's tracking scores it at every tentative collision
+    (unbiased), its marcher integrates it per step."""
     _need_vdb("fire.vdb")
     scene = scene_factory("vdb_fire")
     scene.lantern.volume_estimator = estimator
