@@ -188,6 +188,31 @@ TEST(MediaEmission, RayMarchingConvergesToQuadrature) {
   });
 }
 
+// An emission-only Volume object (an Emission node: no extinction) is empty for transport but
+// emits: tracking (one collision per voxel, weight 1) and marching give the plain integral of E.
+TEST(MediaEmission, EmissionWithoutExtinction) {
+  Fire fire;
+  fire.sigma_a = fire.sigma_s = Spectrum(0.0f);
+  const Medium m = fire.medium();
+  EXPECT_TRUE(m.empty());
+  EXPECT_TRUE(m.emissive());
+  Sampler s(media_test::seed(74), 0, 0);
+  const Ray r = fire_rays()[0];
+  const float t0 = 0.2f, t1 = 3.8f;
+  const Spectrum expect = reference(fire, r, t0, t1, Spectrum(0.0f), 0.0);
+  Mean mean[3];
+  for (int i = 0; i < 20000; ++i) {
+    const Spectrum L = m.emission_integral(r, t0, t1, s, VolumeEstimator::Tracking, 0, Spectrum(0.0f), nullptr);
+    for (int c = 0; c < 3; ++c) mean[c].add(L[c]);
+  }
+  const Spectrum marched =
+      m.emission_integral(r, t0, t1, s, VolumeEstimator::RayMarching, 0.25f / 16, Spectrum(0.0f), nullptr);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_TRUE(within_se(mean[c], expect[c])) << "channel " << c;
+    EXPECT_NEAR(marched[c], expect[c], 1e-3 * std::abs(expect[c])) << "channel " << c;
+  }
+}
+
 TEST(MediaEmission, OnlyGridMediaTakeGridEmissionAndNonEmittersAddNothing) {
   Medium h = Medium::homogeneous(Spectrum(1.0f), Spectrum(1.0f), 0.0f);
   EXPECT_THROW(h.set_grid_emission(nullptr), InvalidArgument);

@@ -867,7 +867,7 @@ int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* d, int coun
     lt::VolumeMix c = to_volume_mix(d, count, false);
     lt::Scene& sc = scene->scene;
     sc.media.push_back(homogeneous_medium(c));
-    if (!sc.media.back().empty()) sc.global_media.push_back(int(sc.media.size()) - 1);
+    if (!sc.media.back().empty() || sc.media.back().emissive()) sc.global_media.push_back(int(sc.media.size()) - 1);
   });
 }
 
@@ -902,7 +902,7 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
     sc.media.back().set_phase(c.phase);
     if (step > 0) sc.media.back().set_march_step(step);
     *out_id = int(sc.media.size()) - 1;
-    if (sc.media.back().empty())
+    if (sc.media.back().empty() && !sc.media.back().emissive())  // an emission-only shader still emits
       sc.warnings.push_back(std::string(path) + ": volume has no density; left out");
     else
       sc.global_media.push_back(*out_id);

@@ -53,7 +53,8 @@ void Scene::commit() {
       bounds.extend(lo);
       bounds.extend(hi);
     } else {
-      has_world_volume_ = true;
+      // A World volume that only emits (sigma_t = 0) hides nothing.
+      has_world_volume_ = has_world_volume_ || !media[m].empty();
     }
   }
   // Rays from beyond Embree's range miss (geometry.h): say so instead of rendering less silently.
