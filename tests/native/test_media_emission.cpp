@@ -188,6 +188,22 @@ TEST(MediaEmission, RayMarchingConvergesToQuadrature) {
   });
 }
 
+// Per-point lookups (each grid in its own index space, trilinear) equal the reference grids'.
+TEST(MediaEmission, LookupsMatchTheReferenceGrids) {
+  const Fire fire;
+  const Medium m = fire.medium();
+  int nonzero = 0;
+  for (float x = -1.1f; x <= 1.1f; x += 0.137f)
+    for (float y = -1.1f; y <= 1.1f; y += 0.173f)
+      for (float z = -1.1f; z <= 1.1f; z += 0.191f) {
+        const Spectrum e = m.emission_at(Vec3(x, y, z)), ref = fire.emission(Vec3(x, y, z));
+        for (int c = 0; c < 3; ++c)
+          ASSERT_NEAR(e[c], ref[c], 1e-5f * std::abs(ref[c]) + 1e-9f) << x << " " << y << " " << z;
+        nonzero += !is_black(ref);
+      }
+  EXPECT_GT(nonzero, 1000);
+}
+
 // An emission-only Volume object (an Emission node: no extinction) is empty for transport but
 // emits: tracking (one collision per voxel, weight 1) and marching give the plain integral of E.
 TEST(MediaEmission, EmissionWithoutExtinction) {
