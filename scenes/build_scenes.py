@@ -1807,6 +1807,52 @@ def build_vdb_smoke(scene):
     scene.cycles.volume_bounces = 1
 
 
+def build_vdb_fire(scene):
+    """fire.vdb (density, flame, temperature; 24x24x32 voxels of 5 cm) as a Volume object whose
+    Principled Volume emits from its grids: Emission Strength from an Attribute node 'flame'
+    (orange, colour above 1), blackbody from the Temperature Attribute 'temperature' x 2000 K (so
+    0 to 2400 K, mostly below 1900 K, where Cycles 3.4's Principled Volume emits negative green and
+    blue); grey smoke of density 2 around it, a dark blue world, one volume bounce."""
+    set_world(scene, (0.01, 0.012, 0.02), 1.0)
+    mat, nt, out = _material("FireVolume")
+    vol = nt.nodes.new("ShaderNodeVolumePrincipled")
+    vol.inputs["Density"].default_value = 2.0
+    vol.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    vol.inputs["Emission Color"].default_value = (6.0, 2.7, 0.6, 1.0)
+    vol.inputs["Blackbody Intensity"].default_value = 1.0
+    vol.inputs["Temperature"].default_value = 2000.0
+    vol.inputs["Temperature Attribute"].default_value = "temperature"
+    flame = nt.nodes.new("ShaderNodeAttribute")
+    flame.attribute_name = "flame"
+    nt.links.new(flame.outputs["Fac"], vol.inputs["Emission Strength"])
+    nt.links.new(vol.outputs[0], out.inputs["Volume"])
+    add_vdb_volume(scene, "Fire", "fire.vdb", mat, (0, 0, 0.0))
+    add_camera(scene, (0, -3.2, 0.8), (0, 0, 0.75), lens=60.0)
+    scene.cycles.volume_step_rate = 0.25
+    scene.cycles.volume_max_steps = 4096
+    scene.cycles.volume_bounces = 1
+
+
+def build_world_glow(scene):
+    """A World volume that emits: Principled Volume of density 0.3 (white scattering) with Emission
+    Strength 0.4, colour (1, 0.6, 0.3), over a diffuse ground and sphere; no lamps, a black world
+    (escaped rays see none of it anyway)."""
+    world = set_world(scene, (0.0, 0.0, 0.0), 1.0)
+    nt = world.node_tree
+    vol = nt.nodes.new("ShaderNodeVolumePrincipled")
+    vol.inputs["Density"].default_value = 0.3
+    vol.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    vol.inputs["Emission Strength"].default_value = 0.4
+    vol.inputs["Emission Color"].default_value = (1.0, 0.6, 0.3, 1.0)
+    nt.links.new(vol.outputs[0], nt.get_output_node('CYCLES').inputs["Volume"])
+    ground = add_object(scene, "Ground", mesh_plane("Ground", 8.0))
+    assign(ground, diffuse("Ground", (0.6, 0.6, 0.55)))
+    sphere = add_object(scene, "Sphere", mesh_sphere("Sphere", 0.5), (0.3, 0.3, 0.5))
+    assign(sphere, diffuse("Blue", (0.15, 0.3, 0.8)))
+    add_camera(scene, (0, -5.0, 1.5), (0, 0, 0.6), lens=35.0)
+    scene.cycles.volume_bounces = 0
+
+
 def build_smoke_interior(scene):
     """A closed room (6 x 6 x 4 m) filled with thin homogeneous smoke; the sun enters through a
     window in the left wall and draws a shaft of light across the smoke (like the sheet's
@@ -2289,6 +2335,8 @@ SCENES = {
     "vdb_cloud": (build_vdb_cloud, (64, 64), 128),
     "vdb_cloud_scaled": (build_vdb_cloud_scaled, (64, 64), 128),
     "vdb_smoke": (build_vdb_smoke, (64, 64), 64),
+    "vdb_fire": (build_vdb_fire, (48, 48), 128),
+    "world_glow": (build_world_glow, (48, 48), 128),
     "smoke_interior": (build_smoke_interior, (64, 64), 64),
 }
 

@@ -15,7 +15,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 18
+ABI_VERSION = 19
 
 # lt_status
 OK = 0
@@ -359,6 +359,10 @@ class RenderSettings(ctypes.Structure):
     ]
 
 
+# VolumeDesc's grid names (Volume objects: float grids of the file feeding the parameters).
+_GRID_FIELDS = ("emission_strength_grid", "blackbody_intensity_grid", "temperature_grid", "temperature_attribute")
+
+
 class VolumeDesc(ctypes.Structure):
     _c_name_ = "lt_volume_desc"
     _fields_ = [
@@ -372,6 +376,10 @@ class VolumeDesc(ctypes.Structure):
         ("blackbody_intensity", ctypes.c_float),
         ("blackbody_tint", ctypes.c_float * 3),
         ("temperature", ctypes.c_float),
+        ("emission_strength_grid", ctypes.c_char_p),
+        ("blackbody_intensity_grid", ctypes.c_char_p),
+        ("temperature_grid", ctypes.c_char_p),
+        ("temperature_attribute", ctypes.c_char_p),
     ]
 
 
@@ -473,6 +481,7 @@ def _declare(lib, layout=True):
         "lt_scene_set_world_lightgroup": ([scene_p, c_int], c_int),
         "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int, c_int], c_int),
         "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc), c_int], c_int),
+        "lt_scene_set_volume_grid_lightgroup": ([scene_p, c_int, c_int], c_int),
         "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, ctypes.c_float, P(VolumeDesc),
                                       c_int, P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
@@ -973,7 +982,9 @@ class Scene:
     def _volume_descs(components):
         """A volume's components (one keyword dict, or a list of them; keywords as VolumeDesc's
         fields: node, color, density, absorption_color, anisotropy, emission_strength,
-        emission_color, blackbody_intensity, blackbody_tint, temperature) as a VolumeDesc array."""
+        emission_color, blackbody_intensity, blackbody_tint, temperature, and for Volume objects the
+        grid names emission_strength_grid, blackbody_intensity_grid, temperature_grid,
+        temperature_attribute) as a VolumeDesc array."""
         if isinstance(components, dict):
             components = [components]
         components = list(components)
@@ -991,6 +1002,8 @@ class Scene:
             d.blackbody_intensity = float(c.get("blackbody_intensity", 0.0))
             d.blackbody_tint[:] = [float(v) for v in tuple(c.get("blackbody_tint", (1.0, 1.0, 1.0)))[:3]]
             d.temperature = float(c.get("temperature", 1000.0))
+            for f in _GRID_FIELDS:
+                setattr(d, f, c[f].encode("utf-8") if c.get(f) else None)
         return arr, len(components)
 
     def set_material_volume(self, material, components, null_surface=True):
@@ -1006,15 +1019,19 @@ class Scene:
         arr, n = self._volume_descs(components)
         _check(self._lib.lt_scene_set_world_volume(self.handle, arr, n), "lt_scene_set_world_volume")
 
-    def add_volume_grid(self, path, grid, transform, components, step=0.0):
+    def add_volume_grid(self, path, grid, transform, components, step=0.0, lightgroup=0):
         """A Volume object's .vdb grid (step: ray-marching step in world units, 0 for the voxel
-        size); raises LanternError (LT_ERROR_IO) with the core's message."""
+        size; lightgroup: its emission's, 0 none, k the light group k - 1); raises LanternError
+        (LT_ERROR_IO) with the core's message."""
         arr, n = self._volume_descs(components)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_volume_grid(self.handle, os.fsencode(path), grid.encode("utf-8"),
                                                    _transform(transform), float(step), arr, n,
                                                    ctypes.byref(out)),
                "lt_scene_add_volume_grid")
+        if lightgroup:
+            _check(self._lib.lt_scene_set_volume_grid_lightgroup(self.handle, out.value, int(lightgroup)),
+                   "lt_scene_set_volume_grid_lightgroup")
         return out.value
 
     def commit(self):

@@ -355,8 +355,9 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
                    "delta tracking and ratio tracking against per-cell majorants (unbiased)")
             media.append("%d heterogeneous VDB grid(s): %s" % (grids, est))
         if summary.get("emissive_media"):
-            media.append("%d emitting (volume emission integrated in closed form along camera-path "
-                         "segments, never light-sampled, as Cycles 3.4; Bidirectional: strategy s = 0 "
+            media.append("%d emitting (volume emission integrated along camera-path segments: closed "
+                         "form in homogeneous media, per step or at every tentative collision in VDB "
+                         "grids; never light-sampled, as Cycles 3.4; Bidirectional: strategy s = 0 "
                          "only)" % summary["emissive_media"])
         text = "media: " + "; ".join(media)
         if integrator == "PATH":

@@ -14,6 +14,8 @@ the samples' values, which the rule's noise estimate holds for).
 """
 import math
 
+import os
+
 import bpy
 import numpy as np
 import pytest
@@ -180,6 +182,34 @@ def test_volume_emission_is_in_its_objects_light_group(integrator, scene_factory
         lantern = [c[name][..., :3] for c in runs[ru.LANTERN]]
         report, _ = ru.agreement_report("volume_light_groups_%s_%s" % (integrator, name), lantern, cycles, outdir,
                                         16, 1e-5)
+        assert report == "", report
+
+
+def test_volume_object_emission_is_in_its_objects_light_group(scene_factory, outdir):
+    """A Volume object's emission is in the object's light group (Cycles: shade_volume.h, under
+    sd->object's): scene vdb_fire (fire.vdb emitting from its flame and temperature grids) with the
+    Volume object in group "fire" and the world in "sky", VOLPATH. Combined_fire and Combined_sky
+    against Cycles' by test_agreement.py's rule, and their sum is Combined."""
+    import build_scenes
+    if not os.path.exists(build_scenes.test_vdb_path("fire.vdb")):
+        pytest.skip("fire.vdb not generated (build the make_test_vdb target; LANTERN_TEST_VDB_DIR)")
+    runs = {}
+    for engine in (ru.CYCLES, ru.LANTERN):
+        for seed in (0, 1):
+            scene = scene_factory("vdb_fire")
+            for name in ("fire", "sky"):
+                scene.view_layers[0].lightgroups.add(name=name)
+            bpy.data.objects["Fire"].lightgroup = "fire"
+            scene.world.lightgroup = "sky"
+            runs.setdefault(engine, []).append(ru.render(scene, engine, 64, seed=seed, integrator="VOLPATH"))
+    r = runs[ru.LANTERN][0]
+    total = r["Combined_fire"][..., :3] + r["Combined_sky"][..., :3]
+    assert np.allclose(total, r.combined[..., :3], rtol=1e-4, atol=1e-6), np.abs(total - r.combined[..., :3]).max()
+    for name in ("Combined_fire", "Combined_sky"):
+        cycles = [c[name][..., :3] for c in runs[ru.CYCLES]]
+        assert cycles[0].sum() > 0, "%s is empty in Cycles' render: the check would say nothing" % name
+        lantern = [c[name][..., :3] for c in runs[ru.LANTERN]]
+        report, _ = ru.agreement_report("vdb_fire_light_groups_%s" % name, lantern, cycles, outdir, 16, 1e-5)
         assert report == "", report
 
 

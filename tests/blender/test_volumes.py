@@ -127,6 +127,20 @@ def test_emissive_principled_volume_agrees_with_cycles(name, integrator, scene_f
     assert report == "", report
 
 
+def test_cold_blackbody_emits_negative_green_and_blue_as_cycles(scene_factory, outdir):
+    """Cycles 3.4's Principled Volume uses the blackbody colour unclamped: at 1200 K its blue is
+    -0.09 and the emission's blue channel negative (a tint of (1, 5, 30) makes it visible against
+    the box's light). volume_blackbody at 1200 K, VOLPATH, test_agreement.py's rule; with the
+    colour clamped to 0 (Cycles' Blackbody node) the cube's tiles are too blue."""
+    scene = scene_factory("volume_blackbody")
+    scene.cycles.volume_bounces = 1
+    vol = bpy.data.materials["GlowVolume"].node_tree.nodes["Principled Volume"]
+    vol.inputs["Temperature"].default_value = 1200.0
+    vol.inputs["Blackbody Tint"].default_value = (1.0, 5.0, 30.0, 1.0)
+    report, _ = ru.two_seed_agreement(scene, SAMPLES, "VOLPATH", "volume_blackbody_cold", outdir, TILE, ROUNDING)
+    assert report == "", report
+
+
 def test_volume_only_material_with_unusable_volume_stays_invisible(scene_factory, outdir):
     """A volume-only material whose volume cannot be used keeps its invisible boundary: the scene
     renders as without the cube (never an opaque black box), and the export says so, naming the
@@ -317,10 +331,76 @@ def test_world_volume_hides_background_and_sun(scene_factory):
 
 
 def test_unsupported_world_volume_node_is_reported(scene_factory):
+    """A surface shader on the World's Volume input (an Emission node is a volume emitter now)."""
     scene = scene_factory("world_fog")
     nt = scene.world.node_tree
-    emission = nt.nodes.new("ShaderNodeEmission")
-    nt.links.new(emission.outputs[0], nt.get_output_node('CYCLES').inputs["Volume"])
+    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    nt.links.new(diffuse.outputs[0], nt.get_output_node('CYCLES').inputs["Volume"])
     summary, text = _export(scene)
-    assert scene.world.name in text and emission.name in text, text
+    assert scene.world.name in text and diffuse.name in text and "not supported" in text, text
     assert summary["media"] == 0, summary
+
+
+# ---- Volume emission of Volume objects and World volumes --------------------------------------
+@pytest.mark.parametrize("integrator,estimator", [("VOLPATH", "TRACKING"), ("VOLPATH", "RAY_MARCHING"),
+                                                  ("BIDIRECTIONAL", "TRACKING")])
+def test_vdb_fire_agrees_with_cycles(integrator, estimator, scene_factory, outdir):
+    """vdb_fire: a Volume object whose Principled Volume emits from its grids, Emission Strength
+    from an Attribute node 'flame' and blackbody from the Temperature Attribute 'temperature' x
+    2000 K (negative green and blue below 1900 K, as Cycles), in grey smoke (one volume bounce),
+    against Cycles (ray marching at a quarter voxel), test_agreement.py's rule. Cycles does not
+    scale the emission by density; Lantern's tracking scores it at every tentative collision
+    (unbiased), its marcher integrates it per step."""
+    _need_vdb("fire.vdb")
+    scene = scene_factory("vdb_fire")
+    scene.lantern.volume_estimator = estimator
+    if estimator == "RAY_MARCHING":
+        # Cycles' step (a quarter voxel, volume_step_rate 0.25); at Lantern's default of one voxel
+        # the marcher's O(h^2) bias puts the fire's tile 1.0 % (1.5 bounds) below Cycles' in blue.
+        scene.lantern.volume_step = 0.05 * 0.25
+    summary, text = _export(scene)
+    assert text == "", text
+    assert summary["emissive_media"] == 1
+    import build_scenes
+    report, mean_l = ru.two_seed_agreement(scene, build_scenes.SCENES["vdb_fire"][2], integrator,
+                                           "vdb_fire_%s_%s" % (integrator, estimator.lower()), outdir, TILE,
+                                           ROUNDING)
+    assert mean_l.max() > 3 * mean_l.min()  # the fire is there: its tiles are far brighter than the sky's
+    assert report == "", report
+
+
+@pytest.mark.parametrize("integrator", ["VOLPATH", "BIDIRECTIONAL"])
+def test_emitting_world_volume_agrees_with_cycles(integrator, scene_factory, outdir):
+    """world_glow: a World volume (Principled Volume, density 0.3) with emission 0.4 x (1, 0.6, 0.3)
+    lighting a ground and a sphere, no lamps: all its light is the volume's emission (escaped rays
+    cross it to infinity, E / sigma_t), against Cycles with the same rule."""
+    scene = scene_factory("world_glow")
+    summary, text = _export(scene)
+    assert text == "", text
+    assert summary["emissive_media"] == 1 and summary["world_media"] == 1
+    import build_scenes
+    report, mean_l = ru.two_seed_agreement(scene, build_scenes.SCENES["world_glow"][2], integrator,
+                                           "world_glow_%s" % integrator, outdir, TILE, ROUNDING)
+    assert mean_l.min() > 0
+    assert report == "", report
+
+
+def test_vdb_fire_grid_uses_that_are_not_supported_are_reported(scene_factory):
+    """A grid the file lacks reads 0 (Cycles' Attribute node), a missing Temperature Attribute
+    leaves the Temperature constant, and a Color Attribute grid is not supported: each is reported
+    by name; the volume still renders."""
+    _need_vdb("fire.vdb")
+    scene = scene_factory("vdb_fire")
+    nt = bpy.data.materials["FireVolume"].node_tree
+    vol = nt.nodes["Principled Volume"]
+    nt.nodes["Attribute"].attribute_name = "fuel"
+    vol.inputs["Temperature Attribute"].default_value = "heat"
+    vol.inputs["Color Attribute"].default_value = "flame"
+    summary, text = _export(scene)
+    assert "'fuel', which the file does not have" in text, text
+    assert "no 'heat' grid (Temperature Attribute)" in text and "2000 K is used everywhere" in text, text
+    assert "grid 'flame' (Color Attribute), which is not supported" in text, text
+    assert "left out" not in text, text
+    assert summary["volumes"] == 1 and summary["emissive_media"] == 1
+    img = ru.render(scene, ru.LANTERN, 2, seed=0, integrator="VOLPATH").combined
+    assert np.isfinite(img).all()

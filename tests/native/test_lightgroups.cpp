@@ -144,22 +144,23 @@ ScenePtr emissive_volume_scene(int box_group) {
   return s;
 }
 
-TEST(Lightgroups, VolumeEmissionIsInItsObjectsGroup) {
+// make(group) builds a scene whose one emitter under test is in `group` (1, or 0: none) and every
+// other emitter in group 2. Every emitter grouped: the groups sum to Combined per pixel. Group 1
+// holds the emitter's light alone: the same render with it in no group has the same Combined
+// (light groups draw no random number) and its light in neither group, so its Combined minus its
+// groups is group 1 there.
+void expect_group_one_holds_the_emitter(ScenePtr (*make)(int)) {
   const int width = 24, height = 18;
   for (int integrator : {LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
     SCOPED_TRACE("integrator " + std::to_string(integrator));
-    // Every emitter grouped: the groups sum to Combined per pixel, overlap of the boxes included.
-    ScenePtr s = emissive_volume_scene(1);
+    ScenePtr s = make(1);
     lt_render_settings rs = render_settings(width, height, 8, 5);
     rs.integrator = integrator;
     const GroupedRender g = render_groups(s.get(), rs);
     double total[2];
     expect_groups_sum_to_combined(g, width, height, total);
     const double key = total[0];
-    // Group 1 holds the first box's emission alone: the same render with the box in no group has
-    // the same Combined (light groups draw no random number) and the box's light in neither
-    // group, so its Combined minus its groups is group 1 here.
-    ScenePtr u = emissive_volume_scene(0);
+    ScenePtr u = make(0);
     const GroupedRender h = render_groups(u.get(), rs);
     EXPECT_EQ(h.passes.combined, g.passes.combined);
     double rest = 0;
@@ -175,5 +176,40 @@ TEST(Lightgroups, VolumeEmissionIsInItsObjectsGroup) {
     EXPECT_NEAR(rest, key, 1e-4 * key);
   }
 }
+
+TEST(Lightgroups, VolumeEmissionIsInItsObjectsGroup) { expect_group_one_holds_the_emitter(emissive_volume_scene); }
+
+// A Volume object's emission (fire.vdb: Emission Strength from its 'flame' grid, blackbody from
+// 'temperature') is in the group its object is put in (lt_scene_set_volume_grid_lightgroup; 0:
+// none), here overlapping an emitting mesh volume of group 2.
+ScenePtr emissive_grid_scene(int grid_group) {
+  ScenePtr s = new_scene();
+  set_world(s.get(), {0, 0, 0}, 0);
+  add_object(s.get(), plane(8, 8), add_diffuse(s.get(), {0.7f, 0.7f, 0.7f}));
+  lt_volume_desc fire = volume(LT_VOLUME_PRINCIPLED, 2.0f, 0.5f);
+  fire.emission_strength = 1.0f;
+  fire.emission_strength_grid = "flame";
+  const float orange[3] = {1.0f, 0.45f, 0.1f}, white[3] = {1, 1, 1};
+  std::copy(orange, orange + 3, fire.emission_color);
+  fire.blackbody_intensity = 1.0f;
+  std::copy(white, white + 3, fire.blackbody_tint);
+  fire.temperature = 1500.0f;
+  fire.temperature_attribute = "temperature";
+  Xform xf = identity();
+  int id = -1;
+  check(lt_scene_add_volume_grid(s.get(), (std::string(LANTERN_TEST_VDB_DIR) + "/fire.vdb").c_str(), "density",
+                                 xf.data(), 0, &fire, 1, &id),
+        "lt_scene_add_volume_grid");
+  check(lt_scene_set_volume_grid_lightgroup(s.get(), id, grid_group), "lt_scene_set_volume_grid_lightgroup");
+  lt_volume_desc c[2] = {volume(LT_VOLUME_ABSORPTION, 0.2f), volume(LT_VOLUME_EMISSION, 0.0f)};
+  c[1].emission_strength = 0.3f;
+  add_instance(s.get(), add_mesh(s.get(), box({0.1f, -1, 0}, {1.4f, 1, 1.5f})), add_volume_material(s.get(), c, 2),
+               identity(), LT_VISIBLE_ALL, 2);
+  set_camera(s.get(), perspective_camera(look_at({0, -5, 1.5f}, {0, 0, 0.7f})));
+  check(lt_scene_commit(s.get()), "lt_scene_commit");
+  return s;
+}
+
+TEST(Lightgroups, VolumeObjectEmissionIsInItsObjectsGroup) { expect_group_one_holds_the_emitter(emissive_grid_scene); }
 
 }  // namespace

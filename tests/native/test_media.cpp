@@ -934,6 +934,21 @@ TEST(VolumeMaterial, BlackbodyMatchesCyclesAndHasUnitLuminance) {
     Spectrum c = blackbody_rec709(T);
     EXPECT_NEAR(0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z, 1.0f, 2e-3f) << T;
   }
+  // Cycles 3.4.1's Principled Volume (density 0, Blackbody Intensity 1, 2 m deep: pixel / (2 sigma_SB
+  // 1e-6 / pi T^4)) at temperatures apart from the fitted samples: unclamped, negative below ~1900 K.
+  struct {
+    float T;
+    Spectrum c;
+  } volume[] = {{700, Spectrum(5.41329241f, -0.203193843f, -0.0822535306f)},
+                {1000, Spectrum(4.60136080f, 0.0390419327f, -0.0900272653f)},
+                {1500, Spectrum(3.26430583f, 0.434046298f, -0.0642370209f)},
+                {2500, Spectrum(2.06762981f, 0.769322693f, 0.139429674f)},
+                {6000, Spectrum(1.08869064f, 0.978328586f, 0.953050792f)}};
+  for (const auto& k : volume) {
+    Spectrum c = blackbody_rec709_unclamped(k.T);
+    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], k.c[ch], 2e-5f) << k.T << " channel " << ch;
+    for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(blackbody_rec709(k.T)[ch], std::max(0.0f, c[ch]));
+  }
   // Principled Volume: strength x colour + tint x sigma_SB 1e-6 / pi x T^4 x blackbody(T).
   Spectrum e = principled_volume_emission(2.0f, Spectrum(0.5f, 0.25f, 1.0f), 1.0f, Spectrum(1.0f), 3000.0f);
   Spectrum bb = blackbody_rec709(3000.0f) * float(5.670373e-14 / kPi * 81e12);

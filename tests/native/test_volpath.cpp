@@ -309,7 +309,8 @@ TEST(VolPath, DebugViewLabelsEachPanel) {
 // Volume shader mixes and emission (issue 12 item 2): a box of Add Shader(Volume Absorption,
 // Emission) seen head-on through an orthographic camera, no lights and a black world: every pixel
 // is the closed form E (1 - exp(-sigma_a d)) / sigma_a over the box's depth d = 2, for VOLPATH and
-// BDPT (strategy s = 0), with no random numbers involved (homogeneous medium).
+// BDPT (strategy s = 0), with no random numbers involved (homogeneous medium); then the same
+// volume as a World volume seen to infinity.
 TEST(VolPath, VolumeEmissionIntegratesInClosedForm) {
   ScenePtr s = new_scene();
   lt_volume_desc c[2] = {volume(LT_VOLUME_ABSORPTION, 1.2f, 0.5f), volume(LT_VOLUME_EMISSION, 0.0f)};
@@ -333,9 +334,26 @@ TEST(VolPath, VolumeEmissionIntegratesInClosedForm) {
       EXPECT_NEAR(p.rgba(4, 4)[ch], expected, 1e-4 * expected) << "integrator " << integrator << " channel " << ch;
     }
   }
-  // Emission is refused where it is not supported: World volumes and Volume objects.
+  // A World volume emits too: an escaping ray crosses it to infinity, E / sigma_a per channel.
   ScenePtr w = new_scene();
-  EXPECT_EQ(lt_scene_set_world_volume(w.get(), c, 2), LT_ERROR_INVALID_ARGUMENT);
-  EXPECT_EQ(lt_scene_set_world_volume(w.get(), c, 1), LT_OK);
   EXPECT_EQ(lt_scene_set_world_volume(w.get(), c, 0), LT_ERROR_INVALID_ARGUMENT);
+  check(lt_scene_set_world_volume(w.get(), c, 2), "set_world_volume");
+  set_world(w.get(), {0, 0, 0}, 0);
+  set_camera(w.get(), orthographic_camera(look_at({0, -4, 1}, {0, 0, 1}), 1.0f));
+  check(lt_scene_commit(w.get()), "commit");
+  for (int integrator : {LT_INTEGRATOR_VOLPATH, LT_INTEGRATOR_BIDIRECTIONAL}) {
+    lt_render_settings rs = render_settings(8, 8, 4, 2);
+    rs.integrator = integrator;
+    Passes p = render(w.get(), rs);
+    for (int ch = 0; ch < 3; ++ch) {
+      const double expected = 2.0 * color[ch] / sigma;
+      EXPECT_NEAR(p.rgba(4, 4)[ch], expected, 1e-4 * expected)
+          << "world, integrator " << integrator << " channel " << ch;
+    }
+  }
+  // Grids are read by Volume objects only.
+  c[1].emission_strength_grid = "flame";
+  ScenePtr g = new_scene();
+  EXPECT_EQ(lt_scene_set_world_volume(g.get(), c, 2), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_material_volume(g.get(), add_diffuse(g.get(), {0, 0, 0}), c, 2, 1), LT_ERROR_INVALID_ARGUMENT);
 }

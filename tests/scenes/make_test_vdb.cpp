@@ -8,6 +8,8 @@
 //   smoke.vdb       "density" (float): a rising, widening noisy smoke plume in 40x40x64 voxels
 //   two_grids.vdb   "density" (the smoke plume) and "cloud" (the cloud): a material's Density
 //                   Attribute picks one
+//   fire.vdb        "density", "flame", "temperature" (float, 24x24x32 voxels of 5 cm): a flame
+//                   whose emission reads the flame and temperature grids, inside a smoke plume
 // Usage: make_test_vdb <output directory>
 #include "make_test_vdb.h"
 
@@ -151,6 +153,28 @@ openvdb::FloatGrid::Ptr smoke_grid() {
   });
 }
 
+// A fire: smoke widening as it rises, a flame core low in it and a hot region around the flame,
+// each grid named after what it holds (as Blender's smoke simulations write them).
+openvdb::GridPtrVec fire_grids() {
+  const int n[3] = {24, 24, 32};
+  auto radius = [](int i, int j) { return std::hypot(i - 11.5, j - 11.5); };
+  auto density = procedural(n, 0.05, 0.0, [&](int i, int j, int k) {
+    const double h = k / 31.0, r = radius(i, j) / (5.0 + 6.0 * h);
+    return std::exp(-2.0 * r * r) * (0.4 + 0.8 * fbm(i * 0.2, j * 0.2, k * 0.15)) - 0.04;
+  });
+  auto flame = procedural(n, 0.05, 0.0, [&](int i, int j, int k) {
+    const double r = radius(i, j) / 3.0, z = (k - 8.0) / 6.0;
+    return std::exp(-3.0 * r * r - z * z) * (0.5 + fbm(i * 0.3 + 7.0, j * 0.3, k * 0.2)) - 0.02;
+  });
+  flame->setName("flame");
+  auto temperature = procedural(n, 0.05, 0.0, [&](int i, int j, int k) {
+    const double r = radius(i, j) / 4.0, z = (k - 10.0) / 8.0;
+    return std::exp(-2.0 * r * r - z * z) * (0.8 + 0.4 * fbm(i * 0.25, j * 0.25 + 3.0, k * 0.2));
+  });
+  temperature->setName("temperature");
+  return {density, flame, temperature};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -186,5 +210,6 @@ int main(int argc, char** argv) {
   auto cloud = cloud_grid();
   cloud->setName("cloud");
   write(dir + "/two_grids.vdb", {smoke_grid(), cloud});
+  write(dir + "/fire.vdb", fire_grids());
   return 0;
 }

@@ -125,7 +125,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
         core_scene.set_world_lightgroup(groups[world.lightgroup])
     for w in core_scene.take_warnings():
         report({'WARNING'}, w)
-    world_media = export_world_volume(depsgraph, core_scene, report)
+    world_media, emissive_media = export_world_volume(depsgraph, core_scene, report)
 
     lights = volumes = 0
     light_kinds = {}
@@ -186,7 +186,9 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                 lights += 1
                 light_kinds[obj.data.type] = light_kinds.get(obj.data.type, 0) + 1
         elif t == 'VOLUME':
-            volumes += export_volume(obj, matrix, core_scene, report, materials)
+            added, emits = export_volume(obj, matrix, core_scene, report, materials, lightgroup)
+            volumes += added
+            emissive_media += emits
         elif t in ('CURVES', 'POINTCLOUD'):
             if t == 'CURVES' and not hair:
                 warn_curve_shape(depsgraph, report)
@@ -215,7 +217,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                    image_files=images.from_files,
                    lights=lights, light_kinds=light_kinds, volumes=volumes, hair=hair,
                    material_media=materials.media, world_media=world_media,
-                   emissive_media=materials.emissive_media, subsurface=sorted(materials.subsurface),
+                   emissive_media=materials.emissive_media + emissive_media, subsurface=sorted(materials.subsurface),
                    media=volumes + materials.media + world_media,
                    cryptomatte=materials.cryptomatte.manifests)
     if motion is not None:

@@ -193,7 +193,7 @@ def _constant_value(socket, warn, where):
     return socket.default_value
 
 
-def volume_keywords(output, warn):
+def volume_keywords(output, warn, attributes=False):
     """The Volume input of an output node (Material Output or World Output) as the list of
     components set_material_volume / set_world_volume / add_volume_grid take, [] when a Volume
     input is linked but nothing in it can be used (reported), or None without a Volume input.
@@ -201,7 +201,14 @@ def volume_keywords(output, warn):
     Add Shader sums its inputs and Mix Shader weights them by (1 - fac, fac), as Cycles mixes
     closures: the weight scales a component's Density (and an Emission node's Strength). Cycles
     3.4's Principled Volume does not scale its own emission by the mix weight (svm_closure.h), and
-    neither does this. Unsupported nodes are reported and left out."""
+    neither does this. Unsupported nodes are reported and left out.
+
+    attributes (Volume objects): an Attribute node (Fac, geometry attribute) feeding Density,
+    Emission Strength / Strength, Blackbody Intensity or Temperature reads the grid of its name,
+    as Cycles reads the object's volume attributes: the socket's value becomes 1 (times the mix
+    weight) and the component names the grid (core's emission_strength_grid, ...; the density
+    grid is export/volume.py's); Principled Volume's Temperature Attribute and Color Attribute are
+    kept as temperature_attribute and color_attribute."""
     if output is None or "Volume" not in output.inputs:
         return None
     if follow(output.inputs["Volume"]) is None:
@@ -233,26 +240,43 @@ def volume_keywords(output, warn):
             return
         where = "volume '%s'" % node.name
 
-        def value(name, default):
+        grids = {}
+
+        def value(name, default, grid_key=None):
             s = node.inputs.get(name)
-            return default if s is None else _constant_value(s, warn, where)
+            if s is None:
+                return default
+            src = follow(s) if attributes and grid_key else None
+            if src is not None and src.node.type == 'ATTRIBUTE' and src.name == "Fac" \
+                    and src.node.attribute_type == 'GEOMETRY' and src.node.attribute_name:
+                if grid_key != "density":  # the density grid is export/volume.py's
+                    grids[grid_key] = src.node.attribute_name
+                return 1.0
+            return _constant_value(s, warn, where)
 
         kind = _VOLUME_KINDS[node.type]
         if kind == core.VOLUME_EMISSION:
-            components.append(dict(node=kind, name=node.name, density=0.0,
-                                   emission_strength=float(value("Strength", 1.0)) * weight,
-                                   emission_color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3]))
+            strength = float(value("Strength", 1.0, "emission_strength_grid")) * weight
+            components.append(dict(node=kind, name=node.name, density=0.0, emission_strength=strength,
+                                   emission_color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3], **grids))
             return
         c = dict(node=kind, name=node.name, color=tuple(value("Color", (1.0, 1.0, 1.0)))[:3],
-                 density=float(value("Density", 1.0)) * weight,
+                 density=float(value("Density", 1.0, "density")) * weight,
                  absorption_color=tuple(value("Absorption Color", (0.0, 0.0, 0.0)))[:3],
                  anisotropy=float(value("Anisotropy", 0.0)))
         if kind == core.VOLUME_PRINCIPLED:
-            c.update(emission_strength=float(value("Emission Strength", 0.0)),
+            c.update(emission_strength=float(value("Emission Strength", 0.0, "emission_strength_grid")),
                      emission_color=tuple(value("Emission Color", (1.0, 1.0, 1.0)))[:3],
-                     blackbody_intensity=float(value("Blackbody Intensity", 0.0)),
+                     blackbody_intensity=float(value("Blackbody Intensity", 0.0, "blackbody_intensity_grid")),
                      blackbody_tint=tuple(value("Blackbody Tint", (1.0, 1.0, 1.0)))[:3],
-                     temperature=float(value("Temperature", 1000.0)))
+                     temperature=float(value("Temperature", 1000.0, "temperature_grid")))
+            if attributes:
+                for key, socket in (("temperature_attribute", "Temperature Attribute"),
+                                    ("color_attribute", "Color Attribute")):
+                    name = node.inputs[socket].default_value if socket in node.inputs else ""
+                    if name:
+                        grids[key] = name
+        c.update(grids)
         components.append(c)
 
     walk(output.inputs["Volume"], 1.0, 0)
@@ -263,19 +287,6 @@ def emissive_nodes(components):
     """Names of the nodes among `components` that emit (volume emission)."""
     return [c.get("name", "?") for c in components or ()
             if c.get("emission_strength", 0.0) > 0.0 or c.get("blackbody_intensity", 0.0) > 0.0]
-
-
-def without_emission(components):
-    """The components with their emission removed (World volumes and Volume objects)."""
-    out = []
-    for c in components:
-        if c["node"] == core.VOLUME_EMISSION:
-            continue
-        c = dict(c)
-        c.pop("emission_strength", None)
-        c.pop("blackbody_intensity", None)
-        out.append(c)
-    return out
 
 
 # Cycles' displacement methods that move vertices -> lt_displacement_method.
@@ -435,12 +446,13 @@ class MaterialExporter:
             self.subsurface.add(material.name)
         return c.program(), volume, null_surface
 
-    def volume(self, material):
-        """The material's Volume output as set_material_volume's components, [] (unusable) or None."""
+    def volume(self, material, attributes=False):
+        """The material's Volume output as set_material_volume's components, [] (unusable) or None
+        (attributes: a Volume object's, volume_keywords)."""
         self._material = material
         if not material.use_nodes or material.node_tree is None:
             return None
-        components = volume_keywords(material.node_tree.get_output_node('CYCLES'), self._warn)
+        components = volume_keywords(material.node_tree.get_output_node('CYCLES'), self._warn, attributes)
         bad = [c.get("name", "?") for c in components or () if not is_finite(*_numbers(c))]
         if bad:
             self._warn("volume %s left out: values not finite" % ", ".join("'%s'" % n for n in bad))
@@ -455,7 +467,7 @@ def _numbers(component):
     """The numeric values of a volume component (set_material_volume's keywords)."""
     out = []
     for k, v in component.items():
-        if k in ("node", "name"):
+        if k in ("node", "name") or isinstance(v, str):
             continue
         out.extend(v if isinstance(v, (tuple, list)) else (v,))
     return out

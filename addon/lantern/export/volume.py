@@ -4,7 +4,7 @@ import bpy
 from mathutils import Matrix, Vector
 
 from .. import core
-from .material import follow, emissive_nodes, without_emission
+from .material import emissive_nodes, follow
 
 # Cycles' default volume shader for a Volume object without material: Principled Volume defaults.
 _DEFAULT = dict(node=core.VOLUME_PRINCIPLED, color=(0.5, 0.5, 0.5), density=1.0,
@@ -52,8 +52,53 @@ def _density_grid(material, warn):
     return names[0] if names else None
 
 
-def export_volume(obj, matrix, core_scene, report, materials):
-    """Adds the object's density grid; returns 1 if added, 0 if left out (with a report)."""
+# Grid names a component may carry (export/material.py: volume_keywords with attributes) and the
+# parameter each multiplies; a missing grid reads 0 (Cycles' Attribute node without the attribute).
+_PARAM_GRIDS = {"emission_strength_grid": "emission_strength", "blackbody_intensity_grid": "blackbody_intensity",
+                "temperature_grid": "temperature"}
+
+
+def _resolve_grids(desc, names, warn):
+    """The components with the grids they name checked against the file's `names`: a parameter's
+    missing grid makes it 0 (reported), a missing Temperature Attribute is dropped (Cycles then
+    uses the Temperature alone; reported where blackbody emits), and a Color Attribute grid,
+    which is not supported, is reported and ignored. Returns (components, grids read)."""
+    out, used = [], set()
+    for c in desc:
+        c = dict(c)
+        for key, param in _PARAM_GRIDS.items():
+            grid = c.get(key)
+            if grid and grid not in names:
+                warn("'%s' reads grid '%s', which the file does not have: it is 0 (as in Cycles)"
+                     % (c.get("name", "?"), grid))
+                c.pop(key)
+                c[param] = 0.0
+            elif grid:
+                used.add(grid)
+        grid = c.get("temperature_attribute")
+        if grid and grid not in names:
+            c.pop("temperature_attribute")
+            if c.get("blackbody_intensity", 0.0) > 0.0:
+                warn("'%s' emits blackbody light but the file has no '%s' grid (Temperature Attribute): "
+                     "the Temperature %g K is used everywhere in the grid's domain, as Cycles does"
+                     % (c.get("name", "?"), grid, c.get("temperature", 1000.0)))
+        elif grid:
+            if c.get("blackbody_intensity", 0.0) > 0.0:
+                used.add(grid)
+            else:
+                c.pop("temperature_attribute")  # nothing reads it
+        color = c.pop("color_attribute", None)
+        if color and color in names:
+            warn("'%s' reads its colour from grid '%s' (Color Attribute), which is not supported; the "
+                 "Color is used" % (c.get("name", "?"), color))
+        out.append(c)
+    return out, used
+
+
+def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0):
+    """Adds the object's density grid and the grids its emission reads; returns (1, whether it
+    emits) if added, (0, False) if left out (with a report). lightgroup: its emission's (core
+    numbering)."""
     volume = obj.data
     material = obj.active_material
     path = _vdb_path(obj)
@@ -79,21 +124,13 @@ def export_volume(obj, matrix, core_scene, report, materials):
     # convention): shift by half a voxel in object space.
     if half_voxel is not None:
         matrix = Matrix(matrix) @ Matrix.Translation(half_voxel)
-    others = [n for n in names if n != grid_name]
-    if others:
-        report({'WARNING'}, "Volume '%s': grids %s are not supported (only the density grid '%s'), "
-                            "ignored" % (obj.name, ", ".join("'%s'" % n for n in others), grid_name))
-    desc = materials.volume(material) if material is not None else None
+    desc = materials.volume(material, attributes=True) if material is not None else None
     if desc is None:
         desc = [_DEFAULT]
-    emitting = emissive_nodes(desc)
-    if emitting:
-        report({'WARNING'}, "Volume '%s': volume emission (%s) is supported in material volumes of "
-                            "meshes only; left out" % (obj.name, ", ".join("'%s'" % n for n in emitting)))
-        desc = without_emission(desc)
+    desc, used = _resolve_grids(desc, names, lambda m: report({'WARNING'}, "Volume '%s': %s" % (obj.name, m)))
     if not desc:
         report({'WARNING'}, "Volume '%s' left out: its material has no usable volume shader" % obj.name)
-        return 0
+        return 0, False
     # Render space Object (Blender's default): density and step size are per object-space unit, so
     # a Volume scaled by 1/50 is as dense as unscaled; Cycles scales them by the length of the
     # object's transform applied to a unit diagonal (BKE_volume_density_scale). World: per metre.
@@ -105,12 +142,18 @@ def export_volume(obj, matrix, core_scene, report, materials):
         if stretch > 0:
             desc = [dict(c, density=c.get("density", 1.0) / stretch) for c in desc]
         step = min(abs(c) for c in linear @ Vector((step, step, step)))
+        # Cycles scales emission by the same factor (shade_volume.h: volume_shader_sample): the
+        # colours are linear in it (an Emission node's Strength too).
+        if stretch > 0:
+            desc = [dict(c, emission_color=tuple(v / stretch for v in c.get("emission_color", (1.0, 1.0, 1.0))),
+                         blackbody_tint=tuple(v / stretch for v in c.get("blackbody_tint", (1.0, 1.0, 1.0))))
+                    for c in desc]
     try:
-        core_scene.add_volume_grid(path, grid_name, matrix, desc, step=step)
+        core_scene.add_volume_grid(path, grid_name, matrix, desc, step=step, lightgroup=lightgroup)
     except core.LanternError as e:
         report({'WARNING'}, "Volume '%s' left out: %s" % (obj.name, e.detail))
-        return 0
+        return 0, False
     finally:
         for w in core_scene.take_warnings():
             report({'WARNING'}, "Volume '%s': %s" % (obj.name, w))
-    return 1
+    return 1, bool(emissive_nodes(desc))

@@ -3,7 +3,7 @@ materials are), its importance map resolution and camera visibility; the World O
 as a medium filling the scene."""
 
 from . import nodes
-from .material import emissive_nodes, volume_keywords, without_emission
+from .material import emissive_nodes, volume_keywords
 
 _CAMERA_DEFAULT = 1
 
@@ -69,28 +69,24 @@ def export_world(depsgraph, core_scene, report, images, camera=None, aovs=None):
 
 
 def export_world_volume(depsgraph, core_scene, report):
-    """The World Output's Volume input as a World volume; returns the number of media (0 or 1).
+    """The World Output's Volume input as a World volume; returns (the number of media, 0 or 1,
+    whether it emits).
 
     As in Cycles, escaped rays and shadow rays to sun and world lights cross it to infinity: the
     background and suns are fully attenuated; the Volumetric Path and Bidirectional integrators
-    render it."""
+    render it, with its emission (in no light group, as Cycles)."""
     world = depsgraph.scene_eval.world
     if world is None or not world.use_nodes or world.node_tree is None:
-        return 0
+        return 0, False
 
     def warn(msg):
         report({'WARNING'}, "World '%s': %s" % (world.name, msg))
 
     volume = volume_keywords(world.node_tree.get_output_node('CYCLES'), warn)
-    emitting = emissive_nodes(volume)
-    if emitting:
-        warn("volume emission (%s) is supported in material volumes only; the World volume's "
-             "emission is left out" % ", ".join("'%s'" % n for n in emitting))
-        volume = without_emission(volume)
     if not volume:
-        return 0
+        return 0, False
     core_scene.set_world_volume(volume)
-    return 1
+    return 1, bool(emissive_nodes(volume))
 
 
 def ao_distance(world):

@@ -51,8 +51,9 @@ extern "C" {
  * lt_displacement_method, lt_mesh_desc.flat_triangles; the Bevel node;
  * lt_image_file_desc.ocio_config and ocio_space: OpenColorIO colour spaces;
  * the Equiangular Cubemap Face panorama; lt_instance_desc's shadow terminator offsets;
- * lt_render_settings.denoise_start_sample: the viewport's denoising). */
-#define LT_ABI_VERSION 18
+ * lt_render_settings.denoise_start_sample: the viewport's denoising); 19: emission of Volume
+ * objects and World volumes (lt_volume_desc's grid names, lt_scene_set_volume_grid_lightgroup). */
+#define LT_ABI_VERSION 19
 
 enum lt_status {
   LT_OK = 0,
@@ -421,9 +422,15 @@ LT_API int lt_scene_set_world_lightgroup(lt_scene* scene, int lightgroup);
  * Emission (Principled and Emission nodes) is radiance per unit length, not scaled by density:
  * emission_strength x emission_color, plus for Principled Volume with blackbody_intensity > 0:
  * blackbody_tint x (Stefan-Boltzmann / pi x 1e-6) x mix(1, T^4, blackbody_intensity) x the
- * unit-luminance blackbody colour of `temperature` kelvin (Cycles' formula). Emission is
- * supported for material volumes only (World volumes and grids refuse it). Fields after
- * `anisotropy` may be left zero: no emission. */
+ * unit-luminance blackbody colour of `temperature` kelvin (Cycles' formula; unclamped as Cycles'
+ * Principled Volume: negative green and blue below ~1900 K). Fields after
+ * `anisotropy` may be left zero: no emission. Volume objects (lt_scene_add_volume_grid) may read
+ * parameters from float grids of their file, as Cycles' volume attributes (an Attribute node
+ * feeding the socket): emission_strength_grid, blackbody_intensity_grid and temperature_grid
+ * multiply emission_strength, blackbody_intensity and temperature by the grid's value at each
+ * point; temperature_attribute (Principled Volume's Temperature Attribute) multiplies the
+ * temperature by max(0, its value). NULL or "": the constant. Material and World volumes refuse
+ * grid names. */
 enum lt_volume_node {
   LT_VOLUME_PRINCIPLED = 0,
   LT_VOLUME_SCATTER = 1,
@@ -441,6 +448,10 @@ typedef struct lt_volume_desc {
   float blackbody_intensity; /* Principled only */
   float blackbody_tint[3];
   float temperature;
+  const char* emission_strength_grid; /* Volume objects only (see above) */
+  const char* blackbody_intensity_grid;
+  const char* temperature_grid;
+  const char* temperature_attribute;
 } lt_volume_desc;
 
 /* Gives a material a homogeneous medium, the sum of `count` >= 1 components, inside the closed
@@ -450,23 +461,26 @@ typedef struct lt_volume_desc {
 LT_API int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_desc* components, int count,
                                         int null_surface);
 
-/* A World volume: a homogeneous medium (the sum of `count` components, no emission) filling the
+/* A World volume: a homogeneous medium (the sum of `count` components) filling the
  * whole scene, active along every ray (it adds to the media of closed meshes the ray is in). As in
  * Cycles 3.4, rays that escape travel an infinite distance through it: the background seen through
  * a world volume with sigma_t > 0 is fully attenuated, and so are shadow rays to the world and to
- * sun lights (they reach infinity). The volumetric and bidirectional integrators see it. Calling it
- * again adds another world medium. */
+ * sun lights (they reach infinity). The volumetric and bidirectional integrators see it; its
+ * emission is in no light group (as Cycles). Calling it again adds another world medium. */
 LT_API int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* components, int count);
 
 /* A Volume object: the float grid `grid` of the .vdb file at `path` (its density multiplies the
- * components' Density, per world unit: the add-on folds Blender's render space into Density; no
- * emission), placed by `transform` (object to world, row-major 3x4) after the grid's own
+ * components' Density, per world unit: the add-on folds Blender's render space into Density and
+ * the emission), placed by `transform` (object to world, row-major 3x4) after the grid's own
  * index-to-object transform. `step`: its ray-marching step in world units (0: the grid's smallest
  * world-space voxel edge); a render's volume_step > 0 overrides it. The medium is bounded by the
  * grid; no geometry. Errors: LT_ERROR_IO with the message (missing, unreadable or corrupt file; no
  * such grid, listing those present; a grid that is empty or not a float grid). */
 LT_API int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
                                     float step, const lt_volume_desc* components, int count, int* out_id);
+/* The light group of a Volume object's emission (out_id of lt_scene_add_volume_grid): 0 none, k > 0
+ * light group k - 1 (lt_instance_desc.lightgroup). */
+LT_API int lt_scene_set_volume_grid_lightgroup(lt_scene* scene, int volume, int lightgroup);
 
 /* Builds acceleration structures and light samplers. Must be called before rendering. After a
  * commit, adding images, materials, meshes, instances or volumes is refused with LT_ERROR_STATE;

@@ -221,6 +221,10 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_volume_desc, blackbody_intensity),
     LT_FIELD(lt_volume_desc, blackbody_tint),
     LT_FIELD(lt_volume_desc, temperature),
+    LT_FIELD(lt_volume_desc, emission_strength_grid),
+    LT_FIELD(lt_volume_desc, blackbody_intensity_grid),
+    LT_FIELD(lt_volume_desc, temperature_grid),
+    LT_FIELD(lt_volume_desc, temperature_attribute),
 
     LT_STRUCT(lt_scene_stats),
     LT_FIELD(lt_scene_stats, mesh_bvh_builds),

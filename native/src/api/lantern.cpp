@@ -2,6 +2,7 @@
 // and lt_last_error() messages. No exception crosses this boundary.
 #include "lantern/lantern.h"
 
+#include <array>
 #include <cstdio>
 #include <cstring>
 #include <map>
@@ -15,6 +16,7 @@
 #include "io/exr.h"
 #include "io/image_file.h"
 #include "io/vdb.h"
+#include "media/grid_emission.h"
 #include "media/volume_material.h"
 #include "render/render.h"
 #include "scene/lights/area.h"
@@ -117,16 +119,56 @@ lt::VolumeCoefficients to_volume(const lt_volume_desc* d) {
   return c;
 }
 
-// The sum of a volume's components (docs/volumes.md, "Volume shader mixes").
-lt::VolumeMix to_volume_mix(const lt_volume_desc* d, int count, bool allow_emission) {
+bool named(const char* grid) { return grid && *grid; }
+
+// The grid names of a component (lt_volume_desc's emission_strength_grid ... temperature_attribute).
+std::array<const char*, 4> grid_names(const lt_volume_desc& d) {
+  return {d.emission_strength_grid, d.blackbody_intensity_grid, d.temperature_grid, d.temperature_attribute};
+}
+
+// The sum of a volume's components (docs/volumes.md, "Volume shader mixes"). Grid names are read by
+// Volume objects only (lt_scene_add_volume_grid), which evaluate the emission per lookup.
+lt::VolumeMix to_volume_mix(const lt_volume_desc* d, int count, bool grids_allowed) {
   require(d != nullptr, "volume description is NULL");
   require(count >= 1 && count <= 64, "volume component count must be in [1, 64], got " + std::to_string(count));
   std::vector<lt::VolumeCoefficients> c;
-  for (int i = 0; i < count; ++i) c.push_back(to_volume(d + i));
-  lt::VolumeMix m = lt::sum_volume_components(c.data(), count);
-  require(allow_emission || lt::is_black(m.emission),
-          "volume emission is supported for material volumes only (not World volumes or Volume objects)");
-  return m;
+  for (int i = 0; i < count; ++i) {
+    c.push_back(to_volume(d + i));
+    for (const char* g : grid_names(d[i]))
+      require(grids_allowed || !named(g),
+              "volume grids are read by Volume objects only (grid '" + std::string(named(g) ? g : "") + "')");
+  }
+  return lt::sum_volume_components(c.data(), count);
+}
+
+// A Volume object's emission: each emitting component with its parameters' grids (indices into
+// *names, which collects the grids' names); empty if nothing emits.
+std::vector<lt::EmissionComponent> grid_emission_components(const lt_volume_desc* d, int count,
+                                                            std::vector<std::string>* names) {
+  auto index = [&](const char* g) {
+    if (!named(g)) return -1;
+    for (size_t k = 0; k < names->size(); ++k)
+      if ((*names)[k] == g) return int(k);
+    names->push_back(g);
+    return int(names->size()) - 1;
+  };
+  auto v3 = [](const float* f) { return lt::Vec3(f[0], f[1], f[2]); };
+  std::vector<lt::EmissionComponent> out;
+  for (int i = 0; i < count; ++i) {
+    const lt_volume_desc& c = d[i];
+    if (c.node != LT_VOLUME_PRINCIPLED && c.node != LT_VOLUME_EMISSION) continue;
+    lt::EmissionComponent e;
+    e.strength = {c.emission_strength, index(c.emission_strength_grid)};
+    e.color = v3(c.emission_color);
+    if (c.node == LT_VOLUME_PRINCIPLED) {
+      e.blackbody = {c.blackbody_intensity, index(c.blackbody_intensity_grid)};
+      e.temperature = {c.temperature, index(c.temperature_grid)};
+      e.temperature_attribute = index(c.temperature_attribute);
+      e.tint = v3(c.blackbody_tint);
+    }
+    if (e.strength.value > 0 || e.blackbody.value > 0) out.push_back(e);
+  }
+  return out;
 }
 
 lt::Medium homogeneous_medium(const lt::VolumeMix& v) {
@@ -809,7 +851,7 @@ int lt_scene_set_material_volume(lt_scene* scene, int material, const lt_volume_
     lt::Scene& sc = scene->scene;
     require(material >= 0 && material < int(sc.materials.size()),
             "material " + std::to_string(material) + " does not exist");
-    lt::VolumeMix c = to_volume_mix(d, count, true);
+    lt::VolumeMix c = to_volume_mix(d, count, false);
     sc.material_medium.resize(sc.materials.size(), -1);
     sc.material_null.resize(sc.materials.size(), 0);
     sc.media.push_back(homogeneous_medium(c));
@@ -825,7 +867,7 @@ int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* d, int coun
     lt::VolumeMix c = to_volume_mix(d, count, false);
     lt::Scene& sc = scene->scene;
     sc.media.push_back(homogeneous_medium(c));
-    if (!sc.media.back().empty()) sc.global_media.push_back(int(sc.media.size()) - 1);
+    if (!sc.media.back().empty() || sc.media.back().emissive()) sc.global_media.push_back(int(sc.media.size()) - 1);
   });
 }
 
@@ -834,15 +876,24 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
   return guarded([&] {
     require(scene && path && transform && d && out_id, "lt_scene_add_volume_grid: NULL argument");
     scene->scene.require_editable();
-    lt::VolumeMix c = to_volume_mix(d, count, false);
+    lt::VolumeMix c = to_volume_mix(d, count, true);
     lt::Transform xf = to_transform(transform, "volume");
     require(std::abs(xf.determinant()) > 1e-30f, "volume transform is singular");
     require(std::isfinite(step) && step >= 0, "volume step must be finite and >= 0 (0: the voxel size)");
-    const std::string grid_name = grid && *grid ? grid : "density";
+    std::vector<std::string> emission_grids;
+    const std::vector<lt::EmissionComponent> emission = grid_emission_components(d, count, &emission_grids);
+    std::vector<std::string> names{grid && *grid ? grid : "density"};  // the density, then the emission's
+    names.insert(names.end(), emission_grids.begin(), emission_grids.end());
     lt::Medium medium;
     try {
-      auto data = std::make_shared<lt::GridData>(lt::load_density_grid(path, grid_name));
-      medium = lt::Medium::heterogeneous(data, c.sigma_a, c.sigma_s, c.phase.g[0], xf);
+      std::vector<lt::GridData> loaded = lt::load_grids(path, names);
+      std::vector<std::shared_ptr<const lt::GridData>> grids;
+      for (lt::GridData& g : loaded) grids.push_back(std::make_shared<lt::GridData>(std::move(g)));
+      medium = lt::Medium::heterogeneous(grids[0], c.sigma_a, c.sigma_s, c.phase.g[0], xf);
+      if (!emission.empty())
+        medium.set_grid_emission(std::make_shared<lt::GridEmission>(
+            std::vector<std::shared_ptr<const lt::GridData>>(grids.begin() + 1, grids.end()), emission,
+            grids[0]->index_to_object));
     } catch (const lt::InvalidArgument& e) {
       throw lt::IoError(std::string(path) + ": " + e.what());  // a file that cannot be used is an I/O error
     }
@@ -851,10 +902,23 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
     sc.media.back().set_phase(c.phase);
     if (step > 0) sc.media.back().set_march_step(step);
     *out_id = int(sc.media.size()) - 1;
-    if (sc.media.back().empty())
+    if (sc.media.back().empty() && !sc.media.back().emissive())  // an emission-only shader still emits
       sc.warnings.push_back(std::string(path) + ": volume has no density; left out");
     else
       sc.global_media.push_back(*out_id);
+  });
+}
+
+int lt_scene_set_volume_grid_lightgroup(lt_scene* scene, int volume, int lightgroup) {
+  return guarded([&] {
+    require(scene != nullptr, "lt_scene_set_volume_grid_lightgroup: NULL scene");
+    scene->scene.require_editable();
+    lt::Scene& sc = scene->scene;
+    require(volume >= 0 && volume < int(sc.media.size()) && !sc.media[size_t(volume)].is_homogeneous(),
+            "volume " + std::to_string(volume) + " is not a Volume object's grid");
+    require(lightgroup >= 0 && lightgroup <= kMaxLightgroups, "volume light group out of range");
+    sc.medium_groups.resize(sc.media.size(), -1);
+    sc.medium_groups[size_t(volume)] = lightgroup - 1;
   });
 }
 

@@ -303,15 +303,12 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     const Spectrum beta_before = beta;
     MediumInteraction mi;
     int medium = -1;
-    if (mode == Mode::Radiance && media_ && scene_.has_emissive_media() && stack.size > 0) {
+    if (mode == Mode::Radiance && media_ && scene_.has_emissive_media()) {
       Crossed c;
       c.at = count;
       c.le = beta * media_emission(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_,
-                                   s_.volume_estimator, s_.volume_step);
-      if (!is_black(c.le)) {
-        if (out_.lightgroups) c.groups = media_emission_groups(scene_, stack);
-        crossed.push_back(c);
-      }
+                                   s_.volume_estimator, s_.volume_step, out_.lightgroups ? &c.groups : nullptr);
+      if (!is_black(c.le)) crossed.push_back(c);
     }
     if (media_)
       medium = sample_media(scene_, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler_, s_.volume_estimator,

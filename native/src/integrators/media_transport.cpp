@@ -1,5 +1,7 @@
 #include "integrators/media_transport.h"
 
+#include <functional>
+
 #include "integrators/path_state.h"
 
 namespace lt {
@@ -77,80 +79,130 @@ Spectrum media_transmittance(const Scene& scene, const VolumeStack& stack, const
   return T;
 }
 
-Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
-                        Sampler& sampler, VolumeEstimator est, float step) {
-  Spectrum E(0.0f);
-  for (int i = 0; i < stack.size; ++i) {
-    const Medium& m = scene.media[stack.media[i]];
-    if (m.emissive()) E += m.emission();
+namespace {
+
+// Adds `value` (a part of the emission estimate) to light group `group` of *g.
+void add_share(LightgroupShares* g, int group, const Spectrum& value) {
+  int k = 0;
+  while (k < g->n && g->group[k] != group) ++k;
+  if (k == g->n) {
+    if (g->n == LightgroupShares::kMax) return;  // more groups on one segment than a sample holds
+    g->group[g->n] = group;
+    g->share[g->n++] = Spectrum(0.0f);
   }
-  if (is_black(E) || !(t1 > t0)) return Spectrum(0.0f);
-  Spectrum sigma(0.0f);
-  bool heterogeneous = false;
+  g->share[k] += value;
+}
+
+}  // namespace
+
+Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
+                        Sampler& sampler, VolumeEstimator est, float step, LightgroupShares* groups) {
+  if (groups) groups->n = 0;
+  if (!(t1 > t0)) return Spectrum(0.0f);
+  // The emitting media the ray is in, with the light group each one's emission belongs to.
+  struct Emitter {
+    int medium, group;
+  };
+  Emitter emitters[VolumeStack::kCapacity + 8];
+  int n = 0;
+  bool homogeneous_emission = false;
+  auto add_emitter = [&](int m, int group) {
+    if (!scene.media[m].emissive() || n == int(sizeof(emitters) / sizeof(emitters[0]))) return;
+    emitters[n++] = Emitter{m, group};
+    homogeneous_emission = homogeneous_emission || scene.media[m].is_homogeneous();
+  };
+  for (int i = 0; i < stack.size; ++i) add_emitter(stack.media[i], stack.groups[i]);
+  if (stack.global)
+    for (int m : scene.global_media) add_emitter(m, scene.medium_lightgroup(m));
+  if (n == 0) return Spectrum(0.0f);
+
+  Spectrum sigma(0.0f);  // extinction of the homogeneous media the ray is in
+  int heterogeneous = 0;
   for_each_medium(scene, stack, [&](int i) {
     const Medium& m = scene.media[i];
     if (m.is_homogeneous())
       sigma += m.sigma_a_unit() + m.sigma_s_unit();
     else
-      heterogeneous = true;
+      ++heterogeneous;
   });
   const double len = length(ray.d), d = double(t1 - t0) * len;  // d may be infinite
-  Spectrum L(0.0f);
-  for (int k = 0; k < 3; ++k) {
-    if (sigma[k] > 0)
-      L[k] = float(E[k] * -std::expm1(-double(sigma[k]) * d) / sigma[k]);
-    else if (std::isfinite(d))
-      L[k] = float(E[k] * d);  // no extinction: E d (an infinite segment without extinction adds nothing)
-  }
-  if (!heterogeneous || is_black(L)) return L;
-  // Heterogeneous media too: sample s in [0, d] with pdf proportional to exp(-sbar s) (sbar the
-  // channel-averaged homogeneous sigma_t; uniform if 0), and weight each channel by
-  // exp(-sigma_k s) T_het(s) / pdf(s) against its closed form.
-  const double sbar = (double(sigma.x) + sigma.y + sigma.z) / 3;
-  const double u = sampler.next_1d();
-  double s, pdf;
-  if (sbar > 0) {
-    const double norm = std::isfinite(d) ? -std::expm1(-sbar * d) : 1.0;
-    s = -std::log1p(-u * norm) / sbar;
-    pdf = sbar * std::exp(-sbar * s) / norm;
-  } else {
-    if (!std::isfinite(d)) return Spectrum(0.0f);
-    s = u * d;
-    pdf = 1 / d;
-  }
-  if (!(pdf > 0) || !std::isfinite(s)) return Spectrum(0.0f);
-  Spectrum T_het(1.0f);
-  const float ts = t0 + float(s / len);
-  for_each_medium(scene, stack, [&](int i) {
-    const Medium& m = scene.media[i];
-    if (!m.is_homogeneous() && !is_black(T_het)) T_het *= m.transmittance(ray, t0, ts, sampler, est, step);
-  });
-  for (int k = 0; k < 3; ++k) L[k] = float(E[k] * std::exp(-double(sigma[k]) * s) * T_het[k] / pdf);
-  return L;
-}
+  Spectrum total(0.0f);
 
-LightgroupShares media_emission_groups(const Scene& scene, const VolumeStack& stack) {
-  LightgroupShares g;
-  Spectrum E(0.0f);
-  for (int i = 0; i < stack.size; ++i) {
-    const Medium& m = scene.media[stack.media[i]];
-    if (!m.emissive()) continue;
-    E += m.emission();
-    int k = 0;
-    while (k < g.n && g.group[k] != stack.groups[i]) ++k;
-    if (k == g.n) {
-      g.group[g.n] = stack.groups[i];
-      g.share[g.n++] = Spectrum(0.0f);
+  // Homogeneous emitters: closed form over the homogeneous media (Cycles' volume_emission_integrate).
+  if (homogeneous_emission) {
+    Spectrum E(0.0f);
+    for (int k = 0; k < n; ++k)
+      if (scene.media[emitters[k].medium].is_homogeneous()) E += scene.media[emitters[k].medium].emission();
+    Spectrum L(0.0f);
+    for (int k = 0; k < 3; ++k) {
+      if (sigma[k] > 0)
+        L[k] = float(E[k] * -std::expm1(-double(sigma[k]) * d) / sigma[k]);
+      else if (std::isfinite(d))
+        L[k] = float(E[k] * d);  // no extinction: E d (an infinite segment without extinction adds nothing)
     }
-    g.share[k] += m.emission();
+    if (heterogeneous > 0 && !is_black(L)) {
+      // Heterogeneous media too: sample s in [0, d] with pdf proportional to exp(-sbar s) (sbar
+      // the channel-averaged homogeneous sigma_t; uniform if 0), and weight each channel by
+      // exp(-sigma_k s) T_het(s) / pdf(s) against its closed form.
+      const double sbar = (double(sigma.x) + sigma.y + sigma.z) / 3;
+      const double u = sampler.next_1d();
+      double s = 0, pdf = 0;
+      if (sbar > 0) {
+        const double norm = std::isfinite(d) ? -std::expm1(-sbar * d) : 1.0;
+        s = -std::log1p(-u * norm) / sbar;
+        pdf = sbar * std::exp(-sbar * s) / norm;
+      } else if (std::isfinite(d)) {
+        s = u * d;
+        pdf = 1 / d;
+      }
+      L = Spectrum(0.0f);
+      if (pdf > 0 && std::isfinite(s)) {
+        Spectrum T_het(1.0f);
+        const float ts = t0 + float(s / len);
+        for_each_medium(scene, stack, [&](int i) {
+          const Medium& m = scene.media[i];
+          if (!m.is_homogeneous() && !is_black(T_het)) T_het *= m.transmittance(ray, t0, ts, sampler, est, step);
+        });
+        for (int k = 0; k < 3; ++k) L[k] = float(E[k] * std::exp(-double(sigma[k]) * s) * T_het[k] / pdf);
+      }
+    }
+    total += L;
+    if (groups && !is_black(L))
+      for (int k = 0; k < n; ++k) {
+        const Medium& m = scene.media[emitters[k].medium];
+        if (!m.is_homogeneous()) continue;
+        Spectrum part;
+        for (int c = 0; c < 3; ++c) part[c] = E[c] > 0 ? L[c] * m.emission()[c] / E[c] : 0.0f;
+        add_share(groups, emitters[k].group, part);
+      }
   }
-  if (g.n == 1) {
-    g.share[0] = Spectrum(1.0f);  // exactly the whole, the common case
-  } else {
-    for (int k = 0; k < g.n; ++k)
-      for (int c = 0; c < 3; ++c) g.share[k][c] = E[c] > 0 ? g.share[k][c] / E[c] : 0.0f;
+
+  // Heterogeneous emitters (Volume objects): each estimates its own emission against its own
+  // transmittance, the homogeneous media's closed form and the other heterogeneous media's
+  // transmittance estimated to each point it scores.
+  for (int k = 0; k < n; ++k) {
+    const Medium& m = scene.media[emitters[k].medium];
+    if (m.is_homogeneous()) continue;
+    std::function<Spectrum(float)> others = [&](float t) {
+      Spectrum T(1.0f);
+      for_each_medium(scene, stack, [&](int i) {
+        if (i != emitters[k].medium && !scene.media[i].is_homogeneous() && !is_black(T))
+          T *= scene.media[i].transmittance(ray, t0, t, sampler, est, step);
+      });
+      return T;
+    };
+    const Spectrum L =
+        m.emission_integral(ray, t0, t1, sampler, est, step, sigma, heterogeneous > 1 ? &others : nullptr);
+    total += L;
+    if (groups && !is_black(L)) add_share(groups, emitters[k].group, L);
   }
-  return g;
+  if (groups) {
+    for (int k = 0; k < groups->n; ++k)
+      for (int c = 0; c < 3; ++c)
+        groups->share[k][c] = total[c] != 0 ? groups->share[k][c] / total[c] : 0.0f;  // may be negative (blackbody)
+    if (groups->n == 1) groups->share[0] = Spectrum(1.0f);  // exactly the whole, the common case
+  }
+  return total;
 }
 
 int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1, Sampler& sampler,

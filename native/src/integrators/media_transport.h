@@ -52,20 +52,20 @@ int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, f
                  VolumeEstimator est, float step, Spectrum* beta, MediumInteraction* mi);
 
 // Volume emission reaching ray.o from [t0, t1] (t1 may be infinite): the emitted radiance per unit
-// length of the stack's media, integrated against the transmittance of every medium the ray is
-// in. Closed form over the homogeneous media (E (1 - exp(-sigma_t d)) / sigma_t per channel, as
-// Cycles' volume_emission_integrate); if heterogeneous global media (Volume objects) overlap, their
-// transmittance to one point sampled with density proportional to the homogeneous transmittance
-// multiplies it (unbiased). Emission is found only along path segments, never by light sampling
-// (Cycles 3.4 does the same); it gets full weight.
+// length of every emitting medium the ray is in (the stack's and, for a path in them, the global
+// media: Volume objects and World volumes), integrated against the transmittance of every medium
+// the ray is in. Homogeneous emitters: closed form over the homogeneous media (E (1 - exp(-sigma_t
+// d)) / sigma_t per channel, as Cycles' volume_emission_integrate); if heterogeneous media overlap,
+// their transmittance to one point sampled with density proportional to the homogeneous
+// transmittance multiplies it (unbiased). Heterogeneous emitters: Medium::emission_integral.
+// Emission is found only along path segments, never by light sampling (Cycles 3.4 does the same);
+// it gets full weight. groups (may be null): the light groups the value belongs to, each emitter's
+// part of the estimate per channel going to its group: the object whose boundary entered a mesh
+// medium (Cycles files a segment's emission under one object's group, shade_volume.h: the same
+// where one emitting volume is around the ray), a Volume object's own (Scene::medium_lightgroup),
+// none for World volumes (as Cycles).
 Spectrum media_emission(const Scene& scene, const VolumeStack& stack, const Ray& ray, float t0, float t1,
-                        Sampler& sampler, VolumeEstimator est, float step);
-
-// The light groups media_emission's value for `stack` belongs to: each emitting medium's share
-// E_m / E per channel (the estimate is linear in the emission) goes to the group of the object
-// whose boundary entered it (Cycles files a segment's emission under one object's group,
-// shade_volume.h: the same where one emitting volume is around the ray).
-LightgroupShares media_emission_groups(const Scene& scene, const VolumeStack& stack);
+                        Sampler& sampler, VolumeEstimator est, float step, LightgroupShares* groups);
 
 // Transmittance of a shadow ray (ray.tmax: distance to the light) through invisible boundaries
 // (updating a copy of the stack), media and transparent surfaces (the weights of their Transparent

@@ -185,9 +185,12 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       int medium = -1;
       // Volume emission along the whole segment (closed form; before the free flight decides where
       // the path goes on, as Cycles 3.4 does).
-      if (kMedia && scene.has_emissive_media() && stack.size > 0)
-        add(beta * media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step),
-            out.lightgroups ? media_emission_groups(scene, stack) : LightgroupShares{});
+      if (kMedia && scene.has_emissive_media()) {
+        LightgroupShares groups;
+        const Spectrum le = media_emission(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step,
+                                           out.lightgroups ? &groups : nullptr);
+        if (!is_black(le)) add(beta * le, groups);
+      }
       if constexpr (kMedia)
         medium = sample_media(scene, stack, ray, ray.tmin, found ? hit.t : INFINITY, sampler, est, step, &beta, &mi);
       const float t_seg = medium >= 0 ? std::min(mi.t, t_end) : t_end;

@@ -117,20 +117,21 @@ std::vector<std::pair<std::string, std::string>> list_vdb_grids(const std::strin
   return out;
 }
 
-GridData load_density_grid(const std::string& path, const std::string& grid_name) {
-  init_openvdb();
-  openvdb::io::File file(path);
-  openvdb::GridPtrVecPtr grids = open_metadata(file, path);
+namespace {
 
+// Reads the float grid `grid_name` of an open file whose metadata is `grids` and converts it to
+// NanoVDB (load_grids' checks and errors, one grid).
+GridData read_grid(openvdb::io::File& file, const openvdb::GridPtrVec& grids, const std::string& path,
+                   const std::string& grid_name) {
   openvdb::GridBase::Ptr meta;
-  for (const auto& g : *grids)
+  for (const auto& g : grids)
     if (g->getName() == grid_name) {
       meta = g;
       break;
     }
   if (!meta)
     throw InvalidArgument("VDB file " + quoted(path) + " has no grid named " + quoted(grid_name) +
-                          "; grids present: " + grid_list(*grids));
+                          "; grids present: " + grid_list(grids));
   if (!meta->isType<openvdb::FloatGrid>())
     throw InvalidArgument("VDB grid " + quoted(grid_name) + " in " + quoted(path) + " holds " + meta->valueType() +
                           " values; a float grid is required");
@@ -138,7 +139,6 @@ GridData load_density_grid(const std::string& path, const std::string& grid_name
   openvdb::FloatGrid::Ptr grid;
   try {
     grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(grid_name));
-    file.close();
   } catch (const std::exception& e) {
     throw IoError("cannot read grid " + quoted(grid_name) + " from VDB file " + quoted(path) +
                   " (corrupt or truncated): " + e.what());
@@ -198,6 +198,22 @@ GridData load_density_grid(const std::string& path, const std::string& grid_name
     throw IoError("cannot convert VDB grid " + quoted(grid_name) + " in " + quoted(path) + " to NanoVDB: " + e.what());
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<GridData> load_grids(const std::string& path, const std::vector<std::string>& names) {
+  init_openvdb();
+  openvdb::io::File file(path);
+  openvdb::GridPtrVecPtr grids = open_metadata(file, path);
+  std::vector<GridData> out;
+  for (const std::string& name : names) out.push_back(read_grid(file, *grids, path, name));
+  file.close();
+  return out;
+}
+
+GridData load_density_grid(const std::string& path, const std::string& grid_name) {
+  return std::move(load_grids(path, {grid_name}).front());
 }
 
 }  // namespace lt

@@ -19,6 +19,9 @@ namespace lt {
 //                    types), a grid that is not float, a grid without active voxels, a
 //                    non-linear (frustum) transform, or non-finite active values.
 GridData load_density_grid(const std::string& path, const std::string& grid_name = "density");
+// The float grids `names` of one .vdb file (a Volume object's density and the grids its emission
+// reads), each as load_density_grid reads it, in that order; the file is opened once.
+std::vector<GridData> load_grids(const std::string& path, const std::vector<std::string>& names);
 
 // (name, value type) of every grid in a .vdb file; throws IoError like load_density_grid.
 std::vector<std::pair<std::string, std::string>> list_vdb_grids(const std::string& path);

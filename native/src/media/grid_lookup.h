@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "media/density_grid.h"
 
@@ -14,6 +15,20 @@ namespace lt {
 
 inline const nanovdb::FloatGrid* as_nano(const GridData& g) {
   return static_cast<const nanovdb::FloatGrid*>(g.nano_grid);
+}
+
+// Trilinear interpolation between the values at integer coordinates, at(i, j, k), clamped >= 0.
+template <class At>
+float trilinear(const At& at, const Vec3& p) {
+  float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
+  int i = int(fx), j = int(fy), k = int(fz);
+  float u = p.x - fx, w = p.y - fy, s = p.z - fz;
+  float c00 = at(i, j, k) * (1 - u) + at(i + 1, j, k) * u;
+  float c10 = at(i, j + 1, k) * (1 - u) + at(i + 1, j + 1, k) * u;
+  float c01 = at(i, j, k + 1) * (1 - u) + at(i + 1, j, k + 1) * u;
+  float c11 = at(i, j + 1, k + 1) * (1 - u) + at(i + 1, j + 1, k + 1) * u;
+  float c0 = c00 * (1 - w) + c10 * w, c1 = c01 * (1 - w) + c11 * w;
+  return std::max(0.0f, c0 * (1 - s) + c1 * s);
 }
 
 // Trilinear interpolation of a dense array, zero outside it; voxel centres at integer coordinates.
@@ -25,15 +40,7 @@ struct DenseLookup {
     return v[(size_t(k) * ny + j) * nx + i];
   }
   float operator()(const Vec3& p) const {
-    float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
-    int i = int(fx), j = int(fy), k = int(fz);
-    float u = p.x - fx, w = p.y - fy, s = p.z - fz;
-    float c00 = at(i, j, k) * (1 - u) + at(i + 1, j, k) * u;
-    float c10 = at(i, j + 1, k) * (1 - u) + at(i + 1, j + 1, k) * u;
-    float c01 = at(i, j, k + 1) * (1 - u) + at(i + 1, j, k + 1) * u;
-    float c11 = at(i, j + 1, k + 1) * (1 - u) + at(i + 1, j + 1, k + 1) * u;
-    float c0 = c00 * (1 - w) + c10 * w, c1 = c01 * (1 - w) + c11 * w;
-    return std::max(0.0f, c0 * (1 - s) + c1 * s);
+    return trilinear([this](int i, int j, int k) { return at(i, j, k); }, p);
   }
 };
 
@@ -51,5 +58,23 @@ auto with_density(const GridData& g, F&& f) {
   }
   return f(dense_lookup(g));
 }
+
+// A lookup into any grid's storage with one branch per lookup (for the grids a medium's emission
+// reads beside its density; the density itself goes through with_density). Holds a NanoVDB read
+// accessor (its node cache), so one per thread and estimator call.
+class GridSampler {
+ public:
+  explicit GridSampler(const GridData& g) : dense_(dense_lookup(g)) {
+    if (g.nano_grid) acc_.emplace(as_nano(g)->getAccessor());
+  }
+  float operator()(const Vec3& p) {  // trilinear at an index-space point, clamped >= 0
+    if (!acc_) return dense_(p);
+    return trilinear([this](int i, int j, int k) { return acc_->getValue(nanovdb::Coord(i, j, k)); }, p);
+  }
+
+ private:
+  DenseLookup dense_;
+  std::optional<nanovdb::FloatGrid::AccessorType> acc_;
+};
 
 }  // namespace lt

@@ -99,9 +99,10 @@ Tracked track(const HeteroRay& r, float t0, float t1, Sampler& rng, S&& on_segme
 // Midpoint ray marching over [a, b] (already clipped to the domain) with steps of h (units of t)
 // starting at a; the last step is shortened to end at b. visit(t_start, dt, density_at_midpoint)
 // returns false to stop. Steps whose midpoints fall in a majorant cell bounded by 0 are skipped
-// without changing the result (their density is exactly 0).
+// without changing the result (their density is exactly 0), unless skip_empty is false (emission).
 template <class D, class V>
-void march(const HeteroRay& r, const D& density, float a, float b, float h, int* steps, V&& visit) {
+void march(const HeteroRay& r, const D& density, float a, float b, float h, int* steps, V&& visit,
+           bool skip_empty = true) {
   double nd = std::ceil(double(b - a) / double(h));
   long n;
   if (!(nd <= Medium::kMaxMarchingSteps)) {
@@ -126,7 +127,7 @@ void march(const HeteroRay& r, const D& density, float a, float b, float h, int*
   MajorantGrid::Iterator it = r.maj->traverse(r.o, r.d, a, b);
   MajorantSegment seg;
   while (k < n && it.next(&seg)) {
-    if (seg.value <= 0) {
+    if (seg.value <= 0 && skip_empty) {
       double first = std::ceil(double(seg.t1 - a) / double(h) - 0.5);
       if (first > double(k)) k = long(std::min(double(n), first));
       continue;
@@ -154,6 +155,7 @@ Medium::Medium(const Medium& o)
       sigma_s_(o.sigma_s_),
       phase_(o.phase_),
       emission_(o.emission_),
+      grid_emission_(o.grid_emission_),
       empty_(o.empty_),
       emissive_(o.emissive_),
       grid_(o.grid_),
@@ -169,6 +171,7 @@ Medium& Medium::operator=(const Medium& o) {
   sigma_s_ = o.sigma_s_;
   phase_ = o.phase_;
   emission_ = o.emission_;
+  grid_emission_ = o.grid_emission_;
   empty_ = o.empty_;
   emissive_ = o.emissive_;
   grid_ = o.grid_;
@@ -181,10 +184,27 @@ Medium& Medium::operator=(const Medium& o) {
 }
 
 void Medium::set_emission(const Spectrum& e) {
-  if (!valid_coefficients(e)) throw InvalidArgument("medium emission must be finite and >= 0");
+  // Negative channels are allowed: Cycles' blackbody below ~1900 K (volume_material.h).
+  if (!is_finite(e)) throw InvalidArgument("medium emission must be finite");
   if (grid_ && !is_black(e)) throw InvalidArgument("emission is supported for homogeneous media only");
   emission_ = e;
   emissive_ = !is_black(e);
+}
+
+void Medium::set_grid_emission(std::shared_ptr<const GridEmission> e) {
+  if (!grid_) throw InvalidArgument("grid emission is supported for heterogeneous media only");
+  grid_emission_ = std::move(e);
+  emissive_ = grid_emission_ != nullptr;
+}
+
+Spectrum Medium::emission_at(const Vec3& p) const {
+  if (!grid_) return emission_;
+  if (!grid_emission_ || !majorant_.valid()) return Spectrum(0.0f);
+  Vec3 q = world_to_index_.point(p);
+  for (int a = 0; a < 3; ++a)
+    if (!(q[a] >= majorant_.lo()[a] && q[a] <= majorant_.hi()[a])) return Spectrum(0.0f);
+  GridEmission::Lookup lookup(*grid_emission_);
+  return lookup(q);
 }
 
 Medium Medium::homogeneous(const Spectrum& sigma_a, const Spectrum& sigma_s, float g) {
@@ -257,7 +277,10 @@ bool Medium::clip(const Ray& ray, float* t0, float* t1) const {
   return majorant_.clip(world_to_index_.point(ray.o), world_to_index_.vector(ray.d), t0, t1);
 }
 
-size_t Medium::memory_bytes() const { return grid_ ? grid_->memory_bytes() + majorant_.memory_bytes() : 0; }
+size_t Medium::memory_bytes() const {
+  if (!grid_) return 0;
+  return grid_->memory_bytes() + majorant_.memory_bytes() + (grid_emission_ ? grid_emission_->memory_bytes() : 0);
+}
 
 // ---- Medium: estimators ---------------------------------------------------------------------
 
@@ -465,6 +488,88 @@ bool Medium::sample_distance(const Ray& ray, float t0, float t1, Sampler& s, Vol
   if (collided) return true;
   out->weight = w;
   return false;
+}
+
+Spectrum Medium::emission_integral(const Ray& ray, float t0, float t1, Sampler& s, VolumeEstimator e, float step,
+                                   const Spectrum& sigma_other, const std::function<Spectrum(float)>* other) const {
+  if (!grid_emission_ || !(t1 > t0)) return Spectrum(0.0f);
+  const float len = length(ray.d);
+  if (!(len > 0) || !std::isfinite(len)) return Spectrum(0.0f);
+  const HeteroRay r = hetero_ray(*this, ray, len);
+  const float start = t0;
+  if (!majorant_.clip(r.o, r.d, &t0, &t1)) return Spectrum(0.0f);
+  GridEmission::Lookup emission(*grid_emission_);
+  const Spectrum so = sigma_other * len;  // the other media's homogeneous extinction per unit t
+  auto others = [&](float t) { return other ? (*other)(t) : Spectrum(1.0f); };
+  Spectrum L(0.0f);
+
+  if (e == VolumeEstimator::RayMarching) {
+    // Cycles' volume_integrate_heterogeneous: per step, E and sigma_t at the step's point, the
+    // step's emission in closed form E (1 - e^{-sigma dt}) / sigma (volume_emission_integrate)
+    // times the transmittance before it. Empty cells are marched too (emission without density).
+    Spectrum T = beer(so, t0 - start);
+    const float h = (step > 0 ? step : march_step_) / len;
+    int steps = 0;
+    with_density(*grid_, [&](const auto& density) {
+      march(
+          r, density, t0, t1, h, &steps,
+          [&](float tk, float dt, float rho) {
+            const float tm = tk + 0.5f * dt;
+            const Spectrum E = emission(r.o + r.d * tm);
+            const Spectrum sigma = r.st * rho + so;
+            if (!is_black(E)) {
+              Spectrum f;
+              for (int c = 0; c < 3; ++c) {
+                const double x = double(sigma[c]) * dt;
+                f[c] = float(sigma[c] > 0 ? -std::expm1(-x) / sigma[c] : dt);
+              }
+              L += T * E * f * others(tm) * len;
+            }
+            T *= beer(sigma, dt);
+            return max_component(T) > 1e-12f;  // the rest adds nothing a float image holds
+          },
+          /*skip_empty=*/false);
+      return 0;
+    });
+    return L;
+  }
+
+  // Tentative collisions at rate sigma_bar = (max - min) x max_c sigma_t per cell (at least one per
+  // voxel of the ray's index-space path, for emission where the density's majorant is 0). At a
+  // collision at t the estimate of the transmittance from `start` is T_res (residual ratio tracking,
+  // as transmittance()) x exp(-sigma_t x integral of min) x exp(-sigma_other (t - start)); its
+  // product with E(t) / sigma_bar, summed over the collisions, is unbiased for the integral (the
+  // collisions are a Poisson process of rate sigma_bar, and ratio tracking's estimate at t, given a
+  // collision at t, is unbiased for T(start, t)). Russian roulette on the whole estimate.
+  const float floor_rate = length(r.d);  // one collision per index unit (voxel) of travel
+  Spectrum T_res(1.0f);
+  double control = 0;  // integral of the minimum before the current segment, units of t
+  float min = 0, rate = 0, seg_t0 = 0;
+  const float pre = t0 - start;  // the other media's extinction before the domain
+  const Tracked end = track(
+      r, t0, t1, s,
+      [&](const MajorantSegment& seg, float* sigma_bar) {
+        if (seg_t0 < seg.t0 && rate > 0) control += double(min) * (seg.t0 - seg_t0);
+        min = seg.min;
+        seg_t0 = seg.t0;
+        *sigma_bar = rate = std::max((seg.value - min) * r.maj_scale, floor_rate);
+        return true;
+      },
+      [&](float t, float rho) {
+        const Spectrum Tc = beer(r.st, float(control + double(min) * (t - seg_t0))) * beer(so, pre + (t - t0));
+        const Spectrum T = T_res * Tc;
+        const Spectrum E = emission(r.o + r.d * t);
+        if (!is_black(E)) L += T * E * others(t) * (len / rate);
+        T_res *= Spectrum(1.0f) - r.st * ((rho - min) / rate);
+        const float m = max_component(T_res * Tc);
+        if (m < kRouletteThreshold) {
+          if (!(m > 0) || s.next_1d() < kRouletteKill) return false;
+          T_res /= 1 - kRouletteKill;
+        }
+        return true;
+      });
+  if (end.capped) count_capped();
+  return L;
 }
 
 }  // namespace lt

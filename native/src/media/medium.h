@@ -40,11 +40,13 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 
 #include "core/math.h"
 #include "core/sampling.h"
 #include "media/density_grid.h"
+#include "media/grid_emission.h"
 #include "media/majorant_grid.h"
 #include "media/phase.h"
 
@@ -96,12 +98,31 @@ class Medium {
   const Phase& phase() const { return phase_; }
   // A mixture of HG lobes (volume shader mixes; media/volume_material.h) replaces the single lobe.
   void set_phase(const Phase& p) { phase_ = p; }
-  // Emitted radiance per unit length (Cycles' volume emission, not scaled by density); homogeneous
-  // media only (throws InvalidArgument otherwise, or for negative / non-finite values). Emission is
+  // Emitted radiance per unit length (Cycles' volume emission, not scaled by density; a channel may
+  // be negative, as Cycles' blackbody below ~1900 K); homogeneous media only (throws
+  // InvalidArgument otherwise, or for non-finite values). Emission is
   // light no estimator samples: the integrators add its closed-form integral along each segment.
   void set_emission(const Spectrum& e);
   const Spectrum& emission() const { return emission_; }
   bool emissive() const { return emissive_; }
+  // A heterogeneous medium's emission read from grids (a Volume object's; media/grid_emission.h),
+  // evaluated per lookup inside the density grid's domain (zero outside it). Throws
+  // InvalidArgument for a homogeneous medium.
+  void set_grid_emission(std::shared_ptr<const GridEmission> e);
+  const GridEmission* grid_emission() const { return grid_emission_.get(); }
+  // Emission per unit length at a world point (exact lookups; for tests and quadrature).
+  Spectrum emission_at(const Vec3& p) const;
+  // A heterogeneous medium's emission reaching ray.o from [t0, t1]: an estimate of
+  // integral E(s) T(t0, s) T_o(s) ds, T this medium's transmittance and T_o(s) =
+  // exp(-sigma_other (s - t0) |ray.d|) x other(s) that of the media overlapping it (sigma_other the
+  // homogeneous ones' extinction, `other` an estimate of the heterogeneous ones' transmittance to s,
+  // or null). RayMarching integrates per step as Cycles does (E and sigma_t constant over the step,
+  // closed form inside it); Tracking is unbiased: residual ratio tracking whose every tentative
+  // collision scores E x the transmittance estimate there / its rate (pbrt-v4's emission at
+  // tentative collisions, with Cycles' emission not scaled by density); where the density's
+  // majorant is 0 the rate is one collision per voxel, so emission without density is found too.
+  Spectrum emission_integral(const Ray& ray, float t0, float t1, Sampler& s, VolumeEstimator e, float step,
+                             const Spectrum& sigma_other, const std::function<Spectrum(float)>* other) const;
   // Coefficients at a world point (exact lookups; for tests and quadrature).
   Spectrum sigma_t(const Vec3& p) const { return (sigma_a_ + sigma_s_) * density(p); }
   Spectrum sigma_s(const Vec3& p) const { return sigma_s_ * density(p); }
@@ -131,6 +152,7 @@ class Medium {
   Spectrum sigma_a_{0.0f}, sigma_s_{0.0f};
   Phase phase_;
   Spectrum emission_{0.0f};
+  std::shared_ptr<const GridEmission> grid_emission_;
   bool empty_ = true, emissive_ = false;
   std::shared_ptr<const GridData> grid_;
   Transform world_to_index_;

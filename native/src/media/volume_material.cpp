@@ -6,23 +6,35 @@ namespace lt {
 
 namespace {
 
-// Cycles 3.4.1's blackbody colour, fitted to its Blackbody node's output rendered at 9
-// temperatures per interval (Cycles evaluates a piecewise fit of the same forms: a/T + bT + c for
-// red and green, a cubic in T for blue). Measured with tests/scenes' tooling in Blender 3.4.1; the
-// fit reproduces the renders to 3e-7 (3e-5 for blue between 1449 and 1902 K, where Cycles clamps
-// negative blue to 0). Rows: lower bound of the interval, red, green, blue coefficients.
+// Cycles 3.4.1's blackbody colour as its Principled Volume uses it (unclamped: below ~1900 K green
+// and blue are negative), fitted to its output (Cycles evaluates a piecewise fit of the same forms:
+// a/T + bT + c for red and green, a cubic in T for blue). Measured in Blender 3.4.1: where positive
+// from the Blackbody node rendered at 9 temperatures per interval (the fit reproduces the renders
+// to 3e-7); the negative parts (green from 800 to 965 K, blue from 800 to 1902 K, and the constant
+// below 800 K) from a Principled Volume of density 0 and Blackbody Intensity 1 seen through 2 m
+// (pixel = 2 sigma_SB 1e-6 / pi T^4 colour), 9 temperatures per interval, fitted to 2e-7.
+// Rows: lower bound of the interval, red, green, blue coefficients.
 struct BlackbodySegment {
   float t0;
   double r[3], g[3], b[4];
 };
 constexpr BlackbodySegment kBlackbody[] = {
-    {800.0f, {1619.19903, -0.00205009798, 5.02993936}, {0, 0, 0}, {0, 0, 0, 0}},
-    {965.0f, {2488.47045, -0.00111329559, 3.22618662}, {-755.997694, 0.000316727221, 0.47831133}, {0, 0, 0, 0}},
-    {1167.0f, {3341.49112, -0.00048651745, 1.76477832}, {-1023.63943, 0.000120223939, 0.936660412}, {0, 0, 0, 0}},
+    {800.0f,
+     {1619.19903, -0.00205009798, 5.02993936},
+     {-488.995226, 0.000604336763, -0.0755912304},
+     {5.97040390e-11, -4.86014480e-08, -9.70365381e-05, -0.00408739648}},
+    {965.0f,
+     {2488.47045, -0.00111329559, 3.22618662},
+     {-755.997694, 0.000316727221, 0.47831133},
+     {2.40298135e-11, 5.55455283e-08, -0.000198551245, 0.0289486395}},
+    {1167.0f,
+     {3341.49112, -0.00048651745, 1.76477832},
+     {-1023.63943, 0.000120223939, 0.936660412},
+     {-1.40867985e-11, 1.89847396e-07, -0.000356592289, 0.0910594796}},
     {1449.0f,
      {4094.63896, -0.00012743972, 0.725707083},
      {-1265.7146, 4.8729131e-06, 1.27054576},
-     {6.66829609e-12, -3.25515255e-08, 5.27902499e-05, -0.0284425826}},
+     {-3.61425278e-11, 2.84804506e-07, -0.000493182737, 0.15670798}},
     {1902.0f,
      {4670.27874, 2.91252119e-05, 0.126705153},
      {-1425.29448, -4.01152186e-05, 1.43972776},
@@ -39,8 +51,8 @@ constexpr BlackbodySegment kBlackbody[] = {
 
 }  // namespace
 
-Spectrum blackbody_rec709(float kelvin) {
-  if (!(kelvin >= 800.0f)) return Spectrum(5.41329479f, 0.0f, 0.0f);  // below 800 K (and NaN): constant
+Spectrum blackbody_rec709_unclamped(float kelvin) {
+  if (!(kelvin >= 800.0f)) return Spectrum(5.41329241f, -0.203193843f, -0.0822535306f);  // below 800 K (and NaN)
   if (kelvin >= 12000.0f) return Spectrum(0.826293707f, 0.994506836f, 1.56630695f);
   int i = int(sizeof(kBlackbody) / sizeof(kBlackbody[0])) - 1;
   while (i > 0 && kelvin < kBlackbody[i].t0) --i;
@@ -49,8 +61,10 @@ Spectrum blackbody_rec709(float kelvin) {
   double r = s.r[0] / t + s.r[1] * t + s.r[2];
   double g = s.g[0] / t + s.g[1] * t + s.g[2];
   double b = ((s.b[0] * t + s.b[1]) * t + s.b[2]) * t + s.b[3];
-  return Spectrum(float(std::max(0.0, r)), float(std::max(0.0, g)), float(std::max(0.0, b)));
+  return Spectrum(float(r), float(g), float(b));
 }
+
+Spectrum blackbody_rec709(float kelvin) { return vmax(Spectrum(0.0f), blackbody_rec709_unclamped(kelvin)); }
 
 Spectrum principled_volume_emission(float strength, const Spectrum& color, float blackbody_intensity,
                                     const Spectrum& blackbody_tint, float temperature) {
@@ -61,7 +75,7 @@ Spectrum principled_volume_emission(float strength, const Spectrum& color, float
     double T4 = (T * T) * (T * T);
     double intensity =
         5.670373e-8 * 1e-6 / double(kPi) * ((1 - double(blackbody_intensity)) + blackbody_intensity * T4);
-    e += vmax(Spectrum(0.0f), blackbody_tint) * blackbody_rec709(float(T)) * float(intensity);
+    e += vmax(Spectrum(0.0f), blackbody_tint) * blackbody_rec709_unclamped(float(T)) * float(intensity);
   }
   return e;
 }

@@ -16,13 +16,16 @@ struct VolumeCoefficients {
 };
 
 // Blackbody colour of temperature `kelvin` in linear Rec.709, as Cycles 3.4.1 computes it (unit
-// luminance, negative components clamped to 0; constant below 800 K and above 12000 K): a
-// piecewise fit to Cycles' own output (volume_material.cpp says how it was measured).
+// luminance; constant below 800 K and above 12000 K): a piecewise fit to Cycles' own output
+// (volume_material.cpp says how it was measured). Unclamped as Cycles' Principled Volume uses it
+// (negative green and blue below ~1900 K); blackbody_rec709 clamps to 0 as its Blackbody node.
+Spectrum blackbody_rec709_unclamped(float kelvin);
 Spectrum blackbody_rec709(float kelvin);
 
 // Principled Volume's emission per unit length (Cycles' svm_node_principled_volume): strength x
 // colour, plus blackbody: tint x (sigma_SB 1e-6 / pi) x mix(1, T^4, intensity) x blackbody(T)
-// when intensity > 0 (sigma_SB the Stefan-Boltzmann constant). Colours clamped to >= 0.
+// when intensity > 0 (sigma_SB the Stefan-Boltzmann constant). Colours and tint clamped to >= 0;
+// the blackbody colour is not (Cycles' is not: below ~1900 K the emission has negative channels).
 Spectrum principled_volume_emission(float strength, const Spectrum& color, float blackbody_intensity,
                                     const Spectrum& blackbody_tint, float temperature);
 

@@ -53,7 +53,8 @@ void Scene::commit() {
       bounds.extend(lo);
       bounds.extend(hi);
     } else {
-      has_world_volume_ = true;
+      // A World volume that only emits (sigma_t = 0) hides nothing.
+      has_world_volume_ = has_world_volume_ || !media[m].empty();
     }
   }
   // Rays from beyond Embree's range miss (geometry.h): say so instead of rendering less silently.
@@ -74,6 +75,7 @@ void Scene::commit() {
     has_boundaries_ = has_boundaries_ || m >= 0;
     has_emissive_media_ = has_emissive_media_ || (m >= 0 && media[m].emissive());
   }
+  for (int m : global_media) has_emissive_media_ = has_emissive_media_ || media[m].emissive();
   has_media_ = has_boundaries_ || !global_media.empty();
   committed_ = true;
   edited_ = false;

@@ -37,6 +37,9 @@ class Scene {
   std::vector<Medium> media;
   std::vector<int> material_medium, global_media;
   std::vector<uint8_t> material_null;
+  // medium_groups[m]: the light group of global medium m's emission (a Volume object's; -1 none).
+  std::vector<int> medium_groups;
+  int medium_lightgroup(int m) const { return m >= 0 && m < int(medium_groups.size()) ? medium_groups[m] : -1; }
   int medium_of(int material) const {
     return material >= 0 && material < int(material_medium.size()) ? material_medium[material] : -1;
   }
@@ -46,7 +49,8 @@ class Scene {
   // Set by commit(): the scene has media at all, and mesh boundaries of media.
   bool has_media() const { return has_media_; }
   bool has_boundaries() const { return has_boundaries_; }
-  // A material's medium emits (volume emission; integrators add it along segments in media).
+  // A medium emits (a material's, a Volume object's or a World volume; integrators add the emission
+  // along segments in media).
   bool has_emissive_media() const { return has_emissive_media_; }
   // A World volume: escaping rays cross it to infinity, so no light arrives from the world or suns.
   bool has_world_volume() const { return has_world_volume_; }
