@@ -204,11 +204,11 @@ const char* catcher_part_letters(int part);
 // both halves are not valid (their values are zero).
 struct HalfImages {
   int width = 0, height = 0;
-  FreshVector<float> color[2];     // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
+  FreshVector<float> color[2];  // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
   // RGB: variance of each half's mean from that half's samples alone (Film::half_images), so that a
   // denoiser guided by one half weighs the other with weights independent of it.
   FreshVector<float> variance[2];
-  FreshVector<float> feature[2];   // kFeatureChannels per pixel
+  FreshVector<float> feature[2];  // kFeatureChannels per pixel
   FreshVector<uint8_t> valid;
 };
 
