@@ -109,10 +109,11 @@ TEST(Memory, FilmKeepsOnlyThePassesAskedFor) {
   // floats; Blender's RenderResult adds 5 more for either engine (bench/memory.py measures it).
   EXPECT_EQ(lean.bytes_per_pixel(), 11u * 4u);
   lt::FilmLayout all;
-  // Every pass: Normal, Albedo, Variance's squares and the denoising features (both halves' sums).
+  // Every pass: Normal, Albedo, Variance's squares and the denoising features (both halves' sums,
+  // and half B's squares for the half images' variances).
   // The light passes: 13 RGB (Colours included); Position, UV (3 each), Mist and two indices;
   // AO (RGB) and Vector (4 and the count of samples that wrote one).
-  EXPECT_EQ(all.bytes_per_pixel(), (11u + 3 + 3 + 3 + 2 * lt::kFeatureChannels + 13 * 3 + 3 + 3 + 3 + 3 + 5) * 4u);
+  EXPECT_EQ(all.bytes_per_pixel(), (11u + 3 + 3 + 3 + 2 * lt::kFeatureChannels + 3 + 13 * 3 + 3 + 3 + 3 + 3 + 5) * 4u);
   // Reading a pass the film does not keep is an error, never zeros that look like data.
   lt::Film film(4, 3, lean);
   film.finish();

@@ -182,8 +182,9 @@ size_t FilmLayout::bytes_per_pixel() const {
   if (has(Pass::Depth)) floats += 1;
   if (has(Pass::Normal)) floats += 3;
   if (has(Pass::Albedo)) floats += 3;
-  if (passes & kDenoisingFeatures) floats += 2 * kFeatureChannels;
-  if (squares) floats += 3;
+  const bool features = (passes & kDenoisingFeatures) != 0;
+  if (features) floats += 2 * kFeatureChannels + 3 + (splats ? 6 : 0);  // and the halves' squares
+  if (squares || features || has(Pass::Variance)) floats += 3;
   if (splats) floats += 6;
   floats += size_t(strategy_cells) * 6;
   for (int t = 0; t < kCryptoTypes; ++t)
@@ -201,7 +202,8 @@ size_t FilmLayout::bytes_per_pixel() const {
 
 Film::Film(int width, int height, const FilmLayout& layout) : width_(width), height_(height), layout_(layout) {
   layout_.passes |= pass_bit(Pass::Combined) | pass_bit(Pass::SampleCount);
-  if (has(Pass::Variance)) layout_.squares = true;
+  // The Variance pass and the half images' variances (denoising) need the sum of squares.
+  if (has(Pass::Variance) || (layout_.passes & kDenoisingFeatures)) layout_.squares = true;
   const size_t n = size_t(width) * height;
   mean_.assign(3 * n, 0.0f);
   half_.assign(3 * n, 0.0f);
@@ -216,10 +218,12 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
     layout_.passes |= kDenoisingFeatures;  // one accumulator holds the three
     feature_.assign(kFeatureChannels * n, 0.0f);
     feature_half_.assign(kFeatureChannels * n, 0.0f);
+    m2_half_.assign(3 * n, 0.0f);
   }
   if (layout_.splats) {
     splat_.assign(3 * n, 0.0f);
     splat_half_.assign(3 * n, 0.0f);
+    if (!feature_.empty()) splat_sq_.assign(6 * n, 0.0f);
   }
   layout_.passes = with_dependencies(layout_.passes);
   if (layout_.shadow_catcher) {
@@ -262,7 +266,11 @@ void Film::add(int x, int y, const SampleValue& s) {
   }
   if (half) {
     const float inv_b = 1.0f / float(n / 2);
-    for (int k = 0; k < 3; ++k) half_[3 * i + k] += (s.radiance[k] - half_[3 * i + k]) * inv_b;
+    for (int k = 0; k < 3; ++k) {
+      const float v = s.radiance[k], delta = v - half_[3 * i + k];
+      half_[3 * i + k] += delta * inv_b;
+      if (!m2_half_.empty()) m2_half_[3 * i + k] += delta * (v - half_[3 * i + k]);
+    }
   }
   if (!normal_.empty())
     for (int k = 0; k < 3; ++k) normal_[3 * i + k] += s.normal[k];
@@ -399,6 +407,30 @@ ErrorEstimate Film::error_estimate(int passes) const {
   return e;
 }
 
+void Film::half_variances(size_t i, const SplatScales& sc, const double* a, const double* b, double (*var)[3]) const {
+  const double n = count_[i], nb = double(count_[i] / 2), na = n - nb, nh[2] = {na, nb};
+  for (int k = 0; k < 3; ++k) {
+    // Each half's sum of squared deviations: B's kept, A's from the total's by Chan et al.'s
+    // pairwise update, M2 = M2_A + M2_B + (m_A - m_B)^2 n_A n_B / n, over the camera samples.
+    const double mb = half_[3 * i + k], ma = (double(mean_[3 * i + k]) * n - mb * nb) / na, d = ma - mb;
+    const double m2b = m2_half_[3 * i + k], m2a = double(m2_[3 * i + k]) - m2b - d * d * na * nb / n;
+    const double m2[2] = {std::max(0.0, m2a), std::max(0.0, m2b)};
+    // A half of one sample has no sample variance: the halves' difference, unbiased for
+    // Var A + Var B = sigma^2 (1/n_A + 1/n_B), as before (its guide then depends on both halves).
+    const double dh = a[k] - b[k], sigma2 = dh * dh / (1.0 / na + 1.0 / nb);
+    for (int j = 0; j < 2; ++j) var[j][k] = nh[j] >= 2 ? m2[j] / ((nh[j] - 1.0) * nh[j]) : sigma2 / nh[j];
+    if (!sc.on || splat_sq_.empty()) continue;
+    // The splats' part, light paths as samples (one splat per path and pixel assumed): each half's
+    // S_h / L_h has variance (Q_h - S_h^2 / L_h) / ((L_h - 1) L_h), Q_h its sum of squared splats.
+    const double s = splat_[3 * i + k], sb = splat_half_[3 * i + k], sum[2] = {s - sb, sb};
+    const double paths[2] = {1.0 / sc.inv_la, 1.0 / sc.inv_lb};
+    for (int j = 0; j < 2; ++j) {
+      const double q = splat_sq_[(2 * i + j) * 3 + k], l = paths[j];
+      if (l >= 2) var[j][k] += std::max(0.0, q - sum[j] * sum[j] / l) / ((l - 1.0) * l);
+    }
+  }
+}
+
 HalfImages Film::half_images() const {
   if (feature_.empty()) throw StateError("this render does not keep the denoising features");
   HalfImages h;
@@ -419,15 +451,16 @@ HalfImages Film::half_images() const {
       double a[3], b[3], mean[3];
       half_means(i, sc, a, b, mean);
       bool finite = true;
+      double var[2][3];
+      half_variances(i, sc, a, b, var);
       for (int k = 0; k < 3; ++k) {
-        // (A - B)^2 is unbiased for Var A + Var B = sigma^2 (1/n_A + 1/n_B), sigma^2 a sample's variance.
-        const double d = a[k] - b[k], sigma2 = d * d / (1.0 / na + 1.0 / nb);
         h.color[0][3 * i + k] = float(a[k]);
         h.color[1][3 * i + k] = float(b[k]);
-        h.variance[0][3 * i + k] = float(sigma2 / na);
-        h.variance[1][3 * i + k] = float(sigma2 / nb);
-        finite =
-            finite && std::isfinite(float(a[k])) && std::isfinite(float(b[k])) && std::isfinite(float(sigma2 / nb));
+        for (int j = 0; j < 2; ++j) {
+          h.variance[j][3 * i + k] = float(var[j][k]);
+          finite = finite && std::isfinite(float(var[j][k]));
+        }
+        finite = finite && std::isfinite(float(a[k])) && std::isfinite(float(b[k]));
       }
       for (int k = 0; k < kFeatureChannels; ++k) {
         const double sum = feature_[kFeatureChannels * i + k], sum_b = feature_half_[kFeatureChannels * i + k];

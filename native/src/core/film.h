@@ -204,9 +204,11 @@ const char* catcher_part_letters(int part);
 // both halves are not valid (their values are zero).
 struct HalfImages {
   int width = 0, height = 0;
-  FreshVector<float> color[2];     // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
-  FreshVector<float> variance[2];  // RGB: variance of each half's mean, (A - B)^2 / (1/n_A + 1/n_B) / n_h
-  FreshVector<float> feature[2];   // kFeatureChannels per pixel
+  FreshVector<float> color[2];  // RGB: half A (odd-numbered samples: 1st, 3rd, ...), half B
+  // RGB: variance of each half's mean from that half's samples alone (Film::half_images), so that a
+  // denoiser guided by one half weighs the other with weights independent of it.
+  FreshVector<float> variance[2];
+  FreshVector<float> feature[2];  // kFeatureChannels per pixel
   FreshVector<uint8_t> valid;
 };
 
@@ -270,6 +272,8 @@ class Film {
     for (int k = 0; k < 3; ++k) splat_[3 * size_t(pixel) + k] += v[k];
     if (half)
       for (int k = 0; k < 3; ++k) splat_half_[3 * size_t(pixel) + k] += v[k];
+    if (splat_sq_.empty()) return;
+    for (int k = 0; k < 3; ++k) splat_sq_[(2 * size_t(pixel) + half) * 3 + k] += v[k] * v[k];
   }
   // A splat's part of a light pass (LightPart; not a Colour), when the film keeps it.
   void add_light_splat(uint32_t pixel, int part, const Spectrum& v) {
@@ -393,6 +397,9 @@ class Film {
   };
   SplatScales splat_scales() const;
   void half_means(size_t i, const SplatScales& sc, double* a, double* b, double* mean) const;
+  // Pixel i's variance of each half's mean (var[half][channel]), from that half's samples and
+  // splats alone where it holds 2 or more samples; a, b: its half means. Needs the features.
+  void half_variances(size_t i, const SplatScales& sc, const double* a, const double* b, double (*var)[3]) const;
   // Locks the film for reading the accumulators: waits while a pass is being rendered.
   std::unique_lock<std::mutex> lock_accumulators() const;
   int width_, height_;
@@ -408,6 +415,10 @@ class Film {
   std::vector<float> feature_, feature_half_, denoised_;
   std::vector<uint32_t> count_;
   std::vector<float> splat_, splat_half_;  // empty without splats
+  // For the half images' variances (kept with the denoising features): m2_half_, half_'s sum of
+  // squared deviations (Welford; half A's follows from m2_); splat_sq_, each half's sum of squared
+  // splats (half A's RGB, then half B's, per pixel; with splats).
+  std::vector<float> m2_half_, splat_sq_;
   // The light and data passes (Pass::DiffuseDirect on): per pass a sum over samples (Position and
   // the indices: the pixel's first sample's value, as Cycles writes them at sample 0), empty when
   // not kept; light_splat_: the light passes' part of the splats (BDPT).

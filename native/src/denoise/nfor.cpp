@@ -105,8 +105,8 @@ void prepare(const HalfImages& in, Planes& pl) {
         pl.feature[k][i] = 0.5f * (in.feature[0][kFeatureChannels * i + k] + in.feature[1][kFeatureChannels * i + k]);
     }
   });
-  // The variance from one pixel's two halves has 1 degree of freedom per channel: smoothed over its
-  // valid 3x3 neighbours (Rousselle et al. 2012 smooth their dual-buffer variance likewise).
+  // Each half's variance (from its own samples: few degrees of freedom) smoothed over its valid
+  // 3x3 neighbours (Rousselle et al. 2012 smooth their dual-buffer variance likewise).
   tbb::parallel_for(0, h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       double sum[2][3] = {}, count = 0;

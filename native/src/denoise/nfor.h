@@ -5,7 +5,8 @@
 // its whole window and the overlapping fits averaged (NFOR's collaborative reconstruction), weighted by NL-means
 // weights computed on the *other* half (cross-filtering: the weights are independent of the noise
 // they average), and the two reconstructions are averaged. The NL-means distance is normalised by
-// each pixel's own variance estimate (from the halves' difference), so the filter's strength
+// the guide half's own variance estimate (from its samples alone: a variance from the halves'
+// difference would hold the half being weighed and brightened the mean), so the filter's strength
 // follows the image's noise, not a per-scene setting.
 #pragma once
 
