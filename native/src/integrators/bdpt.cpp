@@ -822,7 +822,11 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   }
   PathVertex& z0 = endpoint(VertexType::Camera);
   z0.p = lens;
-  base *= transmittance(qs, z0, kVisCamera);
+  // The camera ray through qs starts at the near clip (pr.near), as the camera walk's rays do:
+  // the medium between the lens and the clip is not on the path (world_fog read 0.5 % dark).
+  const Vec3 to_clip = lens + dir * pr.near;
+  base *= transmittance(qs, spawn_ray_to(qs.type == VertexType::Surface ? spawn_origin(qs.sp, -dir) : qs.p, to_clip, time_),
+                        kVisCamera);
   if (is_black(base)) return;
   // Pixel j's estimate is the integral over the film of its filter h_j times the radiance of the
   // film position's ray; over directions instead, h_j times the film's importance J (pixels per
