@@ -400,13 +400,6 @@ BDPT_SCENES = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_li
 # BDPT's image mean must equal PATH's there too (the door scenes' path tracing is too noisy).
 BDPT_VS_PATH = ["cornell_area", "cornell_point", "cornell_spot", "cornell_mesh_light", "glossy_glass", "cornell_dof",
                 "motion_blur"]
-# Open discrepancy, measured and not yet explained: on world_fog (a delta point light inside a World
-# volume) BDPT's image mean is 0.3-0.5 % below Cycles' (0.9949 at 0.10 % standard error in this
-# test; 0.9971 +- 0.0006 with the lamp out of frame), while every internal check agrees (light
-# lengths, heuristics, BDPT against VOLPATH in a closed fog box). Its image-mean check is the
-# strict expected failure below, so that the gap stays visible and a fix turns it into an error.
-# Still 0.9945 (0.089 % standard error) with the view frames and zero-density MIS of bdpt.h.
-MEAN_GAPS = ["world_fog"]
 K = 12
 
 
@@ -423,13 +416,6 @@ def bdpt_mean_report(scene_factory, name, images):
     t_mean = student_t_upper(0.5 * math.erfc(ru.MEAN_Z / math.sqrt(2.0)), K - 1)
     return ru.global_mean_report(name + "_bdpt", ru.image_mean_and_se2(images, independent_pixels=False),
                                  ru.image_mean_and_se2(runs(scene_factory, name, ru.CYCLES)), z=t_mean), t_mean
-
-
-@pytest.mark.xfail(strict=True, reason="open: BDPT's image mean 0.3-0.5 % below Cycles' in a World volume")
-@pytest.mark.parametrize("name", MEAN_GAPS)
-def test_bidirectional_image_mean_known_gap(name, scene_factory):
-    report, _ = bdpt_mean_report(scene_factory, name, bdpt_runs(scene_factory, name))
-    assert report == "", report
 
 
 def bdpt_tile_report(name, images, c0, c1, outdir):
@@ -456,7 +442,7 @@ def test_bidirectional_agrees_with_cycles(name, scene_factory, outdir):
     c0, c1 = runs(scene_factory, name, ru.CYCLES)
     images = bdpt_runs(scene_factory, name)
     mean_report, t_mean = bdpt_mean_report(scene_factory, name, images)
-    reports = [mean_report if name not in MEAN_GAPS else ""]
+    reports = [mean_report]
     if name in BDPT_VS_PATH:
         reports.append(ru.global_mean_report(
             name + "_bdpt_vs_path", ru.image_mean_and_se2(images, independent_pixels=False),

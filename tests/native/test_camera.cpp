@@ -151,33 +151,37 @@ TEST(Camera, LensSamplesAreUniformOverTheAperture) {
 }
 
 // A camera ray's points, within its clipping range, project back (Camera::project, BDPT's t = 1)
-// to the ray's film position and direction from its lens point; beyond the range they do not.
+// to the ray's film position, direction and start (its near clip) from its lens point (and the
+// pinhole's); beyond the range they do not.
 TEST(Camera, LensRaysProjectBackToTheirFilmPosition) {
-  lt_camera_desc d = with_dof(perspective_camera(kView, 28), 2.5f, 0.7f, 7, 0.2f, 1.4f);
-  d.clip_start = 0.5f;
-  d.clip_end = 20;
-  d.shift_x = 0.1f;
-  const lt::Camera cam = camera_of(d);
-  lt::Sampler sampler(5, 0, 0);
+  lt_camera_desc pin = perspective_camera(kView, 28);
+  pin.clip_start = 0.5f;
+  pin.clip_end = 20;
+  pin.shift_x = 0.1f;
   int checked = 0;
-  for (int i = 0; i < 2000; ++i) {
-    const float x = sampler.next_1d() * kW, y = sampler.next_1d() * kH;
-    lt::Ray r;
-    ASSERT_TRUE(cam.generate(x, y, sampler.next_2d(), &r));
-    // Inside the range (its ends are where rounding decides).
-    const float t = r.tmin * 1.001f + (r.tmax * 0.999f - r.tmin * 1.001f) * std::pow(sampler.next_1d(), 3.0f);
-    lt::Camera::Projection pr;
-    ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &pr)) << t;
-    ASSERT_EQ(pr.count, 1);
-    EXPECT_NEAR(pr.at[0].film.x, x, 2e-3f * (1 + t));
-    EXPECT_NEAR(pr.at[0].film.y, y, 2e-3f * (1 + t));
-    EXPECT_NEAR(pr.distance, t, 1e-4f * t);
-    EXPECT_GT(lt::dot(pr.dir, r.d), 1 - 1e-6f);
-    EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmin * 0.98f), 1, &pr));
-    EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmax * 1.02f), 1, &pr));
-    ++checked;
+  for (const lt_camera_desc& d : {with_dof(pin, 2.5f, 0.7f, 7, 0.2f, 1.4f), pin}) {
+    const lt::Camera cam = camera_of(d);
+    lt::Sampler sampler(5, 0, 0);
+    for (int i = 0; i < 2000; ++i) {
+      const float x = sampler.next_1d() * kW, y = sampler.next_1d() * kH;
+      lt::Ray r;
+      ASSERT_TRUE(cam.generate(x, y, sampler.next_2d(), &r));
+      // Inside the range (its ends are where rounding decides).
+      const float t = r.tmin * 1.001f + (r.tmax * 0.999f - r.tmin * 1.001f) * std::pow(sampler.next_1d(), 3.0f);
+      lt::Camera::Projection pr;
+      ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &pr)) << t;
+      ASSERT_EQ(pr.count, 1);
+      EXPECT_NEAR(pr.at[0].film.x, x, 2e-3f * (1 + t));
+      EXPECT_NEAR(pr.at[0].film.y, y, 2e-3f * (1 + t));
+      EXPECT_NEAR(pr.distance, t, 1e-4f * t);
+      EXPECT_NEAR(pr.near, r.tmin, 1e-5f * r.tmin);  // where the ray starts: t = 1's connection ends there
+      EXPECT_GT(lt::dot(pr.dir, r.d), 1 - 1e-6f);
+      EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmin * 0.98f), 1, &pr));
+      EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmax * 1.02f), 1, &pr));
+      ++checked;
+    }
   }
-  EXPECT_EQ(checked, 2000);
+  EXPECT_EQ(checked, 4000);
 }
 
 // The camera's directional density from a lens point, the film's importance (pixels per
@@ -237,6 +241,7 @@ TEST(Camera, OrthographicRaysProjectBackToTheirFilmPosition) {
       EXPECT_NEAR(pr.at[0].film.x, x, 2e-3f * (1 + t));
       EXPECT_NEAR(pr.at[0].film.y, y, 2e-3f * (1 + t));
       EXPECT_NEAR(pr.distance, t, 1e-4f * t);
+      EXPECT_NEAR(pr.near, r.tmin, 1e-5f * r.tmin);
       for (float beyond : {r.tmin * 0.98f, r.tmax * 1.02f}) {
         const lt::Vec3 q = r.o + r.d * beyond;
         EXPECT_FALSE(cam.project(cam.connection_point(q, u), q, 1, &pr));
@@ -491,6 +496,7 @@ TEST(Camera, PanoramaRaysProjectBackToTheirFilmPosition) {
       lt::Camera::Projection pr;
       ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &pr)) << c.name << " at " << x << " " << y;
       EXPECT_NEAR(pr.distance, t, 1e-4f * t);
+      EXPECT_NEAR(pr.near, r.tmin, 1e-5f * r.tmin);
       EXPECT_GT(lt::dot(pr.dir, r.d), 1 - 1e-5f);
       float nearest = INFINITY;
       for (int k = 0; k < pr.count; ++k)

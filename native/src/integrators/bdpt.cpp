@@ -796,11 +796,15 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   // PerspectiveCamera::SampleWi): no draw for a pinhole, whose renders stay as they were. An
   // orthographic camera's lens sample fixes its rays' direction, and the vertex is on its plane.
   const Vec3 lens = cam.connection_point(qs.p, cam.has_lens() ? sampler_.next_2d() : Vec2{0.5f, 0.5f}, time_);
-  if (splits_towards(lens, qs)) return;  // the path meets a catcher: no t = 1 (mis_weight)
   Camera::Projection& pr = scratch_.splat;
   if (!cam.project(lens, qs.p, ctx_.filter.radius(), &pr, time_)) return;
   const Vec3 dir = pr.dir;
   const float dist = pr.distance;
+  // The camera ray through qs starts at the near clip (pr.near), as the camera walk's rays do:
+  // the media and surfaces between the lens and the clip are not on the path (world_fog read
+  // 0.5 % dark when t = 1 alone crossed its World volume there).
+  const Vec3 clip = lens + dir * pr.near;
+  if (splits_towards(clip, qs)) return;  // the path meets a catcher: no t = 1 (mis_weight)
   Spectrum base = qs.beta * f_cos(qs, -dir, Mode::Importance, s == 2 ? excluded_kinds(light[0].vis) : 0) * kinds;
   if (is_black(base)) return;
   // Light passes: qs is the path's first bounce seen from the camera (towards -dir), lit from its
@@ -819,7 +823,8 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
   }
   PathVertex& z0 = endpoint(VertexType::Camera);
   z0.p = lens;
-  base *= transmittance(qs, z0, kVisCamera);
+  base *= transmittance(
+      qs, spawn_ray_to(qs.type == VertexType::Surface ? spawn_origin(qs.sp, -dir) : qs.p, clip, time_), kVisCamera);
   if (is_black(base)) return;
   // Pixel j's estimate is the integral over the film of its filter h_j times the radiance of the
   // film position's ray; over directions instead, h_j times the film's importance J (pixels per

@@ -373,13 +373,14 @@ class Bdpt {
     const Instance& in = scene_.geometry.instance(instance);
     return s_.shadow_catcher && in.shadow_catcher && !in.holdout;
   }
-  // Whether the path of a t = 1 strategy splits: the camera ray from `lens` to its first vertex qs
-  // meets a catcher (qs itself, or one it passes through). A walk's path splits as the walk found.
-  bool splits_towards(const Vec3& lens, const PathVertex& qs) const {
+  // Whether the path of a t = 1 strategy splits: the camera ray from `start` (its near clip) to its
+  // first vertex qs meets a catcher (qs itself, or one it passes through). A walk's path splits as
+  // the walk found.
+  bool splits_towards(const Vec3& start, const PathVertex& qs) const {
     if (!s_.shadow_catcher) return false;
     if (qs.type == VertexType::Surface && splits_on(qs.sp.instance)) return true;
-    const Vec3 to = qs.type == VertexType::Surface ? spawn_origin(qs.sp, normalize(lens - qs.p)) : qs.p;
-    return scene_.geometry.occluded(spawn_ray_to(lens, to, time_), catcher_only_visibility(kVisCamera));
+    const Vec3 to = qs.type == VertexType::Surface ? spawn_origin(qs.sp, normalize(start - qs.p)) : qs.p;
+    return scene_.geometry.occluded(spawn_ray_to(start, to, time_), catcher_only_visibility(kVisCamera));
   }
   FirstBounce first_walk_, first_connect_;
   // The split of a scattering vertex between its predecessor (v.wo) and direction `to`.

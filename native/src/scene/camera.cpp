@@ -459,6 +459,7 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out
   if (d_.panorama) {
     // Clipping is the distance from the camera (camera_sample_panorama).
     if (dist < d_.clip_start || dist > d_.clip_end) return false;
+    out->near = d_.clip_start;
     const Vec3 w{dot(out->dir, b.right), dot(out->dir, b.up), dot(out->dir, b.forward_neg)};
     panorama_preimages(w, margin, out);
     return out->count > 0;
@@ -475,8 +476,11 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out
     py += dot(l, b.up) / d_.focus_distance;
     const float len = std::sqrt(px * px + py * py + 1);
     if (dist < d_.clip_start * len || dist > d_.clip_end * len) return false;
+    out->near = d_.clip_start * len;
   } else if (z < d_.clip_start || z > d_.clip_end) {
     return false;  // clipping planes are perpendicular to the axis
+  } else {
+    out->near = d_.clip_start * dist / z;
   }
   Vec2 film{(px - x0_) / (x1_ - x0_) * width_, (py - y0_) / (y1_ - y0_) * height_};
   if (film.x < -margin || film.x > width_ + margin || film.y < -margin || film.y > height_ + margin) return false;
@@ -514,6 +518,7 @@ bool Camera::project_orthographic(const Basis& b, const Vec3& o, float margin, P
   if (!(local.z > 0)) return false;
   const float along_ray = has_lens() ? out->distance : out->distance * local.z;
   if (along_ray < d_.clip_start || along_ray > d_.clip_end) return false;
+  out->near = d_.clip_start;  // along the ray, as generate()'s
   const Vec3 on_plane = o - b.origin;
   float px = dot(on_plane, b.right), py = dot(on_plane, b.up);
   if (has_lens()) {

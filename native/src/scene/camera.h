@@ -130,6 +130,9 @@ class Camera {
     Vec3 dir;               // unit, from the lens point to the point
     float distance;         // from the lens point
     bool parallel = false;  // orthographic: importance per area across the rays
+    // Where the camera ray from the lens point through the point starts along it (generate()'s
+    // tmin, the near clip): nothing before it, medium or surface, is on that ray.
+    float near = 0;
     int count = 0;
     Preimage at[kMaxPreimages];
   };
