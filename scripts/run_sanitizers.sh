@@ -47,14 +47,15 @@ if [[ " $STEPS " == *" asan "* ]]; then
   # panoramas' projection in DepthOfFieldAndPanoramasAgreeWithPathTracing and the camera tests;
   # orthographic light tracing in the camera tests; the BDPT catcher in ShadowCatcher's matte test),
   # the lobes' furnace and chi-square loops (BsdfSanity, HairLobes.WhiteFurnace, PhaseHG at
-  # g = -0.5 ... 0.5), the rough-metal furnace render (ApiFurnace's other renders).
+  # g = -0.5 ... 0.5), the rough-metal furnace render (ApiFurnace's other renders), the denoiser's
+  # mean at 640x480 (Denoise.HalfVariancesAreUnbiased and KeepsTheMeanWithinTheNoise run its code).
   SLOW="Bdpt.AgreesWithVolumetricPathTracingInMedia:Bdpt.FullBdptAgreesWithPathTracing"
   SLOW+=":Bdpt.DoorSlabsBounceKindsAgreeWithPathTracing:Bdpt.LightLengthOneEqualsPathTracing"
   SLOW+=":Bdpt.MisWeightsSumToOne:BsdfFurnace.NewLobesConserveEnergy:HairLobes.SamplesFollowPdf"
   SLOW+=":ApiFurnace.RoughMetalSphereReflectsAsCyclesPerBounce:PhaseHG/PhaseChi2.SamplingFollowsPdf/0"
   SLOW+=":PhaseHG/PhaseChi2.SamplingFollowsPdf/4:Bdpt.MisWeightsSumToOneWithPanoramas"
   SLOW+=":Bdpt.OrthographicAgreesWithPathTracing:Bdpt.MisWeightsSumToOneWithOrthographicCameras"
-  SLOW+=":ShadowCatcher.BidirectionalAgreesWithPathTracing"
+  SLOW+=":ShadowCatcher.BidirectionalAgreesWithPathTracing:Denoise.KeepsTheMeanWithinTheNoiseAtFullSize"
   pids=()
   for shard in 0 1; do
     GTEST_TOTAL_SHARDS=2 GTEST_SHARD_INDEX=$shard "$ASAN_DIR/lantern_tests" --gtest_brief=1 \
