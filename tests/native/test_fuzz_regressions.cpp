@@ -4,6 +4,7 @@
 #include <openvdb/openvdb.h>
 
 #include <chrono>
+#include <cmath>
 #include <climits>
 #include <cstdint>
 #include <cstring>
@@ -14,6 +15,7 @@
 
 #include "core/error.h"
 #include "io/exr.h"
+#include "program_builder.h"
 #include "scene_builders.h"
 
 namespace {
@@ -36,6 +38,20 @@ void append_u32(std::vector<uint8_t>& out, uint32_t v) {
 
 // fuzz_exr_merge: an EXR header attribute whose size field says 2 GB made OpenEXR allocate (and
 // clear) 2 GB before it found the file too short: seconds and gigabytes for a 40-byte file.
+// fuzz_abi (on CI): a table whose length word was 2e34 was converted to size_t before the bounds
+// check, which is undefined behaviour for floats beyond the integer range.
+TEST(FuzzRegressions, TableLengthBeyondTheIntegerRangeIsRefused) {
+  for (float length : {2.08506e34f, 1e10f, 3.0f, INFINITY, NAN, -1.0f}) {
+    ShaderCode c;
+    c.tex_coord();
+    c.k[0] = length;  // the Object table's length (the pool holds it and the Camera table: 2 floats)
+    EXPECT_THROW(lt::Program(c.code, c.k, c.registers, 0), lt::InvalidArgument) << length;
+  }
+  ShaderCode fine;
+  fine.tex_coord();
+  EXPECT_NO_THROW(lt::Program(fine.code, fine.k, fine.registers, 0));
+}
+
 TEST(FuzzRegressions, ExrAttributeSizeBeyondTheFileIsRefusedBeforeAllocating) {
   lt_test::TempDir dir;
   const std::string path = dir.path + "/huge_attribute.exr";
