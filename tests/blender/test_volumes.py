@@ -26,15 +26,7 @@ def _export(scene):
 
 @pytest.mark.parametrize("name", VOLUME_SCENES)
 @pytest.mark.parametrize("volume_bounces", [0, 2])
-def test_volume_agrees_with_cycles(name, volume_bounces, scene_factory, outdir, request):
-    if name == "thin_fog" and volume_bounces == 2:
-        # Open, measured 2026-12-05 (not a regression: main's library gives the same means): on
-        # thin_fog VOLPATH's image mean is 0.22-0.29 % above Cycles' at every volume bounce limit
-        # (16 seeds x 128 spp against 12 Cycles seeds: 1.0029, 5.8 standard errors at 2; 8 seeds
-        # each: 1.0022 at 0, 1.0029 at 1). Seeds 0 and 1 show it at 2 bounces (3.1 standard
-        # errors): a strict expected failure, so a fix turns it into an error to remove.
-        request.applymarker(pytest.mark.xfail(strict=True, reason="open: VOLPATH 0.2-0.3 % above Cycles on "
-                                              "thin_fog"))
+def test_volume_agrees_with_cycles(name, volume_bounces, scene_factory, outdir):
     scene = scene_factory(name)
     scene.cycles.volume_bounces = volume_bounces
     if name == "world_fog":

@@ -207,8 +207,10 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       if (kMedia && !is_finite(beta)) break;  // free-flight weights
 
       if (medium >= 0) {
-        // A real collision: beta already holds sigma_s T / pdf (medium.h).
-        if (is_black(beta) || b.of(BounceKind::Volume) > s.volume_bounces || b.total > s.max_bounces) break;
+        // A real collision: beta already holds sigma_s T / pdf (medium.h). Past any limit (a
+        // diffuse one too) the path ends here without light, as at a surface (Cycles' volume
+        // shading skips direct light once the path is marked to terminate).
+        if (is_black(beta) || b.exceeded(s)) break;
         const Phase& phase = scene.media[medium].phase();
         const Vec3 wo = normalize(-ray.d);
         if (b.total == 0) nee_first.set_volume();
