@@ -4,8 +4,8 @@
 #include <openvdb/openvdb.h>
 
 #include <chrono>
-#include <cmath>
 #include <climits>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>

@@ -129,7 +129,8 @@ Program::Program(std::vector<uint32_t> code, std::vector<float> constants, int r
         throw InvalidArgument(where + " refers to image " + std::to_string(params[k]) + " which does not exist");
       if (kind == 't') {
         const size_t at = params[k];
-        if (at >= constants.size() || !(constants[at] >= 0.0f && double(constants[at]) <= double(constants.size() - at - 1)))
+        if (at >= constants.size() ||
+            !(constants[at] >= 0.0f && double(constants[at]) <= double(constants.size() - at - 1)))
           throw InvalidArgument(where + " refers to a table past the constants");
       }
     }
