@@ -9,7 +9,13 @@ namespace lt {
 std::vector<float> Bdpt::weight_sums() {
   std::vector<float> sums;
   const size_t capacity = size_t(std::max(s_.max_camera_length, s_.max_light_length)) + size_t(s_.max_bounces) + 4;
-  std::vector<PathVertex> camera(capacity), light(capacity);
+  // Reused buffers: a vertex is kilobytes, and fresh vectors per sample cost more in page faults
+  // than the check itself.
+  thread_local std::vector<PathVertex> camera, light, x, C, L, c3;
+  if (camera.size() < capacity) {
+    camera.resize(capacity);
+    light.resize(capacity);
+  }
   int nt = generate_camera_subpath(camera);
   int ns = generate_light_subpath(light);
   for (int t = 2; t <= nt; ++t)
@@ -23,7 +29,7 @@ std::vector<float> Bdpt::weight_sums() {
       // The full path x[0] = camera ... x[k] = light, with both densities of every vertex:
       // cam[i] (sampled from x[i-1]) and lig[i] (sampled from x[i+1]).
       const int k = s + t - 1;
-      std::vector<PathVertex> x(k + 1);
+      x.resize(k + 1);
       for (int i = 0; i < t; ++i) x[i] = camera[i];
       for (int i = 0; i < s; ++i) x[t + i] = light[s - 1 - i];
       std::vector<float> cam(k + 1), lig(k + 1);
@@ -51,21 +57,23 @@ std::vector<float> Bdpt::weight_sums() {
         if (x[i].type == VertexType::Surface && x[i].kind == BounceKind::Mixed &&
             !mixed_kind(x[i], x[i - 1].p, x[i + 1].p, i != t - 1 && i != t && x[i].delta, x[i].kind_p))
           x[i].kind_p[0] = -1;
+      // The path as every strategy sees it: camera-side prefixes of C, light-side prefixes of
+      // L (reversed); mis_weight reads only the first t2 and s2 entries (and restores what it
+      // assigns), so the two copies serve all strategies.
+      C = x;
+      L.assign(x.rbegin(), x.rend());
+      for (int i = 0; i <= k; ++i) {
+        C[i].pdf_fwd = cam[i];
+        C[i].pdf_rev = lig[i];
+        L[i].pdf_fwd = lig[k - i];
+        L[i].pdf_rev = cam[k - i];
+      }
       float sum = 0;
       for (int t2 = 1; t2 <= k + 1; ++t2) {
         const int s2 = k + 1 - t2;
         if (s2 + t2 - 2 > max_depth() || (s2 == 1 && t2 == 1)) continue;
         if (s2 > s_.max_light_length || t2 - 1 > camera_depth()) continue;  // the subpath limits exclude it
-        std::vector<PathVertex> c2(x.begin(), x.begin() + t2), l2(s2);
-        for (int i = 0; i < t2; ++i) {
-          c2[i].pdf_fwd = cam[i];
-          c2[i].pdf_rev = lig[i];
-        }
-        for (int i = 0; i < s2; ++i) {
-          l2[i] = x[k - i];
-          l2[i].pdf_fwd = lig[k - i];
-          l2[i].pdf_rev = cam[k - i];
-        }
+        std::vector<PathVertex>&c2 = C, &l2 = L;
         // Only strategies whose connection can be made sample this path.
         if (t2 >= 1 && s2 >= 1) {
           const PathVertex& a = c2[t2 - 1];
@@ -94,7 +102,7 @@ std::vector<float> Bdpt::weight_sums() {
           // before its predecessor are the walk's, towards another vertex; mis_weight must not
           // read them.
           PathVertex emitter = c2[t2 - 1];
-          std::vector<PathVertex> c3(c2);
+          c3.assign(c2.begin(), c2.begin() + t2);
           c3[t2 - 1].p = c3[t2 - 1].p + Vec3(1.0f);
           c3[t2 - 1].pdf_fwd = c3[t2 - 1].pdf_rev = NAN;
           c3[t2 - 3].pdf_rev = 2 * c3[t2 - 3].pdf_rev + 1;
