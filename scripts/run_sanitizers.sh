@@ -43,18 +43,17 @@ if [[ " $STEPS " == *" asan "* ]]; then
   step "native tests under ASan + UBSan"
   # Two shards in parallel (one per core). Left out: the long statistical tests (15-70 s each in
   # Release, several times that under ASan), whose code shorter tests run: BDPT's agreement tests
-  # and MIS sums over many paths (MisWeightsSumToOneWithALens, LightTree.BdptMisWeightsSumToOne;
-  # panoramas' projection in DepthOfFieldAndPanoramasAgreeWithPathTracing and the camera tests;
-  # orthographic light tracing in the camera tests; the BDPT catcher in ShadowCatcher's matte test),
+  # (panoramas' and orthographic cameras' light tracing in the MIS-sum and camera tests; the BDPT
+  # catcher in ShadowCatcher's matte test),
   # the lobes' furnace and chi-square loops (BsdfSanity, HairLobes.WhiteFurnace, PhaseHG at
   # g = -0.5 ... 0.5), the rough-metal furnace render (ApiFurnace's other renders), the denoiser's
   # mean at 640x480 (Denoise.HalfVariancesAreUnbiased and KeepsTheMeanWithinTheNoise run its code).
   SLOW="Bdpt.AgreesWithVolumetricPathTracingInMedia:Bdpt.FullBdptAgreesWithPathTracing"
   SLOW+=":Bdpt.DoorSlabsBounceKindsAgreeWithPathTracing:Bdpt.LightLengthOneEqualsPathTracing"
-  SLOW+=":Bdpt.MisWeightsSumToOne:BsdfFurnace.NewLobesConserveEnergy:HairLobes.SamplesFollowPdf"
+  SLOW+=":BsdfFurnace.NewLobesConserveEnergy:HairLobes.SamplesFollowPdf"
   SLOW+=":ApiFurnace.RoughMetalSphereReflectsAsCyclesPerBounce:PhaseHG/PhaseChi2.SamplingFollowsPdf/0"
-  SLOW+=":PhaseHG/PhaseChi2.SamplingFollowsPdf/4:Bdpt.MisWeightsSumToOneWithPanoramas"
-  SLOW+=":Bdpt.OrthographicAgreesWithPathTracing:Bdpt.MisWeightsSumToOneWithOrthographicCameras"
+  SLOW+=":PhaseHG/PhaseChi2.SamplingFollowsPdf/4"
+  SLOW+=":Bdpt.OrthographicAgreesWithPathTracing"
   SLOW+=":ShadowCatcher.BidirectionalAgreesWithPathTracing:Denoise.KeepsTheMeanWithinTheNoiseAtFullSize"
   pids=()
   for shard in 0 1; do
