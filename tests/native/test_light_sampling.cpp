@@ -205,7 +205,7 @@ float distance_to_light(const Scene& s, int i, const Vec3& p, const Vec3& wi) {
     return h.t;
   }
   float t = -1;
-  s.lights.intersect_lamps(r, 31u, [&](const LightSet::LampHit& h) {
+  s.lights.intersect_lamps(r, p, 31u, [&](const LightSet::LampHit& h) {
     if (h.light == i) t = h.t;
   });
   return t;

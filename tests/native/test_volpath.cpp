@@ -175,6 +175,41 @@ TEST(VolPath, BounceLimitsEndPathsInMediaAsAtSurfaces) {
   }
 }
 
+// A point lamp with a radius is a disk facing the path's last scattering, also where the ray
+// crossed an invisible boundary on its way (Cycles keeps the ray's origin there): the top of an
+// empty volume box passing 0.1 below the lamp's centre, inside its radius of 0.3, changes nothing
+// (it turned the disks hit from the floor towards the boundary, against the densities that
+// weigh those hits: the image mean fell 21 %, 16 standard errors). Per 8x8 tile and in the mean,
+// for the volumetric path tracer and BDPT's camera walk.
+TEST(VolPath, PointLampDisksFaceTheLastScatteringThroughBoundaries) {
+  auto scene = [](bool box_around) {
+    ScenePtr s = new_scene();
+    lt_scene* sc = s.get();
+    add_object(sc, plane(4, 4), add_glossy(sc, {0.8f, 0.8f, 0.8f}, 0.4f));
+    if (box_around)
+      add_object(sc, box({-2, -2, -1}, {2, 2, 0.4f}), add_volume_material(sc, volume(LT_VOLUME_PRINCIPLED, 0.0f)));
+    lt_light_desc lamp = point_light({0, 0, 0.5f}, 20);
+    lamp.radius = 0.3f;
+    add_light(sc, lamp);
+    set_camera(sc, perspective_camera(look_at({0, -2.5f, 1.5f}, {0, 0, 0}), 35));
+    check(lt_scene_commit(sc), "commit");
+    return s;
+  };
+  ScenePtr plain = scene(false), boxed = scene(true);
+  const int size = 32;
+  const Passes a = render(plain.get(), volpath_settings(size, size, 64, 5));
+  const Passes b = render(boxed.get(), volpath_settings(size, size, 64, 6));
+  EXPECT_EQ(differing_tiles(a, b, 8, kSigmas), "");
+  EXPECT_EQ(differing_tiles(a, b, size, kSigmas), "") << "image mean";
+  // BDPT's camera walk the same (light length 1: no splats, so its pixels are independent).
+  lt_render_settings bd = volpath_settings(size, size, 64, 7);
+  bd.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
+  bd.max_light_length = 1;
+  const Passes c = render(boxed.get(), bd);
+  EXPECT_EQ(differing_tiles(a, c, 8, kSigmas), "") << "BDPT";
+  EXPECT_EQ(differing_tiles(a, c, size, kSigmas), "") << "BDPT, image mean";
+}
+
 TEST(VolPath, ExtremesAreFiniteAndBounded) {
   struct Case {
     float density, albedo, g, scale;

@@ -338,7 +338,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (lights_.has_hittable()) {
         Ray r = ray;
         r.tmax = medium >= 0 ? std::min(mi.t, found ? hit.t : ray.tmax) : (found ? hit.t : ray.tmax);
-        lights_.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
+        lights_.intersect_lamps(r, prev.p, visibility, [&](const LightSet::LampHit& h) {
           reach(h.light, false, ray.o + ray.d * h.t, h.n,
                 medium >= 0 ? beta_before : beta,  // the segment before the collision (exact for grey media)
                 h.radiance);

@@ -199,7 +199,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       if (lights.has_hittable()) {
         Ray r = ray;
         r.tmax = t_seg;
-        lights.intersect_lamps(r, visibility, [&](const LightSet::LampHit& h) {
+        lights.intersect_lamps(r, prev_p, visibility, [&](const LightSet::LampHit& h) {
           add((medium >= 0 ? beta_before : beta) * h.radiance * mis_emitter(h.light, ray.d, t_prev + h.t),
               lights.lightgroup(h.light));
         });

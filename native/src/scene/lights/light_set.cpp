@@ -273,10 +273,10 @@ void LightSet::pdf_emission(const Scene& scene, int i, const Vec3& origin, const
   *pdf_pos = *pdf_dir = 0;
 }
 
-bool LightSet::intersect_lamp(int i, const Ray& ray, LampHit* hit) const {
+bool LightSet::intersect_lamp(int i, const Ray& ray, const Vec3& from, LampHit* hit) const {
   const Light& l = lights_[i];
   hit->light = i;
-  return l.type == LightType::Area ? area_lamp_intersect(l, ray, hit) : point_lamp_intersect(l, ray, hit);
+  return l.type == LightType::Area ? area_lamp_intersect(l, ray, hit) : point_lamp_intersect(l, ray, from, hit);
 }
 
 }  // namespace lt

@@ -71,12 +71,13 @@ class LightSet {
 
   using LampHit = lt::LampHit;
   // Calls visit(hit) for each hittable lamp (Light::hittable) visible to this ray kind crossed
-  // before tmax: lamps are not occluders.
+  // before tmax: lamps are not occluders. from: the path's last scattering, which a point lamp's
+  // disk faces (the ray may start further along the same line, past invisible boundaries).
   template <class F>
-  void intersect_lamps(const Ray& ray, unsigned visibility, F visit) const {
+  void intersect_lamps(const Ray& ray, const Vec3& from, unsigned visibility, F visit) const {
     for (int i : hittable_) {
       LampHit h;
-      if ((lights_[i].visibility & visibility) && intersect_lamp(i, ray, &h)) visit(h);
+      if ((lights_[i].visibility & visibility) && intersect_lamp(i, ray, from, &h)) visit(h);
     }
   }
   // Sun lights with an angle: radiance arriving along the escaped direction d.
@@ -90,7 +91,7 @@ class LightSet {
   bool has_hittable() const { return !hittable_.empty() || !suns_.empty(); }
 
  private:
-  bool intersect_lamp(int i, const Ray& ray, LampHit* hit) const;
+  bool intersect_lamp(int i, const Ray& ray, const Vec3& from, LampHit* hit) const;
   std::vector<Light> lights_;
   std::vector<int> hittable_, suns_;
   std::vector<std::pair<uint64_t, int>> triangle_index_;  // sorted (instance<<32 | prim) -> light

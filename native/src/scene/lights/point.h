@@ -107,9 +107,11 @@ inline void point_lamp_pdf_emission(const Light& l, const Vec3& dir, float* pdf_
     *pdf_dir = uniform_sphere_pdf();
 }
 
-// A lamp with a radius: the disk facing the ray's origin.
-inline bool point_lamp_intersect(const Light& l, const Ray& ray, LampHit* hit) {
-  Vec3 n = ray.o - l.position;
+// A lamp with a radius: the disk facing `from`, the path's last scattering (Cycles 3.4 keeps the
+// ray's origin there through transparent and volume-only surfaces, moving only its tmin), which
+// the densities of point_lamp_pdf assume too; the ray may start further along the same line.
+inline bool point_lamp_intersect(const Light& l, const Ray& ray, const Vec3& from, LampHit* hit) {
+  Vec3 n = from - l.position;
   float dist = length(n);
   if (!(dist > l.radius)) return false;
   n = n / dist;
