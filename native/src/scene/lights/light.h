@@ -92,7 +92,7 @@ struct EmissionSample {
 };
 
 // A hittable lamp crossed by a ray: distance, normal at the crossing (the area lamp's; -ray.d on
-// a disk facing the ray's origin) and radiance towards the ray origin.
+// a disk facing the path's last scattering) and radiance towards the ray origin.
 struct LampHit {
   int light = -1;
   float t = INFINITY;
