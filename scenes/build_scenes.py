@@ -661,6 +661,14 @@ def build_cornell_point(scene):
     add_light(scene, "PointLight", "POINT", 30.0, (0, 0, 1.7), radius=0.1)
 
 
+def build_lamp_near_ceiling(scene):
+    """The Cornell box lit by a point lamp of radius 0.1 hung 0.05 below the ceiling: the ceiling
+    passes through the lamp's sphere, so ceiling points near it lie within its radius (Cycles
+    still draws the disk facing them; Lantern refused those hits and read 7.5 % dark)."""
+    cornell_box(scene)
+    add_light(scene, "PointLight", "POINT", 30.0, (0.2, 0.1, 1.95), radius=0.1)
+
+
 def build_cornell_spot(scene):
     cornell_box(scene)
     add_light(scene, "SpotLight", "SPOT", 300.0, (0, 0, 1.9), radius=0.05,
@@ -2272,6 +2280,7 @@ SCENES = {
     "lamps500": (build_lamps500, (160, 120), 64),
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),
+    "lamp_near_ceiling": (build_lamp_near_ceiling, (48, 48), 640),
     "cornell_spot": (build_cornell_spot, (96, 96), 128),
     "cornell_mesh_light": (build_cornell_mesh_light, (96, 96), 512),
     "glossy_glass": (build_glossy_glass, (96, 96), 128),

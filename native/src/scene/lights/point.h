@@ -113,7 +113,7 @@ inline void point_lamp_pdf_emission(const Light& l, const Vec3& dir, float* pdf_
 inline bool point_lamp_intersect(const Light& l, const Ray& ray, const Vec3& from, LampHit* hit) {
   Vec3 n = from - l.position;
   float dist = length(n);
-  if (!(dist > l.radius)) return false;
+  if (!(dist > 0)) return false;  // within the radius too: the disk still faces `from` (Cycles)
   n = n / dist;
   float denom = dot(ray.d, n);
   if (denom >= 0) return false;
