@@ -172,7 +172,9 @@ def test_volume_emission_is_in_its_objects_light_group(integrator, scene_factory
                 scene.view_layers[0].lightgroups.add(name=name)
             bpy.data.objects["VolumeCube"].lightgroup = "glow"
             bpy.data.objects["AreaLight"].lightgroup = "key"
-            runs.setdefault(engine, []).append(ru.render(scene, engine, 64, seed=seed, integrator=integrator))
+            # 256 samples: at 64 the image-mean check's noise was 0.18 % of Combined_key's mean and seeds 0
+            # and 1 read 0.994 of Cycles (3.3 standard errors) where ten seeds each agree (0.9986 +- 0.0010).
+            runs.setdefault(engine, []).append(ru.render(scene, engine, 256, seed=seed, integrator=integrator))
     r = runs[ru.LANTERN][0]
     total = r["Combined_glow"][..., :3] + r["Combined_key"][..., :3]
     assert np.allclose(total, r.combined[..., :3], rtol=1e-4, atol=1e-6), np.abs(total - r.combined[..., :3]).max()
