@@ -661,6 +661,16 @@ def build_cornell_point(scene):
     add_light(scene, "PointLight", "POINT", 30.0, (0, 0, 1.7), radius=0.1)
 
 
+def build_area_spread(scene):
+    """The Cornell box under two area lamps with a Spread (Cycles 3.4's soft-box slats): a square
+    of spread 40 degrees and a disk of 90 degrees, both tilted, so the walls see the cut-off."""
+    cornell_box(scene)
+    add_light(scene, "SpreadSquare", "AREA", 40.0, (-0.3, 0.2, 1.95), rotation=(15, 10, 0), shape="SQUARE",
+              size=0.6, spread=math.radians(40.0))
+    add_light(scene, "SpreadDisk", "AREA", 30.0, (0.4, -0.1, 1.9), rotation=(-20, -25, 0), shape="DISK",
+              size=0.5, spread=math.radians(90.0))
+
+
 def build_lamp_near_ceiling(scene):
     """The Cornell box lit by a point lamp of radius 0.1 hung 0.05 below the ceiling: the ceiling
     passes through the lamp's sphere, so ceiling points near it lie within its radius (Cycles
@@ -2281,6 +2291,7 @@ SCENES = {
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),
     "lamp_near_ceiling": (build_lamp_near_ceiling, (48, 48), 640),
+    "area_spread": (build_area_spread, (48, 48), 1536),
     "cornell_spot": (build_cornell_spot, (96, 96), 128),
     "cornell_mesh_light": (build_cornell_mesh_light, (96, 96), 512),
     "glossy_glass": (build_glossy_glass, (96, 96), 128),

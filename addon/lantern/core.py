@@ -10,12 +10,13 @@ a library built from another lantern.h is refused with a message naming what dif
 """
 
 import ctypes
+import math
 import os
 import threading
 
 import numpy as np
 
-ABI_VERSION = 19
+ABI_VERSION = 20
 
 # lt_status
 OK = 0
@@ -255,6 +256,7 @@ class LightDesc(ctypes.Structure):
         ("angle", ctypes.c_float),
         ("visibility", ctypes.c_uint),
         ("lightgroup", ctypes.c_int),
+        ("spread", ctypes.c_float),
     ]
 
 
@@ -916,7 +918,8 @@ class Scene:
         return out.value
 
     def add_light(self, type, color, transform, radius=0.0, spot_size=0.0, spot_blend=0.0,
-                  shape=AREA_SQUARE, size_x=0.0, size_y=0.0, angle=0.0, visibility=VISIBLE_ALL, lightgroup=0):
+                  shape=AREA_SQUARE, size_x=0.0, size_y=0.0, angle=0.0, visibility=VISIBLE_ALL, lightgroup=0,
+                  spread=math.pi):
         d = LightDesc()
         d.type = int(type)
         d.color[:] = [float(c) for c in color[:3]]
@@ -925,6 +928,7 @@ class Scene:
         d.shape, d.size_x, d.size_y, d.angle = int(shape), size_x, size_y, angle
         d.visibility = int(visibility)
         d.lightgroup = int(lightgroup)
+        d.spread = spread
         _check(self._lib.lt_scene_add_light(self.handle, ctypes.byref(d)), "lt_scene_add_light")
         return True
 

@@ -492,6 +492,7 @@ class LANTERN_LIGHT_PT_light(LanternButtonsPanel, Panel):
             else:
                 sub.prop(light, "size", text="Size X")
                 sub.prop(light, "size_y", text="Y")
+            col.prop(light, "spread")
 
 
 def _node_view(layout, id_data, input_name, fallback_prop):

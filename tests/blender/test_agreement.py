@@ -29,6 +29,8 @@ import build_scenes
 import render_utils as ru
 
 # cornell_mesh_light: lit by an emissive quad 10 cm under the ceiling (two-sided mesh light).
+# lamp_near_ceiling: a point lamp whose sphere the ceiling passes through; area_spread: area lamps
+# with a Spread (square 40 degrees, disk 90).
 # Issue 13's world node trees, lighting a diffuse and a glossy sphere: hdri_world (an HDR
 # equirectangular EXR with a sun-like disk through Mapping's X/Y/Z rotation, strength 1.5),
 # light_path_world (Is Camera Ray mixing a grey backdrop and a warm light), procedural_world
@@ -38,8 +40,8 @@ WORLD_SCENES = ["hdri_world", "light_path_world", "procedural_world"]
 # translating and a rotating box, a deforming grid and a panning camera over a shutter of 1 frame
 # (issue 15; tests/blender/test_motion_blur.py checks its export). point_cloud: geometry-nodes
 # points as spheres (issue 15; the hair scenes have their own test).
-PATH_SCENES = ["cornell_area", "cornell_point", "lamp_near_ceiling", "cornell_spot", "cornell_mesh_light",
-               "glossy_glass", "sun_world",
+PATH_SCENES = ["cornell_area", "cornell_point", "lamp_near_ceiling", "area_spread", "cornell_spot",
+               "cornell_mesh_light", "glossy_glass", "sun_world",
                "textured", "instanced", "cornell_dof", "motion_blur", "point_cloud"] + WORLD_SCENES
 # Issue 15's panoramic cameras, one small render each for path tracing; BIDIRECTIONAL's light
 # tracing to panoramas is held to path tracing by tests/native/test_bdpt.cpp (a 400-degree
@@ -394,8 +396,8 @@ def student_t_upper(p, dof):
 # walls of two lobe kinds (issue 12, item 4); normal_mapped: Cycles tilts a normal for the viewer
 # (ensure_valid_reflection), which BDPT's light vertices take from the camera side of each
 # connection (bdpt.h, view_frame; with the light's direction the image mean read 0.978 of Cycles')
-BDPT_SCENES = ["cornell_area", "cornell_point", "lamp_near_ceiling", "cornell_spot", "cornell_mesh_light",
-               "glossy_glass", "door",
+BDPT_SCENES = ["cornell_area", "cornell_point", "lamp_near_ceiling", "area_spread", "cornell_spot",
+               "cornell_mesh_light", "glossy_glass", "door",
                "door_bounce", "door_slabs", "smoke_box", "world_fog", "vdb_cloud", "cornell_dof",
                "motion_blur", "normal_mapped"] + WORLD_SCENES
 # Scenes without media whose path-traced image mean is known within MEAN_POWER at their samples:

@@ -20,7 +20,7 @@ enum Op : uint8_t {
   kAddMaterial,
   kAddMesh,
   kAddInstance,
-  kAddLight,
+  kAddLight,  // type, colour, transform, radius, spot size and blend, shape, sizes, angle, visibility, spread (ABI 20)
   kSetCamera,
   kSetWorld,
   kSetMaterialVolume,

@@ -197,7 +197,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         break;
       }
       case lt_fuzz::kAddLight: {
-        lt_light_desc d;
+        lt_light_desc d{};  // the light group the input does not set stays 0
         d.type = r.i8();
         r.floats(d.color, 3);
         r.floats(d.transform, 12);
@@ -209,6 +209,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         d.size_y = r.f32();
         d.angle = r.f32();
         d.visibility = r.u8();
+        d.spread = r.f32();
         check(lt_scene_add_light(scene, &d));
         break;
       }

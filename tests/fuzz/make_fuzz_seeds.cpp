@@ -143,6 +143,7 @@ void light(Writer& w, int type, float power, float x, float y, float z, int shap
   w.f32(size);
   w.f32(0.125f);  // sun angle
   w.u8(LT_VISIBLE_ALL);
+  w.f32(1.0f);  // an area light's spread (radians)
 }
 
 void camera(Writer& w, int type = LT_CAMERA_PERSPECTIVE) {

@@ -4,12 +4,15 @@
 // emissive triangles, none for sun and world) and returns 0 where the direction misses it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "chi2.h"
 #include "program_builder.h"
+#include "scene/lights/area.h"
 #include "scene/scene.h"
 
 namespace lt {
@@ -275,6 +278,38 @@ TEST(DeltaLights, PointAndSun) {
   EXPECT_TRUE(ls.delta);
   EXPECT_NEAR(length(ls.wi + sun.direction), 0, 1e-6f);
   EXPECT_EQ(s2->lights.pdf(*s2, 0, Vec3(0, 0, 0), ls.wi, INFINITY), 0.0f);
+}
+
+}  // namespace
+}  // namespace lt
+
+namespace lt {
+namespace {
+
+// An area lamp's Spread (Cycles 3.4's slat model) keeps its power: the spread factor weighted by
+// cos a over the hemisphere integrates to pi (the lamp without a spread), by the midpoint rule;
+// it is 1 without a spread and 0 beyond the cut-off angle spread / 2.
+TEST(AreaSpread, KeepsThePowerAndCutsOffAtHalfTheSpread) {
+  for (float degrees : {0.5f, 10.0f, 40.0f, 90.0f, 150.0f, 179.0f}) {
+    Light l;
+    set_area_spread(&l, degrees * kPi / 180.0f);
+    const int n = 400000;
+    double integral = 0;
+    for (int i = 0; i < n; ++i) {
+      const double a = (i + 0.5) * (0.5 * kPi / n);
+      integral += area_spread_factor(l, float(std::cos(a))) * std::cos(a) * std::sin(a);
+    }
+    integral *= 2 * kPi * (0.5 * kPi / n);
+    EXPECT_NEAR(integral / kPi, 1.0, 2e-3) << degrees << " degrees";
+    const float cut = 0.5f * std::max(degrees, 1.0f) * kPi / 180.0f;  // Cycles' minimum: 1 degree
+    EXPECT_EQ(area_spread_factor(l, std::cos(cut * 1.01f)), 0.0f) << degrees;
+    EXPECT_GT(area_spread_factor(l, std::cos(cut * 0.99f)), 0.0f) << degrees;
+  }
+  Light none;
+  set_area_spread(&none, kPi);
+  EXPECT_EQ(area_spread_factor(none, 0.3f), 1.0f);
+  set_area_spread(&none, 0.0f);  // a descriptor that does not say
+  EXPECT_EQ(area_spread_factor(none, 0.01f), 1.0f);
 }
 
 }  // namespace

@@ -15,7 +15,7 @@ _TYPES = {
 _SHAPE_VALUES = {
     'POINT': ("shadow_soft_size",),
     'SPOT': ("shadow_soft_size", "spot_size", "spot_blend"),
-    'AREA': ("size", "size_y"),
+    'AREA': ("size", "size_y", "spread"),
     'SUN': ("angle",),
 }
 _SHAPES = {
@@ -92,6 +92,8 @@ def export_light(obj, matrix_world, core_scene, report, lightgroup=0):
         kw["size_x"] = light.size
         # Square and disk lights have one size: Blender keeps a stale size_y for them.
         kw["size_y"] = light.size_y if light.shape in {'RECTANGLE', 'ELLIPSE'} else light.size
+        # A spread of 0 means Cycles' minimum of 1 degree (the core's 0 is "none").
+        kw["spread"] = max(light.spread, 1e-6)
     elif light.type == 'SUN':
         kw["angle"] = light.angle
     # The core leaves out black and zero-area lights with a warning (reported naming the light).

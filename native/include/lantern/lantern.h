@@ -52,8 +52,9 @@ extern "C" {
  * lt_image_file_desc.ocio_config and ocio_space: OpenColorIO colour spaces;
  * the Equiangular Cubemap Face panorama; lt_instance_desc's shadow terminator offsets;
  * lt_render_settings.denoise_start_sample: the viewport's denoising); 19: emission of Volume
- * objects and World volumes (lt_volume_desc's grid names, lt_scene_set_volume_grid_lightgroup). */
-#define LT_ABI_VERSION 19
+ * objects and World volumes (lt_volume_desc's grid names, lt_scene_set_volume_grid_lightgroup);
+ * 20: area lights' spread (lt_light_desc.spread). */
+#define LT_ABI_VERSION 20
 
 enum lt_status {
   LT_OK = 0,
@@ -330,6 +331,9 @@ typedef struct lt_light_desc {
   float angle; /* sun: angular diameter, radians */
   unsigned visibility;
   int lightgroup; /* 0 none, k > 0 light group k - 1 (lt_instance_desc.lightgroup) */
+  /* area: Blender's Spread, radians (Cycles 3.4: at least 1 degree, up to pi); 0 (a zeroed
+   * descriptor) and pi: none */
+  float spread;
 } lt_light_desc;
 LT_API int lt_scene_add_light(lt_scene* scene, const lt_light_desc* desc);
 

@@ -154,6 +154,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_light_desc, angle),
     LT_FIELD(lt_light_desc, visibility),
     LT_FIELD(lt_light_desc, lightgroup),
+    LT_FIELD(lt_light_desc, spread),
 
     LT_CONST(lt_camera_type, LT_CAMERA_PERSPECTIVE),
     LT_CONST(lt_camera_type, LT_CAMERA_ORTHOGRAPHIC),

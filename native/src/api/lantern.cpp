@@ -655,6 +655,8 @@ int lt_scene_add_light(lt_scene* scene, const lt_light_desc* d) {
           warnings.push_back(name + ": area light of zero area; left out");
           return;
         }
+        require(std::isfinite(d->spread), name + ": spread not finite");
+        lt::set_area_spread(&l, d->spread);
         break;
       }
       case LT_LIGHT_SUN:

@@ -18,6 +18,25 @@ inline Light area_lamp(const Spectrum& power, const Transform& xf, AreaShape sha
   return l;
 }
 
+// Blender's Spread (radians) as Cycles 3.4 turns it into the slat model: the cut-off angle off
+// the normal is spread / 2 (min 1 degree), and the normalisation keeps the lamp's power, the
+// integral of cos a sin a (1 - tan a / tan(spread / 2)) over [0, spread / 2] against 1/2:
+// 1 / (1 - h cot h) for h = spread / 2 (Cycles writes it with the complement's tangent).
+inline void set_area_spread(Light* l, float spread) {
+  if (!(spread > 0) || spread >= kPi) return;  // none (0: a descriptor that does not say)
+  const double h = 0.5 * std::max(double(spread), kPi / 180.0);
+  l->tan_spread = float(1 / std::tan(h));
+  l->normalize_spread = float(1 / (1 - h / std::tan(h)));  // double: 1 - h cot h ~ h^2 / 3 when small
+}
+
+// The spread's factor for light leaving at cos_a off the normal (1 without a spread).
+inline float area_spread_factor(const Light& l, float cos_a) {
+  if (l.tan_spread == 0) return 1.0f;
+  if (!(cos_a > 0)) return 0.0f;
+  const float tan_a = std::sqrt(std::max(0.0f, 1.0f - cos_a * cos_a)) / cos_a;
+  return std::max(0.0f, (1.0f - l.tan_spread * tan_a) * l.normalize_spread);
+}
+
 inline Spectrum area_lamp_radiance(const Light& l) { return l.power * (0.25f / l.area); }
 
 // A point uniform by area (rectangle: u over [-1, 1]^2 of the half axes).
@@ -36,7 +55,7 @@ inline bool area_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample*
   float cos_l = dot(l.direction, -s->wi);
   if (cos_l <= 0) return false;
   s->pdf = d2 / (l.area * cos_l);
-  s->radiance = area_lamp_radiance(l);
+  s->radiance = area_lamp_radiance(l) * area_spread_factor(l, cos_l);
   s->delta = false;
   return true;
 }
@@ -55,7 +74,7 @@ inline bool area_lamp_sample_emission(const Light& l, Vec2 up, Vec2 ud, Emission
   e->n = l.direction;
   e->pdf_pos = 1 / l.area;
   e->pdf_dir = cosine_hemisphere_pdf(local.z);
-  e->radiance = area_lamp_radiance(l);
+  e->radiance = area_lamp_radiance(l) * area_spread_factor(l, local.z);
   return e->pdf_dir > 0;
 }
 
@@ -75,7 +94,7 @@ inline bool area_lamp_intersect(const Light& l, const Ray& ray, LampHit* hit) {
   if (!inside) return false;
   hit->t = t;
   hit->n = l.direction;
-  hit->radiance = area_lamp_radiance(l);
+  hit->radiance = area_lamp_radiance(l) * area_spread_factor(l, -denom / length(ray.d));
   return true;
 }
 

@@ -27,6 +27,9 @@ struct Light {
   Vec3 axis_u, axis_v;
   AreaShape shape = AreaShape::Rectangle;
   float area = 0;
+  // Area: Cycles 3.4's spread (a soft box's slats): emission times max(0, (1 - tan_spread tan a)
+  // normalize_spread) at angle a off the normal; tan_spread 0: none (area.h).
+  float tan_spread = 0, normalize_spread = 1;
   // Sun: tan of the half angle (0: a delta direction).
   float tan_half_angle = 0, cos_half_angle_sun = 1;
   // Triangle emitters: the instance and primitive.
