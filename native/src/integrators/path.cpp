@@ -209,7 +209,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       if (medium >= 0) {
         // A real collision: beta already holds sigma_s T / pdf (medium.h). Past any limit (a
         // diffuse one too) the path ends here without light, as at a surface (Cycles' volume
-        // shading skips direct light once the path is marked to terminate).
+        // shading of a path marked to terminate has no closures and samples no light: the ray only
+        // attenuates, which ending at a free-flight collision equals in expectation).
         if (is_black(beta) || b.exceeded(s)) break;
         const Phase& phase = scene.media[medium].phase();
         const Vec3 wo = normalize(-ray.d);
