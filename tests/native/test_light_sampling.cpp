@@ -81,6 +81,23 @@ std::vector<LightCase> make_cases() {
                            area_light(Vec3(1, 0.5f, 1.5f), n2, f2.s * 0.3f, f2.t * 0.6f, AreaShape::Ellipse),
                            Vec3(0, 0, 0), 2));
   }
+  // Rectangles sampled by solid angle: a large one seen almost edge-on from close to its plane;
+  // one with a Spread of 60 degrees, sampled only where its light reaches the point; one so small
+  // and far (4e-8 sr) that it is sampled by area.
+  cs.push_back(
+      lamp_case("area_rect_grazing",
+                area_light(Vec3(0, 0, 0.05f), Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 1.2f, 0), AreaShape::Rectangle),
+                Vec3(1.5f, 0.3f, 0), 1));
+  {
+    Light l = area_light(Vec3(0, 0, 1), Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 0.8f, 0), AreaShape::Rectangle);
+    set_area_spread(&l, 60 * kPi / 180);
+    cs.push_back(lamp_case("area_rect_spread", l, Vec3(0.6f, 0.3f, 0), 1.5));
+    cs.back().pole = Vec3(0, 0, 1);
+  }
+  cs.push_back(lamp_case(
+      "area_rect_far",
+      area_light(Vec3(3, -2, 100), Vec3(0, 0, -1), Vec3(0.01f, 0, 0), Vec3(0, 0.01f, 0), AreaShape::Rectangle),
+      Vec3(0, 0, 0), 4));
   // Point and spot lights with a radius: a disk facing the point.
   {
     Light l;

@@ -226,7 +226,7 @@ void Bdpt::emitter_reached(std::vector<PathVertex>& camera, int t, PathVertex* c
   if (is_black(c)) return;
   // Strategy s = 1 would have picked this light from the vertex before (mis_weight).
   const PathVertex& before = camera[t - 2];
-  v.pick_nee = before.type == VertexType::Camera ? 0.0f : lights_.pmf_nee(before.p, nee_normal(before), v.light);
+  v.nee_pick = nee_pick(before, v);
   add(c * mis_weight(camera /*unused light*/, camera, crossed, 0, t, pixel_center_), 0, t, lights_.lightgroup(v.light),
       v.infinite && v.light == lights_.world_light());
 }
@@ -613,7 +613,7 @@ int Bdpt::generate_light_subpath(std::vector<PathVertex>& path) {
   // y1's is the disk's (pdf_light handles it).
   if (y0.infinite) y0.pdf_fwd = pmf * lights_.pdf(scene_, li, Vec3(0.0f), -e.ray.d, INFINITY, time_);
   // Strategy s = 1 would have picked this light from y1 with the light tree (mis_weight).
-  y0.pick_nee = count >= 2 ? lights_.pmf_nee(path[1].p, nee_normal(path[1]), li) : 0.0f;
+  y0.nee_pick = count >= 2 ? nee_pick(path[1], y0) : 0.0f;
   return count;
 }
 
@@ -685,12 +685,12 @@ float Bdpt::mis_weight(std::vector<PathVertex>& light, std::vector<PathVertex>& 
   auto ratio_of = [&](const PathVertex& v, bool from_delta) {
     return v.pdf_rev == 0 && !from_delta ? 0.0 : double(remap0(v.pdf_rev)) / remap0(v.pdf_fwd);
   };
-  // The light endpoint's densities above hold the light subpaths' power pick (pdf_light_origin);
-  // strategy s' = 1 picks it with the light tree from x[1] instead (pick_nee), so its ratio takes
-  // the factor lambda = pick_nee / pick_power, and when s = 1 is the strategy weighed, every
-  // other's takes 1 / lambda.
+  // The light endpoint's densities above hold the light subpaths' power pick and area density
+  // (pdf_light_origin); strategy s' = 1 samples it with the light tree from x[1] and its own
+  // density instead (nee_pick), so its ratio takes the factor lambda = nee_pick / pick_power, and
+  // when s = 1 is the strategy weighed, every other's takes 1 / lambda.
   const float pick_power = light_end.light >= 0 ? lights_.pmf(light_end.light) : 0.0f;
-  const double lambda = pick_power > 0 ? double(light_end.pick_nee) / pick_power : 1.0;
+  const double lambda = pick_power > 0 ? double(light_end.nee_pick) / pick_power : 1.0;
   auto ratio = [&](double r, int s2) { return s == 1 ? r / lambda : (s2 == 1 ? r * lambda : r); };
   // Ray visibility: a strategy whose walk would reach a vertex with a ray kind that does not see it
   // cannot sample the path, nor can any strategy moving further vertices across. The light walk
@@ -745,9 +745,9 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     sampled.light = li;
     sampled.vis = scene_.light_visibility(li);
     connect_group_ = lights_.lightgroup(li);
-    sampled.pick_nee = pmf;
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
+    sampled.nee_pick = pmf * lights_.nee_position_ratio(li, pt.p, sampled.p);
     sampled.n = ls.n;
     sampled.beta = ls.radiance / (pmf * ls.pdf);
     // The shadow terminator offset applies here, where the path tracer's next-event estimation

@@ -141,6 +141,11 @@ class Bdpt {
   // The normal the light tree weighs at a vertex for next-event estimation: the geometric one at
   // surfaces (either side: it does not depend on the walk that reached the vertex), none in media.
   static Vec3 nee_normal(const PathVertex& v) { return v.type == VertexType::Surface ? v.n : Vec3(0.0f); }
+  // PathVertex::nee_pick of light vertex v for next-event estimation from `from` (0 from the camera).
+  float nee_pick(const PathVertex& from, const PathVertex& v) const {
+    if (from.type == VertexType::Camera) return 0;
+    return lights_.pmf_nee(from.p, nee_normal(from), v.light) * lights_.nee_position_ratio(v.light, from.p, v.p);
+  }
   bool is_delta_light(const PathVertex& v) const {
     return v.type == VertexType::Light && lights_.light(v.light).delta();
   }
@@ -272,7 +277,7 @@ class Bdpt {
     v.kind = BounceKind::None;
     v.beta = Spectrum(1.0f);
     v.pdf_fwd = v.pdf_rev = 0;
-    v.pick_nee = 0;
+    v.nee_pick = 0;
     v.vis = kVisAll;
     v.n = Vec3(0.0f);
     return v;

@@ -32,9 +32,10 @@ struct PathVertex {
   Spectrum le{0.0f};    // Surface vertices: the radiance they emit towards their predecessor (s = 0)
   float pdf_fwd = 0;    // density of sampling this vertex from its predecessor
   float pdf_rev = 0;    // density of sampling it from its successor (the other direction)
-  // Light vertices: the probability that next-event estimation from the neighbouring vertex picks
-  // this light (the light tree's; light subpaths pick by power: pdf_fwd).
-  float pick_nee = 0;
+  // Light vertices: next-event estimation's density for this light point from the neighbouring
+  // vertex in units of the light's area density 1/A: the light tree's pick probability x
+  // LightSet::nee_position_ratio (light subpaths pick by power, uniform by area: pdf_fwd).
+  float nee_pick = 0;
   Vec3 p;
   Vec3 n;       // geometric normal (zero for points in space: point lights, camera, media)
   Frame frame;  // shading frame, z facing the side the vertex was reached from

@@ -1,6 +1,10 @@
 // Area lamps, Cycles 3.4: a rectangle or ellipse, one-sided, of radiance P / (4 A) (P: Blender's
-// colour x energy, A: the area), sampled uniformly by area; light subpaths leave it cosine-weighted.
+// colour x energy, A: the area); next-event estimation samples a rectangle by solid angle, an
+// ellipse by area; light subpaths leave it uniform by area, cosine-weighted.
 #pragma once
+
+#include <algorithm>
+#include <cmath>
 
 #include "scene/lights/light.h"
 
@@ -46,24 +50,126 @@ inline Vec3 area_lamp_point(const Light& l, Vec2 u) {
   return l.position + l.axis_u * d.x + l.axis_v * d.y;
 }
 
+// The rectangle next-event estimation samples from p: the lamp, or with a Spread only the part
+// whose light can reach p, the square around the disk of radius (distance to the plane) / tan h
+// clamped to the lamp (Cycles 3.4's light_spread_clamp_area_light). False where none can.
+struct AreaWindow {
+  Vec3 corner, ex, ey;   // ex, ey: unit axes
+  float lx = 0, ly = 0;  // side lengths
+};
+inline bool area_lamp_window(const Light& l, const Vec3& p, AreaWindow* w) {
+  const float hx = length(l.axis_u), hy = length(l.axis_v);
+  if (!(hx > 0 && hy > 0)) return false;
+  w->ex = l.axis_u / hx;
+  w->ey = l.axis_v / hy;
+  float u0 = -hx, u1 = hx, v0 = -hy, v1 = hy;
+  if (l.tan_spread > 0) {
+    const Vec3 d = p - l.position;
+    const float r = dot(d, l.direction) / l.tan_spread, cu = dot(d, w->ex), cv = dot(d, w->ey);
+    u0 = std::max(u0, cu - r), u1 = std::min(u1, cu + r);
+    v0 = std::max(v0, cv - r), v1 = std::min(v1, cv + r);
+    if (!(u0 < u1 && v0 < v1)) return false;
+  }
+  w->corner = l.position + w->ex * u0 + w->ey * v0;
+  w->lx = u1 - u0;
+  w->ly = v1 - v0;
+  return true;
+}
+
+// The solid angle a rectangle subtends from p and what sampling it uniformly needs (Urena, Fajardo
+// and King 2013, "An Area-Preserving Parametrization for Spherical Rectangles", as Cycles 3.4's
+// rect_light_sample), in double: S is a difference of angles near 2 pi.
+struct SphericalRect {
+  double x0, y0, x1, y1, z0, b0, b1, k, solid_angle = 0;
+  Vec3 o, x, y, z;
+};
+inline SphericalRect spherical_rect(const AreaWindow& w, const Vec3& p) {
+  SphericalRect r;
+  r.o = p;
+  r.x = w.ex;
+  r.y = w.ey;
+  r.z = cross(w.ex, w.ey);
+  const Vec3 d = w.corner - p;
+  r.z0 = dot(d, r.z);
+  if (r.z0 > 0) r.z = -r.z, r.z0 = -r.z0;  // z points away from the rectangle
+  r.x0 = dot(d, r.x), r.y0 = dot(d, r.y);
+  r.x1 = r.x0 + w.lx, r.y1 = r.y0 + w.ly;
+  if (!(r.z0 < 0)) return r;  // p in the rectangle's plane: no solid angle
+  // The z components of the normals of the planes through p and each edge (the other components
+  // are zero or follow), and the angles between neighbours.
+  const double zz = r.z0 * r.z0;
+  const double nz[4] = {-r.y0 / std::sqrt(zz + r.y0 * r.y0), r.x1 / std::sqrt(zz + r.x1 * r.x1),
+                        r.y1 / std::sqrt(zz + r.y1 * r.y1), -r.x0 / std::sqrt(zz + r.x0 * r.x0)};
+  auto angle = [](double c) { return std::acos(std::clamp(c, -1.0, 1.0)); };
+  const double g0 = angle(-nz[0] * nz[1]), g1 = angle(-nz[1] * nz[2]), g2 = angle(-nz[2] * nz[3]),
+               g3 = angle(-nz[3] * nz[0]);
+  r.b0 = nz[0];
+  r.b1 = nz[2];
+  r.k = 2 * kPi - g2 - g3;
+  r.solid_angle = g0 + g1 - r.k;
+  return r;
+}
+inline Vec3 spherical_rect_point(const SphericalRect& r, Vec2 u) {
+  const double au = u.x * r.solid_angle + r.k;
+  const double fu = (std::cos(au) * r.b0 - r.b1) / std::sin(au);
+  double cu = std::copysign(1 / std::sqrt(fu * fu + r.b0 * r.b0), fu);
+  cu = std::clamp(cu, -1.0, 1.0);
+  const double xu = std::clamp(-cu * r.z0 / std::max(std::sqrt(1 - cu * cu), 1e-12), r.x0, r.x1);
+  const double dd = std::sqrt(xu * xu + r.z0 * r.z0);
+  const double h0 = r.y0 / std::sqrt(dd * dd + r.y0 * r.y0), h1 = r.y1 / std::sqrt(dd * dd + r.y1 * r.y1);
+  const double hv = h0 + u.y * (h1 - h0), hv2 = hv * hv;
+  const double yv = hv2 < 1 - 1e-12 ? std::clamp(hv * dd / std::sqrt(1 - hv2), r.y0, r.y1) : r.y1;
+  return r.o + r.x * float(xu) + r.y * float(yv) + r.z * float(r.z0);
+}
+
+// Below this solid angle (sr) a rectangle is sampled by area: the spherical parametrisation's
+// angles lose their precision there, and area sampling is as good as uniform in solid angle.
+constexpr double kMinRectSolidAngle = 1e-7;
+
+// Next-event estimation, as Cycles 3.4: a rectangle (its Spread's window) uniform in solid angle,
+// an ellipse uniform by area.
 inline bool area_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample* s) {
-  Vec3 q = area_lamp_point(l, u);
+  if (!(dot(p - l.position, l.direction) > 0)) return false;  // one-sided
+  Vec3 q;
+  float window_area = l.area;
+  double solid_angle = 0;
+  if (l.shape == AreaShape::Rectangle) {
+    AreaWindow w;
+    if (!area_lamp_window(l, p, &w)) return false;
+    const SphericalRect r = spherical_rect(w, p);
+    solid_angle = r.solid_angle;
+    window_area = w.lx * w.ly;
+    q = solid_angle >= kMinRectSolidAngle ? spherical_rect_point(r, u)
+                                          : w.corner + w.ex * (u.x * w.lx) + w.ey * (u.y * w.ly);
+  } else {
+    q = area_lamp_point(l, u);
+  }
   float d2;
   if (!aim_at(p, q, s, &d2)) return false;
   s->n = l.direction;
   s->on_surface = true;
   float cos_l = dot(l.direction, -s->wi);
   if (cos_l <= 0) return false;
-  s->pdf = d2 / (l.area * cos_l);
+  s->pdf = solid_angle >= kMinRectSolidAngle ? float(1 / solid_angle) : d2 / (window_area * cos_l);
   s->radiance = area_lamp_radiance(l) * area_spread_factor(l, cos_l);
   s->delta = false;
   return true;
 }
 
-// Solid-angle density of area_lamp_sample for direction wi, the lamp at distance t.
-inline float area_lamp_pdf(const Light& l, const Vec3& wi, float t) {
+// Solid-angle density of area_lamp_sample at p for direction wi, which meets the lamp at distance t.
+inline float area_lamp_pdf(const Light& l, const Vec3& p, const Vec3& wi, float t) {
   float cos_l = dot(l.direction, -wi);
-  return cos_l > 0 ? t * t / (l.area * cos_l) : 0;
+  if (!(cos_l > 0)) return 0;
+  if (l.shape == AreaShape::Ellipse) return t * t / (l.area * cos_l);
+  AreaWindow w;
+  if (!area_lamp_window(l, p, &w)) return 0;
+  if (l.tan_spread > 0) {  // outside the window: never sampled (and dark)
+    const Vec3 q = p + wi * t - w.corner;
+    const float a = dot(q, w.ex), b = dot(q, w.ey);
+    if (!(a >= 0 && a <= w.lx && b >= 0 && b <= w.ly)) return 0;
+  }
+  const double solid_angle = spherical_rect(w, p).solid_angle;
+  return solid_angle >= kMinRectSolidAngle ? float(1 / solid_angle) : t * t / (w.lx * w.ly * cos_l);
 }
 
 inline bool area_lamp_sample_emission(const Light& l, Vec2 up, Vec2 ud, EmissionSample* e) {

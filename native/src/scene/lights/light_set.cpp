@@ -222,7 +222,7 @@ float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, fl
     case LightType::Spot:
       return point_lamp_pdf(l, p, wi, t);
     case LightType::Area:
-      return area_lamp_pdf(l, wi, t);
+      return area_lamp_pdf(l, p, wi, t);
     case LightType::Sun:
       return sun_pdf(l, wi);
     case LightType::Triangle:
@@ -231,6 +231,16 @@ float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, fl
       return world_pdf(scene.world, wi);
   }
   return 0;
+}
+
+float LightSet::nee_position_ratio(int i, const Vec3& p, const Vec3& q) const {
+  const Light& l = lights_[i];
+  if (l.type != LightType::Area || l.shape != AreaShape::Rectangle) return 1;
+  const Vec3 d = q - p;
+  const float t = length(d);
+  if (!(t > 0)) return 0;
+  const Vec3 wi = d / t;
+  return area_lamp_pdf(l, p, wi, t) * dot(l.direction, -wi) / (t * t) * l.area;
 }
 
 bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, EmissionSample* e, float time) const {
