@@ -182,28 +182,35 @@ std::vector<LightCase> make_cases() {
     c.pole = normalize(Vec3(0.1f, 0.2f, 1));
     cs.push_back(std::move(c));
   }
-  // An emissive triangle (a mesh light).
-  {
-    LightCase c;
-    c.name = "triangle";
-    c.scene = std::make_unique<Scene>();
+  // Emissive triangles (mesh lights): seen from closer to its plane than its longest edge, sampled
+  // by solid angle (facing, and almost edge-on), else by area (far).
+  auto triangle_case = [&](std::string name, Vec3 a, Vec3 b, Vec3 c, Vec3 p, double power) {
+    LightCase lc;
+    lc.name = std::move(name);
+    lc.scene = std::make_unique<Scene>();
     ShaderCode e;
     e.emission(e.one(), {1, 1, 1}, 5);
-    c.scene->materials.push_back(Material(Program(e.code, e.k, e.registers, 0)));
+    lc.scene->materials.push_back(Material(Program(e.code, e.k, e.registers, 0)));
     Mesh m;
-    m.positions = {Vec3(-0.5f, -0.3f, 1.2f), Vec3(0.8f, 0.1f, 1.0f), Vec3(0.1f, 0.9f, 1.6f)};
+    m.positions = {a, b, c};
     m.indices = {0, 1, 2};
-    int mesh = c.scene->geometry.add_mesh(std::move(m), c.scene->warnings);
+    int mesh = lc.scene->geometry.add_mesh(std::move(m), lc.scene->warnings);
     Instance inst;
     inst.mesh = mesh;
     inst.materials = {0};
-    c.scene->geometry.add_instance(inst, c.scene->warnings);
-    c.scene->commit();
-    c.light = c.scene->lights.triangle_light(0, 0);
-    c.pole = normalize(Vec3(0.13f, 0.23f, 1.27f));
-    c.power = 1.5;
-    cs.push_back(std::move(c));
-  }
+    lc.scene->geometry.add_instance(inst, lc.scene->warnings);
+    lc.scene->commit();
+    lc.light = lc.scene->lights.triangle_light(0, 0);
+    lc.p = p;
+    lc.pole = normalize((a + b + c) * (1.0f / 3) - p);
+    lc.power = power;
+    cs.push_back(std::move(lc));
+  };
+  triangle_case("triangle", Vec3(-0.5f, -0.3f, 1.2f), Vec3(0.8f, 0.1f, 1.0f), Vec3(0.1f, 0.9f, 1.6f), Vec3(0.0f), 1.5);
+  triangle_case("triangle_grazing", Vec3(-1, -1, 0.04f), Vec3(2, -0.5f, 0.05f), Vec3(0.5f, 2, 0.06f),
+                Vec3(0.3f, 0.2f, 0), 1);
+  triangle_case("triangle_far", Vec3(-0.5f, -0.3f, 4.2f), Vec3(0.8f, 0.1f, 4.0f), Vec3(0.1f, 0.9f, 4.6f), Vec3(0.0f),
+                3);
   return cs;
 }
 

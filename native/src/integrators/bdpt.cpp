@@ -747,7 +747,7 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
     connect_group_ = lights_.lightgroup(li);
     sampled.infinite = l.infinite();
     sampled.p = sampled.infinite ? pt.p + ls.wi : pt.p + ls.wi * ls.distance;
-    sampled.nee_pick = pmf * lights_.nee_position_ratio(li, pt.p, sampled.p);
+    sampled.nee_pick = pmf * lights_.nee_position_ratio(scene_, li, pt.p, sampled.p, time_);
     sampled.n = ls.n;
     sampled.beta = ls.radiance / (pmf * ls.pdf);
     // The shadow terminator offset applies here, where the path tracer's next-event estimation

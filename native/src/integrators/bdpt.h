@@ -144,7 +144,8 @@ class Bdpt {
   // PathVertex::nee_pick of light vertex v for next-event estimation from `from` (0 from the camera).
   float nee_pick(const PathVertex& from, const PathVertex& v) const {
     if (from.type == VertexType::Camera) return 0;
-    return lights_.pmf_nee(from.p, nee_normal(from), v.light) * lights_.nee_position_ratio(v.light, from.p, v.p);
+    return lights_.pmf_nee(from.p, nee_normal(from), v.light) *
+           lights_.nee_position_ratio(scene_, v.light, from.p, v.p, time_);
   }
   bool is_delta_light(const PathVertex& v) const {
     return v.type == VertexType::Light && lights_.light(v.light).delta();

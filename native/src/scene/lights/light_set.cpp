@@ -226,21 +226,26 @@ float LightSet::pdf(const Scene& scene, int i, const Vec3& p, const Vec3& wi, fl
     case LightType::Sun:
       return sun_pdf(l, wi);
     case LightType::Triangle:
-      return triangle_light_pdf(scene, l, wi, t, time);
+      return triangle_light_pdf(scene, l, p, wi, t, time);
     case LightType::World:
       return world_pdf(scene.world, wi);
   }
   return 0;
 }
 
-float LightSet::nee_position_ratio(int i, const Vec3& p, const Vec3& q) const {
+float LightSet::nee_position_ratio(const Scene& scene, int i, const Vec3& p, const Vec3& q, float time) const {
   const Light& l = lights_[i];
-  if (l.type != LightType::Area || l.shape != AreaShape::Rectangle) return 1;
+  const bool rectangle = l.type == LightType::Area && l.shape == AreaShape::Rectangle;
+  if (!rectangle && l.type != LightType::Triangle) return 1;
   const Vec3 d = q - p;
   const float t = length(d);
   if (!(t > 0)) return 0;
   const Vec3 wi = d / t;
-  return area_lamp_pdf(l, p, wi, t) * dot(l.direction, -wi) / (t * t) * l.area;
+  if (rectangle) return area_lamp_pdf(l, p, wi, t) * dot(l.direction, -wi) / (t * t) * l.area;
+  Vec3 p0, p1, p2;
+  float area;
+  const Vec3 ng = triangle_light_corners(scene, l, time, &p0, &p1, &p2, &area);
+  return triangle_light_pdf(scene, l, p, wi, t, time) * std::abs(dot(ng, wi)) / (t * t) * area;
 }
 
 bool LightSet::sample_emission(const Scene& scene, int i, Vec2 up, Vec2 ud, EmissionSample* e, float time) const {

@@ -60,9 +60,9 @@ class LightSet {
   // for area-like lights the point at distance t along wi.
   float pdf(const Scene& scene, int light, const Vec3& p, const Vec3& wi, float t, float time = 0.5f) const;
   // Next-event estimation's area density for the point q of a finite light seen from p, over the
-  // light subpaths' (uniform by area): 1 but for rectangles, which it samples by solid angle
-  // (BDPT's MIS weighs strategy s = 1 with it).
-  float nee_position_ratio(int light, const Vec3& p, const Vec3& q) const;
+  // light subpaths' (uniform by area): 1 but for rectangles and triangles, which it may sample by
+  // solid angle (BDPT's MIS weighs strategy s = 1 with it).
+  float nee_position_ratio(const Scene& scene, int light, const Vec3& p, const Vec3& q, float time = 0.5f) const;
 
   // Emission sampling for light subpaths, and its densities for a given origin (normal n) and
   // direction. Infinite lights emit from the scene's disk (emit_from_scene_disk).

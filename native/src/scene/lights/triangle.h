@@ -1,6 +1,10 @@
 // Emissive triangles (Cycles' mesh lights): every triangle of an emissive material, two-sided,
-// its radiance the material's emission at the point; sampled uniformly by area.
+// its radiance the material's emission at the point; next-event estimation samples it by solid
+// angle or by area (triangle_light_solid_angle), light subpaths uniformly by area.
 #pragma once
+
+#include <algorithm>
+#include <cmath>
 
 #include "scene/lights/light.h"
 #include "scene/scene.h"
@@ -52,18 +56,96 @@ inline Spectrum triangle_light_radiance(const Scene& scene, const SurfacePoint& 
   return material.emission(ctx, scene.images);
 }
 
+// The triangle (p0, p1, p2) as seen from p on the unit sphere, for sampling it uniformly in solid
+// angle (Arvo 1995, "Stratified Sampling of Spherical Triangles", as Cycles 3.4's
+// triangle_light_sample), in double: the solid angle is a difference of angles near pi.
+struct SphericalTriangle {
+  struct D3 {
+    double x = 0, y = 0, z = 0;
+  };
+  D3 a, b, c;  // unit directions to the corners
+  double alpha = 0, cos_alpha = 1, sin_alpha = 0, cos_ab = 1, solid_angle = 0;
+
+  static D3 d3(const Vec3& v) { return {v.x, v.y, v.z}; }
+  static double dot(const D3& u, const D3& v) { return u.x * v.x + u.y * v.y + u.z * v.z; }
+  static D3 axpy(double s, const D3& u, const D3& v) { return {s * u.x + v.x, s * u.y + v.y, s * u.z + v.z}; }
+  static D3 mul(double s, const D3& u) { return {s * u.x, s * u.y, s * u.z}; }
+  static D3 cross(const D3& u, const D3& v) {
+    return {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+  }
+  static D3 unit(const D3& u) {
+    const double l = std::sqrt(dot(u, u));
+    return l > 0 ? D3{u.x / l, u.y / l, u.z / l} : D3{};
+  }
+  SphericalTriangle(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+    const D3 o = d3(p);
+    a = unit(axpy(-1, o, d3(p0)));
+    b = unit(axpy(-1, o, d3(p1)));
+    c = unit(axpy(-1, o, d3(p2)));
+    // The angle at each corner is the one between the planes through it and its two neighbours.
+    const D3 nab = unit(cross(a, b)), nac = unit(cross(a, c)), nbc = unit(cross(b, c));
+    auto angle = [](double x) { return std::acos(std::clamp(x, -1.0, 1.0)); };
+    cos_alpha = std::clamp(dot(nac, nab), -1.0, 1.0);
+    alpha = angle(cos_alpha);
+    sin_alpha = std::sin(alpha);
+    cos_ab = dot(a, b);
+    solid_angle = std::max(0.0, alpha + angle(-dot(nab, nbc)) + angle(dot(nac, nbc)) - kPi);
+  }
+  // The direction for u in [0, 1)^2: u.x picks the sub-triangle of area u.x * solid_angle, u.y
+  // the point along its edge from b.
+  Vec3 direction(Vec2 u) const {
+    const double phi = u.x * solid_angle - alpha, s = std::sin(phi), t = std::cos(phi);
+    const double uu = t - cos_alpha, vv = s + sin_alpha * cos_ab;
+    const double det = (vv * s + uu * t) * sin_alpha;
+    const double q = det != 0 ? std::clamp(((vv * t - uu * s) * cos_alpha - vv) / det, -1.0, 1.0) : 1.0;
+    const D3 c1 = axpy(q, a, mul(std::sqrt(1 - q * q), unit(axpy(-dot(c, a), a, c))));
+    const double z = 1 - u.y * (1 - dot(c1, b));
+    const D3 d = axpy(z, b, mul(std::sqrt(std::max(0.0, 1 - z * z)), unit(axpy(-dot(c1, b), b, c1))));
+    return Vec3(float(d.x), float(d.y), float(d.z));
+  }
+};
+
+// Below this solid angle (sr) a triangle is sampled by area (the angles lose their precision).
+constexpr double kMinTriangleSolidAngle = 1e-7;
+
+// Cycles 3.4 samples a triangle by solid angle from points closer to its plane than its longest
+// edge (the intent of its test, which divides the distance by twice the area), else by area. The
+// solid angle when the first, else 0.
+inline double triangle_light_solid_angle(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                         const Vec3& ng) {
+  const float edge2 = std::max({length_squared(p1 - p0), length_squared(p2 - p0), length_squared(p2 - p1)});
+  const float plane = dot(ng, p0 - p);
+  if (!(edge2 > plane * plane)) return 0;
+  const double sa = SphericalTriangle(p, p0, p1, p2).solid_angle;
+  return sa >= kMinTriangleSolidAngle ? sa : 0;
+}
+
 inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3& p, Vec2 u, float time,
                                   LightSample* s) {
   Vec3 p0, p1, p2;
   float area;
   Vec3 ng = triangle_light_corners(scene, l, time, &p0, &p1, &p2, &area);
-  Vec2 b = sample_triangle(u);
+  const double solid_angle = triangle_light_solid_angle(p, p0, p1, p2, ng);
+  Vec2 b;
+  if (solid_angle > 0) {
+    // The sampled direction's point on the triangle's plane, and its barycentrics.
+    const Vec3 d = SphericalTriangle(p, p0, p1, p2).direction(u);
+    const float t = dot(ng, p0 - p) / dot(ng, d);
+    if (!(t > 0) || !std::isfinite(t)) return false;
+    const Vec3 e1 = p1 - p0, e2 = p2 - p0, r = p + d * t - p0;
+    const Vec3 c = cross(e1, e2);
+    const float inv = 1 / dot(c, c);
+    b = Vec2{std::clamp(dot(cross(r, e2), c) * inv, 0.0f, 1.0f), std::clamp(dot(cross(e1, r), c) * inv, 0.0f, 1.0f)};
+    if (b.x + b.y > 1) b = Vec2{b.x / (b.x + b.y), b.y / (b.x + b.y)};
+  } else {
+    b = sample_triangle(u);
+  }
   Vec3 q = p0 * (1 - b.x - b.y) + p1 * b.x + p2 * b.y;
   float d2;
   if (!aim_at(p, q, s, &d2)) return false;
   float cos_l = std::abs(dot(ng, s->wi));
   if (!(cos_l > 0)) return false;
-  s->pdf = d2 / (area * cos_l);
+  s->pdf = solid_angle > 0 ? float(1 / solid_angle) : d2 / (area * cos_l);
   s->n = ng;
   s->on_surface = true;
   s->radiance = triangle_light_radiance(scene, triangle_light_surface(scene, l, b, time), -s->wi);
@@ -71,13 +153,16 @@ inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3
   return !is_black(s->radiance);
 }
 
-// Solid-angle density of triangle_light_sample for direction wi, the triangle at distance t.
-inline float triangle_light_pdf(const Scene& scene, const Light& l, const Vec3& wi, float t, float time) {
+// Solid-angle density of triangle_light_sample at p for direction wi, the triangle at distance t.
+inline float triangle_light_pdf(const Scene& scene, const Light& l, const Vec3& p, const Vec3& wi, float t,
+                                float time) {
   Vec3 p0, p1, p2;
   float area;
   Vec3 ng = triangle_light_corners(scene, l, time, &p0, &p1, &p2, &area);
   float cos_l = std::abs(dot(ng, wi));
-  return cos_l > 0 ? t * t / (area * cos_l) : 0;
+  if (!(cos_l > 0)) return 0;
+  const double solid_angle = triangle_light_solid_angle(p, p0, p1, p2, ng);
+  return solid_angle > 0 ? float(1 / solid_angle) : t * t / (area * cos_l);
 }
 
 // Both sides emit: the first half of ud.x picks the side, cosine-weighted directions on it.
