@@ -145,7 +145,15 @@ Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, co
   Chi2Result r;
   Binning bins{o.theta_bins, o.phi_bins, std::max(1.0, o.theta_power), Frame(normalize(o.pole))};
   const int nbins = bins.nt * bins.np;
-  const double n = double(o.samples);
+  // LANTERN_CHI2_SAMPLE_DIVISOR=<d> draws samples / d (at least 10^4): the sanitizer run
+  // (scripts/run_sanitizers.sh) looks for memory errors and undefined behaviour in the same
+  // code, not for the test's full statistical power, which the Release suite keeps.
+  uint64_t samples = o.samples;
+  if (const char* env = o.keep_samples ? nullptr : std::getenv("LANTERN_CHI2_SAMPLE_DIVISOR")) {
+    const uint64_t d = std::max(1ul, std::strtoul(env, nullptr, 10));
+    samples = std::max<uint64_t>(std::min<uint64_t>(samples, 10000), samples / d);
+  }
+  const double n = double(samples);
 
   // 1. Histogram of samples, and the claimed pdf against the pdf adapter.
   std::vector<double> observed(nbins, 0.0);
@@ -154,7 +162,7 @@ Chi2Result chi2_test(const DirectionSampler& sample, const DirectionPdf& pdf, co
   uint32_t seed = o.seed;
   if (const char* env = std::getenv("LANTERN_CHI2_SEED")) seed += uint32_t(std::strtoul(env, nullptr, 10)) * 7919u;
   Sampler rng(seed, 0x9e3779b9u, 0);
-  for (uint64_t k = 0; k < o.samples; ++k) {
+  for (uint64_t k = 0; k < samples; ++k) {
     DirectionSample s;
     if (!sample(rng, &s)) {
       ++r.failures;

@@ -12,7 +12,8 @@
 //      to at most 1 (or to a given value).
 // BSDFs, phase functions and light shapes all test through it with a small adapter each.
 // Seeds are fixed; LANTERN_CHI2_SEED=<k> shifts them all (to check the spread of p-values), and
-// LANTERN_CHI2_DUMP=<dir> writes each test's observed and expected histograms there.
+// LANTERN_CHI2_DUMP=<dir> writes each test's observed and expected histograms there;
+// LANTERN_CHI2_SAMPLE_DIVISOR=<d> draws 1/d of the samples (the sanitizer run).
 #pragma once
 
 #include <cstdint>
@@ -47,6 +48,7 @@ struct Chi2Options {
   Vec3 pole{0, 0, 1};      // bins are laid out around this axis
   double theta_power = 1;  // >= 1; bins concentrate near the pole as it grows
   uint64_t samples = 1000000;
+  bool keep_samples = false;  // ignore LANTERN_CHI2_SAMPLE_DIVISOR (the tester's own power checks)
   uint32_t seed = 1;
   double min_expected = 5;           // pool bins below this expected count
   double significance = 0.01;        // before the Sidak correction

@@ -527,6 +527,7 @@ TEST(Chi2Tester, CanFail) {
   Vec3 wo = from_angles(35, 0);
   Chi2Options o;
   o.name = "wrong_alpha";
+  o.keep_samples = true;           // the power these checks need
   o.pdf_rel_tolerance = INFINITY;  // only the distribution is under test here
   Chi2Result wrong_alpha = test::chi2_test(lobe_sampler(glossy(0.3f), wo), lobe_density(glossy(0.33f), wo), o);
   EXPECT_FALSE(wrong_alpha.chi2_ok) << wrong_alpha.summary;
