@@ -13,6 +13,7 @@
 #include "chi2.h"
 #include "program_builder.h"
 #include "scene/lights/area.h"
+#include "scene/lights/triangle.h"
 #include "scene/scene.h"
 
 namespace lt {
@@ -334,6 +335,51 @@ TEST(AreaSpread, KeepsThePowerAndCutsOffAtHalfTheSpread) {
   EXPECT_EQ(area_spread_factor(none, 0.3f), 1.0f);
   set_area_spread(&none, 0.0f);  // a descriptor that does not say
   EXPECT_EQ(area_spread_factor(none, 0.01f), 1.0f);
+}
+
+}  // namespace
+}  // namespace lt
+
+namespace lt {
+namespace {
+
+// A mesh light whose material emits a constant keeps that radiance in its light, and a light sample
+// returns it without running the program: the same as running it. One whose colour a node decides
+// (Texture Coordinate's Generated) is not constant and runs the program per sample.
+TEST(TriangleLight, ConstantEmissionEqualsRunningTheProgram) {
+  for (bool constant : {true, false}) {
+    ShaderCode e;
+    if (constant) {
+      e.emission(e.one(), {1, 0.5f, 0.25f}, 5);
+    } else {
+      e.emit_color(e.one(), e.tex_coord()[0], 5);
+    }
+    Material m(Program(e.code, e.k, e.registers, 0));
+    Spectrum emitted;
+    ASSERT_EQ(m.constant_emission(&emitted), constant);
+    Scene s;
+    s.materials.push_back(std::move(m));
+    Mesh mesh;
+    mesh.positions = {Vec3(-0.5f, -0.3f, 1.2f), Vec3(0.8f, 0.1f, 1.0f), Vec3(0.1f, 0.9f, 1.6f)};
+    mesh.indices = {0, 1, 2};
+    Instance inst;
+    inst.mesh = s.geometry.add_mesh(std::move(mesh), s.warnings);
+    inst.materials = {0};
+    s.geometry.add_instance(inst, s.warnings);
+    s.commit();
+    const int i = s.lights.triangle_light(0, 0);
+    ASSERT_GE(i, 0);
+    Light run_it = s.lights.light(i);
+    EXPECT_EQ(run_it.constant_emission, constant);
+    run_it.constant_emission = false;
+    for (Vec2 u : {Vec2{0.2f, 0.3f}, Vec2{0.7f, 0.6f}, Vec2{0.5f, 0.05f}}) {
+      LightSample a, b;
+      ASSERT_TRUE(s.lights.sample(s, i, Vec3(0.0f), u, &a));
+      ASSERT_TRUE(triangle_light_sample(s, run_it, Vec3(0.0f), u, 0.5f, &b));
+      for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(a.radiance[c], b.radiance[c]) << constant;
+      if (constant) EXPECT_FLOAT_EQ(a.radiance[1], 2.5f);
+    }
+  }
 }
 
 }  // namespace

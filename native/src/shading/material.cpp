@@ -6,6 +6,8 @@ namespace lt {
 
 Material::Material(Program program) : program_(std::move(program)) {
   emissive_ = program_.emission_estimate(&emission_estimate_);
+  static const std::vector<std::unique_ptr<Image>> kNoImages;  // constant inputs read none
+  constant_emission_ = emissive_ && program_.constant_emission(kNoImages, &constant_emitted_);
 }
 
 Material Material::default_surface() {

@@ -36,6 +36,12 @@ class Material {
     return emissive_ ? program_.run(ctx, images, nullptr, nullptr) : Spectrum(0.0f);
   }
   bool emissive() const { return emissive_; }
+  // Whether it emits the same radiance everywhere (emission closures of constant inputs), and
+  // that radiance: light samples then need no shading point (Cycles' constant emission).
+  bool constant_emission(Spectrum* emitted) const {
+    if (constant_emission_) *emitted = constant_emitted_;
+    return constant_emission_;
+  }
   bool may_be_transparent() const { return program_.may_be_transparent(); }
   bool needs_differentials() const { return program_.needs_differentials(); }
   bool traces_rays() const { return program_.traces_rays(); }
@@ -65,8 +71,9 @@ class Material {
   std::shared_ptr<const Program> displacement_;
   DisplacementMethod displacement_method_ = DisplacementMethod::None;
   float pass_index_ = 0, crypto_id_ = 0;
-  bool emissive_ = false;
+  bool emissive_ = false, constant_emission_ = false;
   float emission_estimate_ = 0;
+  Spectrum constant_emitted_{0.0f};
 };
 
 // A program's shading normal as the integrators use it: on the geometric normal's side (ng faces

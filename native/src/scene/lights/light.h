@@ -32,8 +32,10 @@ struct Light {
   float tan_spread = 0, normalize_spread = 1;
   // Sun: tan of the half angle (0: a delta direction).
   float tan_half_angle = 0, cos_half_angle_sun = 1;
-  // Triangle emitters: the instance and primitive.
+  // Triangle emitters: the instance and primitive, and the material's radiance when constant.
   int instance = -1, primitive = -1;
+  bool constant_emission = false;
+  Spectrum emitted{0.0f};
   unsigned visibility = 31;
   int lightgroup = -1;  // the view layer's light group it belongs to (-1: none)
   // Cycles 3.4 draws a point or spot light with a radius as a disk facing whatever it lights: its

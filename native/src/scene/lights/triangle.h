@@ -24,6 +24,7 @@ inline bool triangle_light(const Geometry& geometry, int instance, int primitive
   l->area = 0.5f * length(cross(p1 - p0, p2 - p0));
   if (!(l->area > 0) || !std::isfinite(l->area)) return false;
   l->power = Spectrum(material.emission_power_estimate() * l->area * kPi);
+  l->constant_emission = material.constant_emission(&l->emitted);
   return true;
 }
 
@@ -77,6 +78,7 @@ struct SphericalTriangle {
     const double l = std::sqrt(dot(u, u));
     return l > 0 ? D3{u.x / l, u.y / l, u.z / l} : D3{};
   }
+  SphericalTriangle() = default;
   SphericalTriangle(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2) {
     const D3 o = d3(p);
     a = unit(axpy(-1, o, d3(p0)));
@@ -110,14 +112,15 @@ constexpr double kMinTriangleSolidAngle = 1e-7;
 
 // Cycles 3.4 samples a triangle by solid angle from points closer to its plane than its longest
 // edge (the intent of its test, which divides the distance by twice the area), else by area. The
-// solid angle when the first, else 0.
-inline double triangle_light_solid_angle(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2,
-                                         const Vec3& ng) {
+// solid angle when the first (and the spherical triangle in *st), else 0.
+inline double triangle_light_solid_angle(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& ng,
+                                         SphericalTriangle* st = nullptr) {
   const float edge2 = std::max({length_squared(p1 - p0), length_squared(p2 - p0), length_squared(p2 - p1)});
   const float plane = dot(ng, p0 - p);
   if (!(edge2 > plane * plane)) return 0;
-  const double sa = SphericalTriangle(p, p0, p1, p2).solid_angle;
-  return sa >= kMinTriangleSolidAngle ? sa : 0;
+  const SphericalTriangle t(p, p0, p1, p2);
+  if (st) *st = t;
+  return t.solid_angle >= kMinTriangleSolidAngle ? t.solid_angle : 0;
 }
 
 inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3& p, Vec2 u, float time,
@@ -125,11 +128,12 @@ inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3
   Vec3 p0, p1, p2;
   float area;
   Vec3 ng = triangle_light_corners(scene, l, time, &p0, &p1, &p2, &area);
-  const double solid_angle = triangle_light_solid_angle(p, p0, p1, p2, ng);
+  SphericalTriangle st;
+  const double solid_angle = triangle_light_solid_angle(p, p0, p1, p2, ng, &st);
   Vec2 b;
   if (solid_angle > 0) {
     // The sampled direction's point on the triangle's plane, and its barycentrics.
-    const Vec3 d = SphericalTriangle(p, p0, p1, p2).direction(u);
+    const Vec3 d = st.direction(u);
     const float t = dot(ng, p0 - p) / dot(ng, d);
     if (!(t > 0) || !std::isfinite(t)) return false;
     const Vec3 e1 = p1 - p0, e2 = p2 - p0, r = p + d * t - p0;
@@ -148,7 +152,8 @@ inline bool triangle_light_sample(const Scene& scene, const Light& l, const Vec3
   s->pdf = solid_angle > 0 ? float(1 / solid_angle) : d2 / (area * cos_l);
   s->n = ng;
   s->on_surface = true;
-  s->radiance = triangle_light_radiance(scene, triangle_light_surface(scene, l, b, time), -s->wi);
+  s->radiance = l.constant_emission ? l.emitted
+                                    : triangle_light_radiance(scene, triangle_light_surface(scene, l, b, time), -s->wi);
   s->delta = false;
   return !is_black(s->radiance);
 }
