@@ -126,8 +126,19 @@ inline Vec3 spherical_rect_point(const SphericalRect& r, Vec2 u) {
 // angles lose their precision there, and area sampling is as good as uniform in solid angle.
 constexpr double kMinRectSolidAngle = 1e-7;
 
-// Next-event estimation, as Cycles 3.4: a rectangle (its Spread's window) uniform in solid angle,
-// an ellipse uniform by area.
+// The solid angle of window w from p when next-event estimation samples it by solid angle, else 0:
+// from points closer to the lamp's plane than the window's longer side, as for triangles (further
+// away cos / d^2 hardly varies over it, and area sampling costs no inverse cosines: on cornell_area
+// always by solid angle cost 14 % more CPU per sample for 6 % less variance).
+inline double area_window_solid_angle(const Light& l, const AreaWindow& w, const Vec3& p, SphericalRect* r) {
+  const float side = std::max(w.lx, w.ly), plane = dot(p - l.position, l.direction);
+  if (!(plane < side)) return 0;
+  *r = spherical_rect(w, p);
+  return r->solid_angle >= kMinRectSolidAngle ? r->solid_angle : 0;
+}
+
+// Next-event estimation: a rectangle (its Spread's window) uniform in solid angle from nearby
+// (area_window_solid_angle; Cycles 3.4 from everywhere), else by area, an ellipse by area.
 inline bool area_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample* s) {
   if (!(dot(p - l.position, l.direction) > 0)) return false;  // one-sided
   Vec3 q;
@@ -136,11 +147,10 @@ inline bool area_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample*
   if (l.shape == AreaShape::Rectangle) {
     AreaWindow w;
     if (!area_lamp_window(l, p, &w)) return false;
-    const SphericalRect r = spherical_rect(w, p);
-    solid_angle = r.solid_angle;
+    SphericalRect r;
+    solid_angle = area_window_solid_angle(l, w, p, &r);
     window_area = w.lx * w.ly;
-    q = solid_angle >= kMinRectSolidAngle ? spherical_rect_point(r, u)
-                                          : w.corner + w.ex * (u.x * w.lx) + w.ey * (u.y * w.ly);
+    q = solid_angle > 0 ? spherical_rect_point(r, u) : w.corner + w.ex * (u.x * w.lx) + w.ey * (u.y * w.ly);
   } else {
     q = area_lamp_point(l, u);
   }
@@ -150,7 +160,7 @@ inline bool area_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample*
   s->on_surface = true;
   float cos_l = dot(l.direction, -s->wi);
   if (cos_l <= 0) return false;
-  s->pdf = solid_angle >= kMinRectSolidAngle ? float(1 / solid_angle) : d2 / (window_area * cos_l);
+  s->pdf = solid_angle > 0 ? float(1 / solid_angle) : d2 / (window_area * cos_l);
   s->radiance = area_lamp_radiance(l) * area_spread_factor(l, cos_l);
   s->delta = false;
   return true;
@@ -168,8 +178,9 @@ inline float area_lamp_pdf(const Light& l, const Vec3& p, const Vec3& wi, float 
     const float a = dot(q, w.ex), b = dot(q, w.ey);
     if (!(a >= 0 && a <= w.lx && b >= 0 && b <= w.ly)) return 0;
   }
-  const double solid_angle = spherical_rect(w, p).solid_angle;
-  return solid_angle >= kMinRectSolidAngle ? float(1 / solid_angle) : t * t / (w.lx * w.ly * cos_l);
+  SphericalRect r;
+  const double solid_angle = area_window_solid_angle(l, w, p, &r);
+  return solid_angle > 0 ? float(1 / solid_angle) : t * t / (w.lx * w.ly * cos_l);
 }
 
 inline bool area_lamp_sample_emission(const Light& l, Vec2 up, Vec2 ud, EmissionSample* e) {
