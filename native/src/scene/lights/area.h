@@ -1,6 +1,7 @@
 // Area lamps, Cycles 3.4: a rectangle or ellipse, one-sided, of radiance P / (4 A) (P: Blender's
-// colour x energy, A: the area); next-event estimation samples a rectangle by solid angle, an
-// ellipse by area; light subpaths leave it uniform by area, cosine-weighted.
+// colour x energy, A: the area); next-event estimation samples a rectangle by solid angle from
+// nearby (area_window_solid_angle), else and an ellipse by area; light subpaths leave it uniform by
+// area, cosine-weighted.
 #pragma once
 
 #include <algorithm>
