@@ -16,7 +16,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 20
+ABI_VERSION = 21
 
 # lt_status
 OK = 0
@@ -484,8 +484,8 @@ def _declare(lib, layout=True):
         "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int, c_int], c_int),
         "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc), c_int], c_int),
         "lt_scene_set_volume_grid_lightgroup": ([scene_p, c_int, c_int], c_int),
-        "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, ctypes.c_float, P(VolumeDesc),
-                                      c_int, P(c_int)], c_int),
+        "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, ctypes.c_float,
+                                      ctypes.c_float, ctypes.c_float, P(VolumeDesc), c_int, P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
         "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
         "lt_scene_set_material": ([scene_p, c_int, P(ShaderProgram)], c_int),
@@ -1023,14 +1023,17 @@ class Scene:
         arr, n = self._volume_descs(components)
         _check(self._lib.lt_scene_set_world_volume(self.handle, arr, n), "lt_scene_set_world_volume")
 
-    def add_volume_grid(self, path, grid, transform, components, step=0.0, lightgroup=0):
+    def add_volume_grid(self, path, grid, transform, components, step=0.0, clipping=0.001, face_offset=0.0,
+                        lightgroup=0):
         """A Volume object's .vdb grid (step: ray-marching step in world units, 0 for the voxel
-        size; lightgroup: its emission's, 0 none, k the light group k - 1); raises LanternError
-        (LT_ERROR_IO) with the core's message."""
+        size; clipping: the Volume's Render > Clipping, and face_offset: Cycles' shift of its volume
+        mesh, which shape the region its emission fills; lightgroup: its emission's, 0 none, k the
+        light group k - 1); raises LanternError (LT_ERROR_IO) with the core's message."""
         arr, n = self._volume_descs(components)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_volume_grid(self.handle, os.fsencode(path), grid.encode("utf-8"),
-                                                   _transform(transform), float(step), arr, n,
+                                                   _transform(transform), float(step), float(clipping),
+                                                   float(face_offset), arr, n,
                                                    ctypes.byref(out)),
                "lt_scene_add_volume_grid")
         if lightgroup:

@@ -66,7 +66,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   d.density = 1;
   d.absorption_color[0] = d.absorption_color[1] = d.absorption_color[2] = 0.5f;
   int id = -1;
-  const int status = lt_scene_add_volume_grid(scene, g_path.c_str(), "density", identity, 0, &d, 1, &id);
+  const int status = lt_scene_add_volume_grid(scene, g_path.c_str(), "density", identity, 0, 0.001f, 0.0f, &d, 1, &id);
   if (status != LT_OK && status != LT_ERROR_IO && status != LT_ERROR_OUT_OF_MEMORY) fail("unexpected status");
   if (status != LT_OK && !*lt_last_error()) fail("status without a message");
   if (status == LT_OK) {

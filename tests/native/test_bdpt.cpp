@@ -359,7 +359,7 @@ TEST(Bdpt, AgreesWithVolumetricPathTracingInAGrid) {
     Xform xf = identity();
     int id = -1;
     ASSERT_EQ(lt_scene_add_volume_grid(s.get(), (std::string(LANTERN_TEST_VDB_DIR) + "/density.vdb").c_str(), "density",
-                                       xf.data(), 0, &d, 1, &id),
+                                       xf.data(), 0, 0.001f, 0.0f, &d, 1, &id),
               LT_OK)
         << lt_last_error();
     if (alone) {

@@ -135,7 +135,8 @@ TEST(FuzzRegressions, VdbTileAtTheEdgeOfTheIndexSpace) {
   const float identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
   lt_volume_desc d = lt_test::volume(LT_VOLUME_SCATTER, 1);
   int id = -1;
-  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), path.c_str(), "density", identity, 0, &d, 1, &id), LT_ERROR_IO);
+  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), path.c_str(), "density", identity, 0, 0.001f, 0.0f, &d, 1, &id),
+            LT_ERROR_IO);
   EXPECT_NE(std::string(lt_last_error()).find("beyond the supported index range"), std::string::npos)
       << lt_last_error();
 }

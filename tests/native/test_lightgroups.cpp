@@ -198,7 +198,7 @@ ScenePtr emissive_grid_scene(int grid_group) {
   Xform xf = identity();
   int id = -1;
   check(lt_scene_add_volume_grid(s.get(), (std::string(LANTERN_TEST_VDB_DIR) + "/fire.vdb").c_str(), "density",
-                                 xf.data(), 0, &fire, 1, &id),
+                                 xf.data(), 0, 0.001f, 0.0f, &fire, 1, &id),
         "lt_scene_add_volume_grid");
   check(lt_scene_set_volume_grid_lightgroup(s.get(), id, grid_group), "lt_scene_set_volume_grid_lightgroup");
   lt_volume_desc c[2] = {volume(LT_VOLUME_ABSORPTION, 0.2f), volume(LT_VOLUME_EMISSION, 0.0f)};

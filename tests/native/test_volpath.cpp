@@ -254,7 +254,9 @@ TEST(VolPath, VdbVolumeThroughTheAbi) {
     lt_volume_desc d = volume(LT_VOLUME_PRINCIPLED, 5, 1);
     Xform xf = identity();
     int id = -1;
-    ASSERT_EQ(lt_scene_add_volume_grid(s.get(), vdb("density.vdb").c_str(), "density", xf.data(), 0, &d, 1, &id), LT_OK)
+    ASSERT_EQ(lt_scene_add_volume_grid(s.get(), vdb("density.vdb").c_str(), "density", xf.data(), 0, 0.001f, 0.0f, &d,
+                                       1, &id),
+              LT_OK)
         << lt_last_error();
     EXPECT_GE(id, 0);
     set_world(s.get(), {1, 1, 1}, 1);
@@ -291,8 +293,9 @@ TEST(VolPath, VdbErrorsThroughTheAbi) {
   for (const Case& c : cases) {
     ScenePtr s = new_scene();
     int id = -1;
-    EXPECT_EQ(lt_scene_add_volume_grid(s.get(), vdb(c.file).c_str(), c.grid.c_str(), xf.data(), 0, &d, 1, &id),
-              LT_ERROR_IO)
+    EXPECT_EQ(
+        lt_scene_add_volume_grid(s.get(), vdb(c.file).c_str(), c.grid.c_str(), xf.data(), 0, 0.001f, 0.0f, &d, 1, &id),
+        LT_ERROR_IO)
         << c.file;
     std::string msg = lt_last_error();
     EXPECT_NE(msg.find(c.expect), std::string::npos) << c.file << ": " << msg;
@@ -302,7 +305,8 @@ TEST(VolPath, VdbErrorsThroughTheAbi) {
   int id;
   lt_volume_desc bad = d;
   bad.node = 7;
-  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), vdb("density.vdb").c_str(), "density", xf.data(), 0, &bad, 1, &id),
+  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), vdb("density.vdb").c_str(), "density", xf.data(), 0, 0.001f, 0.0f, &bad,
+                                     1, &id),
             LT_ERROR_INVALID_ARGUMENT);
   EXPECT_EQ(lt_scene_set_material_volume(s.get(), 3, &d, 1, 1), LT_ERROR_INVALID_ARGUMENT);
   bad = d;

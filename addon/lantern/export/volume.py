@@ -5,6 +5,7 @@ from mathutils import Matrix, Vector
 
 from .. import core
 from .material import emissive_nodes, follow
+from .nodes.attributes import hash_string, hash_uint
 
 # Cycles' default volume shader for a Volume object without material: Principled Volume defaults.
 _DEFAULT = dict(node=core.VOLUME_PRINCIPLED, color=(0.5, 0.5, 0.5), density=1.0,
@@ -149,7 +150,11 @@ def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0):
                          blackbody_tint=tuple(v / stretch for v in c.get("blackbody_tint", (1.0, 1.0, 1.0))))
                     for c in desc]
     try:
-        core_scene.add_volume_grid(path, grid_name, matrix, desc, step=step, lightgroup=lightgroup)
+        # Cycles moves each volume mesh by 0.1 x a hash of the datablock's name over the voxels across
+        # it (scene/volume.cpp, face_overlap_avoidance; the geometry's name is its data's).
+        face_offset = 0.1 * hash_uint(hash_string(volume.name)) / 0xFFFFFFFF
+        core_scene.add_volume_grid(path, grid_name, matrix, desc, step=step, clipping=render.clipping,
+                                   face_offset=face_offset, lightgroup=lightgroup)
     except core.LanternError as e:
         report({'WARNING'}, "Volume '%s' left out: %s" % (obj.name, e.detail))
         return 0, False

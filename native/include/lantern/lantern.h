@@ -53,8 +53,9 @@ extern "C" {
  * the Equiangular Cubemap Face panorama; lt_instance_desc's shadow terminator offsets;
  * lt_render_settings.denoise_start_sample: the viewport's denoising); 19: emission of Volume
  * objects and World volumes (lt_volume_desc's grid names, lt_scene_set_volume_grid_lightgroup);
- * 20: area lights' spread (lt_light_desc.spread). */
-#define LT_ABI_VERSION 20
+ * 20: area lights' spread (lt_light_desc.spread); 21: lt_scene_add_volume_grid's clipping (a Volume
+ * object's emission confined to Cycles' volume mesh). */
+#define LT_ABI_VERSION 21
 
 enum lt_status {
   LT_OK = 0,
@@ -478,10 +479,19 @@ LT_API int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* comp
  * the emission), placed by `transform` (object to world, row-major 3x4) after the grid's own
  * index-to-object transform. `step`: its ray-marching step in world units (0: the grid's smallest
  * world-space voxel edge); a render's volume_step > 0 overrides it. The medium is bounded by the
- * grid; no geometry. Errors: LT_ERROR_IO with the message (missing, unreadable or corrupt file; no
- * such grid, listing those present; a grid that is empty or not a float grid). */
+ * grid; no geometry. Its emission is confined, as Cycles 3.4's, to the region its volume mesh
+ * encloses: the 8^3-voxel leaves holding active voxels of the density and emission grids whose
+ * |value| >= `clipping` (Blender's Volume Render > Clipping, 0.001 by default) or a face neighbour
+ * of one (so a constant Emission Strength fills those leaves, not the grids' bounding box), moved
+ * in object space by face_offset / n along each axis, n the voxels across those active voxels'
+ * bounding box on that axis (Cycles' face_overlap_avoidance: face_offset = 0.1 x hash_uint_to_float(
+ * hash_string(the Volume datablock's name))). Errors: LT_ERROR_IO with the message (missing,
+ * unreadable or corrupt file; no such grid, listing those present; a grid that is empty or not a
+ * float grid); LT_ERROR_INVALID_ARGUMENT for a negative or non-finite step or clipping, or a
+ * non-finite face_offset. */
 LT_API int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12],
-                                    float step, const lt_volume_desc* components, int count, int* out_id);
+                                    float step, float clipping, float face_offset, const lt_volume_desc* components,
+                                    int count, int* out_id);
 /* The light group of a Volume object's emission (out_id of lt_scene_add_volume_grid): 0 none, k > 0
  * light group k - 1 (lt_instance_desc.lightgroup). */
 LT_API int lt_scene_set_volume_grid_lightgroup(lt_scene* scene, int volume, int lightgroup);

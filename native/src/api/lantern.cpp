@@ -874,7 +874,7 @@ int lt_scene_set_world_volume(lt_scene* scene, const lt_volume_desc* d, int coun
 }
 
 int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid, const float transform[12], float step,
-                             const lt_volume_desc* d, int count, int* out_id) {
+                             float clipping, float face_offset, const lt_volume_desc* d, int count, int* out_id) {
   return guarded([&] {
     require(scene && path && transform && d && out_id, "lt_scene_add_volume_grid: NULL argument");
     scene->scene.require_editable();
@@ -882,6 +882,8 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
     lt::Transform xf = to_transform(transform, "volume");
     require(std::abs(xf.determinant()) > 1e-30f, "volume transform is singular");
     require(std::isfinite(step) && step >= 0, "volume step must be finite and >= 0 (0: the voxel size)");
+    require(std::isfinite(clipping) && clipping >= 0, "volume clipping must be finite and >= 0");
+    require(std::isfinite(face_offset), "volume face offset must be finite");
     std::vector<std::string> emission_grids;
     const std::vector<lt::EmissionComponent> emission = grid_emission_components(d, count, &emission_grids);
     std::vector<std::string> names{grid && *grid ? grid : "density"};  // the density, then the emission's
@@ -892,10 +894,23 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
       std::vector<std::shared_ptr<const lt::GridData>> grids;
       for (lt::GridData& g : loaded) grids.push_back(std::make_shared<lt::GridData>(std::move(g)));
       medium = lt::Medium::heterogeneous(grids[0], c.sigma_a, c.sigma_s, c.phase.g[0], xf);
-      if (!emission.empty())
-        medium.set_grid_emission(std::make_shared<lt::GridEmission>(
+      if (!emission.empty()) {
+        auto e = std::make_shared<lt::GridEmission>(
             std::vector<std::shared_ptr<const lt::GridData>>(grids.begin() + 1, grids.end()), emission,
-            grids[0]->index_to_object));
+            grids[0]->index_to_object);
+        // Cycles' volume mesh: the leaves of every grid the shader reads, in the density's space.
+        lt::LeafRegion region;
+        const lt::Transform object_to_density = lt::affine_inverse(grids[0]->index_to_object);
+        for (const auto& g : grids) region.add_grid(*g, clipping, lt::compose(object_to_density, g->index_to_object));
+        region.finish();
+        int64_t span[3];
+        if (face_offset != 0 && region.voxel_span(span)) {
+          const lt::Vec3 o(face_offset / float(span[0]), face_offset / float(span[1]), face_offset / float(span[2]));
+          region.set_shift(object_to_density.vector(o));
+        }
+        e->set_region(std::move(region));
+        medium.set_grid_emission(std::move(e));
+      }
     } catch (const lt::InvalidArgument& e) {
       throw lt::IoError(std::string(path) + ": " + e.what());  // a file that cannot be used is an I/O error
     }

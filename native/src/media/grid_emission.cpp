@@ -36,7 +36,7 @@ GridEmission::GridEmission(std::vector<std::shared_ptr<const GridData>> grids,
 size_t GridEmission::memory_bytes() const {
   size_t n = 0;
   for (const auto& g : grids_) n += g->memory_bytes();
-  return n;
+  return n + region_.memory_bytes();
 }
 
 GridEmission::Lookup::Lookup(const GridEmission& e) : e_(&e) {
@@ -47,6 +47,7 @@ GridEmission::Lookup::Lookup(const GridEmission& e) : e_(&e) {
 GridEmission::Lookup::~Lookup() = default;
 
 Spectrum GridEmission::Lookup::operator()(const Vec3& q) {
+  if (e_->has_region_ && !e_->region_.contains(q)) return Spectrum(0.0f);
   float v[kMaxGrids];
   for (size_t g = 0; g < samplers_.size(); ++g) v[g] = samplers_[g](e_->same_space_[g] ? q : e_->to_grid_[g].point(q));
   auto param = [&](const EmissionParam& p) { return p.grid < 0 ? p.value : p.value * v[p.grid]; };

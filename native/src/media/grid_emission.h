@@ -6,10 +6,12 @@
 #pragma once
 
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "core/math.h"
 #include "media/density_grid.h"
+#include "media/leaf_region.h"
 
 namespace lt {
 
@@ -41,8 +43,16 @@ class GridEmission {
   GridEmission(std::vector<std::shared_ptr<const GridData>> grids, std::vector<EmissionComponent> components,
                const Transform& density_index_to_object);
 
-  // Emission per unit length at density index-space points; holds the grids' accessors, so one
-  // per thread and estimator call.
+  // Confines the emission to `r` (finished, in the density's index space): Cycles' volume mesh
+  // (media/leaf_region.h). Without it the emission reaches wherever the medium's domain does.
+  void set_region(LeafRegion r) {
+    region_ = std::move(r);
+    has_region_ = true;
+  }
+  const LeafRegion* region() const { return has_region_ ? &region_ : nullptr; }
+
+  // Emission per unit length at density index-space points (0 outside the region); holds the
+  // grids' accessors, so one per thread and estimator call.
   class Lookup {
    public:
     explicit Lookup(const GridEmission& e);
@@ -63,6 +73,8 @@ class GridEmission {
   std::vector<EmissionComponent> components_;
   std::vector<Transform> to_grid_;   // density index -> grid index
   std::vector<uint8_t> same_space_;  // to_grid_ is the identity
+  LeafRegion region_;
+  bool has_region_ = false;
 };
 
 }  // namespace lt

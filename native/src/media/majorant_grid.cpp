@@ -47,13 +47,18 @@ void MajorantGrid::for_cells(const int a[3], const int b[3], F&& f) {
       for (int x = c0[0]; x <= c1[0]; ++x) f(index(x, y, z), int64_t(overlap(0, x)) * overlap(1, y) * overlap(2, z));
 }
 
-MajorantGrid MajorantGrid::build(const GridData& grid, int cell) {
-  if (grid.empty()) return MajorantGrid();
+MajorantGrid MajorantGrid::build(const GridData& grid, int cell, const int* cover_lo, const int* cover_hi) {
+  const bool cover = cover_lo && cover_hi;
+  if (grid.empty() && !cover) return MajorantGrid();
   // The interpolated density can be non-zero only within one voxel of the non-background voxels.
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {  // clamped: a corrupt VDB may reach the int32 limits (fuzz_vdb)
-    lo[a] = int(std::max<int64_t>(int64_t(grid.index_min[a]) - 1, INT32_MIN));
-    hi[a] = int(std::min<int64_t>(int64_t(grid.index_max[a]) + 1, INT32_MAX));
+    lo[a] = grid.empty() ? INT32_MAX : int(std::max<int64_t>(int64_t(grid.index_min[a]) - 1, INT32_MIN));
+    hi[a] = grid.empty() ? INT32_MIN : int(std::min<int64_t>(int64_t(grid.index_max[a]) + 1, INT32_MAX));
+    if (cover) {
+      lo[a] = std::min(lo[a], cover_lo[a]);
+      hi[a] = std::max(hi[a], cover_hi[a]);
+    }
   }
   MajorantGrid maj(lo, hi, cell);
   if (grid.is_nanovdb()) {

@@ -44,8 +44,11 @@ class MajorantGrid {
   // voxel (the interpolation's reach), each cell the maximum of the stored values (NanoVDB: every
   // voxel and tile, active or not, and the background) over its footprint, and their minimum
   // (clamped >= 0) as the lower bound, in the same pass. An empty grid gives an invalid grid (no
-  // cells).
-  static MajorantGrid build(const GridData& grid, int cell);
+  // cells). cover_lo, cover_hi (optional): an index box the domain covers as well (a Volume
+  // object's emission reaching past its density: media/leaf_region.h); the density there is the
+  // grid's, usually 0.
+  static MajorantGrid build(const GridData& grid, int cell, const int* cover_lo = nullptr,
+                            const int* cover_hi = nullptr);
 
   // Raises to v the bound of every cell whose footprint contains a voxel of the inclusive index
   // box [a, b] (a voxel value, or a tile of equal values); voxels outside [lo, hi] are ignored.

@@ -163,6 +163,7 @@ Medium::Medium(const Medium& o)
       majorant_(o.majorant_),
       voxel_size_(o.voxel_size_),
       march_step_(o.march_step_),
+      majorant_cell_(o.majorant_cell_),
       capped_(o.capped_.load()) {}
 
 Medium& Medium::operator=(const Medium& o) {
@@ -179,6 +180,7 @@ Medium& Medium::operator=(const Medium& o) {
   majorant_ = o.majorant_;
   voxel_size_ = o.voxel_size_;
   march_step_ = o.march_step_;
+  majorant_cell_ = o.majorant_cell_;
   capped_.store(o.capped_.load());
   return *this;
 }
@@ -195,6 +197,13 @@ void Medium::set_grid_emission(std::shared_ptr<const GridEmission> e) {
   if (!grid_) throw InvalidArgument("grid emission is supported for heterogeneous media only");
   grid_emission_ = std::move(e);
   emissive_ = grid_emission_ != nullptr;
+  // An emission region reaching past the density's domain widens the domain (Cycles shades the
+  // whole volume mesh: media/leaf_region.h); the density is the grid's there.
+  int lo[3], hi[3];
+  if (!grid_emission_ || !grid_emission_->region() || !grid_emission_->region()->bounds(lo, hi)) return;
+  bool inside = majorant_.valid();
+  for (int a = 0; a < 3 && inside; ++a) inside = lo[a] >= majorant_.lo()[a] && hi[a] <= majorant_.hi()[a];
+  if (!inside) majorant_ = MajorantGrid::build(*grid_, majorant_cell_, lo, hi);
 }
 
 Spectrum Medium::emission_at(const Vec3& p) const {
@@ -237,6 +246,7 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
   m.voxel_size_ =
       std::min({length(index_to_world.column(0)), length(index_to_world.column(1)), length(index_to_world.column(2))});
   m.march_step_ = m.voxel_size_;
+  m.majorant_cell_ = majorant_cell;
   m.majorant_ = MajorantGrid::build(*grid, majorant_cell);
   m.empty_ = grid->empty() || is_black(sigma_a + sigma_s) || !(m.majorant_.max_value() > 0);
   return m;

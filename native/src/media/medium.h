@@ -106,8 +106,9 @@ class Medium {
   const Spectrum& emission() const { return emission_; }
   bool emissive() const { return emissive_; }
   // A heterogeneous medium's emission read from grids (a Volume object's; media/grid_emission.h),
-  // evaluated per lookup inside the density grid's domain (zero outside it). Throws
-  // InvalidArgument for a homogeneous medium.
+  // evaluated per lookup inside the domain (zero outside it); an emission with a region
+  // (GridEmission::set_region) widens the domain to hold it. Throws InvalidArgument for a
+  // homogeneous medium.
   void set_grid_emission(std::shared_ptr<const GridEmission> e);
   const GridEmission* grid_emission() const { return grid_emission_.get(); }
   // Emission per unit length at a world point (exact lookups; for tests and quadrature).
@@ -158,6 +159,7 @@ class Medium {
   Transform world_to_index_;
   MajorantGrid majorant_;
   float voxel_size_ = 0, march_step_ = 0;
+  int majorant_cell_ = kDefaultMajorantCell;
   mutable std::atomic<uint64_t> capped_{0};
 };
 

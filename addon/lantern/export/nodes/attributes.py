@@ -108,11 +108,8 @@ def _rot(x, k):
     return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
 
 
-def hash_uint2(kx, ky):
-    """Bob Jenkins' lookup3 final mix of two words, as Cycles' hash_uint2."""
-    a = b = c = (0xdeadbeef + (2 << 2) + 13) & 0xFFFFFFFF
-    b = (b + ky) & 0xFFFFFFFF
-    a = (a + kx) & 0xFFFFFFFF
+def _lookup3_final(a, b, c):
+    """Bob Jenkins' lookup3 final mix (Cycles' final())."""
     c ^= b
     c = (c - _rot(b, 14)) & 0xFFFFFFFF
     a ^= c
@@ -128,6 +125,18 @@ def hash_uint2(kx, ky):
     c ^= b
     c = (c - _rot(b, 24)) & 0xFFFFFFFF
     return c
+
+
+def hash_uint(kx):
+    """Cycles' hash_uint: lookup3's final mix of one word."""
+    a = b = c = (0xdeadbeef + (1 << 2) + 13) & 0xFFFFFFFF
+    return _lookup3_final((a + kx) & 0xFFFFFFFF, b, c)
+
+
+def hash_uint2(kx, ky):
+    """Cycles' hash_uint2: lookup3's final mix of two words."""
+    a = b = c = (0xdeadbeef + (2 << 2) + 13) & 0xFFFFFFFF
+    return _lookup3_final((a + kx) & 0xFFFFFFFF, (b + ky) & 0xFFFFFFFF, c)
 
 
 def hash_string(s):
