@@ -59,7 +59,7 @@ if [[ " $STEPS " == *" asan "* ]]; then
   SLOW+=":Bdpt.ImageDoesNotDependOnSceneScale:Bdpt.LightTracingStartsAtTheNearClipInAWorldVolume"
   SLOW+=":Bdpt.LampsInFrostedGlobesAgreeWithPathTracing:Denoise.LowersTheErrorAgainstAReference"
   SLOW+=":ShadowCatcher.BidirectionalAgreesWithPathTracing:Denoise.KeepsTheMeanWithinTheNoiseAtFullSize"
-  SLOW+=":VolPath.MediumOfAnOpaqueBoundaryIsEnteredOnce"
+  SLOW+=":VolPath.MediumOfAnOpaqueBoundaryIsEnteredOnce:Denoise.KeepsTheMeanWithinTheNoiseAtManySamples"
   # The chi-square tests draw a tenth of their samples here (tests/native/chi2.h): the same code
   # runs, the Release suite keeps their statistical power.
   pids=()

@@ -167,6 +167,7 @@ struct Scratch {
   // rows (the weight, the weight times each difference) and colours; [offset][dimension][lane].
   std::vector<float> gx, gw[2], gy[2];
   std::vector<float> coef[2][kDims * 3];  // each half's fit per pixel: coefficient d, channel c at d*3+c
+  std::vector<float> inv_wsum[2];         // each half's pixel: 1 / its weights' sum over its window
 };
 
 // The packed index of the symmetric normal matrix's entry (a, b), a <= b (the order in which the
@@ -290,6 +291,7 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
     for (auto& a : s.acc[g]) a.resize(kTile);
     for (auto& a : s.rhs[g]) a.resize(kTile);
     for (auto& a : s.coef[g]) a.resize(tn);
+    s.inv_wsum[g].resize(tn);
   }
   const float* valid = pl.valid.data();
   const float inv_patch = 1.0f / float((2 * f + 1) * (2 * f + 1));
@@ -427,9 +429,23 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
     }
   }
   // Collaborative reconstruction (NFOR, sec. 4.2): every pixel's fit, evaluated at each neighbour
-  // q of its window, adds into q's sums with the pixel's NL-means weight for q. At an invalid q
-  // (features not known) the fit's value at the pixel.
-  alignas(32) float fit[kTile], xr[kFeatureChannels][kTile];
+  // q of its window, adds into q's sums with the pixel's NL-means weight for q over the pixel's
+  // weight sum. At an invalid q (features not known) the fit's value at the pixel. Dividing by
+  // the sender's sum as well as (at the end) by the receiver's is one step of symmetrising the
+  // filter towards a doubly stochastic one (Milanfar 2013, "Symmetrizing Smoothing Filters"),
+  // which keeps the light where it was: with the receiver's sum alone, a dark pixel (low noise,
+  // few similar neighbours, a small sum) took more from its bright neighbours than they gave up,
+  // and the Cornell box came out 0.1 % (+5 standard errors) brighter at 256 samples.
+  for (int j = 0; j < 2; ++j) {
+    float* inv = s.inv_wsum[j].data();
+    std::fill(inv, inv + tn, 0.0f);
+    for (int oi = 0; oi < offsets; ++oi) {
+      const float* wt = &s.weight[1 - j][size_t(oi) * tn];
+      for (size_t i = 0; i < tn; ++i) inv[i] += wt[i];
+    }
+    for (size_t i = 0; i < tn; ++i) inv[i] = inv[i] > 0 ? 1.0f / inv[i] : 0.0f;
+  }
+  alignas(32) float fit[kTile], xr[kFeatureChannels][kTile], ws[kTile];
   for (int oi = 0; oi < offsets; ++oi) {
     const int dy = oi / side - r, dx = oi % side - r;
     for (int ty = 0; ty < th; ++ty) {
@@ -446,7 +462,10 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
         for (int i = ilo; i < ihi; ++i) xr[k][i] = (fe[qrow + i] - fe[row + i]) * valid[qrow + i];
       }
       for (int j = 0; j < 2; ++j) {
-        const float* wt = &s.weight[1 - j][size_t(oi) * tn + o];
+        const float* w0 = &s.weight[1 - j][size_t(oi) * tn + o];
+        const float* inv = &s.inv_wsum[j][o];
+        for (int i = 0; i < kTile; ++i) ws[i] = w0[i] * inv[i];
+        const float* wt = ws;
         float* sw = sums.weight[j].data() + qrow;
         for (int i = ilo; i < ihi; ++i) sw[i] += wt[i];
         for (int c = 0; c < 3; ++c) {
