@@ -212,6 +212,8 @@ class CurvesDesc(ctypes.Structure):
         ("curve_offsets", ctypes.POINTER(ctypes.c_uint32)),
         ("curve_count", ctypes.c_uint32),
         ("material_slots", _i_p),
+        ("motion_points", _f_p),
+        ("motion_step_count", ctypes.c_int),
     ]
 
 
@@ -866,10 +868,14 @@ class Scene:
                "lt_scene_add_mesh")
         return out.value
 
-    def add_curves(self, points, curve_offsets=None, material_slots=None):
+    def add_curves(self, points, curve_offsets=None, material_slots=None, motion=None):
         """Hair or a point cloud: points (n, 4) of x, y, z, radius (object space); curve_offsets
-        (curves + 1, uint32) into them, or None for a point cloud; material_slots per curve."""
+        (curves + 1, uint32) into them, or None for a point cloud; material_slots per curve;
+        motion: the points (steps, n, 4) at the motion steps over the shutter (deformation)."""
         pts = _f32(points, "curve points", 4)
+        mot = None if motion is None else np.ascontiguousarray(motion, dtype=np.float32)
+        if mot is not None and (mot.ndim != 3 or mot.shape[1:] != (pts.size // 4, 4)):
+            raise ValueError("curve motion points: shape %s for %d points" % (mot.shape, pts.size // 4))
         offs = None
         ncurves = 0
         if curve_offsets is not None:
@@ -880,7 +886,8 @@ class Scene:
             raise ValueError("curve material slots: %d values for %d curves" % (mat.size, ncurves))
         d = CurvesDesc(_fptr(pts), pts.size // 4,
                        None if offs is None else offs.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)),
-                       ncurves, _iptr(mat))
+                       ncurves, _iptr(mat), None if mot is None else _fptr(mot),
+                       0 if mot is None else mot.shape[0])
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_curves(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_curves")

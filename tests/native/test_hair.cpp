@@ -97,6 +97,66 @@ TEST(Curves, RayFromInsideLeavesTheStrand) {
   EXPECT_FALSE(s.g.intersect(r, 31, &hit));
 }
 
+// Deformation motion blur of strands and points (their keys at 3 steps): a strand along +X
+// whose keys move from y = -0.5 to y = +0.5 over the shutter (and thicken from radius 0.05 to
+// 0.15), a sphere moving the same way. A ray at a time meets them where their keys are at that
+// time (linear between steps, as Embree and Cycles move them), and the surface's normal points
+// from the moving axis (the sphere's moving centre) to the hit. A strand whose keys are not finite
+// at some step is dropped.
+TEST(Curves, DeformingStrandsAndPointsAreWhereTheirKeysAreAtTheRaysTime) {
+  Geometry g;
+  std::vector<std::string> warnings;
+  Mesh m;
+  m.kind = GeometryKind::Curves;
+  const float nan = std::nanf("");
+  const float xs[4] = {-1.0f, -1.0f / 3, 1.0f / 3, 1.0f};
+  for (float x : xs) m.curves.cps.insert(m.curves.cps.end(), {x, 0, 0, 0.1f});
+  for (float x : xs) m.curves.cps.insert(m.curves.cps.end(), {x, 3, 0, 0.1f});  // a second strand
+  m.curves.motion_steps = 3;
+  for (int s = 0; s < 3; ++s) {
+    const float y = -0.5f + 0.5f * float(s), r = 0.05f + 0.05f * float(s);
+    for (float x : xs) m.curves.motion_cps.insert(m.curves.motion_cps.end(), {x, y, 0, r});
+    for (float x : xs) m.curves.motion_cps.insert(m.curves.motion_cps.end(), {x, 3, s == 2 ? nan : 0.0f, 0.1f});
+  }
+  m.curves.random = {0.5f, 0.25f};
+  g.add_curves(std::move(m), {0, 4, 8}, warnings);
+  ASSERT_EQ(g.mesh(0).curves.curve_count(), 1u);  // the second strand is not finite at step 2
+  ASSERT_EQ(warnings.size(), 1u);
+  Mesh p;
+  p.kind = GeometryKind::Points;
+  p.curves.cps = {2, 0, 0, 0.2f};
+  p.curves.motion_steps = 3;
+  p.curves.motion_cps = {2, -0.5f, 0, 0.2f, 2, 0, 0, 0.2f, 2, 0.5f, 0, 0.2f};
+  p.curves.random = {0.5f};
+  g.add_curves(std::move(p), {}, warnings);
+  for (int mesh : {0, 1}) {
+    Instance inst;
+    inst.mesh = mesh;
+    g.add_instance(inst, warnings);
+  }
+  g.commit();
+  EXPECT_TRUE(g.has_motion());
+  for (float time : {0.0f, 0.25f, 0.5f, 1.0f}) {
+    const float y = -0.5f + time, r = 0.05f + 0.1f * time;
+    Hit hit;
+    Ray strand = ray({0.3f, y, 5.0f}, {0, 0, -1});
+    strand.time = time;
+    ASSERT_TRUE(g.intersect(strand, 31, &hit)) << "time " << time;
+    EXPECT_NEAR(hit.t, 5.0f - r, 1e-3f) << "time " << time;
+    SurfacePoint sp = g.surface(hit);
+    EXPECT_NEAR(sp.ng.z, 1.0f, 1e-3f) << "time " << time;
+    // Beside the axis where it is at this time: no hit (1.5 radii off).
+    strand.o.y = y + 1.5f * r;
+    EXPECT_FALSE(g.intersect(strand, 31, &hit)) << "time " << time;
+    Ray sphere = ray({2.0f, y + 0.1f, 5.0f}, {0, 0, -1});
+    sphere.time = time;
+    ASSERT_TRUE(g.intersect(sphere, 31, &hit)) << "time " << time;
+    EXPECT_NEAR(hit.t, 5.0f - std::sqrt(0.2f * 0.2f - 0.1f * 0.1f), 1e-3f) << "time " << time;
+    sp = g.surface(hit);
+    EXPECT_NEAR(sp.ng.y, 0.5f, 1e-3f) << "time " << time;  // from the moving centre
+  }
+}
+
 TEST(Curves, BadStrandsAreDroppedWithWarnings) {
   Geometry g;
   std::vector<std::string> w;

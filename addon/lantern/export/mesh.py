@@ -377,8 +377,8 @@ class MeshExporter:
                                shadow_catcher=False, key=None):
         """Curves or spheres of obj as an instance: kind 'HAIR' (the object's particle hair),
         'CURVES' (a Curves object) or 'POINTCLOUD'; key: the object instance's instance_key, for
-        its transform's motion (the strands keep the shutter centre's shape). Returns the core
-        instance id or None."""
+        its transform's motion; the strands' deformation comes from the Motion's samples.
+        Returns the core instance id or None."""
         from .hair import curves_arrays, particle_hair_arrays, pointcloud_arrays
         problem = transform_problem(matrix_world)
         if problem is not None:
@@ -397,8 +397,11 @@ class MeshExporter:
             else:
                 points = pointcloud_arrays(obj.data)
                 args = None if points is None else (points, None, None)
+            deform = None
+            if args is not None and self.motion is not None:
+                deform = self.motion.strand_deformation(obj, args[0])
             self.mesh_ids[geometry] = None if args is None else core_call(self.core_scene, self.report, subject,
-                                                                          "add_curves", *args)
+                                                                          "add_curves", *args, motion=deform)
         mesh_id = self.mesh_ids[geometry]
         if mesh_id is None:
             return None

@@ -104,10 +104,9 @@ class Motion:
         self.moving_instances = self.deforming_meshes = 0
         self.camera_moves = False
         self.vector_pass = False  # the steps are the neighbouring frames, for the Vector pass
-        # Strands and points have no vertex motion in Lantern: what Cycles would blur by
-        # deformation is found (and reported) instead.
-        self.strands = {}      # object pointer -> (name, its strands' or points' arrays at the centre)
-        self.deformed_strands = set()  # names of those whose arrays differ at some step
+        # Strands and points (particle hair, Curves, point clouds) that may deform.
+        self.strands = {}      # object pointer -> (name, motion steps)
+        self.strand_steps = {}  # object pointer -> {step: their (n, 4) keys}
 
     def transforms(self, key, centre, name):
         """The instance's transforms at its motion steps, or None when it does not move."""
@@ -155,6 +154,26 @@ class Motion:
         has_normals = centre_arrays["corner_normals"] is not None and all(n is not None for n in normals)
         return np.concatenate(positions), (np.concatenate(normals) if has_normals else None)
 
+    def strand_deformation(self, obj, centre):
+        """The (steps, n, 4) keys over the shutter of obj's strands or points whose keys at the
+        centre are `centre`, or None when they keep their shape (or change their count: then,
+        as Cycles, no deformation blur, reported)."""
+        ptr = obj.original.as_pointer()
+        entry, at = self.strands.get(ptr), self.strand_steps.get(ptr)
+        if entry is None or not at:
+            return None
+        name, steps = entry
+        out = [at.get(s, centre) for s in range(steps)]  # a step not recorded had the centre's
+        if any(a is None or a.shape != centre.shape for a in out):
+            self.report({'WARNING'}, "Object '%s': its hair, curves or points change in number over the "
+                                     "shutter; deformation motion blur is off for them (their transform "
+                                     "still moves), as Cycles" % name)
+            return None
+        if all(np.array_equal(a, centre) for a in out):
+            return None
+        self.deforming_meshes += 1
+        return np.stack(out)
+
     def camera(self, centre):
         if self.camera_steps < 3 or not self.camera_matrices:
             return None
@@ -182,10 +201,9 @@ def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
             continue
         ptr = obj.original.as_pointer()
         if ptr in motion.strands and steps >= 3:
-            name, centre = motion.strands[ptr]
-            now = _strand_arrays(obj)
-            if now is None or now.shape != centre.shape or not np.allclose(now, centre, rtol=1e-5, atol=1e-6):
-                motion.deformed_strands.add(name)
+            s = round((rel + 1.0) * 0.5 * (steps - 1))
+            if abs(relative_time(s, steps) - rel) < 1e-6:
+                motion.strand_steps.setdefault(ptr, {})[s] = _strand_arrays(obj)
         dsteps = motion.deform.get(ptr, 0)
         if dsteps >= 3:
             s = round((rel + 1.0) * 0.5 * (dsteps - 1))
@@ -284,9 +302,7 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
                 motion.centre_co[obj.original.as_pointer()] = co
         if not inst.is_instance and not frames and _uses_deform(obj.original) and \
                 (obj.type in ('CURVES', 'POINTCLOUD') or (inst.show_particles and obj.type == 'MESH')):
-            arrays = _strand_arrays(obj)
-            if arrays is not None:
-                motion.strands[obj.original.as_pointer()] = (obj.name, arrays)
+            motion.strands[obj.original.as_pointer()] = (obj.name, steps)
     if motion.camera_steps >= 3:
         times.update(relative_time(s, motion.camera_steps) for s in range(motion.camera_steps))
     times.discard(0.0)
@@ -300,8 +316,4 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
             _sample(depsgraph, motion, rel, camera, mesh_arrays)
     finally:
         go(centre_time)
-    for name in sorted(motion.deformed_strands):
-        report({'WARNING'}, "Object '%s': its hair, curves or points change shape over the shutter; Lantern "
-                            "moves them with the object's transform only (Cycles also blurs their "
-                            "deformation)" % name)
     return motion, restore

@@ -53,8 +53,9 @@ extern "C" {
  * the Equiangular Cubemap Face panorama; lt_instance_desc's shadow terminator offsets;
  * lt_render_settings.denoise_start_sample: the viewport's denoising); 19: emission of Volume
  * objects and World volumes (lt_volume_desc's grid names, lt_scene_set_volume_grid_lightgroup);
- * 20: area lights' spread (lt_light_desc.spread); 21: lt_scene_add_volume_grid's clipping (a Volume
- * object's emission confined to Cycles' volume mesh). */
+ * 20: area lights' spread (lt_light_desc.spread); 21: lt_scene_add_volume_grid's clipping and
+ * face_offset (a Volume object's emission confined to Cycles' volume mesh); deforming curves and
+ * points (lt_curves_desc.motion_points and motion_step_count). */
 #define LT_ABI_VERSION 21
 
 enum lt_status {
@@ -253,13 +254,19 @@ LT_API int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* desc, int* out
  * cloud (spheres). Curves render as Cycles' thick (3D) curves: round Catmull-Rom splines through
  * the points, the radius interpolated the same way. material_slots: one per curve (NULL: slot 0).
  * Curves of fewer than 2 points, of zero length or radius, or with a non-finite point, and points
- * of zero radius or non-finite positions are dropped with a warning; negative radii become 0. */
+ * of zero radius or non-finite positions are dropped with a warning; negative radii become 0.
+ * Deformation motion blur: motion_step_count (0: none, else 3 to 129, odd) sets of points equally
+ * spaced over the shutter, 4 * point_count floats each (x, y, z, radius), the centre one equal to
+ * points; the keys move linearly between steps (Embree's vertex motion, as Cycles'). A curve or
+ * point non-finite at any step is dropped. */
 typedef struct lt_curves_desc {
   const float* points;
   uint32_t point_count;
   const uint32_t* curve_offsets;
   uint32_t curve_count;
   const int* material_slots;
+  const float* motion_points;
+  int motion_step_count;
 } lt_curves_desc;
 LT_API int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* desc, int* out_id);
 

@@ -99,6 +99,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_curves_desc, curve_offsets),
     LT_FIELD(lt_curves_desc, curve_count),
     LT_FIELD(lt_curves_desc, material_slots),
+    LT_FIELD(lt_curves_desc, motion_points),
+    LT_FIELD(lt_curves_desc, motion_step_count),
     LT_STRUCT(lt_mesh_attribute),
     LT_FIELD(lt_mesh_attribute, id),
     LT_FIELD(lt_mesh_attribute, components),

@@ -537,6 +537,12 @@ int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* d, int* out_id) {
         for (int& s : m.slots) s = s < 0 ? 0 : s;
       }
     }
+    require_motion_steps(d->motion_step_count, d->motion_points, "curves");
+    if (d->motion_step_count > 0) {
+      m.curves.motion_steps = d->motion_step_count;
+      m.curves.motion_cps.assign(d->motion_points,
+                                 d->motion_points + size_t(d->point_count) * 4 * size_t(d->motion_step_count));
+    }
     // Cycles' Random of a curve or point: hash_uint2_to_float(index, 0).
     const size_t n = d->curve_count ? d->curve_count : d->point_count;
     m.curves.random.resize(n);

@@ -202,7 +202,22 @@ int CurveData::curve_of_segment(uint32_t segment) const {
   return int(it - first_segment.begin()) - 1;
 }
 
-void catmull_rom(const CurveData& c, uint32_t i, float u, Vec3* p, Vec3* dp, float* radius) {
+void CurveData::key(size_t cp, float time, float out[4]) const {
+  if (motion_steps < 2) {
+    std::copy_n(&cps[4 * cp], 4, out);
+    return;
+  }
+  // Embree's linear motion: step s and s + 1 around time (steps - 1).
+  const float x = std::clamp(time, 0.0f, 1.0f) * float(motion_steps - 1);
+  const int s = std::min(int(x), motion_steps - 2);
+  const float f = x - float(s);
+  const size_t n = cps.size();
+  const float* a = &motion_cps[size_t(s) * n + 4 * cp];
+  const float* b = a + n;
+  for (int k = 0; k < 4; ++k) out[k] = (1 - f) * a[k] + f * b[k];
+}
+
+void catmull_rom(const CurveData& c, uint32_t i, float u, Vec3* p, Vec3* dp, float* radius, float time) {
   const float u2 = u * u, u3 = u2 * u;
   // Uniform Catmull-Rom basis (tension 1/2) and its derivative.
   const float b[4] = {0.5f * (-u3 + 2 * u2 - u), 0.5f * (3 * u3 - 5 * u2 + 2), 0.5f * (-3 * u3 + 4 * u2 + u),
@@ -212,9 +227,12 @@ void catmull_rom(const CurveData& c, uint32_t i, float u, Vec3* p, Vec3* dp, flo
   Vec3 P(0.0f), D(0.0f);
   float r = 0;
   for (int k = 0; k < 4; ++k) {
-    P += c.point(i + k) * b[k];
-    D += c.point(i + k) * d[k];
-    r += c.radius(i + k) * b[k];
+    float key[4];
+    c.key(i + k, time, key);
+    const Vec3 q(key[0], key[1], key[2]);
+    P += q * b[k];
+    D += q * d[k];
+    r += key[3] * b[k];
   }
   if (p) *p = P;
   if (dp) *dp = D;
@@ -226,24 +244,43 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
   const int id = int(meshes_.size());
   CurveData& c = mesh.curves;
   const std::string name = std::string(mesh.kind == GeometryKind::Curves ? "curves " : "points ") + std::to_string(id);
-  for (size_t i = 0; i < c.cps.size(); i += 4) {
-    float& r = c.cps[i + 3];
-    if (!(r >= 0) || !std::isfinite(r)) r = 0;
-  }
+  const int steps = c.motion_steps > 1 ? c.motion_steps : 0;
+  const size_t keys = c.cps.size() / 4;
+  for (std::vector<float>* v : {&c.cps, &c.motion_cps})
+    for (size_t i = 0; i < v->size(); i += 4) {
+      float& r = (*v)[i + 3];
+      if (!(r >= 0) || !std::isfinite(r)) r = 0;
+    }
+  // Key i at step s (the centre's without motion).
+  auto key_at = [&](int s, size_t i) { return steps ? &c.motion_cps[(size_t(s) * keys + i) * 4] : &c.cps[4 * i]; };
+  auto finite_at_every_step = [&](size_t i) {
+    bool ok = is_finite(c.point(i));
+    for (int s = 0; s < steps && ok; ++s) ok = is_finite(Vec3(key_at(s, i)[0], key_at(s, i)[1], key_at(s, i)[2]));
+    return ok;
+  };
   size_t dropped = 0, kept = 0;
   if (mesh.kind == GeometryKind::Points) {
     // Spheres: drop the non-finite and the radius-0 ones (nothing to hit).
-    for (size_t i = 0; i < c.cps.size() / 4; ++i) {
-      if (!is_finite(c.point(i)) || !(c.radius(i) > 0)) {
+    std::vector<float> motion;
+    motion.reserve(c.motion_cps.size());
+    std::vector<size_t> keep;
+    for (size_t i = 0; i < keys; ++i) {
+      if (!finite_at_every_step(i) || !(c.radius(i) > 0)) {
         ++dropped;
         continue;
       }
+      keep.push_back(i);
+    }
+    for (int s = 0; s < steps; ++s)
+      for (size_t i : keep) motion.insert(motion.end(), key_at(s, i), key_at(s, i) + 4);
+    for (size_t i : keep) {
       std::copy_n(&c.cps[4 * i], 4, &c.cps[4 * kept]);
       c.random[kept] = c.random[i];
       ++kept;
     }
     c.cps.resize(4 * kept);
     c.random.resize(kept);
+    c.motion_cps = std::move(motion);
     if (dropped)
       warnings.push_back(name + ": dropped " + std::to_string(dropped) +
                          " point(s) with a non-finite position or zero radius");
@@ -256,13 +293,14 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
     c.first_segment.clear();
     c.segments.clear();
     c.arc.clear();
+    std::vector<uint32_t> kept_curves;  // the curves kept, for the motion steps' keys
     size_t bad = 0, short_curves = 0, flat = 0;
     for (size_t k = 0; k + 1 < offsets.size(); ++k) {
       const uint32_t a = offsets[k], e = offsets[k + 1];
       bool finite = true, thick = false;
       float len = 0;
       for (uint32_t i = a; i < e; ++i) {
-        finite = finite && is_finite(c.point(i));
+        finite = finite && finite_at_every_step(i);
         thick = thick || c.radius(i) > 0;
         if (i > a) len += length(c.point(i) - c.point(i - 1));
       }
@@ -291,10 +329,22 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
       cps.insert(cps.end(), &c.cps[4 * (e - 1)], &c.cps[4 * e]);
       c.arc.push_back(s);
       for (uint32_t j = 0; j + 1 < e - a; ++j) c.segments.push_back(base + j);
+      kept_curves.push_back(uint32_t(k));
       random.push_back(c.random[k]);
       slots.push_back(mesh.slots.empty() ? 0 : mesh.slots[k]);
     }
     c.first_segment.push_back(uint32_t(c.segments.size()));
+    // Each step's keys laid out as cps: the kept curves, their ends duplicated.
+    std::vector<float> motion;
+    motion.reserve(size_t(steps) * cps.size());
+    for (int s = 0; s < steps; ++s)
+      for (uint32_t k : kept_curves) {
+        const uint32_t a = offsets[k], e = offsets[k + 1];
+        motion.insert(motion.end(), key_at(s, a), key_at(s, a) + 4);
+        for (uint32_t i = a; i < e; ++i) motion.insert(motion.end(), key_at(s, i), key_at(s, i) + 4);
+        motion.insert(motion.end(), key_at(s, e - 1), key_at(s, e - 1) + 4);
+      }
+    c.motion_cps = std::move(motion);
     c.cps = std::move(cps);
     c.random = std::move(random);
     mesh.slots = std::move(slots);
@@ -305,10 +355,13 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
       warnings.push_back(name + ": dropped " + std::to_string(flat) + " curve(s) of zero length or zero radius");
     kept = c.curve_count();
   }
+  if (!steps) c.motion_cps.clear();
+  c.motion_steps = steps;
   if (kept == 0)
     warnings.push_back(name + " has nothing to render");
   else
     mesh.rtc = curve_scene(mesh);
+  if (kept && steps) ++motion_meshes_;
   meshes_.push_back(std::move(mesh));
   return id;
 }
@@ -321,8 +374,15 @@ RTCScene Geometry::curve_scene(const Mesh& m) const {
   const bool curves = m.kind == GeometryKind::Curves;
   RTCGeometry g =
       rtcNewGeometry(device_, curves ? RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE : RTC_GEOMETRY_TYPE_SPHERE_POINT);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, c.cps.data(), 0, 4 * sizeof(float),
-                             c.cps.size() / 4);
+  const size_t n = c.cps.size() / 4;
+  if (c.motion_steps > 1) {
+    rtcSetGeometryTimeStepCount(g, unsigned(c.motion_steps));
+    for (int s = 0; s < c.motion_steps; ++s)
+      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, unsigned(s), RTC_FORMAT_FLOAT4, c.motion_cps.data(),
+                                 size_t(s) * n * 4 * sizeof(float), 4 * sizeof(float), n);
+  } else {
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, c.cps.data(), 0, 4 * sizeof(float), n);
+  }
   if (curves)
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, c.segments.data(), 0, sizeof(uint32_t),
                                c.segments.size());
@@ -499,10 +559,11 @@ void Geometry::build_top() {
     const std::vector<Transform> still{inst.xf};
     for (const Transform& xf : inst.motion.empty() ? still : inst.motion) {
       for (const Vec3& p : ps) bounds_.extend(xf.point(p));
-      for (size_t k = 0; k < m.curves.cps.size() / 4; ++k) {
-        const float r = m.curves.radius(k);
-        bounds_.extend(xf.point(m.curves.point(k) - Vec3(r)));
-        bounds_.extend(xf.point(m.curves.point(k) + Vec3(r)));
+      const std::vector<float>& keys = m.curves.motion_steps > 1 ? m.curves.motion_cps : m.curves.cps;
+      for (size_t k = 0; k + 3 < keys.size(); k += 4) {
+        const Vec3 p(keys[k], keys[k + 1], keys[k + 2]);
+        bounds_.extend(xf.point(p - Vec3(keys[k + 3])));
+        bounds_.extend(xf.point(p + Vec3(keys[k + 3])));
       }
     }
   }
@@ -693,17 +754,19 @@ SurfacePoint Geometry::curve_surface(const Hit& hit, const Instance& inst, const
   int slot = 0;
   if (m.kind == GeometryKind::Curves) {
     const uint32_t seg = uint32_t(hit.primitive);
-    catmull_rom(c, c.segments[seg], hit.u, &centre, &dp, &r);
+    catmull_rom(c, c.segments[seg], hit.u, &centre, &dp, &r, hit.time);
     const int curve = c.curve_of_segment(seg);
     slot = m.slots.empty() ? 0 : m.slots[size_t(curve)];
     sp.curve = curve;
     sp.bary = {hit.u, 0};
   } else {
-    centre = c.point(size_t(hit.primitive));
-    r = c.radius(size_t(hit.primitive));
+    float key[4];
+    c.key(size_t(hit.primitive), hit.time, key);
+    centre = Vec3(key[0], key[1], key[2]);
+    r = key[3];
     sp.curve = hit.primitive;
   }
-  // At the hit's time: a moving instance's transform (the strands keep their shape).
+  // At the hit's time: the strands' keys (above) and a moving instance's transform.
   const Pose pose = inst.motion.empty() ? Pose(inst) : this->pose(hit.instance, hit.time);
   const Vec3 centre_w = pose.xf.point(centre);
   sp.p = hit.p;

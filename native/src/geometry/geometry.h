@@ -38,14 +38,21 @@ struct CurveData {
   std::vector<uint32_t> first_segment;  // curves: each curve's first segment, then the segment count
   std::vector<float> arc;               // curves: distance along the keys from the curve's root, per control point
   std::vector<float> random;            // per curve (points: per point): Cycles' hash_uint2_to_float(index, 0)
+  // Deformation motion blur: motion_steps (0, or 3 to 129) sets of control points laid out as
+  // cps, equally spaced over the shutter, step by step; cps stays the centre step's. Embree
+  // interpolates the keys linearly between steps, and so do key() and catmull_rom().
+  int motion_steps = 0;
+  std::vector<float> motion_cps;
   size_t curve_count() const { return first_segment.empty() ? 0 : first_segment.size() - 1; }
   int curve_of_segment(uint32_t segment) const;  // binary search over first_segment
   Vec3 point(size_t cp) const { return {cps[4 * cp], cps[4 * cp + 1], cps[4 * cp + 2]}; }
   float radius(size_t cp) const { return cps[4 * cp + 3]; }
+  // Control point cp (x, y, z, radius) at time (0 .. 1 over the shutter).
+  void key(size_t cp, float time, float out[4]) const;
 };
 // The Catmull-Rom point at u in [0, 1] of the segment starting at control point i, its
-// derivative and radius (Embree's and Cycles' uniform basis).
-void catmull_rom(const CurveData& c, uint32_t i, float u, Vec3* p, Vec3* dp, float* radius);
+// derivative and radius (Embree's and Cycles' uniform basis), at time (0 .. 1 over the shutter).
+void catmull_rom(const CurveData& c, uint32_t i, float u, Vec3* p, Vec3* dp, float* radius, float time = 0.5f);
 
 struct Mesh {
   std::vector<Vec3> positions;
@@ -161,9 +168,10 @@ class Geometry {
   // instances need an inverse at every step) keeps its centre transform, with a warning.
   int add_instance(Instance instance, std::vector<std::string>& warnings);
   // Takes curves or points (mesh.kind, mesh.curves filled but for first_segment, arc and the
-  // duplicated end points: given the keys and, per curve, offsets into them in `offsets`).
-  // Curves with a non-finite key or fewer than 2 keys, and non-finite or zero-radius points, are
-  // dropped and counted in warnings; negative or non-finite radii become 0.
+  // duplicated end points: given the keys and, per curve, offsets into them in `offsets`; with
+  // motion, motion_cps holds motion_steps sets of the keys). Curves with a non-finite key (at any
+  // step) or fewer than 2 keys, and non-finite or zero-radius points, are dropped and counted in
+  // warnings; negative or non-finite radii become 0.
   int add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::vector<std::string>& warnings);
   // True displacement, before the first commit: the mesh's new positions (and motion steps') and
   // corner normals (shading/displacement.h); it keeps its old positions in Mesh::undisplaced.
