@@ -167,7 +167,7 @@ struct Scratch {
   // rows (the weight, the weight times each difference) and colours; [offset][dimension][lane].
   std::vector<float> gx, gw[2], gy[2];
   std::vector<float> coef[2][kDims * 3];  // each half's fit per pixel: coefficient d, channel c at d*3+c
-  std::vector<float> inv_wsum[2];         // each half's pixel: 1 / its weights' sum over its window
+  std::vector<float> inv_wsum[2];         // per guide g and pixel: its weights' sum, then 1 / it
 };
 
 // The packed index of the symmetric normal matrix's entry (a, b), a <= b (the order in which the
@@ -291,7 +291,7 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
     for (auto& a : s.acc[g]) a.resize(kTile);
     for (auto& a : s.rhs[g]) a.resize(kTile);
     for (auto& a : s.coef[g]) a.resize(tn);
-    s.inv_wsum[g].resize(tn);
+    s.inv_wsum[g].assign(tn, 0.0f);
   }
   const float* valid = pl.valid.data();
   const float inv_patch = 1.0f / float((2 * f + 1) * (2 * f + 1));
@@ -359,6 +359,8 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
         }
         std::fill(wt, wt + std::min(ilo, kTile), 0.0f);
         std::fill(wt + std::max(ihi, 0), wt + kTile, 0.0f);
+        float* sum = &s.inv_wsum[g][size_t(ty) * kTile];  // the reconstruction's divisor, below
+        for (int i = 0; i < kTile; ++i) sum[i] += wt[i];
       }
     }
   }
@@ -436,15 +438,8 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
   // which keeps the light where it was: with the receiver's sum alone, a dark pixel (low noise,
   // few similar neighbours, a small sum) took more from its bright neighbours than they gave up,
   // and the Cornell box came out 0.1 % (+5 standard errors) brighter at 256 samples.
-  for (int j = 0; j < 2; ++j) {
-    float* inv = s.inv_wsum[j].data();
-    std::fill(inv, inv + tn, 0.0f);
-    for (int oi = 0; oi < offsets; ++oi) {
-      const float* wt = &s.weight[1 - j][size_t(oi) * tn];
-      for (size_t i = 0; i < tn; ++i) inv[i] += wt[i];
-    }
-    for (size_t i = 0; i < tn; ++i) inv[i] = inv[i] > 0 ? 1.0f / inv[i] : 0.0f;
-  }
+  for (int g = 0; g < 2; ++g)
+    for (float& v : s.inv_wsum[g]) v = v > 0 ? 1.0f / v : 0.0f;
   alignas(32) float fit[kTile], xr[kFeatureChannels][kTile], ws[kTile];
   for (int oi = 0; oi < offsets; ++oi) {
     const int dy = oi / side - r, dx = oi % side - r;
@@ -463,7 +458,7 @@ void denoise_tile(const Planes& pl, const DenoiseParams& p, int x0, int x1, int 
       }
       for (int j = 0; j < 2; ++j) {
         const float* w0 = &s.weight[1 - j][size_t(oi) * tn + o];
-        const float* inv = &s.inv_wsum[j][o];
+        const float* inv = &s.inv_wsum[1 - j][o];
         for (int i = 0; i < kTile; ++i) ws[i] = w0[i] * inv[i];
         const float* wt = ws;
         float* sw = sums.weight[j].data() + qrow;
