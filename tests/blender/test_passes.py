@@ -203,7 +203,9 @@ def test_volume_object_emission_is_in_its_objects_light_group(scene_factory, out
                 scene.view_layers[0].lightgroups.add(name=name)
             bpy.data.objects["Fire"].lightgroup = "fire"
             scene.world.lightgroup = "sky"
-            runs.setdefault(engine, []).append(ru.render(scene, engine, 64, seed=seed, integrator="VOLPATH"))
+            # 96 samples: at 64 the combined noise of Combined_fire's mean was 0.52 % (the rule
+            # asks for 0.5 %) once the emission's region became Cycles' volume mesh.
+            runs.setdefault(engine, []).append(ru.render(scene, engine, 96, seed=seed, integrator="VOLPATH"))
     r = runs[ru.LANTERN][0]
     total = r["Combined_fire"][..., :3] + r["Combined_sky"][..., :3]
     assert np.allclose(total, r.combined[..., :3], rtol=1e-4, atol=1e-6), np.abs(total - r.combined[..., :3]).max()
