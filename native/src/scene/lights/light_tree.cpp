@@ -164,9 +164,9 @@ void LightTree::build_node(std::vector<Item>& items, size_t begin, size_t end, u
     std::vector<Node> first_nodes, second_nodes;
     tbb::parallel_invoke([&] { build_node(items, begin, mid, trail, depth + 1, first_nodes); },
                          [&] { build_node(items, mid, end, second_trail, depth + 1, second_nodes); });
+    second = out.size() + first_nodes.size();
     for (std::vector<Node>* part : {&first_nodes, &second_nodes}) {
       const uint32_t base = uint32_t(out.size());
-      if (part == &second_nodes) second = base;
       for (Node n : *part) {
         if (!n.leaf) n.index += base;
         out.push_back(n);
