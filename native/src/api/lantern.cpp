@@ -904,17 +904,9 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
         auto e = std::make_shared<lt::GridEmission>(
             std::vector<std::shared_ptr<const lt::GridData>>(grids.begin() + 1, grids.end()), emission,
             grids[0]->index_to_object);
-        // Cycles' volume mesh: the leaves of every grid the shader reads, in the density's space.
-        lt::LeafRegion region;
-        const lt::Transform object_to_density = lt::affine_inverse(grids[0]->index_to_object);
-        for (const auto& g : grids) region.add_grid(*g, clipping, lt::compose(object_to_density, g->index_to_object));
-        region.finish();
-        int64_t span[3];
-        if (face_offset != 0 && region.voxel_span(span)) {
-          const lt::Vec3 o(face_offset / float(span[0]), face_offset / float(span[1]), face_offset / float(span[2]));
-          region.set_shift(object_to_density.vector(o));
-        }
-        e->set_region(std::move(region));
+        std::vector<const lt::GridData*> all;
+        for (const auto& g : grids) all.push_back(g.get());
+        e->set_region(lt::volume_mesh_region(all, clipping, face_offset));
         medium.set_grid_emission(std::move(e));
       }
     } catch (const lt::InvalidArgument& e) {

@@ -146,6 +146,23 @@ struct Transform {
     Vec3 r = c0 * n.x + c1 * n.y + c2 * n.z;
     return determinant() < 0 ? -r : r;
   }
+  // Whether every entry is the identity's within tol.
+  bool is_identity(float tol = 1e-6f) const {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c)
+        if (!(std::abs(m[r * 4 + c] - (r == c ? 1.0f : 0.0f)) <= tol)) return false;
+    return true;
+  }
+  // The bounds of the box [lo, hi] mapped by this transform (its 8 corners').
+  void map_box(const Vec3& lo, const Vec3& hi, Vec3* out_lo, Vec3* out_hi) const {
+    *out_lo = Vec3(INFINITY);
+    *out_hi = Vec3(-INFINITY);
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 p = point(Vec3((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z));
+      *out_lo = vmin(*out_lo, p);
+      *out_hi = vmax(*out_hi, p);
+    }
+  }
 };
 
 // a after b (b is applied first).

@@ -255,7 +255,10 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
   auto key_at = [&](int s, size_t i) { return steps ? &c.motion_cps[(size_t(s) * keys + i) * 4] : &c.cps[4 * i]; };
   auto finite_at_every_step = [&](size_t i) {
     bool ok = is_finite(c.point(i));
-    for (int s = 0; s < steps && ok; ++s) ok = is_finite(Vec3(key_at(s, i)[0], key_at(s, i)[1], key_at(s, i)[2]));
+    for (int s = 0; s < steps && ok; ++s) {
+      const float* k = key_at(s, i);
+      ok = is_finite(Vec3(k[0], k[1], k[2]));
+    }
     return ok;
   };
   size_t dropped = 0, kept = 0;

@@ -24,12 +24,9 @@ GridEmission::GridEmission(std::vector<std::shared_ptr<const GridData>> grids,
   }
   for (const auto& g : grids_) {
     if (!g) throw InvalidArgument("volume emission: null grid");
-    Transform t = compose(affine_inverse(g->index_to_object), density_index_to_object);
-    bool identity = true;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) identity = identity && std::abs(t.m[r * 4 + c] - (r == c ? 1.0f : 0.0f)) < 1e-6f;
+    const Transform t = compose(affine_inverse(g->index_to_object), density_index_to_object);
     to_grid_.push_back(t);
-    same_space_.push_back(identity);
+    same_space_.push_back(t.is_identity());
   }
 }
 

@@ -17,6 +17,40 @@ inline const nanovdb::FloatGrid* as_nano(const GridData& g) {
   return static_cast<const nanovdb::FloatGrid*>(g.nano_grid);
 }
 
+// Every node of a NanoVDB float grid's tree: leaf(const LeafNode*) for each leaf, and
+// tile(origin, dim, value, active) for each tile of the internal nodes and the root (dim voxels
+// per edge), in the tree's order.
+template <class OnLeaf, class OnTile>
+void walk_nano_tree(const GridData& g, OnLeaf&& leaf, OnTile&& tile) {
+  using Root = nanovdb::FloatTree::RootType;
+  using Upper = Root::ChildNodeType;
+  using Lower = Upper::ChildNodeType;
+  using Leaf = Lower::ChildNodeType;
+  auto visit_lower = [&](const Lower* node) {
+    for (uint32_t n = 0; n < Lower::SIZE; ++n) {
+      if (node->data()->isChild(n))
+        leaf(node->data()->getChild(n));
+      else
+        tile(node->offsetToGlobalCoord(n), int(Leaf::DIM), node->data()->getValue(n), node->data()->isActive(n));
+    }
+  };
+  const Root& root = as_nano(g)->tree().root();
+  for (uint32_t i = 0; i < root.tileCount(); ++i) {
+    const auto* t = root.data()->tile(i);
+    if (!t->isChild()) {
+      tile(t->origin(), int(Upper::DIM), t->value, t->state != 0);
+      continue;
+    }
+    const Upper* upper = root.data()->getChild(t);
+    for (uint32_t n = 0; n < Upper::SIZE; ++n) {
+      if (upper->data()->isChild(n))
+        visit_lower(upper->data()->getChild(n));
+      else
+        tile(upper->offsetToGlobalCoord(n), int(Lower::DIM), upper->data()->getValue(n), upper->data()->isActive(n));
+    }
+  }
+}
+
 // Trilinear interpolation between the values at integer coordinates, at(i, j, k), clamped >= 0.
 template <class At>
 float trilinear(const At& at, const Vec3& p) {

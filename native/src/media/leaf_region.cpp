@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "media/grid_lookup.h"
 
@@ -12,13 +13,6 @@ namespace {
 constexpr int L = LeafRegion::kLeaf;
 
 int64_t floor_div(int64_t i, int64_t n) { return i >= 0 ? i / n : -((-i + n - 1) / n); }
-
-bool is_identity(const Transform& t) {
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c)
-      if (std::abs(t.m[r * 4 + c] - (r == c ? 1.0f : 0.0f)) > 1e-6f) return false;
-  return true;
-}
 
 // Which of a leaf's voxels are kept: any at all, and any on each of its six faces (those dilate
 // into the neighbouring leaf: -x, +x, -y, +y, -z, +z).
@@ -60,21 +54,16 @@ bool LeafRegion::voxel_span(int64_t n[3]) const {
 }
 
 void LeafRegion::add_grid(const GridData& g, float clipping, const Transform& grid_to_here) {
-  if (!is_identity(grid_to_here)) {
+  if (!grid_to_here.is_identity()) {
     // Each of the grid's own leaves adds the leaves here that its mapped box overlaps.
     LeafRegion own;
     own.add_grid(g, clipping);
     own.finish();
     auto add_mapped = [&](const int64_t a[3], const int64_t b[3]) {
-      Vec3 lo(INFINITY), hi(-INFINITY);
-      for (int c = 0; c < 8; ++c) {
-        Vec3 q(float((c & 1) ? L * (b[0] + 1) - 0.5 : L * a[0] - 0.5),
-               float((c & 2) ? L * (b[1] + 1) - 0.5 : L * a[1] - 0.5),
-               float((c & 4) ? L * (b[2] + 1) - 0.5 : L * a[2] - 0.5));
-        Vec3 p = grid_to_here.point(q);
-        lo = vmin(lo, p);
-        hi = vmax(hi, p);
-      }
+      Vec3 lo, hi;
+      grid_to_here.map_box(Vec3(float(L * a[0] - 0.5), float(L * a[1] - 0.5), float(L * a[2] - 0.5)),
+                           Vec3(float(L * (b[0] + 1) - 0.5), float(L * (b[1] + 1) - 0.5), float(L * (b[2] + 1) - 0.5)),
+                           &lo, &hi);
       int64_t la[3], lb[3];
       for (int k = 0; k < 3; ++k) {
         la[k] = int64_t(std::floor((double(lo[k]) + 0.5) / L));
@@ -84,14 +73,9 @@ void LeafRegion::add_grid(const GridData& g, float clipping, const Transform& gr
     };
     if (own.empty()) return;
     {
-      Vec3 lo(INFINITY), hi(-INFINITY);
-      for (int c = 0; c < 8; ++c) {
-        Vec3 q(float((c & 1) ? own.vhi_[0] : own.vlo_[0]), float((c & 2) ? own.vhi_[1] : own.vlo_[1]),
-               float((c & 4) ? own.vhi_[2] : own.vlo_[2]));
-        Vec3 p = grid_to_here.point(q);
-        lo = vmin(lo, p);
-        hi = vmax(hi, p);
-      }
+      Vec3 lo, hi;
+      grid_to_here.map_box(Vec3(float(own.vlo_[0]), float(own.vlo_[1]), float(own.vlo_[2])),
+                           Vec3(float(own.vhi_[0]), float(own.vhi_[1]), float(own.vhi_[2])), &lo, &hi);
       const int64_t a[3] = {int64_t(std::floor(lo.x)), int64_t(std::floor(lo.y)), int64_t(std::floor(lo.z))};
       const int64_t b[3] = {int64_t(std::ceil(hi.x)), int64_t(std::ceil(hi.y)), int64_t(std::ceil(hi.z))};
       cover_voxels(a, b);
@@ -146,45 +130,23 @@ void LeafRegion::add_grid(const GridData& g, float clipping, const Transform& gr
   };
 
   if (g.is_nanovdb()) {
-    using Tree = nanovdb::FloatTree;
-    using Upper = Tree::RootType::ChildNodeType;
-    using Lower = Upper::ChildNodeType;
-    using Leaf = Lower::ChildNodeType;
-    static_assert(Leaf::DIM == L, "NanoVDB leaves are Cycles' (OpenVDB's) 8^3 leaves");
-    const auto& root = as_nano(g)->tree().root();
-    auto visit_leaf = [&](const Leaf* leaf) {
-      LeafFaces f;
-      const nanovdb::Coord o = leaf->origin();
-      for (uint32_t n = 0; n < Leaf::SIZE; ++n)
-        if (leaf->isActive(n) && kept(leaf->getValue(n))) {
-          const int x = int(n >> 6), y = int(n >> 3 & 7), z = int(n & 7);
-          keep_voxel(f, int64_t(o[0]) + x, int64_t(o[1]) + y, int64_t(o[2]) + z, x, y, z);
-        }
-      const int64_t c[3] = {floor_div(o[0], L), floor_div(o[1], L), floor_div(o[2], L)};
-      add_leaf(c, f);
-    };
-    auto visit_lower = [&](const Lower* node) {
-      for (uint32_t n = 0; n < Lower::SIZE; ++n) {
-        if (node->data()->isChild(n))
-          visit_leaf(node->data()->getChild(n));
-        else if (node->data()->isActive(n))
-          add_tile(node->offsetToGlobalCoord(n), Leaf::DIM, node->data()->getValue(n));
-      }
-    };
-    for (uint32_t i = 0; i < root.tileCount(); ++i) {
-      const auto* tile = root.data()->tile(i);
-      if (!tile->isChild()) {
-        if (tile->state) add_tile(tile->origin(), Upper::DIM, tile->value);
-        continue;
-      }
-      const Upper* upper = root.data()->getChild(tile);
-      for (uint32_t n = 0; n < Upper::SIZE; ++n) {
-        if (upper->data()->isChild(n))
-          visit_lower(upper->data()->getChild(n));
-        else if (upper->data()->isActive(n))
-          add_tile(upper->offsetToGlobalCoord(n), Lower::DIM, upper->data()->getValue(n));
-      }
-    }
+    walk_nano_tree(
+        g,
+        [&](const auto* leaf) {
+          static_assert(std::remove_pointer_t<decltype(leaf)>::DIM == L, "NanoVDB's leaves are OpenVDB's (Cycles')");
+          LeafFaces f;
+          const nanovdb::Coord o = leaf->origin();
+          for (uint32_t n = 0; n < L * L * L; ++n)
+            if (leaf->isActive(n) && kept(leaf->getValue(n))) {
+              const int x = int(n >> 6), y = int(n >> 3 & 7), z = int(n & 7);
+              keep_voxel(f, int64_t(o[0]) + x, int64_t(o[1]) + y, int64_t(o[2]) + z, x, y, z);
+            }
+          const int64_t c[3] = {floor_div(o[0], L), floor_div(o[1], L), floor_div(o[2], L)};
+          add_leaf(c, f);
+        },
+        [&](const nanovdb::Coord& origin, int dim, float v, bool active) {
+          if (active) add_tile(origin, dim, v);
+        });
     return;
   }
   // Dense storage: every voxel of the array is active.
@@ -257,6 +219,19 @@ bool LeafRegion::bounds(int lo[3], int hi[3]) const {
     hi[k] = int(std::clamp(b, double(INT32_MIN), double(INT32_MAX)));
   }
   return true;
+}
+
+LeafRegion volume_mesh_region(const std::vector<const GridData*>& grids, float clipping, float face_offset) {
+  LeafRegion region;
+  if (grids.empty()) return region;
+  const Transform object_to_density = affine_inverse(grids[0]->index_to_object);
+  for (const GridData* g : grids) region.add_grid(*g, clipping, compose(object_to_density, g->index_to_object));
+  region.finish();
+  int64_t span[3];
+  if (face_offset != 0 && region.voxel_span(span))
+    region.set_shift(object_to_density.vector(
+        Vec3(face_offset / float(span[0]), face_offset / float(span[1]), face_offset / float(span[2]))));
+  return region;
 }
 
 }  // namespace lt

@@ -60,4 +60,10 @@ class LeafRegion {
   std::vector<uint64_t> bits_;  // a bit per leaf of the bounding box; empty: the whole box
 };
 
+// Cycles' volume mesh of a Volume object whose shader reads `grids` (the density's first), in the
+// density's index space: every grid's leaves at `clipping`, moved by face_offset / (voxels across
+// the active box) per axis in object space (face_overlap_avoidance: 0.1 x hash_uint_to_float(
+// hash_string(the Volume datablock's name))). Finished.
+LeafRegion volume_mesh_region(const std::vector<const GridData*>& grids, float clipping, float face_offset);
+
 }  // namespace lt

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <string>
+#include <type_traits>
 
 #include "core/error.h"
 #include "media/grid_lookup.h"
@@ -64,16 +65,10 @@ MajorantGrid MajorantGrid::build(const GridData& grid, int cell, const int* cove
   if (grid.is_nanovdb()) {
     // Every stored value (active or not, voxel or tile) inside the domain raises the cells whose
     // footprint it lies in; regions with no node read the background.
-    using Tree = nanovdb::FloatTree;
-    using Root = Tree::RootType;
-    using Upper = Root::ChildNodeType;
-    using Lower = Upper::ChildNodeType;
-    using Leaf = Lower::ChildNodeType;
     // The lower bounds start at +inf and fall to every stored value met; `covered` counts the
     // footprint voxels met per cell, so that a cell reaching voxels no node stores (they read the
     // background) falls to the background too.
-    const Root& root = as_nano(grid)->tree().root();
-    const float background = root.background();
+    const float background = as_nano(grid)->tree().root().background();
     maj.raise_all(std::max(0.0f, background));
     maj.minima_.assign(maj.values_.size(), INFINITY);
     std::vector<int64_t> covered(maj.values_.size(), 0);
@@ -84,41 +79,20 @@ MajorantGrid MajorantGrid::build(const GridData& grid, int cell, const int* cove
         covered[i] += n;
       });
     };
-    auto add_tile = [&](const nanovdb::Coord& origin, int dim, float v) {
-      int a[3] = {origin[0], origin[1], origin[2]}, b[3];
-      for (int k = 0; k < 3; ++k) b[k] = int(std::min<int64_t>(int64_t(origin[k]) + dim - 1, INT32_MAX));
-      add(a, b, v);
-    };
-    auto visit_leaf = [&](const Leaf* leaf) {
-      for (uint32_t n = 0; n < Leaf::SIZE; ++n) {
-        nanovdb::Coord c = leaf->offsetToGlobalCoord(n);
-        int a[3] = {c[0], c[1], c[2]};
-        add(a, a, leaf->getValue(n));
-      }
-    };
-    auto visit_lower = [&](const Lower* node) {
-      for (uint32_t n = 0; n < Lower::SIZE; ++n) {
-        if (node->data()->isChild(n))
-          visit_leaf(node->data()->getChild(n));
-        else
-          add_tile(node->offsetToGlobalCoord(n), Leaf::DIM, node->data()->getValue(n));
-      }
-    };
-    auto visit_upper = [&](const Upper* node) {
-      for (uint32_t n = 0; n < Upper::SIZE; ++n) {
-        if (node->data()->isChild(n))
-          visit_lower(node->data()->getChild(n));
-        else
-          add_tile(node->offsetToGlobalCoord(n), Lower::DIM, node->data()->getValue(n));
-      }
-    };
-    for (uint32_t i = 0; i < root.tileCount(); ++i) {
-      const auto* tile = root.data()->tile(i);
-      if (tile->isChild())
-        visit_upper(root.data()->getChild(tile));
-      else
-        add_tile(tile->origin(), Upper::DIM, tile->value);
-    }
+    walk_nano_tree(
+        grid,
+        [&](const auto* leaf) {
+          for (uint32_t n = 0; n < std::remove_pointer_t<decltype(leaf)>::SIZE; ++n) {
+            nanovdb::Coord c = leaf->offsetToGlobalCoord(n);
+            int a[3] = {c[0], c[1], c[2]};
+            add(a, a, leaf->getValue(n));
+          }
+        },
+        [&](const nanovdb::Coord& origin, int dim, float v, bool) {
+          int a[3] = {origin[0], origin[1], origin[2]}, b[3];
+          for (int k = 0; k < 3; ++k) b[k] = int(std::min<int64_t>(int64_t(origin[k]) + dim - 1, INT32_MAX));
+          add(a, b, v);
+        });
     for (int z = 0; z < maj.res_[2]; ++z)
       for (int y = 0; y < maj.res_[1]; ++y)
         for (int x = 0; x < maj.res_[0]; ++x) {

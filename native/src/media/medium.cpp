@@ -267,17 +267,10 @@ bool Medium::bounds(Vec3* lo, Vec3* hi) const {
     *lo = *hi = Vec3(0.0f);
     return true;
   }
-  Transform index_to_world = affine_inverse(world_to_index_);
-  *lo = Vec3(INFINITY);
-  *hi = Vec3(-INFINITY);
-  for (int c = 0; c < 8; ++c) {
-    Vec3 q(float((c & 1) ? majorant_.hi()[0] : majorant_.lo()[0]),
-           float((c & 2) ? majorant_.hi()[1] : majorant_.lo()[1]),
-           float((c & 4) ? majorant_.hi()[2] : majorant_.lo()[2]));
-    Vec3 p = index_to_world.point(q);
-    *lo = vmin(*lo, p);
-    *hi = vmax(*hi, p);
-  }
+  const int* a = majorant_.lo();
+  const int* b = majorant_.hi();
+  affine_inverse(world_to_index_)
+      .map_box(Vec3(float(a[0]), float(a[1]), float(a[2])), Vec3(float(b[0]), float(b[1]), float(b[2])), lo, hi);
   return true;
 }
 
