@@ -714,7 +714,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         self.update_progress(1.0 if st.samples_total <= 0 else
                              st.samples_done / st.samples_total)
         if st.nan_samples:
-            self.report({'WARNING'}, "%d samples were not finite and were discarded"
+            self.report({'WARNING'}, "%d samples were not finite (or beyond 1e15) and were discarded"
                         % st.nan_samples)
         if st.unestimated_pixels:
             self.report({'WARNING'}, "%d pixel(s) had fewer than 2 finite samples and are left "

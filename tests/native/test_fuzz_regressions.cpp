@@ -140,3 +140,57 @@ TEST(FuzzRegressions, VdbTileAtTheEdgeOfTheIndexSpace) {
   EXPECT_NE(std::string(lt_last_error()).find("beyond the supported index range"), std::string::npos)
       << lt_last_error();
 }
+
+// fuzz_abi: a Diffuse BSDF of colour 1.7e38 (finite) under BIDIRECTIONAL at 3 samples: the Diffuse
+// Color pass's float sum overflowed to infinity (Combined keeps a running mean, the light passes
+// sums). The render job checked only a sample's Combined, Albedo and Normal for NaN; now every
+// value a sample writes must lie within kMaxSampleValue (1e15), else the sample is dropped and
+// counted (lt_render_status::nan_samples), for each integrator.
+TEST(FuzzRegressions, ClosureColourNearTheFloatLimitLeavesEveryPassFinite) {
+  using namespace lt_test;
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL, LT_INTEGRATOR_VOLPATH}) {
+    ScenePtr s = new_scene();
+    ShaderCode p;
+    p.diffuse(p.one(), {1.7e38f, 0.5f, -3.375f});
+    add_object(s.get(), plane(4, 4), add_material(s.get(), p));
+    set_world(s.get(), {0.5f, 0.5f, 0.5f}, 1);
+    set_camera(s.get(), perspective_camera(look_at({0, -3, 2}, {0, 0, 0})));
+    check(lt_scene_commit(s.get()), "commit");
+    lt_render_settings rs = render_settings(8, 6, 3);
+    rs.integrator = integrator;
+    Passes out = render(s.get(), rs);
+    EXPECT_EQ(out.status.state, LT_STATE_DONE);
+    EXPECT_EQ(out.first_non_finite(), "") << "integrator " << integrator;
+    EXPECT_GT(out.status.nan_samples, 0u) << "integrator " << integrator;
+  }
+}
+
+// fuzz_abi (on CI): an instance sheared by 1e34 (x += 1e34 z; determinant 1, so invertible) took
+// the camera's rays into its object space beyond what Embree traverses, and Debian's Embree
+// asserts there (RayK::valid()): an abort. Such an instance is now baked into world space (as a
+// flattened one); the plane at z = 0 it transforms is the same plane, so it renders as the plain
+// one does.
+TEST(FuzzRegressions, ExtremeShearRendersAsItsWorldSpaceShape) {
+  using namespace lt_test;
+  auto render_plane = [](const Xform& xf) {
+    ScenePtr s = new_scene();
+    add_object(s.get(), plane(4, 4), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), xf);
+    set_world(s.get(), {0.5f, 0.5f, 0.5f}, 1);
+    set_camera(s.get(), perspective_camera(look_at({0, -3, 2}, {0, 0, 0})));
+    check(lt_scene_commit(s.get()), "commit");
+    return render(s.get(), render_settings(16, 12, 4));
+  };
+  const Passes plain = render_plane(identity());
+  Xform shear = identity();
+  shear[2] = 1.04657e34f;
+  const Passes sheared = render_plane(shear);
+  ASSERT_EQ(sheared.status.state, LT_STATE_DONE);
+  ASSERT_EQ(sheared.first_non_finite(), "");
+  double a = 0, b = 0;
+  for (size_t i = 0; i < plain.combined.size(); ++i) {
+    a += plain.combined[i];
+    b += sheared.combined[i];
+  }
+  EXPECT_GT(a, 0);
+  EXPECT_NEAR(b, a, 1e-4 * a);
+}

@@ -688,7 +688,7 @@ typedef struct lt_render_status {
   int samples_total;
   double elapsed_seconds;
   double remaining_seconds; /* estimate; negative when unknown */
-  uint64_t nan_samples;     /* samples discarded because they were not finite */
+  uint64_t nan_samples;     /* samples discarded: a value not finite or beyond 1e15 in magnitude */
   uint64_t rays;            /* rays traced so far */
   /* Estimated relative error of the Combined image after the last pass: the RMS error relative to
    * the RMS of the converged image, sqrt(E[sum_pc (I_pc - R_pc)^2] / sum_pc R_pc^2) over pixels p

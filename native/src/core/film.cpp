@@ -14,6 +14,22 @@
 
 namespace lt {
 
+bool SampleValue::in_range(int lightgroup_count, int aov_floats, bool light_passes) const {
+  bool ok = true;  // bitwise &: no branch per value
+  const auto check = [&ok](float v) { ok &= lt::in_range(v); };
+  const auto check3 = [&ok](const Vec3& v) { ok &= lt::in_range(v.x) & lt::in_range(v.y) & lt::in_range(v.z); };
+  for (float v : {alpha, depth, mist, object_index, material_index, crypto_weight, vector_weight, matte_transparent,
+                  catcher_split, vector[0], vector[1], vector[2], vector[3]})
+    check(v);
+  for (const Vec3& v : {radiance, normal, albedo, position, uv, ao, catcher, matte, background}) check3(v);
+  if (light_passes)
+    for (const Spectrum& v : light) check3(v);
+  for (float c : crypto_id) ok &= std::isfinite(c);  // hashes: any finite float
+  for (int i = 0; lightgroups && i < lightgroup_count; ++i) check3(lightgroups[i]);
+  for (int i = 0; aovs && i < aov_floats; ++i) check(aovs[i]);
+  return ok;
+}
+
 namespace {
 constexpr int kFilterTableSize = 1024;
 constexpr int kGuidePerBin = 8;  // guide cells per bin: the walk after the lookup is short even in the tails

@@ -65,6 +65,13 @@ struct LightgroupShares {
   Spectrum share[kMax];
 };
 
+// The largest magnitude a sample's value may have: the film's float sums over samples (and their
+// squares, for Variance) hold about 1e8 samples of it. No light of a real scene comes near (a 1 MW
+// point light 10 um away gives about 1e14); a sample beyond it is dropped as a NaN one is.
+constexpr float kMaxSampleValue = 1e15f;
+inline bool in_range(float v) { return std::abs(v) <= kMaxSampleValue; }  // false for NaN
+inline bool in_range(const Vec3& v) { return in_range(v.x) && in_range(v.y) && in_range(v.z); }
+
 struct SampleValue {
   Spectrum radiance{0.0f};
   float alpha = 0;
@@ -114,6 +121,12 @@ struct SampleValue {
   // ray sees directly or behind the catcher (PASS_BACKGROUND, for the approximate Combined).
   Spectrum catcher{0.0f}, matte{0.0f}, background{0.0f};
   float matte_transparent = 0, catcher_split = 0;
+
+  // Whether every value the film reads from this sample (with `lightgroup_count` groups,
+  // `aov_floats` AOV floats, the light parts when `light_passes`) is within kMaxSampleValue (so
+  // neither NaN nor infinite): the render job drops and counts a sample that is not, so that an
+  // extreme material (a colour of 1e38) cannot put an infinity into any pass.
+  bool in_range(int lightgroup_count, int aov_floats, bool light_passes) const;
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).

@@ -405,6 +405,22 @@ bool finite_transform(const Transform& xf) {
 }
 // Embree instances need an inverse.
 bool invertible(const Transform& xf) { return std::abs(xf.determinant()) > 1e-30f; }
+// The scale of an instance's inverse (its linear part's row-sum norm), which Embree applies to
+// every ray reaching the instance; INFINITY when it passes kMaxInverseNorm or takes the origin
+// beyond half the traceable range (such an instance is baked into world space).
+constexpr float kMaxInverseNorm = 1e8f;
+float inverse_norm(const Transform& xf) {
+  const Transform inv = affine_inverse(xf);
+  float norm = 0, offset = 0;
+  for (int row = 0; row < 3; ++row) {
+    const float* m = &inv.m[4 * row];
+    norm = std::max(norm, std::abs(m[0]) + std::abs(m[1]) + std::abs(m[2]));
+    offset = std::max(offset, std::abs(m[3]));
+  }
+  return norm <= kMaxInverseNorm && offset <= kTraceableRange / 2 ? norm : INFINITY;  // NaN: INFINITY
+}
+// Whether Embree can instance this transform (else the mesh is baked into world space).
+bool instanceable(const Transform& xf) { return invertible(xf) && std::isfinite(inverse_norm(xf)); }
 // Whether any triangle keeps an area: the linear part has rank 2 or more, i.e. its cofactor
 // matrix (the normal rows) is not zero. Objects scaled to a line or a point (often how animators
 // hide them) are left out rather than baked.
@@ -451,8 +467,8 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
   const int id = int(instances_.size());
   set_transform(inst, inst.xf);
   if (!inst.motion.empty()) {
-    bool usable = inst.motion.size() >= 2 && finite_transform(inst.xf) && invertible(inst.xf);
-    for (const Transform& m : inst.motion) usable = usable && finite_transform(m) && invertible(m);
+    bool usable = inst.motion.size() >= 2 && finite_transform(inst.xf) && instanceable(inst.xf);
+    for (const Transform& m : inst.motion) usable = usable && finite_transform(m) && instanceable(m);
     if (usable) {
       inst.motion_decomposed = decompose_motion(inst.motion);
       drop_redundant_steps(inst);
@@ -522,21 +538,36 @@ void Geometry::build_top() {
   top_ = rtcNewScene(device_);
   if (partial_visibility_) rtcSetSceneFlags(top_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   bounds_ = Bounds();
+  float largest = 0;  // inverse_norm over Embree's instances, their motion steps and between them
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
     const Mesh& m = meshes_[inst.mesh];
     if (!m.rtc || !finite_transform(inst.xf) || !keeps_area(inst)) continue;
-    const bool flat = !invertible(inst.xf);
+    const bool flat = !instanceable(inst.xf);
     if (flat && !m.is_triangles()) continue;  // curves and spheres of a flattened object: left out
+    const bool moving = !flat && !inst.motion.empty();
+    if (!flat && baked_[i].rtc) {  // an edit made it instanceable again
+      rtcReleaseScene(baked_[i].rtc);
+      baked_[i].rtc = nullptr;
+    }
+    if (!flat) {
+      std::vector<Transform> poses{inst.xf};
+      if (moving)  // Embree interpolates the decomposition: its inverse between steps, sampled
+        for (int k = 0; k <= 8 * int(inst.motion.size()); ++k)
+          poses.push_back(interpolate_motion(inst.motion_decomposed, float(k) / float(8 * inst.motion.size())));
+      for (const Transform& xf : poses) {
+        largest = std::max(largest, std::min(inverse_norm(xf), kMaxInverseNorm));  // (between steps: capped)
+      }
+    }
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, flat ? baked_scene(int(i)) : m.rtc);
-    if (!inst.motion.empty() && same_rotation(inst.motion_decomposed)) {
+    if (moving && same_rotation(inst.motion_decomposed)) {
       // No rotation changes: interpolating the matrices linearly is Cycles' interpolation (M =
       // T + R S is linear in T and S), and Embree traverses it faster than quaternion motion.
       rtcSetGeometryTimeStepCount(g, unsigned(inst.motion.size()));
       for (size_t s = 0; s < inst.motion.size(); ++s)
         rtcSetGeometryTransform(g, unsigned(s), RTC_FORMAT_FLOAT3X4_ROW_MAJOR, inst.motion[s].m);
-    } else if (!inst.motion.empty()) {
+    } else if (moving) {
       // Cycles' instance motion on Embree (bvh/embree.cpp): one quaternion decomposition a step.
       rtcSetGeometryTimeStepCount(g, unsigned(inst.motion.size()));
       for (size_t s = 0; s < inst.motion_decomposed.size(); ++s) {
@@ -560,7 +591,7 @@ void Geometry::build_top() {
     // the curves' and points' keys grown by their radius.
     const std::vector<Vec3>& ps = m.motion_steps > 1 ? m.motion_positions : m.positions;
     const std::vector<Transform> still{inst.xf};
-    for (const Transform& xf : inst.motion.empty() ? still : inst.motion) {
+    for (const Transform& xf : moving ? inst.motion : still) {
       for (const Vec3& p : ps) bounds_.extend(xf.point(p));
       const std::vector<float>& keys = m.curves.motion_steps > 1 ? m.curves.motion_cps : m.curves.cps;
       for (size_t k = 0; k + 3 < keys.size(); k += 4) {
@@ -572,6 +603,11 @@ void Geometry::build_top() {
   }
   rtcCommitScene(top_);
   ++top_builds_;
+  // |L^-1 o + L^-1 t| <= norm |o| + |L^-1 t| (the latter <= half the range): origins within half the
+  // range over the norm stay traceable in every instance, directions within the range over it.
+  const float norm = std::max(largest, 1.0f);
+  ray_origin_limit_ = largest > 0 ? kTraceableRange / 2 / norm : kTraceableRange;
+  ray_direction_limit_ = largest > 0 ? kTraceableRange / norm : kTraceableRange;
 }
 
 // The instance's mesh in world space, its triangles in the mesh's order (hits keep their
@@ -599,10 +635,15 @@ RTCScene Geometry::baked_scene(int instance) {
   return b.rtc;
 }
 
-namespace {
-bool traceable(const Ray& r) {
-  return within_traceable_range(r.o) && within_traceable_range(r.d) && !std::isnan(r.tmin) && !std::isnan(r.tmax);
+bool Geometry::traceable(const Ray& r) const {
+  const auto within = [](const Vec3& v, float limit) {
+    return std::abs(v.x) <= limit && std::abs(v.y) <= limit && std::abs(v.z) <= limit;
+  };
+  return within(r.o, ray_origin_limit_) && within(r.d, ray_direction_limit_) && !std::isnan(r.tmin) &&
+         !std::isnan(r.tmax);
 }
+
+namespace {
 
 // The closest hit in `scene` along (o, d) over the ray's extent at its time: t (the same along
 // (o, d) as along the ray), Embree's instance id (none in a mesh's own scene), primitive,

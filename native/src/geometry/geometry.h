@@ -189,7 +189,8 @@ class Geometry {
   uint64_t top_builds() const { return top_builds_; }
 
   // Closest hit among instances visible to rays of the given visibility bit. A ray outside
-  // kTraceableRange (or with a NaN direction or extent) hits nothing and is occluded.
+  // kTraceableRange, or beyond what an instance's object space holds (ray_origin_limit_), or with
+  // a NaN direction or extent, hits nothing and is occluded.
   bool intersect(const Ray& ray, unsigned visibility, Hit* hit) const;
   // Any hit among instances visible to rays of the given visibility bit (default: those that cast
   // shadows).
@@ -253,13 +254,20 @@ class Geometry {
   std::vector<unsigned> rtc_to_instance_;  // Embree instance geometry id -> our instance index
   std::vector<unsigned> instance_visibility_;
   // Instances whose transform flattens the mesh (zero scale on an axis: no inverse, which Embree's
-  // instancing needs) are traced through a copy of the mesh baked into world space, rebuilt when
-  // the transform changes (Cycles 3.4 renders such objects black).
+  // instancing needs), or whose inverse would take rays beyond what Embree traverses (a scale
+  // below 1e-8, an extreme shear), are traced through a copy of the mesh baked into world space,
+  // rebuilt when the transform changes (Cycles 3.4 renders flattened objects black).
   struct Baked {
     RTCScene rtc = nullptr;
     Transform xf;
   };
   std::vector<Baked> baked_;  // per instance
+  // Embree takes a ray into an instance's object space by the inverse transform and needs it
+  // within kTraceableRange there too: world rays are kept within these limits, set by build_top
+  // from the largest inverse among Embree's instances (instances whose inverse is larger than
+  // kMaxInverseNorm are baked instead, so the limits stay far beyond any scene's size).
+  float ray_origin_limit_ = kTraceableRange, ray_direction_limit_ = kTraceableRange;
+  bool traceable(const Ray& r) const;
   Bounds bounds_;
   bool partial_visibility_ = false;
   bool has_shadow_catcher_ = false;

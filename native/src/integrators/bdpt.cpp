@@ -870,7 +870,7 @@ void Bdpt::splat_t1(std::vector<PathVertex>& light, std::vector<PathVertex>& cam
           if (pdf(z0, nullptr, qs, pixel) > 0) d_first = d;
         }
         Spectrum v = base * (d * w);
-        if (is_finite(v) && !is_black(v))
+        if (in_range(v) && !is_black(v))
           splats.push_back({uint32_t((py - ctx_.y0) * ctx_.width + (px - ctx_.x0)), v,
                             strategies_ ? strategy_cell(s, 1, s_.strategy_depth) : -1, s - 1, first,
                             lights_.lightgroup(light[0].light)});

@@ -7,6 +7,8 @@
 // emitters seen directly (through transparent surfaces too) are Emission, the world Environment.
 #pragma once
 
+#include <cmath>
+
 #include "core/film.h"
 #include "shading/bsdf.h"
 
@@ -21,9 +23,10 @@ struct FirstBounce {
   void set_surface(const Spectrum* kinds) {
     const Spectrum sum = kinds[0] + kinds[1] + kinds[2];
     volume = false;
-    for (int k = 0; k < 3; ++k) {
-      share[0][k] = sum[k] != 0 ? kinds[0][k] / sum[k] : 0.0f;
-      share[1][k] = sum[k] != 0 ? kinds[1][k] / sum[k] : 0.0f;
+    for (int k = 0; k < 3; ++k) {  // (an overflowing sum files everything as transmission)
+      const bool split = sum[k] != 0 && std::isfinite(sum[k]);
+      share[0][k] = split ? kinds[0][k] / sum[k] : 0.0f;
+      share[1][k] = split ? kinds[1][k] / sum[k] : 0.0f;
     }
     share[2] = Spectrum(1.0f) - share[0] - share[1];
   }
