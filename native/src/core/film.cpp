@@ -14,22 +14,6 @@
 
 namespace lt {
 
-bool SampleValue::in_range(int lightgroup_count, int aov_floats, bool light_passes) const {
-  bool ok = true;  // bitwise &: no branch per value
-  const auto check = [&ok](float v) { ok &= lt::in_range(v); };
-  const auto check3 = [&ok](const Vec3& v) { ok &= lt::in_range(v.x) & lt::in_range(v.y) & lt::in_range(v.z); };
-  for (float v : {alpha, depth, mist, object_index, material_index, crypto_weight, vector_weight, matte_transparent,
-                  catcher_split, vector[0], vector[1], vector[2], vector[3]})
-    check(v);
-  for (const Vec3& v : {radiance, normal, albedo, position, uv, ao, catcher, matte, background}) check3(v);
-  if (light_passes)
-    for (const Spectrum& v : light) check3(v);
-  for (float c : crypto_id) ok &= std::isfinite(c);  // hashes: any finite float
-  for (int i = 0; lightgroups && i < lightgroup_count; ++i) check3(lightgroups[i]);
-  for (int i = 0; aovs && i < aov_floats; ++i) check(aovs[i]);
-  return ok;
-}
-
 namespace {
 constexpr int kFilterTableSize = 1024;
 constexpr int kGuidePerBin = 8;  // guide cells per bin: the walk after the lookup is short even in the tails
@@ -265,6 +249,40 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
     strategies_.assign(n * layout_.strategy_cells * 3, 0.0f);
     strategy_splats_.assign(strategies_.size(), 0.0f);
   }
+}
+
+bool Film::accepts(const SampleValue& s) const {
+  bool ok = true;  // bitwise &: no branch per value
+  const auto check = [&ok](float v) { ok &= in_range(v); };
+  const auto check3 = [&ok](const Vec3& v) { ok &= in_range(v.x) & in_range(v.y) & in_range(v.z); };
+  check3(s.radiance);
+  check(s.alpha);
+  check(s.depth);  // (the denoising features derive from it and the normal)
+  check3(s.normal);
+  check3(s.albedo);
+  constexpr unsigned kLightPasses = (pass_bit(Pass::Environment) << 1) - pass_bit(Pass::DiffuseDirect);
+  if (layout_.passes & kLightPasses)
+    for (const Spectrum& v : s.light) check3(v);
+  if (has(Pass::Position)) check3(s.position);
+  if (has(Pass::UV)) check3(s.uv);
+  if (has(Pass::Mist)) check(s.mist);
+  if (has(Pass::ObjectIndex)) check(s.object_index);
+  if (has(Pass::MaterialIndex)) check(s.material_index);
+  if (has(Pass::AO)) check3(s.ao);
+  if (has(Pass::Vector))
+    for (float v : {s.vector[0], s.vector[1], s.vector[2], s.vector[3], s.vector_weight}) check(v);
+  if (layout_.cryptomatte) {
+    check(s.crypto_weight);
+    for (float c : s.crypto_id) ok &= std::isfinite(c);  // hashes: any finite float
+  }
+  if (layout_.shadow_catcher) {
+    for (const Vec3& v : {s.catcher, s.matte, s.background}) check3(v);
+    check(s.matte_transparent);
+    check(s.catcher_split);
+  }
+  for (int i = 0; s.lightgroups && i < layout_.lightgroups; ++i) check3(s.lightgroups[i]);
+  for (int i = 0; s.aovs && i < 4 * layout_.aovs; ++i) check(s.aovs[i]);
+  return ok;
 }
 
 void Film::add(int x, int y, const SampleValue& s) {

@@ -121,12 +121,6 @@ struct SampleValue {
   // ray sees directly or behind the catcher (PASS_BACKGROUND, for the approximate Combined).
   Spectrum catcher{0.0f}, matte{0.0f}, background{0.0f};
   float matte_transparent = 0, catcher_split = 0;
-
-  // Whether every value the film reads from this sample (with `lightgroup_count` groups,
-  // `aov_floats` AOV floats, the light parts when `light_passes`) is within kMaxSampleValue (so
-  // neither NaN nor infinite): the render job drops and counts a sample that is not, so that an
-  // extreme material (a colour of 1e38) cannot put an infinity into any pass.
-  bool in_range(int lightgroup_count, int aov_floats, bool light_passes) const;
 };
 
 // NoisyImage: Combined before denoising (equal to Combined when the render is not denoised).
@@ -272,6 +266,11 @@ class Film {
   int width() const { return width_; }
   int height() const { return height_; }
   bool has(Pass pass) const { return (layout_.passes & pass_bit(pass)) != 0; }
+  // Whether every value of s this film keeps lies within kMaxSampleValue (so is neither NaN nor
+  // infinite): the render job drops and counts a sample that does not, so that an extreme
+  // material (a colour of 1e38) cannot put an infinity into any pass. Only the kept passes are
+  // read: the check costs a few nanoseconds a sample when the film keeps Combined alone.
+  bool accepts(const SampleValue& s) const;
   bool has_features() const { return !feature_.empty(); }
   const FilmLayout& layout() const { return layout_; }
   // Only the thread that owns the pixel in the current pass writes it.

@@ -148,7 +148,6 @@ void RenderJob::render_pass(int sample_index) {
     SampleStats stats;
     uint64_t nans = 0, traced = 0, traced_half = 0;
     const int groups = film_.lightgroups(), aov_floats = 4 * film_.aovs();
-    const bool light_passes = film_.has_light_passes();
     std::vector<Spectrum> lightgroups;
     std::vector<float> aovs;
     for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
@@ -199,7 +198,7 @@ void RenderJob::render_pass(int sample_index) {
             }
             size_t splat_mark = splats.size();
             SampleValue v = integrator_->trace(cs, sampler, stats, splats);
-            if (!v.in_range(groups, aov_floats, light_passes)) {
+            if (!film_.accepts(v)) {
               ++nans;  // never written into the film; counted in the render statistics
               splats.resize(splat_mark);
               continue;
