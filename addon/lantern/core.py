@@ -16,7 +16,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 21
+ABI_VERSION = 22
 
 # lt_status
 OK = 0
@@ -135,6 +135,8 @@ class ImageDesc(ctypes.Structure):
         ("interpolation", ctypes.c_int),
         ("extension", ctypes.c_int),
         ("alpha", ctypes.c_int),
+        ("ocio_config", ctypes.c_char_p),
+        ("ocio_space", ctypes.c_char_p),
     ]
 
 
@@ -763,11 +765,14 @@ class Scene:
         return out.value
 
     def add_image_filled(self, fill, width, height, channels, srgb=False,
-                         interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT, alpha=ALPHA_IGNORE):
+                         interpolation=INTERP_LINEAR, extension=EXTENSION_REPEAT, alpha=ALPHA_IGNORE,
+                         ocio=None):
         """Adds an image whose pixels `fill(array)` writes into the core's own buffer (a float32
-        array of width*height*channels): the pixels are copied once. Returns the image id."""
+        array of width*height*channels): the pixels are copied once. ocio: the (configuration file,
+        colour space name) a byte image's values b / 255 are converted from. Returns the image id."""
+        config, space = (os.fsencode(ocio[0]), ocio[1].encode()) if ocio else (None, None)
         d = ImageDesc(int(width), int(height), int(channels), None, int(bool(srgb)),
-                      int(interpolation), int(extension), int(alpha))
+                      int(interpolation), int(extension), int(alpha), config, space)
         ptr = ctypes.POINTER(ctypes.c_float)()
         _check(self._lib.lt_scene_begin_image(self.handle, ctypes.byref(d), ctypes.byref(ptr)),
                "lt_scene_begin_image")

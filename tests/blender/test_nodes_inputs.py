@@ -825,11 +825,13 @@ def test_shader_to_rgb_as_cycles(output, outdir):
 
 
 @pytest.mark.parametrize("space", ["Filmic Log", "Filmic sRGB", "Linear ACES", "Linear ACEScg", "XYZ"])
-@pytest.mark.parametrize("channels", [3, 1])
-def test_image_file_colour_space_as_cycles(space, channels, tmp_path, outdir):
-    """An 8-bit PNG (RGB or grey, every byte value present) in each of Blender 3.4's other input
-    colour spaces: converted to scene linear with OpenColorIO as Cycles converts it (half floats),
-    pixel by pixel against Cycles (Closest texels, 6 pixels each)."""
+@pytest.mark.parametrize("channels,packed", [(3, False), (1, False), (3, True), (4, True)])
+def test_image_colour_space_as_cycles(space, channels, packed, tmp_path, outdir):
+    """An 8-bit PNG (RGB, grey or RGBA, every byte value present) in each of Blender 3.4's other
+    input colour spaces: converted to scene linear with OpenColorIO as Cycles converts it (half
+    floats; RGBA associated, divided by alpha around the conversion), pixel by pixel against Cycles
+    (Closest texels, 6 pixels each). The file the core reads itself, or the image packed into the
+    .blend, whose byte values come from Blender (Image.pixels) and which the core converts."""
     import bpy
     import numpy as np
 
@@ -840,6 +842,8 @@ def test_image_file_colour_space_as_cycles(space, channels, tmp_path, outdir):
 
     def build(nt, coords):
         img = bpy.data.images.load(path)
+        if packed:
+            img.pack()
         img.colorspace_settings.name = space
         tex = _image_node(nt, img, interpolation="Closest", extension="EXTEND")
         shift = node(nt, "ShaderNodeVectorMath", {"operation": "MULTIPLY_ADD"})
@@ -848,4 +852,4 @@ def test_image_file_colour_space_as_cycles(space, channels, tmp_path, outdir):
         shift.inputs[2].default_value = (0.5, 0.5, 0.5)
         nt.links.new(shift.outputs[0], tex.inputs["Vector"])
         return tex.outputs["Color"]
-    compare_view(build, "image_space_%s_%d" % (space.replace(" ", "_"), channels), outdir)
+    compare_view(build, "image_space_%s_%d%s" % (space.replace(" ", "_"), channels, "_packed" * packed), outdir)

@@ -133,7 +133,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     int id = 0;
     switch (op) {
       case lt_fuzz::kAddImage: {
-        lt_image_desc d;
+        lt_image_desc d{};  // the colour space strings stay NULL
         d.width = 1 + small(r, lt_fuzz::kMaxImageSide);
         d.height = 1 + small(r, lt_fuzz::kMaxImageSide);
         d.channels = r.i8();

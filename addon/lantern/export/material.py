@@ -56,8 +56,6 @@ class ImageExporter:
                                      % (where, extension))
             ext = core.EXTENSION_REPEAT
         space = image.colorspace_settings.name
-        unsupported_space = ("%s: image '%s' colour space '%s' is converted only for 8-bit RGB or grey "
-                             "files Lantern reads itself; its values are used as linear" % (where, image.name, space))
         path = image_file(image)
         if path is not None:
             other = _color_space(image) == "OTHER"
@@ -82,24 +80,25 @@ class ImageExporter:
                                      "magenta (as Cycles)" % (where, image.name))
             self.ids[key] = None
             return None
-        # Byte images give their stored values: sRGB-encoded when the colour space is sRGB.
-        # Float images are already linear; Non-Color data is raw.
+        # Byte images give their stored values: sRGB-encoded when the colour space is sRGB, the
+        # core converts other spaces (OpenColorIO, as Cycles converts them). Float images are
+        # already linear; Non-Color data is raw.
         srgb = (not image.is_float) and space == 'sRGB'
-        if space not in _SPACES_USED and not image.is_float:
-            self.report({'WARNING'}, unsupported_space)
+        other = not image.is_float and _color_space(image) == "OTHER"
         # Blender's pixels go straight into the core's buffer (one copy); the core keeps byte
         # images at 8 bits (their values are exactly b / 255), and alpha where it is not 1.
-        image_id = self.core_scene.add_image_filled(image.pixels.foreach_get, width, height,
-                                                    channels, srgb=srgb, interpolation=interp,
-                                                    extension=ext, alpha=_alpha_mode(image) if alpha else
-                                                    core.ALPHA_IGNORE)
+        try:
+            image_id = self.core_scene.add_image_filled(
+                image.pixels.foreach_get, width, height, channels, srgb=srgb, interpolation=interp,
+                extension=ext, alpha=_alpha_mode(image) if alpha else core.ALPHA_IGNORE,
+                ocio=(ocio_config(), space) if other else None)
+        except core.LanternError as e:  # a colour space OpenColorIO cannot convert
+            self.report({'WARNING'}, "%s: image '%s': %s; it renders magenta (as Cycles)"
+                                     % (where, image.name, e.detail))
+            self.ids[key] = None
+            return None
         self.ids[key] = image_id
         return image_id
-
-
-# Colour spaces whose byte values Image.pixels gives usable (sRGB decoded, the others as linear); the
-# core converts the others (OpenColorIO) only in files it reads itself.
-_SPACES_USED = {'sRGB', 'Non-Color', 'Linear', 'Raw'}
 
 
 def ocio_config():

@@ -55,8 +55,9 @@ extern "C" {
  * objects and World volumes (lt_volume_desc's grid names, lt_scene_set_volume_grid_lightgroup);
  * 20: area lights' spread (lt_light_desc.spread); 21: lt_scene_add_volume_grid's clipping and
  * face_offset (a Volume object's emission confined to Cycles' volume mesh); deforming curves and
- * points (lt_curves_desc.motion_points and motion_step_count). */
-#define LT_ABI_VERSION 21
+ * points (lt_curves_desc.motion_points and motion_step_count); 22: lt_image_desc.ocio_config and
+ * ocio_space (byte images Blender loads in other colour spaces). */
+#define LT_ABI_VERSION 22
 
 enum lt_status {
   LT_OK = 0,
@@ -119,6 +120,13 @@ typedef struct lt_image_desc {
   int interpolation; /* lt_interpolation */
   int extension;     /* lt_extension */
   int alpha;         /* lt_image_alpha */
+  /* A byte image in another colour space (ABI 22; NULL or "": none): ocio_space of the OpenColorIO
+   * configuration file ocio_config, the pixels b / 255 as Blender gives them (srgb must be 0).
+   * Converted to scene linear as Cycles 3.4 loads such an image from Blender (colours associated
+   * with alpha unless it is IGNORE or CHANNEL_PACKED, half floats through OpenColorIO's processor
+   * to the scene_linear role) and held as half floats. Copied: the strings need not outlive the call. */
+  const char* ocio_config;
+  const char* ocio_space;
 } lt_image_desc;
 LT_API int lt_scene_add_image(lt_scene* scene, const lt_image_desc* desc, int* out_id);
 /* The same without a caller's copy of the pixels: lt_scene_begin_image allocates the image's

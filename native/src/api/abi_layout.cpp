@@ -48,6 +48,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_image_desc, interpolation),
     LT_FIELD(lt_image_desc, extension),
     LT_FIELD(lt_image_desc, alpha),
+    LT_FIELD(lt_image_desc, ocio_config),
+    LT_FIELD(lt_image_desc, ocio_space),
     LT_CONST(lt_image_alpha, LT_ALPHA_IGNORE),
     LT_CONST(lt_image_alpha, LT_ALPHA_STRAIGHT),
     LT_CONST(lt_image_alpha, LT_ALPHA_PREMULTIPLIED),

@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <memory>
+#include <string>
 
 #include "lantern/lantern.h"
 #include "render/render.h"
@@ -14,8 +15,9 @@ struct lt_scene {
   lt::Scene scene;
   // lt_scene_begin_image's buffer, until lt_scene_end_image takes it.
   struct PendingImage {
-    lt_image_desc desc{};
+    lt_image_desc desc{};  // its pixels and colour space strings are the members below
     lt::FloatBuffer pixels;
+    std::string ocio_config, ocio_space;
   };
   std::unique_ptr<PendingImage> pending_image;
   std::atomic<int> live_renders{0};  // renders started and not yet destroyed: they read the scene

@@ -204,6 +204,11 @@ void check_image(const lt_image_desc& d) {
   require(
       d.alpha >= LT_ALPHA_IGNORE && d.alpha <= LT_ALPHA_CHANNEL_PACKED,
       "unknown image alpha " + std::to_string(d.alpha) + "; valid: IGNORE, STRAIGHT, PREMULTIPLIED, CHANNEL_PACKED");
+  if (d.ocio_space && *d.ocio_space) {
+    require(d.ocio_config && *d.ocio_config,
+            "colour space '" + std::string(d.ocio_space) + "' without a configuration");
+    require(d.srgb == 0, "an image in colour space '" + std::string(d.ocio_space) + "' is not also sRGB-encoded");
+  }
 }
 
 // lt_interpolation, for images given by the caller and read from files alike (one filter each,
@@ -213,6 +218,19 @@ lt::Interpolation interpolation(int i) {
          : i == LT_INTERP_CUBIC ? lt::Interpolation::Cubic
                                 : lt::Interpolation::Linear;
 }
+
+// An image the caller gives (lt_image_desc), converted from another colour space when it names one.
+std::unique_ptr<lt::Image> given_image(const lt_image_desc& d, lt::FloatBuffer pixels, const std::string& ocio_config,
+                                       const std::string& ocio_space) {
+  if (!ocio_space.empty())
+    return lt::byte_image_to_scene_linear(d.width, d.height, d.channels, std::move(pixels), lt::ImageAlpha(d.alpha),
+                                          interpolation(d.interpolation), lt::Extension(d.extension), ocio_config,
+                                          ocio_space);
+  return std::make_unique<lt::Image>(d.width, d.height, d.channels, std::move(pixels), d.srgb != 0,
+                                     interpolation(d.interpolation), lt::Extension(d.extension),
+                                     lt::ImageAlpha(d.alpha));
+}
+std::string text_or_empty(const char* s) { return s ? s : ""; }
 
 lt::Program to_program(const lt_scene* scene, const lt_shader_program* p) {
   require(p->code_words >= 0 && p->code_words <= lt::kMaxProgramWords,
@@ -279,9 +297,16 @@ int lt_scene_add_image(lt_scene* scene, const lt_image_desc* d, int* out_id) {
     check_image(*d);
     require(d->pixels != nullptr, "image pixels are NULL");
     auto& images = scene->scene.images;
-    images.push_back(std::make_unique<lt::Image>(d->width, d->height, d->channels, d->pixels, d->srgb != 0,
-                                                 interpolation(d->interpolation), lt::Extension(d->extension),
-                                                 lt::ImageAlpha(d->alpha)));
+    const std::string space = d->ocio_space ? d->ocio_space : "";
+    if (space.empty()) {
+      images.push_back(std::make_unique<lt::Image>(d->width, d->height, d->channels, d->pixels, d->srgb != 0,
+                                                   interpolation(d->interpolation), lt::Extension(d->extension),
+                                                   lt::ImageAlpha(d->alpha)));
+    } else {
+      lt::FloatBuffer px(size_t(d->width) * d->height * d->channels);
+      std::memcpy(px.data(), d->pixels, px.size() * sizeof(float));
+      images.push_back(given_image(*d, std::move(px), text_or_empty(d->ocio_config), space));
+    }
     *out_id = int(images.size()) - 1;
   });
 }
@@ -296,6 +321,9 @@ int lt_scene_begin_image(lt_scene* scene, const lt_image_desc* d, float** out_pi
     auto p = std::make_unique<lt_scene::PendingImage>();
     p->desc = *d;
     p->desc.pixels = nullptr;
+    p->ocio_config = text_or_empty(d->ocio_config);
+    p->ocio_space = text_or_empty(d->ocio_space);
+    p->desc.ocio_config = p->desc.ocio_space = nullptr;
     p->pixels = lt::FloatBuffer(size_t(d->width) * d->height * d->channels);
     *out_pixels = p->pixels.data();
     scene->pending_image = std::move(p);
@@ -310,9 +338,7 @@ int lt_scene_end_image(lt_scene* scene, int* out_id) {
     std::unique_ptr<lt_scene::PendingImage> p = std::move(scene->pending_image);
     const lt_image_desc& d = p->desc;
     auto& images = scene->scene.images;
-    images.push_back(std::make_unique<lt::Image>(d.width, d.height, d.channels, std::move(p->pixels), d.srgb != 0,
-                                                 interpolation(d.interpolation), lt::Extension(d.extension),
-                                                 lt::ImageAlpha(d.alpha)));
+    images.push_back(given_image(d, std::move(p->pixels), p->ocio_config, p->ocio_space));
     *out_id = int(images.size()) - 1;
   });
 }

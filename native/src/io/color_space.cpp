@@ -60,25 +60,34 @@ OCIO::ConstCPUProcessorRcPtr processor(const std::string& config, const std::str
 
 void halves_to_scene_linear(const std::string& config, const std::string& space, uint16_t* pixels, size_t n,
                             int channels) {
-  if (channels != 1 && channels != 3) throw InvalidArgument("halves_to_scene_linear: 1 or 3 channels");
+  if (channels != 1 && channels != 3 && channels != 4)
+    throw InvalidArgument("halves_to_scene_linear: 1, 3 or 4 channels");
   const OCIO::ConstCPUProcessorRcPtr p = processor(config, space);
+  const auto weighted = [](float a) { return !(a <= 0.0f || a == 1.0f); };
   // In chunks, as Cycles' processor_apply_pixels: a few rows' worth of floats at a time.
   constexpr size_t kChunk = 1 << 16;
   std::vector<float> rgb(3 * std::min(n, kChunk));
   for (size_t start = 0; start < n; start += kChunk) {
     const size_t count = std::min(kChunk, n - start);
     uint16_t* px = pixels + start * size_t(channels);
-    for (size_t i = 0; i < count; ++i)
-      for (int k = 0; k < 3; ++k)
-        rgb[3 * i + k] = cycles_half_to_float(px[i * size_t(channels) + (channels == 3 ? k : 0)]);
+    for (size_t i = 0; i < count; ++i) {
+      const uint16_t* v = px + i * size_t(channels);
+      const float a = channels == 4 ? cycles_half_to_float(v[3]) : 1.0f;
+      for (int k = 0; k < 3; ++k) {
+        rgb[3 * i + k] = cycles_half_to_float(v[channels == 1 ? 0 : k]);
+        if (weighted(a)) rgb[3 * i + k] *= 1.0f / a;
+      }
+    }
     OCIO::PackedImageDesc desc(rgb.data(), long(count), 1, 3);
     p->apply(desc);
     for (size_t i = 0; i < count; ++i) {
-      if (channels == 3) {
-        for (int k = 0; k < 3; ++k) px[3 * i + k] = cycles_float_to_half(rgb[3 * i + k]);
-      } else {
-        px[i] = cycles_float_to_half((rgb[3 * i] + rgb[3 * i + 1] + rgb[3 * i + 2]) * (1.0f / 3.0f));
+      uint16_t* v = px + i * size_t(channels);
+      if (channels == 1) {
+        v[0] = cycles_float_to_half((rgb[3 * i] + rgb[3 * i + 1] + rgb[3 * i + 2]) * (1.0f / 3.0f));
+        continue;
       }
+      const float a = channels == 4 ? cycles_half_to_float(v[3]) : 1.0f;
+      for (int k = 0; k < 3; ++k) v[k] = cycles_float_to_half(weighted(a) ? rgb[3 * i + k] * a : rgb[3 * i + k]);
     }
   }
 }

@@ -329,4 +329,24 @@ std::unique_ptr<Image> read_image_file(const ImageFileRequest& r) {
   return std::make_unique<Image>(w, h, c, std::move(px), false, r.interp, r.ext, core_alpha(r, true));
 }
 
+std::unique_ptr<Image> byte_image_to_scene_linear(int width, int height, int channels, FloatBuffer pixels,
+                                                  ImageAlpha alpha, Interpolation interp, Extension ext,
+                                                  const std::string& ocio_config, const std::string& ocio_space) {
+  const size_t n = size_t(width) * height;
+  const bool rgba = channels == 4, associate = alpha == ImageAlpha::Straight || alpha == ImageAlpha::Premultiplied;
+  HalfBuffer px(n * size_t(channels));
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &pixels[i * size_t(channels)];
+    uint16_t* h = &px[i * size_t(channels)];
+    const float a = !rgba || alpha == ImageAlpha::Ignore ? 1.0f : v[3];
+    for (int k = 0; k < (rgba ? 3 : channels); ++k) h[k] = cycles_float_to_half(associate ? v[k] * a : v[k]);
+    if (rgba) h[3] = cycles_float_to_half(a);
+  }
+  pixels.reset();
+  halves_to_scene_linear(ocio_config, ocio_space, px.data(), n, channels);
+  // Straight colours are associated now (never Straight for halves: Image's constructor).
+  const ImageAlpha held = alpha == ImageAlpha::Straight ? ImageAlpha::Premultiplied : alpha;
+  return std::make_unique<Image>(width, height, channels, std::move(px), interp, ext, held);
+}
+
 }  // namespace lt

@@ -47,4 +47,13 @@ std::unique_ptr<Image> read_image_file(const ImageFileRequest& request);
 // A Radiance (.hdr) file, decoded as Blender does (read_image_file calls it for them).
 std::unique_ptr<Image> read_radiance(const ImageFileRequest& request);
 
+// A byte image Blender holds in another colour space (packed, generated, or a file it loads), given
+// as Image.pixels gives it (channels 1, 3 or 4 floats b / 255), converted as Cycles 3.4 loads it
+// from Blender (blender/image.cpp's half pixels, the colours associated with alpha unless alpha is
+// Ignore or ChannelPacked, an ignored alpha set to 1; then halves_to_scene_linear) and held as
+// half floats. Takes the caller's buffer.
+std::unique_ptr<Image> byte_image_to_scene_linear(int width, int height, int channels, FloatBuffer pixels,
+                                                  ImageAlpha alpha, Interpolation interp, Extension ext,
+                                                  const std::string& ocio_config, const std::string& ocio_space);
+
 }  // namespace lt
