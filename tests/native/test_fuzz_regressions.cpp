@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <string>
 #include <vector>
@@ -32,6 +33,21 @@ void append(std::vector<uint8_t>& out, const std::string& s) {
 
 void append_u32(std::vector<uint8_t>& out, uint32_t v) {
   for (int k = 0; k < 4; ++k) out.push_back(uint8_t(v >> (8 * k)));
+}
+
+// A 4 x 4 plane of the material `material` makes, transformed by xf, under a uniform grey world of
+// strength `world`, seen from (0, -3, 2); rendered at w x h with `samples` by `integrator`.
+lt_test::Passes render_plane(const std::function<int(lt_scene*)>& material, float world, int integrator, int w, int h,
+                             int samples, const lt_test::Xform& xf = lt_test::identity()) {
+  using namespace lt_test;
+  ScenePtr s = new_scene();
+  add_object(s.get(), plane(4, 4), material(s.get()), xf);
+  set_world(s.get(), {0.5f, 0.5f, 0.5f}, world);
+  set_camera(s.get(), perspective_camera(look_at({0, -3, 2}, {0, 0, 0})));
+  check(lt_scene_commit(s.get()), "commit");
+  lt_render_settings rs = render_settings(w, h, samples);
+  rs.integrator = integrator;
+  return render(s.get(), rs);
 }
 
 }  // namespace
@@ -86,14 +102,11 @@ TEST(FuzzRegressions, ExrAttributeSizeBeyondTheFileIsRefusedBeforeAllocating) {
 // through a null pointer (UBSan; a segmentation fault in Release builds).
 TEST(FuzzRegressions, BidirectionalRenderWithoutLightsIsBlack) {
   using namespace lt_test;
-  ScenePtr s = new_scene();
-  add_object(s.get(), plane(4, 4), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}));
-  set_world(s.get(), {0, 0, 0}, 0);
-  set_camera(s.get(), perspective_camera(look_at({0, -3, 2}, {0, 0, 0})));
-  check(lt_scene_commit(s.get()), "commit");
-  lt_render_settings rs = render_settings(8, 6, 2);
-  rs.integrator = LT_INTEGRATOR_BIDIRECTIONAL;
-  Passes p = render(s.get(), rs);
+  const Passes p = render_plane(
+      [](lt_scene* s) {
+        return add_diffuse(s, {0.8f, 0.8f, 0.8f});
+      },
+      0, LT_INTEGRATOR_BIDIRECTIONAL, 8, 6, 2);
   EXPECT_EQ(p.status.state, LT_STATE_DONE);
   ASSERT_EQ(p.first_non_finite(), "");
   for (size_t i = 0; i < p.combined.size(); i += 4)
@@ -148,17 +161,13 @@ TEST(FuzzRegressions, VdbTileAtTheEdgeOfTheIndexSpace) {
 // counted (lt_render_status::nan_samples), for each integrator.
 TEST(FuzzRegressions, ClosureColourNearTheFloatLimitLeavesEveryPassFinite) {
   using namespace lt_test;
-  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL, LT_INTEGRATOR_VOLPATH}) {
-    ScenePtr s = new_scene();
+  const auto huge = [](lt_scene* s) {
     ShaderCode p;
     p.diffuse(p.one(), {1.7e38f, 0.5f, -3.375f});
-    add_object(s.get(), plane(4, 4), add_material(s.get(), p));
-    set_world(s.get(), {0.5f, 0.5f, 0.5f}, 1);
-    set_camera(s.get(), perspective_camera(look_at({0, -3, 2}, {0, 0, 0})));
-    check(lt_scene_commit(s.get()), "commit");
-    lt_render_settings rs = render_settings(8, 6, 3);
-    rs.integrator = integrator;
-    Passes out = render(s.get(), rs);
+    return add_material(s, p);
+  };
+  for (int integrator : {LT_INTEGRATOR_PATH, LT_INTEGRATOR_BIDIRECTIONAL, LT_INTEGRATOR_VOLPATH}) {
+    const Passes out = render_plane(huge, 1, integrator, 8, 6, 3);
     EXPECT_EQ(out.status.state, LT_STATE_DONE);
     EXPECT_EQ(out.first_non_finite(), "") << "integrator " << integrator;
     EXPECT_GT(out.status.nan_samples, 0u) << "integrator " << integrator;
@@ -172,18 +181,14 @@ TEST(FuzzRegressions, ClosureColourNearTheFloatLimitLeavesEveryPassFinite) {
 // one does.
 TEST(FuzzRegressions, ExtremeShearRendersAsItsWorldSpaceShape) {
   using namespace lt_test;
-  auto render_plane = [](const Xform& xf) {
-    ScenePtr s = new_scene();
-    add_object(s.get(), plane(4, 4), add_diffuse(s.get(), {0.8f, 0.8f, 0.8f}), xf);
-    set_world(s.get(), {0.5f, 0.5f, 0.5f}, 1);
-    set_camera(s.get(), perspective_camera(look_at({0, -3, 2}, {0, 0, 0})));
-    check(lt_scene_commit(s.get()), "commit");
-    return render(s.get(), render_settings(16, 12, 4));
+  const auto grey = [](lt_scene* s) { return add_diffuse(s, {0.8f, 0.8f, 0.8f}); };
+  const auto render_plane_at = [&](const Xform& xf) {
+    return render_plane(grey, 1, LT_INTEGRATOR_PATH, 16, 12, 4, xf);
   };
-  const Passes plain = render_plane(identity());
+  const Passes plain = render_plane_at(identity());
   Xform shear = identity();
   shear[2] = 1.04657e34f;
-  const Passes sheared = render_plane(shear);
+  const Passes sheared = render_plane_at(shear);
   ASSERT_EQ(sheared.status.state, LT_STATE_DONE);
   ASSERT_EQ(sheared.first_non_finite(), "");
   double a = 0, b = 0;
