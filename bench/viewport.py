@@ -1,18 +1,22 @@
-"""Viewport benchmark: time to the first viewport image, time per refinement, and update latency
-after a camera move and an object move, on every scene of examples.blend, through the add-on's
-ViewportSession (the code view_update / view_draw run, without the GPU upload).
+"""Viewport benchmark: time to the first viewport image, to 8 and to 32 samples, time per
+refinement, and update latency after a camera move and an object move, on every scene of
+examples.blend, through the add-on's ViewportSession with the settings view_draw gives it
+(engine.viewport_settings; the code view_update / view_draw run, without the GPU upload).
 
 Run from the repository root (the volume examples read ./assets/*.vdb, which
 scripts/render_examples.sh copies from <build>/test_vdb):
 
     LANTERN_LIBRARY=$PWD/build/liblantern.so blender -b --factory-startup examples.blend \\
         --python-exit-code 1 --python bench/viewport.py -- \\
-        [--size 640x360] [--threads 2] [--passes 8] [--out bench/results]
+        [--size 640x360] [--threads 2] [--samples 32] [--viewport-integrator FAST|RENDER] \\
+        [--scenes a05_box,door] [--integrator PATH] [--out bench/results]
 
 Per scene, the viewport looks through the scene camera at --size (Blender's own projection
 matrix for that size, as a camera view gives view_draw):
   * first image: full export + BVH build + the first pass (1/4 resolution, 1 sample)
-  * refinement: seconds per full-resolution sample pass (mean over --passes passes)
+  * to 8 and to --samples samples: from the same start (export included) to the full-resolution
+    image of that many samples (Sampling > Viewport > Samples = --samples)
+  * refinement: seconds per full-resolution sample pass (mean between the first and the last)
   * camera move: the view turned by 1 degree, 5 times, each as soon as the previous move's first
     full-resolution pass is shown -> median time to the first image (reduced resolution, chosen
     by the session from the measured pass cost) and to the first full-resolution pass; full
@@ -60,14 +64,15 @@ def until(session, settings, condition, timeout=300.0):
     return time.perf_counter() - t0
 
 
-def bench_scene(scene, w, h, threads, passes):
+def bench_scene(scene, w, h, threads, samples):
     with bpy.context.temp_override(scene=scene, view_layer=scene.view_layers[0]):
         depsgraph = bpy.context.evaluated_depsgraph_get()  # made for scenes without a window
-    settings = engine.render_settings(scene, w, h, [0, 0, 0, 0])
-    settings.update(samples=passes, threads=threads, strategy_view_depth=0)
+    scene.lantern.viewport_samples = samples
+    settings = engine.viewport_settings(scene, w, h)
+    settings.update(threads=threads)
     cam = scene.camera.evaluated_get(depsgraph)
     s = ViewportSession(lambda level, msg: None)
-    out = {"integrator": scene.lantern.integrator}
+    out = {"integrator": scene.lantern.integrator, "viewport_integrator": engine.viewport_integrator(scene.lantern)}
     try:
         t0 = time.perf_counter()
         s.sync(depsgraph)
@@ -76,10 +81,14 @@ def bench_scene(scene, w, h, threads, passes):
         s.set_view(view_camera(camera_view(cam, depsgraph, w, h), w, h), w, h)
         until(s, settings, lambda: s.pixels is not None)
         out["first_image_s"] = time.perf_counter() - t0
-        until(s, settings, lambda: s.shown_stage == 1 and s.samples[0] >= 1)
+        until(s, settings, lambda: s.shown_divider == 1 and s.samples[0] >= 1)
         t1 = time.perf_counter()
-        until(s, settings, lambda: s.shown_stage == 1 and s.samples[0] >= passes)
-        out["refinement_s"] = (time.perf_counter() - t1) / max(passes - 1, 1)
+        until(s, settings, lambda: s.shown_divider == 1 and s.samples[0] >= min(8, samples))
+        out["to_8_samples_s"] = time.perf_counter() - t0
+        until(s, settings, lambda: s.shown_divider == 1 and s.samples[0] >= samples)
+        out["to_%d_samples_s" % samples] = time.perf_counter() - t0
+        out["refinement_s"] = (time.perf_counter() - t1) / max(samples - 1, 1)
+        out["first_divider"] = s.first_divider
 
         stats0, counters0 = s.scene.stats(), dict(s.counters)
         first, full = [], []
@@ -89,14 +98,13 @@ def bench_scene(scene, w, h, threads, passes):
             version = s.version
             until(s, settings, lambda: s.version > version)
             first.append(time.perf_counter() - t0)
-            until(s, settings, lambda: s.shown_stage == 1 and s.samples[0] >= 1)
+            until(s, settings, lambda: s.shown_divider == 1 and s.samples[0] >= 1)
             full.append(time.perf_counter() - t0)
         out["camera_move_first_image_s"] = float(np.median(first))
         out["camera_move_first_image_min_s"] = min(first)
         out["camera_move_first_full_pass_s"] = float(np.median(full))
         out["camera_move_full_exports"] = s.counters["full_exports"] - counters0["full_exports"]
         out["camera_move_bvh_builds"] = {k: s.scene.stats()[k] - stats0[k] for k in stats0}
-        out["start_divider"] = s.divider
 
         # Object move through the incremental path (what view_update does for a transform).
         instances = s.state["instances"]
@@ -126,7 +134,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--size", default="640x360")
     ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--passes", type=int, default=8)
+    ap.add_argument("--samples", type=int, default=32)
+    ap.add_argument("--viewport-integrator", default="FAST", choices=("FAST", "RENDER"))
     ap.add_argument("--scenes", default="")
     ap.add_argument("--integrator", default="", help="override every scene's integrator (e.g. PATH)")
     ap.add_argument("--out", default=os.path.join(REPO, "bench", "results"))
@@ -138,19 +147,23 @@ def main():
     for name in names:
         if a.integrator:
             bpy.data.scenes[name].lantern.integrator = a.integrator
-        results[name] = bench_scene(bpy.data.scenes[name], w, h, a.threads, a.passes)
+        bpy.data.scenes[name].lantern.viewport_integrator = a.viewport_integrator
+        results[name] = bench_scene(bpy.data.scenes[name], w, h, a.threads, a.samples)
         print(name, json.dumps(results[name]), flush=True)
     os.makedirs(a.out, exist_ok=True)
     with open(os.path.join(a.out, "viewport.json"), "w") as f:
-        json.dump(dict(size=[w, h], threads=a.threads, passes=a.passes, results=results), f, indent=1)
-    print("\n%-20s %10s %10s %12s %12s %12s %9s" % ("scene", "first[ms]", "pass[ms]", "cam img[ms]",
-                                                    "cam pass[ms]", "obj img[ms]", "re-export"))
+        json.dump(dict(size=[w, h], threads=a.threads, samples=a.samples, viewport_integrator=a.viewport_integrator,
+                       results=results), f, indent=1)
+    print("\n%-20s %-14s %9s %8s %8s %9s %11s %12s %11s %9s" % (
+        "scene", "viewport", "first[ms]", "to 8[s]", "to %d[s]" % a.samples, "pass[ms]", "cam img[ms]",
+        "cam pass[ms]", "obj img[ms]", "re-export"))
     for name, r in results.items():
         if "error" in r:
             print("%-20s error: %s" % (name, r["error"]))
             continue
-        print("%-20s %10.1f %10.1f %12.1f %12.1f %12s %9d" % (
-            name, 1e3 * r["first_image_s"], 1e3 * r["refinement_s"], 1e3 * r["camera_move_first_image_s"],
+        print("%-20s %-14s %9.1f %8.2f %8.2f %9.1f %11.1f %12.1f %11s %9d" % (
+            name, r["viewport_integrator"], 1e3 * r["first_image_s"], r["to_8_samples_s"],
+            r["to_%d_samples_s" % a.samples], 1e3 * r["refinement_s"], 1e3 * r["camera_move_first_image_s"],
             1e3 * r["camera_move_first_full_pass_s"],
             "%.1f" % (1e3 * r["object_move_first_image_s"]) if "object_move_first_image_s" in r else "-",
             r["camera_move_full_exports"]))

@@ -202,6 +202,40 @@ def render_settings(scene, width, height, border):
     )
 
 
+def viewport_integrator(lt):
+    """The integrator the viewport renders with (Sampling > Viewport > Integrator)."""
+    if lt.viewport_integrator == 'FAST' and lt.integrator == 'BIDIRECTIONAL':
+        return 'VOLPATH'
+    return lt.integrator
+
+
+def viewport_settings(scene, width, height):
+    """The viewport's render settings: the render's, with the viewport's samples, integrator and
+    denoising; it stops at its samples or the noise target, never by the time limit."""
+    lt = scene.lantern
+    settings = render_settings(scene, width, height, [0, 0, 0, 0])
+    settings.update(samples=lt.viewport_samples, strategy_view_depth=0, time_limit=0.0,
+                    integrator=core.enum_value("lt_integrator", viewport_integrator(lt)),
+                    **viewport_denoise_settings(lt))
+    return settings
+
+
+def format_viewport_stats(session, scene):
+    """The viewport's status line: its stages below the full resolution say they refine (they
+    stop after their one sample), then format_stats; and which integrator previews when it is
+    not the render's."""
+    st = session.status
+    if session.shown_divider != 1:
+        text = "Sample 0/%d | refining at 1/%d resolution" % (scene.lantern.viewport_samples, session.shown_divider)
+    else:
+        text = format_stats(st)
+    integrator = viewport_integrator(scene.lantern)
+    if integrator != scene.lantern.integrator:
+        names = {item.identifier: item.name for item in scene.lantern.bl_rna.properties["integrator"].enum_items}
+        text += " | viewport: %s (render: %s)" % (names[integrator], names[scene.lantern.integrator])
+    return text
+
+
 def viewport_denoise_settings(lt):
     """The viewport's denoising (Sampling > Viewport > Denoise): in place of the render's. The
     core's start sample 0 means a final render's denoising; Cycles' 0 denoises from the start."""
@@ -767,11 +801,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
                 # (the scene export reported what the camera lacks: not again at each redraw)
                 view = with_camera_panorama(view, camera, depsgraph, context.region_data, lambda *m: None)
             session.set_view(view, width, height)
-            settings = render_settings(scene, width, height, [0, 0, 0, 0])
-            # The viewport stops at its own samples or the noise target, never by the time limit.
-            settings.update(samples=scene.lantern.viewport_samples, strategy_view_depth=0,
-                            time_limit=0.0, **viewport_denoise_settings(scene.lantern))
-            refining = session.update(settings)
+            refining = session.update(viewport_settings(scene, width, height))
         except core.LanternError as e:
             session.error = str(e)
             refining = False
@@ -786,7 +816,7 @@ class LanternRenderEngine(bpy.types.RenderEngine):
         if session.error:
             self.update_stats("", "Lantern: " + session.error)
         elif session.status is not None:
-            self.update_stats("", format_stats(session.status))
+            self.update_stats("", format_viewport_stats(session, scene))
         else:
             self.update_stats("", "Rendering")
         if session.pixels is None:

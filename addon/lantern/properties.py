@@ -85,6 +85,20 @@ class LanternRenderSettings(bpy.types.PropertyGroup):
                     "cleaner preview but keep the CPU busy longer after each change",
         default=32, min=1, max=1 << 24, soft_max=4096,
     )
+    viewport_integrator: EnumProperty(
+        name="Viewport Integrator",
+        description="The integrator the viewport previews with (F12 always uses the Integrator above): "
+                    "a faster one refines the preview sooner",
+        items=[
+            ("FAST", "Fast Preview",
+             "Volumetric path tracing in the viewport when the render is Bidirectional (several "
+             "times the cost per sample; the same image where path tracing finds the light: "
+             "caustics only light tracing finds, a point lamp's through sharp glass, show in "
+             "the render alone); otherwise the render's integrator"),
+            ("RENDER", "Same as Render", "The render's integrator, at its cost per sample"),
+        ],
+        default="FAST",
+    )
     # Cycles' Sampling > Viewport > Denoise (scene.cycles.use_preview_denoising and
     # preview_denoising_start_sample): the core denoises the image the viewport reads while it
     # refines (lt_render_settings.denoise_start_sample).

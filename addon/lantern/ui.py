@@ -74,7 +74,9 @@ class LANTERN_RENDER_PT_sampling_viewport(LanternButtonsPanel, Panel):
     bl_parent_id = "LANTERN_RENDER_PT_sampling"
 
     def draw(self, context):
-        _split(self.layout).prop(context.scene.lantern, "viewport_samples", text="Samples")
+        col = _split(self.layout).column()
+        col.prop(context.scene.lantern, "viewport_samples", text="Samples")
+        col.prop(context.scene.lantern, "viewport_integrator", text="Integrator")
 
 
 def _denoise_panel(name, parent, use, doc, start_sample=None):

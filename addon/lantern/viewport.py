@@ -18,13 +18,18 @@ import numpy as np
 from . import core
 from .scene_sync import SceneSync
 
-# Progressive stages after each change: one sample at a reduced resolution, then the full
-# resolution up to the viewport's sample count. The reduction is the smallest of DIVIDERS (per
-# side) whose pass is predicted, from the measured cost of full-resolution passes, to take at
-# most START_SECONDS; START_DIVIDER until a cost is known.
+# Progressive stages after each change, as Cycles' viewport refines its resolution: one sample at
+# a reduced resolution, one at each finer one needed, then the full resolution up to the viewport's
+# sample count. Every stage is chosen from the measured cost of a pixel sample (_measure): the first
+# is the finest of DIVIDERS (per side) whose pass is predicted to take at most START_SECONDS
+# (START_DIVIDER while no cost is known); each next one the finest whose pass is predicted to take
+# at most REFRESH_SECONDS, and at least twice finer, so that a slow integrator (BDPT: about 0.5 s
+# a full pass of the Cornell box at 640 x 360 on 2 cores) still shows an image within about
+# REFRESH_SECONDS of the previous one until the full resolution's first pass.
 DIVIDERS = (2, 4, 8, 16)
 START_DIVIDER = 4
 START_SECONDS = 0.03
+REFRESH_SECONDS = 0.25
 HALF_FLOAT_MAX = 65504.0  # larger values would become Inf in the RGBA16F texture
 
 
@@ -129,8 +134,8 @@ class ViewportSession(SceneSync):
         super().__init__(report)
         SESSIONS.add(self)
         self.render = None
-        self.stage = 0
-        self.divider = START_DIVIDER
+        self.divider = START_DIVIDER  # of the running render's resolution per side (1: full)
+        self.first_divider = None     # the first stage's, after the last change
         self.camera = None
         self.size = (0, 0)
         self.settings_key = None
@@ -139,9 +144,10 @@ class ViewportSession(SceneSync):
         self.pixels = None         # latest Combined image, (h, w, 4) float32, rows bottom to top
         self.version = 0           # bumps whenever pixels change
         self.samples = (0, 0)      # (done, total) of the displayed stage
-        self.shown_stage = None    # the stage the pixels come from (0: reduced resolution)
+        self.shown_divider = None  # the divider of the stage the pixels come from (1: full resolution)
         self.status = None         # core status of the render the pixels come from
-        self.pixel_seconds = None  # measured seconds per pixel and sample at full resolution
+        self.pixel_seconds = None  # measured seconds per pixel and sample (_measure)
+        self._cost = (None, 0)     # (the settings it was measured with, pixel samples it comes from)
         self._shown = None         # (render serial, samples done, state) the pixels come from
         self.changed_at = time.monotonic()
         self.first_image_seconds = None   # from the last change to the first image of it
@@ -177,7 +183,7 @@ class ViewportSession(SceneSync):
         self.changed_at = time.monotonic()
         self.first_image_seconds = None
         # The pixels stay on screen until the new render has some; what they show is stale.
-        self.shown_stage = None
+        self.shown_divider = None
         self.samples = (0, 0)
         self.status = None
 
@@ -194,36 +200,56 @@ class ViewportSession(SceneSync):
             self.dirty = True
         if self.dirty:
             self.dirty = False
-            self.divider = self._divider()
-            self.stage = 0 if min(self.size) >= 4 * self.divider else 1
+            self.divider = self.first_divider = self._fit(self._finest(START_SECONDS))
             self._start(settings)
         st = self.render.poll()
-        if self.stage == 1 and st.samples_done > 0:
-            self.pixel_seconds = st.elapsed_seconds / (st.samples_done * self.size[0] * self.size[1])
+        self._measure(st, settings)
         # Also once it stops: the final image may be newer than the last published one (a
         # denoised one, say) at the same sample count.
         if st.samples_done > 0 and self._shown != (self.counters["restarts"], st.samples_done, st.state):
             self._read(st)
-        if st.state != core.STATE_RUNNING and self.stage == 0:
-            self.stage = 1
-            self._start(settings)
-            return True
         if st.state == core.STATE_FAILED:
             self.error = "Lantern viewport render failed"
+            return False
+        if st.state != core.STATE_RUNNING and self.divider > 1:
+            self.divider = self._fit(min(self._finest(REFRESH_SECONDS), self.divider // 2))
+            self._start(settings)
+            return True
         return st.state == core.STATE_RUNNING
 
-    def _divider(self):
+    def _finest(self, seconds):
+        """The finest divider (1: full resolution) whose one-sample pass is predicted to take at
+        most `seconds`; START_DIVIDER while no cost is known."""
         if self.pixel_seconds is None:
             return START_DIVIDER
         w, h = self.size
-        return next((d for d in DIVIDERS if (w // d) * (h // d) * self.pixel_seconds <= START_SECONDS),
+        return next((d for d in (1,) + DIVIDERS if (w // d) * (h // d) * self.pixel_seconds <= seconds),
                     DIVIDERS[-1])
+
+    def _fit(self, divider):
+        """A view too small to reduce four times over renders at full resolution at once."""
+        return divider if min(self.size) >= 4 * divider else 1
+
+    def _measure(self, st, settings):
+        """Seconds per pixel and sample of the running render, kept if it comes from at least as
+        many pixel samples as the kept figure or from a full-resolution pass (small renders pay
+        their start-up over few pixels and overstate the cost); forgotten when the settings that
+        set the cost (integrator, bounces, ...) change."""
+        if st.samples_done <= 0:
+            return
+        key = tuple(sorted((k, str(v)) for k, v in settings.items() if k not in ("width", "height", "samples")))
+        w, h = self.render.region_size
+        work = st.samples_done * w * h
+        kept_key, kept_work = self._cost
+        if key != kept_key or work >= min(kept_work, self.size[0] * self.size[1]):
+            self.pixel_seconds = st.elapsed_seconds / work
+            self._cost = (key, work)
 
     def _start(self, settings):
         self._stop()
         s = dict(settings)
         s["passes"] = 1 << core.PASS_COMBINED  # the viewport shows Combined only: no other film memory
-        if self.stage == 0:
+        if self.divider > 1:
             # One sample: nothing to denoise (the film then keeps no denoising features).
             s.update(width=max(1, s["width"] // self.divider), height=max(1, s["height"] // self.divider),
                      samples=1, denoise=0)
@@ -238,7 +264,7 @@ class ViewportSession(SceneSync):
         self.version += 1
         self.samples = (st.samples_done, st.samples_total)
         self.status = st
-        self.shown_stage = self.stage
+        self.shown_divider = self.divider
         self._shown = (self.counters["restarts"], st.samples_done, st.state)
         if self.first_image_seconds is None:
             self.first_image_seconds = time.monotonic() - self.changed_at

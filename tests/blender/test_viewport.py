@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 from lantern import core
-from lantern.engine import format_stats, render_settings, viewport_denoise_settings
+from lantern import viewport
+from lantern.engine import (format_stats, format_viewport_stats, render_settings, viewport_denoise_settings,
+                            viewport_settings)
 from lantern.export import export_scene
 from lantern.viewport import ViewportSession, view_camera, with_camera_lens, with_camera_panorama
 
@@ -143,7 +145,7 @@ def _first_image(session, settings, w, h):
     settings = dict(settings, width=w, height=h)
     while True:
         session.update(settings)
-        if session.pixels is not None and session.shown_stage == 1 and session.samples[0] >= 1:
+        if session.pixels is not None and session.shown_divider == 1 and session.samples[0] >= 1:
             return
         time.sleep(0.002)
 
@@ -178,7 +180,7 @@ def test_resizing_does_not_leak(scene_factory):
     growth = rss[1] - rss[0]
     print("RSS after 10 resizes %.1f MB, after 60: %.1f MB (growth %.1f MB; one image kept per "
           "resize would be %.0f MB)" % (rss[0], rss[1], growth, leaked_images_mb))
-    assert restarts >= 2 * len(sizes), restarts  # every size rendered (two stages each)
+    assert restarts >= len(sizes), restarts  # every size rendered
     assert growth < 0.25 * leaked_images_mb, (rss, leaked_images_mb)
 
 
@@ -189,10 +191,10 @@ def _refine(session, settings):
     version = session.version
     while True:
         refining = session.update(settings)
-        if session.version != version and session.shown_stage == 1:
+        if session.version != version and session.shown_divider == 1:
             version = session.version
             seen.append((session.samples[0], bool(session.status.denoised)))
-        if not refining and session.shown_stage == 1:
+        if not refining and session.shown_divider == 1:
             return seen
         time.sleep(0.002)
 
@@ -236,5 +238,93 @@ def test_viewport_denoises_from_the_start_sample(scene_factory):
         print("viewport MSE against 256 samples at 4 samples: noisy %.3g, denoised %.3g"
               % (mse(noisy4), mse(image4)))
         assert mse(image4) < 0.5 * mse(noisy4), (mse(image4), mse(noisy4))
+    finally:
+        session.close()
+
+
+def test_viewport_integrator_previews_bidirectional_with_path_tracing(scene_factory):
+    """Issue 14: Sampling > Viewport > Integrator. Fast Preview (the default) renders a
+    Bidirectional scene's viewport with volumetric path tracing and keeps every other integrator;
+    Same as Render keeps Bidirectional. The status line names the preview's integrator when it
+    is not the render's."""
+    scene = scene_factory("cornell_area")
+    lt = scene.lantern
+    assert lt.viewport_integrator == 'FAST'
+    expected = {('PATH', 'FAST'): 'PATH', ('VOLPATH', 'FAST'): 'VOLPATH', ('BIDIRECTIONAL', 'FAST'): 'VOLPATH',
+                ('VOLUME_DEBUG', 'FAST'): 'VOLUME_DEBUG', ('BIDIRECTIONAL', 'RENDER'): 'BIDIRECTIONAL',
+                ('PATH', 'RENDER'): 'PATH'}
+    for (render, preview), used in expected.items():
+        lt.integrator, lt.viewport_integrator = render, preview
+        settings = viewport_settings(scene, 64, 48)
+        assert settings["integrator"] == core.enum_value("lt_integrator", used), (render, preview)
+        assert settings["samples"] == lt.viewport_samples and settings["time_limit"] == 0
+        session = types.SimpleNamespace(shown_divider=1, status=types.SimpleNamespace(
+            samples_done=3, samples_total=32, rel_error=0.1, elapsed_seconds=1.0, active_pixels=0,
+            unestimated_pixels=0, denoised=False, state=core.STATE_RUNNING, remaining_seconds=2.0))
+        text = format_viewport_stats(session, scene)
+        assert ("viewport: Volumetric Path (render: Bidirectional)" in text) == (used != render), text
+
+
+def _stages(session, settings, scene):
+    """Drives the session until its full-resolution render stops; returns, for every image it
+    read, (divider, samples, predicted seconds of that stage's pass from the cost known when it
+    started, status line)."""
+    seen, version, predicted = [], session.version, {}
+    while True:
+        if session.render is not None and session.divider not in predicted:
+            w, h = session.size
+            d = session.divider
+            predicted[d] = None if session.pixel_seconds is None else (w // d) * (h // d) * session.pixel_seconds
+        refining = session.update(settings)
+        if session.version != version:
+            version = session.version
+            seen.append((session.shown_divider, session.samples[0], predicted.get(session.shown_divider),
+                         format_viewport_stats(session, scene)))
+        if not refining and session.shown_divider == 1:
+            return seen
+        time.sleep(0.001)
+
+
+def test_viewport_refines_through_resolutions_chosen_from_the_measured_cost(scene_factory):
+    """Issue 14: after a change the viewport shows one sample at a reduced resolution, then one at
+    each finer resolution it needs, then the full resolution up to its samples. Each stage after
+    the first at least halves the divider and is the finest whose pass the cost measured so far
+    predicts within REFRESH_SECONDS, or half the previous divider; after a camera move the first
+    stage is chosen from the cost the first change measured. Bidirectional at 640 x 360, where a
+    full pass costs more than the refresh budget on 2 cores (about 0.5 s). The status line of a
+    reduced stage says it refines, never "Stopped"."""
+    scene = scene_factory("cornell_area")
+    scene.lantern.integrator = 'BIDIRECTIONAL'
+    scene.lantern.viewport_integrator = 'RENDER'
+    scene.lantern.viewport_samples = 3
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    w, h = 640, 360
+    session = viewport.ViewportSession(lambda *m: None)
+    try:
+        session.sync(depsgraph)
+        assert session.error is None, session.error
+        cam = scene.camera.evaluated_get(depsgraph)
+        settings = dict(viewport_settings(scene, w, h), threads=2)
+        runs = []
+        for shift in (0.0, 0.01):  # the second: a camera move, a new render from a first stage
+            view = _camera_view(cam, depsgraph, w, h)
+            view.view_matrix[0][3] += shift
+            session.set_view(view_camera(view, w, h), w, h)
+            runs.append(_stages(session, settings, scene))
+        print("stages (divider, samples, predicted seconds):", [[r[:3] for r in run] for run in runs])
+        for seen in runs:
+            dividers = [d for d, _, _, _ in seen]
+            assert dividers[0] > 1 and dividers[-1] == 1 and seen[-1][1] == 3, seen
+            stages = [d for i, d in enumerate(dividers) if i == 0 or dividers[i - 1] != d]
+            assert all(d <= prev // 2 for prev, d in zip(stages, stages[1:])), seen
+            for d, n, _, text in seen:
+                if d > 1:
+                    assert n == 1 and "refining at 1/%d resolution" % d in text and "Stopped" not in text, text
+            assert "Stopped by samples" in seen[-1][3], seen[-1][3]
+        stages = [(d, p) for i, (d, _, p, _) in enumerate(runs[1]) if i == 0 or runs[1][i - 1][0] != d]
+        assert all(p is not None for _, p in stages), stages
+        for (prev, _), (d, p) in zip(stages, stages[1:]):
+            assert p <= viewport.REFRESH_SECONDS or d == prev // 2, stages
     finally:
         session.close()

@@ -87,7 +87,7 @@ def wait_until(what, condition, timeout):
 
 def refined(samples):
     s = session()
-    return s is not None and s.shown_stage == 1 and s.samples[0] >= samples
+    return s is not None and s.shown_divider == 1 and s.samples[0] >= samples
 
 
 def after_change(what, change, timeout=30.0):
