@@ -415,9 +415,9 @@ void set_normal(const Instr& in, Machine& m) {
   if (!m.displaced || !(dot(n, n) > 0) || !is_finite(n)) return;
   const Vec3 N = normalize(n);
   m.displaced_raw = normalize(m.untilted(n));
-  m.displaced->emplace(*m.ctx);
-  set_shading_normal(&**m.displaced, N);
-  m.ctx = &**m.displaced;
+  ShadingContext* displaced = m.displaced->make(*m.ctx);
+  set_shading_normal(displaced, N);
+  m.ctx = displaced;
   if (m.moved)
     for (int k = 0; k < 2; ++k) set_shading_normal(&m.moved[k], N);
 }

@@ -184,8 +184,10 @@ Spectrum Program::execute_all(const ShadingContext& ctx, const std::vector<std::
   m.images = &images;
   m.bsdf = bsdf;
   m.displacement = displacement;
-  ShadingContext moved[2];
+  // Rooms for contexts only some programs use (Machine::displaced, moved, undisplaced).
+  Room<std::array<ShadingContext, 2>> bump_room;
   if (uses_bump_) {
+    ShadingContext* moved = bump_room.make()->data();
     for (int k = 0; k < 2; ++k) {
       moved[k] = ctx;
       const ShadingContext::Offset& d = ctx.offset[k];
@@ -198,10 +200,10 @@ Spectrum Program::execute_all(const ShadingContext& ctx, const std::vector<std::
     }
     m.moved = moved;
   }
-  std::optional<ShadingContext> displaced;  // constructed by a SetNormal only
+  Room<ShadingContext> displaced;  // made by a SetNormal only
   if (sets_normal_) m.displaced = &displaced;
-  std::optional<std::array<ShadingContext, 3>> undisplaced;
-  if (bump_eval_) m.undisplaced = undisplaced.emplace().data();
+  Room<std::array<ShadingContext, 3>> undisplaced;
+  if (bump_eval_) m.undisplaced = undisplaced.make()->data();
   m.emitted = Spectrum(0.0f);
   if (bsdf) bsdf->clear();
   const uint32_t* w = code_.data();
