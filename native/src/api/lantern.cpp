@@ -297,16 +297,9 @@ int lt_scene_add_image(lt_scene* scene, const lt_image_desc* d, int* out_id) {
     check_image(*d);
     require(d->pixels != nullptr, "image pixels are NULL");
     auto& images = scene->scene.images;
-    const std::string space = d->ocio_space ? d->ocio_space : "";
-    if (space.empty()) {
-      images.push_back(std::make_unique<lt::Image>(d->width, d->height, d->channels, d->pixels, d->srgb != 0,
-                                                   interpolation(d->interpolation), lt::Extension(d->extension),
-                                                   lt::ImageAlpha(d->alpha)));
-    } else {
-      lt::FloatBuffer px(size_t(d->width) * d->height * d->channels);
-      std::memcpy(px.data(), d->pixels, px.size() * sizeof(float));
-      images.push_back(given_image(*d, std::move(px), text_or_empty(d->ocio_config), space));
-    }
+    lt::FloatBuffer px(size_t(d->width) * d->height * d->channels);  // the one copy Image would make
+    std::memcpy(px.data(), d->pixels, px.size() * sizeof(float));
+    images.push_back(given_image(*d, std::move(px), text_or_empty(d->ocio_config), text_or_empty(d->ocio_space)));
     *out_id = int(images.size()) - 1;
   });
 }

@@ -254,7 +254,7 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
 bool Film::accepts(const SampleValue& s) const {
   bool ok = true;  // bitwise &: no branch per value
   const auto check = [&ok](float v) { ok &= in_range(v); };
-  const auto check3 = [&ok](const Vec3& v) { ok &= in_range(v.x) & in_range(v.y) & in_range(v.z); };
+  const auto check3 = [&ok](const Vec3& v) { ok &= in_range(v); };
   check3(s.radiance);
   check(s.alpha);
   check(s.depth);  // (the denoising features derive from it and the normal)

@@ -69,8 +69,8 @@ struct LightgroupShares {
 // squares, for Variance) hold about 1e8 samples of it. No light of a real scene comes near (a 1 MW
 // point light 10 um away gives about 1e14); a sample beyond it is dropped as a NaN one is.
 constexpr float kMaxSampleValue = 1e15f;
-inline bool in_range(float v) { return std::abs(v) <= kMaxSampleValue; }  // false for NaN
-inline bool in_range(const Vec3& v) { return in_range(v.x) && in_range(v.y) && in_range(v.z); }
+inline bool in_range(float v) { return std::abs(v) <= kMaxSampleValue; }                       // false for NaN
+inline bool in_range(const Vec3& v) { return in_range(v.x) & in_range(v.y) & in_range(v.z); }  // no branches
 
 struct SampleValue {
   Spectrum radiance{0.0f};

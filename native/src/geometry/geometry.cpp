@@ -550,14 +550,13 @@ void Geometry::build_top() {
       rtcReleaseScene(baked_[i].rtc);
       baked_[i].rtc = nullptr;
     }
-    if (!flat) {
-      std::vector<Transform> poses{inst.xf};
-      if (moving)  // Embree interpolates the decomposition: its inverse between steps, sampled
-        for (int k = 0; k <= 8 * int(inst.motion.size()); ++k)
-          poses.push_back(interpolate_motion(inst.motion_decomposed, float(k) / float(8 * inst.motion.size())));
-      for (const Transform& xf : poses) {
-        largest = std::max(largest, std::min(inverse_norm(xf), kMaxInverseNorm));  // (between steps: capped)
-      }
+    if (!flat) largest = std::max(largest, inverse_norm(inst.xf));  // finite: instanceable
+    if (moving) {  // Embree interpolates the decomposition: its inverse between steps, sampled (capped)
+      const int n = 8 * int(inst.motion.size());
+      for (int k = 0; k <= n; ++k)
+        largest = std::max(
+            largest,
+            std::min(inverse_norm(interpolate_motion(inst.motion_decomposed, float(k) / float(n))), kMaxInverseNorm));
     }
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, flat ? baked_scene(int(i)) : m.rtc);
