@@ -306,7 +306,7 @@ def _height_image(nt, coords):
 
 
 @pytest.mark.parametrize("source", ["height_object", "height_world", "vector_object", "vector_world",
-                                    "vector_tangent"])
+                                    "vector_tangent", "vector_tangent_sphere"])
 @pytest.mark.parametrize("shown", ["Normal", "Fresnel"])
 def test_displacement_as_bump(source, shown, outdir):
     """The Material Output's Displacement (method Bump, Cycles 3.4's default): Cycles turns the
@@ -331,29 +331,40 @@ def test_displacement_as_bump(source, shown, outdir):
         if shown == "Normal":
             return node(nt, "ShaderNodeNewGeometry").outputs["Normal"]
         return node(nt, "ShaderNodeFresnel", IOR=1.5).outputs["Fac"]
-    # The tangent space needs a UV map: the plane has one, the sphere none. Object space differs from
+    # Tangent space on the plane from its UV map, on the sphere (no UV map) from Cycles' sphere-mapped
+    # undeformed coordinates (test_tangent_space_without_uv_map). Object space differs from
     # world space on a scaled object (scaled evenly: on an unevenly scaled smooth mesh Lantern's
     # interpolated normal itself differs from Cycles', README).
-    shape = "plane" if source == "vector_tangent" else "scaled" if "object" in source else "sphere"
+    shape = "plane" if source == "vector_tangent" else "sphere" if source.endswith("sphere") else "scaled" if "object" in source else "sphere"
     compare_view(build, "displacement_%s_%s" % (source, shown), outdir, shape=shape, displacement=displacement)
 
 
-@pytest.mark.parametrize("idname", ["ShaderNodeVectorDisplacement", "ShaderNodeNormalMap"])
-def test_tangent_space_without_uv_map_warns(idname):
-    """Tangent space on a mesh without a UV map: Cycles derives MikkTSpace tangents from sphere-mapped
-    Generated coordinates, which Lantern does not; the export names the object and says what it
-    does instead."""
+@pytest.mark.parametrize("case", ["normal_map", "tangent"])
+def test_tangent_space_without_uv_map(case, outdir):
+    """Tangent space on a mesh without any UV map (the sphere): Cycles 3.4 takes MikkTSpace's
+    tangents over the vertices' undeformed coordinates mapped to a sphere (blender/mesh.cpp,
+    mikk_get_texture_coordinate with map_to_sphere). Seen failing with the tangents left out
+    (the Normal Map flat, the Tangent node zero)."""
+    def build(nt, coords):
+        if case == "tangent":
+            return node(nt, "ShaderNodeTangent", {"direction_type": "UV_MAP"}).outputs["Tangent"]
+        n = node(nt, "ShaderNodeNormalMap", {"space": "TANGENT"}, Strength=1.0, Color=(0.75, 0.3, 0.85))
+        return n.outputs["Normal"]
+    compare_view(build, "no_uv_%s" % case, outdir, shape="sphere")
+
+
+def test_tangent_space_of_a_missing_uv_map_warns():
+    """A Normal Map naming a UV map the mesh lacks: no tangents (as Cycles, which finds no
+    attribute); the export names the object, the map and what Lantern does instead."""
     import build_scenes as bs
     from node_cases import view_scene
 
-    def displacement(nt, coords):
-        n = node(nt, idname, {"space": "TANGENT"})
-        if idname == "ShaderNodeNormalMap":
-            return n.outputs["Normal"]
-        return n.outputs["Displacement"]
-    scene = view_scene(lambda nt, coords: coords, shape="sphere", displacement=displacement)
+    def normal(nt, coords):
+        return node(nt, "ShaderNodeNormalMap", {"space": "TANGENT", "uv_map": "Missing"}).outputs["Normal"]
+    scene = view_scene(normal, shape="sphere")
     reports = ru.export(scene)[1]
-    assert any("'sphere'" in r and "no UV map" in r and "Vector Displacement" in r for r in reports), reports
+    assert any("'sphere'" in r and "no UV map 'Missing'" in r and "Vector Displacement" in r for r in reports), \
+        reports
     bs.reset_file()
 
 

@@ -1,5 +1,6 @@
 """Mesh export: each distinct evaluated geometry once, then one instance per object instance."""
 
+import bpy
 import numpy as np
 
 from .light import visibility_bits
@@ -64,33 +65,113 @@ def _render_uv(mesh, name):
     return next((l for l in mesh.uv_layers if l.active_render), None) or mesh.uv_layers.active
 
 
+def _map_to_sphere(co):
+    """Cycles' map_to_sphere (util/math.h): (u, v) of directions from the origin, in
+    float32 as Cycles computes them; (0, 0) at the origin, u = 0 on the Z axis."""
+    co = np.asarray(co, np.float32).reshape(-1, 3)
+    x, y, z = co[:, 0], co[:, 1], co[:, 2]
+    length = np.sqrt(x * x + y * y + z * z)
+    safe = np.where(length > 0, length, np.float32(1))
+    u = (np.float32(1) - np.arctan2(x, y) / np.float32(np.pi)) / np.float32(2)
+    u = np.where((x == 0) & (y == 0), np.float32(0), u)
+    v = np.float32(1) - np.arccos(np.clip(z / safe, -1, 1)) / np.float32(np.pi)
+    uv = np.stack([u, v], axis=1).astype(np.float32)
+    uv[~(length > 0)] = 0
+    return uv
+
+
+def _sphere_tangents(mesh, warn):
+    """Cycles 3.4's tangents on a mesh without UV maps (blender/mesh.cpp, MikkTSpace fed the loop
+    triangles, each corner's UV its vertex's undeformed position mapped to a sphere): Blender's
+    MikkTSpace run on a temporary mesh of those triangles (run on the polygons, it would split the
+    quads where the wrapped coordinates jump differently). Smooth triangles take that mesh's vertex
+    normals, Cycles the polygons' (equal where the polygons are planar). Per triangle corner:
+    (tangents, signs), or None."""
+    tris = mesh.loop_triangles
+    nt, nv = len(tris), len(mesh.vertices)
+    triangles = np.empty(nt * 3, dtype=np.int32)
+    tris.foreach_get("vertices", triangles)
+    smooth = np.ones(nt, dtype=bool)
+    try:
+        tris.foreach_get("use_smooth", smooth)
+    except (AttributeError, TypeError, RuntimeError):
+        pass
+    co = np.empty(nv * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    undeformed = np.empty(nv * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("undeformed_co", undeformed)
+    # Cycles' coordinates: the undeformed ones through its Generated attribute and back (float32
+    # rounding included; the seam's u of 0 or 1 turns on the sign of what remains of x = 0).
+    size = np.array(getattr(mesh, "texspace_size", (1.0, 1.0, 1.0)), np.float32)
+    size = np.where(size != 0, np.float32(0.5) / np.where(size != 0, size, np.float32(1)), size).astype(np.float32)
+    loc = (np.array(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0)), np.float32) * size
+           - np.float32(0.5)).astype(np.float32)
+    generated = undeformed.reshape(-1, 3) * size - loc
+    with np.errstate(divide="ignore", invalid="ignore"):
+        undeformed = (generated + loc) * (np.float32(1) / size)
+    try:
+        tm = bpy.data.meshes.new("lantern_sphere_tangents")
+    except RuntimeError as e:  # a context where data cannot be added
+        warn("tangents from the undeformed coordinates cannot be computed here (%s); Normal Maps are "
+             "left flat" % str(e).strip())
+        return None
+    try:
+        tm.vertices.add(nv)
+        tm.vertices.foreach_set("co", co)
+        tm.loops.add(nt * 3)
+        tm.loops.foreach_set("vertex_index", triangles)
+        tm.polygons.add(nt)
+        tm.polygons.foreach_set("loop_start", np.arange(0, nt * 3, 3, dtype=np.int32))
+        tm.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=np.int32))
+        tm.polygons.foreach_set("use_smooth", smooth)
+        tm.update(calc_edges=True)
+        layer = tm.uv_layers.new(name="sphere", do_init=False)
+        layer.data.foreach_set("uv", _map_to_sphere(undeformed)[triangles].reshape(-1))
+        tm.calc_tangents(uvmap=layer.name)
+        t = np.empty(nt * 9, dtype=np.float32)
+        sign = np.empty(nt * 3, dtype=np.float32)
+        tm.loops.foreach_get("tangent", t)
+        tm.loops.foreach_get("bitangent_sign", sign)
+        return t, sign
+    finally:
+        bpy.data.meshes.remove(tm)
+
+
 def _requested(mesh, key, warn):
     """(components, per-loop values) of an attribute request (AttributeRegistry key), or None when
-    the mesh lacks it (the core then gives Cycles' values for a missing attribute)."""
+    the mesh lacks it (the core then gives Cycles' values for a missing attribute); a third
+    element 'corners' when the values are per loop triangle corner already."""
     kind, name = key
     nl = len(mesh.loops)
     if kind == 'tangent':
         layer = _render_uv(mesh, name)
-        if layer is None:
-            # Cycles derives MikkTSpace tangents from sphere-mapped Generated coordinates there.
-            warn("no UV map%s for tangent space: Normal Maps are left flat and Vector Displacement "
-                 "uses each triangle's first edge as tangent (Cycles derives tangents from the "
-                 "Generated coordinates)" % (" '%s'" % name if name else ""))
+        if layer is None and not name and not len(mesh.uv_layers):
+            # Cycles 3.4 (blender/mesh.cpp, mikk_get_texture_coordinate): without any UV map the
+            # default tangent space comes from the undeformed coordinates mapped to a sphere.
+            got = _sphere_tangents(mesh, warn)
+            corners = True
+        elif layer is None:
+            warn("no UV map '%s' for tangent space: Normal Maps are left flat and Vector Displacement "
+                 "uses each triangle's first edge as tangent" % name if name else
+                 "no render UV map for tangent space: Normal Maps are left flat and Vector Displacement "
+                 "uses each triangle's first edge as tangent")
             return None
-        try:
-            mesh.calc_tangents(uvmap=layer.name)
-        except RuntimeError as e:
-            warn("tangents of UV map '%s' cannot be computed (%s); normal maps there are left flat"
-                 % (layer.name, str(e).strip()))
+        else:
+            try:
+                mesh.calc_tangents(uvmap=layer.name)
+            except RuntimeError as e:
+                warn("tangents of UV map '%s' cannot be computed (%s); normal maps there are left flat"
+                     % (layer.name, str(e).strip()))
+                return None
+            got, corners = (np.empty(nl * 3, dtype=np.float32), np.empty(nl, dtype=np.float32)), False
+            mesh.loops.foreach_get("tangent", got[0])
+            mesh.loops.foreach_get("bitangent_sign", got[1])
+        if got is None:
             return None
-        values = np.empty((nl, 4), dtype=np.float32)
-        t = np.empty(nl * 3, dtype=np.float32)
-        sign = np.empty(nl, dtype=np.float32)
-        mesh.loops.foreach_get("tangent", t)
-        mesh.loops.foreach_get("bitangent_sign", sign)
-        values[:, :3] = t.reshape(-1, 3)
-        values[:, 3] = sign
-        return 4, values
+        values = np.empty((len(got[1]), 4), dtype=np.float32)
+        values[:, :3] = got[0].reshape(-1, 3)
+        values[:, 3] = got[1]
+        return (4, values, 'corners') if corners else (4, values)
     if kind == 'color':
         attrs = getattr(mesh, "color_attributes", None)
         if attrs is None or not len(attrs):
@@ -114,8 +195,8 @@ def mesh_attributes(mesh, requests, corner_loops, warn=lambda _t: None):
         got = _requested(mesh, key, warn)
         if got is None:
             continue
-        n, per_loop = got
-        values = np.nan_to_num(per_loop[corner_loops], nan=0.0, posinf=0.0, neginf=0.0)
+        n, values = got[:2]
+        values = np.nan_to_num(values if len(got) > 2 else values[corner_loops], nan=0.0, posinf=0.0, neginf=0.0)
         out.append((attr_id, n, np.ascontiguousarray(values, dtype=np.float32).reshape(-1)))
     return out
 
