@@ -335,7 +335,7 @@ def test_displacement_as_bump(source, shown, outdir):
     # undeformed coordinates (test_tangent_space_without_uv_map). Object space differs from
     # world space on a scaled object (scaled evenly: on an unevenly scaled smooth mesh Lantern's
     # interpolated normal itself differs from Cycles', README).
-    shape = "plane" if source == "vector_tangent" else "sphere" if source.endswith("sphere") else "scaled" if "object" in source else "sphere"
+    shape = "plane" if source == "vector_tangent" else "scaled" if "object" in source else "sphere"
     compare_view(build, "displacement_%s_%s" % (source, shown), outdir, shape=shape, displacement=displacement)
 
 
