@@ -538,14 +538,25 @@ void Geometry::build_top() {
   top_ = rtcNewScene(device_);
   if (partial_visibility_) rtcSetSceneFlags(top_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   bounds_ = Bounds();
+  rtc_to_instance_.resize(instances_.size());
+  for (size_t i = 0; i < instances_.size(); ++i) rtc_to_instance_[i] = unsigned(i);
+  rtc_visibility_ = instance_visibility_;
+  // Instances Embree traces (not the curves and spheres of a flattened object), those that move,
+  // and how many move.
+  const auto traced = [&](const Instance& inst) {
+    const Mesh& m = meshes_[inst.mesh];
+    return m.rtc && finite_transform(inst.xf) && keeps_area(inst) && (instanceable(inst.xf) || m.is_triangles());
+  };
+  const auto moves = [&](const Instance& inst) { return instanceable(inst.xf) && !inst.motion.empty(); };
+  const size_t moving_count =
+      std::count_if(instances_.begin(), instances_.end(), [&](const Instance& x) { return traced(x) && moves(x); });
   float largest = 0;  // inverse_norm over Embree's instances, their motion steps and between them
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
     const Mesh& m = meshes_[inst.mesh];
-    if (!m.rtc || !finite_transform(inst.xf) || !keeps_area(inst)) continue;
+    if (!traced(inst)) continue;
     const bool flat = !instanceable(inst.xf);
-    if (flat && !m.is_triangles()) continue;  // curves and spheres of a flattened object: left out
-    const bool moving = !flat && !inst.motion.empty();
+    const bool moving = moves(inst);
     if (!flat && baked_[i].rtc) {  // an edit made it instanceable again
       rtcReleaseScene(baked_[i].rtc);
       baked_[i].rtc = nullptr;
@@ -558,34 +569,18 @@ void Geometry::build_top() {
             largest,
             std::min(inverse_norm(interpolate_motion(inst.motion_decomposed, float(k) / float(n))), kMaxInverseNorm));
     }
-    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(g, flat ? baked_scene(int(i)) : m.rtc);
-    if (moving && same_rotation(inst.motion_decomposed)) {
-      // No rotation changes: interpolating the matrices linearly is Cycles' interpolation (M =
-      // T + R S is linear in T and S), and Embree traverses it faster than quaternion motion.
-      rtcSetGeometryTimeStepCount(g, unsigned(inst.motion.size()));
-      for (size_t s = 0; s < inst.motion.size(); ++s)
-        rtcSetGeometryTransform(g, unsigned(s), RTC_FORMAT_FLOAT3X4_ROW_MAJOR, inst.motion[s].m);
-    } else if (moving) {
-      // Cycles' instance motion on Embree (bvh/embree.cpp): one quaternion decomposition a step.
-      rtcSetGeometryTimeStepCount(g, unsigned(inst.motion.size()));
-      for (size_t s = 0; s < inst.motion_decomposed.size(); ++s) {
-        const DecomposedTransform& d = inst.motion_decomposed[s];
-        RTCQuaternionDecomposition q;
-        rtcInitQuaternionDecomposition(&q);
-        rtcQuaternionDecompositionSetQuaternion(&q, d.q[3], d.q[0], d.q[1], d.q[2]);
-        rtcQuaternionDecompositionSetScale(&q, d.scale[0], d.scale[1], d.scale[2]);
-        rtcQuaternionDecompositionSetSkew(&q, d.skew[0], d.skew[1], d.skew[2]);
-        rtcQuaternionDecompositionSetTranslation(&q, d.translation.x, d.translation.y, d.translation.z);
-        rtcSetGeometryTransformQuaternion(g, unsigned(s), &q);
-      }
+    RTCScene object = flat ? baked_scene(int(i)) : m.rtc;
+    if (moving) {
+      attach_moving(object, inst, unsigned(i), moving_count == 1);
     } else {
+      RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(g, object);
       // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout; the baked copy is in world space.
       rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, (flat ? kIdentity : inst.xf).m);
+      rtcCommitGeometry(g);
+      rtcAttachGeometryByID(top_, g, unsigned(i));
+      rtcReleaseGeometry(g);
     }
-    rtcCommitGeometry(g);
-    rtcAttachGeometryByID(top_, g, unsigned(i));
-    rtcReleaseGeometry(g);
     // Bounds over the motion steps' vertices (between steps the motion stays near them), and
     // the curves' and points' keys grown by their radius.
     const std::vector<Vec3>& ps = m.motion_steps > 1 ? m.motion_positions : m.positions;
@@ -607,6 +602,60 @@ void Geometry::build_top() {
   const float norm = std::max(largest, 1.0f);
   ray_origin_limit_ = largest > 0 ? kTraceableRange / 2 / norm : kTraceableRange;
   ray_direction_limit_ = largest > 0 ? kTraceableRange / norm : kTraceableRange;
+}
+
+// A moving instance: its motion steps, as Cycles gives them to Embree. A scene's only moving
+// instance is split instead into one Embree instance per motion segment, each valid over its
+// segment's time range (rtcSetGeometryTimeRange; two steps are split at their middle, exact since
+// Embree interpolates within a segment as across it): Embree tests no bounds at the root of a BVH
+// that holds one primitive, so a lone moving object, its motion BVH's only primitive, made every
+// ray interpolate and invert its transform (30-40 % of a render; bench/README.md). With two or
+// more, the split added more than it saved.
+void Geometry::attach_moving(RTCScene object, const Instance& inst, unsigned id, bool lone) {
+  const bool matrices = same_rotation(inst.motion_decomposed);
+  const size_t n = inst.motion.size();
+  const size_t segments = lone ? std::max<size_t>(n - 1, 2) : 1;
+  const unsigned steps = segments == 1 ? unsigned(n) : 2;
+  for (size_t k = 0; k < segments; ++k) {
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, object);
+    rtcSetGeometryTimeStepCount(g, steps);
+    if (segments > 1) rtcSetGeometryTimeRange(g, float(k) / float(segments), float(k + 1) / float(segments));
+    for (unsigned end = 0; end < steps; ++end) {
+      // A step, or two steps split in two: their start, middle or end (point 0, 1, 2).
+      const size_t point = k + end;
+      const bool halves = segments == 2 && n == 2;
+      const bool middle = halves && point == 1;
+      const size_t step = halves ? point / 2 : point;
+      if (matrices) {
+        // No rotation changes: interpolating the matrices linearly is Cycles' interpolation (M =
+        // T + R S is linear in T and S), and Embree traverses it faster than quaternion motion.
+        Transform xf = inst.motion[step];
+        if (middle)
+          for (int e = 0; e < 12; ++e) xf.m[e] = 0.5f * (inst.motion[0].m[e] + inst.motion[1].m[e]);
+        rtcSetGeometryTransform(g, end, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xf.m);
+      } else {
+        // Cycles' instance motion on Embree (bvh/embree.cpp): one quaternion decomposition a step.
+        const DecomposedTransform d =
+            middle ? interpolate_decomposed(inst.motion_decomposed, 0.5f) : inst.motion_decomposed[step];
+        RTCQuaternionDecomposition q;
+        rtcInitQuaternionDecomposition(&q);
+        rtcQuaternionDecompositionSetQuaternion(&q, d.q[3], d.q[0], d.q[1], d.q[2]);
+        rtcQuaternionDecompositionSetScale(&q, d.scale[0], d.scale[1], d.scale[2]);
+        rtcQuaternionDecompositionSetSkew(&q, d.skew[0], d.skew[1], d.skew[2]);
+        rtcQuaternionDecompositionSetTranslation(&q, d.translation.x, d.translation.y, d.translation.z);
+        rtcSetGeometryTransformQuaternion(g, end, &q);
+      }
+    }
+    rtcCommitGeometry(g);
+    const unsigned rtc_id = k == 0 ? id : unsigned(rtc_to_instance_.size());
+    rtcAttachGeometryByID(top_, g, rtc_id);
+    rtcReleaseGeometry(g);
+    if (k > 0) {
+      rtc_to_instance_.push_back(id);
+      rtc_visibility_.push_back(instance_visibility_[id]);
+    }
+  }
 }
 
 // The instance's mesh in world space, its triangles in the mesh's order (hits keep their
@@ -678,8 +727,10 @@ bool closest_hit(RTCScene scene, RTCIntersectContext* ctx, const Ray& ray, const
 bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   if (!traceable(ray)) return false;
   VisibilityContext c;
-  init_visibility(&c, partial_visibility_ ? instance_visibility_.data() : nullptr, visibility);
-  return closest_hit(top_, &c.ctx, ray, ray.o, ray.d, hit);
+  init_visibility(&c, partial_visibility_ ? rtc_visibility_.data() : nullptr, visibility);
+  if (!closest_hit(top_, &c.ctx, ray, ray.o, ray.d, hit)) return false;
+  hit->instance = int(rtc_to_instance_[size_t(hit->instance)]);  // a motion segment's own id
+  return true;
 }
 
 bool Geometry::intersect_instance(const Ray& ray, int instance, Hit* hit) const {
@@ -705,7 +756,7 @@ bool Geometry::intersect_instance(const Ray& ray, int instance, Hit* hit) const 
 bool Geometry::occluded(const Ray& ray, unsigned visibility) const {
   if (!traceable(ray)) return true;
   VisibilityContext c;
-  init_visibility(&c, partial_visibility_ ? instance_visibility_.data() : nullptr, visibility);
+  init_visibility(&c, partial_visibility_ ? rtc_visibility_.data() : nullptr, visibility);
   RTCRay r;
   r.org_x = ray.o.x;
   r.org_y = ray.o.y;

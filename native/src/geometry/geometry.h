@@ -251,8 +251,11 @@ class Geometry {
   RTCScene top_ = nullptr;
   std::vector<Mesh> meshes_;
   std::vector<Instance> instances_;
-  std::vector<unsigned> rtc_to_instance_;  // Embree instance geometry id -> our instance index
   std::vector<unsigned> instance_visibility_;
+  // Embree's top-level geometry ids: an instance's index, then a moving instance's further motion
+  // segments (attach_moving); their instances and visibility.
+  std::vector<unsigned> rtc_to_instance_, rtc_visibility_;
+  void attach_moving(RTCScene object, const Instance& inst, unsigned id, bool lone);
   // Instances whose transform flattens the mesh (zero scale on an axis: no inverse, which Embree's
   // instancing needs), or whose inverse would take rays beyond what Embree traverses (a scale
   // below 1e-8, an extreme shear), are traced through a copy of the mesh baked into world space,
