@@ -10,8 +10,7 @@
 // light before the split also filed as the matte, and a second path from the same state and the
 // same random numbers sees only catchers (catcher_only_visibility; lamps, the world and catchers'
 // own emission light it), its light filed apart (SampleValue::catcher); the film divides them.
-#include <optional>
-
+#include "core/room.h"
 #include "integrators/light_passes.h"
 #include "integrators/media_transport.h"
 #include "integrators/path_state.h"
@@ -78,7 +77,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     State state;
     Sampler sampler;
   };
-  std::optional<Snapshot> snap;
+  Room<Snapshot> snap;  // not std::optional, whose storage GCC zero-fills (core/room.h)
   // The world the camera ray sees along `r` (Cycles' background pass, for the approximate matte).
   auto add_background = [&](const Ray& r, const Spectrum& w, unsigned vis) {
     if (catchers) out.background += w * catcher_background(scene, s, r.d, b, vis);
@@ -162,7 +161,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       Hit hit;
       ++stats.rays;
       // Only a scene with catchers keeps the state of each camera segment, for a split.
-      if (catchers && !split && b.total == 0) snap = Snapshot{state, sampler};
+      if (catchers && !split && b.total == 0) snap.make(Snapshot{state, sampler});
       bool found = scene.geometry.intersect(ray, catcher_leg ? catcher_only_visibility(visibility) : visibility, &hit);
       const float t_end = found ? hit.t : ray.tmax;
       // Cycles' integrator_split_shadow_catcher: before the segment's volume and the surface are
@@ -430,8 +429,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     if (!split || catcher_leg) break;
     // The catcher-only path, from the segment that met the catcher.
     catcher_leg = true;
-    state = snap->state;
-    sampler = snap->sampler;
+    state = snap.get()->state;
+    sampler = snap.get()->sampler;
     if constexpr (kMedia) stack = catcher_volume_stack(scene, ray, stats);
   }
   out.radiance = L;
