@@ -157,7 +157,7 @@ TEST(World, EnvironmentProjections) {
                                 {normalize(Vec3(0.3f, 0.2f, 0.5f)), 0, 0}};
     for (const Case& k : cases) {
       ShadingContext c;
-      c.object_N = k.d;
+      c.set_normal_values(k.d, Vec3(0.0f));
       float u = k.u, v = k.v;
       if (projection == 1 && k.u == 0) {  // the general formula
         Vec3 d = k.d;

@@ -66,7 +66,7 @@ float fresnel_cos(float cosi, float eta) {
 void tex_coord(const Instr& in, Machine& m) {
   const ShadingContext& c = m.at(in.param[2]);
   m.set(in.out[0], c.generated);
-  m.set(in.out[1], c.object_N);
+  m.set(in.out[1], c.object_normal());
   m.set(in.out[2], Vec3(c.uv.x, c.uv.y, 0.0f));
   const float* object = m.k + in.param[0];
   m.set(in.out[3], object[0] == 12 ? affine(object + 1, c.P) : c.object_P);
@@ -750,7 +750,7 @@ void exec_inputs_family(const Instr& in, Machine& m) {
     case kOpGeometry:
       m.set(in.out[0], m.at(in.param[0]).P);
       m.set(in.out[1], c.N);
-      m.set(in.out[2], c.tangent);
+      m.set(in.out[2], c.surface_tangent());
       m.set(in.out[3], c.Ng);
       m.set(in.out[4], c.I);
       m.set(in.out[5], Vec3(1 - c.bary.x - c.bary.y, c.bary.x, 0.0f));

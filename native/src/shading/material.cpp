@@ -40,18 +40,33 @@ ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp,
   c.curve = sp.curve;
   c.dpdu = sp.dpdu;
   // Cycles' primitive_tangent on curves: the curve's direction.
-  if (sp.curve >= 0 && length_squared(sp.dpdu) > 0) c.tangent = normalize(sp.dpdu);
+  if (sp.curve >= 0 && length_squared(sp.dpdu) > 0) c.set_normal_values(c.object_normal(), normalize(sp.dpdu));
   return c;
 }
 
 void set_shading_normal(ShadingContext* c, const Vec3& n) {
   c->N = n;
-  const Pose& pose = c->pose;
-  c->object_N = normalize(pose.normal_to_object(n));
+  c->derived_ = false;
+}
+
+namespace {
+void derive_normal_values(const ShadingContext& c) {
+  const Pose& pose = c.pose;
   // Cycles' primitive_tangent: a tangent around the generated Z axis, made normal to N.
-  const Vec3 around = pose.normal_to_world(Vec3(-(c->generated.y - 0.5f), c->generated.x - 0.5f, 0.0f));
-  const Vec3 tangent = cross(n, normalize(cross(around, n)));
-  c->tangent = is_finite(tangent) ? tangent : Vec3(0.0f);
+  const Vec3 around = pose.normal_to_world(Vec3(-(c.generated.y - 0.5f), c.generated.x - 0.5f, 0.0f));
+  const Vec3 tangent = cross(c.N, normalize(cross(around, c.N)));
+  c.set_normal_values(normalize(pose.normal_to_object(c.N)), is_finite(tangent) ? tangent : Vec3(0.0f));
+}
+}  // namespace
+
+Vec3 ShadingContext::object_normal() const {
+  if (!derived_) derive_normal_values(*this);
+  return object_N_;
+}
+
+Vec3 ShadingContext::surface_tangent() const {
+  if (!derived_) derive_normal_values(*this);
+  return tangent_;
 }
 
 void add_tracing(const Geometry& geometry, const SurfacePoint& sp, float min_ray_pdf, Sampler& sampler,

@@ -88,7 +88,7 @@ inline Frame local_frame(const ShadingFrame& f, const Vec3& ng) {
 // The shading point as the nodes see it, for a ray of direction ray_d that met sp at distance t
 // from its start (a camera ray starts at the near clip, as Cycles').
 ShadingContext shading_context(const Geometry& geometry, const SurfacePoint& sp, const Vec3& ray_d, float t);
-// Gives the shading point the normal n (unit, facing the ray) and what depends on it: object_N and
+// Gives the shading point the normal n (unit, facing the ray) and what depends on it: object_normal() and
 // Geometry's Tangent (shading_context; Cycles' SetNormal replaces sd->N the same way).
 void set_shading_normal(ShadingContext* ctx, const Vec3& n);
 // What Bump and Wireframe need (ShadingContext::footprint, offset, corners): the ray footprint at

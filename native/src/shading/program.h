@@ -45,12 +45,22 @@ struct ShadingContext {
   Vec3 N;          // smooth shading normal, facing the incoming ray (Cycles' sd->N)
   Vec3 Ng;         // geometric normal, facing the incoming ray
   Vec3 I;          // toward the viewer: the incoming ray's reversed direction
-  Vec3 tangent;    // Cycles' Geometry Tangent: around the generated Z axis, normal to N
   Vec2 uv;         // the active render UV map
   Vec2 bary;       // barycentrics of the triangle's second and third vertices
   Vec3 generated;  // object-space position in the mesh's texture space (Cycles' Generated)
   Vec3 object_P;   // object-space position
-  Vec3 object_N;   // object-space N
+  // Object-space N, and Cycles' Geometry Tangent (around the generated Z axis, normal to N; a
+  // curve's direction): set with N (set_shading_normal) but worked out when first read, since
+  // most programs read neither (material.cpp).
+  Vec3 object_normal() const;
+  Vec3 surface_tangent() const;
+  void set_normal_values(const Vec3& object_N, const Vec3& tangent) const {
+    object_N_ = object_N;
+    tangent_ = tangent;
+    derived_ = true;
+  }
+  mutable Vec3 object_N_, tangent_;
+  mutable bool derived_ = false;
   bool backfacing = false;
   bool background = false;  // a world ray's point (world_context): no object, P is the direction
   // Bump and Wireframe (add_differentials): the ray footprint (Cycles' compact sd->dP) and what the

@@ -41,7 +41,7 @@ bool backfacing(const Machine& m) { return m.ctx && m.ctx->backfacing; }
 // A tangent for anisotropic lobes (a zero Tangent input stands for the shading point's), turned
 // about the normal n by `rotation` turns (Cycles' rotate_around_axis(T, N, rotation * 2 pi)).
 void take_tangent(Machine& m, Vec3 t, const Vec3& n, float rotation) {
-  if (!(dot(t, t) > 0) || !is_finite(t)) t = m.ctx ? m.ctx->tangent : Vec3(0.0f);
+  if (!(dot(t, t) > 0) || !is_finite(t)) t = m.ctx ? m.ctx->surface_tangent() : Vec3(0.0f);
   if (rotation != 0 && std::isfinite(rotation)) {
     const float a = rotation * 2 * kPi, c = std::cos(a), s = std::sin(a);
     t = t * c + cross(n, t) * s + n * (dot(n, t) * (1 - c));  // Rodrigues
@@ -283,7 +283,8 @@ void take_hair_tangent(Machine& m, const Vec3& T, Lobe* l) {
 // The curve's direction (Cycles' sd->dPdu), else the shading point's tangent.
 Vec3 hair_direction(const Machine& m) {
   if (length_squared(m.ctx->dpdu) > 0) return normalize(m.ctx->dpdu);
-  return is_black(m.ctx->tangent) ? Frame(m.ctx->N).s : m.ctx->tangent;
+  const Vec3 t = m.ctx->surface_tangent();
+  return is_black(t) ? Frame(m.ctx->N).s : t;
 }
 
 // Cycles' Random of a curve (ATTR_STD_CURVE_RANDOM).

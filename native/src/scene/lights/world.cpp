@@ -9,8 +9,8 @@ namespace lt {
 ShadingContext world_context(const Vec3& dir) {
   ShadingContext c;
   c.P = c.generated = c.object_P = dir;
-  c.N = c.Ng = c.I = c.object_N = -dir;
-  c.tangent = Vec3(0.0f);
+  c.N = c.Ng = c.I = -dir;
+  c.set_normal_values(-dir, Vec3(0.0f));
   c.uv = Vec2{0, 0};
   c.bary = Vec2{0, 0};
   c.background = true;
