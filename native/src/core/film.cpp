@@ -235,6 +235,7 @@ Film::Film(int width, int height, const FilmLayout& layout) : width_(width), hei
   for (int p = kFirstSummedPass; p < int(Pass::Count); ++p) {
     if (!has(Pass(p)) || Pass(p) == Pass::ShadowCatcher) continue;
     sums_[p - kFirstSummedPass].assign(summed_floats(Pass(p)) * n, 0.0f);
+    summed_kept_.push_back(p - kFirstSummedPass);
     if (layout_.splats && is_light_pass(Pass(p)) && !is_colour_pass(Pass(p)))
       light_splat_[p - kFirstSummedPass].assign(3 * n, 0.0f);
   }
@@ -318,9 +319,8 @@ void Film::add(int x, int y, const SampleValue& s) {
     if (half)
       for (int k = 0; k < kFeatureChannels; ++k) feature_half_[kFeatureChannels * i + k] += f[k];
   }
-  for (int j = 0; j < kSummedPasses; ++j) {
+  for (const int j : summed_kept_) {
     std::vector<float>& a = sums_[j];
-    if (a.empty()) continue;
     const Pass p = Pass(j + kFirstSummedPass);
     if (j < kLightParts) {
       for (int k = 0; k < 3; ++k) a[3 * i + k] += s.light[j][k];

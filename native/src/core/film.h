@@ -435,6 +435,7 @@ class Film {
   // the indices: the pixel's first sample's value, as Cycles writes them at sample 0), empty when
   // not kept; light_splat_: the light passes' part of the splats (BDPT).
   std::vector<float> sums_[kSummedPasses];
+  std::vector<int> summed_kept_;  // the indices of sums_ kept (add() visits only those)
   std::vector<float> light_splat_[kLightParts];
   // Cryptomatte: per kept type, FilmLayout::cryptomatte_slots() (id, weight sum) pairs per pixel.
   std::vector<float> crypto_[kCryptoTypes];

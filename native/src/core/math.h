@@ -77,6 +77,7 @@ inline float max_abs_component(const Vec3& a) {
 }
 inline float average(const Vec3& a) { return (a.x + a.y + a.z) * (1.0f / 3.0f); }
 inline bool is_black(const Vec3& a) { return a.x == 0 && a.y == 0 && a.z == 0; }
+inline bool same_vector(const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 inline bool is_finite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
 inline Vec3 lerp(float t, const Vec3& a, const Vec3& b) { return a * (1 - t) + b * t; }
 // Rec. 709 luminance, the weights Blender's default (linear Rec. 709) working space uses.

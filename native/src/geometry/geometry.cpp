@@ -904,8 +904,7 @@ Vec3 Geometry::shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& 
   Vec3 cn[3];
   object_corner_normals(m, sp.primitive, sp.time, cn);
   // Flat faces (the add-on gives their three corners the face's normal) keep the triangle.
-  auto same = [](const Vec3& a, const Vec3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
-  if (same(cn[0], cn[1]) && same(cn[1], cn[2])) return spawn_origin(sp, wi);
+  if (same_vector(cn[0], cn[1]) && same_vector(cn[1], cn[2])) return spawn_origin(sp, wi);
   float nl = dot(n, wi);
   const Vec3 side = nl < 0 ? -ng : ng;
   const float amount = terminator_offset_amount(cutoff, std::abs(nl), dot(side, wi));

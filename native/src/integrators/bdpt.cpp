@@ -441,7 +441,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       v.smooth_n = smooth_n;
       v.tangent = sf.tangent;
       // Hair lobes keep their tangent in this frame; an untilted normal along Ng never tilts.
-      v.tilts = sp.curve < 0 && !(v.raw_n.x == v.n.x && v.raw_n.y == v.n.y && v.raw_n.z == v.n.z);
+      v.tilts = sp.curve < 0 && !same_vector(v.raw_n, v.n);
     }
     v.pdf_fwd = density_of(count, v);
     reverse_density(count, v);

@@ -171,7 +171,7 @@ class Bdpt {
     Vec3 n = ensure_valid_reflection(side * v.n, view, side * v.raw_n);
     if (!is_finite(n)) n = side * v.raw_n;
     n = facing_normal(side * n, v.n);
-    if (n.x == v.frame.n.x && n.y == v.frame.n.y && n.z == v.frame.n.z) return {v.frame, true};
+    if (same_vector(n, v.frame.n)) return {v.frame, true};
     return {is_black(v.tangent) ? Frame(n) : Frame(n, v.tangent), false};
   }
   // v's BSDF in vf: v.bsdf, or for another frame a copy with its bump normal moved there.

@@ -223,9 +223,10 @@ Spectrum Program::execute_all(const ShadingContext& ctx, const std::vector<std::
     if (m.has_shading_normal) {
       frame->n = m.shading_normal;
       frame->raw = m.shading_normal_raw;
-    } else if (bsdf && bsdf->count() > 0) {
+    } else if (bsdf && bsdf->count() > 0 && !same_vector(frame->n, m.ctx->Ng)) {
       // Cycles' closure nodes pass an unlinked Normal (sd->N) through ensure_valid_reflection too:
-      // a smooth-shaded silhouette's normal tilts so that its mirror direction leaves the surface.
+      // a smooth-shaded silhouette's normal tilts so that its mirror direction leaves the surface
+      // (Ng itself reflects every direction above it and stays).
       const Vec3 valid = ensure_valid_reflection(m.ctx->Ng, m.ctx->I, frame->n);
       if (is_finite(valid)) frame->n = valid;
     }
