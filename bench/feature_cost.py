@@ -7,9 +7,9 @@ rendered with the feature on against the same scene with it off.
 - dof: cornell_dof (scenes/build_scenes.py: F/0.05, 6 blades, anamorphic) against a pinhole. With
   a lens every camera ray draws one more 2D sample and BDPT's light tracing one per connection;
   the rays are as many, but blurred pixels make incoherent rays.
-- motion_one: motion_blur with only the rotating box animated (the others keep their pose at the
-  frame): a scene's one moving object, which Embree would otherwise trace without any bounds test
-  (geometry.cpp, attach_moving).
+- motion_one: motion_blur_one (motion_blur with only the rotating box animated): a scene's one
+  moving object, which Embree would otherwise trace without any bounds test (geometry.cpp,
+  attach_moving).
 - motion: motion_blur (a translating and a rotating box, a deforming grid, a panning camera;
   shutter 1 frame, 3 motion steps) against motion blur off (everything at the shutter's centre).
   Every camera sample draws one time, moving instances traverse Embree's motion BVH (quaternion
@@ -33,26 +33,16 @@ REPO = os.path.dirname(BENCH)
 sys.path[:0] = [os.path.join(REPO, "addon"), os.path.join(REPO, "scenes")]
 
 
-def _only_rotating_moves(scene):
-    """Clears the animation of everything in motion_blur but the rotating box."""
-    for ob in scene.objects:
-        if ob.name != "Rotating" and ob.animation_data:
-            ob.animation_data_clear()
-        keys = getattr(getattr(ob, "data", None), "shape_keys", None)
-        if keys is not None and keys.animation_data:
-            keys.animation_data_clear()
-
-
 def _motion_blur(scene, on):
     scene.render.use_motion_blur = on
 
 
-# feature: (scene, what it is called, switch(scene, on), default resolution, prepare(scene))
+# feature: (scene, what it is called, switch(scene, on), default resolution)
 FEATURES = {
     "dof": ("cornell_dof", "depth of field / pinhole",
-            lambda scene, on: setattr(scene.camera.data.dof, "use_dof", on), (160, 160), None),
-    "motion": ("motion_blur", "motion blur / none", _motion_blur, (160, 107), None),
-    "motion_one": ("motion_blur", "one moving object's blur / none", _motion_blur, (160, 107), _only_rotating_moves),
+            lambda scene, on: setattr(scene.camera.data.dof, "use_dof", on), (160, 160)),
+    "motion": ("motion_blur", "motion blur / none", _motion_blur, (160, 107)),
+    "motion_one": ("motion_blur_one", "one moving object's blur / none", _motion_blur, (160, 107)),
 }
 
 
@@ -85,12 +75,10 @@ def main(args):
     import build_scenes
     import lantern
     lantern.register()
-    name, label, switch, resolution, prepare = FEATURES[args.feature]
+    name, label, switch, resolution = FEATURES[args.feature]
     width, height = args.width or resolution[0], args.height or resolution[1]
     build_scenes.reset_file()
     scene = build_scenes.build(name, resolution=(width, height))
-    if prepare:
-        prepare(scene)
     results = []
     for integrator in ("PATH", "BIDIRECTIONAL"):
         times = {"on": [], "off": []}

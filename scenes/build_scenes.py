@@ -2132,6 +2132,18 @@ def build_motion_blur(scene, blur=True):
     scene.cycles.motion_blur_position = "CENTER"
 
 
+def build_motion_blur_one(scene):
+    """motion_blur with only the turning box animated (the rest keep their pose at the frame): a
+    scene's one moving object, which the core splits into motion segments (Geometry::attach_moving)."""
+    build_motion_blur(scene)
+    for ob in scene.objects:
+        if ob.name != "Rotating" and ob.animation_data:
+            ob.animation_data_clear()
+        keys = getattr(getattr(ob, "data", None), "shape_keys", None)
+        if keys is not None and keys.animation_data:
+            keys.animation_data_clear()
+
+
 # ----------------------------------------------------------------------------------------------
 # Curves and points (issue 15)
 # ----------------------------------------------------------------------------------------------
@@ -2297,6 +2309,7 @@ SCENES = {
     "glossy_glass": (build_glossy_glass, (96, 96), 128),
     "cornell_dof": (build_cornell_dof, (96, 96), 128),
     "motion_blur": (build_motion_blur, (96, 64), 128),
+    "motion_blur_one": (build_motion_blur_one, (96, 64), 128),
     "pano_equirectangular": (lambda scene: build_panorama(scene, "EQUIRECTANGULAR"), (64, 32), 128),
     "pano_fisheye_equidistant": (lambda scene: build_panorama(scene, "FISHEYE_EQUIDISTANT"), (48, 48), 128),
     "pano_fisheye_equisolid": (lambda scene: build_panorama(scene, "FISHEYE_EQUISOLID"), (48, 32), 128),

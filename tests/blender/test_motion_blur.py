@@ -100,19 +100,13 @@ def test_viewport_ignores_motion_blur_as_cycles(scene_factory):
 
 
 def test_lone_moving_object_agrees_with_cycles(scene_factory, outdir):
-    """motion_blur with only the turning box animated: a scene's one moving object, which the core
+    """motion_blur_one (motion_blur with only the turning box animated): a scene's one moving object, which the core
     gives Embree as one instance per motion segment (geometry.cpp, attach_moving; alone, Embree
     would trace it with no bounds test at all). Per tile and the image mean against Cycles, PATH
     and BIDIRECTIONAL."""
     from test_agreement import ROUNDING, TILE
-    scene = scene_factory("motion_blur")
-    for ob in scene.objects:
-        if ob.name != "Rotating" and ob.animation_data:
-            ob.animation_data_clear()
-        keys = getattr(getattr(ob, "data", None), "shape_keys", None)
-        if keys is not None and keys.animation_data:
-            keys.animation_data_clear()
-    spp = build_scenes.SCENES["motion_blur"][2]
+    scene = scene_factory("motion_blur_one")
+    spp = build_scenes.SCENES["motion_blur_one"][2]
     cycles = [ru.render(scene, ru.CYCLES, spp, seed=seed).combined for seed in (0, 1)]
     for integrator in ("PATH", "BIDIRECTIONAL"):
         lantern = [ru.render(scene, ru.LANTERN, spp, seed=seed, integrator=integrator).combined for seed in (0, 1)]
