@@ -80,6 +80,17 @@ def _map_to_sphere(co):
     return uv
 
 
+def _smooth_triangles(tris):
+    """Each loop triangle's smooth flag (all smooth in Blender versions without the property: their
+    corner normals are flat on flat faces anyway)."""
+    smooth = np.ones(len(tris), dtype=bool)
+    try:
+        tris.foreach_get("use_smooth", smooth)
+    except (AttributeError, TypeError, RuntimeError):
+        smooth[:] = True
+    return smooth
+
+
 def _sphere_tangents(mesh, warn):
     """Cycles 3.4's tangents on a mesh without UV maps (blender/mesh.cpp, MikkTSpace fed the loop
     triangles, each corner's UV its vertex's undeformed position mapped to a sphere): Blender's
@@ -91,24 +102,19 @@ def _sphere_tangents(mesh, warn):
     nt, nv = len(tris), len(mesh.vertices)
     triangles = np.empty(nt * 3, dtype=np.int32)
     tris.foreach_get("vertices", triangles)
-    smooth = np.ones(nt, dtype=bool)
-    try:
-        tris.foreach_get("use_smooth", smooth)
-    except (AttributeError, TypeError, RuntimeError):
-        pass
+    smooth = _smooth_triangles(tris)
     co = np.empty(nv * 3, dtype=np.float32)
     mesh.vertices.foreach_get("co", co)
     undeformed = np.empty(nv * 3, dtype=np.float32)
     mesh.vertices.foreach_get("undeformed_co", undeformed)
-    # Cycles' coordinates: the undeformed ones through its Generated attribute and back (float32
-    # rounding included; the seam's u of 0 or 1 turns on the sign of what remains of x = 0).
-    size = np.array(getattr(mesh, "texspace_size", (1.0, 1.0, 1.0)), np.float32)
-    size = np.where(size != 0, np.float32(0.5) / np.where(size != 0, size, np.float32(1)), size).astype(np.float32)
-    loc = (np.array(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0)), np.float32) * size
-           - np.float32(0.5)).astype(np.float32)
-    generated = undeformed.reshape(-1, 3) * size - loc
+    # Cycles' coordinates: the undeformed ones through its Generated attribute and back, in float32
+    # (mesh_texture_space; the seam's u of 0 or 1 turns on the sign of what remains of x = 0).
+    size = np.array(mesh.texspace_size, np.float32)
     with np.errstate(divide="ignore", invalid="ignore"):
-        undeformed = (generated + loc) * (np.float32(1) / size)
+        scale = np.where(size != 0, np.float32(0.5) / size, size)
+        loc = np.array(mesh.texspace_location, np.float32) * scale - np.float32(0.5)
+        generated = undeformed.reshape(-1, 3) * scale - loc
+        orco = (generated + loc) * (np.float32(1) / scale)
     try:
         tm = bpy.data.meshes.new("lantern_sphere_tangents")
     except RuntimeError as e:  # a context where data cannot be added
@@ -126,7 +132,7 @@ def _sphere_tangents(mesh, warn):
         tm.polygons.foreach_set("use_smooth", smooth)
         tm.update(calc_edges=True)
         layer = tm.uv_layers.new(name="sphere", do_init=False)
-        layer.data.foreach_set("uv", _map_to_sphere(undeformed)[triangles].reshape(-1))
+        layer.data.foreach_set("uv", _map_to_sphere(orco)[triangles].reshape(-1))
         tm.calc_tangents(uvmap=layer.name)
         t = np.empty(nt * 9, dtype=np.float32)
         sign = np.empty(nt * 3, dtype=np.float32)
@@ -301,11 +307,7 @@ def mesh_arrays(mesh, requests=(), warn=lambda _t: None):
     material_slots = np.empty(nt, dtype=np.int32)
     tris.foreach_get("material_index", material_slots)
 
-    smooth = np.empty(nt, dtype=bool)
-    try:
-        tris.foreach_get("use_smooth", smooth)
-    except (AttributeError, TypeError, RuntimeError):
-        smooth[:] = True  # newer Blender: its corner normals are flat on flat faces anyway
+    smooth = _smooth_triangles(tris)
     has_custom = getattr(mesh, "has_custom_normals", False)
     corner_normals = flat_triangles = None
     if smooth.any() or has_custom:

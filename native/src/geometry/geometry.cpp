@@ -538,8 +538,7 @@ void Geometry::build_top() {
   top_ = rtcNewScene(device_);
   if (partial_visibility_) rtcSetSceneFlags(top_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   bounds_ = Bounds();
-  rtc_to_instance_.resize(instances_.size());
-  for (size_t i = 0; i < instances_.size(); ++i) rtc_to_instance_[i] = unsigned(i);
+  segment_instance_.clear();
   rtc_visibility_ = instance_visibility_;
   // Instances Embree traces (not the curves and spheres of a flattened object), those that move,
   // and how many move.
@@ -616,15 +615,15 @@ void Geometry::attach_moving(RTCScene object, const Instance& inst, unsigned id,
   const size_t n = inst.motion.size();
   const size_t segments = lone ? std::max<size_t>(n - 1, 2) : 1;
   const unsigned steps = segments == 1 ? unsigned(n) : 2;
+  const bool halves = segments == 2 && n == 2;  // two steps split at their middle
   for (size_t k = 0; k < segments; ++k) {
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, object);
     rtcSetGeometryTimeStepCount(g, steps);
     if (segments > 1) rtcSetGeometryTimeRange(g, float(k) / float(segments), float(k + 1) / float(segments));
     for (unsigned end = 0; end < steps; ++end) {
-      // A step, or two steps split in two: their start, middle or end (point 0, 1, 2).
+      // A step, or with halves the start, middle or end of the two (point 0, 1, 2).
       const size_t point = k + end;
-      const bool halves = segments == 2 && n == 2;
       const bool middle = halves && point == 1;
       const size_t step = halves ? point / 2 : point;
       if (matrices) {
@@ -648,11 +647,11 @@ void Geometry::attach_moving(RTCScene object, const Instance& inst, unsigned id,
       }
     }
     rtcCommitGeometry(g);
-    const unsigned rtc_id = k == 0 ? id : unsigned(rtc_to_instance_.size());
+    const unsigned rtc_id = k == 0 ? id : unsigned(instances_.size() + segment_instance_.size());
     rtcAttachGeometryByID(top_, g, rtc_id);
     rtcReleaseGeometry(g);
     if (k > 0) {
-      rtc_to_instance_.push_back(id);
+      segment_instance_.push_back(id);
       rtc_visibility_.push_back(instance_visibility_[id]);
     }
   }
@@ -729,7 +728,8 @@ bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   VisibilityContext c;
   init_visibility(&c, partial_visibility_ ? rtc_visibility_.data() : nullptr, visibility);
   if (!closest_hit(top_, &c.ctx, ray, ray.o, ray.d, hit)) return false;
-  hit->instance = int(rtc_to_instance_[size_t(hit->instance)]);  // a motion segment's own id
+  if (size_t(hit->instance) >= instances_.size())  // a motion segment's own id
+    hit->instance = int(segment_instance_[size_t(hit->instance) - instances_.size()]);
   return true;
 }
 

@@ -252,9 +252,9 @@ class Geometry {
   std::vector<Mesh> meshes_;
   std::vector<Instance> instances_;
   std::vector<unsigned> instance_visibility_;
-  // Embree's top-level geometry ids: an instance's index, then a moving instance's further motion
-  // segments (attach_moving); their instances and visibility.
-  std::vector<unsigned> rtc_to_instance_, rtc_visibility_;
+  // Embree's top-level geometry ids are the instances' indices, then a moving instance's further
+  // motion segments (attach_moving): those segments' instances, and every id's visibility.
+  std::vector<unsigned> segment_instance_, rtc_visibility_;
   void attach_moving(RTCScene object, const Instance& inst, unsigned id, bool lone);
   // Instances whose transform flattens the mesh (zero scale on an axis: no inverse, which Embree's
   // instancing needs), or whose inverse would take rays beyond what Embree traverses (a scale

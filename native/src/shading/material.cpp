@@ -49,23 +49,22 @@ void set_shading_normal(ShadingContext* c, const Vec3& n) {
   c->derived_ = false;
 }
 
-namespace {
-void derive_normal_values(const ShadingContext& c) {
-  const Pose& pose = c.pose;
+void ShadingContext::derive_normal_values() const {
+  object_N_ = normalize(pose.normal_to_object(N));
   // Cycles' primitive_tangent: a tangent around the generated Z axis, made normal to N.
-  const Vec3 around = pose.normal_to_world(Vec3(-(c.generated.y - 0.5f), c.generated.x - 0.5f, 0.0f));
-  const Vec3 tangent = cross(c.N, normalize(cross(around, c.N)));
-  c.set_normal_values(normalize(pose.normal_to_object(c.N)), is_finite(tangent) ? tangent : Vec3(0.0f));
+  const Vec3 around = pose.normal_to_world(Vec3(-(generated.y - 0.5f), generated.x - 0.5f, 0.0f));
+  const Vec3 tangent = cross(N, normalize(cross(around, N)));
+  tangent_ = is_finite(tangent) ? tangent : Vec3(0.0f);
+  derived_ = true;
 }
-}  // namespace
 
 Vec3 ShadingContext::object_normal() const {
-  if (!derived_) derive_normal_values(*this);
+  if (!derived_) derive_normal_values();
   return object_N_;
 }
 
 Vec3 ShadingContext::surface_tangent() const {
-  if (!derived_) derive_normal_values(*this);
+  if (!derived_) derive_normal_values();
   return tangent_;
 }
 

@@ -196,6 +196,9 @@ Spectrum Program::execute_all(const ShadingContext& ctx, const std::vector<std::
       moved[k].generated += d.generated;
       moved[k].uv = {ctx.uv.x + d.uv.x, ctx.uv.y + d.uv.y};
       moved[k].bary = {ctx.bary.x + d.bary.x, ctx.bary.y + d.bary.y};
+      // The point's own object normal and tangent: the move shifts the position and its
+      // coordinates, not the normal's frame (a moved Generated would turn the tangent).
+      moved[k].set_normal_values(ctx.object_normal(), ctx.surface_tangent());
       m.bumped[k] = &moved[k];
     }
     m.moved = moved;

@@ -13,9 +13,7 @@
 
 #include <cstdint>
 #include <memory>
-#include <new>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "core/math.h"
@@ -50,17 +48,15 @@ struct ShadingContext {
   Vec3 generated;  // object-space position in the mesh's texture space (Cycles' Generated)
   Vec3 object_P;   // object-space position
   // Object-space N, and Cycles' Geometry Tangent (around the generated Z axis, normal to N; a
-  // curve's direction): set with N (set_shading_normal) but worked out when first read, since
-  // most programs read neither (material.cpp).
+  // curve's direction): worked out from N when first read after set_shading_normal, since most
+  // programs read neither (material.cpp); set_normal_values gives fixed ones.
   Vec3 object_normal() const;
   Vec3 surface_tangent() const;
-  void set_normal_values(const Vec3& object_N, const Vec3& tangent) const {
+  void set_normal_values(const Vec3& object_N, const Vec3& tangent) {
     object_N_ = object_N;
     tangent_ = tangent;
     derived_ = true;
   }
-  mutable Vec3 object_N_, tangent_;
-  mutable bool derived_ = false;
   bool backfacing = false;
   bool background = false;  // a world ray's point (world_context): no object, P is the direction
   // Bump and Wireframe (add_differentials): the ray footprint (Cycles' compact sd->dP) and what the
@@ -102,6 +98,12 @@ struct ShadingContext {
   // their colour after one, PATH_RAY_DIFFUSE_ANCESTOR). Elsewhere (BDPT, AO, displacement) that
   // diffuse, the radius-0 limit.
   bool subsurface = false;
+
+ private:
+  friend void set_shading_normal(ShadingContext* ctx, const Vec3& n);
+  void derive_normal_values() const;
+  mutable Vec3 object_N_, tangent_;
+  mutable bool derived_ = false;
 };
 
 // The machine an instruction runs on: read inputs, write outputs.

@@ -143,11 +143,8 @@ void LightSet::build(std::vector<Light> lights, const World* world, const Bounds
     total += power[i];
     if (!lights_[i].infinite()) bounded += power[i];
   }
-  // Without any power to go by, the power pick is uniform; the tree has nothing to weigh. With a
-  // single light to pick, the pick is that light: the tree's walk would only add its cost (4 % of
-  // a Cornell box render; where it weighs the light 0, its samples light nothing anyway).
-  const auto lit = std::count_if(power.begin(), power.end(), [](float p) { return p > 0; });
-  tree_used_ = selection_from_environment(selection_) == LightSelection::Tree && total > 0 && geometry && lit > 1;
+  // Without any power to go by, the power pick is uniform; the tree has nothing to weigh.
+  tree_used_ = selection_from_environment(selection_) == LightSelection::Tree && total > 0 && geometry;
   if (!tree_used_) return;
   std::vector<LightTree::Item> items;
   std::vector<float> infinite_power;
