@@ -74,8 +74,8 @@ struct ShaderCode {
   void glossy(uint32_t weight, Rgb color, float roughness) {
     emit(lt::kOpGlossy, {weight, c3({0, 0, 0}), c3(color), c1(roughness)}, {}, {lt::kDistGGX});
   }
-  void glass(uint32_t weight, Rgb color, float roughness, float ior) {
-    emit(lt::kOpGlass, {weight, c3({0, 0, 0}), c3(color), c1(roughness), c1(ior)}, {}, {lt::kDistGGX});
+  void glass(uint32_t weight, Rgb color, float roughness, float ior, uint32_t distribution = lt::kDistGGX) {
+    emit(lt::kOpGlass, {weight, c3({0, 0, 0}), c3(color), c1(roughness), c1(ior)}, {}, {distribution});
   }
   // Refraction BSDF (distribution kDistSharp, kDistGGX or kDistBeckmann).
   void refraction(uint32_t weight, Rgb color, float roughness, float ior, uint32_t distribution = lt::kDistGGX) {
@@ -88,7 +88,8 @@ struct ShaderCode {
   // Principled BSDF with these inputs and Blender's defaults for the others.
   // normal: its Normal input (world space; zero: the shading point's).
   void principled(uint32_t weight, Rgb base, float metallic, float roughness, float specular = 0.5f,
-                  float transmission = 0, float ior = 1.45f, float transmission_roughness = 0, Rgb normal = {0, 0, 0}) {
+                  float transmission = 0, float ior = 1.45f, float transmission_roughness = 0, Rgb normal = {0, 0, 0},
+                  uint32_t distribution = lt::kDistGGX) {
     const uint32_t z3 = c3({0, 0, 0}), z = c1(0);
     // Operand order of kOpPrincipled (shading/shaders.h).
     emit(lt::kOpPrincipled,
@@ -118,7 +119,7 @@ struct ShaderCode {
           c1(1),
           z3,
           z3},
-         {}, {lt::kDistGGX, 0});
+         {}, {distribution, 0});
   }
   // The weights Mix Shader hands its two inputs.
   std::pair<uint32_t, uint32_t> mix(uint32_t weight, float fac) {

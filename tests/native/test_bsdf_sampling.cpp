@@ -151,6 +151,27 @@ Lobe multi_ggx(float alpha, Spectrum w = Spectrum(1.0f), Spectrum color = Spectr
   l.ms_color = color;
   return l;
 }
+// The Glass node's Multiscatter GGX: w the closure weight, color its Color (each later bounce).
+Lobe multi_ggx_glass(float alpha, float eta, Spectrum w = Spectrum(1.0f), Spectrum color = Spectrum(1.0f)) {
+  Lobe l = dielectric(alpha, eta, w);
+  l.type = LobeType::MultiGGXGlass;
+  l.ms_color = color;
+  return l;
+}
+// The Principled BSDF's layers at Multiscatter GGX: its specular (f0 = cspec0) and its glass.
+Lobe multi_ggx_specular(float alpha, Spectrum f0, float spec = 0.5f) {
+  Lobe l = specular(alpha, f0, Spectrum(1.0f), spec);
+  l.type = LobeType::MultiGGX;
+  l.ms_fresnel = true;
+  return l;
+}
+Lobe multi_ggx_principled_glass(float alpha, float eta, Spectrum base, float spec_tint) {
+  Lobe l = principled_glass(alpha, eta, base, spec_tint);
+  l.type = LobeType::MultiGGXGlass;
+  l.ms_color = base;
+  l.ms_fresnel = true;
+  return l;
+}
 Lobe transparent(Spectrum w = Spectrum(1.0f)) {
   Lobe l;
   l.type = LobeType::Transparent;
@@ -424,6 +445,13 @@ std::vector<Chi2Case> make_cases() {
   // Multiscatter GGX: the single-scattering visible normals mixed with the cosine hemisphere.
   cs.push_back(lobe_case("multi_ggx_0.3_40", multi_ggx(0.3f), from_angles(40, 15)));
   cs.push_back(lobe_case("multi_ggx_aniso_0.8_0.2_75", aniso(multi_ggx(0.8f), 0.2f), from_angles(75, 100)));
+  cs.push_back(lobe_case("multi_ggx_specular_0.4_60", multi_ggx_specular(0.4f, Spectrum(0.04f)), from_angles(60, 5)));
+  // Its glass: the single-scattering glass mixed with cosine lobes on both sides.
+  cs.push_back(lobe_case("multi_ggx_glass_0.3_30", multi_ggx_glass(0.3f, 1.45f), from_angles(30, 15)));
+  cs.push_back(lobe_case("multi_ggx_glass_1_80", multi_ggx_glass(1, 1.45f), from_angles(80, 40)));
+  cs.push_back(lobe_case("multi_ggx_glass_inside_0.5_50", multi_ggx_glass(0.5f, 1 / 1.45f), from_angles(50, 70)));
+  cs.push_back(
+      lobe_case("multi_ggx_glass_wo_below", multi_ggx_glass(0.4f, 1.45f), normalize(Vec3(0.3f, -0.5f, -0.4f))));
 
   // Mixtures through Bsdf::sample / Bsdf::eval.
   {
@@ -979,6 +1007,9 @@ TEST(BsdfFurnace, NewLobesConserveEnergy) {
       {"multi_ggx_0.5", multi_ggx(0.5f), -1, 3e-2},
       {"multi_ggx_1", multi_ggx(1), -1, 3e-2},
       {"multi_ggx_aniso_0.2_0.7", aniso(multi_ggx(0.2f), 0.7f), -1, 3e-2},
+      {"multi_ggx_glass_0.3", multi_ggx_glass(0.3f, 1.45f), -1, 3e-2},
+      {"multi_ggx_glass_1", multi_ggx_glass(1, 1.45f), -1, 3e-2},
+      {"multi_ggx_glass_inside_0.5", multi_ggx_glass(0.5f, 1 / 1.45f), -1, 3e-2},
   };
   const int n = 200000;
   uint32_t seed = 300;
@@ -987,7 +1018,7 @@ TEST(BsdfFurnace, NewLobesConserveEnergy) {
       const Vec3 wo = from_angles(t, 40);
       const Estimate e = albedo(k.lobe, wo, n, ++seed);
       const double quad = quadrature_albedo(k.lobe, wo);
-      const bool multi = k.lobe.type == LobeType::MultiGGX;
+      const bool multi = k.lobe.type == LobeType::MultiGGX || k.lobe.type == LobeType::MultiGGXGlass;
       // Cycles' 10-bounce walk gains up to 2 % at grazing angles (its quadrature shows it too).
       EXPECT_LE(multi ? quad : e.mean, (multi ? 1.03 : 1) + 5 * e.se + 1e-5) << k.name << " theta " << t;
       EXPECT_NEAR(e.mean, quad, 5 * e.se + k.quad_tol) << k.name << " theta " << t << " (se " << e.se << ")";
@@ -1348,6 +1379,35 @@ TEST(BsdfValues, CyclesClosedForms) {
     const double f = d / (4 * co * ci * (1 + lambda(co) + lambda(ci)));
     EXPECT_NEAR(lobe_eval(multi_ggx(float(a), Spectrum(1.0f), Spectrum(0.0f)), wo, wi).x, f, 1e-4 * f);
     EXPECT_GE(lobe_eval(multi_ggx(float(a)), wo, wi).x, f * (1 - 1e-5));  // white: the walk only adds
+  }
+  // Its glass with a black bounce colour is single scattering too (mf_eval_glass's first order):
+  // reflection F(o.h) D / (4 cos_o cos_i (1 + Lambda(o) + Lambda(i))); refraction Walter et al.
+  // 2007's with the height-correlated G2 = B(1 + Lambda(o), 1 + Lambda(i)) of Heitz 2014,
+  // whether the walk starts at wo or, for a shallower wi, at -wi from the other side.
+  {
+    const double a = 0.4, eta = 1.45;
+    auto lambda = [&](double c) { return 0.5 * (std::sqrt(1 + a * a * (1 - c * c) / (c * c)) - 1); };
+    auto D = [&](const Vec3& m) {
+      const double c2 = double(m.z) * m.z, t2 = (1 - c2) / c2;
+      return a * a / (pi * c2 * c2 * (a * a + t2) * (a * a + t2));
+    };
+    const Lobe black = multi_ggx_glass(float(a), float(eta), Spectrum(1.0f), Spectrum(0.0f));
+    const double fr = fresnel_dielectric(dot(wo, h), float(eta)) * D(h) / (4 * co * ci * (1 + lambda(co) + lambda(ci)));
+    EXPECT_NEAR(lobe_eval(black, wo, wi).x, fr, 1e-4 * fr);
+    auto refract_f = [&](const Vec3& o, const Vec3& i) {  // o above, i below
+      Vec3 m = normalize(o + i * float(eta));
+      if (m.z < 0) m = -m;
+      const double c = dot(o, m), ci_m = dot(i, m), t = c + eta * ci_m;
+      const double lo = lambda(o.z), li = lambda(-i.z);
+      const double b = std::exp(std::lgamma(1 + lo) + std::lgamma(1 + li) - std::lgamma(2 + lo + li));
+      return eta * eta * (1 - fresnel_dielectric(float(c), float(eta))) * c * -ci_m * D(m) * b / (o.z * t * t * -i.z);
+    };
+    for (const Vec3& wt : {from_angles(125, 230), from_angles(165, 200)}) {  // shallower / deeper than wo
+      const double ft = refract_f(wo, wt);
+      ASSERT_GT(ft, 0);
+      EXPECT_NEAR(lobe_eval(black, wo, wt).x, ft, 1e-4 * ft);
+      EXPECT_GE(lobe_eval(multi_ggx_glass(float(a), float(eta)), wo, wt).x, ft * (1 - 1e-5));
+    }
   }
   // Translucent: 1/pi on the far side only.
   EXPECT_NEAR(lobe_eval(translucent(), wo, flip_z_test(wi)).x, 1 / pi, 1e-7);

@@ -35,6 +35,10 @@
 //                known mixture, as Cycles' own walk has no pdf. Cycles' sample weight is the walk's
 //                escape probability (1 for white), its eval's mean lower at high roughness (0.85 at
 //                alpha 1, normal incidence): Lantern follows eval's mean for both strategies.
+//                With ms_fresnel the Principled specular (..._multi_ggx_fresnel).
+//   MultiGGXGlass  bsdf_microfacet_multi_ggx_glass(_fresnel): the walk with a dielectric phase
+//                function, sampled from a known mixture; where Cycles' evaluation departs from
+//                its walk (eta^2, the reversed walk's IOR) Lantern follows the walk.
 // Cycles' closures return f cos(wi); here f excludes it. Where Cycles' sample() disagrees with its
 // eval() (clearcoat sampled from GGX, anisotropic Beckmann sampled isotropically, toon's ramp read
 // at a random angle), f is eval()'s and the sampling is exact for the pdf reported.
@@ -100,6 +104,7 @@ struct MsAlpha {
   float x, y;
 };
 MsAlpha ms_alphas(const Lobe& l) { return {ms_alpha(lobe_alpha(l)), ms_alpha(lobe_alpha_y(l))}; }
+inline float ms_glass_alpha(const Lobe& l) { return ms_alpha(lobe_alpha(l)); }  // isotropic, as Cycles
 bool ms_smooth(const Lobe& l) {
   const MsAlpha a = ms_alphas(l);
   return a.x * a.y < 1e-7f;
@@ -150,6 +155,10 @@ bool lobe_is_delta(const Lobe& l) {
       return as_smooth(l);
     case LobeType::MultiGGX:
       return ms_smooth(l);
+    case LobeType::MultiGGXGlass: {
+      const float a = ms_glass_alpha(l), eta = lobe_eta(l);
+      return a * a < 1e-7f || std::abs(eta - 1) < kEtaDeltaEpsilon || std::abs(1 / eta - 1) < kEtaDeltaEpsilon;
+    }
     case LobeType::Dielectric:
     case LobeType::DielectricBeckmann: {
       float eta = lobe_eta(l);  // symmetric in eta and 1/eta, so both sides agree
@@ -594,11 +603,33 @@ uint32_t ms_seed(const Vec3& o, const Vec3& i) {
   return h;
 }
 
-// mf_eval (glossy, no Fresnel): f cos_i for view o and light i, both above. As in Cycles 3.4 the
-// walk's bounce colour enters its estimate twice (phase x throughput x throughput).
-Spectrum ms_eval_cos(const Lobe& l, Vec3 o, Vec3 i) {
-  const MsAlpha a = ms_alphas(l);
-  const Spectrum color = vmin(vmax(l.ms_color, Spectrum(0.0f)), Spectrum(1.0f));
+// interpolate_fresnel_color (Cycles' Principled closures): cspec0 blended towards 1 by the
+// dielectric Fresnel at cos, renormalised to 0 at normal incidence, for eta on either side of 1
+// (total internal reflection gives 1).
+Spectrum interpolate_fresnel(const Spectrum& cspec0, float eta, float cos) {
+  const Spectrum c0 = vmin(vmax(cspec0, Spectrum(0.0f)), Spectrum(1.0f));
+  const float r = (eta - 1) / (eta + 1), F0 = r * r;
+  if (!(F0 < 1)) return Spectrum(1.0f);
+  const float fh = (fresnel_dielectric(clamp(std::abs(cos), 0.0f, 1.0f), eta) - F0) / (1 - F0);
+  return vmin(vmax(c0 * (1 - fh) + Spectrum(fh), Spectrum(0.0f)), Spectrum(1.0f));
+}
+
+// What colours a walk (Cycles' mf_eval arguments): the bounce colour, and with fresnel the
+// Principled's interpolate_fresnel_color towards cspec0 at IOR eta.
+struct MsColors {
+  Spectrum color, cspec0;
+  bool fresnel;
+  float eta;
+};
+MsColors ms_colors(const Lobe& l, bool glass) {
+  return {vmin(vmax(l.ms_color, Spectrum(0.0f)), Spectrum(1.0f)), glass ? l.glass_f0 : l.f0, l.ms_fresnel,
+          glass ? lobe_eta(l) : l.eta};  // the specular IOR may be infinite (a mirror's Fresnel)
+}
+
+// mf_eval_glossy: f cos_i for view o and light i, both above. As in Cycles 3.4 the walk's
+// throughput enters its estimate twice (phase x throughput x throughput); with fresnel the first
+// order is coloured at the half vector and later reflections at their microfacets.
+Spectrum ms_eval_cos(const MsAlpha& a, const MsColors& c, Vec3 o, Vec3 i) {
   bool swapped = false;
   if (i.z < o.z) {  // walk from the shallower direction (less noise; the BSDF is reciprocal)
     std::swap(o, i);
@@ -610,8 +641,9 @@ Spectrum ms_eval_cos(const Lobe& l, Vec3 o, Vec3 i) {
   const float shadowing_lambda = ms_lambda(i, a);
   const Vec3 wh = normalize(o + i);
   const float g2 = 1 / (1 - (lambda_r + 1) + shadowing_lambda);
-  Spectrum eval(g2 * 0.25f / o.z * ms_D(wh, a));
   Spectrum throughput(1.0f);
+  if (c.fresnel) throughput = interpolate_fresnel(c.cspec0, c.eta, dot(o, wh));
+  Spectrum eval = throughput * (g2 * 0.25f / o.z * ms_D(wh, a));
   Vec3 wr = -o;
   float hr = 1, c1_r = 1, g1_r = 0;
   for (int order = 0; order < 10; ++order) {
@@ -623,9 +655,10 @@ Spectrum ms_eval_cos(const Lobe& l, Vec3 o, Vec3 i) {
       eval += throughput * phase * ms_G1(i, ms_C1(hr), shadowing_lambda);
     }
     if (order + 1 < 10) {
+      if (c.fresnel && order > 0) throughput *= interpolate_fresnel(c.cspec0, c.eta, dot(-wr, wm));
       wr = wr - wm * (2 * dot(wr, wm));
       lambda_r = ms_lambda(wr, a);
-      throughput *= color;
+      if (!c.fresnel) throughput *= c.color;
       c1_r = ms_C1(hr);
       g1_r = ms_G1(wr, c1_r, lambda_r);
     }
@@ -654,13 +687,175 @@ Spectrum ms_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
   float p_vndf = 0;
   micro_reflect(o, i, mf, &p_vndf, nullptr);
   *pdf = p_single * p_vndf + (1 - p_single) * i.z * kInvPi;
-  return l.weight * ms_eval_cos(l, o, i) / i.z;
+  return l.weight * ms_eval_cos(a, ms_colors(l, false), o, i) / i.z;
 }
 bool ms_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* i) {
   const MsAlpha a = ms_alphas(l);
   if (u_extra < ms_single_albedo(a)) return micro_sample_reflect(o, Micro{false, a.x, a.y}, u, i);
   *i = sample_cosine_hemisphere(u);
   return i->z > 0;
+}
+
+// ---- Multiscatter GGX glass (mf_eval_glass: the same walk with a dielectric phase function) ----
+
+// B(x, y) = Gamma(x) Gamma(y) / Gamma(x + y), reentrant (std::lgamma writes the global signgam).
+float beta_fn(float x, float y) {
+  int sign;
+  return std::exp(lgammaf_r(x, &sign) + lgammaf_r(y, &sign) - lgammaf_r(x + y, &sign));
+}
+// mf_sample_phase_glass: reflect on the microfacet wm with the dielectric Fresnel's probability,
+// else refract; *outside says which.
+Vec3 ms_sample_phase_glass(const Vec3& wi, float eta, const Vec3& wm, float u, bool* outside) {
+  const float c = dot(wi, wm);
+  if (u < fresnel_dielectric(std::abs(c), eta)) {
+    *outside = true;
+    return wm * (2 * c) - wi;
+  }
+  *outside = false;
+  const float inv = 1 / eta;
+  const float cos_t = -safe_sqrt(1 - (1 - c * c) * inv * inv);
+  return normalize(wm * (c * inv + cos_t) - wi * inv);
+}
+// mf_eval_phase_glass: the walk direction w (into the surface) scattered towards wo, on wo's
+// side (reflection x F) or through (refraction x (1 - F), Walter et al. 2007's with its eta^2,
+// which Cycles 3.4 leaves out: see ms_glass_eval_cos).
+float ms_phase_glass(const Vec3& w, float lambda, const Vec3& wo, bool wo_outside, float alpha, float eta) {
+  if (w.z > 0.9999f) return 0;
+  const float area = w.z < -0.9999f ? 1.0f : lambda * w.z;
+  const MsAlpha a{alpha, alpha};
+  if (wo_outside) {
+    const Vec3 wh = normalize(wo - w);
+    if (wh.z < 0) return 0;
+    const float c = dot(-w, wh), den = area * c;
+    if (!(den > 0)) return 0;
+    return fresnel_dielectric(c, eta) * c * ms_D(wh, a) * 0.25f / den;
+  }
+  Vec3 wh = normalize(wo * eta - w);
+  if (wh.z < 0) wh = -wh;
+  const float c = dot(-w, wh), co = dot(wo, wh);
+  if (c < 0) return 0;
+  const float t = c + eta * co, den = area * t * t;
+  if (!(den > 0)) return 0;
+  return eta * eta * (1 - fresnel_dielectric(c, eta)) * c * std::max(0.0f, -co) * ms_D(wh, a) / den;
+}
+
+// mf_eval_glass: f |cos_i| for view o (above) and light i on either side. Cycles' reflection
+// passes the Principled's fresnel colours, its refraction never does (then every later bounce
+// takes the colour). Both walk from the shallower direction.
+// Two departures from Cycles 3.4's evaluation, which disagrees with its own walk there (README):
+// its refraction phase lacks Walter et al.'s eta^2 (which its single-scattering glass and the
+// walk's unit refraction weight imply), and it walks the reverse pair (-i, -o) with the same eta
+// where that pair sees the interface from the other side. Here the phase has eta^2 and the
+// reverse walk 1 / eta: f(o, i) = eta^2 f(-i, -o) (generalised reciprocity).
+Spectrum ms_glass_eval_cos(float alpha, const MsColors& c, Vec3 o, Vec3 i) {
+  const bool i_outside = i.z > 0;
+  float eta = c.eta, scale = 1;
+  bool swapped = false;
+  if (!i_outside) {
+    if (-i.z < o.z) {
+      const Vec3 t = -i;
+      i = -o;
+      o = t;
+      swapped = true;
+      scale = eta * eta;
+      eta = 1 / eta;
+    }
+  } else if (i.z < o.z) {
+    std::swap(o, i);
+    swapped = true;
+  }
+  MsRng rng{ms_seed(o, i)};
+  if (o.z < 1e-5f || (i.z < 1e-5f && i_outside) || (i.z > -1e-5f && !i_outside)) return Spectrum(0.0f);
+  const MsAlpha a{alpha, alpha};
+  float lambda_r = ms_lambda(-o, a);
+  const float shadowing_lambda = ms_lambda(i_outside ? i : -i, a);
+  float single = ms_phase_glass(-o, lambda_r, i, i_outside, alpha, eta);
+  single *=
+      i_outside ? -lambda_r / (shadowing_lambda - lambda_r) : -lambda_r * beta_fn(-lambda_r, shadowing_lambda + 1);
+  Spectrum throughput(1.0f);
+  if (c.fresnel) throughput = interpolate_fresnel(c.cspec0, eta, dot(o, normalize(o + i)));
+  Spectrum eval = throughput * single;
+  Vec3 wr = -o;
+  float hr = 1, c1_r = 1, g1_r = 0;
+  bool outside = true;
+  for (int order = 0; order < 10; ++order) {
+    if (!ms_sample_height(wr, &hr, &c1_r, &g1_r, &lambda_r, rng.next())) break;
+    const float uy = rng.next(), ux = rng.next();
+    const Vec3 wm = ms_sample_vndf(-wr, a, ux, uy);
+    if (order > 0) {  // (Cycles' fresnel reflection estimates order 0 too: the analytic is its mean)
+      const float phase = outside ? ms_phase_glass(wr, lambda_r, i, i_outside, alpha, eta)
+                                  : ms_phase_glass(wr, lambda_r, -i, !i_outside, alpha, 1 / eta);
+      eval +=
+          throughput * (phase * ms_G1(i_outside ? i : -i, ms_C1(outside == i_outside ? hr : -hr), shadowing_lambda));
+    }
+    if (order + 1 < 10) {
+      const Vec3 wi_prev = -wr;
+      bool next_outside;
+      wr = ms_sample_phase_glass(-wr, outside ? eta : 1 / eta, wm, rng.next(), &next_outside);
+      if (!next_outside) {
+        outside = !outside;
+        wr = -wr;
+        hr = -hr;
+      }
+      if (c.fresnel && !next_outside)
+        throughput *= c.color;
+      else if (c.fresnel && order > 0)
+        throughput *= interpolate_fresnel(c.cspec0, eta, dot(wi_prev, wm));
+      lambda_r = ms_lambda(wr, a);
+      if (!c.fresnel) throughput *= c.color;
+      c1_r = ms_C1(hr);
+      g1_r = ms_G1(wr, c1_r, lambda_r);
+    }
+  }
+  if (swapped) eval *= scale * std::abs(o.z / i.z);
+  return eval;
+}
+
+// Sampling: with probability A (as glossy) the single-scattering glass (visible normals, the
+// reflection with the macro Fresnel F(o.z)'s probability, else the refraction), else a cosine
+// lobe on o's side with probability clamp(F, 0.1, 0.9) or on the far side.
+struct MsGlassSplit {
+  float p_single, p_reflect, q_reflect;
+};
+MsGlassSplit ms_glass_split(float alpha, float cos_o, float eta) {
+  const float f = fresnel_dielectric(cos_o, eta);
+  return {ms_single_albedo({alpha, alpha}), f, clamp(f, 0.1f, 0.9f)};
+}
+Spectrum ms_glass_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
+  *pdf = 0;
+  if (!(o.z > 0) || i.z == 0) return Spectrum(0.0f);
+  const float alpha = ms_glass_alpha(l), eta = lobe_eta(l);
+  const MsGlassSplit s = ms_glass_split(alpha, o.z, eta);
+  const Micro mf{false, alpha, alpha};
+  float p = 0;
+  MsColors c = ms_colors(l, true);
+  Spectrum tint(1.0f);
+  if (i.z > 0) {
+    micro_reflect(o, i, mf, &p, nullptr);
+    *pdf = s.p_single * s.p_reflect * p + (1 - s.p_single) * s.q_reflect * i.z * kInvPi;
+  } else {
+    micro_refract(o, i, mf, eta, &p);
+    *pdf = s.p_single * (1 - s.p_reflect) * p + (1 - s.p_single) * (1 - s.q_reflect) * -i.z * kInvPi;
+    // Cycles' refraction eval walks without the fresnel colours; its Principled closure weight
+    // lacks the base colour, which its sample() gives each refraction: Lantern keeps it once
+    // (refraction_tint), so that rough coloured glass is coloured as in Cycles' images.
+    c.fresnel = false;
+    tint = l.refraction_tint;
+  }
+  return l.weight * tint * ms_glass_eval_cos(alpha, c, o, i) / std::abs(i.z);
+}
+bool ms_glass_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* i) {
+  const float alpha = ms_glass_alpha(l), eta = lobe_eta(l);
+  const MsGlassSplit s = ms_glass_split(alpha, o.z, eta);
+  const Micro mf{false, alpha, alpha};
+  if (u_extra < s.p_single) {
+    if (u_extra < s.p_single * s.p_reflect) return micro_sample_reflect(o, mf, u, i);
+    return micro_sample_refract(o, mf, eta, u, i);
+  }
+  *i = sample_cosine_hemisphere(u);
+  if (!(i->z > 0)) return false;
+  if (u_extra >= s.p_single + (1 - s.p_single) * s.q_reflect) i->z = -i->z;
+  return true;
 }
 
 // ---- per-lobe evaluation in the frame where o.z > 0 -------------------------------------------
@@ -670,11 +865,7 @@ bool ms_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* i) {
 // Glass BSDF node (glass_f0 white).
 Spectrum glass_reflection_color(const Lobe& l, float eta, float cos_ih) {
   if (l.glass_f0.x == 1 && l.glass_f0.y == 1 && l.glass_f0.z == 1) return Spectrum(1.0f);
-  const Spectrum c0 = vmin(vmax(l.glass_f0, Spectrum(0.0f)), Spectrum(1.0f));
-  const float r = (eta - 1) / (eta + 1), F0 = r * r;
-  if (!(F0 < 1)) return Spectrum(1.0f);
-  const float fh = (fresnel_dielectric(clamp(cos_ih, 0.0f, 1.0f), eta) - F0) / (1 - F0);
-  return vmin(vmax(c0 * (1 - fh) + Spectrum(fh), Spectrum(0.0f)), Spectrum(1.0f));
+  return interpolate_fresnel(l.glass_f0, eta, std::max(cos_ih, 0.0f));
 }
 
 // A glass lobe's branch weights at wo's angle cos_o (GlassPart) and the probability with which it
@@ -731,6 +922,8 @@ Spectrum eval_upper(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
       return l.weight * as_eval(l, o, i, pdf);
     case LobeType::MultiGGX:
       return ms_eval(l, o, i, pdf);
+    case LobeType::MultiGGXGlass:
+      return ms_glass_eval(l, o, i, pdf);
     case LobeType::Clearcoat:
       return l.weight * clearcoat_eval(l, o, i, pdf);
     case LobeType::Sheen:
@@ -773,7 +966,7 @@ bool sanitize(BsdfSample* s) {
 float selection_estimate(const Lobe& l, const Vec3& wo) {
   Spectrum w = vmax(l.weight, Spectrum(0.0f));
   const float c = std::abs(wo.z);
-  if (l.type == LobeType::SpecularGGX)
+  if (l.type == LobeType::SpecularGGX || (l.type == LobeType::MultiGGX && l.ms_fresnel))
     w *= vmax(fresnel_principled(l.f0, l.eta, c), fresnel_principled(l.f0, l.eta, 0.5f));
   else if (l.type == LobeType::Clearcoat)
     w *= std::max(fresnel_principled(kClearcoatF0, kClearcoatIor, c).x,
@@ -1011,6 +1204,7 @@ uint32_t lobe_flags(const Lobe& l) {
       return (delta ? kLobeSpecular : kLobeGlossy) | kLobeReflection;
     case LobeType::Dielectric:
     case LobeType::DielectricBeckmann:
+    case LobeType::MultiGGXGlass:
       return (delta ? kLobeSpecular : kLobeGlossy) | (glass_only_refracts(l) ? 0u : kLobeReflection) |
              (l.glass_part == GlassPart::Reflection ? 0u : kLobeTransmission);
     case LobeType::Transparent:
@@ -1085,6 +1279,7 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         s.wi = mirror;
         s.pdf = 1;
         s.f = l.weight / o.z;
+        if (l.ms_fresnel) s.f *= fresnel_principled(l.f0, l.eta, o.z);
         s.flags = kLobeSpecular | kLobeReflection;
         break;
       case LobeType::SpecularGGX:
@@ -1100,7 +1295,8 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         s.flags = kLobeSpecular | kLobeReflection;
         break;
       case LobeType::Dielectric:
-      case LobeType::DielectricBeckmann: {
+      case LobeType::DielectricBeckmann:
+      case LobeType::MultiGGXGlass: {
         float eta = lobe_eta(l);
         const GlassSplit g = glass_split(l, o.z, eta);
         if (u_extra < g.p_reflect) {
@@ -1163,6 +1359,11 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
         break;
       case LobeType::MultiGGX:
         if (!ms_sample(l, o, u, u_extra, &s.wi)) return false;
+        break;
+      case LobeType::MultiGGXGlass:
+        if (!ms_glass_sample(l, o, u, u_extra, &s.wi)) return false;
+        s.flags = kLobeGlossy | (s.wi.z > 0 ? kLobeReflection : kLobeTransmission);
+        if (s.wi.z < 0) s.eta = lobe_eta(l);
         break;
       case LobeType::Clearcoat:
         if (!clearcoat_sample(l, o, u, &s.wi)) return false;
@@ -1420,7 +1621,7 @@ Spectrum Bsdf::albedo() const {
     const LobeType t = lobes_[k].type;
     // The BSSRDF's weight holds its retro-reflection's (Cycles' denoising albedo skips it too).
     if (t == LobeType::PrincipledDiffuse && lobes_[k].diffuse_part == DiffusePart::RetroReflection) continue;
-    if (t == LobeType::SpecularGGX || t == LobeType::Clearcoat) {
+    if (t == LobeType::SpecularGGX || t == LobeType::Clearcoat || (t == LobeType::MultiGGX && lobes_[k].ms_fresnel)) {
       Spectrum f0 = t == LobeType::Clearcoat ? kClearcoatF0 : vmin(vmax(lobes_[k].f0, Spectrum(0.0f)), Spectrum(1.0f));
       w *= f0 + (Spectrum(1.0f) - f0) * (1.0f / 21.0f);
     } else if (t == LobeType::Sheen) {
@@ -1446,6 +1647,7 @@ PassKind lobe_pass_kind(const Lobe& lobe, bool transmit) {
       return PassKind::Diffuse;  // Cycles' CLOSURE_IS_BSDF_DIFFUSE range (and BSSRDFs)
     case LobeType::Dielectric:
     case LobeType::DielectricBeckmann:
+    case LobeType::MultiGGXGlass:
       return transmit ? PassKind::Transmission : PassKind::Glossy;
     default:
       return PassKind::Glossy;

@@ -83,6 +83,8 @@ enum class LobeType : uint8_t {
   // (clamped to [1e-4, 1]; delta at alpha x alpha_y < 1e-7); weight = closure weight, ms_color =
   // the node's Color (saturated), the extra factor of every bounce after the first. f is Cycles'
   // estimate: exact single scattering plus one random walk seeded from the direction pair.
+  // With ms_fresnel, the Principled BSDF's specular at Multiscatter GGX above roughness 0.075
+  // (..._multi_ggx_fresnel): alphas, f0 and eta as SpecularGGX.
   MultiGGX,
   // Hair lobes (shading/bsdf_hair.cpp), on curves: hair_tangent is the curve's direction in the
   // local frame (+Z the normal from the curve's axis). They are neither reflection nor
@@ -97,6 +99,14 @@ enum class LobeType : uint8_t {
   // negated (Cycles' bsdf->offset).
   HairReflection,
   HairTransmission,
+  // Glass BSDF with distribution Multiscatter GGX (bsdf_microfacet_multi_ggx_glass) and the
+  // Principled BSDF's glass at Multiscatter GGX above roughness 0.05 (..._glass_fresnel, with
+  // ms_fresnel): Heitz et al. 2016's dielectric walk, reflection and refraction in one closure.
+  // alpha = Roughness^2 (isotropic, clamped to [1e-4, 1]; delta at alpha^2 < 1e-7), eta as for
+  // Dielectric, ms_color = the node's Color (the Principled: the base colour), weight = closure
+  // weight. The Principled's reflection blends glass_f0 towards 1 (interpolate_fresnel_color)
+  // and its refraction takes refraction_tint (see bsdf.cpp).
+  MultiGGXGlass,
   // A BSSRDF (Cycles 3.4's Bssrdf closure, closure/bssrdf.h): no value and no pdf at the point;
   // picked by sample() (kLobeSubsurface) with Cycles' sample weight, average(weight) x its channels
   // of radius >= 1e-8. sss_radius is the radius after bssrdf_setup_radius, sss_albedo the
@@ -117,7 +127,9 @@ inline bool lobe_is_hair(LobeType t) {
 // The glass lobes, which reflect or refract with the relative IOR eta (integrators count their
 // bounces by the branch sampled). Translucent transmits without crossing an IOR; Cycles counts it
 // as a transmission bounce with diffuse ray visibility (integrator/path_state.h).
-inline bool lobe_is_glass(LobeType t) { return t == LobeType::Dielectric || t == LobeType::DielectricBeckmann; }
+inline bool lobe_is_glass(LobeType t) {
+  return t == LobeType::Dielectric || t == LobeType::DielectricBeckmann || t == LobeType::MultiGGXGlass;
+}
 
 // Which branches a glass lobe keeps, and their weights at wo (F the dielectric Fresnel of wo's
 // angle at the macro normal), as Cycles 3.4's closures (svm_node_closure_bsdf):
@@ -148,7 +160,11 @@ struct Lobe {
   Spectrum f0{0.04f};       // SpecularGGX: reflectance at normal incidence (Cycles' cspec0)
   float toon_size = 0;      // DiffuseToon, GlossyToon: Size
   float toon_smooth = 0;    // DiffuseToon, GlossyToon: Smooth
-  Spectrum ms_color{1.0f};  // MultiGGX: the colour of each bounce after the first
+  Spectrum ms_color{1.0f};  // MultiGGX(Glass): the colour of each bounce after the first
+  // MultiGGX, MultiGGXGlass: the Principled BSDF's closures (Cycles' ..._FRESNEL_ID): the walk
+  // colours reflections by interpolate_fresnel_color towards f0 (MultiGGX, with eta) or glass_f0
+  // (MultiGGXGlass) and refractions by ms_color, instead of ms_color for every later bounce.
+  bool ms_fresnel = false;
   // Dielectric, DielectricBeckmann: the Principled BSDF's glass (Cycles 3.4 makes it a Fresnel
   // reflection closure and a refraction closure of other colours): the refraction's colour
   // relative to weight (the base colour), and the cspec0 its reflection blends towards 1 by

@@ -155,6 +155,7 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   const bool bssrdf = m.ctx && m.ctx->subsurface;
   const Vec3 base = bssrdf ? non_negative(m.v(in.in[2])) : mixed;
   const float metallic = unit(m.f(in.in[8]));
+  const bool multiscatter = in.param[0] == kDistMultiGGX;
   const float transmission = unit(m.f(in.in[19])) * (1 - metallic);
   const float r = unit(m.f(in.in[11]));
   // 12.5 is where 0.08 specular reaches 1 (an infinite IOR); NaN becomes 0.
@@ -188,7 +189,9 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   // Cycles leaves the layer out when Specular and Metallic are both below its closure cutoff.
   if (spec > kClosureCutoff || metallic > kClosureCutoff) {
     Lobe g;
-    g.type = LobeType::SpecularGGX;
+    // Cycles 3.4 keeps single-scattering GGX at Roughness <= 0.075 under Multiscatter GGX.
+    g.type = multiscatter && r > 0.075f ? LobeType::MultiGGX : LobeType::SpecularGGX;
+    g.ms_fresnel = g.type == LobeType::MultiGGX;
     g.weight = weight * (1 - transmission);
     // Cycles does not clamp Anisotropic: a linked value below 0 turns the lobe the other way, one
     // above 1/0.9 makes aspect 0 (alpha saturates to 1). NaN is 0.
@@ -209,7 +212,10 @@ void principled(const Instr& in, Machine& m, Vec3 weight) {
   }
   if (transmission > 0) {
     Lobe t;
-    t.type = LobeType::Dielectric;
+    // Multiscatter GGX above Roughness 0.05: one closure (MultiGGXGlass) with the same colours.
+    t.type = multiscatter && r > 0.05f ? LobeType::MultiGGXGlass : LobeType::Dielectric;
+    t.ms_fresnel = t.type == LobeType::MultiGGXGlass;
+    t.ms_color = vmin(base, Vec3(1.0f));
     // Cycles 3.4: a reflection closure of weight transmission x F, coloured by
     // interpolate_fresnel_color towards cspec0 = mix(1, base, Specular Tint), and a refraction
     // closure of weight base x transmission x (1 - F).
@@ -477,6 +483,10 @@ void exec_shaders_family(const Instr& in, Machine& m) {
       const float r = in.param[0] == kDistSharp ? 0.0f : unit(m.f(in.in[3]));
       l.type = in.param[0] == kDistBeckmann ? LobeType::DielectricBeckmann : LobeType::Dielectric;
       l.weight = weight * non_negative(m.v(in.in[2]));
+      if (in.op == kOpGlass && in.param[0] == kDistMultiGGX) {
+        l.type = LobeType::MultiGGXGlass;
+        l.ms_color = vmin(non_negative(m.v(in.in[2])), Vec3(1.0f));  // Cycles' extra->color
+      }
       l.alpha = r * r;
       const float ior = glass_ior(m.f(in.in[4]));
       l.eta = backfacing(m) ? 1 / ior : ior;

@@ -5,17 +5,10 @@ from . import ops, register_shader
 _DISTRIBUTIONS = {'SHARP': ops.DIST_SHARP, 'GGX': ops.DIST_GGX, 'BECKMANN': ops.DIST_BECKMANN,
                   'ASHIKHMIN_SHIRLEY': ops.DIST_ASHIKHMIN_SHIRLEY,
                   'MULTI_GGX': ops.DIST_MULTI_GGX}
-# Distributions the core renders as GGX for now, by node type (README: departures).
-_AS_GGX = {'BSDF_GLASS': {'MULTI_GGX'}, 'BSDF_PRINCIPLED': {'MULTI_GGX'}}
 
 
-def _distribution(c, node):
-    d = getattr(node, "distribution", 'GGX')
-    rough = node.inputs.get("Roughness")
-    if d in _AS_GGX.get(node.type, ()) and rough is not None and (c.linked(rough) or rough.default_value > 0):
-        c.warn("%s '%s': distribution %s is rendered as GGX" % (node.bl_label, node.name, d))
-        return ops.DIST_GGX
-    return _DISTRIBUTIONS.get(d, ops.DIST_GGX)
+def _distribution(node):
+    return _DISTRIBUTIONS.get(getattr(node, "distribution", 'GGX'), ops.DIST_GGX)
 
 
 @register_shader('MIX_SHADER')
@@ -47,7 +40,7 @@ def diffuse(c, node, weight):
 @register_shader('BSDF_GLOSSY')
 def glossy(c, node, weight):
     c.closure(ops.GLOSSY, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
-                           c.float(node.inputs["Roughness"])], params=[_distribution(c, node)])
+                           c.float(node.inputs["Roughness"])], params=[_distribution(node)])
 
 
 @register_shader('BSDF_GLASS')
@@ -55,7 +48,7 @@ def glass(c, node, weight):
     _ior_warning(c, node)
     c.closure(ops.GLASS, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
                           c.float(node.inputs["Roughness"]), c.float(node.inputs["IOR"])],
-              params=[_distribution(c, node)])
+              params=[_distribution(node)])
 
 
 # Cycles 3.4's CLOSURE_BSDF_REFRACTION_ID and MICROFACET_{GGX,BECKMANN}_REFRACTION_ID: refraction
@@ -65,7 +58,7 @@ def refraction(c, node, weight):
     _ior_warning(c, node, "seen from outside it lets almost no light through")
     c.closure(ops.REFRACTION, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
                                c.float(node.inputs["Roughness"]), c.float(node.inputs["IOR"])],
-              params=[_distribution(c, node)])
+              params=[_distribution(node)])
 
 
 @register_shader('BSDF_ANISOTROPIC')
@@ -73,7 +66,7 @@ def anisotropic(c, node, weight):
     c.closure(ops.ANISOTROPIC, [weight, c.normal(node.inputs.get("Normal")), c.color(node.inputs["Color"]),
                                 c.float(node.inputs["Roughness"]), c.float(node.inputs["Anisotropy"]),
                                 c.float(node.inputs["Rotation"]), c.normal(node.inputs.get("Tangent"))],
-              params=[_distribution(c, node)])
+              params=[_distribution(node)])
 
 
 @register_shader('BSDF_VELVET')
@@ -131,8 +124,6 @@ def principled(c, node, weight):
     def socket(name):
         return inp.get(name) or inp.get(_ALIASES.get(name, name))
 
-    if node.distribution != 'GGX' and (c.linked(inp["Roughness"]) or inp["Roughness"].default_value > 0):
-        c.warn("Principled BSDF '%s': distribution %s is rendered as GGX" % (node.name, node.distribution))
     ignored = []
     if c.linked(inp.get("Clearcoat Normal")):
         ignored.append("Clearcoat Normal (the clearcoat uses the Normal input)")
@@ -153,7 +144,7 @@ def principled(c, node, weight):
     operands.append(c.normal(inp.get("Clearcoat Normal")))
     operands.append(c.normal(inp.get("Tangent")))
     c.closure(ops.PRINCIPLED, operands,
-              params=[_distribution(c, node), _SSS_METHODS.get(getattr(node, "subsurface_method", ""),
+              params=[_distribution(node), _SSS_METHODS.get(getattr(node, "subsurface_method", ""),
                                                                ops.SSS_RANDOM_WALK)])
 
 
