@@ -1,6 +1,6 @@
 """Attribute nodes against Cycles, pixel by pixel (the compare_grid harness of node_cases: each case an Emission
 of the node's output on a camera-facing plane): named UV maps, colour attributes of both domains in
-byte and float colours, the Attribute node (geometry and object types), Object Info on objects of
+byte and float colours, the Attribute node (geometry, object and instancer types), Object Info on objects of
 different colours and indices, Tangent and Normal Map. Each case may prepare its plane (its mesh
 and object) before the render (compare_grid's prepare).
 """
@@ -199,25 +199,51 @@ def test_tangent_and_normal_map(outdir):
     assert not bad, bad
 
 
-def test_object_info_random_of_collection_instances(outdir):
-    """Object Info's Random and Location on instances of a collection (DepsgraphObjectInstance
-    .random_id, hashed as Cycles does) and on a plain object (Cycles' hash of its name)."""
-    scene, _rows, _cols = harness._scene("attr_instances", 4)
-    mat = bpy.data.materials.new("attr_instances_random")
+def _emission_material(name, colour):
+    """A material that emits colour(s), s a harness.Setup of its tree (returns the socket)."""
+    mat = bpy.data.materials.new(name)
     mat.use_nodes = True
     nt = mat.node_tree
     nt.nodes.clear()
     s = harness.Setup(nt)
     out = s.node("ShaderNodeOutputMaterial")
     em = s.node("ShaderNodeEmission")
-    info = s.node("ShaderNodeObjectInfo")
-    comb = s.node("ShaderNodeCombineXYZ")
-    s.link(info.outputs["Random"], comb.inputs[0])
-    sep = s.node("ShaderNodeSeparateXYZ")
-    s.link(info.outputs["Location"], sep.inputs[0])
-    s.link(s.math("MULTIPLY", s.math("ADD", sep.outputs[0], 2.0), 0.2), comb.inputs[2])
-    s.link(comb.outputs[0], em.inputs["Color"])
+    s.link(colour(s), em.inputs["Color"])
     s.link(em.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def _tile_centres(scene, n, half, outdir):
+    """Renders scene with Lantern and Cycles and checks that the centres (2 half pixels square) of
+    its first n tiles agree within the harness's bounds; returns Cycles' mean of each."""
+    lt = render_utils.render(scene, render_utils.LANTERN, samples=4, outdir=outdir, tag=scene.name + "_lantern")
+    cy = render_utils.render(scene, render_utils.CYCLES, samples=4, outdir=outdir, tag=scene.name + "_cycles")
+    lt, cy = lt.combined[..., :3], cy.combined[..., :3]
+    tile = harness.TILE
+    c = slice(tile // 2 - half, tile // 2 + half)
+    means = []
+    for i in range(n):
+        a = lt[c, i * tile:(i + 1) * tile][:, c]
+        b = cy[c, i * tile:(i + 1) * tile][:, c]
+        assert np.all(np.abs(a - b) <= harness.RTOL * np.abs(b) + harness.ATOL), (i, a.mean((0, 1)), b.mean((0, 1)))
+        means.append(b.mean((0, 1)))
+    return means
+
+
+def test_object_info_random_of_collection_instances(outdir):
+    """Object Info's Random and Location on instances of a collection (DepsgraphObjectInstance
+    .random_id, hashed as Cycles does) and on a plain object (Cycles' hash of its name)."""
+    scene, _rows, _cols = harness._scene("attr_instances", 4)
+
+    def colour(s):
+        info = s.node("ShaderNodeObjectInfo")
+        comb = s.node("ShaderNodeCombineXYZ")
+        s.link(info.outputs["Random"], comb.inputs[0])
+        sep = s.node("ShaderNodeSeparateXYZ")
+        s.link(info.outputs["Location"], sep.inputs[0])
+        s.link(s.math("MULTIPLY", s.math("ADD", sep.outputs[0], 2.0), 0.2), comb.inputs[2])
+        return comb.outputs[0]
+    mat = _emission_material("attr_instances_random", colour)
     group = bpy.data.collections.new("attr_instances_group")
     me = build_scenes.mesh_plane("attr_instances_plane", 0.8)
     me.materials.append(mat)
@@ -231,15 +257,48 @@ def test_object_info_random_of_collection_instances(outdir):
         scene.collection.objects.link(empty)
     plain = build_scenes.add_object(scene, "attr_instances_plain", me.copy(), location=(1.5, 0.0, 0.0))
     plain.data.materials[0] = mat
-    lt = render_utils.render(scene, render_utils.LANTERN, samples=4, outdir=outdir, tag="attr_instances_lantern")
-    cy = render_utils.render(scene, render_utils.CYCLES, samples=4, outdir=outdir, tag="attr_instances_cycles")
-    lt, cy = lt.combined[..., :3], cy.combined[..., :3]
-    tile = harness.TILE
-    values = []
-    for i in range(4):  # the centre of each object's tile
-        c = slice(tile // 2 - 6, tile // 2 + 6)
-        a = lt[c, i * tile:(i + 1) * tile][:, c]
-        b = cy[c, i * tile:(i + 1) * tile][:, c]
-        assert np.all(np.abs(a - b) <= harness.RTOL * np.abs(b) + harness.ATOL), (i, a.mean((0, 1)), b.mean((0, 1)))
-        values.append(float(b[..., 0].mean()))
+    values = [float(m[0]) for m in _tile_centres(scene, 4, 6, outdir)]
     assert len(set(round(v, 4) for v in values)) == 4, values  # four different random numbers
+
+
+def test_instancer_attributes_of_collection_and_particle_instances(outdir):
+    """The Attribute node's Instancer type (issue 13) as Cycles 3.4 reads it (lookup_instance_property):
+    on an instance, its particle system's settings, then its instancer's custom property, else the
+    object's own; on an object that is no instance, its own. A sphere (in a collection the scene does
+    not show) reads "tint" into an Emission: instanced by an Empty with a 3-float "tint", by one with
+    a float "tint", by one without (the sphere's own 0.7), a plain copy with its own "tint", and one
+    particle of an emitter whose settings and object both have one (the settings win)."""
+    scene, _rows, _cols = harness._scene("attr_instancer", 5)
+    mat = _emission_material("attr_instancer_tint", lambda s: s.node(
+        "ShaderNodeAttribute", attribute_type='INSTANCER', attribute_name="tint").outputs["Color"])
+    me = build_scenes.mesh_sphere("attr_instancer_sphere", 0.4)
+    me.materials.append(mat)
+    member = bpy.data.objects.new("attr_instancer_member", me)
+    member["tint"] = 0.7
+    group = bpy.data.collections.new("attr_instancer_group")
+    group.objects.link(member)
+    for i, tint in enumerate(((0.9, 0.2, 0.4), 0.35, None)):
+        empty = bpy.data.objects.new("attr_instancer_%d" % i, None)
+        empty.instance_type = 'COLLECTION'
+        empty.instance_collection = group
+        empty.location = (i - 2.0, 0.0, 0.0)
+        if tint is not None:
+            empty["tint"] = tint
+        scene.collection.objects.link(empty)
+    plain = build_scenes.add_object(scene, "attr_instancer_plain", me, location=(1.0, 0.0, 0.0))
+    plain["tint"] = (0.1, 0.6, 0.9)
+    point = bpy.data.meshes.new("attr_instancer_point")
+    point.from_pydata([(0.0, 0.0, 0.0)], [], [])
+    emitter = build_scenes.add_object(scene, "attr_instancer_emitter", point, location=(2.0, 0.0, 0.0))
+    emitter["tint"] = 0.15
+    emitter.show_instancer_for_render = False
+    psys = emitter.modifiers.new("particles", 'PARTICLE_SYSTEM').particle_system
+    ps = psys.settings
+    ps.count, ps.emit_from, ps.physics_type = 1, 'VERT', 'NO'
+    ps.frame_start = ps.frame_end = 1
+    ps.lifetime = 100
+    ps.render_type, ps.instance_object, ps.particle_size = 'OBJECT', member, 1.0
+    ps["tint"] = 0.55
+    expected = [(0.9, 0.2, 0.4), (0.35,) * 3, (0.7,) * 3, (0.1, 0.6, 0.9), (0.55,) * 3]
+    for i, (got, want) in enumerate(zip(_tile_centres(scene, 5, 4, outdir), expected)):
+        assert np.allclose(got, want, atol=1e-3), (i, got, want)

@@ -33,6 +33,14 @@ def instance_key(inst):
     return (inst.object.original.as_pointer(),)
 
 
+def instancer_of(inst):
+    """(parent object, particle system or None) of an instance, for the Attribute node's
+    Instancer type; None for an object that is no instance."""
+    if not inst.is_instance or inst.parent is None:
+        return None
+    return inst.parent, inst.particle_system
+
+
 def holdout_of(inst, view_layer):
     """Cycles' holdout object (blender/object.cpp): an instance takes its instancer's, an object
     its own flag or its holdout collection's (Object.holdout_get)."""
@@ -154,7 +162,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             key = instance_key(inst) + ('hair',)
             instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR', holdout=holdout,
                                                             shadow_catcher=catcher, lightgroup=lightgroup,
-                                                            key=instance_key(inst)), matrix)
+                                                            key=instance_key(inst), instancer=instancer_of(inst)),
+                              matrix)
             hair += 1
         if not inst.show_self:  # e.g. a particle emitter set not to render itself
             continue
@@ -170,14 +179,16 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                                                                     key=instance_key(inst),
                                                                     deform=not inst.is_instance,
                                                                     holdout=holdout, shadow_catcher=catcher,
-                                                                    lightgroup=lightgroup), matrix)
+                                                                    lightgroup=lightgroup,
+                                                                    instancer=instancer_of(inst)), matrix)
         elif t in CONVERTIBLE_TYPES:
             if inst.is_instance:
                 instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, warn_empty=False,
                                                                         random_id=inst.random_id,
                                                                         key=instance_key(inst),
                                                                         holdout=holdout, shadow_catcher=catcher,
-                                                                        lightgroup=lightgroup),
+                                                                        lightgroup=lightgroup,
+                                                                        instancer=instancer_of(inst)),
                                                  matrix)
             else:
                 deferred.append((obj, matrix, instance_key(inst), holdout, lightgroup, catcher))
@@ -197,7 +208,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             instances[instance_key(inst)] = (meshes.export_curves_instance(obj, matrix, t, random_id=random_id,
                                                                            holdout=holdout, shadow_catcher=catcher,
                                                                            lightgroup=lightgroup,
-                                                                           key=instance_key(inst)),
+                                                                           key=instance_key(inst),
+                                                                           instancer=instancer_of(inst)),
                                              matrix)
         elif t not in skipped_types:
             skipped_types.add(t)

@@ -207,33 +207,51 @@ def mesh_attributes(mesh, requests, corner_loops, warn=lambda _t: None):
     return out
 
 
-def object_values(obj, names):
-    """(id, 4 floats) of object attributes (Attribute node, Object type) found on the object or
-    its data: an RNA path ('color') or a custom property; floats become (f, f, f, 1)."""
-    out = []
-    for name, attr_id in names:
-        value = None
-        for owner in (obj, getattr(obj, "data", None)):
-            if owner is None or not name:
-                continue
-            try:
-                value = owner.path_resolve(name)
-            except (ValueError, TypeError):
-                try:
-                    value = owner[name]
-                except (KeyError, TypeError):
-                    value = None
-            if value is not None:
-                break
+def _property(owner, name):
+    """Cycles' lookup_property (blender/object.cpp): a custom property or an RNA path of owner
+    that is a number or an array of at most 4 floats, as (x, y, z, w) (a number n: (n, n, n, 1),
+    a shorter array padded with 0 and a last 1); None where there is none."""
+    for path in ('["%s"]' % name.replace('\\', '\\\\').replace('"', '\\"'), name):
         try:
-            v = [float(x) for x in value] if hasattr(value, "__len__") else [float(value)] * 3
-        except (TypeError, ValueError):
+            value = owner.path_resolve(path)
+        except (ValueError, TypeError):
             continue
-        if not v or len(v) > 4:
+        if isinstance(value, bool):  # a boolean property: Cycles reads none
             continue
-        v = (v + [0.0] * 3)[:3] + [1.0] if len(v) < 4 else v
+        if isinstance(value, (int, float)):
+            v = [float(value)] * 3 + [1.0]
+        else:
+            try:
+                items = list(value)
+            except TypeError:
+                continue
+            if not items or len(items) > 4 or not all(isinstance(x, float) for x in items):
+                continue
+            v = items + [0.0, 0.0, 0.0, 1.0][len(items):]
         if all(x == x and abs(x) != float('inf') for x in v):
-            out.append((attr_id, v))
+            return v
+    return None
+
+
+def object_values(obj, keys, instancer=None):
+    """(id, 4 floats) of the object attributes (the Attribute node's Object and Instancer types)
+    found as Cycles' lookup_instance_property finds them: for the Instancer type on an instance,
+    on its particle system's settings, then on its instancer (instancer = (parent object,
+    particle system or None)); then on the object, then on its data."""
+    out = []
+    for name, attr_id, use_instancer in keys:
+        if not name:
+            continue
+        owners = []
+        if use_instancer and instancer is not None:
+            parent, psys = instancer
+            owners = [psys.settings if psys is not None else None, parent]
+        owners += [obj, getattr(obj, "data", None)]
+        for owner in owners:
+            value = _property(owner, name) if owner is not None else None
+            if value is not None:
+                out.append((attr_id, value))
+                break
     return out
 
 
@@ -422,11 +440,12 @@ class MeshExporter:
         return [self.materials.export(m) for m in mats]
 
     def export_instance(self, obj, matrix_world, warn_empty=True, random_id=None, key=None, deform=False,
-                        holdout=False, lightgroup=0, shadow_catcher=False):
+                        holdout=False, lightgroup=0, shadow_catcher=False, instancer=None):
         """obj: an evaluated object of a mesh or convertible type; random_id: the depsgraph
         instance's (None for an object that is no instance); key: its instance_key, for motion
         blur; deform: whether its mesh may deform over the shutter (an object, not an instance);
-        holdout: a holdout object (export.holdout_of); lightgroup: its emission's (export.lightgroup_of).
+        holdout: a holdout object (export.holdout_of); lightgroup: its emission's (export.lightgroup_of);
+        instancer: an instance's (export.instancer_of), for Instancer attributes.
         Returns the core instance id, or None when the object has no geometry."""
         problem = transform_problem(matrix_world)
         if problem is not None:
@@ -448,7 +467,8 @@ class MeshExporter:
         instance = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_instance",
                              mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
                              pass_index=obj.pass_index, random_id=random_id,
-                             attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion,
+                             attributes=object_values(obj, self.materials.attributes.object_keys(), instancer),
+                             motion=motion,
                              cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
                              shadow_catcher=shadow_catcher, terminator=terminator_of(obj),
                              lightgroup=lightgroup)
@@ -457,11 +477,11 @@ class MeshExporter:
         return instance
 
     def export_curves_instance(self, obj, matrix_world, kind, random_id=None, holdout=False, lightgroup=0,
-                               shadow_catcher=False, key=None):
+                               shadow_catcher=False, key=None, instancer=None):
         """Curves or spheres of obj as an instance: kind 'HAIR' (the object's particle hair),
         'CURVES' (a Curves object) or 'POINTCLOUD'; key: the object instance's instance_key, for
-        its transform's motion; the strands' deformation comes from the Motion's samples.
-        Returns the core instance id or None."""
+        its transform's motion; the strands' deformation comes from the Motion's samples;
+        instancer as export_instance's. Returns the core instance id or None."""
         from .hair import curves_arrays, particle_hair_arrays, pointcloud_arrays
         problem = transform_problem(matrix_world)
         if problem is not None:
@@ -496,7 +516,8 @@ class MeshExporter:
         instance = core_call(self.core_scene, self.report, subject, "add_instance",
                              mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
                              pass_index=obj.pass_index, random_id=random_id,
-                             attributes=object_values(obj, self.materials.attributes.object_keys()), motion=motion,
+                             attributes=object_values(obj, self.materials.attributes.object_keys(), instancer),
+                             motion=motion,
                              cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
                              shadow_catcher=shadow_catcher, terminator=terminator_of(obj),
                              lightgroup=lightgroup)

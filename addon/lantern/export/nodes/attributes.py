@@ -13,7 +13,9 @@ DOMAIN_MESH, DOMAIN_OBJECT, DOMAIN_COLOR = 0, 1, 2
 class AttributeRegistry:
     """Keys: ('attr', name) a mesh attribute by name (UV maps first, then Mesh.attributes);
     ('color', '') the default colour attribute; ('tangent', uv map name or '' for the active
-    render map) a MikkTSpace tangent and its sign; ('object', name) a value of the object."""
+    render map) a MikkTSpace tangent and its sign; ('object', name) a value of the object;
+    ('instancer', name) a value of an instance's instancer, else of the object (Cycles names the
+    two types apart)."""
 
     def __init__(self):
         self.ids = {}
@@ -25,10 +27,14 @@ class AttributeRegistry:
         return self.ids[key]
 
     def mesh_keys(self):
-        return [(k, i) for k, i in self.ids.items() if k[0] != 'object']
+        return [(k, i) for k, i in self.ids.items() if k[0] not in _OBJECT_KINDS]
 
     def object_keys(self):
-        return [(k[1], i) for k, i in self.ids.items() if k[0] == 'object']
+        """[(name, id, whether an instancer's value comes first)] of the object values."""
+        return [(k[1], i, k[0] == 'instancer') for k, i in self.ids.items() if k[0] in _OBJECT_KINDS]
+
+
+_OBJECT_KINDS = ('object', 'instancer')
 
 
 def registry(c):
@@ -62,9 +68,7 @@ def color_attribute(c, node, want):
 def attribute(c, node, want):
     kind, domain = ('attr', DOMAIN_MESH)
     if node.attribute_type in ('OBJECT', 'INSTANCER'):
-        kind, domain = 'object', DOMAIN_OBJECT
-        if node.attribute_type == 'INSTANCER':
-            c.warn("Attribute '%s': Instancer attributes are read from the object itself" % node.name)
+        kind, domain = node.attribute_type.lower(), DOMAIN_OBJECT
     elif node.attribute_type == 'VIEW_LAYER':
         c.warn("Attribute '%s': View Layer attributes are not exported; 0 is used" % node.name)
         return {"Color": c.const((0.0, 0.0, 0.0)), "Vector": c.const((0.0, 0.0, 0.0)), "Fac": c.const(0.0),
