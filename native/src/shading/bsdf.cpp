@@ -811,31 +811,41 @@ Spectrum ms_glass_eval_cos(float alpha, const MsColors& c, Vec3 o, Vec3 i) {
   return eval;
 }
 
-// Sampling: with probability A (as glossy) the single-scattering glass (visible normals, the
-// reflection with the macro Fresnel F(o.z)'s probability, else the refraction), else a cosine
-// lobe on o's side with probability clamp(F, 0.1, 0.9) or on the far side.
+// Sampling: with probability A (as glossy) a visible normal m, reflected with the probability
+// F(o.m) and else refracted (Walter et al. 2007: the split at the microfacet, so that a rough
+// interface refracts even beyond the critical angle of its macro normal), else a cosine lobe on
+// o's side with probability clamp(F(o.z), 0.1, 0.9) or on the far side.
 struct MsGlassSplit {
-  float p_single, p_reflect, q_reflect;
+  float p_single, q_reflect;
 };
 MsGlassSplit ms_glass_split(float alpha, float cos_o, float eta) {
-  const float f = fresnel_dielectric(cos_o, eta);
-  return {ms_single_albedo({alpha, alpha}), f, clamp(f, 0.1f, 0.9f)};
+  return {ms_single_albedo({alpha, alpha}), clamp(fresnel_dielectric(cos_o, eta), 0.1f, 0.9f)};
+}
+// The single-scattering part's density of i: the visible normal's, times its branch's Fresnel.
+float ms_glass_single_pdf(const Vec3& o, const Vec3& i, float alpha, float eta) {
+  const Micro mf{false, alpha, alpha};
+  float p = 0;
+  if (i.z > 0) {
+    float cos_om = 0;
+    micro_reflect(o, i, mf, &p, &cos_om);
+    return p * fresnel_dielectric(cos_om, eta);
+  }
+  micro_refract(o, i, mf, eta, &p);
+  if (!(p > 0)) return 0;
+  Vec3 m = normalize(o + i * eta);
+  if (m.z < 0) m = -m;
+  return p * (1 - fresnel_dielectric(dot(o, m), eta));
 }
 Spectrum ms_glass_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
   *pdf = 0;
   if (!(o.z > 0) || i.z == 0) return Spectrum(0.0f);
   const float alpha = ms_glass_alpha(l), eta = lobe_eta(l);
   const MsGlassSplit s = ms_glass_split(alpha, o.z, eta);
-  const Micro mf{false, alpha, alpha};
-  float p = 0;
+  const float q = i.z > 0 ? s.q_reflect : 1 - s.q_reflect;
+  *pdf = s.p_single * ms_glass_single_pdf(o, i, alpha, eta) + (1 - s.p_single) * q * std::abs(i.z) * kInvPi;
   MsColors c = ms_colors(l, true);
   Spectrum tint(1.0f);
-  if (i.z > 0) {
-    micro_reflect(o, i, mf, &p, nullptr);
-    *pdf = s.p_single * s.p_reflect * p + (1 - s.p_single) * s.q_reflect * i.z * kInvPi;
-  } else {
-    micro_refract(o, i, mf, eta, &p);
-    *pdf = s.p_single * (1 - s.p_reflect) * p + (1 - s.p_single) * (1 - s.q_reflect) * -i.z * kInvPi;
+  if (i.z < 0) {
     // Cycles' refraction eval walks without the fresnel colours; its Principled closure weight
     // lacks the base colour, which its sample() gives each refraction: Lantern keeps it once
     // (refraction_tint), so that rough coloured glass is coloured as in Cycles' images.
@@ -847,10 +857,18 @@ Spectrum ms_glass_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) 
 bool ms_glass_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* i) {
   const float alpha = ms_glass_alpha(l), eta = lobe_eta(l);
   const MsGlassSplit s = ms_glass_split(alpha, o.z, eta);
-  const Micro mf{false, alpha, alpha};
   if (u_extra < s.p_single) {
-    if (u_extra < s.p_single * s.p_reflect) return micro_sample_reflect(o, mf, u, i);
-    return micro_sample_refract(o, mf, eta, u, i);
+    const Vec3 m = ggx_sample_visible_normal(o, alpha, u);
+    const float c = dot(o, m);
+    if (!(c > 0)) return false;
+    if (u_extra < s.p_single * fresnel_dielectric(c, eta)) {
+      *i = normalize(m * (2 * c) - o);
+      return i->z > 0 && is_finite(*i);
+    }
+    const float sin2_t = (1 - c * c) / (eta * eta);
+    if (sin2_t >= 1) return false;  // F = 1 there: not reached
+    *i = normalize(-o / eta + m * (c / eta - std::sqrt(1 - sin2_t)));
+    return i->z < 0 && is_finite(*i);
   }
   *i = sample_cosine_hemisphere(u);
   if (!(i->z > 0)) return false;
