@@ -158,17 +158,10 @@ Lobe multi_ggx_glass(float alpha, float eta, Spectrum w = Spectrum(1.0f), Spectr
   l.ms_color = color;
   return l;
 }
-// The Principled BSDF's layers at Multiscatter GGX: its specular (f0 = cspec0) and its glass.
+// The Principled BSDF's specular at Multiscatter GGX (f0 = cspec0).
 Lobe multi_ggx_specular(float alpha, Spectrum f0, float spec = 0.5f) {
   Lobe l = specular(alpha, f0, Spectrum(1.0f), spec);
   l.type = LobeType::MultiGGX;
-  l.ms_fresnel = true;
-  return l;
-}
-Lobe multi_ggx_principled_glass(float alpha, float eta, Spectrum base, float spec_tint) {
-  Lobe l = principled_glass(alpha, eta, base, spec_tint);
-  l.type = LobeType::MultiGGXGlass;
-  l.ms_color = base;
   l.ms_fresnel = true;
   return l;
 }

@@ -324,12 +324,16 @@ float micro_reflect(const Vec3& o, const Vec3& i, const Micro& mf, float* pdf, f
   return 0.25f * d * micro_g1_f(mf, o) * micro_g1_f(mf, i);
 }
 
+// o mirrored about the microfacet m (c = o.m > 0).
+bool reflect_about(const Vec3& o, const Vec3& m, float c, Vec3* i, bool below = false) {
+  *i = normalize(m * (2 * c) - o);
+  return (i->z > 0 || (below && i->z < 0)) && is_finite(*i);
+}
 bool micro_sample_reflect(const Vec3& o, const Micro& mf, Vec2 u, Vec3* i, bool below = false) {
   Vec3 m = micro_sample(mf, o, u);
   float c = dot(o, m);
   if (!(c > 0)) return false;
-  *i = normalize(m * (2 * c) - o);
-  return (i->z > 0 || (below && i->z < 0)) && is_finite(*i);
+  return reflect_about(o, m, c, i, below);
 }
 
 // ---- microfacet refraction (Walter et al. 2007, eq. 21 without Fresnel and without 1/eta^2) ---
@@ -337,7 +341,7 @@ bool micro_sample_reflect(const Vec3& o, const Micro& mf, Vec2 u, Vec3* i, bool 
 // vector is m = +-normalize(o + eta i), oriented to m.z > 0; the pair is valid only if o.m > 0 and
 // i.m < 0. f = D G1(o) G1(i) eta^2 |o.m| |i.m| / (cos_o cos_i (o.m + eta i.m)^2),
 // pdf = D_o(m) eta^2 |i.m| / (o.m + eta i.m)^2 (the Jacobian of the refraction map).
-float micro_refract(const Vec3& o, const Vec3& i, const Micro& mf, float eta, float* pdf) {
+float micro_refract(const Vec3& o, const Vec3& i, const Micro& mf, float eta, float* pdf, float* cos_om = nullptr) {
   *pdf = 0;
   if (i.z >= 0 || o.z <= 0) return 0;
   Vec3 ht = o + i * eta;
@@ -347,21 +351,26 @@ float micro_refract(const Vec3& o, const Vec3& i, const Micro& mf, float eta, fl
   if (m.z < 0) m = -m;
   float om = dot(o, m), im = dot(i, m);
   if (!(om > 0) || !(im < 0)) return 0;
+  if (cos_om) *cos_om = om;
   float d = micro_D(mf, m);
   float jac = eta * eta * -im / len2;
   *pdf = micro_g1_pdf(mf, o) * om * d * jac;
   return d * micro_g1_f(mf, o) * micro_g1_f(mf, i) * om * jac;
 }
 
-bool micro_sample_refract(const Vec3& o, const Micro& mf, float eta, Vec2 u, Vec3* i) {
-  Vec3 m = micro_sample(mf, o, u);
-  float c = dot(o, m);
-  if (!(c > 0)) return false;
+// o refracted through the microfacet m (c = o.m > 0) into the side of relative IOR eta.
+bool refract_through(const Vec3& o, const Vec3& m, float c, float eta, Vec3* i) {
   float sin2_t = (1 - c * c) / (eta * eta);
   if (sin2_t >= 1) return false;  // total internal reflection at this microfacet: Cycles drops it
   float cos_t = std::sqrt(1 - sin2_t);
   *i = normalize(-o / eta + m * (c / eta - cos_t));
   return i->z < 0 && is_finite(*i);
+}
+bool micro_sample_refract(const Vec3& o, const Micro& mf, float eta, Vec2 u, Vec3* i) {
+  Vec3 m = micro_sample(mf, o, u);
+  float c = dot(o, m);
+  if (!(c > 0)) return false;
+  return refract_through(o, m, c, eta, i);
 }
 
 // ---- Ashikhmin-Shirley (bsdf_ashikhmin_shirley) ------------------------------------------------
@@ -603,17 +612,6 @@ uint32_t ms_seed(const Vec3& o, const Vec3& i) {
   return h;
 }
 
-// interpolate_fresnel_color (Cycles' Principled closures): cspec0 blended towards 1 by the
-// dielectric Fresnel at cos, renormalised to 0 at normal incidence, for eta on either side of 1
-// (total internal reflection gives 1).
-Spectrum interpolate_fresnel(const Spectrum& cspec0, float eta, float cos) {
-  const Spectrum c0 = vmin(vmax(cspec0, Spectrum(0.0f)), Spectrum(1.0f));
-  const float r = (eta - 1) / (eta + 1), F0 = r * r;
-  if (!(F0 < 1)) return Spectrum(1.0f);
-  const float fh = (fresnel_dielectric(clamp(std::abs(cos), 0.0f, 1.0f), eta) - F0) / (1 - F0);
-  return vmin(vmax(c0 * (1 - fh) + Spectrum(fh), Spectrum(0.0f)), Spectrum(1.0f));
-}
-
 // What colours a walk (Cycles' mf_eval arguments): the bounce colour, and with fresnel the
 // Principled's interpolate_fresnel_color towards cspec0 at IOR eta.
 struct MsColors {
@@ -642,7 +640,7 @@ Spectrum ms_eval_cos(const MsAlpha& a, const MsColors& c, Vec3 o, Vec3 i) {
   const Vec3 wh = normalize(o + i);
   const float g2 = 1 / (1 - (lambda_r + 1) + shadowing_lambda);
   Spectrum throughput(1.0f);
-  if (c.fresnel) throughput = interpolate_fresnel(c.cspec0, c.eta, dot(o, wh));
+  if (c.fresnel) throughput = fresnel_principled(c.cspec0, c.eta, dot(o, wh));
   Spectrum eval = throughput * (g2 * 0.25f / o.z * ms_D(wh, a));
   Vec3 wr = -o;
   float hr = 1, c1_r = 1, g1_r = 0;
@@ -655,7 +653,7 @@ Spectrum ms_eval_cos(const MsAlpha& a, const MsColors& c, Vec3 o, Vec3 i) {
       eval += throughput * phase * ms_G1(i, ms_C1(hr), shadowing_lambda);
     }
     if (order + 1 < 10) {
-      if (c.fresnel && order > 0) throughput *= interpolate_fresnel(c.cspec0, c.eta, dot(-wr, wm));
+      if (c.fresnel && order > 0) throughput *= fresnel_principled(c.cspec0, c.eta, std::abs(dot(-wr, wm)));
       wr = wr - wm * (2 * dot(wr, wm));
       lambda_r = ms_lambda(wr, a);
       if (!c.fresnel) throughput *= c.color;
@@ -773,7 +771,7 @@ Spectrum ms_glass_eval_cos(float alpha, const MsColors& c, Vec3 o, Vec3 i) {
   single *=
       i_outside ? -lambda_r / (shadowing_lambda - lambda_r) : -lambda_r * beta_fn(-lambda_r, shadowing_lambda + 1);
   Spectrum throughput(1.0f);
-  if (c.fresnel) throughput = interpolate_fresnel(c.cspec0, eta, dot(o, normalize(o + i)));
+  if (c.fresnel) throughput = fresnel_principled(c.cspec0, eta, dot(o, normalize(o + i)));
   Spectrum eval = throughput * single;
   Vec3 wr = -o;
   float hr = 1, c1_r = 1, g1_r = 0;
@@ -800,7 +798,7 @@ Spectrum ms_glass_eval_cos(float alpha, const MsColors& c, Vec3 o, Vec3 i) {
       if (c.fresnel && !next_outside)
         throughput *= c.color;
       else if (c.fresnel && order > 0)
-        throughput *= interpolate_fresnel(c.cspec0, eta, dot(wi_prev, wm));
+        throughput *= fresnel_principled(c.cspec0, eta, std::abs(dot(wi_prev, wm)));
       lambda_r = ms_lambda(wr, a);
       if (!c.fresnel) throughput *= c.color;
       c1_r = ms_C1(hr);
@@ -830,11 +828,9 @@ float ms_glass_single_pdf(const Vec3& o, const Vec3& i, float alpha, float eta) 
     micro_reflect(o, i, mf, &p, &cos_om);
     return p * fresnel_dielectric(cos_om, eta);
   }
-  micro_refract(o, i, mf, eta, &p);
-  if (!(p > 0)) return 0;
-  Vec3 m = normalize(o + i * eta);
-  if (m.z < 0) m = -m;
-  return p * (1 - fresnel_dielectric(dot(o, m), eta));
+  float cos_om = 0;
+  micro_refract(o, i, mf, eta, &p, &cos_om);
+  return p * (1 - fresnel_dielectric(cos_om, eta));
 }
 Spectrum ms_glass_eval(const Lobe& l, const Vec3& o, const Vec3& i, float* pdf) {
   *pdf = 0;
@@ -861,14 +857,8 @@ bool ms_glass_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* 
     const Vec3 m = ggx_sample_visible_normal(o, alpha, u);
     const float c = dot(o, m);
     if (!(c > 0)) return false;
-    if (u_extra < s.p_single * fresnel_dielectric(c, eta)) {
-      *i = normalize(m * (2 * c) - o);
-      return i->z > 0 && is_finite(*i);
-    }
-    const float sin2_t = (1 - c * c) / (eta * eta);
-    if (sin2_t >= 1) return false;  // F = 1 there: not reached
-    *i = normalize(-o / eta + m * (c / eta - std::sqrt(1 - sin2_t)));
-    return i->z < 0 && is_finite(*i);
+    if (u_extra < s.p_single * fresnel_dielectric(c, eta)) return reflect_about(o, m, c, i);
+    return refract_through(o, m, c, eta, i);
   }
   *i = sample_cosine_hemisphere(u);
   if (!(i->z > 0)) return false;
@@ -883,7 +873,7 @@ bool ms_glass_sample(const Lobe& l, const Vec3& o, Vec2 u, float u_extra, Vec3* 
 // Glass BSDF node (glass_f0 white).
 Spectrum glass_reflection_color(const Lobe& l, float eta, float cos_ih) {
   if (l.glass_f0.x == 1 && l.glass_f0.y == 1 && l.glass_f0.z == 1) return Spectrum(1.0f);
-  return interpolate_fresnel(l.glass_f0, eta, std::max(cos_ih, 0.0f));
+  return fresnel_principled(l.glass_f0, eta, cos_ih);
 }
 
 // A glass lobe's branch weights at wo's angle cos_o (GlassPart) and the probability with which it
@@ -1157,7 +1147,7 @@ float fresnel_dielectric(float cos_i, float eta) {
 }
 Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i) {
   const Spectrum c0 = vmin(vmax(f0, Spectrum(0.0f)), Spectrum(1.0f));  // saturate(cspec0), as Cycles
-  if (!(eta > 1)) return c0;                                           // IOR 1 (Specular 0): F(1) = F(cos) = 0
+  if (eta == 1) return c0;                                             // IOR 1 (Specular 0): F(1) = F(cos) = 0
   if (!(eta < INFINITY)) return Spectrum(1.0f);                        // F(1) = 1: a perfect mirror
   const float r = (eta - 1) / (eta + 1), F0 = r * r;                   // fresnel_dielectric_cos(1, eta)
   // FH <= 1; FH < 0 where the dielectric Fresnel dips below F0 (at Specular 5, not at 2), but the

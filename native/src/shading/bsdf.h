@@ -364,8 +364,9 @@ float fresnel_dielectric(float cos_i, float eta);
 // their normal: tilts N towards Ng just enough that the mirror reflection of I stays above the
 // surface (normal maps seen at grazing angles otherwise shade from below).
 Vec3 ensure_valid_reflection(const Vec3& Ng, const Vec3& I, const Vec3& N);
-// Cycles 3.4's Principled v1 specular Fresnel (interpolate_fresnel_color): f0 blended to 1 by the
+// Cycles 3.4's Principled v1 Fresnel (interpolate_fresnel_color): f0 blended to 1 by the
 // dielectric Fresnel of IOR eta at cos_i, renormalised to [0, 1]; f0 (cspec0) clamped to [0, 1].
+// eta may be below 1 (the Principled glass seen from inside; total internal reflection gives 1).
 Spectrum fresnel_principled(const Spectrum& f0, float eta, float cos_i);
 // Cycles 3.4's bssrdf_setup_radius (closure/bssrdf.h): Burley and Random Walk (Fixed Radius)
 // scale the radius by 1/(4 pi); Random Walk by sqrt(3 (1 - alpha')), alpha' the single-scattering
