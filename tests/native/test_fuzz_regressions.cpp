@@ -97,6 +97,70 @@ TEST(FuzzRegressions, ExrAttributeSizeBeyondTheFileIsRefusedBeforeAllocating) {
   EXPECT_NE(std::string(lt_last_error()).find("claims"), std::string::npos) << lt_last_error();
 }
 
+// fuzz_vdb (on CI): a VDB header whose file-metadata name length said 4 GB made Lantern's own
+// truncation check (io/vdb.cpp) allocate and clear 4 GB before comparing the length with the
+// file's: 7-10 s and 4 GB for a 70-byte file. The length is now checked first.
+TEST(FuzzRegressions, VdbHeaderLengthBeyondTheFileIsRefusedBeforeAllocating) {
+  lt_test::TempDir dir;
+  const std::string path = dir.path + "/huge_name.vdb";
+  std::vector<uint8_t> bytes;
+  append_u32(bytes, uint32_t(openvdb::OPENVDB_MAGIC));  // int64 magic
+  append_u32(bytes, 0);
+  append_u32(bytes, 224);  // file format version
+  append_u32(bytes, 10);   // library version 10.0
+  append_u32(bytes, 0);
+  bytes.push_back(1);                           // grid offsets present
+  bytes.insert(bytes.end(), 36, uint8_t('0'));  // UUID
+  append_u32(bytes, 1);                         // one file metadata entry, whose name length is
+  append_u32(bytes, 0xfffffff0u);               // 4 GB
+  bytes.insert(bytes.end(), 16, uint8_t('x'));
+  write_bytes(path, bytes);
+  lt_test::ScenePtr s = lt_test::new_scene();
+  const float identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+  lt_volume_desc d = lt_test::volume(LT_VOLUME_SCATTER, 1);
+  int id = -1;
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), path.c_str(), "density", identity, 0, 0.001f, 0.0f, &d, 1, &id),
+            LT_ERROR_IO);
+  EXPECT_NE(std::string(lt_last_error()).find("truncated: the header is cut"), std::string::npos) << lt_last_error();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.5);
+}
+
+// fuzz_vdb: a length in a grid's metadata (past the header Lantern checked) that ran past the end
+// of the file made OpenVDB allocate and copy it (8-10 GB, 16-20 s) before failing. Each grid's
+// metadata is now walked before OpenVDB reads it.
+TEST(FuzzRegressions, VdbGridMetadataLengthBeyondTheFileIsRefusedBeforeAllocating) {
+  lt_test::TempDir dir;
+  const std::string path = dir.path + "/huge_metadata.vdb";
+  openvdb::initialize();
+  auto grid = openvdb::FloatGrid::create(0.0f);
+  grid->setName("density");
+  grid->tree().setValue(openvdb::Coord(1, 2, 3), 1.0f);
+  grid->insertMeta("note", openvdb::StringMetadata("#note#"));
+  {
+    openvdb::io::File file(path);
+    file.write({grid});
+    file.close();
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  const size_t at = bytes.find("#note#");
+  ASSERT_NE(at, std::string::npos);
+  const uint32_t huge = 0xfffffff0u;  // the value's byte count, just before it
+  std::memcpy(&bytes[at - 4], &huge, 4);
+  std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  lt_test::ScenePtr s = lt_test::new_scene();
+  const float identity[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+  lt_volume_desc d = lt_test::volume(LT_VOLUME_SCATTER, 1);
+  int id = -1;
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(lt_scene_add_volume_grid(s.get(), path.c_str(), "density", identity, 0, 0.001f, 0.0f, &d, 1, &id),
+            LT_ERROR_IO);
+  EXPECT_NE(std::string(lt_last_error()).find("runs past the end"), std::string::npos) << lt_last_error();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.5);
+}
+
 // fuzz_abi: a bidirectional render of a scene without any light (no lamp, no emissive surface, a
 // black world) took the s = 1 strategy anyway and picked a light from the empty set: a read
 // through a null pointer (UBSan; a segmentation fault in Release builds).

@@ -709,6 +709,27 @@ TEST(MediaMajorant, DdaVisitsCellsInOrderAndCoversTheSegment) {
   EXPECT_GT(crossed, 5000);  // the rays do cross many cells
 }
 
+TEST(MediaMajorant, WideSparseBoundsCoarsenTheCellsInsteadOfFailing) {
+  // Two voxels 4000 apart (a sparse VDB, or one changed coordinate in fuzz_vdb's inputs): at 4
+  // voxels per cell that is 10^9 cells (8 GB); the cells double until at most kMaxCells remain.
+  const int lo[3] = {-1, -1, -1}, hi[3] = {4001, 4001, 4001};
+  MajorantGrid grid(lo, hi, 4);
+  EXPECT_EQ(grid.cell_size(), 16);
+  int64_t cells = 1;
+  for (int a = 0; a < 3; ++a) cells *= grid.resolution(a);
+  EXPECT_LE(cells, MajorantGrid::kMaxCells);
+  EXPECT_GT(cells * 8, MajorantGrid::kMaxCells);  // and no coarser than needed
+  const int a0[3] = {0, 0, 0}, a1[3] = {4000, 4000, 4000};
+  grid.add_voxels(a0, a0, 3.0f);
+  grid.add_voxels(a1, a1, 5.0f);
+  EXPECT_EQ(grid.value_at(Vec3(0, 0, 0)), 3.0f);
+  EXPECT_EQ(grid.value_at(Vec3(4000, 4000, 4000)), 5.0f);
+  EXPECT_EQ(grid.value_at(Vec3(2000, 2000, 2000)), 0.0f);
+  // Bounds that fit keep the requested cell.
+  const int small[3] = {100, 100, 100};
+  EXPECT_EQ(MajorantGrid(lo, small, 4).cell_size(), 4);
+}
+
 // ---- extremes and bounded work ------------------------------------------------------------------
 
 TEST(MediaExtremes, FiniteOutputsAndBoundedWork) {

@@ -4,25 +4,31 @@
 #include <string>
 #include <type_traits>
 
-#include "core/error.h"
 #include "media/grid_lookup.h"
 
 namespace lt {
 
-MajorantGrid::MajorantGrid(const int lo[3], const int hi[3], int cell) : cell_(std::max(1, cell)) {
+MajorantGrid::MajorantGrid(const int lo[3], const int hi[3], int cell) {
   // In 64 bits: a corrupt VDB's bounds may span the whole int32 index space (fuzz_vdb).
-  int64_t res[3], cells = 1;
+  int64_t extent[3], res[3], cells = 0;
   for (int a = 0; a < 3; ++a) {
     lo_[a] = lo[a];
     hi_[a] = int(std::min<int64_t>(std::max<int64_t>(hi[a], int64_t(lo[a]) + 1), INT32_MAX));
-    res[a] = std::max<int64_t>(1, (int64_t(hi_[a]) - lo_[a] + cell_ - 1) / cell_);
-    cells = std::min<int64_t>(cells * res[a], int64_t(1) << 62);
+    extent[a] = int64_t(hi_[a]) - lo_[a];
   }
-  if (cells > kMaxCells)
-    throw InvalidArgument("the grid's bounds (" + std::to_string(int64_t(hi_[0]) - lo_[0]) + " x " +
-                          std::to_string(int64_t(hi_[1]) - lo_[1]) + " x " + std::to_string(int64_t(hi_[2]) - lo_[2]) +
-                          " voxels) need " + std::to_string(cells) + " majorant cells; at most " +
-                          std::to_string(kMaxCells) + " are supported");
+  // Cells double until the grid fits kMaxCells: memory stays bounded for sparse grids of wide
+  // bounds (coarser bounds there cost only more null collisions).
+  for (int64_t c = std::max(1, cell);; c *= 2) {
+    cells = 1;
+    for (int a = 0; a < 3; ++a) {
+      res[a] = std::max<int64_t>(1, (extent[a] + c - 1) / c);
+      cells *= res[a];
+    }
+    if (cells <= kMaxCells) {
+      cell_ = int(c);
+      break;
+    }
+  }
   for (int a = 0; a < 3; ++a) res_[a] = int(res[a]);
   values_.assign(size_t(cells), 0.0f);
   minima_.assign(size_t(cells), 0.0f);

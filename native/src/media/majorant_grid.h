@@ -35,11 +35,11 @@ struct MajorantSegment {
 class MajorantGrid {
  public:
   MajorantGrid() = default;
-  // Domain [lo, hi] in index space (hi > lo per axis), `cell` voxels per cell edge (>= 1). All cells
-  // start at 0 (upper and lower bounds).
-  // Throws InvalidArgument when the bounds need more than kMaxCells cells (1 GiB of floats).
+  // Domain [lo, hi] in index space (hi > lo per axis), `cell` voxels per cell edge (>= 1), doubled
+  // as often as needed to keep at most kMaxCells cells (2 x 64 MB of floats; cell_size() says what
+  // was chosen). All cells start at 0 (upper and lower bounds).
   MajorantGrid(const int lo[3], const int hi[3], int cell);
-  static constexpr int64_t kMaxCells = int64_t(1) << 28;
+  static constexpr int64_t kMaxCells = int64_t(1) << 24;
   // The majorants of a density grid: the domain is the non-background voxels' bounds widened by one
   // voxel (the interpolation's reach), each cell the maximum of the stored values (NanoVDB: every
   // voxel and tile, active or not, and the background) over its footprint, and their minimum
