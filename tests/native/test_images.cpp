@@ -85,6 +85,26 @@ TEST(ImageCubic, PartitionOfUnityAndExtensionsAtTheEdges) {
   EXPECT_NEAR(grey(4, 1, ramp, lt::Extension::Repeat).lookup({centre(0, 4) + 1.0f, 0.5f}).x, (0.1f + 0.3f) / 6, 1e-6f);
 }
 
+// fuzz_abi: a texture coordinate of 5.7e34 (a mapping's scale) was converted to int (undefined
+// behaviour: UBSan's float-cast-overflow; in Release INT_MIN, so Extend gave the left edge for
+// any far coordinate). Far coordinates now give the edge they lie beyond (Extend), nothing (Clip)
+// or a texel of the period (Repeat), for every interpolation.
+TEST(ImageLookup, CoordinatesBeyondTheIntegerRange) {
+  const std::vector<float> ramp = {0.0f, 0.1f, 0.2f, 0.3f};
+  for (lt::Interpolation interp : {lt::Interpolation::Closest, lt::Interpolation::Linear, lt::Interpolation::Cubic})
+    for (float u : {5.7e34f, -5.7e34f, 3e9f, -3e9f}) {
+      const int k = int(interp);
+      const lt::Vec2 uv{u, 0.5f};
+      const lt::Image extend(4, 1, 1, ramp.data(), false, interp, lt::Extension::Extend);
+      EXPECT_NEAR(extend.lookup(uv).x, u > 0 ? 0.3f : 0.0f, 1e-6f) << k << " " << u;
+      const lt::Image clip(4, 1, 1, ramp.data(), false, interp, lt::Extension::Clip);
+      EXPECT_EQ(clip.lookup(uv).x, 0.0f) << k << " " << u;
+      const lt::Image repeat(4, 1, 1, ramp.data(), false, interp, lt::Extension::Repeat);
+      const float r = repeat.lookup(uv).x;
+      EXPECT_TRUE(r >= 0.0f && r <= 0.3f) << k << " " << u << ": " << r;
+    }
+}
+
 TEST(ImageCubic, OneFilterForBytesHalvesAndFloats) {
   // The same texels stored as bytes (a file's), half floats (a half OpenEXR's) and floats give the
   // same cubic lookups: one filter reads each storage in place. The float images hold one texel

@@ -3,6 +3,7 @@
 #include <Imath/half.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <new>
 
@@ -192,6 +193,19 @@ T Image::filtered(Vec2 uv, F get) const {
   };
   float x = uv.x * width_ - 0.5f, y = uv.y * height_ - 0.5f;
   if (!std::isfinite(x) || !std::isfinite(y)) return T(0.0f);
+  // Texel coordinates beyond int's range (a mapping scaled to 1e34: fuzz_abi) are first brought
+  // into it: Repeat by the period (fmod is exact), Extend and Clip to just past the edge, whose
+  // result (the edge texel, or nothing outside a Clip image) is the same.
+  auto in_range = [&](float c, int n) {
+    if (std::abs(c) < float(1 << 30)) return c;
+    if (ext_ == Extension::Repeat) {
+      const float r = float(std::fmod(double(c), double(n)));
+      return r < 0 ? r + float(n) : r;
+    }
+    return c < 0 ? -4.0f : float(n) + 4.0f;
+  };
+  x = in_range(x, width_);
+  y = in_range(y, height_);
   if (interp_ == Interpolation::Closest) {
     bool inside = true;
     int ix = wrap(int(std::floor(x + 0.5f)), width_, &inside), iy = wrap(int(std::floor(y + 0.5f)), height_, &inside);
