@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 
 #include "core/error.h"
@@ -62,7 +63,12 @@ namespace {
 // OpenEXR 3.1 allocates what an attribute's size field says before it reads the value, so a
 // corrupt or hostile file made a merge allocate gigabytes before failing (found by
 // tests/fuzz/fuzz_exr_merge). The headers are walked here first, and a size that runs past the end
-// of the file is refused. Anything else wrong is left to OpenEXR's own messages.
+// of the file is refused. OpenEXR reads a known type by its own layout whatever the size field says
+// (Header::readFrom, TypedAttribute<T>::readValueFrom): a channel list to its empty name, a
+// preview by its width and height, a fixed-size type by its size, a string vector string by
+// string; the walk does the same, or it would lose step where OpenEXR does (fuzz_exr_merge: a
+// channel list shorter than its size made OpenEXR read a 1.8 GB string from what followed).
+// Anything else wrong is left to OpenEXR's own messages.
 void check_attribute_sizes(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) return;
@@ -85,19 +91,63 @@ void check_attribute_sizes(const std::string& path) {
     if (!f) truncated();
     return s;
   };
+  // Skips n bytes of attribute attr's value, refused when they run past the end of the file.
+  auto skip = [&](const std::string& attr, int64_t n) {
+    if (!f) truncated();
+    const std::streamoff left = file_size - f.tellg();
+    if (n < 0 || n > left)
+      throw IoError("could not read " + path + ": header attribute '" + attr + "' claims " + std::to_string(n) +
+                    " bytes, but the file has " + std::to_string(left) + " left");
+    f.seekg(std::streamoff(n), std::ios::cur);
+  };
+  static const std::map<std::string, int> kFixed = {{"box2i", 16},
+                                                    {"box2f", 16},
+                                                    {"chromaticities", 32},
+                                                    {"compression", 1},
+                                                    {"deepImageState", 1},
+                                                    {"double", 8},
+                                                    {"envmap", 1},
+                                                    {"float", 4},
+                                                    {"int", 4},
+                                                    {"keycode", 28},
+                                                    {"lineOrder", 1},
+                                                    {"m33f", 36},
+                                                    {"m33d", 72},
+                                                    {"m44f", 64},
+                                                    {"m44d", 128},
+                                                    {"rational", 8},
+                                                    {"tiledesc", 9},
+                                                    {"timecode", 8},
+                                                    {"v2i", 8},
+                                                    {"v2f", 8},
+                                                    {"v2d", 16},
+                                                    {"v3i", 12},
+                                                    {"v3f", 12},
+                                                    {"v3d", 24}};
   if (u32() != 20000630u) return;  // not OpenEXR: OpenEXR says so
   const bool multipart = (u32() & 0x1000u) != 0;
   if (!f) return;
   for (;;) {
     for (std::string attr = name(); !attr.empty(); attr = name()) {
-      name();  // type
-      const uint32_t size = u32();
-      if (!f) truncated();
-      const std::streamoff left = file_size - f.tellg();
-      if (int32_t(size) < 0 || std::streamoff(size) > left)
-        throw IoError("could not read " + path + ": header attribute '" + attr + "' claims " +
-                      std::to_string(int32_t(size)) + " bytes, but the file has " + std::to_string(left) + " left");
-      f.seekg(std::streamoff(size), std::ios::cur);
+      const std::string type = name();
+      const int64_t size = int32_t(u32());
+      const auto fixed = kFixed.find(type);
+      if (fixed != kFixed.end()) {
+        skip(attr, fixed->second);
+      } else if (type == "chlist") {
+        while (!name().empty()) skip(attr, 16);  // pixel type, pLinear, 3 reserved, x and y sampling
+      } else if (type == "preview") {
+        const int64_t w = u32(), h = u32();
+        skip(attr, 4 * w * h);
+      } else if (type == "stringvector") {
+        for (int64_t read = 0; read < size;) {
+          const int64_t n = int32_t(u32());
+          skip(attr, n);
+          read += 4 + n;
+        }
+      } else {
+        skip(attr, size);
+      }
     }
     if (!multipart || f.peek() == 0 || f.peek() == std::char_traits<char>::eof()) return;
   }
