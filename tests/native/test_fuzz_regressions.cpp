@@ -40,6 +40,25 @@ std::string read_bytes(const std::string& path) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
+// An empty float grid named "density" (OpenVDB initialised), and writing it uncompressed (its
+// values as plain bytes a test can find and change) to path; read back as a string of bytes.
+openvdb::FloatGrid::Ptr density_grid() {
+  openvdb::initialize();
+  auto grid = openvdb::FloatGrid::create(0.0f);
+  grid->setName("density");
+  return grid;
+}
+
+std::string write_and_read_back(const std::string& path, const openvdb::FloatGrid::Ptr& grid) {
+  {
+    openvdb::io::File file(path);
+    file.setCompression(openvdb::io::COMPRESS_NONE);
+    file.write({grid});
+    file.close();
+  }
+  return read_bytes(path);
+}
+
 // Adds `path` as a Volume object's density grid through the ABI (scattering, identity transform):
 // the status, and in *seconds (optional) the time the call took.
 int add_density_vdb(const std::string& path, double* seconds = nullptr) {
@@ -51,6 +70,36 @@ int add_density_vdb(const std::string& path, double* seconds = nullptr) {
   const int status = lt_scene_add_volume_grid(s.get(), path.c_str(), "density", identity, 0, 0.001f, 0.0f, &d, 1, &id);
   if (seconds) *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return status;
+}
+
+// The file is refused (LT_ERROR_IO, a message containing `expect`) within 0.5 s: before anything
+// allocates what a corrupt length says (seconds and gigabytes).
+void expect_vdb_refused_at_once(const std::string& path, const std::string& expect) {
+  double seconds = 0;
+  EXPECT_EQ(add_density_vdb(path, &seconds), LT_ERROR_IO);
+  EXPECT_NE(std::string(lt_last_error()).find(expect), std::string::npos) << lt_last_error();
+  EXPECT_LT(seconds, 0.5);
+}
+
+// An EXR file's start: magic and version 2 (single part, scanlines); the header follows.
+std::vector<uint8_t> exr_start() {
+  std::vector<uint8_t> bytes;
+  append_u32(bytes, 20000630u);
+  append_u32(bytes, 2);
+  return bytes;
+}
+
+// read_exr refuses the file within 0.5 s, saying the attribute `owner` claims 2147483632 bytes.
+void expect_exr_owner_refused_at_once(const std::string& path, bool pixels) {
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    lt::read_exr(path, pixels);
+    ADD_FAILURE() << "read " << path;
+  } catch (const lt::IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("header attribute 'owner' claims 2147483632 bytes"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.5);
 }
 
 // A 4 x 4 plane of the material `material` makes, transformed by xf, under a uniform grey world of
@@ -89,25 +138,13 @@ TEST(FuzzRegressions, TableLengthBeyondTheIntegerRangeIsRefused) {
 TEST(FuzzRegressions, ExrAttributeSizeBeyondTheFileIsRefusedBeforeAllocating) {
   lt_test::TempDir dir;
   const std::string path = dir.path + "/huge_attribute.exr";
-  std::vector<uint8_t> bytes;
-  append_u32(bytes, 20000630u);  // magic
-  append_u32(bytes, 2);          // version 2, single part, scanlines
+  std::vector<uint8_t> bytes = exr_start();
   append(bytes, "owner");
   append(bytes, "string");
   append_u32(bytes, 0x7ffffff0u);  // 2 GB
   bytes.insert(bytes.end(), 16, uint8_t('x'));
   write_bytes(path, bytes);
-  for (bool pixels : {false, true}) {
-    const auto start = std::chrono::steady_clock::now();
-    try {
-      lt::read_exr(path, pixels);
-      FAIL() << "a header claiming 2 GB in a " << bytes.size() << "-byte file was read";
-    } catch (const lt::IoError& e) {
-      EXPECT_NE(std::string(e.what()).find("header attribute 'owner' claims 2147483632 bytes"), std::string::npos)
-          << e.what();
-    }
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.5);
-  }
+  for (bool pixels : {false, true}) expect_exr_owner_refused_at_once(path, pixels);
   // Through the ABI, as `lantern merge` reads its parts.
   const std::string out = dir.path + "/merged.exr";
   const char* parts[] = {path.c_str()};
@@ -133,10 +170,7 @@ TEST(FuzzRegressions, VdbHeaderLengthBeyondTheFileIsRefusedBeforeAllocating) {
   append_u32(bytes, 0xfffffff0u);               // 4 GB
   bytes.insert(bytes.end(), 16, uint8_t('x'));
   write_bytes(path, bytes);
-  double seconds = 0;
-  EXPECT_EQ(add_density_vdb(path, &seconds), LT_ERROR_IO);
-  EXPECT_NE(std::string(lt_last_error()).find("truncated: the header is cut"), std::string::npos) << lt_last_error();
-  EXPECT_LT(seconds, 0.5);
+  expect_vdb_refused_at_once(path, "truncated: the header is cut");
 }
 
 // fuzz_vdb: a length in a grid's metadata (past the header Lantern checked) that ran past the end
@@ -145,26 +179,16 @@ TEST(FuzzRegressions, VdbHeaderLengthBeyondTheFileIsRefusedBeforeAllocating) {
 TEST(FuzzRegressions, VdbGridMetadataLengthBeyondTheFileIsRefusedBeforeAllocating) {
   lt_test::TempDir dir;
   const std::string path = dir.path + "/huge_metadata.vdb";
-  openvdb::initialize();
-  auto grid = openvdb::FloatGrid::create(0.0f);
-  grid->setName("density");
+  auto grid = density_grid();
   grid->tree().setValue(openvdb::Coord(1, 2, 3), 1.0f);
   grid->insertMeta("note", openvdb::StringMetadata("#note#"));
-  {
-    openvdb::io::File file(path);
-    file.write({grid});
-    file.close();
-  }
-  std::string bytes = read_bytes(path);
+  std::string bytes = write_and_read_back(path, grid);
   const size_t at = bytes.find("#note#");
   ASSERT_NE(at, std::string::npos);
   const uint32_t huge = 0xfffffff0u;  // the value's byte count, just before it
   std::memcpy(&bytes[at - 4], &huge, 4);
   std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
-  double seconds = 0;
-  EXPECT_EQ(add_density_vdb(path, &seconds), LT_ERROR_IO);
-  EXPECT_NE(std::string(lt_last_error()).find("runs past the end"), std::string::npos) << lt_last_error();
-  EXPECT_LT(seconds, 0.5);
+  expect_vdb_refused_at_once(path, "runs past the end");
 }
 
 // fuzz_exr_merge: a channel list whose size field said more than its channels took. OpenEXR reads
@@ -174,9 +198,7 @@ TEST(FuzzRegressions, VdbGridMetadataLengthBeyondTheFileIsRefusedBeforeAllocatin
 TEST(FuzzRegressions, ExrChannelListShorterThanItsSizeIsWalkedAsOpenExrReadsIt) {
   lt_test::TempDir dir;
   const std::string path = dir.path + "/short_chlist.exr";
-  std::vector<uint8_t> bytes;
-  append_u32(bytes, 20000630u);  // magic
-  append_u32(bytes, 2);          // version 2, single part, scanlines
+  std::vector<uint8_t> bytes = exr_start();
   append(bytes, "channels");
   append(bytes, "chlist");
   append_u32(bytes, 19 + 17);  // the channel's 19 bytes and the next attribute's 17: a walk by size
@@ -189,15 +211,7 @@ TEST(FuzzRegressions, ExrChannelListShorterThanItsSizeIsWalkedAsOpenExrReadsIt) 
   bytes.push_back(0);              // (end of the header, for a walk by size)
   bytes.insert(bytes.end(), 16, uint8_t('x'));
   write_bytes(path, bytes);
-  const auto start = std::chrono::steady_clock::now();
-  try {
-    lt::read_exr(path, false);
-    FAIL() << "read";
-  } catch (const lt::IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("header attribute 'owner' claims 2147483632 bytes"), std::string::npos)
-        << e.what();
-  }
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.5);
+  expect_exr_owner_refused_at_once(path, false);
 }
 
 // fuzz_abi: a bidirectional render of a scene without any light (no lamp, no emissive surface, a
@@ -224,20 +238,12 @@ TEST(FuzzRegressions, BidirectionalRenderWithoutLightsIsBlack) {
 TEST(FuzzRegressions, VdbTileAtTheEdgeOfTheIndexSpace) {
   lt_test::TempDir dir;
   const std::string path = dir.path + "/edge_tile.vdb";
-  openvdb::initialize();
-  auto grid = openvdb::FloatGrid::create(0.0f);
-  grid->setName("density");
+  auto grid = density_grid();
   grid->tree().addTile(3, openvdb::Coord(0, 0, 0), 1.0f, true);  // 4096^3 root tiles
   grid->tree().addTile(3, openvdb::Coord(4096, 0, 0), 1.0f, true);
-  {
-    openvdb::io::File file(path);
-    file.setCompression(openvdb::io::COMPRESS_NONE);
-    file.write({grid});
-    file.close();
-  }
+  std::string bytes = write_and_read_back(path, grid);
   // A root tile is stored as its origin (3 x int32), value (float) and active flag (1 byte): move
   // the second to x = 2^31 - 4096, the last tile origin whose voxels all fit in int32.
-  std::string bytes = read_bytes(path);
   const std::string tile("\0\x10\0\0\0\0\0\0\0\0\0\0\0\0\x80\x3f\x01", 17);
   const size_t at = bytes.find(tile);
   ASSERT_NE(at, std::string::npos) << "root tile not found in the file";
