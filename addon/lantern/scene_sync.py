@@ -11,6 +11,7 @@ import numpy as np
 from . import core
 from .export import NO_FLAGS, export_lights, export_scene, instance_flags, instance_key, lightgroup_indices
 from .export.camera import camera_table, export_camera
+from .export.mesh import view_layer_value
 
 _GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
 _TRACED_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
@@ -84,6 +85,10 @@ class SceneSync:
                             + _GEOMETRY_TYPES):
                 return False
         exporter = self.state["materials"]
+        exporter.depsgraph = depsgraph
+        # View Layer attributes are constants of the programs: a changed one needs a new scene.
+        if any(view_layer_value(depsgraph, name) != value for name, value in exporter.view_layer_seen.items()):
+            return False
         if camera_object is not None:
             # Texture Coordinate's Camera and Window read the camera: a moved camera
             # re-translates the materials.

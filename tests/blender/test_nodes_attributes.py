@@ -302,3 +302,64 @@ def test_instancer_attributes_of_collection_and_particle_instances(outdir):
     expected = [(0.9, 0.2, 0.4), (0.35,) * 3, (0.7,) * 3, (0.1, 0.6, 0.9), (0.55,) * 3]
     for i, (got, want) in enumerate(zip(_tile_centres(scene, 5, 4, outdir), expected)):
         assert np.allclose(got, want, atol=1e-3), (i, got, want)
+
+
+def test_view_layer_attributes_read_the_view_layer_then_the_scene_then_the_world(outdir):
+    """The Attribute node's View Layer type (issue 13) as Cycles 3.4 resolves it
+    (BKE_view_layer_find_rgba_attribute): one sphere per name, emitting its Color, found on the
+    view layer (before the scene's value of the same name), on the scene only, on the world only,
+    nowhere (black), and its Fac (the mean of the colour) for a view layer value."""
+    scene, _rows, _cols = harness._scene("attr_view_layer", 5)
+    layer = scene.view_layers[0]
+    layer["vl_a"] = (0.2, 0.5, 0.8)
+    scene["vl_a"] = 0.9
+    scene["vl_b"] = 0.35
+    if scene.world is None:
+        scene.world = bpy.data.worlds.new("attr_view_layer_world")
+    scene.world.color = (0.0, 0.0, 0.0)
+    scene.world["vl_c"] = (0.6, 0.1, 0.3)
+    cases = [("vl_a", "Color"), ("vl_b", "Color"), ("vl_c", "Color"), ("vl_none", "Color"), ("vl_a", "Fac")]
+    for i, (name, socket) in enumerate(cases):
+        mat = _emission_material("attr_view_layer_%d" % i, lambda s, name=name, socket=socket: s.node(
+            "ShaderNodeAttribute", attribute_type='VIEW_LAYER', attribute_name=name).outputs[socket])
+        me = build_scenes.mesh_sphere("attr_view_layer_sphere_%d" % i, 0.4)
+        me.materials.append(mat)
+        build_scenes.add_object(scene, "attr_view_layer_%d" % i, me, location=(i - 2.0, 0.0, 0.0))
+    expected = [(0.2, 0.5, 0.8), (0.35,) * 3, (0.6, 0.1, 0.3), (0.0,) * 3, (0.5,) * 3]
+    for i, (got, want) in enumerate(zip(_tile_centres(scene, 5, 4, outdir), expected)):
+        assert np.allclose(got, want, atol=1e-3), (i, got, want)
+
+
+def test_view_layer_attribute_animated_re_exports_each_frame(tmp_path):
+    """A View Layer attribute is a constant of the programs: rendering an animation with
+    Persistent Data, a scene property keyed 0.2 at frame 1 and 0.6 at frame 3 makes each frame
+    a new export (the kept scene would show the first frame's value) with that frame's value."""
+    from lantern import engine
+    scene, _rows, _cols = harness._scene("attr_view_layer_anim", 1)
+    if scene.world is None:
+        scene.world = bpy.data.worlds.new("attr_view_layer_anim_world")
+    scene.world.color = (0.0, 0.0, 0.0)
+    mat = _emission_material("attr_view_layer_anim", lambda s: s.node(
+        "ShaderNodeAttribute", attribute_type='VIEW_LAYER', attribute_name="vl_anim").outputs["Color"])
+    me = build_scenes.mesh_sphere("attr_view_layer_anim_sphere", 0.4)
+    me.materials.append(mat)
+    build_scenes.add_object(scene, "attr_view_layer_anim", me)
+    for frame, value in ((1, 0.2), (3, 0.6)):
+        scene["vl_anim"] = value
+        scene.keyframe_insert('["vl_anim"]', frame=frame)
+    for fc in scene.animation_data.action.fcurves:
+        for k in fc.keyframe_points:
+            k.interpolation = 'LINEAR'
+    scene.frame_start, scene.frame_end = 1, 3
+    render_utils.configure(scene, render_utils.LANTERN, 4, 0)
+    render_utils._exr_settings(scene)
+    scene.render.use_persistent_data = True
+    scene.render.filepath = str(tmp_path / "vl_")
+    bpy.ops.render.render(animation=True, scene=scene.name)
+    scene.render.use_persistent_data = False
+    assert engine.LAST_RENDER["scene_sync"]["full_exports"] == 3, engine.LAST_RENDER["scene_sync"]
+    for frame, want in ((1, 0.2), (2, 0.4), (3, 0.6)):
+        img = render_utils.read_multilayer_exr(str(tmp_path / ("vl_%04d.exr" % frame)))["Combined"]
+        h, w = img.shape[:2]
+        centre = img[h // 2 - 2:h // 2 + 2, w // 2 - 2:w // 2 + 2, :3]
+        assert np.allclose(centre, want, atol=2e-3), (frame, centre.mean((0, 1)))

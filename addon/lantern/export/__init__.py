@@ -114,13 +114,14 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     images = ImageExporter(core_scene, report)
     materials = MaterialExporter(core_scene, report, images)
     materials.ao_distance = ao_distance(depsgraph.scene_eval.world)
+    materials.depsgraph = depsgraph
     if state is None or camera_object is not None:
         materials.camera = camera_table(depsgraph, camera_object)
     meshes = MeshExporter(depsgraph, core_scene, report, materials, motion)
     materials.aovs = aov_indices(depsgraph.view_layer_eval)
     try:
         summary["world"] = export_world(depsgraph, core_scene, report, images, camera=materials.camera,
-                                        aovs=materials.aovs)
+                                        aovs=materials.aovs, view_layer_value=materials.view_layer_value)
     except core.LanternError as e:  # a value the core refuses (not finite): no world, the render goes on
         if e.status != core.ERROR_INVALID_ARGUMENT:
             raise

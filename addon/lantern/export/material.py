@@ -8,6 +8,7 @@ import bpy
 from .. import core
 from . import nodes
 from .cryptomatte import Names
+from .mesh import view_layer_value
 from .names import core_call, is_finite
 from .nodes.attributes import AttributeRegistry
 
@@ -307,6 +308,10 @@ class MaterialExporter:
         self.camera = None  # Texture Coordinate's camera table (camera.camera_table)
         self.ao_distance = 10.0  # the World's AO distance (Ambient Occlusion's Distance 0)
         self.aovs = {}  # AOV name -> (index, colour) of the view layer's valid AOVs (aov_indices)
+        # The depsgraph View Layer attributes are read from (each render's, each viewport update's),
+        # and the values the translated programs hold (a viewport update compares them anew).
+        self.depsgraph = None
+        self.view_layer_seen = {}
         self.core_scene = core_scene
         self.report = report
         self.images = images
@@ -386,11 +391,18 @@ class MaterialExporter:
         self.core_scene.set_material(self.ids[key], program)
         return True
 
+    def view_layer_value(self, name):
+        """The Attribute node's View Layer value of name (mesh.view_layer_value), recorded."""
+        value = view_layer_value(self.depsgraph, name) if self.depsgraph is not None else (0.0, 0.0, 0.0, 0.0)
+        self.view_layer_seen[name] = value
+        return value
+
     def _compiler(self, material):
         c = nodes.Compiler(material.name, self.images, self._warn, camera=self.camera)
         c.attributes = self.attributes  # one numbering of attribute names per scene
         c.material_pass_index = material.pass_index
         c.ao_distance = self.ao_distance
+        c.view_layer_value = self.view_layer_value
         return c
 
     def _displacement(self, material, output, method):

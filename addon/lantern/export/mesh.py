@@ -255,6 +255,18 @@ def object_values(obj, keys, instancer=None):
     return out
 
 
+def view_layer_value(depsgraph, name):
+    """The Attribute node's View Layer type as Cycles 3.4 resolves it (resolve_view_layer_attributes,
+    BKE_view_layer_find_rgba_attribute): name on the view layer, then the scene, then its world
+    (a custom property before an RNA path, as _property); 4 zeros where none has it."""
+    scene = depsgraph.scene_eval
+    for owner in (depsgraph.view_layer_eval, scene, scene.world):
+        value = _property(owner, name) if owner is not None and name else None
+        if value is not None:
+            return tuple(value)
+    return (0.0, 0.0, 0.0, 0.0)
+
+
 def smooth_vertex_normals(mesh, positions):
     """Blender 3.x's vertex normals (mesh_normals.cc, mesh_calc_normals_poly_and_vertex: each
     polygon's normal weighted by its corner's angle, summed per vertex, normalised; a zero sum

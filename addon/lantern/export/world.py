@@ -29,10 +29,11 @@ def _map_resolution(world):
     return int(settings.sample_map_resolution)
 
 
-def export_world(depsgraph, core_scene, report, images, camera=None, aovs=None):
+def export_world(depsgraph, core_scene, report, images, camera=None, aovs=None, view_layer_value=None):
     """Sets the world; returns a short description of what was exported. camera: the camera
     table of Texture Coordinate's Camera and Window outputs (camera.camera_table), or None; aovs:
-    the view layer's AOVs (aov_indices) its AOV Output nodes write, where a camera ray escapes."""
+    the view layer's AOVs (aov_indices) its AOV Output nodes write, where a camera ray escapes;
+    view_layer_value: the Attribute node's View Layer values (MaterialExporter.view_layer_value)."""
     world = depsgraph.scene_eval.world
     if world is None:
         core_scene.set_world(color=(0.0, 0.0, 0.0), strength=1.0, visibility=1)
@@ -47,6 +48,8 @@ def export_world(depsgraph, core_scene, report, images, camera=None, aovs=None):
         return "color"
     output = world.node_tree.get_output_node('CYCLES')
     c = nodes.Compiler(world.name, images, warn, camera=camera, world=True)
+    if view_layer_value is not None:
+        c.view_layer_value = view_layer_value
     if output is None:
         warn("no active World Output node, rendered black")
     else:

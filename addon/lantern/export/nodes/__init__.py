@@ -74,6 +74,9 @@ class Compiler:
         self._warn = warn
         self.camera = camera  # 28 floats for Texture Coordinate's Camera and Window, or None
         self.ao_distance = 10.0  # the World's AO distance (Ambient Occlusion's Distance 0), Blender's default
+        # The Attribute node's View Layer values: name -> 4 floats (mesh.view_layer_value); none
+        # without a depsgraph (tests compiling alone).
+        self.view_layer_value = lambda name: (0.0, 0.0, 0.0, 0.0)
         self.code = []
         self.constants = []
         self._const_ids = {}

@@ -70,9 +70,10 @@ def attribute(c, node, want):
     if node.attribute_type in ('OBJECT', 'INSTANCER'):
         kind, domain = node.attribute_type.lower(), DOMAIN_OBJECT
     elif node.attribute_type == 'VIEW_LAYER':
-        c.warn("Attribute '%s': View Layer attributes are not exported; 0 is used" % node.name)
-        return {"Color": c.const((0.0, 0.0, 0.0)), "Vector": c.const((0.0, 0.0, 0.0)), "Fac": c.const(0.0),
-                "Alpha": c.const(0.0)}
+        # A constant of the render, as Cycles folds it: RGB, their mean as Fac, the fourth as Alpha.
+        x, y, z, w = c.view_layer_value(node.attribute_name)
+        return {"Color": c.const((x, y, z)), "Vector": c.const((x, y, z)), "Fac": c.const((x + y + z) / 3.0),
+                "Alpha": c.const(w)}
     outs = _attribute(c, kind, node.attribute_name, domain)
     return {"Color": outs["Vector"], "Vector": outs["Vector"], "Fac": outs["Fac"], "Alpha": outs["Alpha"]}
 
