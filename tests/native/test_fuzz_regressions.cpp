@@ -214,6 +214,23 @@ TEST(FuzzRegressions, ExrChannelListShorterThanItsSizeIsWalkedAsOpenExrReadsIt) 
   expect_exr_owner_refused_at_once(path, false);
 }
 
+// fuzz_exr_merge: a part with LightTracing.R but not its G and B channels (a renamed channel)
+// passed every check and the merge read the missing channels through a null pointer (UBSan; a
+// segmentation fault in Release). Such parts are refused.
+TEST(FuzzRegressions, MergeRefusesAPartWithOneLightTracingChannel) {
+  lt_test::TempDir dir;
+  const std::string part = dir.path + "/part.exr", out = dir.path + "/merged.exr";
+  std::vector<lt::ExrChannel> channels;
+  for (const char* name : {"A", "B", "G", "R", "SampleCount.X", "LightTracing.R"})
+    channels.push_back({name, std::vector<float>(4, 1.0f)});
+  lt::write_exr(part, 2, 2, channels,
+                {{"lantern/samples", "1"}, {"lantern/sample_ranges", "0-1"}, {"lantern/light_paths", "4"}});
+  const char* parts[] = {part.c_str()};
+  EXPECT_EQ(lt_merge_exr(out.c_str(), parts, 1), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(lt_last_error()).find("1 of the LightTracing R, G and B channels"), std::string::npos)
+      << lt_last_error();
+}
+
 // fuzz_abi: a bidirectional render of a scene without any light (no lamp, no emissive surface, a
 // black world) took the s = 1 strategy anyway and picked a light from the empty set: a read
 // through a null pointer (UBSan; a segmentation fault in Release builds).

@@ -195,7 +195,14 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   // al.'s update (1979), from ss_p = (c_p - 1) c_p Var_p since the Variance pass is s^2 / c.
   const ExrImage& ref = parts[0];
   const size_t n = size_t(ref.width) * ref.height, nc = ref.channels.size(), np = parts.size();
-  const bool light = ref.find("LightTracing.R") != nullptr;
+  // Light tracing's splats: all three colour channels or none (fuzz_exr_merge: one alone was read
+  // through a null channel).
+  int light_channels = 0;
+  for (int c = 0; c < 3; ++c) light_channels += ref.find(std::string("LightTracing.") + "RGB"[c]) != nullptr;
+  if (light_channels % 3 != 0)
+    throw InvalidArgument(paths[0] + ": " + std::to_string(light_channels) +
+                          " of the LightTracing R, G and B channels; not merged");
+  const bool light = light_channels == 3;
   const bool catcher = ref.find(std::string(catcher_part_name(kCatcherCombined)) + ".R") != nullptr;
   long long total_samples = 0, total_light_paths = 0;
   for (long long s : samples) total_samples += s;
@@ -295,7 +302,7 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
   std::vector<double> cam_mean(n * 3, 0.0), cam_ss(n * 3, 0.0);
   for (size_t p = 0; p < np; ++p) {
     const ExrImage img = read_exr(paths[p]);
-    if (img.channels.size() != nc) throw IoError(paths[p] + " changed while merging");
+    if (channel_list(img) != channel_list(ref)) throw IoError(paths[p] + " changed while merging");
     const float* c_p = img.find("SampleCount.X")->pixels.data();
     // With shadow catchers R, G, B are the matte (film.h): Combined's own means pool the variance.
     const std::string rgb_prefix = catcher ? std::string(catcher_part_name(kCatcherCombined)) + "." : "";
