@@ -3,12 +3,15 @@
 // points project back to its film position and lens point, and the camera's directional density
 // integrates to one over the film); without an aperture the rays are the pinhole's. Panoramas map
 // the film as Cycles' equirectangular and fisheye projections do, and leave the film outside a
-// fisheye's circle black and opaque.
+// fisheye's circle black and opaque. The pixel filter's sampling has the density its pdf claims
+// (BDPT's light tracing splats with it) and follows the filter's profile.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "api/handles.h"
+#include "core/film.h"
 #include "core/sampling.h"
 #include "scene/camera.h"
 #include "scene_builders.h"
@@ -568,6 +571,56 @@ TEST(Camera, PanoramaBadInput) {
       Passes p = render(s.get(), rs);
       EXPECT_EQ(p.first_non_finite(), "");
       EXPECT_EQ(p.status.nan_samples, 0u);
+    }
+  }
+}
+
+float filter_profile(lt::FilterType type, float width, float x) {
+  switch (type) {
+    case lt::FilterType::Box:
+      return 1;
+    case lt::FilterType::Gaussian:
+      return std::exp(-2 * (2 * x / width) * (2 * x / width));
+    case lt::FilterType::BlackmanHarris:
+      break;
+  }
+  const float a = 2 * lt::kPi * (x / (2 * width) + 0.5f);
+  return 0.35875f - 0.48829f * std::cos(a) + 0.14128f * std::cos(2 * a) - 0.01168f * std::cos(3 * a);
+}
+
+// Evenly spaced u (a deterministic stand-in for uniform numbers) binned over the filter's range
+// give, bin by bin, the integral of pdf() to within rounding: the offsets are sampled with the
+// density BDPT divides by. And that density is the filter's profile, normalised.
+TEST(PixelFilter, SamplesHaveTheDensityPdfClaimsAndTheFiltersProfile) {
+  for (lt::FilterType type : {lt::FilterType::Box, lt::FilterType::Gaussian, lt::FilterType::BlackmanHarris}) {
+    for (float width : {0.01f, 1.5f, 4.0f}) {
+      SCOPED_TRACE(testing::Message() << "type " << int(type) << " width " << width);
+      const lt::FilterSampler f(type, width);
+      const float r = f.radius();
+      constexpr int kBins = 48, kN = 1 << 20, kQuad = 2000;
+      std::vector<double> observed(kBins, 0.0), expected(kBins, 0.0);
+      for (int k = 0; k < kN; ++k) {
+        const float x = f.sample((k + 0.5f) / kN);
+        ASSERT_TRUE(std::abs(x) <= r) << x;
+        observed[std::min(kBins - 1, int((x + r) / (2 * r) * kBins))] += 1;
+      }
+      double integral = 0, worst = 0;
+      for (int b = 0; b < kBins; ++b) {
+        for (int q = 0; q < kQuad; ++q) expected[b] += f.pdf(-r + 2 * r * (b + (q + 0.5) / kQuad) / kBins);
+        expected[b] *= 2.0 * r / kBins / kQuad * kN;
+        integral += expected[b] / kN;
+        worst = std::max(worst, std::abs(observed[b] - expected[b]) / (expected[b] + 100));
+      }
+      EXPECT_NEAR(integral, 1.0, 1e-3);
+      EXPECT_LT(worst, 0.01);
+      // The profile: within 1 % of the peak's value wherever it is above a tenth of it.
+      const float peak = f.pdf(0), p0 = filter_profile(type, width, 0);
+      for (int k = -99; k <= 99; ++k) {
+        const float x = r * k / 100.0f, want = filter_profile(type, width, x) / p0;
+        if (want > 0.1f) EXPECT_NEAR(f.pdf(x) / peak, want, 0.01f) << "at " << x;
+      }
+      EXPECT_EQ(f.pdf(r), 0.0f);
+      EXPECT_EQ(f.pdf(-1.01f * r), 0.0f);
     }
   }
 }

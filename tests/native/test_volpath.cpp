@@ -268,8 +268,13 @@ TEST(VolPath, VdbVolumeThroughTheAbi) {
     rs.volume_bounces = 16;
     Passes p = render(s.get(), rs);
     ASSERT_EQ(p.first_non_finite(), "");
-    EXPECT_LT(p.rgba(8, 8)[0], 0.99f) << "the cloud should dim the centre (single scattering loses light)";
-    EXPECT_GT(p.rgba(8, 8)[0], 0.0f);
+    // Over the central pixels: at 16 samples one pixel's samples can all come through at 1 (the
+    // centre pixel did when the pixel filter's sampling changed).
+    double centre = 0;
+    for (int y = 4; y < 12; ++y)
+      for (int x = 4; x < 12; ++x) centre += p.rgba(x, y)[0] / 64.0;
+    EXPECT_LT(centre, 0.99) << "the cloud should dim the centre (single scattering loses light)";
+    EXPECT_GT(centre, 0.0);
     EXPECT_NEAR(p.rgba(0, 0)[0], 1.0f, 1e-4f) << "the corner sees the world only";
     // The debug view renders its four panels.
     rs.integrator = LT_INTEGRATOR_VOLUME_DEBUG;
