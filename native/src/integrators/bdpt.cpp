@@ -354,13 +354,13 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
             reach(light, true, prev.p + ray.d, Vec3(0.0f), beta, le);
           };
           if (lights_.world_light() >= 0 && (!background || scene_.world.camera_visible)) {
-            ShadingContext wc = world_context(ray.d);
-            Bounces b;  // a camera ray stays one through transparent passes, as at surfaces here
-            b.total = bounces;
-            describe_ray(b, visibility, &wc);
-            wc.transparent_depth = transparent;
-            if (background && first && !first->aovs_done) write_aovs_at(&wc, cs_.aovs, s_);  // as path.cpp
-            escape(lights_.world_light(), scene_.world.radiance(wc));
+            escape(lights_.world_light(), scene_.world.escaped_radiance(ray.d, [&](ShadingContext* wc) {
+              Bounces b;  // a camera ray stays one through transparent passes, as at surfaces here
+              b.total = bounces;
+              describe_ray(b, visibility, wc);
+              wc->transparent_depth = transparent;
+              if (background && first && !first->aovs_done) write_aovs_at(wc, cs_.aovs, s_);  // as path.cpp
+            }));
           }
           lights_.escaped_suns(ray.d, visibility, escape);
         }

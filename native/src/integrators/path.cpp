@@ -244,13 +244,14 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         if (b.total == 0 && !split) add_background(ray, beta, visibility);
         if (!transparent_background) {
           if (lights.world_light() >= 0 && (!background || scene.world.camera_visible)) {
-            ShadingContext wc = world_context(ray.d);
-            describe_ray(b, visibility, &wc);
-            // The World's AOV Outputs write where a camera ray escapes (Cycles' background shader
-            // with PATH_RAY_TRANSPARENT_BACKGROUND, not PATH_RAY_SINGLE_PASS_DONE).
-            if (b.total == 0 && !aovs_done && !catcher_leg) write_aovs_at(&wc, cs.aovs, s);
-            add(beta * scene.world.radiance(wc) * mis_emitter(lights.world_light(), ray.d, INFINITY),
-                lights.lightgroup(lights.world_light()), true);
+            const Spectrum le = scene.world.escaped_radiance(ray.d, [&](ShadingContext* wc) {
+              describe_ray(b, visibility, wc);
+              // The World's AOV Outputs write where a camera ray escapes (Cycles' background shader
+              // with PATH_RAY_TRANSPARENT_BACKGROUND, not PATH_RAY_SINGLE_PASS_DONE).
+              if (b.total == 0 && !aovs_done && !catcher_leg) write_aovs_at(wc, cs.aovs, s);
+            });
+            add(beta * le * mis_emitter(lights.world_light(), ray.d, INFINITY), lights.lightgroup(lights.world_light()),
+                true);
           }
           lights.escaped_suns(ray.d, visibility, [&](int i, const Spectrum& radiance) {
             add(beta * radiance * mis_emitter(i, ray.d, INFINITY), lights.lightgroup(i));

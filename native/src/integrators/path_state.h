@@ -134,9 +134,7 @@ inline Spectrum catcher_background(const Scene& scene, const IntegratorSettings&
                                    unsigned visibility) {
   if (!s.shadow_catcher || !s.shadow_catcher_approximate || s.transparent_background) return Spectrum(0.0f);
   if (scene.lights.world_light() < 0 || !scene.world.camera_visible) return Spectrum(0.0f);
-  ShadingContext wc = world_context(dir);
-  describe_ray(b, visibility, &wc);
-  return scene.world.radiance(wc);
+  return scene.world.escaped_radiance(dir, [&](ShadingContext* wc) { describe_ray(b, visibility, wc); });
 }
 // Whether light li shines in the scene a catcher-only path sees: lamps, the world and the
 // emission of catchers, not that of other objects (Cycles' light_distribution_sample).

@@ -40,7 +40,17 @@ class World {
     return program_ ? program_->run(ctx, *images_, nullptr, nullptr) : color_;
   }
   // As light sampling sees it (Light Path flags of world_context).
-  Spectrum radiance(const Vec3& dir) const { return radiance(world_context(dir)); }
+  Spectrum radiance(const Vec3& dir) const { return program_ ? radiance(world_context(dir)) : color_; }
+  // Along an escaped ray's direction: `prepare(ShadingContext*)` gives a program's context the
+  // ray's Light Path values and writes its AOV outputs. A constant world has neither to use, and
+  // its context is not built (an escaped ray is most of the shading under a uniform sky).
+  template <class Prepare>
+  Spectrum escaped_radiance(const Vec3& dir, Prepare&& prepare) const {
+    if (!program_) return color_;
+    ShadingContext wc = world_context(dir);
+    prepare(&wc);
+    return radiance(wc);
+  }
   bool black() const { return !program_ && is_black(color_); }
   // Whether a sampling map is used (false: constant, never light-sampled by the integrators).
   bool has_map() const { return program_ != nullptr; }
