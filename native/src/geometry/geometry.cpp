@@ -972,4 +972,11 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
   return sp;
 }
 
+int Geometry::material(const Hit& hit) const {
+  const Instance& inst = instances_[hit.instance];
+  const Mesh& m = meshes_[inst.mesh];
+  if (!m.is_triangles()) return curve_surface(hit, inst, m).material;  // a strand's slot comes with its keys
+  return inst.material_for(m.slots.empty() ? 0 : m.slots[hit.primitive]);
+}
+
 }  // namespace lt

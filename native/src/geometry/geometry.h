@@ -210,6 +210,9 @@ class Geometry {
   bool intersect_instance(const Ray& ray, int instance, Hit* hit) const;
   // The hit's surface at the hit's time.
   SurfacePoint surface(const Hit& hit) const;
+  // The hit's material alone (surface(hit).material): whether a point needs shading at all is
+  // asked before its surface is worked out (an opaque occluder of a shadow ray, a medium boundary).
+  int material(const Hit& hit) const;
   // The origin of a next-event shadow ray from sp towards wi: spawn_origin, moved first by the
   // instance's shadow terminator Geometry Offset on smooth-shaded triangles (Cycles'
   // shadow_ray_offset, geometry/terminator.h). n, ng: the shading normal (after a displacement's

@@ -243,10 +243,13 @@ Spectrum shadow_transmittance(const Scene& scene, VolumeStack stack, Ray ray, Sa
     bool found = scene.geometry.intersect(ray, visibility, &hit);
     T *= media_transmittance(scene, stack, ray, ray.tmin, found ? hit.t : ray.tmax, sampler, est, step);
     if (!found || is_black(T)) return T;
+    const int material_id = scene.geometry.material(hit);
+    const bool null = scene.null_surface(material_id);
+    const Material& material = scene.material(material_id);
+    if (!null && !material.may_be_transparent()) return Spectrum(0.0f);  // opaque: no surface to work out
     SurfacePoint sp = scene.geometry.surface(hit);
-    if (!scene.null_surface(sp.material)) {
-      const Material& material = scene.material(sp.material);
-      if (!material.may_be_transparent() || ++transparent > max_transparent) return Spectrum(0.0f);
+    if (!null) {
+      if (++transparent > max_transparent) return Spectrum(0.0f);
       ShadingContext ctx = shading_context(scene.geometry, sp, ray.d, hit.t);
       ctx.camera_ray = false;
       ctx.shadow_ray = true;
