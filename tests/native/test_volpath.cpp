@@ -84,6 +84,55 @@ TEST(VolPath, SingleScatteringLosesEnergyInTheFurnace) {
   EXPECT_LT(p.rgba(8, 8)[0], 0.9f);
 }
 
+// A camera inside an absorbing medium box (an invisible boundary) starts its rays in the medium:
+// the centre sees the white world through 1 of the medium, exp(-1); from outside, through the box,
+// exp(-2). The stack is initialised by tracing only where the camera may be inside a medium
+// object's bounds (Scene::may_be_inside_boundary, as Cycles'), everywhere when that object moves.
+TEST(VolPath, CameraInsideAMediumStartsInIt) {
+  const auto render_from = [](const lt::Vec3& eye, bool moving, lt::Scene** committed) {
+    ScenePtr s = new_scene();
+    const int m = add_volume_material(s.get(), volume(LT_VOLUME_PRINCIPLED, 1.0f, 0.0f));  // absorption only
+    lt_instance_desc d{};
+    d.mesh = add_mesh(s.get(), box({-1, -1, -1}, {1, 1, 1}));
+    const Xform xf = identity(), before = translate({0, 0, -1e-4f}), after = translate({0, 0, 1e-4f});
+    std::copy(xf.begin(), xf.end(), d.transform);
+    float steps[36];  // three steps, the centre one the transform
+    std::copy(before.begin(), before.end(), steps);
+    std::copy(xf.begin(), xf.end(), steps + 12);
+    std::copy(after.begin(), after.end(), steps + 24);
+    if (moving) {
+      d.motion_transforms = steps;
+      d.motion_step_count = 3;
+    }
+    d.materials = &m;
+    d.material_count = 1;
+    d.visibility = LT_VISIBLE_ALL;
+    int id = -1;
+    check(lt_scene_add_instance(s.get(), &d, &id), "lt_scene_add_instance");
+    set_world(s.get(), {1, 1, 1}, 1);
+    set_camera(s.get(), perspective_camera(look_at({eye.x, eye.y, eye.z}, {0, 1, 0}), 200));
+    check(lt_scene_commit(s.get()), "commit");
+    *committed = &s->scene;
+    lt_render_settings rs = volpath_settings(8, 8, 256, 5);
+    Passes p = render(s.get(), rs);
+    double centre = 0;
+    for (int y = 2; y < 6; ++y)
+      for (int x = 2; x < 6; ++x) centre += p.rgba(x, y)[0] / 16.0;
+    EXPECT_EQ(p.first_non_finite(), "");
+    return std::make_pair(std::move(s), centre);
+  };
+  for (bool moving : {false, true}) {
+    SCOPED_TRACE(moving ? "moving box" : "still box");
+    lt::Scene* scene = nullptr;
+    auto inside = render_from({0, 0, 0}, moving, &scene);
+    EXPECT_TRUE(scene->may_be_inside_boundary({0, 0, 0}));
+    EXPECT_EQ(scene->may_be_inside_boundary({0, -4, 0}), moving);
+    EXPECT_NEAR(inside.second, std::exp(-1.0), 0.03);
+    auto outside = render_from({0, -4, 0}, moving, &scene);
+    EXPECT_NEAR(outside.second, std::exp(-2.0), 0.03);
+  }
+}
+
 // A room whose wall material carries the fog (as a Blender user would fill a room: one mesh, a
 // surface and a Volume output) renders as the same walls around an invisible fog box just inside
 // them, per 8x8 tile within 5 SE, for VOLPATH and BDPT. Next-event estimation from a wall, towards

@@ -22,6 +22,7 @@ void for_each_medium(const Scene& scene, const VolumeStack& stack, F f) {
 void init_volume_stack(const Scene& scene, const Ray& camera_ray, VolumeStack* stack, SampleStats& stats,
                        unsigned visibility) {
   stack->size = 0;
+  if (!scene.may_be_inside_boundary(camera_ray.o)) return;
   Ray r = camera_ray;
   r.tmin = 0;
   r.tmax = INFINITY;

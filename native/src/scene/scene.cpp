@@ -1,5 +1,7 @@
 #include "scene/scene.h"
 
+#include <algorithm>
+
 #include "core/error.h"
 #include "scene/lights/triangle.h"
 #include "shading/displacement.h"
@@ -7,6 +9,14 @@
 namespace lt {
 
 Scene::Scene() = default;
+
+bool Scene::may_be_inside_boundary(const Vec3& p) const {
+  if (boundaries_anywhere_) return true;
+  for (const Bounds& b : boundary_bounds_)
+    if (p.x >= b.lo.x && p.y >= b.lo.y && p.z >= b.lo.z && p.x <= b.hi.x && p.y <= b.hi.y && p.z <= b.hi.z)
+      return true;
+  return !is_finite(p);  // (a ray that cannot be placed: traced as before)
+}
 
 void Scene::require_editable() const {
   if (committed_) throw StateError("the scene is committed and can no longer be edited");
@@ -76,6 +86,27 @@ void Scene::commit() {
     has_emissive_media_ = has_emissive_media_ || (m >= 0 && media[m].emissive());
   }
   for (int m : global_media) has_emissive_media_ = has_emissive_media_ || media[m].emissive();
+  boundary_bounds_.clear();
+  boundaries_anywhere_ = false;
+  for (size_t i = 0; has_boundaries_ && i < geometry.instance_count(); ++i) {
+    const Instance& inst = geometry.instance(int(i));
+    const Mesh& m = geometry.mesh(inst.mesh);
+    const bool medium =
+        std::any_of(inst.materials.begin(), inst.materials.end(), [&](int mat) { return medium_of(mat) >= 0; });
+    if (!medium || !m.rtc) continue;
+    if (!inst.motion.empty() || m.motion_steps > 1 || !m.is_triangles()) {
+      boundaries_anywhere_ = true;
+      continue;
+    }
+    Bounds b;
+    for (const Vec3& p : m.positions) b.extend(inst.xf.point(p));
+    if (b.empty()) continue;
+    // Grown by a margin well beyond the rounding of the transform and of the rays' offsets.
+    const Vec3 pad = (b.hi - b.lo) * 1e-3f + Vec3(1e-3f * (1.0f + max_abs_component(vmax(abs(b.lo), abs(b.hi)))));
+    b.lo = b.lo - pad;
+    b.hi = b.hi + pad;
+    boundary_bounds_.push_back(b);
+  }
   has_media_ = has_boundaries_ || !global_media.empty();
   committed_ = true;
   edited_ = false;

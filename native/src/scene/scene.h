@@ -49,6 +49,11 @@ class Scene {
   // Set by commit(): the scene has media at all, and mesh boundaries of media.
   bool has_media() const { return has_media_; }
   bool has_boundaries() const { return has_boundaries_; }
+  // Whether p may lie inside an object with a medium (within the world bounds of one that does not
+  // move, or anywhere when one moves or is not a mesh): elsewhere a ray starting at p starts in no
+  // such medium, and init_volume_stack traces nothing (Cycles 3.4 likewise initialises the stack
+  // only when the camera may be inside a volume object's bounds: Camera::device_update_volume).
+  bool may_be_inside_boundary(const Vec3& p) const;
   // A medium emits (a material's, a Volume object's or a World volume; integrators add the emission
   // along segments in media).
   bool has_emissive_media() const { return has_emissive_media_; }
@@ -85,6 +90,8 @@ class Scene {
   uint64_t emissive_triangles_ = 0, emissive_instances_ = 0;
   bool has_media_ = false, has_boundaries_ = false, has_world_volume_ = false, has_emissive_media_ = false;
   bool has_transparent_shadows_ = false;
+  std::vector<Bounds> boundary_bounds_;
+  bool boundaries_anywhere_ = false;
 };
 
 }  // namespace lt
