@@ -13,8 +13,7 @@ Scene::Scene() = default;
 bool Scene::may_be_inside_boundary(const Vec3& p) const {
   if (boundaries_anywhere_) return true;
   for (const Bounds& b : boundary_bounds_)
-    if (p.x >= b.lo.x && p.y >= b.lo.y && p.z >= b.lo.z && p.x <= b.hi.x && p.y <= b.hi.y && p.z <= b.hi.z)
-      return true;
+    if (p.x >= b.lo.x && p.y >= b.lo.y && p.z >= b.lo.z && p.x <= b.hi.x && p.y <= b.hi.y && p.z <= b.hi.z) return true;
   return !is_finite(p);  // (a ray that cannot be placed: traced as before)
 }
 
