@@ -18,7 +18,7 @@ TEST(PathState, RussianRouletteSurvivesAsCyclesSquareRoot) {
 TEST(PathState, RussianRouletteIsUnbiasedAndNeverAmplifiesPastTheStart) {
   // Over every decision (the roulette's number is a call of the sample's Sampler, so average over
   // samples), survivors are divided by q: the mean throughput is the input's; a survivor's
-  // relative throughput is sqrt(|beta| / start) <= 1. Before bounce 3 nothing is drawn or ended.
+  // relative throughput is sqrt(|beta| / start) <= 1. Before the first bounce nothing is drawn or ended.
   const Spectrum in(0.09f, 0.03f, 0.06f);
   const int n = 1 << 14;
   double mean[3] = {0, 0, 0};
@@ -26,7 +26,7 @@ TEST(PathState, RussianRouletteIsUnbiasedAndNeverAmplifiesPastTheStart) {
   for (int i = 0; i < n; ++i) {
     lt::Sampler s(5, 0, uint32_t(i), lt::SamplePattern::SobolOwen);
     Spectrum beta = in;
-    if (!lt::russian_roulette(3, &beta, s)) continue;
+    if (!lt::russian_roulette(lt::kPathRouletteBounce, lt::kPathRouletteBounce, &beta, s)) continue;
     ++survived;
     EXPECT_NEAR(lt::max_abs_component(beta), 0.3f, 1e-6f);
     for (int k = 0; k < 3; ++k) mean[k] += beta[k] / n;
@@ -36,6 +36,6 @@ TEST(PathState, RussianRouletteIsUnbiasedAndNeverAmplifiesPastTheStart) {
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(mean[k], in[k], 4.0 / n * in[k] / 0.3) << k;
   lt::Sampler s(5, 0, 0, lt::SamplePattern::SobolOwen);
   Spectrum beta = in;
-  EXPECT_TRUE(lt::russian_roulette(2, &beta, s));
+  EXPECT_TRUE(lt::russian_roulette(lt::kPathRouletteBounce - 1, lt::kPathRouletteBounce, &beta, s));
   EXPECT_EQ(beta[0], in[0]);
 }

@@ -525,7 +525,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
     ray.tmin = 0;
     ray.tmax = INFINITY;
     // MIS weights need not account for Russian roulette (it keeps every strategy unbiased).
-    if (!russian_roulette(bounces, &beta, sampler_, beta_start)) break;
+    if (!russian_roulette(bounces, kBdptRouletteBounce, &beta, sampler_, beta_start)) break;
   }
   return count;
 }

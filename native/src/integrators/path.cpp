@@ -329,9 +329,10 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         // it (integrator_intersect_terminate; shade_surface divides by q after the emission): what
         // a sampled direction finds (the world, an emitter) is never thinned by the roulette, only
         // what the path gathers from here on. Under a white world that cut the error per sample by
-        // 1.6x (bench/README.md). From the third bounce's vertex (one later than Cycles: there the
-        // roulette thinned the second vertex's next-event estimate, +17 % error on the Cornell box).
-        if (!russian_roulette(b.total, &beta, sampler)) break;
+        // 1.6x (bench/README.md). From the fourth bounce's vertex (Cycles: the second; there the
+        // roulette thinned the second vertex's next-event estimate, +17 % error on the Cornell box,
+        // and from the third it cost more in error than it saved in time: kPathRouletteBounce).
+        if (!russian_roulette(b.total, kPathRouletteBounce, &beta, sampler)) break;
 
         // Once more from a subsurface walk's exit point (Cycles shades it with the exit lobe alone).
         bool alive = true;
@@ -425,7 +426,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
       }
 
       // A medium vertex: the roulette before the ray it sampled (a surface has had its own).
-      if (medium >= 0 && !russian_roulette(b.total, &beta, sampler)) break;
+      if (medium >= 0 && !russian_roulette(b.total, kPathRouletteBounce, &beta, sampler)) break;
     }
     if (!split || catcher_leg) break;
     // The catcher-only path, from the segment that met the catcher.
