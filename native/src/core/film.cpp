@@ -15,7 +15,8 @@
 namespace lt {
 
 namespace {
-constexpr int kProfileBins = 4096;  // the filter profile's resolution over [0, radius] when its table is built
+constexpr int kFilterTableSize = 1024;
+constexpr int kGuidePerBin = 8;  // guide cells per bin: the walk after the lookup is short even in the tails
 
 // IEEE half floats for the published image (what a display needs, as Cycles' display buffer):
 // round to nearest even, finite values beyond the range clamped to +-65504.
@@ -75,50 +76,48 @@ FilterSampler::FilterSampler(FilterType type, float width) {
       };
       break;
   }
-  // The profile's CDF over [0, radius] (piecewise constant on kProfileBins bins), inverted exactly
-  // at kFilterTableSize / 2 evenly spaced probabilities and mirrored about 0.
-  const int n = kProfileBins, m = kFilterTableSize, half = m / 2;
-  std::vector<double> cdf(n + 1, 0.0);
-  for (int i = 0; i < n; ++i) cdf[i + 1] = cdf[i] + std::max(0.0f, f(half_range_ * (i + 0.5f) / n));
-  if (!(cdf[n] > 0)) std::fill(cdf.begin(), cdf.end(), 1.0);  // (not reached by the three profiles)
-  inverse_.assign(m + 1, 0.0f);
-  for (int k = 1, i = 0; k < half; ++k) {
-    const double target = cdf[n] * k / half;
-    while (i + 1 < n && cdf[i + 1] <= target) ++i;
-    const double w = cdf[i + 1] - cdf[i];
-    const double x = half_range_ * (i + (w > 0 ? (target - cdf[i]) / w : 0.0)) / n;
-    inverse_[half + k] = float(x);
-    inverse_[half - k] = -float(x);
+  const int n = kFilterTableSize;
+  std::vector<double> v(n), cdf(n + 1, 0.0);
+  for (int i = 0; i < n; ++i) {
+    v[i] = std::max(0.0f, f(half_range_ * (i + 0.5f) / n));
+    cdf[i + 1] = cdf[i] + v[i];
   }
-  inverse_[0] = -half_range_;
-  inverse_[m] = half_range_;
-  // Each segment of the table holds probability 1/m over its width.
-  density_.resize(m);
-  for (int j = 0; j < m; ++j) {
-    const float w = inverse_[j + 1] - inverse_[j];
-    density_[j] = w > 0 ? 1.0f / (float(m) * w) : 0.0f;
+  const double total = cdf[n] > 0 ? cdf[n] : 1.0;
+  cdf_.resize(n + 1);
+  inv_width_.resize(n);
+  density_.resize(n);
+  guide_.resize(size_t(n) * kGuidePerBin);
+  for (int i = 0; i <= n; ++i) cdf_[i] = float(cdf[i] / total);
+  cdf_[n] = 1.0f;
+  for (int i = 0; i < n; ++i) {
+    const float w = cdf_[i + 1] - cdf_[i];
+    inv_width_[i] = w > 0 ? 1.0f / w : 0.0f;
+    // Density per pixel of offset: the bin's probability spread over its width, split by sign.
+    density_[i] = float(v[i] / total * n * 0.5 / half_range_);
   }
-  guide_.resize(kPdfGuideCells);
-  for (int c = 0, j = 0; c < kPdfGuideCells; ++c) {
-    const float x = -half_range_ + 2 * half_range_ * float(c) / kPdfGuideCells;
-    while (j + 1 < m && inverse_[j + 1] <= x) ++j;
-    guide_[c] = uint16_t(j);
+  const int g = int(guide_.size());
+  for (int k = 0, i = 0; k < g; ++k) {
+    while (i + 1 < n && cdf_[i + 1] <= float(k) / g) ++i;
+    guide_[k] = uint32_t(i);
   }
 }
 
 float FilterSampler::sample(float u) const {
-  const float x = u * float(kFilterTableSize);
-  const int i = std::min(int(x), kFilterTableSize - 1);
-  return inverse_[i] + (x - float(i)) * (inverse_[i + 1] - inverse_[i]);
+  // The profile is symmetric: the first half of u picks the sign.
+  const float sign = u < 0.5f ? -1.0f : 1.0f;
+  const float r = std::min(u < 0.5f ? 2 * u : 2 * u - 1, kOneMinusEpsilon);
+  const int n = int(inv_width_.size()), g = int(guide_.size());
+  int i = int(guide_[std::min(g - 1, int(r * g))]);
+  while (i + 1 < n && cdf_[i + 1] <= r) ++i;  // also skips empty bins
+  const float t = std::min((r - cdf_[i]) * inv_width_[i], kOneMinusEpsilon);
+  return sign * half_range_ * (i + t) / n;
 }
 
 float FilterSampler::pdf(float offset) const {
-  if (!(std::abs(offset) < half_range_)) return 0;
-  const int c = int((offset + half_range_) / (2 * half_range_) * kPdfGuideCells);
-  int j = guide_[std::min(std::max(c, 0), kPdfGuideCells - 1)];
-  while (j > 0 && inverse_[j] > offset) --j;  // (rounding at a cell's edge)
-  while (j + 1 < kFilterTableSize && inverse_[j + 1] <= offset) ++j;
-  return density_[j];
+  const float a = std::abs(offset) / half_range_;
+  if (!(a < 1)) return 0;
+  const int n = int(density_.size());
+  return density_[std::min(int(a * n), n - 1)];
 }
 
 int pass_channels(Pass pass) {

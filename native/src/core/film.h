@@ -17,26 +17,21 @@ namespace lt {
 
 enum class FilterType { Box = 0, Gaussian = 1, BlackmanHarris = 2 };
 
-// Importance-samples the pixel filter, as Cycles does (film.cpp: filter_table, read by
-// filter_table_sample): each sample lands in exactly one pixel with weight 1, at an offset drawn
-// from the filter's 1D profile, separably in x and y, by a table of the profile's inverse CDF read
-// with linear interpolation (one 4 kB table, one lookup per axis: this is on every camera sample's
-// path). The density that sampling has is piecewise constant, 1 / (table size x segment width) on
-// each segment of the table; pdf() returns exactly it. Blackman-Harris spans [-w, w], Gaussian
-// [-1.5w, 1.5w] (sigma w/4), Box [-w/2, w/2].
+// Importance-samples the pixel filter, as Cycles does (film.cpp: filter_table): each sample lands
+// in exactly one pixel with weight 1, at an offset drawn from the filter's 1D profile, separably
+// in x and y. Blackman-Harris spans [-w, w], Gaussian [-1.5w, 1.5w] (sigma w/4), Box [-w/2, w/2].
 class FilterSampler {
  public:
-  static constexpr int kFilterTableSize = 1024;  // segments over [-radius, radius] (Cycles' FILTER_TABLE_SIZE)
   FilterSampler(FilterType type, float width);
   float sample(float u) const;    // offset from the pixel centre, in pixels
   float pdf(float offset) const;  // density of sample() at an offset (normalised: integrates to 1)
   float radius() const { return half_range_; }
 
  private:
-  static constexpr int kPdfGuideCells = 1024;  // pdf(): the first segment of each cell of the offset range
-  std::vector<float> inverse_;                 // kFilterTableSize + 1 offsets, at u = k / kFilterTableSize
-  std::vector<float> density_;                 // per segment
-  std::vector<uint16_t> guide_;
+  // The profile over [0, radius] as a piecewise-constant distribution in float, inverted through
+  // a guide table: two lookups per camera sample, on the hot path.
+  std::vector<float> cdf_, inv_width_, density_;
+  std::vector<uint32_t> guide_;
   float half_range_ = 0.5f;
 };
 
