@@ -845,12 +845,11 @@ SurfacePoint Geometry::curve_surface(const Hit& hit, const Instance& inst, const
   const CurveData& c = m.curves;
   Vec3 centre, dp(0.0f);
   float r;
-  int slot = 0;
+  int curve = -1;
+  const int slot = slot_of(m, hit.primitive, &curve);
   if (m.kind == GeometryKind::Curves) {
     const uint32_t seg = uint32_t(hit.primitive);
     catmull_rom(c, c.segments[seg], hit.u, &centre, &dp, &r, hit.time);
-    const int curve = c.curve_of_segment(seg);
-    slot = m.slots.empty() ? 0 : m.slots[size_t(curve)];
     sp.curve = curve;
     sp.bary = {hit.u, 0};
   } else {
@@ -966,7 +965,7 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
     const Vec2* uv = &m.corner_uvs[3 * t];
     sp.uv = {uv[0].x * b0 + uv[1].x * b1 + uv[2].x * b2, uv[0].y * b0 + uv[1].y * b1 + uv[2].y * b2};
   }
-  sp.material = inst.material_for(m.slots.empty() ? 0 : m.slots[t]);
+  sp.material = inst.material_for(slot_of(m, t));
   sp.instance = hit.instance;
   sp.primitive = t;
   return sp;
@@ -974,9 +973,15 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
 
 int Geometry::material(const Hit& hit) const {
   const Instance& inst = instances_[hit.instance];
-  const Mesh& m = meshes_[inst.mesh];
-  if (!m.is_triangles()) return curve_surface(hit, inst, m).material;  // a strand's slot comes with its keys
-  return inst.material_for(m.slots.empty() ? 0 : m.slots[hit.primitive]);
+  return inst.material_for(slot_of(meshes_[inst.mesh], hit.primitive));
+}
+
+int Geometry::slot_of(const Mesh& m, int primitive, int* curve) const {
+  if (m.is_triangles()) return m.slots.empty() ? 0 : m.slots[size_t(primitive)];
+  if (m.kind != GeometryKind::Curves) return 0;  // points: one slot
+  const int k = m.curves.curve_of_segment(uint32_t(primitive));
+  if (curve) *curve = k;
+  return m.slots.empty() ? 0 : m.slots[size_t(k)];
 }
 
 }  // namespace lt

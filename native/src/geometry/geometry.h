@@ -288,6 +288,9 @@ class Geometry {
                           int stride = 1) const;
   RTCScene curve_scene(const Mesh& mesh) const;
   SurfacePoint curve_surface(const Hit& hit, const Instance& inst, const Mesh& m) const;
+  // A primitive's material slot: a triangle's, a strand segment's curve's (that curve in *curve), a
+  // point's (0: one slot).
+  int slot_of(const Mesh& m, int primitive, int* curve = nullptr) const;
   RTCScene baked_scene(int instance);
 };
 

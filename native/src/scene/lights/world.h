@@ -40,7 +40,9 @@ class World {
     return program_ ? program_->run(ctx, *images_, nullptr, nullptr) : color_;
   }
   // As light sampling sees it (Light Path flags of world_context).
-  Spectrum radiance(const Vec3& dir) const { return program_ ? radiance(world_context(dir)) : color_; }
+  Spectrum radiance(const Vec3& dir) const {
+    return escaped_radiance(dir, [](ShadingContext*) {});
+  }
   // Along an escaped ray's direction: `prepare(ShadingContext*)` gives a program's context the
   // ray's Light Path values and writes its AOV outputs. A constant world has neither to use, and
   // its context is not built (an escaped ray is most of the shading under a uniform sky).
