@@ -2143,15 +2143,17 @@ def build_motion_blur(scene, blur=True):
     scene.cycles.motion_blur_position = "CENTER"
 
 
-def build_motion_blur_one(scene):
-    """motion_blur with only the turning box animated (the rest keep their pose at the frame): a
-    scene's one moving object, which the core splits into motion segments (Geometry::attach_moving)."""
+def build_motion_blur_only(scene, animated):
+    """motion_blur with only the objects named in `animated` animated (the rest keep their pose at
+    the frame). motion_blur_one: the turning box alone, a scene's one moving object, which the core
+    splits into motion segments (Geometry::attach_moving). motion_blur_sliding: everything but the
+    turning box, whose motion the core bakes into world-space triangles (bakes_motion)."""
     build_motion_blur(scene)
     for ob in scene.objects:
-        if ob.name != "Rotating" and ob.animation_data:
+        if ob.name not in animated and ob.animation_data:
             ob.animation_data_clear()
         keys = getattr(getattr(ob, "data", None), "shape_keys", None)
-        if keys is not None and keys.animation_data:
+        if ob.name not in animated and keys is not None and keys.animation_data:
             keys.animation_data_clear()
 
 
@@ -2320,7 +2322,9 @@ SCENES = {
     "glossy_glass": (build_glossy_glass, (96, 96), 128),
     "cornell_dof": (build_cornell_dof, (96, 96), 128),
     "motion_blur": (build_motion_blur, (96, 64), 128),
-    "motion_blur_one": (build_motion_blur_one, (96, 64), 128),
+    "motion_blur_one": (lambda scene: build_motion_blur_only(scene, {"Rotating"}), (96, 64), 128),
+    "motion_blur_sliding": (lambda scene: build_motion_blur_only(scene, {"Translating", "Deforming", "Camera"}),
+                            (96, 64), 128),
     "pano_equirectangular": (lambda scene: build_panorama(scene, "EQUIRECTANGULAR"), (64, 32), 128),
     "pano_fisheye_equidistant": (lambda scene: build_panorama(scene, "FISHEYE_EQUIDISTANT"), (48, 48), 128),
     "pano_fisheye_equisolid": (lambda scene: build_panorama(scene, "FISHEYE_EQUISOLID"), (48, 32), 128),

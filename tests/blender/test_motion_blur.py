@@ -4,6 +4,7 @@ Agreement with Cycles is in test_agreement.py (scene motion_blur)."""
 import re
 
 import numpy as np
+import pytest
 
 import build_scenes
 import render_utils as ru
@@ -99,17 +100,21 @@ def test_viewport_ignores_motion_blur_as_cycles(scene_factory):
     assert (scene.frame_current, scene.frame_subframe) == (1, 0.0)
 
 
-def test_lone_moving_object_agrees_with_cycles(scene_factory, outdir):
-    """motion_blur_one (motion_blur with only the turning box animated): a scene's one moving object, which the core
-    gives Embree as one instance per motion segment (geometry.cpp, attach_moving; alone, Embree
-    would trace it with no bounds test at all). Per tile and the image mean against Cycles, PATH
-    and BIDIRECTIONAL."""
+@pytest.mark.parametrize("name, motion", [("motion_blur_one", (1, 0, "still")),
+                                          ("motion_blur_sliding", (1, 1, "moving, 3 steps"))])
+def test_partly_moving_scenes_agree_with_cycles(scene_factory, outdir, name, motion):
+    """Per tile and the image mean against Cycles, PATH and BIDIRECTIONAL, on the two ways the core
+    gives Embree part of motion_blur. motion_blur_one (only the turning box animated): a scene's one
+    moving object, as one Embree instance per motion segment (geometry.cpp, attach_moving; alone,
+    Embree would trace it with no bounds test at all). motion_blur_sliding (all but the turning box):
+    objects moving without turning, baked into world-space triangles at each motion step
+    (bakes_motion), beside a deforming grid and a panning camera."""
     from test_agreement import ROUNDING, TILE
-    scene = scene_factory("motion_blur_one")
-    spp = build_scenes.SCENES["motion_blur_one"][2]
+    scene = scene_factory(name)
+    spp = build_scenes.SCENES[name][2]
     cycles = [ru.render(scene, ru.CYCLES, spp, seed=seed).combined for seed in (0, 1)]
     for integrator in ("PATH", "BIDIRECTIONAL"):
         lantern = [ru.render(scene, ru.LANTERN, spp, seed=seed, integrator=integrator).combined for seed in (0, 1)]
-        assert _motion_line()[0] == (1, 0, "still"), _motion_line()[1]
-        report, _ = ru.agreement_report("motion_lone_" + integrator.lower(), lantern, cycles, outdir, TILE, ROUNDING)
+        assert _motion_line()[0] == motion, _motion_line()[1]
+        report, _ = ru.agreement_report(name + "_" + integrator.lower(), lantern, cycles, outdir, TILE, ROUNDING)
         assert report == "", report

@@ -30,11 +30,16 @@ void expect_near(const Transform& a, const Transform& b, float tol, const std::s
   for (int i = 0; i < 12; ++i) EXPECT_NEAR(a.m[i], b.m[i], tol) << what << ", element " << i;
 }
 
-// A strip 2 long along +x, 0.1 wide, in the z = 0 plane.
-Mesh strip() {
+// A strip 2 long along +x, 0.1 wide, in the z = 0 plane, of `quads` quads along its length.
+Mesh strip(int quads = 1) {
   Mesh m;
-  m.positions = {Vec3(0, -0.05f, 0), Vec3(2, -0.05f, 0), Vec3(2, 0.05f, 0), Vec3(0, 0.05f, 0)};
-  m.indices = {0, 1, 2, 0, 2, 3};
+  for (int i = 0; i <= quads; ++i) {
+    const float x = 2.0f * float(i) / float(quads);
+    m.positions.push_back(Vec3(x, -0.05f, 0));
+    m.positions.push_back(Vec3(x, 0.05f, 0));
+  }
+  for (uint32_t i = 0; i < uint32_t(quads); ++i)
+    m.indices.insert(m.indices.end(), {2 * i, 2 * i + 2, 2 * i + 3, 2 * i, 2 * i + 3, 2 * i + 1});
   return m;
 }
 
@@ -132,29 +137,43 @@ TEST(Motion, InstanceMotionHitsWhereTheInterpolatedTransformIs) {
 }
 
 // A scene's one moving object is given to Embree as one instance per motion segment (Embree tests
-// no bounds at the root of a one-primitive BVH), each valid over its own time range: at every time
-// the object is hit where its interpolated transform puts it and nowhere a segment would be at
-// another time. Probed over a grid of points and times, for matrix motion (translation and scale,
-// two steps split in the middle) and quaternion motion (turning, two and three steps).
+// no bounds at the root of a one-primitive BVH), each valid over its own time range; one that does
+// not turn is traced through its triangles baked in world space at each step (Geometry::
+// bakes_motion) unless its mesh is large and shared. Either way, at every time the object is hit
+// where its interpolated transform puts it and nowhere a segment would be at another time, by the
+// scene's rays and by intersect_instance's. Probed over a grid of points and times, for matrix
+// motion (translation and scale: baked, and Embree's two steps split in the middle) and
+// quaternion motion (turning, two and three steps).
 TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
   struct Case {
     const char* name;
     std::vector<Transform> steps;
+    bool large_shared;  // 4200 triangles, also instanced still far away: not baked
+    bool baked;
   };
+  const std::vector<Transform> translating = {rot_z(0, 1, Vec3(-1, 0, 0)), rot_z(0, 1.5f, Vec3(1, 0.5f, 0))};
   const Case cases[] = {
-      {"translating, 2 steps", {rot_z(0, 1, Vec3(-1, 0, 0)), rot_z(0, 1.5f, Vec3(1, 0.5f, 0))}},
-      {"turning, 2 steps", {rot_z(-60 * kDeg), rot_z(60 * kDeg, 1, Vec3(0.2f, 0, 0))}},
-      {"turning, 3 steps", {rot_z(0), rot_z(70 * kDeg), rot_z(140 * kDeg, 1, Vec3(0, 0.3f, 0))}},
+      {"translating, 2 steps, baked", translating, false, true},
+      {"translating, 2 steps, Embree's", translating, true, false},
+      {"turning, 2 steps", {rot_z(-60 * kDeg), rot_z(60 * kDeg, 1, Vec3(0.2f, 0, 0))}, false, false},
+      {"turning, 3 steps", {rot_z(0), rot_z(70 * kDeg), rot_z(140 * kDeg, 1, Vec3(0, 0.3f, 0))}, false, false},
   };
   for (const Case& c : cases) {
     Geometry g;
     std::vector<std::string> warnings;
     Instance inst;
-    inst.mesh = g.add_mesh(strip(), warnings);
+    inst.mesh = g.add_mesh(strip(c.large_shared ? 2100 : 1), warnings);
     inst.xf = c.steps[0];
     inst.motion = c.steps;
     g.add_instance(inst, warnings);
+    if (c.large_shared) {
+      Instance still = inst;
+      still.motion.clear();
+      still.xf = rot_z(0, 1, Vec3(1000, 0, 0));
+      g.add_instance(still, warnings);
+    }
     g.commit();
+    EXPECT_EQ(g.mesh_builds(), c.baked ? 2u : 1u) << c.name << ": a baked copy is a build of its own";
     const std::vector<DecomposedTransform> d = decompose_motion(c.steps);
     int hits = 0, checked = 0;
     for (int k = 0; k <= 20; ++k) {
@@ -170,11 +189,43 @@ TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
           EXPECT_EQ(hit, margin > 0) << c.name << " at time " << time << ", (" << x << ", " << y << ")";
           hits += hit;
           ++checked;
-          if (hit) EXPECT_EQ(h.instance, 0) << c.name;
+          if (!hit) continue;
+          EXPECT_EQ(h.instance, 0) << c.name;
+          Ray r;
+          r.o = Vec3(x, y, 1);
+          r.d = Vec3(0, 0, -1);
+          r.time = time;
+          Hit own;
+          ASSERT_TRUE(g.intersect_instance(r, 0, &own)) << c.name << " at time " << time;
+          EXPECT_NEAR(own.t, h.t, 1e-5f) << c.name;
+          EXPECT_EQ(own.primitive, h.primitive) << c.name;
         }
     }
     EXPECT_GT(hits, 100) << c.name;
     EXPECT_GT(checked, 200000) << c.name;
+  }
+}
+
+// Motion is baked into world-space triangles only when every moving object can be (none turns):
+// beside a turning object, whose motion BVH stays, a translating one keeps Embree's instance motion.
+TEST(Motion, ObjectsThatDoNotTurnAreBakedOnlyWhenNoneTurns) {
+  const std::vector<Transform> sliding = {rot_z(0, 1, Vec3(-1, 0, 0)), rot_z(0, 1, Vec3(1, 0, 0))};
+  const std::vector<Transform> turning = {rot_z(0), rot_z(60 * kDeg)};
+  for (const bool with_turning : {false, true}) {
+    Geometry g;
+    std::vector<std::string> warnings;
+    for (const auto& motion : {sliding, with_turning ? turning : sliding}) {
+      Instance inst;
+      inst.mesh = g.add_mesh(strip(), warnings);
+      inst.xf = motion[0];
+      inst.motion = motion;
+      g.add_instance(inst, warnings);
+    }
+    g.commit();
+    EXPECT_EQ(g.mesh_builds(), with_turning ? 2u : 4u) << (with_turning ? "with" : "without") << " a turning object";
+    Hit h;
+    EXPECT_TRUE(hit_down(g, 1.5f, 0, 1.0f, &h));  // a sliding strip at its end, x in [1, 3]
+    EXPECT_FALSE(hit_down(g, 2.5f, 0, 0.0f, &h)) << "nothing is there at the start";
   }
 }
 

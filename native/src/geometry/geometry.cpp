@@ -437,6 +437,21 @@ bool same_rotation(const std::vector<DecomposedTransform>& steps) {
   return true;
 }
 
+// A moving instance whose rotation stays the same (its matrices interpolate linearly, as Embree's
+// matrix motion) and whose undeforming mesh is not too large to copy can be traced through motion
+// triangles baked into world space: vertex i at step k is M_k p_i, and Embree's linear
+// interpolation of those is M(t) p_i, since M(t) is linear between steps. build_top does so when
+// every moving instance can: the top level then needs no motion BVH, whose traversal by every ray
+// was most of such an object's cost (a translating box: +9 % -> +1 %; subdivided to 49k
+// triangles, +5 % -> +0 %). Beside a turning object, whose motion BVH stays, Embree's matrix
+// motion shares it for nothing and baking was slower (bench/README.md, motion blur).
+constexpr size_t kBakedMotionShared = 4096, kBakedMotionOwn = size_t(1) << 20;  // triangles: the copy's memory
+bool bakes_motion(const Instance& inst, const Mesh& m) {
+  const size_t limit = m.users == 1 ? kBakedMotionOwn : kBakedMotionShared;
+  return !inst.motion.empty() && m.is_triangles() && m.motion_steps < 2 && m.triangle_count() <= limit &&
+         same_rotation(inst.motion_decomposed);
+}
+
 void set_transform(Instance& inst, const Transform& xf) { static_cast<Pose&>(inst) = Pose::of(xf); }
 
 // Steps a constant velocity makes redundant (a translation, a linear shape key: Cycles' 3 steps
@@ -547,8 +562,12 @@ void Geometry::build_top() {
     return m.rtc && finite_transform(inst.xf) && keeps_area(inst) && (instanceable(inst.xf) || m.is_triangles());
   };
   const auto moves = [&](const Instance& inst) { return instanceable(inst.xf) && !inst.motion.empty(); };
-  const size_t moving_count =
-      std::count_if(instances_.begin(), instances_.end(), [&](const Instance& x) { return traced(x) && moves(x); });
+  const bool bake_motion = std::none_of(instances_.begin(), instances_.end(), [&](const Instance& x) {
+    return traced(x) && moves(x) && !bakes_motion(x, meshes_[x.mesh]);
+  });
+  const size_t moving_count = bake_motion ? 0
+                                          : std::count_if(instances_.begin(), instances_.end(),
+                                                          [&](const Instance& x) { return traced(x) && moves(x); });
   float largest = 0;  // inverse_norm over Embree's instances, their motion steps and between them
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
@@ -556,26 +575,27 @@ void Geometry::build_top() {
     if (!traced(inst)) continue;
     const bool flat = !instanceable(inst.xf);
     const bool moving = moves(inst);
-    if (!flat && baked_[i].rtc) {  // an edit made it instanceable again
+    const bool baked = flat || (moving && bake_motion);  // traced in world space
+    if (!baked && baked_[i].rtc) {                       // an edit made it instanceable again
       rtcReleaseScene(baked_[i].rtc);
       baked_[i].rtc = nullptr;
     }
-    if (!flat) largest = std::max(largest, inverse_norm(inst.xf));  // finite: instanceable
-    if (moving) {  // Embree interpolates the decomposition: its inverse between steps, sampled (capped)
+    if (!baked) largest = std::max(largest, inverse_norm(inst.xf));  // finite: instanceable
+    if (moving && !baked) {  // Embree interpolates the decomposition: its inverse between steps, sampled (capped)
       const int n = 8 * int(inst.motion.size());
       for (int k = 0; k <= n; ++k)
         largest = std::max(
             largest,
             std::min(inverse_norm(interpolate_motion(inst.motion_decomposed, float(k) / float(n))), kMaxInverseNorm));
     }
-    RTCScene object = flat ? baked_scene(int(i)) : m.rtc;
-    if (moving) {
+    RTCScene object = baked ? baked_scene(int(i)) : m.rtc;
+    if (moving && !baked) {
       attach_moving(object, inst, unsigned(i), moving_count == 1);
     } else {
       RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
       rtcSetGeometryInstancedScene(g, object);
       // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout; the baked copy is in world space.
-      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, (flat ? kIdentity : inst.xf).m);
+      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, (baked ? kIdentity : inst.xf).m);
       rtcCommitGeometry(g);
       rtcAttachGeometryByID(top_, g, unsigned(i));
       rtcReleaseGeometry(g);
@@ -658,27 +678,32 @@ void Geometry::attach_moving(RTCScene object, const Instance& inst, unsigned id,
 }
 
 // The instance's mesh in world space, its triangles in the mesh's order (hits keep their
-// primitive ids; surface() transforms the mesh's own corners). Triangles flattened to no area
-// become single points, which rays never hit.
+// primitive ids; surface() transforms the mesh's own corners), at each of its motion steps if
+// it moves (bakes_motion). Triangles flattened to no area become single points, which rays
+// never hit (a moving baked instance is invertible at every step: none are).
 RTCScene Geometry::baked_scene(int instance) {
   const Instance& inst = instances_[size_t(instance)];
   Baked& b = baked_[size_t(instance)];
-  if (b.rtc && std::equal(b.xf.m, b.xf.m + 12, inst.xf.m)) return b.rtc;
+  const auto same = [](const Transform& a, const Transform& c) { return std::equal(a.m, a.m + 12, c.m); };
+  const std::vector<Transform> steps = inst.motion.empty() ? std::vector<Transform>{inst.xf} : inst.motion;
+  if (b.rtc && std::equal(b.steps.begin(), b.steps.end(), steps.begin(), steps.end(), same)) return b.rtc;
   if (b.rtc) rtcReleaseScene(b.rtc);
   const Mesh& m = meshes_[size_t(inst.mesh)];
-  std::vector<Vec3> positions(m.positions.size());
-  for (size_t i = 0; i < positions.size(); ++i) positions[i] = inst.xf.point(m.positions[i]);
+  const size_t n = m.positions.size();
+  std::vector<Vec3> positions(n * steps.size());
+  for (size_t k = 0; k < steps.size(); ++k)
+    for (size_t i = 0; i < n; ++i) positions[k * n + i] = steps[k].point(m.positions[i]);
   std::vector<uint32_t> indices = m.indices;
-  for (size_t t = 0; t < m.triangle_count(); ++t) {
+  for (size_t t = 0; t < m.triangle_count() && steps.size() == 1; ++t) {
     const Vec3 &p0 = positions[indices[3 * t]], &p1 = positions[indices[3 * t + 1]],
                &p2 = positions[indices[3 * t + 2]];
     if (!(length(cross(p1 - p0, p2 - p0)) > 0)) indices[3 * t + 1] = indices[3 * t + 2] = indices[3 * t];
   }
-  b.rtc = triangle_scene(positions, indices);
+  b.rtc = triangle_scene(positions, indices, int(steps.size()));
   if (partial_visibility_) rtcSetSceneFlags(b.rtc, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   rtcCommitScene(b.rtc);
   ++mesh_builds_;  // a BVH over the mesh: moving such an object costs a mesh build
-  b.xf = inst.xf;
+  b.steps = steps;
   return b.rtc;
 }
 

@@ -262,10 +262,11 @@ class Geometry {
   // Instances whose transform flattens the mesh (zero scale on an axis: no inverse, which Embree's
   // instancing needs), or whose inverse would take rays beyond what Embree traverses (a scale
   // below 1e-8, an extreme shear), are traced through a copy of the mesh baked into world space,
-  // rebuilt when the transform changes (Cycles 3.4 renders flattened objects black).
+  // rebuilt when the transform changes (Cycles 3.4 renders flattened objects black); so are
+  // moving instances that do not turn, at each motion step (bakes_motion in geometry.cpp).
   struct Baked {
     RTCScene rtc = nullptr;
-    Transform xf;
+    std::vector<Transform> steps;  // the transform, or the motion steps, it was baked with
   };
   std::vector<Baked> baked_;  // per instance
   // Embree takes a ray into an instance's object space by the inverse transform and needs it
