@@ -54,6 +54,7 @@
 #include "shading/bsdf.h"
 
 #include <cstring>
+#include <optional>
 
 namespace lt {
 
@@ -79,11 +80,12 @@ inline bool is_glass(const Lobe& l) { return lobe_is_glass(l.type); }
 // The lobe as seen from below (-Z): the frame is mirrored, and glass's relative IOR inverts, since
 // eta is the IOR of the -Z side over the +Z side. This is what a reverse evaluation needs (BDPT's
 // pdf of the opposite direction through glass), and it keeps bent shading normals finite.
-const Lobe& lobe_from_below(const Lobe& l, Lobe* tmp) {
+// tmp is only made for glass: a Lobe's defaults are some 40 stores, on every sample and evaluation.
+const Lobe& lobe_from_below(const Lobe& l, std::optional<Lobe>* tmp) {
   if (!is_glass(l)) return l;
-  *tmp = l;
-  tmp->eta = 1 / lobe_eta(l);
-  return *tmp;
+  tmp->emplace(l);
+  (*tmp)->eta = 1 / lobe_eta(l);
+  return **tmp;
 }
 
 // Microfacet alphas below which the lobe is a mirror: the isotropic threshold kSmoothAlpha, and
@@ -1238,7 +1240,7 @@ Spectrum lobe_eval_pdf(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf
     *pdf_out = std::isfinite(pdf) && pdf > 0 ? pdf : 0.0f;
     return is_finite(f) ? vmax(f, Spectrum(0.0f)) : Spectrum(0.0f);
   }
-  Lobe tmp;
+  std::optional<Lobe> tmp;
   Spectrum f =
       wo.z > 0 ? eval_upper(l, wo, wi, &pdf) : eval_upper(lobe_from_below(l, &tmp), flip_z(wo), flip_z(wi), &pdf);
   *pdf_out = std::isfinite(pdf) && pdf > 0 ? pdf : 0.0f;
@@ -1270,7 +1272,7 @@ bool lobe_sample(const Lobe& lobe, const Vec3& wo, Vec2 u, float u_extra, BsdfSa
   }
   const bool flip = wo.z < 0;
   const Vec3 o = flip ? flip_z(wo) : wo;
-  Lobe tmp;
+  std::optional<Lobe> tmp;
   const Lobe& l = flip ? lobe_from_below(lobe, &tmp) : lobe;
   BsdfSample s;
   s.eta = 1;

@@ -79,9 +79,11 @@ inline bool area_lamp_window(const Light& l, const Vec3& p, AreaWindow* w) {
 
 // The solid angle a rectangle subtends from p and what sampling it uniformly needs (Urena, Fajardo
 // and King 2013, "An Area-Preserving Parametrization for Spherical Rectangles", as Cycles 3.4's
-// rect_light_sample), in double: S is a difference of angles near 2 pi.
+// rect_light_sample, in single precision as there): S is a difference of angles near 2 pi, exact
+// to about 1e-6 sr, which the nearby points it is used from (area_window_solid_angle) keep far
+// above kMinRectSolidAngle.
 struct SphericalRect {
-  double x0, y0, x1, y1, z0, b0, b1, k, solid_angle = 0;
+  float x0, y0, x1, y1, z0, b0, b1, k, solid_angle = 0;
   Vec3 o, x, y, z;
 };
 inline SphericalRect spherical_rect(const AreaWindow& w, const Vec3& p) {
@@ -98,12 +100,12 @@ inline SphericalRect spherical_rect(const AreaWindow& w, const Vec3& p) {
   if (!(r.z0 < 0)) return r;  // p in the rectangle's plane: no solid angle
   // The z components of the normals of the planes through p and each edge (the other components
   // are zero or follow), and the angles between neighbours.
-  const double zz = r.z0 * r.z0;
-  const double nz[4] = {-r.y0 / std::sqrt(zz + r.y0 * r.y0), r.x1 / std::sqrt(zz + r.x1 * r.x1),
-                        r.y1 / std::sqrt(zz + r.y1 * r.y1), -r.x0 / std::sqrt(zz + r.x0 * r.x0)};
-  auto angle = [](double c) { return std::acos(std::clamp(c, -1.0, 1.0)); };
-  const double g0 = angle(-nz[0] * nz[1]), g1 = angle(-nz[1] * nz[2]), g2 = angle(-nz[2] * nz[3]),
-               g3 = angle(-nz[3] * nz[0]);
+  const float zz = r.z0 * r.z0;
+  const float nz[4] = {-r.y0 / std::sqrt(zz + r.y0 * r.y0), r.x1 / std::sqrt(zz + r.x1 * r.x1),
+                       r.y1 / std::sqrt(zz + r.y1 * r.y1), -r.x0 / std::sqrt(zz + r.x0 * r.x0)};
+  auto angle = [](float c) { return std::acos(std::clamp(c, -1.0f, 1.0f)); };
+  const float g0 = angle(-nz[0] * nz[1]), g1 = angle(-nz[1] * nz[2]), g2 = angle(-nz[2] * nz[3]),
+              g3 = angle(-nz[3] * nz[0]);
   r.b0 = nz[0];
   r.b1 = nz[2];
   r.k = 2 * kPi - g2 - g3;
@@ -111,27 +113,27 @@ inline SphericalRect spherical_rect(const AreaWindow& w, const Vec3& p) {
   return r;
 }
 inline Vec3 spherical_rect_point(const SphericalRect& r, Vec2 u) {
-  const double au = u.x * r.solid_angle + r.k;
-  const double fu = (std::cos(au) * r.b0 - r.b1) / std::sin(au);
-  double cu = std::copysign(1 / std::sqrt(fu * fu + r.b0 * r.b0), fu);
-  cu = std::clamp(cu, -1.0, 1.0);
-  const double xu = std::clamp(-cu * r.z0 / std::max(std::sqrt(1 - cu * cu), 1e-12), r.x0, r.x1);
-  const double dd = std::sqrt(xu * xu + r.z0 * r.z0);
-  const double h0 = r.y0 / std::sqrt(dd * dd + r.y0 * r.y0), h1 = r.y1 / std::sqrt(dd * dd + r.y1 * r.y1);
-  const double hv = h0 + u.y * (h1 - h0), hv2 = hv * hv;
-  const double yv = hv2 < 1 - 1e-12 ? std::clamp(hv * dd / std::sqrt(1 - hv2), r.y0, r.y1) : r.y1;
-  return r.o + r.x * float(xu) + r.y * float(yv) + r.z * float(r.z0);
+  const float au = u.x * r.solid_angle + r.k;
+  const float fu = (std::cos(au) * r.b0 - r.b1) / std::sin(au);
+  float cu = std::copysign(1 / std::sqrt(fu * fu + r.b0 * r.b0), fu);
+  cu = std::clamp(cu, -1.0f, 1.0f);
+  const float xu = std::clamp(-cu * r.z0 / std::max(std::sqrt(1 - cu * cu), 1e-6f), r.x0, r.x1);
+  const float dd = std::sqrt(xu * xu + r.z0 * r.z0);
+  const float h0 = r.y0 / std::sqrt(dd * dd + r.y0 * r.y0), h1 = r.y1 / std::sqrt(dd * dd + r.y1 * r.y1);
+  const float hv = h0 + u.y * (h1 - h0), hv2 = hv * hv;
+  const float yv = hv2 < 1 - 1e-6f ? std::clamp(hv * dd / std::sqrt(1 - hv2), r.y0, r.y1) : r.y1;
+  return r.o + r.x * xu + r.y * yv + r.z * r.z0;
 }
 
 // Below this solid angle (sr) a rectangle is sampled by area: the spherical parametrisation's
 // angles lose their precision there, and area sampling is as good as uniform in solid angle.
-constexpr double kMinRectSolidAngle = 1e-7;
+constexpr float kMinRectSolidAngle = 1e-3f;
 
 // The solid angle of window w from p when next-event estimation samples it by solid angle, else 0:
 // from points closer to the lamp's plane than the window's longer side, as for triangles (further
 // away cos / d^2 hardly varies over it, and area sampling costs no inverse cosines: on cornell_area
 // always by solid angle cost 14 % more CPU per sample for 6 % less variance).
-inline double area_window_solid_angle(const Light& l, const AreaWindow& w, const Vec3& p, SphericalRect* r) {
+inline float area_window_solid_angle(const Light& l, const AreaWindow& w, const Vec3& p, SphericalRect* r) {
   const float side = std::max(w.lx, w.ly), plane = dot(p - l.position, l.direction);
   if (!(plane < side)) return 0;
   *r = spherical_rect(w, p);
@@ -144,7 +146,7 @@ inline bool area_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample*
   if (!(dot(p - l.position, l.direction) > 0)) return false;  // one-sided
   Vec3 q;
   float window_area = l.area;
-  double solid_angle = 0;
+  float solid_angle = 0;
   if (l.shape == AreaShape::Rectangle) {
     AreaWindow w;
     if (!area_lamp_window(l, p, &w)) return false;
@@ -161,7 +163,7 @@ inline bool area_lamp_sample(const Light& l, const Vec3& p, Vec2 u, LightSample*
   s->on_surface = true;
   float cos_l = dot(l.direction, -s->wi);
   if (cos_l <= 0) return false;
-  s->pdf = solid_angle > 0 ? float(1 / solid_angle) : d2 / (window_area * cos_l);
+  s->pdf = solid_angle > 0 ? 1 / solid_angle : d2 / (window_area * cos_l);
   s->radiance = area_lamp_radiance(l) * area_spread_factor(l, cos_l);
   s->delta = false;
   return true;
@@ -180,8 +182,8 @@ inline float area_lamp_pdf(const Light& l, const Vec3& p, const Vec3& wi, float 
     if (!(a >= 0 && a <= w.lx && b >= 0 && b <= w.ly)) return 0;
   }
   SphericalRect r;
-  const double solid_angle = area_window_solid_angle(l, w, p, &r);
-  return solid_angle > 0 ? float(1 / solid_angle) : t * t / (w.lx * w.ly * cos_l);
+  const float solid_angle = area_window_solid_angle(l, w, p, &r);
+  return solid_angle > 0 ? 1 / solid_angle : t * t / (w.lx * w.ly * cos_l);
 }
 
 inline bool area_lamp_sample_emission(const Light& l, Vec2 up, Vec2 ud, EmissionSample* e) {
