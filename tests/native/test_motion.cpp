@@ -136,27 +136,31 @@ TEST(Motion, InstanceMotionHitsWhereTheInterpolatedTransformIs) {
   EXPECT_NEAR(p1.x, 0.05f, 1e-5f);
 }
 
-// A scene's one moving object is given to Embree as one instance per motion segment (Embree tests
-// no bounds at the root of a one-primitive BVH), each valid over its own time range; one that does
-// not turn is traced through its triangles baked in world space at each step (Geometry::
-// bakes_motion) unless its mesh is large and shared. Either way, at every time the object is hit
-// where its interpolated transform puts it and nowhere a segment would be at another time, by the
-// scene's rays and by intersect_instance's. Probed over a grid of points and times, for matrix
-// motion (translation and scale: baked, and Embree's two steps split in the middle) and
-// quaternion motion (turning, two and three steps).
+// A moving object alone in Embree's motion BVH is given to Embree as one instance per motion
+// segment (Embree tests no bounds at the root of a one-primitive BVH), each valid over its own time
+// range; beside a few still objects it shares their BVH (build_top); one that does not turn is
+// traced through its triangles baked in world space at each step (bakes_motion) unless its mesh is
+// large and shared. Every way, at every time the object is hit where its interpolated transform
+// puts it and nowhere a segment would be at another time, by the scene's rays and by
+// intersect_instance's. Probed over a grid of points and times, for matrix motion (translation and
+// scale) and quaternion motion (turning, two and three steps).
 TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
   struct Case {
     const char* name;
     std::vector<Transform> steps;
-    bool large_shared;  // 4200 triangles, also instanced still far away: not baked
+    bool large_shared;  // 4200 triangles, shared with the still instances: not baked
+    int still;          // still instances of the same mesh, far away
     bool baked;
   };
   const std::vector<Transform> translating = {rot_z(0, 1, Vec3(-1, 0, 0)), rot_z(0, 1.5f, Vec3(1, 0.5f, 0))};
+  const std::vector<Transform> turning = {rot_z(0), rot_z(70 * kDeg), rot_z(140 * kDeg, 1, Vec3(0, 0.3f, 0))};
   const Case cases[] = {
-      {"translating, 2 steps, baked", translating, false, true},
-      {"translating, 2 steps, Embree's", translating, true, false},
-      {"turning, 2 steps", {rot_z(-60 * kDeg), rot_z(60 * kDeg, 1, Vec3(0.2f, 0, 0))}, false, false},
-      {"turning, 3 steps", {rot_z(0), rot_z(70 * kDeg), rot_z(140 * kDeg, 1, Vec3(0, 0.3f, 0))}, false, false},
+      {"translating, baked", translating, false, 0, true},
+      {"translating, sharing the still instance's motion BVH", translating, true, 1, false},
+      {"translating, beside 300 still instances: split in the middle", translating, true, 300, false},
+      {"turning, 2 steps, split", {rot_z(-60 * kDeg), rot_z(60 * kDeg, 1, Vec3(0.2f, 0, 0))}, false, 0, false},
+      {"turning, 3 steps, split", turning, false, 0, false},
+      {"turning, 3 steps, sharing the still instance's motion BVH", turning, false, 1, false},
   };
   for (const Case& c : cases) {
     Geometry g;
@@ -166,10 +170,10 @@ TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
     inst.xf = c.steps[0];
     inst.motion = c.steps;
     g.add_instance(inst, warnings);
-    if (c.large_shared) {
+    for (int k = 0; k < c.still; ++k) {
       Instance still = inst;
       still.motion.clear();
-      still.xf = rot_z(0, 1, Vec3(1000, 0, 0));
+      still.xf = rot_z(0, 1, Vec3(1000.0f + 3.0f * float(k), 0, 0));
       g.add_instance(still, warnings);
     }
     g.commit();

@@ -445,6 +445,7 @@ bool same_rotation(const std::vector<DecomposedTransform>& steps) {
 // was most of such an object's cost (a translating box: +9 % -> +1 %; subdivided to 49k
 // triangles, +5 % -> +0 %). Beside a turning object, whose motion BVH stays, Embree's matrix
 // motion shares it for nothing and baking was slower (bench/README.md, motion blur).
+constexpr size_t kStillInstancesInMotionBvh = 256;                              // build_top
 constexpr size_t kBakedMotionShared = 4096, kBakedMotionOwn = size_t(1) << 20;  // triangles: the copy's memory
 bool bakes_motion(const Instance& inst, const Mesh& m) {
   const size_t limit = m.users == 1 ? kBakedMotionOwn : kBakedMotionShared;
@@ -568,6 +569,15 @@ void Geometry::build_top() {
   const size_t moving_count = bake_motion ? 0
                                           : std::count_if(instances_.begin(), instances_.end(),
                                                           [&](const Instance& x) { return traced(x) && moves(x); });
+  // With Embree's motion at the top level, a few still instances join the moving ones' motion BVH
+  // as two equal steps: Embree keeps static and motion primitives in two BVHs, and each ray then
+  // traverses both (motion_blur, 5 instances: 4.75-4.81 -> 4.56-4.60 s). With many the motion
+  // BVH's dearer nodes cost more than the second traversal (1600 more: 5.20-5.37 -> 5.47-5.48 s;
+  // 100 and 400: the same). bench/README.md, motion blur.
+  const size_t traced_count = std::count_if(instances_.begin(), instances_.end(), traced);
+  const bool one_motion_bvh = moving_count > 0 && traced_count - moving_count <= kStillInstancesInMotionBvh;
+  // The moving instance alone in its motion BVH (attach_moving).
+  const bool lone = moving_count == 1 && (!one_motion_bvh || traced_count == 1);
   float largest = 0;  // inverse_norm over Embree's instances, their motion steps and between them
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
@@ -590,12 +600,15 @@ void Geometry::build_top() {
     }
     RTCScene object = baked ? baked_scene(int(i)) : m.rtc;
     if (moving && !baked) {
-      attach_moving(object, inst, unsigned(i), moving_count == 1);
+      attach_moving(object, inst, unsigned(i), lone);
     } else {
       RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
       rtcSetGeometryInstancedScene(g, object);
+      const unsigned steps = one_motion_bvh ? 2 : 1;
+      rtcSetGeometryTimeStepCount(g, steps);
       // Embree's RTC_FORMAT_FLOAT3X4_ROW_MAJOR is exactly our layout; the baked copy is in world space.
-      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, (baked ? kIdentity : inst.xf).m);
+      for (unsigned k = 0; k < steps; ++k)
+        rtcSetGeometryTransform(g, k, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, (baked ? kIdentity : inst.xf).m);
       rtcCommitGeometry(g);
       rtcAttachGeometryByID(top_, g, unsigned(i));
       rtcReleaseGeometry(g);
@@ -623,13 +636,13 @@ void Geometry::build_top() {
   ray_direction_limit_ = largest > 0 ? kTraceableRange / norm : kTraceableRange;
 }
 
-// A moving instance: its motion steps, as Cycles gives them to Embree. A scene's only moving
-// instance is split instead into one Embree instance per motion segment, each valid over its
-// segment's time range (rtcSetGeometryTimeRange; two steps are split at their middle, exact since
-// Embree interpolates within a segment as across it): Embree tests no bounds at the root of a BVH
-// that holds one primitive, so a lone moving object, its motion BVH's only primitive, made every
-// ray interpolate and invert its transform (30-40 % of a render; bench/README.md). With two or
-// more, the split added more than it saved.
+// A moving instance: its motion steps, as Cycles gives them to Embree. One alone in its motion
+// BVH (build_top) is split instead into one Embree instance per motion segment, each valid over
+// its segment's time range (rtcSetGeometryTimeRange; two steps are split at their middle, exact
+// since Embree interpolates within a segment as across it): Embree tests no bounds at the root of
+// a BVH that holds one primitive, so a lone moving object, its motion BVH's only primitive, made
+// every ray interpolate and invert its transform (30-40 % of a render; bench/README.md). With
+// other primitives in that BVH, the split added more than it saved.
 void Geometry::attach_moving(RTCScene object, const Instance& inst, unsigned id, bool lone) {
   const bool matrices = same_rotation(inst.motion_decomposed);
   const size_t n = inst.motion.size();
