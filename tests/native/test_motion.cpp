@@ -43,12 +43,17 @@ Mesh strip(int quads = 1) {
   return m;
 }
 
-bool hit_down(const Geometry& g, float x, float y, float time, Hit* hit) {
+// Straight down onto the z = 0 plane at (x, y), at a time.
+Ray down(float x, float y, float time) {
   Ray r;
   r.o = Vec3(x, y, 1);
   r.d = Vec3(0, 0, -1);
   r.time = time;
-  return g.intersect(r, 31u, hit);
+  return r;
+}
+
+bool hit_down(const Geometry& g, float x, float y, float time, Hit* hit) {
+  return g.intersect(down(x, y, time), 31u, hit);
 }
 
 constexpr float kDeg = float(kPi / 180);
@@ -195,12 +200,8 @@ TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
           ++checked;
           if (!hit) continue;
           EXPECT_EQ(h.instance, 0) << c.name;
-          Ray r;
-          r.o = Vec3(x, y, 1);
-          r.d = Vec3(0, 0, -1);
-          r.time = time;
           Hit own;
-          ASSERT_TRUE(g.intersect_instance(r, 0, &own)) << c.name << " at time " << time;
+          ASSERT_TRUE(g.intersect_instance(down(x, y, time), 0, &own)) << c.name << " at time " << time;
           EXPECT_NEAR(own.t, h.t, 1e-5f) << c.name;
           EXPECT_EQ(own.primitive, h.primitive) << c.name;
         }

@@ -445,13 +445,14 @@ bool same_rotation(const std::vector<DecomposedTransform>& steps) {
 // was most of such an object's cost (a translating box: +9 % -> +1 %; subdivided to 49k
 // triangles, +5 % -> +0 %). Beside a turning object, whose motion BVH stays, Embree's matrix
 // motion shares it for nothing and baking was slower (bench/README.md, motion blur).
-constexpr size_t kStillInstancesInMotionBvh = 256;                              // build_top
 constexpr size_t kBakedMotionShared = 4096, kBakedMotionOwn = size_t(1) << 20;  // triangles: the copy's memory
 bool bakes_motion(const Instance& inst, const Mesh& m) {
   const size_t limit = m.users == 1 ? kBakedMotionOwn : kBakedMotionShared;
   return !inst.motion.empty() && m.is_triangles() && m.motion_steps < 2 && m.triangle_count() <= limit &&
          same_rotation(inst.motion_decomposed);
 }
+// The most still instances build_top puts in the moving ones' motion BVH.
+constexpr size_t kStillInstancesInMotionBvh = 256;
 
 void set_transform(Instance& inst, const Transform& xf) { static_cast<Pose&>(inst) = Pose::of(xf); }
 
