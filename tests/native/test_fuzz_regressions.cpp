@@ -231,6 +231,21 @@ TEST(FuzzRegressions, MergeRefusesAPartWithOneLightTracingChannel) {
       << lt_last_error();
 }
 
+// fuzz_exr_merge (a local run, 2026-12-06): a light pass with its Colour's three channels but not
+// all three of its own (DiffDir.R alone) passed the checks, and the merge divided by reading the
+// missing channels' sums at index -1 (UBSan's pointer overflow). Such parts are refused.
+TEST(FuzzRegressions, MergeRefusesALightPassMissingSomeOfItsChannels) {
+  lt_test::TempDir dir;
+  const std::string part = dir.path + "/part.exr", out = dir.path + "/merged.exr";
+  std::vector<lt::ExrChannel> channels;
+  for (const char* name : {"A", "B", "G", "R", "SampleCount.X", "DiffDir.R", "DiffCol.B", "DiffCol.G", "DiffCol.R"})
+    channels.push_back({name, std::vector<float>(4, 1.0f)});
+  lt::write_exr(part, 2, 2, channels, {{"lantern/samples", "1"}, {"lantern/sample_ranges", "0-1"}});
+  const char* parts[] = {part.c_str()};
+  EXPECT_EQ(lt_merge_exr(out.c_str(), parts, 1), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(lt_last_error()).find("DiffDir.R without"), std::string::npos) << lt_last_error();
+}
+
 // fuzz_abi: a bidirectional render of a scene without any light (no lamp, no emissive surface, a
 // black world) took the s = 1 strategy anyway and picked a light from the empty set: a read
 // through a null pointer (UBSan; a segmentation fault in Release builds).

@@ -262,9 +262,15 @@ std::string merge_exr(const std::string& out_path, const std::vector<std::string
         colour_k[k][c] = channel_index(std::string(exr_pass_name(colour)) + "." + "RGB"[c]);
         if (name == prefix + "RGB"[c]) rgb_index[k] = c;
       }
-      if (colour_k[k][0] < 0 || colour_k[k][1] < 0 || colour_k[k][2] < 0 || rgb_index[k] < 0)
+      // The division needs the pass's three channels and its Colour's (fuzz_exr_merge: one
+      // missing was read at index -1).
+      const auto all = [](const std::array<int, 3>& ks) { return ks[0] >= 0 && ks[1] >= 0 && ks[2] >= 0; };
+      if (!all(colour_k[k]) || rgb_index[k] < 0)
         throw InvalidArgument(paths[0] + ": " + name + " without its " + exr_pass_name(colour) +
                               " channels, which it is divided by; not merged");
+      if (!all(self_k[k]))
+        throw InvalidArgument(paths[0] + ": " + name + " without the other channels of " +
+                              prefix.substr(0, prefix.size() - 1) + ", with which it is divided; not merged");
       kind[k] = Divided;
     }
     // Any other mean with its splats' part apart (light groups' Combined_<name>): as a light pass.
