@@ -123,16 +123,22 @@ std::vector<DecomposedTransform> decompose_motion(const std::vector<Transform>& 
             0)
       for (float& c : d[i].q) c = -c;
   }
+  // In double, and the angle by atan2 of its sine and cosine: acos of a cosine near 1 (a step's
+  // small turn) and the perpendicular from nearly equal quaternions lose most of float's digits.
   for (size_t i = 0; i + 1 < d.size(); ++i) {
     const float* a = d[i].q;
     const float* b = d[i + 1].q;
-    const float c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
-    if (c > 0.9995f) continue;  // linear: theta stays 0
-    float l = 0;
-    for (int k = 0; k < 4; ++k) l += sqr(d[i].q_perp[k] = b[k] - a[k] * c);
+    double c = 0;
+    for (int k = 0; k < 4; ++k) c += double(a[k]) * double(b[k]);
+    if (c > 0.9995) continue;  // linear: theta stays 0
+    double perp[4], l = 0;
+    for (int k = 0; k < 4; ++k) {
+      perp[k] = double(b[k]) - double(a[k]) * c;
+      l += perp[k] * perp[k];
+    }
     l = std::sqrt(l);
-    for (float& p : d[i].q_perp) p /= l;
-    d[i].theta = std::acos(clamp(c, -1.0f, 1.0f));
+    for (int k = 0; k < 4; ++k) d[i].q_perp[k] = float(perp[k] / l);
+    d[i].theta = float(std::atan2(l, c));
   }
   return d;
 }
