@@ -164,7 +164,8 @@ TEST(Motion, InstanceMotionHitsWhereTheInterpolatedTransformIs) {
 
 // A moving object alone in Embree's motion BVH is given to Embree as one instance per motion
 // segment (Embree tests no bounds at the root of a one-primitive BVH), each valid over its own time
-// range; beside a few still objects it shares their BVH (build_top); one that does not turn is
+// range; beside a few still instances it shares their BVH (build_top), unless they are flattened
+// into the top level (flattens_beside_motion); one that does not turn is
 // traced through its triangles baked in world space at each step (bakes_motion) unless its mesh is
 // large and shared. Every way, at every time the object is hit where its interpolated transform
 // puts it and nowhere a segment would be at another time, by the scene's rays and by
@@ -176,17 +177,18 @@ TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
     std::vector<Transform> steps;
     bool large_shared;  // 4200 triangles, shared with the still instances: not baked
     int still;          // still instances of the same mesh, far away
-    bool baked;
+    int copies;         // world-space copies built: the moving one baked, or the still ones flattened
   };
   const std::vector<Transform> translating = {rot_z(0, 1, Vec3(-1, 0, 0)), rot_z(0, 1.5f, Vec3(1, 0.5f, 0))};
   const std::vector<Transform> turning = {rot_z(0), rot_z(70 * kDeg), rot_z(140 * kDeg, 1, Vec3(0, 0.3f, 0))};
   const Case cases[] = {
-      {"translating, baked", translating, false, 0, true},
-      {"translating, sharing the still instance's motion BVH", translating, true, 1, false},
-      {"translating, beside 300 still instances: split in the middle", translating, true, 300, false},
-      {"turning, 2 steps, split", {rot_z(-60 * kDeg), rot_z(60 * kDeg, 1, Vec3(0.2f, 0, 0))}, false, 0, false},
-      {"turning, 3 steps, split", turning, false, 0, false},
-      {"turning, 3 steps, sharing the still instance's motion BVH", turning, false, 1, false},
+      {"translating, baked", translating, false, 0, 1},
+      {"translating, sharing the still instance's motion BVH", translating, true, 1, 0},
+      {"translating, beside 300 still instances: split in the middle", translating, true, 300, 0},
+      {"turning, 2 steps, split", {rot_z(-60 * kDeg), rot_z(60 * kDeg, 1, Vec3(0.2f, 0, 0))}, false, 0, 0},
+      {"turning, 3 steps, split", turning, false, 0, 0},
+      {"turning, 3 steps, sharing the still instance's motion BVH", turning, true, 1, 0},
+      {"turning, 3 steps, beside 2 still instances flattened into the top level: split", turning, false, 2, 2},
   };
   for (const Case& c : cases) {
     Geometry g;
@@ -203,7 +205,7 @@ TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
       g.add_instance(still, warnings);
     }
     g.commit();
-    EXPECT_EQ(g.mesh_builds(), c.baked ? 2u : 1u) << c.name << ": a baked copy is a build of its own";
+    EXPECT_EQ(g.mesh_builds(), 1u + unsigned(c.copies)) << c.name << ": a world-space copy is a build of its own";
     const std::vector<DecomposedTransform> d = decompose_motion(c.steps);
     int hits = 0, checked = 0;
     for (int k = 0; k <= 20; ++k) {
@@ -230,6 +232,62 @@ TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
     EXPECT_GT(hits, 100) << c.name;
     EXPECT_GT(checked, 200000) << c.name;
   }
+}
+
+// Beside a turning object, still triangle meshes are traced as world-space triangles in the top
+// level (flattens_beside_motion): hit as their own instance, on the same triangle at the same t as
+// when instanced (the scene without motion), by intersect, occluded and intersect_instance, and
+// hidden from the ray kinds they hide from. Fails if a flattened hit reports Embree's empty
+// instance id or the visibility filter reads it.
+TEST(Motion, StillObjectsBesideATurningOneAreHitAsTheirInstances) {
+  const std::vector<Transform> turning = {rot_z(0), rot_z(60 * kDeg)};
+  Transform tilted = rot_z(30 * kDeg, 1.5f, Vec3(-3, 4, 0));
+  Geometry moving, still;
+  for (Geometry* g : {&moving, &still}) {
+    std::vector<std::string> warnings;
+    Instance spinner;
+    spinner.mesh = g->add_mesh(strip(), warnings);
+    spinner.xf = turning[0];
+    if (g == &moving) spinner.motion = turning;
+    g->add_instance(spinner, warnings);
+    Instance a;  // its own mesh of 8 quads, turned, scaled and moved
+    a.mesh = g->add_mesh(strip(8), warnings);
+    a.xf = tilted;
+    g->add_instance(a, warnings);
+    Instance b = a;  // the same mesh 10 m on, hidden from camera rays (visibility bit 1)
+    b.xf = rot_z(0, 1, Vec3(10, 0, 0));
+    b.visibility = 31u & ~1u;
+    g->add_instance(b, warnings);
+    g->commit();
+  }
+  EXPECT_EQ(moving.mesh_builds(), still.mesh_builds() + 2) << "the two still instances flattened";
+  int checked = 0;
+  for (int quad = 0; quad < 8; ++quad) {  // a point 0.01 from each quad's diagonal (strip's winding)
+    const float u = 0.25f * float(quad) + 0.075f;
+    const Vec3 on_a = tilted.point(Vec3(u, -0.03f, 0)), on_b = Vec3(10 + u, -0.03f, 0);
+    for (const float time : {0.0f, 0.5f, 1.0f}) {
+      Hit h, ref;
+      ASSERT_TRUE(moving.intersect(down(on_a.x, on_a.y, time), 1u, &h)) << u;
+      ASSERT_TRUE(still.intersect(down(on_a.x, on_a.y, time), 1u, &ref)) << u;
+      EXPECT_EQ(h.instance, 1);
+      EXPECT_EQ(h.primitive, ref.primitive);
+      EXPECT_NEAR(h.t, ref.t, 1e-5f);
+      EXPECT_NEAR(h.u, ref.u, 1e-4f);
+      EXPECT_NEAR(h.v, ref.v, 1e-4f);
+      const SurfacePoint sp = moving.surface(h), sref = still.surface(ref);
+      EXPECT_NEAR(length(sp.p - sref.p), 0.0f, 1e-5f);
+      EXPECT_NEAR(std::abs(dot(sp.ng, sref.ng)), 1.0f, 1e-6f);
+      Hit own;
+      ASSERT_TRUE(moving.intersect_instance(down(on_a.x, on_a.y, time), 1, &own));
+      EXPECT_EQ(own.primitive, ref.primitive);
+      EXPECT_FALSE(moving.intersect(down(on_b.x, on_b.y, time), 1u, &h)) << "camera rays do not see b";
+      ASSERT_TRUE(moving.intersect(down(on_b.x, on_b.y, time), 2u, &h)) << "other rays do";
+      EXPECT_EQ(h.instance, 2);
+      EXPECT_TRUE(moving.occluded(down(on_b.x, on_b.y, time)));
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 24);
 }
 
 // Motion is baked into world-space triangles only when every moving object can be (none turns):

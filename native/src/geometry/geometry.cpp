@@ -23,6 +23,7 @@ void visibility_filter(const RTCFilterFunctionNArguments* args) {
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     unsigned inst = RTCHitN_instID(args->hit, args->N, i, 0);
+    if (inst == RTC_INVALID_GEOMETRY_ID) inst = RTCHitN_geomID(args->hit, args->N, i);  // flattened (build_top)
     if (!(c->visibility[inst] & c->mask)) args->valid[i] = 0;
   }
 }
@@ -451,6 +452,19 @@ bool bakes_motion(const Instance& inst, const Mesh& m) {
   return !inst.motion.empty() && m.is_triangles() && m.motion_steps < 2 && m.triangle_count() <= limit &&
          same_rotation(inst.motion_decomposed);
 }
+// Beside Embree's motion, still triangle meshes are traced in world space from the top level
+// (Cycles' applied transforms): a still instance in the moving ones' motion BVH made every ray
+// that entered it interpolate and invert its two equal steps (Embree's motion instance entries
+// were most of motion blur's extra time in perf), and kept apart it cost a second instance
+// traversal. Sponza with a sliding and a turning object, motion blur on: 3.54 -> 3.16 s, below
+// the 3.29-3.38 s of the still render's instancing (bench/README.md, motion blur). Up to
+// kFlattenedTriangles in all (each copy's BVH is memory beside the mesh's own); the rest, and
+// curves, points and deforming meshes, stay instances.
+constexpr size_t kFlattenedTriangles = size_t(1) << 21;
+bool flattens_beside_motion(const Instance& inst, const Mesh& m) {
+  const size_t limit = m.users == 1 ? kBakedMotionOwn : kBakedMotionShared;
+  return inst.motion.empty() && m.is_triangles() && m.motion_steps < 2 && m.triangle_count() <= limit;
+}
 // The most still instances build_top puts in the moving ones' motion BVH.
 constexpr size_t kStillInstancesInMotionBvh = 256;
 
@@ -575,10 +589,22 @@ void Geometry::build_top() {
   // traverses both (motion_blur, 5 instances: 4.75-4.81 -> 4.56-4.60 s). With many the motion
   // BVH's dearer nodes cost more than the second traversal (1600 more: 5.20-5.37 -> 5.47-5.48 s;
   // 100 and 400: the same). bench/README.md, motion blur.
-  const size_t traced_count = std::count_if(instances_.begin(), instances_.end(), traced);
-  const bool one_motion_bvh = moving_count > 0 && traced_count - moving_count <= kStillInstancesInMotionBvh;
+  std::vector<bool> flattened(instances_.size(), false);
+  size_t flattened_triangles = 0, still_instances = 0;
+  for (size_t i = 0; i < instances_.size(); ++i) {
+    const Instance& inst = instances_[i];
+    const Mesh& m = meshes_[inst.mesh];
+    if (!traced(inst) || moves(inst)) continue;
+    if (moving_count > 0 && flattens_beside_motion(inst, m) &&
+        flattened_triangles + m.triangle_count() <= kFlattenedTriangles) {
+      flattened[i] = true;
+      flattened_triangles += m.triangle_count();
+    }
+    still_instances += !flattened[i];
+  }
+  const bool one_motion_bvh = moving_count > 0 && still_instances <= kStillInstancesInMotionBvh;
   // The moving instance alone in its motion BVH (attach_moving).
-  const bool lone = moving_count == 1 && (!one_motion_bvh || traced_count == 1);
+  const bool lone = moving_count == 1 && (!one_motion_bvh || still_instances == 0);
   float largest = 0;  // inverse_norm over Embree's instances, their motion steps and between them
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
@@ -586,7 +612,7 @@ void Geometry::build_top() {
     if (!traced(inst)) continue;
     const bool flat = !instanceable(inst.xf);
     const bool moving = moves(inst);
-    const bool baked = flat || (moving && bake_motion);  // traced in world space
+    const bool baked = flat || flattened[i] || (moving && bake_motion);  // traced in world space
     if (!baked && baked_[i].rtc) {                       // an edit made it instanceable again
       rtcReleaseScene(baked_[i].rtc);
       baked_[i].rtc = nullptr;
@@ -602,6 +628,8 @@ void Geometry::build_top() {
     RTCScene object = baked ? baked_scene(int(i)) : m.rtc;
     if (moving && !baked) {
       attach_moving(object, inst, unsigned(i), lone);
+    } else if (flattened[i]) {  // its world-space triangles in the top level, by the instance's id
+      rtcAttachGeometryByID(top_, rtcGetGeometry(object, 0), unsigned(i));
     } else {
       RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
       rtcSetGeometryInstancedScene(g, object);
@@ -732,7 +760,7 @@ bool Geometry::traceable(const Ray& r) const {
 namespace {
 
 // The closest hit in `scene` along (o, d) over the ray's extent at its time: t (the same along
-// (o, d) as along the ray), Embree's instance id (none in a mesh's own scene), primitive,
+// (o, d) as along the ray), Embree's instance id (a flattened still's geometry id; none in a mesh's own scene), primitive,
 // barycentrics, and the world position along `ray`.
 bool closest_hit(RTCScene scene, RTCIntersectContext* ctx, const Ray& ray, const Vec3& o, const Vec3& d, Hit* hit) {
   RTCRayHit rh;
@@ -752,7 +780,7 @@ bool closest_hit(RTCScene scene, RTCIntersectContext* ctx, const Ray& ray, const
   rtcIntersect1(scene, ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   hit->t = rh.ray.tfar;
-  hit->instance = int(rh.hit.instID[0]);
+  hit->instance = int(rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID);
   hit->primitive = int(rh.hit.primID);
   hit->u = rh.hit.u;
   hit->v = rh.hit.v;
