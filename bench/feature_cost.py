@@ -2,8 +2,8 @@
 rendered with the feature on against the same scene with it off.
 
     LANTERN_LIBRARY=build/liblantern.so blender -b --factory-startup --python bench/feature_cost.py -- \
-        --feature dof|motion|motion_one|motion_sliding [--repeats 3] [--width W] [--height H] [--samples 64] \
-        [--out FILE]
+        --feature dof|motion|motion_one|motion_sliding|motion_sponza [--repeats 3] [--width W] [--height H] \
+        [--samples 64] [--out FILE]
 
 - dof: cornell_dof (scenes/build_scenes.py: F/0.05, 6 blades, anamorphic) against a pinhole. With
   a lens every camera ray draws one more 2D sample and BDPT's light tracing one per connection;
@@ -14,6 +14,9 @@ rendered with the feature on against the same scene with it off.
 - motion_sliding: motion_blur_sliding (motion_blur without the turning box's animation): objects
   that move without turning, whose motion the core bakes into world-space triangles (geometry.cpp,
   bakes_motion), and the deforming grid and the camera.
+- motion_sponza: sponza_motion (the Sponza model with a sliding and a turning box under an area
+  lamp; ../shared/assets): a real model's still meshes beside Embree's motion, which the core
+  traces in world space (geometry.cpp, flattens_beside_motion).
 - motion: motion_blur (a translating and a rotating box, a deforming grid, a panning camera;
   shutter 1 frame, 3 motion steps) against motion blur off (everything at the shutter's centre).
   Every camera sample draws one time, moving instances traverse Embree's motion BVH (quaternion
@@ -48,6 +51,7 @@ FEATURES = {
     "motion": ("motion_blur", "motion blur / none", _motion_blur, (160, 107)),
     "motion_one": ("motion_blur_one", "one moving object's blur / none", _motion_blur, (160, 107)),
     "motion_sliding": ("motion_blur_sliding", "blur without turning / none", _motion_blur, (160, 107)),
+    "motion_sponza": ("sponza_motion", "motion blur on Sponza / none", _motion_blur, (200, 150)),
 }
 
 

@@ -2061,6 +2061,23 @@ def build_sponza(scene):
     add_camera(scene, (-13.5, 0.0, 1.6), (10.0, 0.0, 4.0), lens=18.0)
 
 
+def build_sponza_motion(scene):
+    """Sponza (build_sponza) with a default-sized area lamp and two boxes moving over the shutter:
+    one sliding 2.8 m, one turning 90 degrees (keys at frames 0 and 2, rendered at 1 with a
+    shutter of 1 frame). Motion blur's cost on a real model (bench/feature_cost.py)."""
+    build_sponza(scene)
+    add_light(scene, "Lamp", "AREA", 800.0, (-6.0, 0.0, 4.5), size=1.0)
+    slider = add_object(scene, "Sliding", mesh_box("Sliding", (0.8, 0.8, 0.8)), (-7.0, -1.0, 1.1))
+    assign(slider, diffuse("SlidingRed", RED))
+    _keyframes(slider, "location", [(-7.0, -1.0, 1.1), (-5.0, 1.0, 1.1)])
+    turner = add_object(scene, "Turning", mesh_box("Turning", (1.0, 1.0, 1.0)), (-5.0, -2.0, 0.5))
+    assign(turner, diffuse("TurningGreen", GREEN))
+    _keyframes(turner, "rotation_euler", [(0.0, 0.0, 0.0), (0.0, 0.0, math.radians(90.0))])
+    scene.frame_current = 1
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 1.0
+
+
 def build_lamps500(scene):
     """Many lights (issue 14's 500-lamp room): a closed 8 x 6 x 3 m room, two boxes, and a 25 x 20
     grid of small point lamps (2 W, radius 3 cm, alternately warm and cool) 40 cm below the
@@ -2397,6 +2414,7 @@ MODEL_SCENES = {
     "sibenik": (build_sibenik, (160, 120), 64),
     "sibenik_smoke": (build_sibenik_smoke, (160, 120), 64),
     "sponza": (build_sponza, (160, 120), 64),
+    "sponza_motion": (build_sponza_motion, (200, 150), 64),
 }
 
 # example scene name: (builder scene, resolution, samples, Lantern integrator[, other Lantern

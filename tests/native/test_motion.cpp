@@ -113,8 +113,18 @@ TEST(Motion, InterpolationSlerpsRotationAndLerpsTheRest) {
 TEST(Motion, SlerpIsExactToRoundingAtEveryStepAngle) {
   const auto rotation = [](double radians) {
     Transform m;
-    const float v[12] = {float(std::cos(radians)), float(-std::sin(radians)), 0, 0, float(std::sin(radians)),
-                         float(std::cos(radians)), 0, 0, 0, 0, 1, 0};
+    const float v[12] = {float(std::cos(radians)),
+                         float(-std::sin(radians)),
+                         0,
+                         0,
+                         float(std::sin(radians)),
+                         float(std::cos(radians)),
+                         0,
+                         0,
+                         0,
+                         0,
+                         1,
+                         0};
     std::copy(v, v + 12, m.m);
     return m;
   };

@@ -613,7 +613,8 @@ void Geometry::build_top() {
     const bool flat = !instanceable(inst.xf);
     const bool moving = moves(inst);
     const bool baked = flat || flattened[i] || (moving && bake_motion);  // traced in world space
-    if (!baked && baked_[i].rtc) {                       // an edit made it instanceable again
+    // An edit made it instanceable again, or motion went away.
+    if (!baked && baked_[i].rtc) {
       rtcReleaseScene(baked_[i].rtc);
       baked_[i].rtc = nullptr;
     }
@@ -760,8 +761,8 @@ bool Geometry::traceable(const Ray& r) const {
 namespace {
 
 // The closest hit in `scene` along (o, d) over the ray's extent at its time: t (the same along
-// (o, d) as along the ray), Embree's instance id (a flattened still's geometry id; none in a mesh's own scene), primitive,
-// barycentrics, and the world position along `ray`.
+// (o, d) as along the ray), Embree's instance id (for a still flattened into the top level its
+// geometry id; none in a mesh's own scene), primitive, barycentrics, and the world position.
 bool closest_hit(RTCScene scene, RTCIntersectContext* ctx, const Ray& ray, const Vec3& o, const Vec3& d, Hit* hit) {
   RTCRayHit rh;
   rh.ray.org_x = o.x;
