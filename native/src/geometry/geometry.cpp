@@ -456,8 +456,8 @@ bool bakes_motion(const Instance& inst, const Mesh& m) {
 // (Cycles' applied transforms): a still instance in the moving ones' motion BVH made every ray
 // that entered it interpolate and invert its two equal steps (Embree's motion instance entries
 // were most of motion blur's extra time in perf), and kept apart it cost a second instance
-// traversal. Sponza with a sliding and a turning object, motion blur on: 3.54 -> 3.16 s, below
-// the 3.29-3.38 s of the still render's instancing (bench/README.md, motion blur). Up to
+// traversal. Sponza with a sliding and a turning object, motion blur on: 3.80 -> 3.23 s, the
+// still render's time (bench/README.md, motion blur; flattening that too gained nothing). Up to
 // kFlattenedTriangles in all (each copy's BVH is memory beside the mesh's own); the rest, and
 // curves, points and deforming meshes, stay instances.
 constexpr size_t kFlattenedTriangles = size_t(1) << 21;
