@@ -584,11 +584,13 @@ void Geometry::build_top() {
   const size_t moving_count = bake_motion ? 0
                                           : std::count_if(instances_.begin(), instances_.end(),
                                                           [&](const Instance& x) { return traced(x) && moves(x); });
-  // With Embree's motion at the top level, a few still instances join the moving ones' motion BVH
-  // as two equal steps: Embree keeps static and motion primitives in two BVHs, and each ray then
-  // traverses both (motion_blur, 5 instances: 4.75-4.81 -> 4.56-4.60 s). With many the motion
-  // BVH's dearer nodes cost more than the second traversal (1600 more: 5.20-5.37 -> 5.47-5.48 s;
-  // 100 and 400: the same). bench/README.md, motion blur.
+  // With Embree's motion at the top level, still triangle meshes are flattened into it
+  // (flattens_beside_motion), and a few other still instances (curves, points, deforming or large
+  // meshes) join the moving ones' motion BVH as two equal steps: Embree keeps static and motion
+  // primitives in two BVHs, and each ray then traverses both (motion_blur, 5 instances: 4.75-4.81
+  // -> 4.56-4.60 s before the flattening). With many the motion BVH's dearer nodes cost more than
+  // the second traversal (1600 more: 5.20-5.37 -> 5.47-5.48 s; 100 and 400: the same).
+  // bench/README.md, motion blur.
   std::vector<bool> flattened(instances_.size(), false);
   size_t flattened_triangles = 0, still_instances = 0;
   for (size_t i = 0; i < instances_.size(); ++i) {
