@@ -113,19 +113,9 @@ TEST(Motion, InterpolationSlerpsRotationAndLerpsTheRest) {
 TEST(Motion, SlerpIsExactToRoundingAtEveryStepAngle) {
   const auto rotation = [](double radians) {
     Transform m;
-    const float v[12] = {float(std::cos(radians)),
-                         float(-std::sin(radians)),
-                         0,
-                         0,
-                         float(std::sin(radians)),
-                         float(std::cos(radians)),
-                         0,
-                         0,
-                         0,
-                         0,
-                         1,
-                         0};
-    std::copy(v, v + 12, m.m);
+    m.m[0] = m.m[5] = float(std::cos(radians));
+    m.m[4] = float(std::sin(radians));
+    m.m[1] = -m.m[4];
     return m;
   };
   for (const double degrees : {0.5, 10.0, 60.0, 120.0, 170.0, 179.9}) {
@@ -175,12 +165,11 @@ TEST(Motion, InstanceMotionHitsWhereTheInterpolatedTransformIs) {
 // A moving object alone in Embree's motion BVH is given to Embree as one instance per motion
 // segment (Embree tests no bounds at the root of a one-primitive BVH), each valid over its own time
 // range; beside a few still instances it shares their BVH (build_top), unless they are flattened
-// into the top level (flattens_beside_motion); one that does not turn is
-// traced through its triangles baked in world space at each step (bakes_motion) unless its mesh is
-// large and shared. Every way, at every time the object is hit where its interpolated transform
-// puts it and nowhere a segment would be at another time, by the scene's rays and by
-// intersect_instance's. Probed over a grid of points and times, for matrix motion (translation and
-// scale) and quaternion motion (turning, two and three steps).
+// into the top level (flattens_beside_motion); one that does not turn is traced through its
+// triangles baked in world space at each step (bakes_motion) unless its mesh is large and shared. Every way, at every
+// time the object is hit where its interpolated transform puts it and nowhere a segment would be at another time, by
+// the scene's rays and by intersect_instance's. Probed over a grid of points and times, for matrix motion (translation
+// and scale) and quaternion motion (turning, two and three steps).
 TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
   struct Case {
     const char* name;
@@ -245,10 +234,10 @@ TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
 }
 
 // Beside a turning object, still triangle meshes are traced as world-space triangles in the top
-// level (flattens_beside_motion): hit as their own instance, on the same triangle at the same t as
-// when instanced (the scene without motion), by intersect, occluded and intersect_instance, and
-// hidden from the ray kinds they hide from. Fails if a flattened hit reports Embree's empty
-// instance id or the visibility filter reads it.
+// level (flattens_beside_motion), and so is a flat one (zero scale, always baked): hit as their own
+// instance, on the same triangle at the same t as when instanced (the scene without motion), by
+// intersect, occluded and intersect_instance, and hidden from the ray kinds they hide from. Fails
+// if a flattened hit reports Embree's empty instance id or the visibility filter reads it.
 TEST(Motion, StillObjectsBesideATurningOneAreHitAsTheirInstances) {
   const std::vector<Transform> turning = {rot_z(0), rot_z(60 * kDeg)};
   Transform tilted = rot_z(30 * kDeg, 1.5f, Vec3(-3, 4, 0));
@@ -268,6 +257,10 @@ TEST(Motion, StillObjectsBesideATurningOneAreHitAsTheirInstances) {
     b.xf = rot_z(0, 1, Vec3(10, 0, 0));
     b.visibility = 31u & ~1u;
     g->add_instance(b, warnings);
+    Instance c = a;  // the same mesh at y = -5, flattened onto z = 0 (no inverse: baked)
+    c.xf = rot_z(0, 1, Vec3(0, -5, 0));
+    c.xf.m[10] = 0;
+    g->add_instance(c, warnings);
     g->commit();
   }
   EXPECT_EQ(moving.mesh_builds(), still.mesh_builds() + 2) << "the two still instances flattened";
@@ -294,6 +287,11 @@ TEST(Motion, StillObjectsBesideATurningOneAreHitAsTheirInstances) {
       ASSERT_TRUE(moving.intersect(down(on_b.x, on_b.y, time), 2u, &h)) << "other rays do";
       EXPECT_EQ(h.instance, 2);
       EXPECT_TRUE(moving.occluded(down(on_b.x, on_b.y, time)));
+      ASSERT_TRUE(moving.intersect(down(u, -5.03f, time), 1u, &h)) << "the flat one";
+      ASSERT_TRUE(still.intersect(down(u, -5.03f, time), 1u, &ref));
+      EXPECT_EQ(h.instance, 3);
+      EXPECT_EQ(h.primitive, ref.primitive);
+      EXPECT_NEAR(h.t, ref.t, 1e-5f);
       ++checked;
     }
   }

@@ -596,9 +596,10 @@ void Geometry::build_top() {
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
     const Mesh& m = meshes_[inst.mesh];
-    if (!traced(inst) || moves(inst)) continue;
-    if (moving_count > 0 && flattens_beside_motion(inst, m) &&
-        flattened_triangles + m.triangle_count() <= kFlattenedTriangles) {
+    if (!traced(inst) || moves(inst) || moving_count == 0) continue;
+    if (!instanceable(inst.xf)) {  // baked in world space anyway (flat): no copy to count
+      flattened[i] = true;
+    } else if (flattens_beside_motion(inst, m) && flattened_triangles + m.triangle_count() <= kFlattenedTriangles) {
       flattened[i] = true;
       flattened_triangles += m.triangle_count();
     }
