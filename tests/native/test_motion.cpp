@@ -298,6 +298,43 @@ TEST(Motion, StillObjectsBesideATurningOneAreHitAsTheirInstances) {
   EXPECT_EQ(checked, 24);
 }
 
+// A turning object hidden from camera rays, alone (one Embree instance per motion segment, whose
+// further top-level ids carry its visibility: attach_moving) or among 8 more in Embree's motion
+// BVH: camera rays pass through it, other rays hit it where it is at their time, and it casts
+// shadows.
+TEST(Motion, AMovingObjectHiddenFromCameraRaysIsSeenByTheOthers) {
+  for (const int more : {0, 8}) {
+    Geometry g;
+    std::vector<std::string> warnings;
+    Instance inst;
+    inst.mesh = g.add_mesh(strip(), warnings);
+    inst.xf = rot_z(0);
+    inst.motion = {rot_z(0), rot_z(90 * kDeg)};
+    inst.visibility = 31u & ~1u;
+    g.add_instance(inst, warnings);
+    for (int k = 0; k < more; ++k) {
+      Instance far = inst;
+      far.visibility = 31u;
+      far.motion = {rot_z(0, 1, Vec3(1000.0f + 3.0f * float(k), 0, 0)),
+                    rot_z(90 * kDeg, 1, Vec3(1000.0f + 3.0f * float(k), 0, 0))};
+      far.xf = far.motion[0];
+      g.add_instance(far, warnings);
+    }
+    g.commit();
+    const std::string name = more ? "among 8 more" : "alone, split";
+    Hit h;
+    EXPECT_FALSE(g.intersect(down(1.5f, 0, 0.0f), 1u, &h)) << name;
+    ASSERT_TRUE(g.intersect(down(1.5f, 0, 0.0f), 2u, &h)) << name;
+    EXPECT_EQ(h.instance, 0) << name;
+    EXPECT_FALSE(g.intersect(down(1.5f, 0, 1.0f), 2u, &h)) << name << ": turned away at the end";
+    EXPECT_TRUE(g.intersect(down(0, 1.5f, 1.0f), 2u, &h)) << name;
+    EXPECT_EQ(h.instance, 0) << name;
+    EXPECT_FALSE(g.intersect(down(0, 1.5f, 1.0f), 1u, &h)) << name << ": nor at the end (a later segment's id)";
+    EXPECT_TRUE(g.occluded(down(1.5f, 0, 0.0f))) << name;
+    EXPECT_FALSE(g.occluded(down(1.5f, 0, 1.0f))) << name;
+  }
+}
+
 // Motion is baked into world-space triangles only when every moving object can be (none turns):
 // beside a turning object, whose motion BVH stays, a translating one keeps Embree's instance motion.
 TEST(Motion, ObjectsThatDoNotTurnAreBakedOnlyWhenNoneTurns) {
