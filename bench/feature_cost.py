@@ -3,7 +3,7 @@ rendered with the feature on against the same scene with it off.
 
     LANTERN_LIBRARY=build/liblantern.so blender -b --factory-startup --python bench/feature_cost.py -- \
         --feature dof|motion|motion_one|motion_sliding|motion_sponza [--repeats 3] [--width W] [--height H] \
-        [--samples 64] [--out FILE]
+        [--samples 64] [--threads 2] [--out FILE]
 
 - dof: cornell_dof (scenes/build_scenes.py: F/0.05, 6 blades, anamorphic) against a pinhole. With
   a lens every camera ray draws one more 2D sample and BDPT's light tracing one per connection;
@@ -23,16 +23,20 @@ rendered with the feature on against the same scene with it off.
   interpolation per instance per ray), the deforming grid's triangles are interpolated, and each
   hit on a moving object interpolates its transform for shading.
 
-Each render goes through the engine (bpy.ops.render.render, 2 threads: sampling a shutter needs
-RenderEngine.frame_set). The ratios use the core's render time (lt_render_status.elapsed, not the
+Each render goes through the engine (bpy.ops.render.render, 2 threads unless --threads: sampling a
+shutter needs RenderEngine.frame_set). The ratios use the core's render time (lt_render_status.elapsed, not the
 export), the process's CPU time from the core render's start to its end (the figure to trust on a
 shared machine) and the whole render's wall time, best of `--repeats` each (other processes only
-add time), the two settings alternating. Nothing asserts on time.
+add time), the two settings alternating, and the median of the on/off pairs' CPU ratios. On this
+shared machine a best of 3 moves by about 5 %; to see a change of 1-2 %, pin the render to one core
+(`taskset -c 1 setarch -R blender ... -- --threads 1 --repeats 6`: a pair's ratio then spreads by
+0.01-0.02; bench/README.md, motion blur). Nothing asserts on time.
 """
 import argparse
 import json
 import os
 import resource
+import statistics
 import sys
 
 BENCH = os.path.dirname(os.path.abspath(__file__))
@@ -71,7 +75,7 @@ def render_once(scene, integrator, args):
         return start(self, *a, **k)
     core.Render.start = timed_start
     try:
-        out = ru.render(scene, ru.LANTERN, args.samples, seed=0, threads=2, integrator=integrator)
+        out = ru.render(scene, ru.LANTERN, args.samples, seed=0, threads=args.threads, integrator=integrator)
     finally:
         core.Render.start = start
     cpu1 = _cpu()
@@ -96,17 +100,20 @@ def main(args):
                 switch(scene, key == "on")
                 times[key].append(render_once(scene, integrator, args))
         best = {k: tuple(min(t[i] for t in v) for i in range(3)) for k, v in times.items()}
-        row = dict(integrator=integrator, runs=times, best=best,
+        pair_ratios = sorted(on[1] / off[1] for on, off in zip(times["on"], times["off"]))
+        row = dict(integrator=integrator, runs=times, best=best, pair_cpu_ratio_median=statistics.median(pair_ratios),
                    core_ratio=best["on"][0] / best["off"][0], cpu_ratio=best["on"][1] / best["off"][1],
                    wall_ratio=best["on"][2] / best["off"][2])
         results.append(row)
-        print("%-13s %s: core %.3f (%.2f s / %.2f s), CPU %.3f (%.2f s / %.2f s), whole render %.3f"
+        print("%-13s %s: core %.3f (%.2f s / %.2f s), CPU %.3f (%.2f s / %.2f s), whole render %.3f, "
+              "CPU pairs' median %.3f"
               % (integrator, label, row["core_ratio"], best["on"][0], best["off"][0], row["cpu_ratio"],
-                 best["on"][1], best["off"][1], row["wall_ratio"]))
+                 best["on"][1], best["off"][1], row["wall_ratio"], row["pair_cpu_ratio_median"]))
     out = args.out or os.path.join(BENCH, "results", "%s_cost.json" % args.feature)
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     with open(out, "w") as f:
-        json.dump(dict(feature=args.feature, width=width, height=height, samples=args.samples, results=results),
+        json.dump(dict(feature=args.feature, width=width, height=height, samples=args.samples, threads=args.threads,
+                   results=results),
                   f, indent=1)
 
 
@@ -117,6 +124,7 @@ if __name__ == "__main__":
     p.add_argument("--width", type=int, default=0)
     p.add_argument("--height", type=int, default=0)
     p.add_argument("--samples", type=int, default=64)
+    p.add_argument("--threads", type=int, default=2)
     p.add_argument("--out", default=None)
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     main(p.parse_args(argv))

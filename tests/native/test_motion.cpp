@@ -166,10 +166,11 @@ TEST(Motion, InstanceMotionHitsWhereTheInterpolatedTransformIs) {
 // segment (Embree tests no bounds at the root of a one-primitive BVH), each valid over its own time
 // range; beside a few still instances it shares their BVH (build_top), unless they are flattened
 // into the top level (flattens_beside_motion); one that does not turn is traced through its
-// triangles baked in world space at each step (bakes_motion) unless its mesh is large and shared. Every way, at every
-// time the object is hit where its interpolated transform puts it and nowhere a segment would be at another time, by
-// the scene's rays and by intersect_instance's. Probed over a grid of points and times, for matrix motion (translation
-// and scale) and quaternion motion (turning, two and three steps).
+// triangles baked in world space at each step (bakes_motion) unless its mesh is large and shared.
+// Every way, at every time the object is hit where its interpolated transform puts it and nowhere
+// a segment would be at another time, by the scene's rays and by intersect_instance's. Probed over
+// a grid of points and times, for matrix motion (translation and scale) and quaternion motion
+// (turning, two and three steps).
 TEST(Motion, ALoneMovingObjectIsHitOnlyWhereItIsAtTheRaysTime) {
   struct Case {
     const char* name;
