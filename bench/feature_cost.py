@@ -14,9 +14,10 @@ rendered with the feature on against the same scene with it off.
 - motion_sliding: motion_blur_sliding (motion_blur without the turning box's animation): objects
   that move without turning, whose motion the core bakes into world-space triangles (geometry.cpp,
   bakes_motion), and the deforming grid and the camera.
-- motion_sponza: sponza_motion (the Sponza model with a sliding and a turning box under an area
-  lamp; ../shared/assets): a real model's still meshes beside Embree's motion, which the core
-  traces in world space (geometry.cpp, flattens_beside_motion).
+- motion_sponza: sponza_motion (the Sponza model from ../shared/assets under an area lamp, with
+  every kind of motion motion_blur has: a sliding and a turning box, a bulging grid, a panning
+  camera): a real model's still meshes beside Embree's motion, which the core traces in world
+  space (geometry.cpp, flattens_beside_motion).
 - motion: motion_blur (a translating and a rotating box, a deforming grid, a panning camera;
   shutter 1 frame, 3 motion steps) against motion blur off (everything at the shutter's centre).
   Every camera sample draws one time, moving instances traverse Embree's motion BVH (quaternion

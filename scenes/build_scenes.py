@@ -2062,9 +2062,10 @@ def build_sponza(scene):
 
 
 def build_sponza_motion(scene):
-    """Sponza (build_sponza) with a default-sized area lamp and two boxes moving over the shutter:
-    one sliding 2.8 m, one turning 90 degrees (keys at frames 0 and 2, rendered at 1 with a
-    shutter of 1 frame). Motion blur's cost on a real model (bench/feature_cost.py)."""
+    """Sponza (build_sponza) with a default-sized area lamp and every kind of motion issue 15
+    names, over a shutter of 1 frame at frame 1 (keys at frames 0 and 2): a box sliding 2.8 m, a
+    box turning 90 degrees, a grid bulging (deformation blur) and the camera panning 4 degrees.
+    Motion blur's cost on a real model (bench/feature_cost.py)."""
     build_sponza(scene)
     add_light(scene, "Lamp", "AREA", 800.0, (-6.0, 0.0, 4.5), size=1.0)
     slider = add_object(scene, "Sliding", mesh_box("Sliding", (0.8, 0.8, 0.8)), (-7.0, -1.0, 1.1))
@@ -2073,6 +2074,8 @@ def build_sponza_motion(scene):
     turner = add_object(scene, "Turning", mesh_box("Turning", (1.0, 1.0, 1.0)), (-5.0, -2.0, 0.5))
     assign(turner, diffuse("TurningGreen", GREEN))
     _keyframes(turner, "rotation_euler", [(0.0, 0.0, 0.0), (0.0, 0.0, math.radians(90.0))])
+    _bulging_grid(scene, (-6.0, 1.8, 1.5), (90, 0, -90), 1.5)
+    _pan(scene.camera, -4.0)
     scene.frame_current = 1
     scene.render.use_motion_blur = True
     scene.render.motion_blur_shutter = 1.0
@@ -2118,6 +2121,32 @@ def _keyframes(idblock, path, values, frames=(0, 2), owner=None):
             k.interpolation = "LINEAR"
 
 
+def _bulging_grid(scene, location, rotation, size):
+    """A 12 x 12 grid of `size` metres (smooth, blue) whose centre bulges by 0.6 size over keys at
+    frames 0 and 2: an animated shape key, deformation blur."""
+    bm = _bmesh_with_uvs()
+    bmesh.ops.create_grid(bm, x_segments=12, y_segments=12, size=0.5 * size, calc_uvs=True)
+    grid = add_object(scene, "Deforming", _smooth(_mesh("Deforming", bm), True), location, rotation)
+    assign(grid, diffuse("GridBlue", (0.15, 0.25, 0.8)))
+    grid.shape_key_add(name="Basis")
+    bulge = grid.shape_key_add(name="Bulge")
+    for v, b in zip(grid.data.vertices, bulge.data):
+        r2 = (v.co.x * v.co.x + v.co.y * v.co.y) / (size * size)
+        b.co = v.co + Vector((0.0, 0.0, 0.6 * size * math.exp(-8.0 * r2)))
+    _keyframes(bulge, "value", [0.0, 1.0], owner=grid.data.shape_keys)
+    return grid
+
+
+def _pan(cam, degrees):
+    """Keys the camera turning about world Z by `degrees` a frame through its present pose at
+    frame 1 (keys at frames 0 and 2)."""
+    cam.rotation_mode = "XYZ"
+    base = cam.rotation_quaternion.to_euler("XYZ")
+    _keyframes(cam, "rotation_euler", [(base.x, base.y, base.z - math.radians(degrees)),
+                                       (base.x, base.y, base.z + math.radians(degrees))])
+    return cam
+
+
 def build_motion_blur(scene, blur=True):
     """Issue 15's motion blur, rendered at frame 1 with a shutter of 1 frame centred on it (Cycles'
     defaults: 3 motion steps per object): a box translating 0.8 m a frame, a box spinning 120
@@ -2138,22 +2167,9 @@ def build_motion_blur(scene, blur=True):
     assign(spinner, diffuse("SpinnerGreen", GREEN))
     _keyframes(spinner, "rotation_euler",
                [(0.0, 0.0, math.radians(-120.0)), (0.0, 0.0, math.radians(120.0))])
-    bm = _bmesh_with_uvs()
-    bmesh.ops.create_grid(bm, x_segments=12, y_segments=12, size=0.5, calc_uvs=True)
-    grid = add_object(scene, "Deforming", _smooth(_mesh("Deforming", bm), True), (0.0, 1.2, 1.6), (70, 0, 0))
-    assign(grid, diffuse("GridBlue", (0.15, 0.25, 0.8)))
-    grid.shape_key_add(name="Basis")
-    bulge = grid.shape_key_add(name="Bulge")
-    for v, b in zip(grid.data.vertices, bulge.data):
-        r2 = v.co.x * v.co.x + v.co.y * v.co.y
-        b.co = v.co + Vector((0.0, 0.0, 0.6 * math.exp(-8.0 * r2)))
-    _keyframes(bulge, "value", [0.0, 1.0], owner=grid.data.shape_keys)
+    _bulging_grid(scene, (0.0, 1.2, 1.6), (70, 0, 0), 1.0)
     add_light(scene, "AreaLight", "AREA", 200.0, (0.5, -1.5, 3.0), rotation=(25, 0, 0), shape="DISK", size=1.5)
-    cam = add_camera(scene, (0.0, -4.0, 1.6), (0.0, 0.5, 0.7), lens=30.0)
-    cam.rotation_mode = "XYZ"
-    base = cam.rotation_quaternion.to_euler("XYZ")
-    _keyframes(cam, "rotation_euler", [(base.x, base.y, base.z - math.radians(8.0)),
-                                       (base.x, base.y, base.z + math.radians(8.0))])
+    _pan(add_camera(scene, (0.0, -4.0, 1.6), (0.0, 0.5, 0.7), lens=30.0), 8.0)
     scene.frame_current = 1  # keys at 0 and 2: the shutter (0.5 to 1.5) sees constant velocities
     scene.render.use_motion_blur = blur
     scene.render.motion_blur_shutter = 1.0
