@@ -2075,7 +2075,7 @@ def build_sponza_motion(scene):
     assign(turner, diffuse("TurningGreen", GREEN))
     _keyframes(turner, "rotation_euler", [(0.0, 0.0, 0.0), (0.0, 0.0, math.radians(90.0))])
     _bulging_grid(scene, (-6.0, 1.8, 1.5), (90, 0, -90), 1.5)
-    _pan(scene.camera, -4.0)
+    pan_camera(scene.camera, -4.0)
     scene.frame_current = 1
     scene.render.use_motion_blur = True
     scene.render.motion_blur_shutter = 1.0
@@ -2137,7 +2137,7 @@ def _bulging_grid(scene, location, rotation, size):
     return grid
 
 
-def _pan(cam, degrees):
+def pan_camera(cam, degrees):
     """Keys the camera turning about world Z by `degrees` a frame through its present pose at
     frame 1 (keys at frames 0 and 2)."""
     cam.rotation_mode = "XYZ"
@@ -2169,7 +2169,7 @@ def build_motion_blur(scene, blur=True):
                [(0.0, 0.0, math.radians(-120.0)), (0.0, 0.0, math.radians(120.0))])
     _bulging_grid(scene, (0.0, 1.2, 1.6), (70, 0, 0), 1.0)
     add_light(scene, "AreaLight", "AREA", 200.0, (0.5, -1.5, 3.0), rotation=(25, 0, 0), shape="DISK", size=1.5)
-    _pan(add_camera(scene, (0.0, -4.0, 1.6), (0.0, 0.5, 0.7), lens=30.0), 8.0)
+    pan_camera(add_camera(scene, (0.0, -4.0, 1.6), (0.0, 0.5, 0.7), lens=30.0), 8.0)
     scene.frame_current = 1  # keys at 0 and 2: the shutter (0.5 to 1.5) sees constant velocities
     scene.render.use_motion_blur = blur
     scene.render.motion_blur_shutter = 1.0

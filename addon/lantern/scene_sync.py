@@ -11,10 +11,15 @@ import numpy as np
 from . import core
 from .export import NO_FLAGS, export_lights, export_scene, instance_flags, instance_key, lightgroup_indices
 from .export.camera import camera_table, export_camera
+from .export.hair import hair_systems
 from .export.mesh import view_layer_value
 
-_GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume)
-_TRACED_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
+_GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume, bpy.types.Curves,
+                   bpy.types.PointCloud, bpy.types.ParticleSettings)
+_TRACED_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META', 'CURVES', 'POINTCLOUD'}
+# Types whose every instance export_scene records (the others come as a MESH instance of their
+# evaluated geometry): one of them not recorded is new.
+_RECORDED_TYPES = {'MESH', 'CURVES', 'POINTCLOUD'}
 
 
 def _key(obj):
@@ -136,21 +141,28 @@ class SceneSync:
         seen = 0
         moves = []
         for inst in depsgraph.object_instances:
-            if not inst.show_self or inst.object.type not in _TRACED_TYPES:
-                continue
-            key = instance_key(inst)
-            entry = instances.get(key)
-            if entry is None:
-                if inst.object.type == 'MESH':
-                    return None  # an instance that was not exported
-                continue
-            seen += 1
-            if instance_flags(inst, view_layer, groups) != flags.get(key, NO_FLAGS):
+            t = inst.object.type
+            base = instance_key(inst)
+            # An emitter's particle hair is an instance of its own (export_scene), shown even where
+            # the emitter is not.
+            keys = [base + ('hair',)] if t == 'MESH' and inst.show_particles and hair_systems(inst.object) else []
+            if inst.show_self and t in _TRACED_TYPES:
+                keys.append(base)
+            if keys and instance_flags(inst, view_layer, groups) != flags.get(base, NO_FLAGS):
                 return None  # holdout, light group, catcher or terminator changed: the instance is added anew
-            core_id, old = entry
-            matrix = np.array(inst.matrix_world, dtype=np.float32)
-            if core_id is not None and not np.array_equal(matrix, old):
-                moves.append((key, core_id, matrix))
+            matrix = None
+            for key in keys:
+                entry = instances.get(key)
+                if entry is None:
+                    if t in _RECORDED_TYPES:
+                        return None  # an instance that was not exported
+                    continue
+                seen += 1
+                core_id, old = entry
+                if matrix is None:
+                    matrix = np.array(inst.matrix_world, dtype=np.float32)
+                if core_id is not None and not np.array_equal(matrix, old):
+                    moves.append((key, core_id, matrix))
         return moves if seen == len(instances) else None  # else: an exported instance is gone
 
     def _close_scene(self):

@@ -46,22 +46,55 @@ def _animated_scene(scene_factory):
     return scene
 
 
-def test_persistent_data_animation_reuses_the_scene_and_equals_single_frames(scene_factory, tmp_path):
-    """`blender -b -a` with Persistent Data: one export for three frames (the box's moves are
-    instance transforms), and each frame equals the frame rendered on its own."""
-    scene = _animated_scene(scene_factory)
+def _check_kept_between_frames(scene, tmp_path, transform_updates):
+    """`blender -b -a` over the scene's frames with Persistent Data: one export, then the moves
+    as instance transforms, and each frame equal to the frame rendered on its own."""
     ru.configure(scene, ru.LANTERN, 4, 7)
     ru._exr_settings(scene)
     scene.render.use_persistent_data = True
     scene.render.filepath = str(tmp_path / "anim_")
     bpy.ops.render.render(animation=True, scene=scene.name)
     sync = engine.LAST_RENDER["scene_sync"]
-    assert sync["full_exports"] == 1 and sync["transform_updates"] == 2, sync
+    assert sync["full_exports"] == 1 and sync["transform_updates"] == transform_updates, sync
     scene.render.use_persistent_data = False
     bpy.context.window.scene = scene  # see _frame
-    for frame in (1, 2, 3):
+    for frame in range(scene.frame_start, scene.frame_end + 1):
         animated = ru.read_multilayer_exr(str(tmp_path / ("anim_%04d.exr" % frame)))["Combined"]
         scene.frame_set(frame)
         alone = ru.render(scene, ru.LANTERN, 4, seed=7).combined
         assert engine.LAST_RENDER["scene_sync"] is None
         assert np.abs(animated - alone).max() < 1e-4, frame
+
+
+def test_persistent_data_animation_reuses_the_scene_and_equals_single_frames(scene_factory, tmp_path):
+    """The box's moves are instance transforms: one export for three frames."""
+    _check_kept_between_frames(_animated_scene(scene_factory), tmp_path, transform_updates=2)
+
+
+def _moving_every_frame(scene, names):
+    for name in names:
+        for fc in scene.objects[name].animation_data.action.fcurves:
+            fc.extrapolation = 'LINEAR'
+    scene.frame_start, scene.frame_end = 1, 3
+    scene.render.resolution_x = scene.render.resolution_y = 32
+
+
+def test_persistent_data_keeps_hair_curves_and_points(scene_factory, tmp_path):
+    """A scene with particle hair, a Curves object and point clouds is kept too (each of them an
+    instance export_scene records: the emitter's hair apart from the emitter). hair_motion with
+    the hair ball held still (a moving emitter re-evaluates its particles: a geometry update, a
+    new scene, as Cycles re-syncs it) and the Curves object moving; point_cloud with a cloud
+    moving. Before, every frame of such a scene was a full export."""
+    scene = scene_factory("hair_motion")
+    scene.render.use_motion_blur = False
+    scene.objects["Ball"].animation_data_clear()
+    _moving_every_frame(scene, ["RandomCurves"])
+    _check_kept_between_frames(scene, tmp_path / "hair", transform_updates=2)
+
+    scene = scene_factory("point_cloud")
+    cloud = scene.objects["Cloud0"]
+    cloud.keyframe_insert("location", frame=1)
+    cloud.location.z += 0.2
+    cloud.keyframe_insert("location", frame=2)
+    _moving_every_frame(scene, ["Cloud0"])
+    _check_kept_between_frames(scene, tmp_path / "points", transform_updates=2)
