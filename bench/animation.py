@@ -12,13 +12,15 @@ Scenes (scenes/build_scenes.py), every F-curve extrapolated so that each frame m
   exported anew, in Lantern as in Cycles) and the bulging grid's shape key held still: a deforming
   mesh is a geometry change, which makes Lantern export a new scene.
 - hair: the hair ball with --strands strands (a quarter parents, 4 children each, as
-  bench/hair_export.py) and the camera panning 4 degrees a frame: a heavy export kept. Each engine renders frames 1 .. --frames with
-Persistent Data on, then off, then on and off again (frame_set and the output's write included,
-PNG files in a temporary folder); a frame's time is from the previous frame's write to its own
-(render_write handlers). Reported per engine and setting: the first frame (the export every render
-pays) and the median of the later frames' times over both runs, and for Lantern the median of the
-core's render time in them (lt_render_status.elapsed) and of each frame's time beside it: the
-export or the edits, the BVH builds, the frame change and the write. Nothing asserts on time (bench/README.md, animation renders).
+  bench/hair_export.py) and the camera panning 4 degrees a frame: a heavy export kept.
+Each engine renders frames 1 .. --frames with Persistent Data on, then off, then on and off again
+(frame_set and the output's write included, PNG files in a temporary folder); a frame's time is
+from the previous frame's write to its own (render_write handlers). Reported per engine and
+setting: the first frame (the export every render pays) and the median of the later frames'
+times over both runs, and for Lantern the median of the core's render time in them
+(lt_render_status.elapsed) and of each frame's time beside it: the export or the edits, the BVH
+builds, the frame change and the write. Nothing asserts on time (bench/README.md, animation
+renders).
 """
 import argparse
 import json
@@ -104,22 +106,27 @@ def main(args):
             later = [t for r in rs for t in r["frames"][1:]]
             row = dict(engine=engine_name, persistent=persistent, runs=rs,
                        first=min(r["frames"][0] for r in rs), later_median=statistics.median(later))
+            text = ""
             if engine_name == "LANTERN":
                 row["later_core_median"] = statistics.median(c for r in rs for c in r["core"][1:])
-                row["later_beside_median"] = statistics.median(t - c for r in rs
-                                                               for t, c in zip(r["frames"][1:], r["core"][1:]))
+                row["later_beside_median"] = statistics.median(
+                    t - c for r in rs for t, c in zip(r["frames"][1:], r["core"][1:]))
+                text = ", the core's render %.3f s, beside it %.3f s" % (row["later_core_median"],
+                                                                       row["later_beside_median"])
+            if rs[-1]["scene_sync"]:
+                text += ", scene_sync %s" % rs[-1]["scene_sync"]
             results.append(row)
-            print("%-8s persistent %-5s first frame %.2f s, later frames %.3f s (median of %d)%s%s"
-                  % (engine_name, persistent, row["first"], row["later_median"], len(later),
-                     ", the core's render %.3f s, beside it %.3f s" % (row["later_core_median"], row["later_beside_median"])
-                     if "later_core_median" in row else "",
-                     ", scene_sync %s" % rs[-1]["scene_sync"] if rs[-1]["scene_sync"] else ""))
-        on, off = (next(r for r in results if r["engine"] == engine_name and r["persistent"] == p) for p in (True, False))
-        print("%-8s later frames: full re-export / Persistent Data %.2f" % (engine_name, off["later_median"] / on["later_median"]))
+            print("%-8s persistent %-5s first frame %.2f s, later frames %.3f s (median of %d)%s"
+                  % (engine_name, persistent, row["first"], row["later_median"], len(later), text))
+        on, off = (next(r for r in results if r["engine"] == engine_name and r["persistent"] == p)
+                   for p in (True, False))
+        print("%-8s later frames: full re-export / Persistent Data %.2f"
+              % (engine_name, off["later_median"] / on["later_median"]))
     out = args.out or os.path.join(BENCH, "results", "animation_%s.json" % args.scene)
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     with open(out, "w") as f:
-        json.dump(dict(scene=args.scene, strands=args.strands if args.scene == "hair" else None, frames=args.frames, samples=args.samples, width=args.width, height=args.height,
+        json.dump(dict(scene=args.scene, strands=args.strands if args.scene == "hair" else None,
+                       frames=args.frames, samples=args.samples, width=args.width, height=args.height,
                        threads=args.threads, results=results), f, indent=1)
 
 

@@ -646,7 +646,9 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             rw, rh = render.region_size
             text = scene_report(summary, render.settings, warnings, st, rw * rh)
             LAST_RENDER["report"] = text
-            LAST_RENDER["scene_sync"] = dict(self._kept.counters) if persistent else None
+            # With the core's BVH builds so far: what a kept scene rebuilt (tests, benchmarks).
+            LAST_RENDER["scene_sync"] = dict(self._kept.counters, mesh_bvh_builds=stats["mesh_bvh_builds"],
+                                             top_bvh_builds=stats["top_bvh_builds"]) if persistent else None
             print(text)
             self.report({'INFO'}, text)
         except core.LanternError as e:

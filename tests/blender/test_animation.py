@@ -48,14 +48,25 @@ def _animated_scene(scene_factory):
 
 def _check_kept_between_frames(scene, tmp_path, transform_updates):
     """`blender -b -a` over the scene's frames with Persistent Data: one export, then the moves
-    as instance transforms, and each frame equal to the frame rendered on its own."""
+    as instance transforms (each frame one more top-level BVH build and no mesh's: builds counted
+    by the core), and each frame equal to the frame rendered on its own."""
     ru.configure(scene, ru.LANTERN, 4, 7)
     ru._exr_settings(scene)
     scene.render.use_persistent_data = True
     scene.render.filepath = str(tmp_path / "anim_")
-    bpy.ops.render.render(animation=True, scene=scene.name)
-    sync = engine.LAST_RENDER["scene_sync"]
+    syncs = []
+
+    def written(*_):
+        syncs.append(engine.LAST_RENDER["scene_sync"])
+    bpy.app.handlers.render_write.append(written)
+    try:
+        bpy.ops.render.render(animation=True, scene=scene.name)
+    finally:
+        bpy.app.handlers.render_write.remove(written)
+    sync = syncs[-1]
     assert sync["full_exports"] == 1 and sync["transform_updates"] == transform_updates, sync
+    assert [s["mesh_bvh_builds"] for s in syncs] == [syncs[0]["mesh_bvh_builds"]] * len(syncs), syncs
+    assert [s["top_bvh_builds"] - syncs[0]["top_bvh_builds"] for s in syncs] == list(range(len(syncs))), syncs
     scene.render.use_persistent_data = False
     bpy.context.window.scene = scene  # see _frame
     for frame in range(scene.frame_start, scene.frame_end + 1):
