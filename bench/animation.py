@@ -37,10 +37,9 @@ sys.path[:0] = [os.path.join(REPO, "addon"), os.path.join(REPO, "scenes")]
 
 def animate_every_frame(scene):
     """Extrapolates every object's F-curves linearly and holds the shape keys still."""
+    import build_scenes
     for ob in scene.objects:
-        if ob.animation_data and ob.animation_data.action:
-            for fc in ob.animation_data.action.fcurves:
-                fc.extrapolation = "LINEAR"
+        build_scenes.extrapolate_motion(ob)
         keys = getattr(getattr(ob, "data", None), "shape_keys", None)
         if keys is not None and keys.animation_data:
             keys.animation_data_clear()

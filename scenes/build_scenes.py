@@ -2121,6 +2121,13 @@ def _keyframes(idblock, path, values, frames=(0, 2), owner=None):
             k.interpolation = "LINEAR"
 
 
+def extrapolate_motion(obj):
+    """Extends obj's F-curves linearly past their keys: every frame of an animation moves it."""
+    if obj.animation_data and obj.animation_data.action:
+        for fc in obj.animation_data.action.fcurves:
+            fc.extrapolation = "LINEAR"
+
+
 def _bulging_grid(scene, location, rotation, size):
     """A 12 x 12 grid of `size` metres (smooth, blue) whose centre bulges by 0.6 size over keys at
     frames 0 and 2: an animated shape key, deformation blur."""

@@ -9,9 +9,9 @@ import bpy
 import numpy as np
 
 from . import core
-from .export import NO_FLAGS, export_lights, export_scene, instance_flags, instance_key, lightgroup_indices
+from .export import (NO_FLAGS, export_lights, export_scene, hair_key, instance_flags, instance_key,
+                     lightgroup_indices)
 from .export.camera import camera_table, export_camera
-from .export.hair import hair_systems
 from .export.mesh import view_layer_value
 
 _GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume, bpy.types.Curves,
@@ -143,9 +143,8 @@ class SceneSync:
         for inst in depsgraph.object_instances:
             t = inst.object.type
             base = instance_key(inst)
-            # An emitter's particle hair is an instance of its own (export_scene), shown even where
-            # the emitter is not.
-            keys = [base + ('hair',)] if t == 'MESH' and inst.show_particles and hair_systems(inst.object) else []
+            hair = hair_key(inst)
+            keys = [] if hair is None else [hair]
             if inst.show_self and t in _TRACED_TYPES:
                 keys.append(base)
             if keys and instance_flags(inst, view_layer, groups) != flags.get(base, NO_FLAGS):

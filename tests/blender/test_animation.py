@@ -2,6 +2,7 @@
 import bpy
 import numpy as np
 
+import build_scenes
 import render_utils as ru
 from lantern import engine
 
@@ -84,8 +85,7 @@ def test_persistent_data_animation_reuses_the_scene_and_equals_single_frames(sce
 
 def _moving_every_frame(scene, names):
     for name in names:
-        for fc in scene.objects[name].animation_data.action.fcurves:
-            fc.extrapolation = 'LINEAR'
+        build_scenes.extrapolate_motion(scene.objects[name])
     scene.frame_start, scene.frame_end = 1, 3
     scene.render.resolution_x = scene.render.resolution_y = 32
 
@@ -93,8 +93,8 @@ def _moving_every_frame(scene, names):
 def test_persistent_data_keeps_hair_curves_and_points(scene_factory, tmp_path):
     """A scene with particle hair, a Curves object and point clouds is kept too (each of them an
     instance export_scene records: the emitter's hair apart from the emitter). hair_motion with
-    the hair ball held still (a moving emitter re-evaluates its particles: a geometry update, a
-    new scene, as Cycles re-syncs it) and the Curves object moving; point_cloud with a cloud
+    the hair ball held still (a moving emitter re-evaluates its particles: Blender flags a
+    geometry update, and a new scene is exported) and the Curves object moving; point_cloud with a cloud
     moving. Before, every frame of such a scene was a full export."""
     scene = scene_factory("hair_motion")
     scene.render.use_motion_blur = False

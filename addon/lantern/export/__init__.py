@@ -33,6 +33,14 @@ def instance_key(inst):
     return (inst.object.original.as_pointer(),)
 
 
+def hair_key(inst):
+    """The key of an emitter's particle hair, an instance of its own beside the emitter's (shown
+    even where the emitter is not); None for an instance without hair."""
+    if inst.object.type == 'MESH' and inst.show_particles and hair_systems(inst.object):
+        return instance_key(inst) + ('hair',)
+    return None
+
+
 def instancer_of(inst):
     """(parent object, particle system or None) of an instance, for the Attribute node's
     Instancer type; None for an object that is no instance."""
@@ -156,11 +164,11 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
         catchers += catcher and inst.show_self and (t in ('MESH', 'CURVES', 'POINTCLOUD') or t in CONVERTIBLE_TYPES)
         if inst_flags != NO_FLAGS:
             flags[instance_key(inst)] = inst_flags
-        if t == 'MESH' and inst.show_particles and hair_systems(obj):
+        key = hair_key(inst)
+        if key is not None:
             if not hair:
                 warn_curve_shape(depsgraph, report)
             matrix = np.array(inst.matrix_world, dtype=np.float32)
-            key = instance_key(inst) + ('hair',)
             instances[key] = (meshes.export_curves_instance(obj, matrix, 'HAIR', holdout=holdout,
                                                             shadow_catcher=catcher, lightgroup=lightgroup,
                                                             key=instance_key(inst), instancer=instancer_of(inst)),
