@@ -2,7 +2,7 @@
 the native scene between frames and applies each frame's moves as edits (addon/lantern/scene_sync.py),
 against a full re-export of every frame; Cycles' own Persistent Data beside it.
 
-    blender -b --factory-startup --python bench/animation.py -- [--scene sponza|hair] [--strands 100000] \
+    blender -b --factory-startup --python bench/animation.py -- [--scene sponza|hair|hair_moving] [--strands 100000] \
         [--frames 6] [--samples 16] [--width 200] [--height 150] [--threads 2] [--engines LANTERN,CYCLES] \
         [--out FILE]
 
@@ -13,6 +13,9 @@ Scenes (scenes/build_scenes.py), every F-curve extrapolated so that each frame m
   mesh is a geometry change, which makes Lantern export a new scene.
 - hair: the hair ball with --strands strands (a quarter parents, 4 children each, as
   bench/hair_export.py) and the camera panning 4 degrees a frame: a heavy export kept.
+- hair_moving: the same hair ball, the camera still and the ball (the emitter) moving 0.05 m and
+  turning 10 degrees a frame: Blender flags each move of an emitter as a geometry update, and
+  Lantern keeps the scene when the emitter's mesh and hair read as exported (scene_sync.py).
 Each engine renders frames 1 .. --frames with Persistent Data on, then off, then on and off again
 (frame_set and the output's write included, PNG files in a temporary folder); a frame's time is
 from the previous frame's write to its own (render_write handlers). Reported per engine and
@@ -92,7 +95,10 @@ def main(args):
     else:
         scene = build_scenes.new_scene("hair_animation", (args.width, args.height), args.samples)
         build_scenes.build_hair_ball(scene, strands=args.strands // 4, children=4)
-        build_scenes.pan_camera(scene.camera, 4.0)
+        if args.scene == "hair":
+            build_scenes.pan_camera(scene.camera, 4.0)
+        else:
+            build_scenes.move_and_turn(scene.objects["Ball"], 0.05, 10.0)
     animate_every_frame(scene)
     results = []
     for engine_name in args.engines.split(","):
@@ -124,14 +130,14 @@ def main(args):
     out = args.out or os.path.join(BENCH, "results", "animation_%s.json" % args.scene)
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     with open(out, "w") as f:
-        json.dump(dict(scene=args.scene, strands=args.strands if args.scene == "hair" else None,
+        json.dump(dict(scene=args.scene, strands=args.strands if args.scene != "sponza" else None,
                        frames=args.frames, samples=args.samples, width=args.width, height=args.height,
                        threads=args.threads, results=results), f, indent=1)
 
 
 if __name__ == "__main__":
     p = argparse.ArgumentParser()
-    p.add_argument("--scene", choices=("sponza", "hair"), default="sponza")
+    p.add_argument("--scene", choices=("sponza", "hair", "hair_moving"), default="sponza")
     p.add_argument("--strands", type=int, default=100000)
     p.add_argument("--frames", type=int, default=6)
     p.add_argument("--samples", type=int, default=16)

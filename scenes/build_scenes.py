@@ -2154,6 +2154,16 @@ def pan_camera(cam, degrees):
     return cam
 
 
+def move_and_turn(obj, metres, degrees):
+    """Keys obj translating along X by `metres` and turning about its Z by `degrees` a frame
+    through its present pose at frame 1 (keys at frames 0 and 2)."""
+    x, y, z = obj.location
+    rx, ry, rz = obj.rotation_euler
+    _keyframes(obj, "location", [(x - metres, y, z), (x + metres, y, z)])
+    _keyframes(obj, "rotation_euler", [(rx, ry, rz - math.radians(degrees)), (rx, ry, rz + math.radians(degrees))])
+    return obj
+
+
 def build_motion_blur(scene, blur=True):
     """Issue 15's motion blur, rendered at frame 1 with a shutter of 1 frame centred on it (Cycles'
     defaults: 3 motion steps per object): a box translating 0.8 m a frame, a box spinning 120
@@ -2293,9 +2303,7 @@ def build_hair_motion(scene):
     a frame about its vertical axis, and a Curves object (500 random curves, Blender's
     curves_random_add) translating upward 0.5 m a frame."""
     build_hair_ball(scene, strands=300, principled=False)
-    ball = scene.objects["Ball"]
-    _keyframes(ball, "location", [(-0.6, 0.0, 0.6), (0.6, 0.0, 0.6)])
-    _keyframes(ball, "rotation_euler", [(0.0, 0.0, math.radians(-40.0)), (0.0, 0.0, math.radians(40.0))])
+    move_and_turn(scene.objects["Ball"], 0.6, 40.0)
     bpy.ops.object.curves_random_add()  # into the context's scene: moved to this one
     curves = bpy.context.active_object
     for c in list(curves.users_collection):

@@ -12,6 +12,7 @@ from . import core
 from .export import (NO_FLAGS, export_lights, export_scene, hair_key, instance_flags, instance_key,
                      lightgroup_indices)
 from .export.camera import camera_table, export_camera
+from .export.hair import hair_systems
 from .export.mesh import view_layer_value
 
 _GEOMETRY_TYPES = (bpy.types.Mesh, bpy.types.Curve, bpy.types.MetaBall, bpy.types.Volume, bpy.types.Curves,
@@ -73,7 +74,8 @@ class SceneSync:
         for u in depsgraph.updates:
             idb = u.id
             if isinstance(idb, bpy.types.Object):
-                if u.is_updated_geometry and idb.type in _TRACED_TYPES | {'VOLUME'}:
+                if u.is_updated_geometry and idb.type in _TRACED_TYPES | {'VOLUME'} \
+                        and not self._emitter_unchanged(depsgraph, idb):
                     return False
                 # Any object update: compare every instance's matrix, and the set of instances
                 # (an object hidden, shown or added needs a new scene).
@@ -130,6 +132,14 @@ class SceneSync:
         self.scene.commit()
         self._changed()
         return True
+
+    def _emitter_unchanged(self, depsgraph, obj):
+        """A particle-hair emitter flagged for geometry whose mesh and hair read as exported: a
+        move (Blender evaluates the particles of a moved emitter again)."""
+        if obj.type != 'MESH' or not hair_systems(obj):
+            return False
+        obj = obj.evaluated_get(depsgraph)
+        return self.state["meshes"].emitter_unchanged(obj, obj.matrix_world)
 
     def _moved_instances(self, depsgraph):
         """[(key, core id, new matrix)] of the exported instances that moved, or None when the

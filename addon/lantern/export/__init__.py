@@ -109,7 +109,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     report(level_set, message) receives warnings, like RenderEngine.report. camera_object
     overrides the scene camera (RenderEngine.camera_override); None with state given: no camera
     (the viewport sets its own). state, a dict, receives what viewport updates need: the
-    material exporter and each mesh instance's (core instance id, matrix) by instance_key.
+    material and mesh exporters and each mesh instance's (core instance id, matrix) by instance_key.
     motion: what moves over the shutter (export/motion.py's collect), None without motion blur.
     """
     report = _deduplicating(report)
@@ -126,6 +126,8 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     if state is None or camera_object is not None:
         materials.camera = camera_table(depsgraph, camera_object)
     meshes = MeshExporter(depsgraph, core_scene, report, materials, motion)
+    if state is not None:
+        meshes.emitters = {}
     materials.aovs = aov_indices(depsgraph.view_layer_eval)
     try:
         summary["world"] = export_world(depsgraph, core_scene, report, images, camera=materials.camera,
@@ -230,7 +232,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key, holdout=holdout,
                                                      shadow_catcher=catcher, lightgroup=lightgroup), matrix)
     if state is not None:
-        state.update(materials=materials, instances=instances, flags=flags)
+        state.update(materials=materials, meshes=meshes, instances=instances, flags=flags)
 
     summary.update(shadow_catchers=catchers, meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()

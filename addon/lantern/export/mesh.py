@@ -4,6 +4,7 @@ import bpy
 import numpy as np
 
 from .light import visibility_bits
+from .hair import hair_systems, particle_hair_arrays
 from .names import core_call, transform_problem
 from .nodes.attributes import object_random_id
 
@@ -381,6 +382,37 @@ def mesh_arrays(mesh, requests=(), warn=lambda _t: None):
                 corner_uvs=corner_uvs, material_slots=material_slots, attributes=attributes, **texspace)
 
 
+_NOT_KEPT = object()  # equal to no arrays (_same)
+
+
+def _same(a, b):
+    """Exact equality of export arrays: dicts, sequences, numpy arrays and plain values."""
+    if isinstance(a, dict) or isinstance(b, dict):
+        return isinstance(a, dict) and isinstance(b, dict) and a.keys() == b.keys() \
+            and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.dtype == b.dtype \
+            and np.array_equal(a, b)
+    if isinstance(a, (list, tuple)) or isinstance(b, (list, tuple)):
+        return isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)) and len(a) == len(b) \
+            and all(_same(x, y) for x, y in zip(a, b))
+    return a == b
+
+
+def _same_strands(new, old, matrix_world):
+    """particle_hair_arrays' (points, offsets, slots) the same up to the rounding of reading keys
+    back into object space: offsets and slots exactly, keys within 1e-5 of their world-space extent
+    once placed by matrix_world, radii within 1e-5 of the largest."""
+    if new[0].shape != old[0].shape or not _same(new[1:], old[1:]):
+        return False
+    m = np.asarray(matrix_world, dtype=np.float64)
+    p, q = new[0].astype(np.float64), old[0].astype(np.float64)
+    extent = 1.0 + np.abs(p[:, :3] @ m[:3, :3].T + m[:3, 3]).max(initial=0.0)
+    moved = np.abs((p[:, :3] - q[:, :3]) @ m[:3, :3].T).max(initial=0.0)
+    radius = np.abs(p[:, 3] - q[:, 3]).max(initial=0.0)
+    return bool(moved <= 1e-5 * extent and radius <= 1e-5 * np.abs(q[:, 3]).max(initial=0.0))
+
+
 def open_edge_count(triangles):
     """Edges used by exactly one triangle (0 for a closed mesh)."""
     t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -403,6 +435,10 @@ class MeshExporter:
         self.mesh_ids = {}  # geometry key -> core mesh id, or None for empty geometry
         self.open_edges = {}  # geometry key -> edges with one triangle (meshes with volumes only)
         self.instance_count = 0
+        # Original object pointer -> {'mesh': mesh_arrays, 'hair': (points, offsets, slots)} of
+        # each particle-hair emitter, kept for emitter_unchanged (a dict when the scene is kept:
+        # the viewport's, Persistent Data's), 16 bytes a hair key beside the core's copy.
+        self.emitters = None
 
     def _geometry_key(self, obj):
         if obj.type == 'MESH' and obj.data is not None:
@@ -412,7 +448,10 @@ class MeshExporter:
 
     def _mesh_id(self, obj, warn_empty=True, deform=False):
         key = self._geometry_key(obj)
+        emitter = self.emitters is not None and obj.type == 'MESH' and hair_systems(obj)
         if key in self.mesh_ids:
+            if emitter:  # arrays read for another object, not kept: emitter_unchanged says no
+                self.emitters.setdefault(obj.original.as_pointer(), {})['mesh'] = _NOT_KEPT
             return self.mesh_ids[key]
         mesh_id = None
         mesh, temporary = None, False
@@ -424,6 +463,8 @@ class MeshExporter:
             warn = lambda t: self.report({'WARNING'}, "Object '%s': %s" % (obj.name, t))  # noqa: E731
             requests = self.materials.attributes.mesh_keys()
             arrays = mesh_arrays(mesh, requests, warn) if mesh is not None else None
+            if emitter:
+                self.emitters.setdefault(obj.original.as_pointer(), {})['mesh'] = arrays
             if arrays is None:
                 if warn_empty:
                     self.report({'WARNING'}, "Object '%s' has no faces, skipped" % obj.name)
@@ -494,7 +535,7 @@ class MeshExporter:
         'CURVES' (a Curves object) or 'POINTCLOUD'; key: the object instance's instance_key, for
         its transform's motion; the strands' deformation comes from the Motion's samples;
         instancer as export_instance's. Returns the core instance id or None."""
-        from .hair import curves_arrays, particle_hair_arrays, pointcloud_arrays
+        from .hair import curves_arrays, pointcloud_arrays
         problem = transform_problem(matrix_world)
         if problem is not None:
             self.report({'WARNING'}, "Object '%s' left out: %s" % (obj.name, problem))
@@ -512,6 +553,8 @@ class MeshExporter:
             else:
                 points = pointcloud_arrays(obj.data)
                 args = None if points is None else (points, None, None)
+            if self.emitters is not None and kind == 'HAIR':
+                self.emitters.setdefault(obj.original.as_pointer(), {})['hair'] = args
             deform = None
             if args is not None and self.motion is not None:
                 deform = self.motion.strand_deformation(obj, args[0])
@@ -536,6 +579,26 @@ class MeshExporter:
         if instance is not None:
             self.instance_count += 1
         return instance
+
+    def emitter_unchanged(self, obj, matrix_world):
+        """Whether a particle-hair emitter's evaluated geometry is still what the export recorded,
+        so that the kept scene only moves it: Blender flags every move of an emitter as a geometry
+        update (its particles are evaluated again). The mesh must read the same to the bit; the hair
+        keys, read back from Blender's world-space float32 path cache into object space, to
+        rounding: within 1e-5 of the strands' world-space extent when placed by matrix_world."""
+        kept = (self.emitters or {}).get(obj.original.as_pointer())
+        if not kept:
+            return False
+        silent = lambda *_: None  # noqa: E731 (the export reported them)
+        if 'mesh' in kept:
+            mesh = mesh_arrays(obj.data, self.materials.attributes.mesh_keys(), silent)
+            if not _same(mesh, kept['mesh']):
+                return False
+        if 'hair' in kept:
+            hair, old = particle_hair_arrays(obj, silent), kept['hair']
+            if (hair is None) != (old is None) or (hair is not None and not _same_strands(hair, old, matrix_world)):
+                return False
+        return True
 
     def _check_adaptive(self, obj):
         """Cycles' experimental adaptive subdivision (dicing by screen size) is not done."""
