@@ -12,6 +12,7 @@
 // Cycles' closures return f cos; Lantern's f excludes the cosine (the integrator multiplies
 // |wi.z|), so each value here is divided by |wi.z|.
 #include <cmath>
+#include <cstring>
 
 #include "shading/bsdf.h"
 
@@ -53,21 +54,37 @@ float log_bessel_I0(float x) {
   if (x > 12.0f) return x + 0.5f * (1.0f / (8.0f * x) - std::log(2 * kPi) - std::log(x));
   return std::log(bessel_I0(x));
 }
-// The logistic restricted to [-pi, pi] and renormalised.
-float trimmed_logistic(float x, float s) {
-  const float scale = 1 - 2 * logistic_cdf(-kPi, s);
+// The logistic restricted to [-pi, pi] and renormalised; c = logistic_cdf(-pi, s).
+float trimmed_logistic(float x, float s, float c) {
+  const float scale = 1 - 2 * c;
   return scale > 0 ? logistic(x, s) / scale : 0.0f;
 }
-float sample_trimmed_logistic(float u, float s) {
-  const float c = logistic_cdf(-kPi, s);
+float sample_trimmed_logistic(float u, float s, float c) {
   const float x = -s * std::log(1 / (u * (1 - 2 * c) + c) - 1);
   return clamp(x, -kPi, kPi);
 }
+// What d'Eon et al.'s Mp needs of a variance v alone (kept per lobe parameters: HairTerms).
+struct MpTerms {
+  float v, inv_v, tail;                 // tail: log(1 / (2 v)) for v <= 0.1, else 2 v sinh(1 / v)
+  float exp_m2v;                        // exp(-2 / v), for sampling
+  double inv_v_exact, log_v, log_norm;  // longitudinal_exact's 1 / v, log v, log(1 - exp(-2 / v))
+};
+MpTerms mp_terms(float v) {
+  MpTerms t;
+  t.v = v;
+  t.inv_v = 1 / v;
+  t.tail = v <= 0.1f ? std::log(0.5f * t.inv_v) : std::sinh(t.inv_v) * 2 * v;
+  t.exp_m2v = std::exp(-2 / v);
+  t.inv_v_exact = 1 / double(v);
+  t.log_v = std::log(double(v));
+  t.log_norm = std::log1p(-std::exp(-2 / double(v)));
+  return t;
+}
 // d'Eon et al.'s Mp for variance v (the log form for small v avoids overflow).
-float longitudinal(float sin_i, float cos_i, float sin_o, float cos_o, float v) {
-  const float inv_v = 1 / v, cos_arg = cos_i * cos_o * inv_v, sin_arg = sin_i * sin_o * inv_v;
-  if (v <= 0.1f) return std::exp(log_bessel_I0(cos_arg) - sin_arg - inv_v + 0.6931f + std::log(0.5f * inv_v));
-  return std::exp(-sin_arg) * bessel_I0(cos_arg) / (std::sinh(inv_v) * 2 * v);
+float longitudinal(float sin_i, float cos_i, float sin_o, float cos_o, const MpTerms& m) {
+  const float cos_arg = cos_i * cos_o * m.inv_v, sin_arg = sin_i * sin_o * m.inv_v;
+  if (m.v <= 0.1f) return std::exp(log_bessel_I0(cos_arg) - sin_arg - m.inv_v + 0.6931f + m.tail);
+  return std::exp(-sin_arg) * bessel_I0(cos_arg) / m.tail;
 }
 // log I0(|x|) to 5e-7 relative in I0 (Abramowitz and Stegun 9.8.1 and 9.8.2; measured
 // against std::cyl_bessel_i over 0 .. 700, which took 15 times as long: 14 % of a hair render).
@@ -89,30 +106,41 @@ double log_bessel_I0_accurate(double x) {
 }
 // The same Mp with an accurate I0 (Cycles' series stops after 10 terms, a few percent low near
 // its switch to the asymptotic form at 12): the density d'Eon's sampling draws exactly, for pdfs.
-float longitudinal_exact(float sin_i, float cos_i, float sin_o, float cos_o, float v) {
-  const double x = double(cos_i) * cos_o / v, b = double(sin_i) * sin_o / v;
-  return float(std::exp(log_bessel_I0_accurate(x) - b - 1 / double(v) - std::log(double(v)) -
-                        std::log1p(-std::exp(-2 / double(v)))));
+float longitudinal_exact(float sin_i, float cos_i, float sin_o, float cos_o, const MpTerms& m) {
+  const double x = double(cos_i) * cos_o / m.v, b = double(sin_i) * sin_o / m.v;
+  return float(std::exp(log_bessel_I0_accurate(x) - b - m.inv_v_exact - m.log_v - m.log_norm));
 }
 // The density over solid angle of the elevation principled_sample draws for a lobe: theta' from
 // Mp cos theta', then theta' + delta, folded back over the pole (sin kept, |cos|). Each theta'
-// that lands on theta_i adds Mp(theta') cos theta'; the solid angle divides by cos theta_i.
-float tilted_density(float sin_i, float cos_i, float sin_o, float cos_o, float v, float delta) {
+// that lands on theta_i (elevation e, sin_i and cos_i) adds Mp(theta') cos theta'; the solid angle
+// divides by cos theta_i.
+float tilted_density(float e, float cos_i, float sin_o, float cos_o, const MpTerms& m, float delta) {
   if (!(cos_i > 0)) return 0;
-  const float e = std::asin(clamp(sin_i, -1.0f, 1.0f));
   float sum = 0;
   for (float t : {e - delta, kPi - e - delta, -kPi - e - delta}) {
     if (std::abs(t) > 0.5f * kPi) continue;
     const float c = std::cos(t);
-    sum += longitudinal_exact(std::sin(t), c, sin_o, cos_o, v) * c;
+    sum += longitudinal_exact(std::sin(t), c, sin_o, cos_o, m) * c;
   }
   return sum / cos_i;
 }
+// sin and cos of the cuticle angle alpha, 2 alpha and 4 alpha.
+struct Tilt {
+  float s1, c1, s2, c2, s4, c4;
+};
+Tilt tilt_terms(float alpha) {
+  Tilt t;
+  t.s1 = std::sin(alpha);
+  t.c1 = cos_from_sin(t.s1);
+  t.s2 = 2 * t.s1 * t.c1;
+  t.c2 = t.c1 * t.c1 - t.s1 * t.s1;
+  t.s4 = 2 * t.s2 * t.c2;
+  t.c4 = t.c2 * t.c2 - t.s2 * t.s2;
+  return t;
+}
 // sin and cos of theta_i tilted by the cuticle angle for R (2 alpha), TT (-alpha), TRT (-4 alpha).
-void alpha_angles(float sin_i, float cos_i, float alpha, float out[6]) {
-  const float s1 = std::sin(alpha), c1 = cos_from_sin(s1);
-  const float s2 = 2 * s1 * c1, c2 = c1 * c1 - s1 * s1;
-  const float s4 = 2 * s2 * c2, c4 = c2 * c2 - s2 * s2;
+void alpha_angles(float sin_i, float cos_i, const Tilt& a, float out[6]) {
+  const float s1 = a.s1, c1 = a.c1, s2 = a.s2, c2 = a.c2, s4 = a.s4, c4 = a.c4;
   out[0] = sin_i * c2 + cos_i * s2;
   out[1] = std::abs(cos_i * c2 - sin_i * s2);
   out[2] = sin_i * c1 - cos_i * s1;
@@ -172,6 +200,69 @@ void hair_out(const Lobe& l, const HairFrame& f, const Vec3& wo, HairOut* o) {
   for (int p = 0; p < 4; ++p) o->ap_energy[p] = total > 0 ? o->ap_energy[p] / total : 0.0f;
 }
 
+// What a lobe's parameters determine: the Mp terms of each variance, the logistic's trim and the
+// tilt. Kept per thread for the last parameters (the same for every vertex of a material without
+// textured inputs), compared bit for bit: a pure function of them, so renders stay the same bits.
+struct HairTerms {
+  MpTerms tt, r, trt, coat;  // variances v / 4, v, 4 v and the R lobe's m0
+  float cdf_pi;              // logistic_cdf(-pi, s)
+  Tilt tilt, untilt;         // alpha and -alpha
+};
+const HairTerms& hair_terms(const Lobe& l) {
+  thread_local struct {
+    float key[4];
+    bool valid = false;
+    HairTerms t;
+  } last;
+  const float key[4] = {l.hair_roughness, l.hair_m0, l.hair_radial, l.hair_tilt};
+  if (last.valid && std::memcmp(key, last.key, sizeof key) == 0) return last.t;
+  std::memcpy(last.key, key, sizeof key);
+  last.valid = true;
+  HairTerms& t = last.t;
+  const float v = l.hair_roughness;
+  t.tt = mp_terms(0.25f * v);
+  t.r = mp_terms(v);
+  t.trt = mp_terms(4 * v);
+  t.coat = mp_terms(l.hair_m0);
+  t.cdf_pi = logistic_cdf(-kPi, l.hair_radial);
+  t.tilt = tilt_terms(l.hair_tilt);
+  t.untilt = tilt_terms(-l.hair_tilt);
+  return t;
+}
+
+// What a lobe and wo determine: the fibre frame, wo's angles and attenuations. A vertex asks three
+// times (the light's eval, the sample, the sampled direction's eval): the last is kept per thread,
+// as hair_terms.
+struct HairSetup {
+  bool ok;
+  HairFrame f;
+  HairOut o;
+};
+const HairSetup& hair_setup(const Lobe& l, const Vec3& wo) {
+  thread_local struct {
+    float key[10];
+    bool valid = false;
+    HairSetup s;
+  } last;
+  const float key[10] = {wo.x,
+                         wo.y,
+                         wo.z,
+                         l.hair_tangent.x,
+                         l.hair_tangent.y,
+                         l.hair_tangent.z,
+                         l.eta,
+                         l.hair_sigma[0],
+                         l.hair_sigma[1],
+                         l.hair_sigma[2]};
+  if (last.valid && std::memcmp(key, last.key, sizeof key) == 0) return last.s;
+  std::memcpy(last.key, key, sizeof key);
+  last.valid = true;
+  HairSetup& s = last.s;
+  s.ok = hair_frame(l, wo, &s.f);
+  if (s.ok) hair_out(l, s.f, wo, &s.o);
+  return s;
+}
+
 // The share of uniform-sphere samples in principled_sample: F, whose tilted Mp lacks the
 // Jacobian, is not proportional to the d'Eon sampling density where the untilted angle nears the
 // fibre's axis (F / pdf grows like 1 / cos theta', a variance without bound: fireflies in hair);
@@ -185,36 +276,39 @@ constexpr float kDefensive = 0.05f;
 // percent. Here the pdf is the density, so the estimate of F is unbiased.
 Spectrum principled_eval(const Lobe& l, const Vec3& wo, const Vec3& wi, float* pdf) {
   *pdf = 0;
-  HairFrame f;
-  if (!hair_frame(l, wo, &f)) return Spectrum(0.0f);
-  HairOut o;
-  hair_out(l, f, wo, &o);
+  const HairSetup& s = hair_setup(l, wo);
+  if (!s.ok) return Spectrum(0.0f);
+  const HairFrame& f = s.f;
+  const HairOut& o = s.o;
+  const HairTerms& t = hair_terms(l);
   const float sin_i = dot(wi, f.x), cos_i = cos_from_sin(sin_i);
   const float phi = std::atan2(dot(wi, f.z), dot(wi, f.y)) - o.phi_o;
   float ang[6];
-  alpha_angles(sin_i, cos_i, l.hair_tilt, ang);
-  const float v = l.hair_roughness;
+  alpha_angles(sin_i, cos_i, t.tilt, ang);
+  const float e = std::asin(clamp(sin_i, -1.0f, 1.0f));  // theta_i
+  const MpTerms* sampled[3] = {&t.r, &t.tt, &t.trt};
+  const MpTerms* valued[3] = {&t.coat, &t.tt, &t.trt};
   Spectrum F(0.0f);
   float p_total = 0;
   for (int p = 0; p < 3; ++p) {
-    const float vp = p == 0 ? v : p == 1 ? 0.25f * v : 4 * v;
-    const float np = trimmed_logistic(wrap_angle(phi - delta_phi(p, o.gamma_o, o.gamma_t)), l.hair_radial);
-    const float mp = longitudinal(ang[2 * p], ang[2 * p + 1], o.sin_o, o.cos_o, p == 0 ? l.hair_m0 : vp);
+    const float np = trimmed_logistic(wrap_angle(phi - delta_phi(p, o.gamma_o, o.gamma_t)), l.hair_radial, t.cdf_pi);
+    const float mp = longitudinal(ang[2 * p], ang[2 * p + 1], o.sin_o, o.cos_o, *valued[p]);
     F += o.ap[p] * (mp * np);
     const float delta = p == 0 ? -2 * l.hair_tilt : p == 1 ? l.hair_tilt : 4 * l.hair_tilt;
-    p_total += o.ap_energy[p] * tilted_density(sin_i, cos_i, o.sin_o, o.cos_o, vp, delta) * np;
+    p_total += o.ap_energy[p] * tilted_density(e, cos_i, o.sin_o, o.cos_o, *sampled[p], delta) * np;
   }
-  F += o.ap[3] * (longitudinal(sin_i, cos_i, o.sin_o, o.cos_o, 4 * v) * (0.5f * kInvPi));
-  p_total += o.ap_energy[3] * longitudinal_exact(sin_i, cos_i, o.sin_o, o.cos_o, 4 * v) * (0.5f * kInvPi);
+  F += o.ap[3] * (longitudinal(sin_i, cos_i, o.sin_o, o.cos_o, t.trt) * (0.5f * kInvPi));
+  p_total += o.ap_energy[3] * longitudinal_exact(sin_i, cos_i, o.sin_o, o.cos_o, t.trt) * (0.5f * kInvPi);
   *pdf = kDefensive * (0.25f * kInvPi) + (1 - kDefensive) * p_total;
   return F;
 }
 
 bool principled_sample(const Lobe& l, const Vec3& wo, Vec2 u, float u_extra, Vec3* wi) {
-  HairFrame f;
-  if (!hair_frame(l, wo, &f)) return false;
-  HairOut o;
-  hair_out(l, f, wo, &o);
+  const HairSetup& s = hair_setup(l, wo);
+  if (!s.ok) return false;
+  const HairFrame& f = s.f;
+  const HairOut& o = s.o;
+  const HairTerms& t = hair_terms(l);
   if (u_extra < kDefensive) {
     *wi = sample_uniform_sphere(u);
     return true;
@@ -227,22 +321,20 @@ bool principled_sample(const Lobe& l, const Vec3& wo, Vec2 u, float u_extra, Vec
     ux -= o.ap_energy[p];
   }
   const float u_phi = clamp(o.ap_energy[p] > 0 ? ux / o.ap_energy[p] : 0.5f, 0.0f, kOneMinusEpsilon);
-  float v = l.hair_roughness;
-  if (p == 1) v *= 0.25f;
-  if (p >= 2) v *= 4.0f;
+  const MpTerms& m = p == 0 ? t.r : p == 1 ? t.tt : t.trt;
   // d'Eon et al.'s Mp sampling (as Cycles).
   const float u1 = std::max(u.x, 1e-5f);
-  const float fac = 1 + v * std::log(u1 + (1 - u1) * std::exp(-2 / v));
+  const float fac = 1 + m.v * std::log(u1 + (1 - u1) * m.exp_m2v);
   float sin_i = -fac * o.sin_o + cos_from_sin(fac) * std::cos(2 * kPi * u.y) * o.cos_o;
   float cos_i = cos_from_sin(sin_i);
   if (p < 3) {
     float ang[6];
-    alpha_angles(sin_i, cos_i, -l.hair_tilt, ang);
+    alpha_angles(sin_i, cos_i, t.untilt, ang);
     sin_i = ang[2 * p];
     cos_i = ang[2 * p + 1];
   }
-  const float phi =
-      p < 3 ? delta_phi(p, o.gamma_o, o.gamma_t) + sample_trimmed_logistic(u_phi, l.hair_radial) : 2 * kPi * u_phi;
+  const float phi = p < 3 ? delta_phi(p, o.gamma_o, o.gamma_t) + sample_trimmed_logistic(u_phi, l.hair_radial, t.cdf_pi)
+                          : 2 * kPi * u_phi;
   const float phi_i = o.phi_o + phi;
   *wi = f.x * sin_i + f.y * (cos_i * std::cos(phi_i)) + f.z * (cos_i * std::sin(phi_i));
   return is_finite(*wi);
