@@ -10,7 +10,7 @@ import numpy as np
 
 from . import core
 from .export import (NO_FLAGS, export_lights, export_scene, hair_key, instance_flags, instance_key,
-                     lightgroup_indices)
+                     instancer_of, lightgroup_indices)
 from .export.camera import camera_table, export_camera
 from .export.hair import hair_systems
 from .export.mesh import view_layer_value
@@ -86,8 +86,11 @@ class SceneSync:
             elif isinstance(idb, bpy.types.Light):
                 lights = True
             elif isinstance(idb, bpy.types.ShaderNodeTree):
-                # A node group (or an embedded tree) changed: re-translate every material.
-                materials.extend(m for m in bpy.data.materials if m.node_tree is not None)
+                # A material's own tree changed (an animated node value), or a node group: its
+                # material, or every material.
+                tree = idb.original
+                owners = [m for m in bpy.data.materials if m.node_tree is not None and m.node_tree.original == tree]
+                materials.extend(owners or [m for m in bpy.data.materials if m.node_tree is not None])
             elif isinstance(idb, (bpy.types.World, bpy.types.Image, bpy.types.Collection)
                             + _GEOMETRY_TYPES):
                 return False
@@ -103,6 +106,8 @@ class SceneSync:
             if table != exporter.camera:
                 exporter.camera = table
                 materials = [m for m in bpy.data.materials if m.original.as_pointer() in exporter.ids]
+        # Translated as the depsgraph evaluates them (animated values); bpy.data's are the originals.
+        materials = list({m.original.as_pointer(): m.evaluated_get(depsgraph) for m in materials}.values())
         # Scene updates (render settings) need nothing here: renders take their settings anew.
         if not (transforms or lights or materials or camera_object is not None):
             return True
@@ -146,6 +151,7 @@ class SceneSync:
         set of instances changed (a new scene is needed)."""
         instances = self.state["instances"]
         flags = self.state.get("flags", {})
+        meshes = self.state["meshes"]
         view_layer = depsgraph.view_layer_eval
         groups = lightgroup_indices(view_layer)
         seen = 0
@@ -159,6 +165,8 @@ class SceneSync:
                 keys.append(base)
             if keys and instance_flags(inst, view_layer, groups) != flags.get(base, NO_FLAGS):
                 return None  # holdout, light group, catcher or terminator changed: the instance is added anew
+            if keys and not meshes.values_unchanged(inst, base, instancer_of(inst)):
+                return None  # an animated colour, pass index, ray visibility or object attribute
             matrix = None
             for key in keys:
                 entry = instances.get(key)

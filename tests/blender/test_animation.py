@@ -180,3 +180,64 @@ def test_persistent_data_exports_an_emitter_whose_geometry_changes(scene_factory
     (tmp_path / "hair").mkdir()
     syncs, _ = _kept_animation(scene, tmp_path / "hair", 4, 7)
     _check_syncs(syncs, transform_updates=0, full_exports=3)
+
+
+def _animated_box_material(scene):
+    """cornell_area at 32 x 32 over frames 1-3 with the tall box in a material of its own (the
+    default Principled BSDF) that the caller animates: (box, material's node tree, its BSDF)."""
+    scene.render.resolution_x = scene.render.resolution_y = 32
+    scene.frame_start, scene.frame_end = 1, 3
+    box = scene.objects["TallBox"]
+    mat = bpy.data.materials.new("Animated")
+    mat.use_nodes = True
+    box.material_slots[0].material = mat
+    return box, mat.node_tree, mat.node_tree.nodes["Principled BSDF"]
+
+
+def _keyframes(owner, path, values):
+    for frame, value in enumerate(values, start=1):
+        setattr(owner, path, value)
+        owner.keyframe_insert(path, frame=frame)
+
+
+def test_persistent_data_follows_animated_materials_and_object_values(scene_factory, tmp_path):
+    """A keyframed Base Color is a material update: the material translated as the depsgraph
+    evaluates it (bpy.data's is the original, which keeps frame 1's colour). Object Info's Color
+    and Object Index, ray visibility and a custom property the Attribute node reads, keyframed, are
+    values the core instance was added with: a new scene each frame. Each frame equals the frame
+    rendered alone (before, the kept scene rendered frame 1's values at every frame)."""
+    scene = scene_factory("cornell_area")
+    _, _, bsdf = _animated_box_material(scene)
+    _keyframes(bsdf.inputs["Base Color"], "default_value", [(1, 0, 0, 1), (0, 1, 0, 1), (0, 0, 1, 1)])
+    syncs, frames = _kept_animation(scene, tmp_path / "material", 4, 7)
+    assert syncs[-1]["full_exports"] == 1 and syncs[-1]["material_updates"] == 2, syncs[-1]
+    for frame, animated in zip((1, 2, 3), frames):
+        assert np.abs(animated - _alone(scene, frame, 4, 7)).max() < 1e-4, frame
+
+    def object_info(output):
+        scene = scene_factory("cornell_area")
+        box, tree, bsdf = _animated_box_material(scene)
+        info = tree.nodes.new("ShaderNodeObjectInfo")
+        tree.links.new(info.outputs[output], bsdf.inputs["Base Color"])
+        return scene, box
+
+    scene, box = object_info("Color")
+    _keyframes(box, "color", [(1, 0, 0, 1), (0, 1, 0, 1), (0, 0, 1, 1)])
+    _check_kept_between_frames(scene, tmp_path / "color", transform_updates=0, full_exports=3)
+    scene, box = object_info("Object Index")  # pass index 0, 1, 0: black, white, black
+    _keyframes(box, "pass_index", [0, 1, 0])
+    _check_kept_between_frames(scene, tmp_path / "index", transform_updates=0, full_exports=3)
+    scene, box = object_info("Color")
+    _keyframes(box, "visible_camera", [True, False, True])
+    _check_kept_between_frames(scene, tmp_path / "visibility", transform_updates=0, full_exports=3)
+
+    scene = scene_factory("cornell_area")
+    box, tree, bsdf = _animated_box_material(scene)
+    attribute = tree.nodes.new("ShaderNodeAttribute")
+    attribute.attribute_type, attribute.attribute_name = 'OBJECT', "tint"
+    tree.links.new(attribute.outputs["Color"], bsdf.inputs["Base Color"])
+    box["tint"] = 0.0
+    for frame, value in enumerate((0.1, 0.9, 0.4), start=1):
+        box["tint"] = value
+        box.keyframe_insert('["tint"]', frame=frame)
+    _check_kept_between_frames(scene, tmp_path / "attribute", transform_updates=0, full_exports=3)

@@ -128,6 +128,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     meshes = MeshExporter(depsgraph, core_scene, report, materials, motion)
     if state is not None:
         meshes.emitters = {}
+        meshes.instance_values = {}
     materials.aovs = aov_indices(depsgraph.view_layer_eval)
     try:
         summary["world"] = export_world(depsgraph, core_scene, report, images, camera=materials.camera,

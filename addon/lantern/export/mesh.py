@@ -256,6 +256,13 @@ def object_values(obj, keys, instancer=None):
     return out
 
 
+def instance_values(obj, object_keys, instancer=None):
+    """What a core instance takes from its object beside its geometry and transform: ray
+    visibility bits, Object Info's Color and Object Index, the Attribute node's object values
+    (object_values)."""
+    return visibility_bits(obj), tuple(obj.color), obj.pass_index, object_values(obj, object_keys, instancer)
+
+
 def view_layer_value(depsgraph, name):
     """The Attribute node's View Layer type as Cycles 3.4 resolves it (resolve_view_layer_attributes,
     BKE_view_layer_find_rgba_attribute): name on the view layer, then the scene, then its world
@@ -439,6 +446,9 @@ class MeshExporter:
         # each particle-hair emitter, kept for emitter_unchanged (a dict when the scene is kept:
         # the viewport's, Persistent Data's), 16 bytes a hair key beside the core's copy.
         self.emitters = None
+        # instance_key -> [(how many object keys, instance_values)] of each core instance added for
+        # it, kept for values_unchanged (a dict when the scene is kept).
+        self.instance_values = None
 
     def _geometry_key(self, obj):
         if obj.type == 'MESH' and obj.data is not None:
@@ -515,19 +525,8 @@ class MeshExporter:
                         "becomes (Cycles 3.4 renders such objects black)" % obj.name)
         self._check_closed(obj, material_ids)
         self._check_adaptive(obj)
-        if random_id is None:
-            random_id = object_random_id(obj.name)
-        instance = core_call(self.core_scene, self.report, "Object '%s'" % obj.name, "add_instance",
-                             mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
-                             pass_index=obj.pass_index, random_id=random_id,
-                             attributes=object_values(obj, self.materials.attributes.object_keys(), instancer),
-                             motion=motion,
-                             cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
-                             shadow_catcher=shadow_catcher, terminator=terminator_of(obj),
-                             lightgroup=lightgroup)
-        if instance is not None:
-            self.instance_count += 1
-        return instance
+        return self._add_instance("Object '%s'" % obj.name, obj, mesh_id, matrix_world, material_ids, random_id,
+                                  instancer, motion, key, holdout, shadow_catcher, lightgroup)
 
     def export_curves_instance(self, obj, matrix_world, kind, random_id=None, holdout=False, lightgroup=0,
                                shadow_catcher=False, key=None, instancer=None):
@@ -563,22 +562,38 @@ class MeshExporter:
         mesh_id = self.mesh_ids[geometry]
         if mesh_id is None:
             return None
-        if random_id is None:
-            random_id = object_random_id(obj.name)
         motion = None
         if self.motion is not None and key is not None:
             motion = self.motion.transforms(key, matrix_world, obj.name)
+        return self._add_instance(subject, obj, mesh_id, matrix_world, material_ids, random_id, instancer, motion,
+                                  key, holdout, shadow_catcher, lightgroup)
+
+    def _add_instance(self, subject, obj, mesh_id, matrix_world, material_ids, random_id, instancer, motion, key,
+                      holdout, shadow_catcher, lightgroup):
+        if random_id is None:
+            random_id = object_random_id(obj.name)
+        object_keys = self.materials.attributes.object_keys()
+        values = instance_values(obj, object_keys, instancer)
+        visibility, color, pass_index, attributes = values
         instance = core_call(self.core_scene, self.report, subject, "add_instance",
-                             mesh_id, matrix_world, material_ids, visibility_bits(obj), color=tuple(obj.color),
-                             pass_index=obj.pass_index, random_id=random_id,
-                             attributes=object_values(obj, self.materials.attributes.object_keys(), instancer),
-                             motion=motion,
+                             mesh_id, matrix_world, material_ids, visibility, color=color,
+                             pass_index=pass_index, random_id=random_id, attributes=attributes, motion=motion,
                              cryptomatte=self.materials.cryptomatte.instance(obj), holdout=holdout,
                              shadow_catcher=shadow_catcher, terminator=terminator_of(obj),
                              lightgroup=lightgroup)
         if instance is not None:
             self.instance_count += 1
+            if self.instance_values is not None and key is not None:
+                self.instance_values.setdefault(key, []).append((len(object_keys), values))
         return instance
+
+    def values_unchanged(self, inst, key, instancer):
+        """Whether the object of depsgraph instance inst (instance_key key) still gives its core
+        instances the values they were added with (instance_values): the core cannot change them in
+        place, so an animated one needs a new scene."""
+        object_keys = self.materials.attributes.object_keys()
+        return all(instance_values(inst.object, object_keys[:n], instancer) == values
+                   for n, values in self.instance_values.get(key, ()))
 
     def emitter_unchanged(self, obj, matrix_world):
         """Whether a particle-hair emitter's evaluated geometry is still what the export recorded,
