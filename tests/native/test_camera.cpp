@@ -233,7 +233,10 @@ TEST(Camera, OrthographicRaysProjectBackToTheirFilmPosition) {
       const lt::Vec2 u = sampler.next_2d();
       lt::Ray r;
       ASSERT_TRUE(cam.generate(x, y, u, &r));
-      const float t = r.tmin * 1.001f + (r.tmax * 0.999f - r.tmin * 1.001f) * std::pow(sampler.next_1d(), 3.0f);
+      // With a lens the rays start on the near clip plane (tmin 0): from 1 cm past it, as a
+      // direction from a point that close loses float's digits.
+      const float lo = std::max(r.tmin * 1.001f, 0.01f);
+      const float t = lo + (r.tmax * 0.999f - lo) * std::pow(sampler.next_1d(), 3.0f);
       const lt::Vec3 p = r.o + r.d * t;
       const lt::Vec3 o = cam.connection_point(p, u);
       EXPECT_LT(dist(o, r.o), 2e-5f * (1 + t));
@@ -245,11 +248,35 @@ TEST(Camera, OrthographicRaysProjectBackToTheirFilmPosition) {
       EXPECT_NEAR(pr.at[0].film.y, y, 2e-3f * (1 + t));
       EXPECT_NEAR(pr.distance, t, 1e-4f * t);
       EXPECT_NEAR(pr.near, r.tmin, 1e-5f * r.tmin);
-      for (float beyond : {r.tmin * 0.98f, r.tmax * 1.02f}) {
+      for (float beyond : {r.tmin > 0 ? r.tmin * 0.98f : -0.1f, r.tmax * 1.02f}) {
         const lt::Vec3 q = r.o + r.d * beyond;
         EXPECT_FALSE(cam.project(cam.connection_point(q, u), q, 1, &pr));
       }
     }
+  }
+}
+
+// Cycles' orthographic depth of field (camera_sample_orthographic) starts the rays on the near clip
+// plane and aims them at the focus distance from there: one film position's rays meet at depth
+// Clip Start + focus distance, not at the focus distance.
+TEST(Camera, OrthographicDepthOfFieldFocusesAtClipStartPlusFocusDistance) {
+  lt_camera_desc d = orthographic_camera(kView, 4);
+  d.clip_start = 2;
+  d.clip_end = 50;
+  const lt::Camera cam = camera_of(with_dof(d, 3, 0.5f));
+  ASSERT_TRUE(cam.has_lens());
+  auto at_depth = [&](float x, float y, lt::Vec2 u, float depth) {
+    lt::Ray r;
+    EXPECT_TRUE(cam.generate(x, y, u, &r));
+    EXPECT_NEAR(cam.depth(r.o + r.d * r.tmin), 2.0f, 1e-5f);  // on the near clip plane
+    const float d0 = cam.depth(r.o), per_t = cam.depth(r.o + r.d) - d0;
+    return r.o + r.d * ((depth - d0) / per_t);
+  };
+  for (const lt::Vec2 film : {lt::Vec2{3.5f, 7.25f}, lt::Vec2{40.5f, 20.0f}}) {
+    const lt::Vec3 a = at_depth(film.x, film.y, {0.1f, 0.2f}, 5), b = at_depth(film.x, film.y, {0.9f, 0.7f}, 5);
+    EXPECT_LT(dist(a, b), 1e-4f);
+    const lt::Vec3 c = at_depth(film.x, film.y, {0.1f, 0.2f}, 3), e = at_depth(film.x, film.y, {0.9f, 0.7f}, 3);
+    EXPECT_GT(dist(c, e), 0.05f);  // out of focus at the focus distance from the camera
   }
 }
 

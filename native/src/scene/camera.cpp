@@ -415,15 +415,18 @@ bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
   if (d_.orthographic) {
     r->o = b.origin + b.right * pp.x + b.up * pp.y;
     r->d = -b.forward_neg;
-    if (has_lens()) {
-      // Cycles' orthographic depth of field: every ray aims at the focus point on the view axis
-      // (camera_sample_orthographic), so only the focus plane stays sharp.
-      const Vec2 l = aperture_offset(u_lens);
-      r->o = r->o + b.right * l.x + b.up * l.y;
-      r->d = normalize(b.to_world(Vec3(-l.x, -l.y, -d_.focus_distance)));
-    }
     r->tmin = d_.clip_start;
     r->tmax = d_.clip_end;
+    if (has_lens()) {
+      // Cycles' orthographic depth of field (camera_sample_orthographic): rays start on the near
+      // clip plane, moved by the lens offset, and aim at the focus distance measured from there,
+      // so the plane in focus is at Clip Start + focus distance.
+      const Vec2 l = aperture_offset(u_lens);
+      r->o = ortho_lens_plane(b) + b.right * (pp.x + l.x) + b.up * (pp.y + l.y);
+      r->d = normalize(b.to_world(Vec3(-l.x, -l.y, -d_.focus_distance)));
+      r->tmin = 0;
+      r->tmax = d_.clip_end - d_.clip_start;
+    }
     return true;
   }
   Vec3 local(pp.x, pp.y, -1.0f);
@@ -499,14 +502,15 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out
 Vec3 Camera::connection_point(const Vec3& p, Vec2 u, float time) const {
   if (!d_.orthographic) return has_lens() ? lens_point(u, time) : position(time);
   const Basis b = basis(time);
-  const Vec3 v = p - b.origin;
+  const Vec3 origin = has_lens() ? ortho_lens_plane(b) : b.origin;
+  const Vec3 v = p - origin;
   const float depth = -dot(v, b.forward_neg);
   Vec2 along{0, 0};  // the plane's offset per unit of depth
   if (has_lens()) {
     const Vec2 l = aperture_offset(u);
     along = {-l.x / d_.focus_distance, -l.y / d_.focus_distance};
   }
-  return b.origin + b.right * (dot(v, b.right) - along.x * depth) + b.up * (dot(v, b.up) - along.y * depth);
+  return origin + b.right * (dot(v, b.right) - along.x * depth) + b.up * (dot(v, b.up) - along.y * depth);
 }
 
 // The camera's rays from one lens offset l are parallel, direction d = (-l, -focus) normalised:
@@ -516,10 +520,15 @@ Vec3 Camera::connection_point(const Vec3& p, Vec2 u, float time) const {
 bool Camera::project_orthographic(const Basis& b, const Vec3& o, float margin, Projection* out) const {
   const Vec3 local{dot(out->dir, b.right), dot(out->dir, b.up), -dot(out->dir, b.forward_neg)};  // z forward
   if (!(local.z > 0)) return false;
-  const float along_ray = has_lens() ? out->distance : out->distance * local.z;
-  if (along_ray < d_.clip_start || along_ray > d_.clip_end) return false;
-  out->near = d_.clip_start;  // along the ray, as generate()'s
-  const Vec3 on_plane = o - b.origin;
+  if (has_lens()) {  // o on the near clip plane (generate()'s rays start there)
+    if (out->distance > d_.clip_end - d_.clip_start) return false;
+    out->near = 0;
+  } else {
+    const float along_ray = out->distance * local.z;
+    if (along_ray < d_.clip_start || along_ray > d_.clip_end) return false;
+    out->near = d_.clip_start;  // along the ray, as generate()'s
+  }
+  const Vec3 on_plane = o - (has_lens() ? ortho_lens_plane(b) : b.origin);
   float px = dot(on_plane, b.right), py = dot(on_plane, b.up);
   if (has_lens()) {
     px += d_.focus_distance * local.x / local.z;  // minus l

@@ -109,7 +109,8 @@ class Camera {
   // BDPT's t = 1: the camera vertex a point p is connected to, for the lens sample u (drawn only
   // when has_lens()): the lens point of a perspective camera, the camera's position for a pinhole
   // or a panorama; for an orthographic camera, whose rays from one lens point are parallel (a sun
-  // seen backwards), the point of its plane whose ray passes through p.
+  // seen backwards), the point of its plane (with a lens, the near clip plane, where its rays
+  // start) whose ray passes through p.
   Vec3 connection_point(const Vec3& p, Vec2 u, float time = 0.5f) const;
 
   // The film positions whose camera rays (from one lens point) have a given direction, with the
@@ -185,6 +186,8 @@ class Camera {
   Basis interpolated_basis(float time) const;
   // project() for an orthographic camera.
   bool project_orthographic(const Basis& b, const Vec3& o, float margin, Projection* out) const;
+  // An orthographic camera with a lens: the near clip plane's centre, where its rays start.
+  Vec3 ortho_lens_plane(const Basis& b) const { return b.origin - b.forward_neg * d_.clip_start; }
 
   CameraDesc d_;
   int width_ = 1, height_ = 1;
