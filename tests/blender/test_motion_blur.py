@@ -118,3 +118,41 @@ def test_partly_moving_scenes_agree_with_cycles(scene_factory, outdir, name, mot
         assert _motion_line()[0] == motion, _motion_line()[1]
         report, _ = ru.agreement_report(name + "_" + integrator.lower(), lantern, cycles, outdir, TILE, ROUNDING)
         assert report == "", report
+
+
+def test_curves_and_text_deform_over_the_shutter_as_cycles(scene_factory, outdir):
+    """A curve whose Bevel Depth and a text whose Extrude grow in the shutter's second half (at its
+    centre, the frame, the ring is a thin tube and the letter thin): their evaluated meshes reach the
+    depsgraph as instances of themselves (export/motion.py's own_geometry), which deform as an
+    object's mesh does. Before, their deformation blur was dropped (the frame's shapes rendered).
+    Per tile and the image mean against Cycles (PATH)."""
+    import bpy
+    from test_agreement import ROUNDING, TILE
+    scene = scene_factory("cornell_area", resolution=(48, 48))
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 1.0
+    curve = bpy.data.curves.new("Ring", 'CURVE')
+    spline = curve.splines.new('BEZIER')
+    spline.bezier_points.add(3)
+    for p, (x, z) in zip(spline.bezier_points, ((-0.4, 1.0), (0.0, 1.4), (0.4, 1.0), (0.0, 0.6))):
+        p.co = (x, 0.0, z)
+        p.handle_left_type = p.handle_right_type = 'AUTO'
+    spline.use_cyclic_u = True
+    text = bpy.data.curves.new("Word", 'FONT')
+    text.body = "L"
+    text.size = 0.5
+    for data, path, values in ((curve, "bevel_depth", (0.01, 0.3)), (text, "extrude", (0.02, 0.4))):
+        for frame, value in zip((1, 1.5), values):
+            setattr(data, path, value)
+            data.keyframe_insert(path, frame=frame)
+        for fc in data.animation_data.action.fcurves:
+            for k in fc.keyframe_points:
+                k.interpolation = 'LINEAR'
+    build_scenes.add_object(scene, "Ring", curve, (0.0, 0.0, 0.0))
+    build_scenes.add_object(scene, "Word", text, (0.3, -0.3, 0.3), (90, 0, -20))
+    scene.frame_set(1)
+    cycles = [ru.render(scene, ru.CYCLES, 64, seed=seed).combined for seed in (0, 1)]
+    lantern = [ru.render(scene, ru.LANTERN, 64, seed=seed).combined for seed in (0, 1)]
+    assert _motion_line()[0] == (0, 2, "still"), _motion_line()[1]
+    report, _ = ru.agreement_report("curve_deform", lantern, cycles, outdir, TILE, ROUNDING)
+    assert report == "", report

@@ -8,6 +8,7 @@ from .hair import hair_systems, warn_curve_shape
 from .light import export_light
 from .material import ImageExporter, MaterialExporter
 from .mesh import CONVERTIBLE_TYPES, TERMINATOR_DEFAULT, MeshExporter, terminator_of
+from .motion import own_geometry
 from .volume import export_volume
 from .world import ao_distance, export_world, export_world_volume
 
@@ -189,7 +190,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             random_id = inst.random_id if inst.is_instance else None
             instances[instance_key(inst)] = (meshes.export_instance(obj, matrix, random_id=random_id,
                                                                     key=instance_key(inst),
-                                                                    deform=not inst.is_instance,
+                                                                    deform=own_geometry(inst),
                                                                     holdout=holdout, shadow_catcher=catcher,
                                                                     lightgroup=lightgroup,
                                                                     instancer=instancer_of(inst)), matrix)

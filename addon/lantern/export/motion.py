@@ -73,6 +73,14 @@ def _shutter_curve_flat(rd):
     return max(values) - min(values) <= 1e-4 * max(1.0, abs(max(values)))
 
 
+def own_geometry(inst):
+    """Whether a depsgraph instance is its object's own evaluated geometry: an object's, or the
+    mesh a curve, surface, text or metaball object evaluates to (an instance whose object's
+    original is its instancer), which deforms as Cycles deforms it; not an instance of another
+    object (particles, collections, geometry nodes), whose geometry is shared."""
+    return not inst.is_instance or (inst.parent is not None and inst.object.original == inst.parent.original)
+
+
 def _key(inst):
     if inst.is_instance:
         return (inst.object.original.as_pointer(), inst.parent.original.as_pointer(), tuple(inst.persistent_id))
@@ -197,7 +205,7 @@ def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
             s = round((rel + 1.0) * 0.5 * (steps - 1))
             if abs(relative_time(s, steps) - rel) < 1e-6:
                 motion.matrices.setdefault(key, {})[s] = np.array(inst.matrix_world, dtype=np.float32)
-        if inst.is_instance:
+        if not own_geometry(inst):
             continue
         ptr = obj.original.as_pointer()
         if ptr in motion.strands and steps >= 3:
@@ -295,7 +303,7 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
             continue
         motion.steps[_key(inst)] = steps
         times.update(relative_time(s, steps) for s in range(steps))
-        if not inst.is_instance and obj.type == 'MESH' and (frames or _uses_deform(obj.original)):
+        if own_geometry(inst) and obj.type == 'MESH' and (frames or _uses_deform(obj.original)):
             co = _vertices(obj)
             if co is not None:
                 motion.deform[obj.original.as_pointer()] = steps
