@@ -156,3 +156,28 @@ def test_curves_and_text_deform_over_the_shutter_as_cycles(scene_factory, outdir
     assert _motion_line()[0] == (0, 2, "still"), _motion_line()[1]
     report, _ = ru.agreement_report("curve_deform", lantern, cycles, outdir, TILE, ROUNDING)
     assert report == "", report
+
+
+def test_particles_born_within_the_shutter_are_hidden_as_cycles(scene_factory):
+    """Cycles hides a particle instance missing at any motion step (Object::update_motion with
+    hide_on_missing_motion, which it sets for particle instances): of a box's particles, the 20 born
+    after the shutter opens are not rendered, with a note, and the 10 born before it are."""
+    import bpy
+    scene = scene_factory("cornell_area", resolution=(24, 24))
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 1.0  # frame 5: 4.5 to 5.5
+    pebble = build_scenes.add_object(scene, "Pebble", build_scenes.mesh_box("Pebble", (0.05, 0.05, 0.05)),
+                                     (0, 0, -5))
+    box = scene.objects["ShortBox"]
+    for name, count, born in (("Late", 20, 4.7), ("Early", 10, 1.0)):
+        box.modifiers.new(name, 'PARTICLE_SYSTEM')
+        settings = box.particle_systems[-1].settings
+        settings.count, settings.frame_start, settings.frame_end, settings.lifetime = count, born, born + 0.1, 50
+        settings.normal_factor, settings.effector_weights.gravity = 0.5, 0.0
+        settings.render_type, settings.instance_object = 'OBJECT', pebble
+    bpy.context.window.scene = scene
+    scene.frame_set(5)
+    assert np.isfinite(ru.render(scene, ru.LANTERN, 1, seed=0).combined).all()
+    line, report = _motion_line()
+    assert "20 particle instance(s) born or dying within the shutter are not rendered" in report, report
+    assert line is not None and line[0] == 10, report

@@ -8,7 +8,7 @@ from .hair import hair_systems, warn_curve_shape
 from .light import export_light
 from .material import ImageExporter, MaterialExporter
 from .mesh import CONVERTIBLE_TYPES, TERMINATOR_DEFAULT, MeshExporter, terminator_of
-from .motion import own_geometry
+from .motion import instance_key, own_geometry
 from .volume import export_volume
 from .world import ao_distance, export_world, export_world_volume
 
@@ -24,14 +24,6 @@ def _deduplicating(report):
             seen.add(message)
             report(level, message)
     return wrapped
-
-
-def instance_key(inst):
-    """Identifies an object instance across depsgraph evaluations (for viewport updates)."""
-    if inst.is_instance:
-        return (inst.object.original.as_pointer(), inst.parent.original.as_pointer(),
-                tuple(inst.persistent_id))
-    return (inst.object.original.as_pointer(),)
 
 
 def hair_key(inst):
@@ -248,4 +240,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     if motion is not None:
         summary.update(moving_objects=motion.moving_instances, deforming_meshes=motion.deforming_meshes,
                        camera_motion=motion.camera_moves)
+        if motion.hidden_particles:
+            report({'INFO'}, "%d particle instance(s) born or dying within the shutter are not rendered, as "
+                             "Cycles hides them" % motion.hidden_particles)
     return summary

@@ -570,6 +570,8 @@ class MeshExporter:
 
     def _add_instance(self, subject, obj, mesh_id, matrix_world, material_ids, random_id, instancer, motion, key,
                       holdout, shadow_catcher, lightgroup):
+        if self.motion is not None and motion is self.motion.HIDDEN:
+            return None
         if random_id is None:
             random_id = object_random_id(obj.name)
         object_keys = self.materials.attributes.object_keys()

@@ -8,7 +8,8 @@ the frame (CENTER), from it (START) or up to it (END), scene.cycles.motion_blur_
 object's steps are 2^motion_steps + 1 (object_motion_steps), equally spaced over the shutter, the
 middle one at the shutter's centre; obj.cycles.use_motion_blur and use_deform_motion switch them
 per object (and the instancer's, for instances). An object missing at a step keeps its centre
-transform there (Object::update_motion); one missing at the centre is not rendered. Lights do not
+transform there (Object::update_motion), a particle instance is hidden (hide_on_missing_motion);
+one missing at the centre is not rendered. Lights do not
 move (Cycles 3.4 has no light motion); Volume objects are rendered at the shutter's centre.
 
 The Vector pass with motion blur off samples the same way, as Cycles' motion pass
@@ -81,7 +82,9 @@ def own_geometry(inst):
     return not inst.is_instance or (inst.parent is not None and inst.object.original == inst.parent.original)
 
 
-def _key(inst):
+def instance_key(inst):
+    """Identifies an object instance across depsgraph evaluations (the shutter's sub-frames,
+    viewport updates)."""
     if inst.is_instance:
         return (inst.object.original.as_pointer(), inst.parent.original.as_pointer(), tuple(inst.persistent_id))
     return (inst.object.original.as_pointer(),)
@@ -110,14 +113,20 @@ class Motion:
         self.camera_steps = 0
         self.camera_matrices = {}
         self.moving_instances = self.deforming_meshes = 0
+        # Particle instances (Cycles' hide_on_missing_motion): hidden when missing at a step.
+        self.particles = set()  # their instance keys
+        self.hidden_particles = 0
         self.camera_moves = False
         self.vector_pass = False  # the steps are the neighbouring frames, for the Vector pass
         # Strands and points (particle hair, Curves, point clouds) that may deform.
         self.strands = {}      # object pointer -> (name, motion steps)
         self.strand_steps = {}  # object pointer -> {step: their (n, 4) keys}
 
+    # transforms() of a particle instance missing at some motion step: not rendered.
+    HIDDEN = "hidden"
+
     def transforms(self, key, centre, name):
-        """The instance's transforms at its motion steps, or None when it does not move."""
+        """The instance's transforms at its motion steps, None when it does not move, or HIDDEN."""
         steps = self.steps.get(key, 0)
         mats = self.matrices.get(key)
         if steps < 3 or not mats:
@@ -130,6 +139,11 @@ class Motion:
             if m is None and s != steps // 2:
                 missing = True
             out.append(centre if m is None else m)
+        if missing and key in self.particles:
+            # Cycles' Object::update_motion: a particle that is born or dies within the shutter is
+            # hidden (its instance has no transform there).
+            self.hidden_particles += 1
+            return self.HIDDEN
         if missing:
             self.report({'WARNING'}, "Object '%s' does not exist at every motion step: its transform at the "
                                      "shutter's centre is used where it is missing (as Cycles)" % name)
@@ -199,7 +213,7 @@ def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
         if not (inst.show_self or inst.show_particles):  # an emitter hidden from render keeps its hair
             continue
         obj = inst.object
-        key = _key(inst)
+        key = instance_key(inst)
         steps = motion.steps.get(key, 0)
         if steps >= 3:
             s = round((rel + 1.0) * 0.5 * (steps - 1))
@@ -301,7 +315,9 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
         steps = 3 if frames else object_motion_steps(obj.original, parent.original if parent is not None else None)
         if steps < 3:
             continue
-        motion.steps[_key(inst)] = steps
+        motion.steps[instance_key(inst)] = steps
+        if inst.is_instance and inst.particle_system is not None:
+            motion.particles.add(instance_key(inst))
         times.update(relative_time(s, steps) for s in range(steps))
         if own_geometry(inst) and obj.type == 'MESH' and (frames or _uses_deform(obj.original)):
             co = _vertices(obj)
