@@ -168,3 +168,21 @@ def test_deforming_hair_agrees_with_cycles(scene_factory, outdir):
     both = lantern_and_cycles_of(scene, "hair_motion")
     report, _ = ru.agreement_report("hair_deforming", both[ru.LANTERN], both[ru.CYCLES], outdir, TILE, ROUNDING)
     assert report == "", report
+
+
+def test_attributes_read_on_hair_curves_and_points_are_reported(scene_factory):
+    """Lantern exports no attributes of strands and points: a material reading one (an Attribute
+    node, a UV Map node's map) reads 0 there, and the export names the object and the attribute
+    (before, nothing was said); a material reading none says nothing. hair_motion: the hair ball's
+    particle hair and the Curves object."""
+    scene = scene_factory("hair_motion")
+    reports = ru.export(scene)[1]
+    assert not any("Lantern does not export for hair" in r for r in reports), reports
+    for slot in scene.objects["Ball"].material_slots[:] + scene.objects["RandomCurves"].material_slots[:]:
+        tree = slot.material.node_tree
+        attribute = tree.nodes.new("ShaderNodeAttribute")
+        attribute.attribute_name = "col"
+        tree.links.new(attribute.outputs["Color"], tree.nodes["Diffuse BSDF"].inputs["Color"])
+    reports = ru.export(scene)[1]
+    for subject in ("Object 'Ball' (particle hair)", "Object 'RandomCurves'"):
+        assert any(r.startswith(subject + ": its material reads 'col'") for r in reports), reports

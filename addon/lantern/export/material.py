@@ -324,6 +324,7 @@ class MaterialExporter:
         self.emissive_media = 0  # of those, volumes that emit
         self.subsurface = set()  # names of the materials that scatter under their surface
         self.attributes = AttributeRegistry()  # names the programs read (export/mesh.py exports them)
+        self.mesh_attribute_names = {}  # core material id -> the mesh attributes its program reads, named
         self.cryptomatte = Names()  # the Cryptomatte names of materials and (export/mesh.py) objects
 
     # -- public --------------------------------------------------------------------------------
@@ -334,7 +335,11 @@ class MaterialExporter:
         key = material.original.as_pointer()
         if key in self.ids:
             return self.ids[key]
-        program, volume, null_surface = self._translate(material)
+        self.attributes.used = set()
+        try:
+            program, volume, null_surface = self._translate(material)
+        finally:
+            used, self.attributes.used = self.attributes.used, None
         subject = "Material '%s'" % material.name
         mat_id = -1
         if self._bad:
@@ -364,6 +369,9 @@ class MaterialExporter:
             self.core_scene.set_material_volume(mat_id, [dict(node=core.VOLUME_SCATTER, density=0.0)],
                                                 null_surface=True)
         self.ids[key] = mat_id
+        if mat_id >= 0:
+            self.mesh_attribute_names[mat_id] = sorted("'%s'" % name if name else "the default colour attribute"
+                                                       for kind, name in used if kind in ('attr', 'color'))
         self.volumes[key] = (volume, null_surface)
         self.displacements[key] = _program_key(self._displaced if mat_id >= 0 else None)
         if volume:

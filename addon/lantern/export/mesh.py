@@ -476,7 +476,9 @@ class MeshExporter:
             if emitter:
                 self.emitters.setdefault(obj.original.as_pointer(), {})['mesh'] = arrays
             if arrays is None:
-                if warn_empty:
+                # Vertices or edges without faces; an empty mesh (all of a geometry-nodes object's
+                # output points or instances, which come as their own instances) says nothing.
+                if warn_empty and mesh is not None and len(mesh.vertices):
                     self.report({'WARNING'}, "Object '%s' has no faces, skipped" % obj.name)
             else:
                 if deform and self.motion is not None and obj.type == 'MESH':
@@ -543,6 +545,11 @@ class MeshExporter:
         geometry = (kind, obj.original.as_pointer() if kind == 'HAIR' else self._geometry_key(obj))
         subject = "Object '%s'%s" % (obj.name, " (particle hair)" if kind == 'HAIR' else "")
         if geometry not in self.mesh_ids:
+            names = sorted({n for m in material_ids for n in self.materials.mesh_attribute_names.get(m, ())})
+            if names:
+                self.report({'WARNING'}, "%s: its material reads %s, which Lantern does not export for hair, "
+                            "curves and points: it reads 0 there (Cycles reads the strands' and points' "
+                            "attributes, and hair's UVs from its emitter)" % (subject, ", ".join(names)))
             if kind == 'HAIR':
                 arrays = particle_hair_arrays(obj, self.report)
                 args = arrays and (arrays[0], arrays[1], arrays[2])

@@ -19,9 +19,12 @@ class AttributeRegistry:
 
     def __init__(self):
         self.ids = {}
+        self.used = None  # a set: the keys asked for are added to it (one material's)
 
     def id(self, kind, name):
         key = (kind, name or "")
+        if self.used is not None:
+            self.used.add(key)
         if key not in self.ids:
             self.ids[key] = len(self.ids)
         return self.ids[key]
