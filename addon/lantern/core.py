@@ -16,7 +16,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 22
+ABI_VERSION = 23
 
 # lt_status
 OK = 0
@@ -297,6 +297,8 @@ class CameraDesc(ctypes.Structure):
         ("fisheye_polynomial", ctypes.c_float * 5),
         ("panorama_viewplane", ctypes.c_float * 4),
         ("panorama_frame_aspect", ctypes.c_float),
+        ("zoom_pre", ctypes.c_float),
+        ("zoom_post", ctypes.c_float),
     ]
 
 
@@ -953,8 +955,9 @@ class Scene:
                    fisheye_lens=10.5, latitude_min=-1.57079633, latitude_max=1.57079633,
                    longitude_min=-3.14159265, longitude_max=3.14159265, motion=None,
                    fisheye_polynomial=FISHEYE_POLYNOMIAL_DEFAULT, panorama_viewplane=(0.0, 0.0, 0.0, 0.0),
-                   panorama_frame_aspect=0.0):
-        """motion: the camera's transforms at its motion steps over the shutter.
+                   panorama_frame_aspect=0.0, zoom=None):
+        """motion: the camera's transforms at its motion steps over the shutter; zoom: a
+        perspective camera's (zoom_pre, zoom_post) over it (lantern.h), or None.
         fisheye_polynomial: the lens polynomial's k0 .. k4 (Cycles' camera settings).
         panorama_viewplane, panorama_frame_aspect: a viewport through a panoramic camera (lantern.h)."""
         d = CameraDesc()
@@ -973,6 +976,7 @@ class Scene:
         d.fisheye_polynomial[:] = [float(k) for k in fisheye_polynomial]
         d.panorama_viewplane[:] = [float(v) for v in panorama_viewplane]
         d.panorama_frame_aspect = panorama_frame_aspect
+        d.zoom_pre, d.zoom_post = zoom if zoom is not None else (1.0, 1.0)
         motion_keep = _motion(d, motion)  # noqa: F841 (kept alive for the call)
         _check(self._lib.lt_scene_set_camera(self.handle, ctypes.byref(d)), "lt_scene_set_camera")
 

@@ -181,3 +181,30 @@ def test_particles_born_within_the_shutter_are_hidden_as_cycles(scene_factory):
     line, report = _motion_line()
     assert "20 particle instance(s) born or dying within the shutter are not rendered" in report, report
     assert line is not None and line[0] == 10, report
+
+
+def test_a_zoom_blurs_as_cycles(scene_factory, outdir):
+    """A focal length animated from 25 to 75 mm over frames 0 to 2 (50 mm at frame 1): Cycles blurs
+    a perspective camera's zoom (its fov at the shutter's opening and closing, the view plane
+    interpolated between them), and so does Lantern (lt_camera_desc.zoom_pre and zoom_post; the
+    render report says the camera zooms). Per tile and the image mean against Cycles, PATH and
+    BIDIRECTIONAL (t = 1 projects through the view plane at the sample's time). Before, the frame's
+    focal length alone rendered."""
+    from test_agreement import ROUNDING, TILE
+    scene = scene_factory("cornell_area", resolution=(48, 48))
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 1.0
+    cam = scene.camera.data
+    for frame, lens in ((0, 25.0), (2, 75.0)):
+        cam.lens = lens
+        cam.keyframe_insert("lens", frame=frame)
+    for k in cam.animation_data.action.fcurves[0].keyframe_points:
+        k.interpolation = 'LINEAR'
+    scene.frame_set(1)
+    cycles = [ru.render(scene, ru.CYCLES, 64, seed=seed).combined for seed in (0, 1)]
+    for integrator in ("PATH", "BIDIRECTIONAL"):
+        lantern = [ru.render(scene, ru.LANTERN, 64, seed=seed, integrator=integrator).combined for seed in (0, 1)]
+        assert _motion_line()[0] == (0, 0, "still"), _motion_line()[1]
+        assert "camera still, zooming" in engine.LAST_RENDER["report"], engine.LAST_RENDER["report"]
+        report, _ = ru.agreement_report("zoom_" + integrator.lower(), lantern, cycles, outdir, TILE, ROUNDING)
+        assert report == "", report

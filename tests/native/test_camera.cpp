@@ -153,38 +153,48 @@ TEST(Camera, LensSamplesAreUniformOverTheAperture) {
   }
 }
 
+// A perspective camera zooming over the shutter (Cycles' perspective motion): the view plane at
+// the shutter's opening 0.6 times the centre's, at its closing 1.7 times.
+lt_camera_desc zooming(lt_camera_desc d) {
+  d.zoom_pre = 0.6f;
+  d.zoom_post = 1.7f;
+  return d;
+}
+
 // A camera ray's points, within its clipping range, project back (Camera::project, BDPT's t = 1)
 // to the ray's film position, direction and start (its near clip) from its lens point (and the
-// pinhole's); beyond the range they do not.
+// pinhole's; and a zooming camera's, at the ray's time); beyond the range they do not.
 TEST(Camera, LensRaysProjectBackToTheirFilmPosition) {
   lt_camera_desc pin = perspective_camera(kView, 28);
   pin.clip_start = 0.5f;
   pin.clip_end = 20;
   pin.shift_x = 0.1f;
   int checked = 0;
-  for (const lt_camera_desc& d : {with_dof(pin, 2.5f, 0.7f, 7, 0.2f, 1.4f), pin}) {
+  const lt_camera_desc lens = with_dof(pin, 2.5f, 0.7f, 7, 0.2f, 1.4f);
+  for (const lt_camera_desc& d : {lens, pin, zooming(lens)}) {
     const lt::Camera cam = camera_of(d);
     lt::Sampler sampler(5, 0, 0);
     for (int i = 0; i < 2000; ++i) {
       const float x = sampler.next_1d() * kW, y = sampler.next_1d() * kH;
+      const float time = d.zoom_pre > 0 ? sampler.next_1d() : 0.5f;
       lt::Ray r;
-      ASSERT_TRUE(cam.generate(x, y, sampler.next_2d(), &r));
+      ASSERT_TRUE(cam.generate(x, y, sampler.next_2d(), &r, time));
       // Inside the range (its ends are where rounding decides).
       const float t = r.tmin * 1.001f + (r.tmax * 0.999f - r.tmin * 1.001f) * std::pow(sampler.next_1d(), 3.0f);
       lt::Camera::Projection pr;
-      ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &pr)) << t;
+      ASSERT_TRUE(cam.project(r.o, r.o + r.d * t, 0, &pr, time)) << t;
       ASSERT_EQ(pr.count, 1);
       EXPECT_NEAR(pr.at[0].film.x, x, 2e-3f * (1 + t));
       EXPECT_NEAR(pr.at[0].film.y, y, 2e-3f * (1 + t));
       EXPECT_NEAR(pr.distance, t, 1e-4f * t);
       EXPECT_NEAR(pr.near, r.tmin, 1e-5f * r.tmin);  // where the ray starts: t = 1's connection ends there
       EXPECT_GT(lt::dot(pr.dir, r.d), 1 - 1e-6f);
-      EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmin * 0.98f), 1, &pr));
-      EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmax * 1.02f), 1, &pr));
+      EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmin * 0.98f), 1, &pr, time));
+      EXPECT_FALSE(cam.project(r.o, r.o + r.d * (r.tmax * 1.02f), 1, &pr, time));
       ++checked;
     }
   }
-  EXPECT_EQ(checked, 4000);
+  EXPECT_EQ(checked, 6000);
 }
 
 // The camera's directional density from a lens point, the film's importance (pixels per
@@ -196,23 +206,28 @@ TEST(Camera, LensRaysProjectBackToTheirFilmPosition) {
 // LensRaysProjectBackToTheirFilmPosition.
 TEST(Camera, DirectionalDensityIntegratesToOne) {
   const lt_camera_desc d = with_dof(perspective_camera(kView, 20), 0.6f, 0.25f, 0, 0, 1);
-  const lt::Camera cam = camera_of(d);
+  const lt::Camera still = camera_of(d), zoom = camera_of(zooming(d));
   const float film_area = kW * kH;
   lt::Sampler sampler(8, 0, 0);
-  for (lt::Vec2 u : {lt::Vec2{0.5f, 0.5f}, lt::Vec2{0.95f, 0.5f}, lt::Vec2{0.1f, 0.85f}}) {
-    const lt::Vec3 o = cam.lens_point(u);
+  // A zooming camera at a time of its shutter: its film covers another solid angle.
+  for (auto [u, time] : {std::pair{lt::Vec2{0.5f, 0.5f}, -1.0f}, std::pair{lt::Vec2{0.95f, 0.5f}, -1.0f},
+                         std::pair{lt::Vec2{0.1f, 0.85f}, -1.0f}, std::pair{lt::Vec2{0.3f, 0.6f}, 0.15f},
+                         std::pair{lt::Vec2{0.7f, 0.2f}, 0.9f}}) {
+    const lt::Camera& cam = time < 0 ? still : zoom;
+    time = time < 0 ? 0.5f : time;
+    const lt::Vec3 o = cam.lens_point(u, time);
     constexpr int kN = 400000;
     double sum = 0, sum2 = 0;
     for (int n = 0; n < kN; ++n) {
       const lt::Vec3 w = lt::sample_uniform_sphere(sampler.next_2d());
       lt::Camera::Projection pr;
       double f = 0;
-      if (cam.project(o, o + w * 5.0f, 0, &pr)) f = pr.at[0].importance / film_area / lt::uniform_sphere_pdf();
+      if (cam.project(o, o + w * 5.0f, 0, &pr, time)) f = pr.at[0].importance / film_area / lt::uniform_sphere_pdf();
       sum += f;
       sum2 += f * f;
     }
     const double mean = sum / kN, se = std::sqrt((sum2 / kN - mean * mean) / kN);
-    EXPECT_NEAR(mean, 1.0, 4 * se + 1e-3) << "lens point " << o.x << " " << o.y << " " << o.z;
+    EXPECT_NEAR(mean, 1.0, 4 * se + 1e-3) << "lens point " << o.x << " " << o.y << " " << o.z << " time " << time;
   }
 }
 

@@ -77,6 +77,8 @@ def camera_keywords(depsgraph, obj, report, matrix=None, shift_x=None, motion=No
         kw["type"] = core.CAMERA_ORTHOGRAPHIC
     elif cam.type == 'PANO':
         kw.update(_panorama(cam, obj.name, report))
+    if kw["type"] == core.CAMERA_PERSPECTIVE and motion is not None and matrix is None:
+        kw["zoom"] = motion.camera_zoom(half_fov_tan(cam, rd))
     dof = cam.dof
     if dof.use_dof:
         distance = focus_distance(depsgraph, obj, matrix)
@@ -120,6 +122,15 @@ def _panorama(cam, name, report):
                 latitude_min=ccam.latitude_min, latitude_max=ccam.latitude_max,
                 longitude_min=ccam.longitude_min, longitude_max=ccam.longitude_max,
                 fisheye_polynomial=[getattr(ccam, "fisheye_polynomial_k%d" % i) for i in range(5)])
+
+
+def half_fov_tan(cam, rd):
+    """tan of half a perspective camera's field of view as Cycles takes it for its perspective motion
+    (blender/camera.cpp: 0.5 sensor size / lens / aspect ratio, the sensor fitted to the frame)."""
+    x, y = rd.resolution_x * rd.pixel_aspect_x, rd.resolution_y * rd.pixel_aspect_y
+    horizontal = cam.sensor_fit == 'HORIZONTAL' or (cam.sensor_fit == 'AUTO' and x > y)
+    size = cam.sensor_height if cam.sensor_fit == 'VERTICAL' else cam.sensor_width
+    return 0.5 * size / cam.lens / (x / y if horizontal else y / x)
 
 
 def camera_table(depsgraph, camera_object=None):

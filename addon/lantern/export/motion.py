@@ -112,6 +112,8 @@ class Motion:
         self.positions = {}    # object pointer -> {step: arrays of mesh_arrays} (only when they move)
         self.camera_steps = 0
         self.camera_matrices = {}
+        self.camera_fov = {}  # step -> tan(fov / 2) of a perspective camera, at the first and last steps
+        self.zoom = None      # camera_zoom()'s answer
         self.moving_instances = self.deforming_meshes = 0
         # Particle instances (Cycles' hide_on_missing_motion): hidden when missing at a step.
         self.particles = set()  # their instance keys
@@ -196,6 +198,18 @@ class Motion:
         self.deforming_meshes += 1
         return np.stack(out)
 
+    def camera_zoom(self, centre_fov):
+        """(zoom_pre, zoom_post) of a perspective camera whose tan(fov / 2) is centre_fov at the
+        shutter's centre, or None when it keeps its field of view (Cycles' perspective motion)."""
+        if self.camera_steps < 3 or not self.camera_fov:
+            return None
+        zoom = tuple(self.camera_fov.get(s, centre_fov) / centre_fov for s in (0, self.camera_steps - 1))
+        if zoom == (1.0, 1.0):
+            return None
+        self.camera_moves = True
+        self.zoom = zoom
+        return zoom
+
     def camera(self, centre):
         if self.camera_steps < 3 or not self.camera_matrices:
             return None
@@ -241,6 +255,9 @@ def _sample(depsgraph, motion, rel, camera_object, mesh_arrays):
         if abs(relative_time(s, motion.camera_steps) - rel) < 1e-6:
             cam = camera_object.evaluated_get(depsgraph)
             motion.camera_matrices[s] = np.array(cam.matrix_world, dtype=np.float32)
+            if cam.type == 'CAMERA' and s in (0, motion.camera_steps - 1):
+                from .camera import half_fov_tan
+                motion.camera_fov[s] = half_fov_tan(cam.data, depsgraph.scene.render)
 
 
 def _strand_arrays(obj):

@@ -56,8 +56,9 @@ extern "C" {
  * 20: area lights' spread (lt_light_desc.spread); 21: lt_scene_add_volume_grid's clipping and
  * face_offset (a Volume object's emission confined to Cycles' volume mesh); deforming curves and
  * points (lt_curves_desc.motion_points and motion_step_count); 22: lt_image_desc.ocio_config and
- * ocio_space (byte images Blender loads in other colour spaces). */
-#define LT_ABI_VERSION 22
+ * ocio_space (byte images Blender loads in other colour spaces); 23: a perspective camera's zoom over
+ * the shutter (lt_camera_desc.zoom_pre and zoom_post). */
+#define LT_ABI_VERSION 23
 
 enum lt_status {
   LT_OK = 0,
@@ -403,6 +404,12 @@ typedef struct lt_camera_desc {
    * ratio (width / height) that the fisheyes' sensor is fitted to (0: the film's). */
   float panorama_viewplane[4];
   float panorama_frame_aspect;
+  /* A perspective camera's zoom over the shutter (Cycles' perspective motion: fov_pre and
+   * fov_post, taken at the shutter's opening and closing): the view plane's size there over the
+   * centre's, tan(fov / 2) / tan(fov_centre / 2) (> 0; 0 or 1: none). A film position's point on
+   * the view plane is interpolated linearly in time between them, as camera_sample_perspective
+   * does. Ignored by orthographic and panoramic cameras, as Cycles. */
+  float zoom_pre, zoom_post;
 } lt_camera_desc;
 LT_API int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* desc);
 

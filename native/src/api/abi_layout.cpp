@@ -203,6 +203,8 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_camera_desc, fisheye_polynomial),
     LT_FIELD(lt_camera_desc, panorama_viewplane),
     LT_FIELD(lt_camera_desc, panorama_frame_aspect),
+    LT_FIELD(lt_camera_desc, zoom_pre),
+    LT_FIELD(lt_camera_desc, zoom_post),
 
     LT_STRUCT(lt_world_desc),
     LT_FIELD(lt_world_desc, color),

@@ -803,6 +803,10 @@ int lt_scene_set_camera(lt_scene* scene, const lt_camera_desc* d) {
     c.clip_start = d->clip_start;
     c.clip_end = d->clip_end;
     c.pixel_aspect = d->pixel_aspect;
+    for (float z : {d->zoom_pre, d->zoom_post})
+      require(std::isfinite(z) && z >= 0, "camera zoom_pre and zoom_post must be finite and >= 0 (0: none)");
+    c.zoom_pre = d->zoom_pre > 0 ? d->zoom_pre : 1.0f;
+    c.zoom_post = d->zoom_post > 0 ? d->zoom_post : 1.0f;
     require_motion_steps(d->motion_step_count, d->motion_transforms, "camera");
     c.motion = motion_transforms(d->motion_transforms, d->motion_step_count);
     for (const lt::Transform& m : c.motion)

@@ -58,6 +58,7 @@ Camera::Camera(const CameraDesc& desc, int width, int height) : d_(desc), width_
         (desc.latitude_max == desc.latitude_min || desc.longitude_max == desc.longitude_min)) ||
        (desc.panorama_type == PanoramaType::FisheyeLensPolynomial && k[1] == 0 && k[2] == 0 && k[3] == 0 && k[4] == 0));
   connectable_ = !(desc.panorama && desc.aperture_radius > 0) && !degenerate;
+  zooms_ = !desc.panorama && !desc.orthographic && (desc.zoom_pre != 1 || desc.zoom_post != 1);
   centre_ = basis_of(desc.xf);
   if (desc.motion.size() >= 2) motion_ = decompose_motion(desc.motion);
   rigid_motion_ = true;
@@ -429,7 +430,8 @@ bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
     }
     return true;
   }
-  Vec3 local(pp.x, pp.y, -1.0f);
+  const float s = plane_scale(time);
+  Vec3 local(pp.x * s, pp.y * s, -1.0f);
   const float len = length(local);
   if (has_lens()) {
     // Thin lens (Cycles' camera_sample_perspective; pbrt 3, section 6.2.3): the pinhole ray's
@@ -440,7 +442,7 @@ bool Camera::generate(float x, float y, Vec2 u_lens, Ray* r, float time) const {
     r->d = normalize(b.to_world(local * d_.focus_distance - lens));
   } else {
     r->o = b.origin;
-    r->d = (b.right * pp.x + b.up * pp.y - b.forward_neg) * (1.0f / len);
+    r->d = (b.right * local.x + b.up * local.y - b.forward_neg) * (1.0f / len);
   }
   // Clipping planes are perpendicular to the axis, as in Cycles (with a lens, Cycles keeps the
   // pinhole ray's range along the lens ray: 1 / cos of the pinhole ray).
@@ -485,14 +487,15 @@ bool Camera::project(const Vec3& o, const Vec3& p, float margin, Projection* out
   } else {
     out->near = d_.clip_start * dist / z;
   }
-  Vec2 film{(px - x0_) / (x1_ - x0_) * width_, (py - y0_) / (y1_ - y0_) * height_};
+  const float s = plane_scale(time);  // a zoom: the view plane at this time is s times the centre's
+  Vec2 film{(px / s - x0_) / (x1_ - x0_) * width_, (py / s - y0_) / (y1_ - y0_) * height_};
   if (film.x < -margin || film.x > width_ + margin || film.y < -margin || film.y > height_ + margin) return false;
   // A view-plane area a per pixel at unit distance: the direction at angle theta from the axis
   // covers a / cos^3 theta of it per steradian (pbrt 3, section 16.1.1; the same from a lens
   // point, pbrt-v4's PerspectiveCamera::PDF_We, since the focus plane is at cos theta times the
   // ray's length).
   const float c = z / dist;
-  out->at[0] = {film, 1 / (pixel_area_ * c * c * c)};
+  out->at[0] = {film, 1 / (pixel_area_ * s * s * c * c * c)};
   out->count = 1;
   return true;
 }
@@ -553,8 +556,9 @@ bool Camera::raster(const Vec3& p, float time, Vec2* film) const {
       *film = Vec2{0.0f, 0.0f};
       return true;
     }
-    px /= z;
-    py /= z;
+    const float s = plane_scale(time);
+    px /= z * s;
+    py /= z * s;
   }
   film->x = (px - x0_) / (x1_ - x0_) * width_;
   film->y = (py - y0_) / (y1_ - y0_) * height_;

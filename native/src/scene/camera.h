@@ -55,6 +55,9 @@ struct CameraDesc {
   // Motion blur: 0, or 2 to 129 transforms equally spaced over the shutter, the centre one xf
   // (Cycles interpolates them as objects', kernel/camera/camera.h); the lens stays as it is.
   std::vector<Transform> motion;
+  // A perspective camera's zoom: the view plane's scale at the shutter's opening and closing
+  // (lt_camera_desc.zoom_pre, zoom_post; 1: none).
+  float zoom_pre = 1, zoom_post = 1;
 };
 
 // Cycles' aperture radius from Blender's F-stop (blender/camera.cpp): the focal length in metres
@@ -74,7 +77,7 @@ class Camera {
   // The pinhole's ray (no lens) through (x, y); false as generate.
   bool generate(float x, float y, Ray* ray) const { return generate(x, y, Vec2{0.5f, 0.5f}, ray); }
   // Whether the camera moves over the shutter.
-  bool has_motion() const { return !motion_.empty(); }
+  bool has_motion() const { return !motion_.empty() || zooms_; }
   // Cycles' compact ray differentials there (camera_sample_perspective / _orthographic /
   // _panorama, without depth of field): the footprint's size where the ray starts, at the near
   // clip (dP), and its growth per unit distance beyond it (dD: the angle between neighbouring
@@ -184,6 +187,13 @@ class Camera {
   Basis basis(float time) const { return motion_.empty() ? centre_ : moving_basis(time); }
   Basis moving_basis(float time) const;
   Basis interpolated_basis(float time) const;
+  // The view plane's scale at a shutter time (zooms_): from zoom_pre at 0 through 1 at the
+  // centre to zoom_post at 1, linear on each half, as Cycles interpolates a raster position's point
+  // between its perspective_pre, centre and perspective_post projections.
+  float plane_scale(float time) const {
+    if (!zooms_) return 1;
+    return time < 0.5f ? d_.zoom_pre + (1 - d_.zoom_pre) * (2 * time) : 1 + (d_.zoom_post - 1) * (2 * time - 1);
+  }
   // project() for an orthographic camera.
   bool project_orthographic(const Basis& b, const Vec3& o, float margin, Projection* out) const;
   // An orthographic camera with a lens: the near clip plane's centre, where its rays start.
@@ -198,6 +208,7 @@ class Camera {
   // (the lens polynomial's), so that theta is monotonic between consecutive ends: project()'s roots.
   std::vector<double> radial_ends_;
   bool connectable_ = true;
+  bool zooms_ = false;  // a perspective camera whose view plane scales over the shutter
   Basis centre_;
   std::vector<DecomposedTransform> motion_;
   bool rigid_motion_ = false;  // every step without skew and with positive scales (interpolated_basis)
