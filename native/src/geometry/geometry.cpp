@@ -411,6 +411,7 @@ bool invertible(const Transform& xf) { return std::abs(xf.determinant()) > 1e-30
 // beyond half the traceable range (such an instance is baked into world space).
 constexpr float kMaxInverseNorm = 1e8f;
 float inverse_norm(const Transform& xf) {
+  if (!invertible(xf)) return INFINITY;  // e.g. a motion step's instant scaled to nothing
   const Transform inv = affine_inverse(xf);
   float norm = 0, offset = 0;
   for (int row = 0; row < 3; ++row) {
@@ -499,7 +500,11 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
   set_transform(inst, inst.xf);
   if (!inst.motion.empty()) {
     bool usable = inst.motion.size() >= 2 && finite_transform(inst.xf) && instanceable(inst.xf);
-    for (const Transform& m : inst.motion) usable = usable && finite_transform(m) && instanceable(m);
+    // A step may scale the object to nothing (growing from or shrinking to nothing, as Cycles
+    // blurs it): Embree inverts the interpolated transform only at rays' times, where it has
+    // an inverse but at that step's instant.
+    for (const Transform& m : inst.motion)
+      usable = usable && finite_transform(m) && (instanceable(m) || scaled_to_nothing(m));
     if (usable) {
       inst.motion_decomposed = decompose_motion(inst.motion);
       drop_redundant_steps(inst);

@@ -77,6 +77,10 @@ Pose Pose::of(const Transform& xf) {
 DecomposedTransform decompose(const Transform& m) {
   DecomposedTransform d;
   d.translation = Vec3(m.m[3], m.m[7], m.m[11]);
+  if (scaled_to_nothing(m)) {  // no rotation of its own: decompose_motion gives it a neighbour's
+    d.scale[0] = d.scale[1] = d.scale[2] = 0;
+    return d;
+  }
   // Gram-Schmidt on the columns: L = R S with S upper triangular.
   const Vec3 c0 = m.column(0), c1 = m.column(1), c2 = m.column(2);
   const float s00 = length(c0);
@@ -116,8 +120,21 @@ Transform recompose(const DecomposedTransform& d) {
 
 std::vector<DecomposedTransform> decompose_motion(const std::vector<Transform>& steps) {
   std::vector<DecomposedTransform> d(steps.size());
+  for (size_t i = 0; i < steps.size(); ++i) d[i] = decompose(steps[i]);
+  // A step scaled to nothing (an object growing from or shrinking to nothing) takes the rotation of
+  // the step before it, or of the first one after it that has one, as Cycles'
+  // transform_motion_decompose: its scale alone is interpolated, not a turn to an arbitrary rotation.
   for (size_t i = 0; i < steps.size(); ++i) {
-    d[i] = decompose(steps[i]);
+    if (!scaled_to_nothing(steps[i])) continue;
+    size_t from = i;
+    if (i > 0) {
+      from = i - 1;
+    } else {
+      while (from + 1 < steps.size() && scaled_to_nothing(steps[from])) ++from;
+    }
+    std::copy(d[from].q, d[from].q + 4, d[i].q);
+  }
+  for (size_t i = 0; i < steps.size(); ++i) {
     if (i > 0 &&
         d[i - 1].q[0] * d[i].q[0] + d[i - 1].q[1] * d[i].q[1] + d[i - 1].q[2] * d[i].q[2] + d[i - 1].q[3] * d[i].q[3] <
             0)

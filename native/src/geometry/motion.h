@@ -44,6 +44,13 @@ struct DecomposedTransform {
   float q_perp[4] = {0, 0, 0, 0};
 };
 
+// Whether a transform's linear part is zero (an object scaled to nothing at a motion step).
+inline bool scaled_to_nothing(const Transform& m) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (m.m[4 * r + c] != 0) return false;
+  return true;
+}
 DecomposedTransform decompose(const Transform& m);
 Transform recompose(const DecomposedTransform& d);
 // The steps decomposed, each quaternion on the side of its predecessor (shortest arcs).
