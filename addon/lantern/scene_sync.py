@@ -107,7 +107,7 @@ class SceneSync:
                 exporter.camera = table
                 materials = [m for m in bpy.data.materials if m.original.as_pointer() in exporter.ids]
         # Translated as the depsgraph evaluates them (animated values); bpy.data's are the originals.
-        materials = list({m.original.as_pointer(): m.evaluated_get(depsgraph) for m in materials}.values())
+        materials = list({m.original.as_pointer(): m.original.evaluated_get(depsgraph) for m in materials}.values())
         # Scene updates (render settings) need nothing here: renders take their settings anew.
         if not (transforms or lights or materials or camera_object is not None):
             return True
