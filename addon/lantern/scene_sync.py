@@ -152,6 +152,7 @@ class SceneSync:
         instances = self.state["instances"]
         flags = self.state.get("flags", {})
         meshes = self.state["meshes"]
+        object_keys = self.state["materials"].attributes.object_keys()
         view_layer = depsgraph.view_layer_eval
         groups = lightgroup_indices(view_layer)
         seen = 0
@@ -165,7 +166,7 @@ class SceneSync:
                 keys.append(base)
             if keys and instance_flags(inst, view_layer, groups) != flags.get(base, NO_FLAGS):
                 return None  # holdout, light group, catcher or terminator changed: the instance is added anew
-            if keys and not meshes.values_unchanged(inst, base, instancer_of(inst)):
+            if keys and not meshes.values_unchanged(inst, base, instancer_of(inst), object_keys):
                 return None  # an animated colour, pass index, ray visibility or object attribute
             matrix = None
             for key in keys:

@@ -596,11 +596,11 @@ class MeshExporter:
                 self.instance_values.setdefault(key, []).append((len(object_keys), values))
         return instance
 
-    def values_unchanged(self, inst, key, instancer):
+    def values_unchanged(self, inst, key, instancer, object_keys):
         """Whether the object of depsgraph instance inst (instance_key key) still gives its core
-        instances the values they were added with (instance_values): the core cannot change them in
-        place, so an animated one needs a new scene."""
-        object_keys = self.materials.attributes.object_keys()
+        instances the values they were added with (instance_values; object_keys: the materials'
+        attributes.object_keys()): the core cannot change them in place, so an animated one needs
+        a new scene."""
         return all(instance_values(inst.object, object_keys[:n], instancer) == values
                    for n, values in self.instance_values.get(key, ()))
 
