@@ -2349,6 +2349,128 @@ def build_point_cloud(scene):
     add_camera(scene, (0.0, -3.2, 1.4), (0.0, 0.0, 0.6), lens=45.0)
 
 
+def _emission_of(name, color):
+    """An Emission shader (strength 1) whose Color is color(nt), a node output of the tree."""
+    mat, nt, out = _material(name)
+    em = nt.nodes.new("ShaderNodeEmission")
+    nt.links.new(color(nt), em.inputs["Color"])
+    nt.links.new(em.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def _vector_math(nt, operation, *inputs):
+    node = nt.nodes.new("ShaderNodeVectorMath")
+    node.operation = operation
+    for k, value in enumerate(inputs):
+        if isinstance(value, tuple):
+            node.inputs[k].default_value = value
+        else:
+            nt.links.new(value, node.inputs[k])
+    return node.outputs[0]
+
+
+def _into_blue(nt, value):
+    """(0, 0, value) of a float output."""
+    combine = nt.nodes.new("ShaderNodeCombineXYZ")
+    nt.links.new(value, combine.inputs["Z"])
+    return combine.outputs[0]
+
+
+def build_hair_attributes(scene):
+    """What strands and points carry for shading, each shown as an Emission colour (issue 15):
+    particle hair (300 x 4 strands on the hair ball) reads its emitter's UV maps at the roots
+    (Texture Coordinate's UV: the active render map; a UV Map node: a second map) and a byte colour
+    attribute (Attribute node 'Col'); a Curves object (Blender's random curves) reads its
+    surface_uv_coordinate (the default UV) and a per-point float 'ramp'; a point cloud reads a
+    per-point vector 'pc' stored by geometry nodes. No lights: a dim world."""
+    def hair_color(nt):
+        uv = nt.nodes.new("ShaderNodeTexCoord").outputs["UV"]
+        second = nt.nodes.new("ShaderNodeUVMap")
+        second.uv_map = "Second"
+        sep = nt.nodes.new("ShaderNodeSeparateXYZ")
+        nt.links.new(second.outputs["UV"], sep.inputs[0])
+        col = nt.nodes.new("ShaderNodeAttribute")
+        col.attribute_name = "Col"
+        base = _vector_math(nt, "ADD", uv, _into_blue(nt, sep.outputs["X"]))
+        return _vector_math(nt, "MULTIPLY_ADD", col.outputs["Color"], (0.5, 0.5, 0.5), base)
+    build_hair_ball(scene, strands=300, hair_mat=_emission_of("HairValues", hair_color))
+    for name in ("AreaLight", "Floor"):
+        bpy.data.objects.remove(scene.objects[name])
+    ball = scene.objects["Ball"].data
+    co = np.empty(3 * len(ball.vertices), np.float32)
+    ball.vertices.foreach_get("co", co)
+    loop_vertex = np.empty(len(ball.loops), np.int32)
+    ball.loops.foreach_get("vertex_index", loop_vertex)
+    p = co.reshape(-1, 3)[loop_vertex]
+    uv = np.column_stack([np.arctan2(p[:, 1], p[:, 0]) / (2 * np.pi) + 0.5, p[:, 2] + 0.5])
+    ball.uv_layers.new(name="UVMap").data.foreach_set("uv", uv.reshape(-1))
+    ball.uv_layers.new(name="Second").data.foreach_set("uv", (1.0 - uv).reshape(-1))
+    ball.uv_layers["UVMap"].active_render = True
+    rgba = np.ones((len(ball.loops), 4), np.float32)
+    rgba[:, :3] = np.abs(p) * 1.6
+    col = ball.color_attributes.new("Col", "BYTE_COLOR", "CORNER")
+    col.data.foreach_set("color", np.clip(rgba, 0, 1).reshape(-1))
+
+    bpy.ops.object.curves_random_add()  # into the context's scene: moved to this one
+    curves = bpy.context.active_object
+    for c in list(curves.users_collection):
+        c.objects.unlink(curves)
+    scene.collection.objects.link(curves)
+    curves.name = "RandomCurves"
+    curves.location = (1.0, -0.4, 0.5)
+    curves.scale = (0.35, 0.35, 0.35)
+    data = curves.data
+    n, offsets = len(data.curves), np.empty(len(data.curves) + 1, np.int32)
+    data.curve_offset_data.foreach_get("value", offsets)
+    k = np.arange(n, dtype=np.float32)
+    surface_uv = data.attributes.new("surface_uv_coordinate", "FLOAT2", "CURVE")
+    surface_uv.data.foreach_set("vector", np.column_stack([k / n, (k * 0.37) % 1.0]).reshape(-1))
+    ramp = np.concatenate([np.linspace(0.0, 1.0, e - b, dtype=np.float32) for b, e in zip(offsets, offsets[1:])])
+    data.attributes.new("ramp", "FLOAT", "POINT").data.foreach_set("value", ramp)
+
+    def curves_color(nt):
+        uv = nt.nodes.new("ShaderNodeTexCoord").outputs["UV"]
+        attr = nt.nodes.new("ShaderNodeAttribute")
+        attr.attribute_name = "ramp"
+        return _vector_math(nt, "ADD", uv, _into_blue(nt, attr.outputs["Fac"]))
+    data.materials.append(_emission_of("CurvesValues", curves_color))
+
+    bm = bmesh.new()
+    bmesh.ops.create_icosphere(bm, subdivisions=2, radius=0.3)
+    cloud = add_object(scene, "Cloud", _mesh("Cloud", bm), location=(-0.9, -0.5, 0.4))
+
+    def cloud_color(nt):
+        attr = nt.nodes.new("ShaderNodeAttribute")
+        attr.attribute_name = "pc"
+        return attr.outputs["Color"]
+    tree = bpy.data.node_groups.new("ToPointsWithValues", "GeometryNodeTree")
+    tree.inputs.new("NodeSocketGeometry", "Geometry")
+    tree.outputs.new("NodeSocketGeometry", "Geometry")
+    gin, gout = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
+    to_points = tree.nodes.new("GeometryNodeMeshToPoints")
+    to_points.inputs["Radius"].default_value = 0.05
+    store = tree.nodes.new("GeometryNodeStoreNamedAttribute")
+    store.data_type = "FLOAT_VECTOR"
+    store.domain = "POINT"
+    store.inputs["Name"].default_value = "pc"
+    position = tree.nodes.new("GeometryNodeInputPosition")
+    scaled = tree.nodes.new("ShaderNodeVectorMath")
+    scaled.operation = "MULTIPLY_ADD"
+    scaled.inputs[1].default_value = (1.5, 1.5, 1.5)
+    scaled.inputs[2].default_value = (0.5, 0.5, 0.5)
+    tree.links.new(position.outputs[0], scaled.inputs[0])
+    tree.links.new(scaled.outputs[0], next(i for i in store.inputs if i.identifier == "Value_Vector"))
+    set_mat = tree.nodes.new("GeometryNodeSetMaterial")
+    set_mat.inputs["Material"].default_value = _emission_of("CloudValues", cloud_color)
+    tree.links.new(gin.outputs[0], to_points.inputs["Mesh"])
+    tree.links.new(to_points.outputs[0], store.inputs["Geometry"])
+    tree.links.new(store.outputs[0], set_mat.inputs["Geometry"])
+    tree.links.new(set_mat.outputs[0], gout.inputs[0])
+    cloud.modifiers.new("Points", "NODES").node_group = tree
+    scene.camera.location = (0.0, -4.5, 1.5)  # farther back on the line to the ball
+    scene.camera.data.lens = 50.0
+
+
 SCENES = {
     "hair_ball": (build_hair_ball, (96, 96), 128),
     "hair_ball_diffuse": (lambda scene: build_hair_ball(scene, principled=False), (96, 96), 128),
@@ -2360,6 +2482,7 @@ SCENES = {
         scene, 300, hair_mat=hair_bsdf_material("HairBsdfTangent", tangent=True), sun_only=True), (48, 48), 256),
     "hair_motion": (build_hair_motion, (48, 48), 128),
     "point_cloud": (build_point_cloud, (96, 96), 128),
+    "hair_attributes": (build_hair_attributes, (96, 48), 64),
     "lamps500": (build_lamps500, (160, 120), 64),
     "cornell_area": (build_cornell_area, (96, 96), 128),
     "cornell_point": (build_cornell_point, (96, 96), 128),

@@ -16,7 +16,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 23
+ABI_VERSION = 24
 
 # lt_status
 OK = 0
@@ -206,6 +206,17 @@ class MeshDesc(ctypes.Structure):
     ]
 
 
+class CurvesAttribute(ctypes.Structure):
+    _c_name_ = "lt_curves_attribute"
+    _fields_ = [
+        ("id", ctypes.c_int),
+        ("components", ctypes.c_int),
+        ("per_point", ctypes.c_int),
+        ("values", _f_p),
+        ("value_count", ctypes.c_int),
+    ]
+
+
 class CurvesDesc(ctypes.Structure):
     _c_name_ = "lt_curves_desc"
     _fields_ = [
@@ -216,6 +227,9 @@ class CurvesDesc(ctypes.Structure):
         ("material_slots", _i_p),
         ("motion_points", _f_p),
         ("motion_step_count", ctypes.c_int),
+        ("curve_uvs", _f_p),
+        ("attributes", ctypes.POINTER(CurvesAttribute)),
+        ("attribute_count", ctypes.c_int),
     ]
 
 
@@ -439,9 +453,8 @@ class AbiEntry(ctypes.Structure):
     ]
 
 
-STRUCTS = (AbiEntry, ImageDesc, ImageFileDesc, ShaderProgram, MeshAttribute, MeshDesc, InstanceDesc, LightDesc,
-           CameraDesc, WorldDesc,
-           VolumeDesc, SceneStats, RenderSettings, RenderStatus)
+STRUCTS = (AbiEntry, ImageDesc, ImageFileDesc, ShaderProgram, MeshAttribute, MeshDesc, CurvesAttribute, CurvesDesc,
+           InstanceDesc, LightDesc, CameraDesc, WorldDesc, VolumeDesc, SceneStats, RenderSettings, RenderStatus)
 
 
 # ---- library loading -----------------------------------------------------------------------------
@@ -875,10 +888,12 @@ class Scene:
                "lt_scene_add_mesh")
         return out.value
 
-    def add_curves(self, points, curve_offsets=None, material_slots=None, motion=None):
+    def add_curves(self, points, curve_offsets=None, material_slots=None, motion=None, uvs=None, attributes=()):
         """Hair or a point cloud: points (n, 4) of x, y, z, radius (object space); curve_offsets
         (curves + 1, uint32) into them, or None for a point cloud; material_slots per curve;
-        motion: the points (steps, n, 4) at the motion steps over the shutter (deformation)."""
+        motion: the points (steps, n, 4) at the motion steps over the shutter (deformation);
+        uvs: the default UV map, (curves, 2), or None; attributes: (id, components, per_point,
+        values) of the named ones, one value per point or (per_point false) per curve."""
         pts = _f32(points, "curve points", 4)
         mot = None if motion is None else np.ascontiguousarray(motion, dtype=np.float32)
         if mot is not None and (mot.ndim != 3 or mot.shape[1:] != (pts.size // 4, 4)):
@@ -895,6 +910,17 @@ class Scene:
                        None if offs is None else offs.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)),
                        ncurves, _iptr(mat), None if mot is None else _fptr(mot),
                        0 if mot is None else mot.shape[0])
+        uv = None if uvs is None else _f32(uvs, "curve UVs", 2)
+        if uv is not None:
+            if uv.size != 2 * ncurves:
+                raise ValueError("curve UVs: %d values for %d curves" % (uv.size, ncurves))
+            d.curve_uvs = _fptr(uv)
+        attrs = [(int(i), int(n), int(bool(p)), _f32(v, "curve attribute %d" % int(i))) for i, n, p, v in attributes]
+        if attrs:
+            table = (CurvesAttribute * len(attrs))(*[CurvesAttribute(i, n, p, _fptr(v), v.size)
+                                                     for i, n, p, v in attrs])
+            d.attributes = table
+            d.attribute_count = len(attrs)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_curves(self.handle, ctypes.byref(d), ctypes.byref(out)),
                "lt_scene_add_curves")

@@ -205,6 +205,69 @@ TEST(Curves, BadStrandsAreDroppedWithWarnings) {
   EXPECT_NEAR(hit.t, 2.5f, 1e-3f);
 }
 
+// Cycles' curve attributes (curve_attribute_float): a per-curve value and the default UV are the
+// hit curve's, a per-point value is linear in u between the hit segment's two keys; a point
+// reads its own. A dropped curve (the middle one, of zero length) and a dropped point take their
+// values with them.
+TEST(Curves, AttributesAndUvsFollowTheKeptCurvesAndPoints) {
+  Geometry g;
+  std::vector<std::string> w;
+  Mesh m;
+  m.kind = GeometryKind::Curves;
+  // Curve 0 along +X at y = 0 (3 keys), curve 1 of zero length, curve 2 along +X at y = 2 (3 keys).
+  m.curves.cps = {-1, 0, 0, 0.1f, 0,  0, 0, 0.1f, 1, 0, 0, 0.1f, 5, 5, 5, 0.1f,
+                  5,  5, 5, 0.1f, -1, 2, 0, 0.1f, 0, 2, 0, 0.1f, 1, 2, 0, 0.1f};
+  m.curves.random = {0, 0, 0};
+  m.curves.uv = {{0.1f, 0.2f}, {0.3f, 0.4f}, {0.5f, 0.6f}};
+  MeshAttribute per_curve{7, 2, false, {1, 2, 3, 4, 5, 6}};
+  MeshAttribute per_point{9, 1, true, {10, 20, 30, 40, 50, 60, 70, 80}};
+  m.attributes = {per_curve, per_point};
+  g.add_curves(std::move(m), {0, 3, 5, 8}, w);
+  Mesh p;
+  p.kind = GeometryKind::Points;
+  p.curves.cps = {0, 5, 0, 0, 3, 5, 0, 0.2f};  // the first has radius 0: dropped
+  p.curves.random = {0, 0};
+  p.attributes = {MeshAttribute{9, 3, true, {1, 2, 3, 4, 5, 6}}};
+  g.add_curves(std::move(p), {}, w);
+  for (int mesh : {0, 1}) {
+    Instance inst;
+    inst.mesh = mesh;
+    g.add_instance(inst, w);
+  }
+  g.commit();
+  const Mesh& curves = g.mesh(0);
+  ASSERT_EQ(curves.curves.curve_count(), 2u);
+  struct Probe {
+    float x, y, uv_x, per_curve, key0, key1;  // key0, key1: the hit segment's keys' values
+  };
+  // x = -0.5 is on the first segment, x = 0.75 on the second.
+  for (const Probe& e : {Probe{-0.5f, 0, 0.1f, 1, 10, 20}, Probe{0.75f, 0, 0.1f, 1, 20, 30},
+                         Probe{-0.5f, 2, 0.5f, 5, 60, 70}, Probe{0.75f, 2, 0.5f, 5, 70, 80}}) {
+    Hit hit;
+    ASSERT_TRUE(g.intersect(ray({e.x, e.y, 5.0f}, {0, 0, -1}), 31, &hit)) << e.x << " " << e.y;
+    const SurfacePoint sp = g.surface(hit);
+    EXPECT_FLOAT_EQ(sp.uv.x, e.uv_x);
+    float v[4];
+    int n = 0;
+    ASSERT_TRUE(curves.interpolate(7, sp.primitive, sp.bary.x, sp.bary.y, v, &n));
+    EXPECT_EQ(n, 2);
+    EXPECT_FLOAT_EQ(v[0], e.per_curve);
+    EXPECT_FLOAT_EQ(v[1], e.per_curve + 1);
+    ASSERT_TRUE(curves.interpolate(9, sp.primitive, sp.bary.x, sp.bary.y, v, &n));
+    EXPECT_GT(sp.bary.x, 0.2f);
+    EXPECT_LT(sp.bary.x, 0.9f);
+    EXPECT_NEAR(v[0], e.key0 + (e.key1 - e.key0) * sp.bary.x, 1e-4f) << e.x << " " << e.y;
+    EXPECT_FALSE(curves.interpolate(8, sp.primitive, sp.bary.x, sp.bary.y, v, &n));
+  }
+  Hit hit;
+  ASSERT_TRUE(g.intersect(ray({3.0f, 5.0f, 5.0f}, {0, 0, -1}), 31, &hit));
+  const SurfacePoint sp = g.surface(hit);
+  float v[4];
+  ASSERT_TRUE(g.mesh(1).interpolate(9, sp.primitive, sp.bary.x, sp.bary.y, v));
+  EXPECT_EQ(v[0], 4);
+  EXPECT_EQ(v[2], 6);
+}
+
 // ---- hair lobes ---------------------------------------------------------------------------------
 
 // Principled Hair with Cycles' parameter maps (shaders.cpp) applied by hand: roughness r -> v,

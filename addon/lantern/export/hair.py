@@ -5,6 +5,7 @@ objects and point clouds, into the core's round Catmull-Rom curves and spheres
 import numpy as np
 
 from . import particle_cache
+from .attribute_values import attribute_array
 
 # Cycles' radii when a Curves object or point cloud has no radius attribute.
 CURVES_DEFAULT_RADIUS = 0.005
@@ -148,6 +149,92 @@ def pointcloud_arrays(cloud):
     if radius is None:
         radius = np.full(n, POINTS_DEFAULT_RADIUS, dtype=np.float32)
     return np.column_stack([pos, radius]).astype(np.float32)
+
+
+def _srgb_to_linear(c):
+    """Cycles' color_srgb_to_linear, per component."""
+    c = np.asarray(c, dtype=np.float32)
+    with np.errstate(invalid='ignore'):
+        return np.where(c < 0.04045, np.maximum(c, 0) / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
+def _on_emitter(obj, method, index):
+    """Per strand of particle_hair_arrays (same order), ParticleSystem.uv_on_emitter or
+    mcol_on_emitter (method) of the emitter's layer `index`, as Cycles' ObtainCacheParticleUV and
+    ObtainCacheParticleVcol call it (children pass the first particle)."""
+    out = []
+    for psys in hair_systems(obj):
+        total = len(psys.particles)
+        children = len(psys.child_particles) if psys.settings.child_type != 'NONE' else 0
+        first = total if children else 0
+        if total + children - first <= 0:
+            continue
+        modifier = next((m for m in obj.modifiers if m.type == 'PARTICLE_SYSTEM' and m.particle_system == psys), None)
+        if modifier is None:
+            return None
+        call = getattr(psys, method)
+        particles = psys.particles
+        for k in range(first, total + children):
+            particle = particles[k] if k < total else particles[0]
+            out.append(tuple(call(modifier, particle=particle, particle_no=k, **{
+                'uv_no' if method == 'uv_on_emitter' else 'vcol_no': index})))
+    return np.asarray(out, dtype=np.float32)
+
+
+def particle_hair_attributes(obj, reads, ids):
+    """Cycles' values of particle hair (blender/curves.cpp, sync_particle_hair), one per strand:
+    the emitter's UV maps at the strand's root (its active render map the default UV) and its byte
+    colour attributes (Mesh.vertex_colors, sRGB to linear, alpha 1). reads: the registry keys the
+    materials read; ids: the registry's ids. Returns (uvs or None, [(id, components, per_point,
+    values)]); other names read nothing there (as in Cycles)."""
+    mesh = obj.data
+    uv_layers = list(getattr(mesh, "uv_layers", ()))
+    vcols = list(getattr(mesh, "vertex_colors", ()))
+    cache = {}
+
+    def uv(i):
+        if ('uv', i) not in cache:
+            cache['uv', i] = _on_emitter(obj, 'uv_on_emitter', i)
+        return cache['uv', i]
+    uvs = None
+    if ('uv', '') in reads:
+        render = next((i for i, l in enumerate(uv_layers) if l.active_render), None)
+        uvs = uv(render) if render is not None else None
+    attrs = []
+    for kind, name in sorted(reads):
+        if kind != 'attr':
+            continue
+        got = None
+        layer = next((i for i, l in enumerate(uv_layers) if l.name == name), None)
+        if layer is not None:
+            got = uv(layer)
+        else:
+            vcol = next((i for i, l in enumerate(vcols) if l.name == name), None)
+            rgb = _on_emitter(obj, 'mcol_on_emitter', vcol) if vcol is not None else None
+            if rgb is not None and len(rgb):
+                got = np.column_stack([_srgb_to_linear(rgb), np.ones(len(rgb), np.float32)])
+        if got is not None and len(got):
+            attrs.append((ids[kind, name], got.shape[1], False, got))
+    return (uvs if uvs is not None and len(uvs) else None), attrs
+
+
+def generic_attributes(data, reads, ids, domains):
+    """Named attributes of a Curves or PointCloud datablock that the materials read (reads, ids as
+    particle_hair_attributes'), as Cycles' attr_create_generic takes them: domains maps a Blender
+    domain to per_point ({'POINT': True, 'CURVE': False} for curves). Returns (uvs or None,
+    [(id, components, per_point, values)]): the default UV is the first 2D vector of the curve
+    domain (Cycles' rule; Blender's surface_uv_coordinate)."""
+    uvs = None
+    if ('uv', '') in reads and 'CURVE' in domains:
+        first = next((a for a in data.attributes if a.data_type == 'FLOAT2' and a.domain == 'CURVE'), None)
+        uvs = attribute_array(first)[1] if first is not None else None
+    attrs = []
+    for kind, name in sorted(reads):
+        a = data.attributes.get(name) if kind == 'attr' else None
+        got = attribute_array(a) if a is not None and a.domain in domains else None
+        if got is not None:
+            attrs.append((ids[kind, name], got[0], domains[a.domain], got[1]))
+    return uvs, attrs
 
 
 def warn_curve_shape(depsgraph, report):

@@ -324,7 +324,7 @@ class MaterialExporter:
         self.emissive_media = 0  # of those, volumes that emit
         self.subsurface = set()  # names of the materials that scatter under their surface
         self.attributes = AttributeRegistry()  # names the programs read (export/mesh.py exports them)
-        self.mesh_attribute_names = {}  # core material id -> the mesh attributes its program reads, named
+        self.geometry_reads = {}  # core material id -> the geometry values its program reads (registry keys)
         self.cryptomatte = Names()  # the Cryptomatte names of materials and (export/mesh.py) objects
 
     # -- public --------------------------------------------------------------------------------
@@ -370,8 +370,7 @@ class MaterialExporter:
                                                 null_surface=True)
         self.ids[key] = mat_id
         if mat_id >= 0:
-            self.mesh_attribute_names[mat_id] = sorted("'%s'" % name if name else "the default colour attribute"
-                                                       for kind, name in used if kind in ('attr', 'color'))
+            self.geometry_reads[mat_id] = frozenset(k for k in used if k[0] in ('attr', 'color', 'uv'))
         self.volumes[key] = (volume, null_surface)
         self.displacements[key] = _program_key(self._displaced if mat_id >= 0 else None)
         if volume:

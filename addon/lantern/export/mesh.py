@@ -3,8 +3,10 @@
 import bpy
 import numpy as np
 
+from .attribute_values import attribute_array
 from .light import visibility_bits
-from .hair import hair_systems, particle_hair_arrays
+from .hair import (curves_arrays, generic_attributes, hair_systems, particle_hair_arrays,
+                   particle_hair_attributes, pointcloud_arrays)
 from .names import core_call, transform_problem
 from .nodes.attributes import object_random_id
 
@@ -26,24 +28,12 @@ def terminator_of(obj):
 CONVERTIBLE_TYPES = {'CURVE', 'SURFACE', 'FONT', 'META'}
 
 
-# Mesh.attributes data types: (property, components, numpy type).
-_ATTRIBUTE_TYPES = {
-    'FLOAT': ("value", 1, np.float32), 'INT': ("value", 1, np.int32), 'BOOLEAN': ("value", 1, bool),
-    'FLOAT2': ("vector", 2, np.float32), 'FLOAT_VECTOR': ("vector", 3, np.float32),
-    'FLOAT_COLOR': ("color", 4, np.float32), 'BYTE_COLOR': ("color", 4, np.float32),
-}
-
-
 def _loop_values(mesh, attr):
     """(components, per-loop values (n_loops, components)) of a Mesh.attributes entry, or None."""
-    kind = _ATTRIBUTE_TYPES.get(attr.data_type)
-    if kind is None or attr.domain not in ('POINT', 'CORNER', 'FACE'):
+    got = attribute_array(attr) if attr.domain in ('POINT', 'CORNER', 'FACE') else None
+    if got is None:
         return None
-    prop, n, dtype = kind
-    values = np.empty(len(attr.data) * n, dtype=dtype)
-    # 'color' is scene linear for byte and float colours alike (Cycles reads them linear).
-    attr.data.foreach_get(prop, values)
-    values = values.astype(np.float32).reshape(-1, n)
+    n, values = got
     if attr.domain == 'CORNER':
         return n, values
     if attr.domain == 'POINT':
@@ -536,7 +526,6 @@ class MeshExporter:
         'CURVES' (a Curves object) or 'POINTCLOUD'; key: the object instance's instance_key, for
         its transform's motion; the strands' deformation comes from the Motion's samples;
         instancer as export_instance's. Returns the core instance id or None."""
-        from .hair import curves_arrays, pointcloud_arrays
         problem = transform_problem(matrix_world)
         if problem is not None:
             self.report({'WARNING'}, "Object '%s' left out: %s" % (obj.name, problem))
@@ -545,27 +534,32 @@ class MeshExporter:
         geometry = (kind, obj.original.as_pointer() if kind == 'HAIR' else self._geometry_key(obj))
         subject = "Object '%s'%s" % (obj.name, " (particle hair)" if kind == 'HAIR' else "")
         if geometry not in self.mesh_ids:
-            names = sorted({n for m in material_ids for n in self.materials.mesh_attribute_names.get(m, ())})
-            if names:
-                self.report({'WARNING'}, "%s: its material reads %s, which Lantern does not export for hair, "
-                            "curves and points: it reads 0 there (Cycles reads the strands' and points' "
-                            "attributes, and hair's UVs from its emitter)" % (subject, ", ".join(names)))
+            reads = set().union(*(self.materials.geometry_reads.get(m, ()) for m in material_ids))
+            ids = self.materials.attributes.ids
+            values = None, ()
             if kind == 'HAIR':
                 arrays = particle_hair_arrays(obj, self.report)
                 args = arrays and (arrays[0], arrays[1], arrays[2])
+                if args and reads:
+                    values = particle_hair_attributes(obj, reads, ids)
             elif kind == 'CURVES':
                 arrays = curves_arrays(obj.data)
                 args = arrays and (arrays[0], arrays[1], None)
+                if args and reads:
+                    values = generic_attributes(obj.data, reads, ids, {'POINT': True, 'CURVE': False})
             else:
                 points = pointcloud_arrays(obj.data)
                 args = None if points is None else (points, None, None)
+                if args and reads:
+                    values = generic_attributes(obj.data, reads, ids, {'POINT': True})
             if self.emitters is not None and kind == 'HAIR':
                 self.emitters.setdefault(obj.original.as_pointer(), {})['hair'] = args
             deform = None
             if args is not None and self.motion is not None:
                 deform = self.motion.strand_deformation(obj, args[0])
             self.mesh_ids[geometry] = None if args is None else core_call(self.core_scene, self.report, subject,
-                                                                          "add_curves", *args, motion=deform)
+                                                                          "add_curves", *args, motion=deform,
+                                                                          uvs=values[0], attributes=values[1])
         mesh_id = self.mesh_ids[geometry]
         if mesh_id is None:
             return None

@@ -57,8 +57,9 @@ extern "C" {
  * face_offset (a Volume object's emission confined to Cycles' volume mesh); deforming curves and
  * points (lt_curves_desc.motion_points and motion_step_count); 22: lt_image_desc.ocio_config and
  * ocio_space (byte images Blender loads in other colour spaces); 23: a perspective camera's zoom over
- * the shutter (lt_camera_desc.zoom_pre and zoom_post). */
-#define LT_ABI_VERSION 23
+ * the shutter (lt_camera_desc.zoom_pre and zoom_post); 24: attributes and UVs of curves and points
+ * (lt_curves_desc.curve_uvs and attributes, lt_curves_attribute). */
+#define LT_ABI_VERSION 24
 
 enum lt_status {
   LT_OK = 0,
@@ -268,6 +269,18 @@ LT_API int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* desc, int* out
  * spaced over the shutter, 4 * point_count floats each (x, y, z, radius), the centre one equal to
  * points; the keys move linearly between steps (Embree's vertex motion, as Cycles'). A curve or
  * point non-finite at any step is dropped. */
+/* A named attribute of curves or points, read as lt_mesh_attribute's (same ids, 1 to 4 components,
+ * finite values): per_point nonzero, one value per point, which a curve segment interpolates
+ * linearly between its two keys (Cycles' curve key attributes); 0, one value per curve (Cycles'
+ * curve attributes; points take per_point only). */
+typedef struct lt_curves_attribute {
+  int id;
+  int components;
+  int per_point;
+  const float* values;
+  int value_count;
+} lt_curves_attribute;
+
 typedef struct lt_curves_desc {
   const float* points;
   uint32_t point_count;
@@ -276,6 +289,11 @@ typedef struct lt_curves_desc {
   const int* material_slots;
   const float* motion_points;
   int motion_step_count;
+  /* The default UV map (Texture Coordinate's UV), 2 finite floats per curve (Cycles' hair UV: the
+   * emitter's UV at the root of particle hair, a Curves object's surface UV); NULL: (0, 0). */
+  const float* curve_uvs;
+  const lt_curves_attribute* attributes; /* may be NULL when attribute_count is 0 */
+  int attribute_count;
 } lt_curves_desc;
 LT_API int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* desc, int* out_id);
 

@@ -82,6 +82,27 @@ lt::Transform to_transform(const float* m, const char* what) {
 // Motion blur steps (lt_mesh_desc, lt_instance_desc, lt_camera_desc): 0, or an odd count from 3 to
 // 129 (Cycles' 2^steps + 1 with steps 1 to 7; Embree's RTC_MAX_TIME_STEP_COUNT), so that the
 // centre step is the shutter's centre.
+// Attribute `name` of mesh m (lt_mesh_attribute, lt_curves_attribute), checked: `elements`
+// values of `components` floats each (one per `element`).
+lt::MeshAttribute checked_attribute(const lt::Mesh& m, const std::string& name, int id, int components,
+                                    const float* values, int value_count, size_t elements, const char* element) {
+  require(id >= 0 && id < lt::kMaxAttributeId,
+          name + ": id " + std::to_string(id) + " out of range [0, " + std::to_string(lt::kMaxAttributeId) + ")");
+  require(m.attribute(id) == nullptr, name + ": id " + std::to_string(id) + " given twice");
+  require(components >= 1 && components <= 4, name + ": components must be 1 to 4");
+  const size_t n = elements * size_t(components);
+  require(value_count >= 0 && size_t(value_count) == n, name + ": " + std::to_string(value_count) +
+                                                            " values, expected " + std::to_string(n) + " (" +
+                                                            std::to_string(components) + " per " + element + ")");
+  require(n == 0 || values, name + ": values are NULL");
+  require(finite_array(values, n), name + ": values must be finite");
+  lt::MeshAttribute attr;
+  attr.id = id;
+  attr.components = components;
+  attr.values.assign(values, values + n);
+  return attr;
+}
+
 void require_motion_steps(int count, const void* data, const std::string& what) {
   require(count == 0 || (count >= 3 && count <= 129 && count % 2 == 1),
           what + ": " + std::to_string(count) + " motion steps; expected 0 or an odd count from 3 to 129");
@@ -478,22 +499,8 @@ int lt_scene_add_mesh(lt_scene* scene, const lt_mesh_desc* d, int* out_id) {
             "mesh attributes are NULL or their count negative");
     for (int i = 0; i < d->attribute_count; ++i) {
       const lt_mesh_attribute& a = d->attributes[i];
-      const std::string name = "mesh attribute " + std::to_string(i);
-      require(a.id >= 0 && a.id < lt::kMaxAttributeId,
-              name + ": id " + std::to_string(a.id) + " out of range [0, " + std::to_string(lt::kMaxAttributeId) + ")");
-      require(m.attribute(a.id) == nullptr, name + ": id " + std::to_string(a.id) + " given twice");
-      require(a.components >= 1 && a.components <= 4, name + ": components must be 1 to 4");
-      const size_t n = corners * size_t(a.components);
-      require(a.value_count >= 0 && size_t(a.value_count) == n, name + ": " + std::to_string(a.value_count) +
-                                                                    " values, expected " + std::to_string(n) + " (" +
-                                                                    std::to_string(a.components) + " per corner)");
-      require(n == 0 || a.values, name + ": values are NULL");
-      require(finite_array(a.values, n), name + ": values must be finite");
-      lt::MeshAttribute attr;
-      attr.id = a.id;
-      attr.components = a.components;
-      attr.values.assign(a.values, a.values + n);
-      m.attributes.push_back(std::move(attr));
+      m.attributes.push_back(checked_attribute(m, "mesh attribute " + std::to_string(i), a.id, a.components, a.values,
+                                               a.value_count, corners, "corner"));
     }
     require_motion_steps(d->motion_step_count, d->motion_positions, "mesh");
     if (d->motion_step_count > 0) {
@@ -555,6 +562,22 @@ int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* d, int* out_id) {
         m.slots.assign(d->material_slots, d->material_slots + d->curve_count);
         for (int& s : m.slots) s = s < 0 ? 0 : s;
       }
+    }
+    require(d->attribute_count >= 0 && (d->attribute_count == 0 || d->attributes),
+            "curve attributes are NULL or their count negative");
+    for (int i = 0; i < d->attribute_count; ++i) {
+      const lt_curves_attribute& a = d->attributes[i];
+      const bool per_point = a.per_point || !d->curve_count;
+      m.attributes.push_back(checked_attribute(m, "curve attribute " + std::to_string(i), a.id, a.components, a.values,
+                                               a.value_count, per_point ? d->point_count : d->curve_count,
+                                               per_point ? "point" : "curve"));
+      m.attributes.back().per_point = per_point;
+    }
+    if (d->curve_uvs && d->curve_count) {
+      require(finite_array(d->curve_uvs, 2 * size_t(d->curve_count)), "curve UVs must be finite");
+      m.curves.uv.resize(d->curve_count);
+      for (size_t k = 0; k < d->curve_count; ++k)
+        m.curves.uv[k] = lt::Vec2{d->curve_uvs[2 * k], d->curve_uvs[2 * k + 1]};
     }
     require_motion_steps(d->motion_step_count, d->motion_points, "curves");
     if (d->motion_step_count > 0) {

@@ -277,6 +277,11 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
     }
     for (int s = 0; s < steps; ++s)
       for (size_t i : keep) motion.insert(motion.end(), key_at(s, i), key_at(s, i) + 4);
+    for (MeshAttribute& a : mesh.attributes) {
+      const size_t n = size_t(a.components);
+      for (size_t j = 0; j < keep.size(); ++j) std::copy_n(&a.values[keep[j] * n], n, &a.values[j * n]);
+      a.values.resize(keep.size() * n);
+    }
     for (size_t i : keep) {
       std::copy_n(&c.cps[4 * i], 4, &c.cps[4 * kept]);
       c.random[kept] = c.random[i];
@@ -349,6 +354,28 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
         motion.insert(motion.end(), key_at(s, e - 1), key_at(s, e - 1) + 4);
       }
     c.motion_cps = std::move(motion);
+    // Attributes and UVs of the kept curves; per-point values laid out as the keys.
+    for (MeshAttribute& a : mesh.attributes) {
+      const size_t n = size_t(a.components);
+      const float* at = a.values.data();
+      std::vector<float> v;
+      for (uint32_t k : kept_curves) {
+        if (!a.per_point) {
+          v.insert(v.end(), at + k * n, at + (k + 1) * n);
+          continue;
+        }
+        const uint32_t first = offsets[k], end = offsets[k + 1];
+        v.insert(v.end(), at + first * n, at + (first + 1) * n);
+        v.insert(v.end(), at + first * n, at + end * n);
+        v.insert(v.end(), at + (end - 1) * n, at + end * n);
+      }
+      a.values = std::move(v);
+    }
+    if (!c.uv.empty()) {
+      std::vector<Vec2> uv;
+      for (uint32_t k : kept_curves) uv.push_back(c.uv[k]);
+      c.uv = std::move(uv);
+    }
     c.cps = std::move(cps);
     c.random = std::move(random);
     mesh.slots = std::move(slots);
@@ -908,6 +935,17 @@ bool Mesh::interpolate(int id, int t, float b1, float b2, float out[4], int* com
     return false;
   }
   const int n = a->components;
+  if (kind != GeometryKind::Triangles) {
+    size_t element = size_t(t);  // points: the point
+    if (kind == GeometryKind::Curves && a->per_point) {
+      const float* k0 = &a->values[(size_t(curves.segments[size_t(t)]) + 1) * n];
+      for (int k = 0; k < n; ++k) out[k] = (1 - b1) * k0[k] + b1 * k0[n + k];
+      return true;
+    }
+    if (kind == GeometryKind::Curves) element = size_t(curves.curve_of_segment(uint32_t(t)));
+    std::copy_n(&a->values[element * n], n, out);
+    return true;
+  }
   const float* v = &a->values[size_t(3 * t) * n];
   const float b0 = 1 - b1 - b2;
   for (int k = 0; k < n; ++k) out[k] = v[k] * b0 + v[n + k] * b1 + v[2 * n + k] * b2;
@@ -928,6 +966,7 @@ SurfacePoint Geometry::curve_surface(const Hit& hit, const Instance& inst, const
     catmull_rom(c, c.segments[seg], hit.u, &centre, &dp, &r, hit.time);
     sp.curve = curve;
     sp.bary = {hit.u, 0};
+    if (!c.uv.empty()) sp.uv = c.uv[size_t(curve)];
   } else {
     float key[4];
     c.key(size_t(hit.primitive), hit.time, key);

@@ -14,12 +14,14 @@
 
 namespace lt {
 
-// A named per-corner attribute (UV map, colour, generic values, tangent with its sign); the
-// add-on turns names into ids per scene. components 1-4, 3 corners per triangle.
+// A named attribute (UV map, colour, generic values, tangent with its sign); the add-on turns
+// names into ids per scene. components 1-4. Triangles: per corner, 3 per triangle. Curves: per
+// curve, or per_point laid out as CurveData::cps (ends duplicated). Points: per point.
 struct MeshAttribute {
   int id = -1;
   int components = 0;
-  std::vector<float> values;  // components per corner
+  bool per_point = false;
+  std::vector<float> values;  // components per element
 };
 constexpr int kMaxAttributeId = 1 << 16;
 
@@ -38,6 +40,7 @@ struct CurveData {
   std::vector<uint32_t> first_segment;  // curves: each curve's first segment, then the segment count
   std::vector<float> arc;               // curves: distance along the keys from the curve's root, per control point
   std::vector<float> random;            // per curve (points: per point): Cycles' hash_uint2_to_float(index, 0)
+  std::vector<Vec2> uv;                 // curves: the default UV map per curve, or empty ((0, 0))
   // Deformation motion blur: motion_steps (0, or 3 to 129) sets of control points laid out as
   // cps, equally spaced over the shutter, step by step; cps stays the centre step's. Embree
   // interpolates the keys linearly between steps, and so do key() and catmull_rom().
@@ -86,7 +89,9 @@ struct Mesh {
     return nullptr;
   }
   // An attribute interpolated over triangle t at barycentrics (b1, b2) into out[0..3] (unused
-  // components 0, alpha 1); false (out zero) when the mesh lacks it.
+  // components 0, alpha 1); false (out zero) when the mesh lacks it. Curves: t the segment, b1
+  // its u (Cycles' curve_attribute_*: per-point values linear between the segment's keys);
+  // points: t the point.
   bool interpolate(int id, int t, float b1, float b2, float out[4], int* components = nullptr) const;
 };
 

@@ -21,6 +21,12 @@ class AttributeRegistry:
         self.ids = {}
         self.used = None  # a set: the keys asked for are added to it (one material's)
 
+    def note(self, key):
+        """A geometry value read without an id: ('uv', '') the default UV map (Texture Coordinate's
+        UV), which curves export only when a material reads it."""
+        if self.used is not None:
+            self.used.add(key)
+
     def id(self, kind, name):
         key = (kind, name or "")
         if self.used is not None:
@@ -53,10 +59,16 @@ def _attribute(c, kind, name, domain):
                   params=[registry(c).id(kind, name), domain, c.bump])
 
 
+def default_uv(c):
+    """Texture Coordinate's UV output, noted as read (AttributeRegistry.note)."""
+    registry(c).note(('uv', ''))
+    return c.texcoord("UV")
+
+
 @register('UVMAP')
 def uv_map(c, node, want):
     if not node.uv_map:
-        return {"UV": c.texcoord("UV")}
+        return {"UV": default_uv(c)}
     return {"UV": _attribute(c, 'attr', node.uv_map, DOMAIN_MESH)["Vector"]}
 
 

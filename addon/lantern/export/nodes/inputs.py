@@ -1,7 +1,7 @@
 """Nodes that read the shading point, constants and image textures (inputs.h in the core)."""
 
 from . import TEX_COORD_OUTPUTS, ops, register
-from .attributes import registry
+from .attributes import default_uv, registry
 from .textures import float_bits
 
 MAGENTA = (1.0, 0.0, 1.0)  # a missing image, as Cycles renders it
@@ -26,6 +26,8 @@ def tex_coord(c, node, want):
         # Another object's space: its world-to-object matrix as a table.
         m = node.object.matrix_world.inverted()
         table = [m[r][k] for r in range(3) for k in range(4)]
+    if node.outputs["UV"].is_linked:
+        default_uv(c)
     return {n: c.texcoord(n, table) for n in TEX_COORD_OUTPUTS}
 
 
@@ -120,7 +122,8 @@ def image_texture(c, node, want):
         if node.image is None:
             c.warn("image texture '%s' has no image; it renders magenta (as Cycles)" % node.name)
         return {"Color": c.const(MAGENTA), "Alpha": c.const(1.0)}
-    vec = c.vector(node.inputs["Vector"], default=c.texcoord("UV"))
+    sock = node.inputs["Vector"]
+    vec = c.vector(sock) if c.linked(sock) else default_uv(c)
     # Cycles divides colours by alpha where the Alpha output reaches the shader output
     # (NODE_IMAGE_ALPHA_UNASSOCIATE): the param is set when something reads Alpha (Compiler.read).
     if node.projection in _PROJECTIONS:
