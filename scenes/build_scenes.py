@@ -2350,10 +2350,12 @@ def build_point_cloud(scene):
 
 
 def _emission_of(name, color):
-    """An Emission shader (strength 1) whose Color is color(nt), a node output of the tree."""
+    """An Emission shader (strength 1) whose Color is color(nt), a node output of the tree, plus a
+    quarter of |Generated|."""
     mat, nt, out = _material(name)
     em = nt.nodes.new("ShaderNodeEmission")
-    nt.links.new(color(nt), em.inputs["Color"])
+    generated = _vector_math(nt, "ABSOLUTE", nt.nodes.new("ShaderNodeTexCoord").outputs["Generated"])
+    nt.links.new(_vector_math(nt, "MULTIPLY_ADD", generated, (0.25, 0.25, 0.25), color(nt)), em.inputs["Color"])
     nt.links.new(em.outputs[0], out.inputs["Surface"])
     return mat
 
@@ -2382,7 +2384,8 @@ def build_hair_attributes(scene):
     (Texture Coordinate's UV: the active render map; a UV Map node: a second map) and a byte colour
     attribute (Attribute node 'Col'); a Curves object (Blender's random curves) reads its
     surface_uv_coordinate (the default UV) and a per-point float 'ramp'; a point cloud reads a
-    per-point vector 'pc' stored by geometry nodes. No lights: a dim world."""
+    per-point vector 'pc' stored by geometry nodes; all three add a quarter of |Generated|. No
+    lights: a dim world."""
     def hair_color(nt):
         uv = nt.nodes.new("ShaderNodeTexCoord").outputs["UV"]
         second = nt.nodes.new("ShaderNodeUVMap")

@@ -104,6 +104,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_curves_desc, motion_points),
     LT_FIELD(lt_curves_desc, motion_step_count),
     LT_FIELD(lt_curves_desc, curve_uvs),
+    LT_FIELD(lt_curves_desc, curve_generated),
     LT_FIELD(lt_curves_desc, attributes),
     LT_FIELD(lt_curves_desc, attribute_count),
     LT_STRUCT(lt_curves_attribute),

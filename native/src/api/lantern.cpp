@@ -579,6 +579,14 @@ int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* d, int* out_id) {
       for (size_t k = 0; k < d->curve_count; ++k)
         m.curves.uv[k] = lt::Vec2{d->curve_uvs[2 * k], d->curve_uvs[2 * k + 1]};
     }
+    if (d->curve_generated && d->curve_count) {
+      require(finite_array(d->curve_generated, 3 * size_t(d->curve_count)),
+              "curve generated coordinates must be finite");
+      m.curves.generated.resize(d->curve_count);
+      for (size_t k = 0; k < d->curve_count; ++k)
+        m.curves.generated[k] =
+            lt::Vec3(d->curve_generated[3 * k], d->curve_generated[3 * k + 1], d->curve_generated[3 * k + 2]);
+    }
     require_motion_steps(d->motion_step_count, d->motion_points, "curves");
     if (d->motion_step_count > 0) {
       m.curves.motion_steps = d->motion_step_count;
@@ -589,17 +597,6 @@ int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* d, int* out_id) {
     const size_t n = d->curve_count ? d->curve_count : d->point_count;
     m.curves.random.resize(n);
     for (size_t k = 0; k < n; ++k) m.curves.random[k] = float(lt::tex::hash_uint2(uint32_t(k), 0)) / float(0xFFFFFFFFu);
-    // Blender's automatic texture space: the bounds of the points.
-    lt::Bounds b;
-    for (size_t k = 0; k < d->point_count; ++k) {
-      const lt::Vec3 p = m.curves.point(k);
-      if (lt::is_finite(p)) b.extend(p);
-    }
-    if (!b.empty()) {
-      m.texspace_location = (b.lo + b.hi) * 0.5f;
-      m.texspace_size = (b.hi - b.lo) * 0.5f;
-      for (int k = 0; k < 3; ++k) m.texspace_size[k] = std::max(m.texspace_size[k], 1e-5f);
-    }
     *out_id = scene->scene.geometry.add_curves(std::move(m), offsets, scene->scene.warnings);
   });
 }

@@ -371,11 +371,14 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
       }
       a.values = std::move(v);
     }
-    if (!c.uv.empty()) {
-      std::vector<Vec2> uv;
-      for (uint32_t k : kept_curves) uv.push_back(c.uv[k]);
-      c.uv = std::move(uv);
-    }
+    auto kept_only = [&](auto& per_curve) {
+      if (per_curve.empty()) return;
+      std::remove_reference_t<decltype(per_curve)> kept_values;
+      for (uint32_t k : kept_curves) kept_values.push_back(per_curve[k]);
+      per_curve = std::move(kept_values);
+    };
+    kept_only(c.uv);
+    kept_only(c.generated);
     c.cps = std::move(cps);
     c.random = std::move(random);
     mesh.slots = std::move(slots);
@@ -986,8 +989,8 @@ SurfacePoint Geometry::curve_surface(const Hit& hit, const Instance& inst, const
   // Object space: the centre plus the radius along the normal (no inverse transform per hit).
   const Vec3 no = pose.normal_to_object(n);
   sp.po = length_squared(no) > 0 ? centre + normalize(no) * r : centre;
-  const Vec3 g = (sp.po - m.texspace_location) / (2.0f * m.texspace_size);
-  sp.generated = Vec3(g.x + 0.5f, g.y + 0.5f, g.z + 0.5f);
+  // Cycles: particle hair's per-curve Generated, else (svm_node_attr's fallback) object space.
+  sp.generated = m.kind == GeometryKind::Curves && !c.generated.empty() ? c.generated[size_t(curve)] : sp.po;
   sp.material = inst.material_for(slot);
   sp.instance = hit.instance;
   sp.primitive = hit.primitive;
