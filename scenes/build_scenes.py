@@ -2297,6 +2297,17 @@ def build_hair_ball(scene, strands=600, children=4, principled=True, hair_mat=No
     add_camera(scene, (0.0, -3.0, 1.2), (0.0, 0.0, 0.6), lens=50.0)
 
 
+def _random_curves(scene):
+    """A Curves object of Blender's random curves (500), named RandomCurves, in the scene."""
+    bpy.ops.object.curves_random_add()  # into the context's scene: moved to this one
+    curves = bpy.context.active_object
+    for c in list(curves.users_collection):
+        c.objects.unlink(curves)
+    scene.collection.objects.link(curves)
+    curves.name = "RandomCurves"
+    return curves
+
+
 def build_hair_motion(scene):
     """Moving hair under motion blur (a shutter of 1 frame centred on frame 1, 3 motion steps): the
     hair ball (a Diffuse BSDF on 300 x 4 strands) translating 0.6 m a frame and turning 40 degrees
@@ -2304,12 +2315,7 @@ def build_hair_motion(scene):
     curves_random_add) translating upward 0.5 m a frame."""
     build_hair_ball(scene, strands=300, principled=False)
     move_and_turn(scene.objects["Ball"], 0.6, 40.0)
-    bpy.ops.object.curves_random_add()  # into the context's scene: moved to this one
-    curves = bpy.context.active_object
-    for c in list(curves.users_collection):
-        c.objects.unlink(curves)
-    scene.collection.objects.link(curves)
-    curves.name = "RandomCurves"
+    curves = _random_curves(scene)
     curves.data.materials.append(diffuse("CurvesOrange", (0.8, 0.4, 0.1)))
     curves.scale = (0.8, 0.8, 0.8)
     _keyframes(curves, "location", [(0.9, -0.6, 0.2), (0.9, -0.6, 1.2)])
@@ -2414,12 +2420,7 @@ def build_hair_attributes(scene):
     col = ball.color_attributes.new("Col", "BYTE_COLOR", "CORNER")
     col.data.foreach_set("color", np.clip(rgba, 0, 1).reshape(-1))
 
-    bpy.ops.object.curves_random_add()  # into the context's scene: moved to this one
-    curves = bpy.context.active_object
-    for c in list(curves.users_collection):
-        c.objects.unlink(curves)
-    scene.collection.objects.link(curves)
-    curves.name = "RandomCurves"
+    curves = _random_curves(scene)
     curves.location = (1.0, -0.4, 0.5)
     curves.scale = (0.35, 0.35, 0.35)
     data = curves.data
