@@ -228,7 +228,9 @@ class CurvesDesc(ctypes.Structure):
         ("motion_points", _f_p),
         ("motion_step_count", ctypes.c_int),
         ("curve_uvs", _f_p),
-        ("curve_generated", _f_p),
+        ("generated_from_root", ctypes.c_int),
+        ("texspace_location", ctypes.c_float * 3),
+        ("texspace_size", ctypes.c_float * 3),
         ("attributes", ctypes.POINTER(CurvesAttribute)),
         ("attribute_count", ctypes.c_int),
     ]
@@ -889,13 +891,14 @@ class Scene:
                "lt_scene_add_mesh")
         return out.value
 
-    def add_curves(self, points, curve_offsets=None, material_slots=None, motion=None, uvs=None, generated=None,
+    def add_curves(self, points, curve_offsets=None, material_slots=None, motion=None, uvs=None, texspace=None,
                    attributes=()):
         """Hair or a point cloud: points (n, 4) of x, y, z, radius (object space); curve_offsets
         (curves + 1, uint32) into them, or None for a point cloud; material_slots per curve;
         motion: the points (steps, n, 4) at the motion steps over the shutter (deformation);
-        uvs: the default UV map, (curves, 2), or None; generated: Generated per curve, (curves, 3),
-        or None (the shading point in object space); attributes: (id, components, per_point,
+        uvs: the default UV map, (curves, 2), or None; texspace: (location, size) of the texture
+        space Generated takes each curve's root through (particle hair's emitter), or None (the
+        shading point in object space); attributes: (id, components, per_point,
         values) of the named ones, one value per point or (per_point false) per curve."""
         pts = _f32(points, "curve points", 4)
         mot = None if motion is None else np.ascontiguousarray(motion, dtype=np.float32)
@@ -913,15 +916,14 @@ class Scene:
                        None if offs is None else offs.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32)),
                        ncurves, _iptr(mat), None if mot is None else _fptr(mot),
                        0 if mot is None else mot.shape[0])
-        per_curve = []  # kept alive for the call
-        for values, n, field, what in ((uvs, 2, "curve_uvs", "curve UVs"),
-                                       (generated, 3, "curve_generated", "curve generated coordinates")):
-            if values is not None:
-                a = _f32(values, what, n)
-                if a.size != n * ncurves:
-                    raise ValueError("%s: %d values for %d curves" % (what, a.size, ncurves))
-                setattr(d, field, _fptr(a))
-                per_curve.append(a)
+        uv = None if uvs is None else _f32(uvs, "curve UVs", 2)
+        if uv is not None:
+            if uv.size != 2 * ncurves:
+                raise ValueError("curve UVs: %d values for %d curves" % (uv.size, ncurves))
+            d.curve_uvs = _fptr(uv)
+        if texspace is not None:
+            d.generated_from_root = 1
+            d.texspace_location[:], d.texspace_size[:] = ([float(x) for x in v] for v in texspace)
         attrs = [(int(i), int(n), int(bool(p)), _f32(v, "curve attribute %d" % int(i))) for i, n, p, v in attributes]
         if attrs:
             table = (CurvesAttribute * len(attrs))(*[CurvesAttribute(i, n, p, _fptr(v), v.size)

@@ -206,7 +206,7 @@ TEST(Curves, BadStrandsAreDroppedWithWarnings) {
 }
 
 // Cycles' curve attributes (curve_attribute_float): a per-curve value, the default UV and
-// Generated are the hit curve's, a per-point value is linear in u between the hit segment's two
+// Generated (the root's) are the hit curve's, a per-point value is linear in u between the hit segment's two
 // keys; a point reads its own, and its Generated is the object-space point. A dropped curve (the middle one, of zero
 // length) and a dropped point take their values with them.
 TEST(Curves, AttributesUvsAndGeneratedFollowTheKeptCurvesAndPoints) {
@@ -219,7 +219,9 @@ TEST(Curves, AttributesUvsAndGeneratedFollowTheKeptCurvesAndPoints) {
                   5,  5, 5, 0.1f, -1, 2, 0, 0.1f, 0, 2, 0, 0.1f, 1, 2, 0, 0.1f};
   m.curves.random = {0, 0, 0};
   m.curves.uv = {{0.1f, 0.2f}, {0.3f, 0.4f}, {0.5f, 0.6f}};
-  m.curves.generated = {Vec3(1.0f), Vec3(2.0f), Vec3(3.0f)};
+  m.curves.generated_from_root = true;  // roots (-1, 0, 0) and (-1, 2, 0); a flat texture space in z
+  m.texspace_location = Vec3(0.0f);
+  m.texspace_size = Vec3(1, 1, 0);
   MeshAttribute per_curve{7, 2, false, {1, 2, 3, 4, 5, 6}};
   MeshAttribute per_point{9, 1, true, {10, 20, 30, 40, 50, 60, 70, 80}};
   m.attributes = {per_curve, per_point};
@@ -248,7 +250,9 @@ TEST(Curves, AttributesUvsAndGeneratedFollowTheKeptCurvesAndPoints) {
     ASSERT_TRUE(g.intersect(ray({e.x, e.y, 5.0f}, {0, 0, -1}), 31, &hit)) << e.x << " " << e.y;
     const SurfacePoint sp = g.surface(hit);
     EXPECT_FLOAT_EQ(sp.uv.x, e.uv_x);
-    EXPECT_EQ(sp.generated.x, e.y == 0 ? 1.0f : 3.0f);
+    EXPECT_EQ(sp.generated.x, 0.0f);
+    EXPECT_EQ(sp.generated.y, e.y == 0 ? 0.5f : 1.5f);
+    EXPECT_EQ(sp.generated.z, 0.5f);
     float v[4];
     int n = 0;
     ASSERT_TRUE(curves.interpolate(7, sp.primitive, sp.bary.x, sp.bary.y, v, &n));

@@ -158,9 +158,9 @@ def _srgb_to_linear(c):
         return np.where(c < 0.04045, np.maximum(c, 0) / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
-def _on_emitter(obj, method, index):
+def _on_emitter(obj, method, **layer):
     """Per strand of particle_hair_arrays (same order), ParticleSystem.uv_on_emitter or
-    mcol_on_emitter (method) of the emitter's layer `index`, as Cycles' ObtainCacheParticleUV and
+    mcol_on_emitter (method) of the emitter's layer (uv_no or vcol_no), as Cycles' ObtainCacheParticleUV and
     ObtainCacheParticleVcol call it (children pass the first particle)."""
     out = []
     for psys in hair_systems(obj):
@@ -176,8 +176,7 @@ def _on_emitter(obj, method, index):
         particles = psys.particles
         for k in range(first, total + children):
             particle = particles[k] if k < total else particles[0]
-            out.append(tuple(call(modifier, particle=particle, particle_no=k, **{
-                'uv_no' if method == 'uv_on_emitter' else 'vcol_no': index})))
+            out.append(tuple(call(modifier, particle=particle, particle_no=k, **layer)))
     return np.asarray(out, dtype=np.float32)
 
 
@@ -194,7 +193,7 @@ def particle_hair_attributes(obj, reads, ids):
 
     def uv(i):
         if ('uv', i) not in cache:
-            cache['uv', i] = _on_emitter(obj, 'uv_on_emitter', i)
+            cache['uv', i] = _on_emitter(obj, 'uv_on_emitter', uv_no=i)
         return cache['uv', i]
     uvs = None
     if ('uv', '') in reads:
@@ -210,7 +209,7 @@ def particle_hair_attributes(obj, reads, ids):
             got = uv(layer)
         else:
             vcol = next((i for i, l in enumerate(vcols) if l.name == name), None)
-            rgb = _on_emitter(obj, 'mcol_on_emitter', vcol) if vcol is not None else None
+            rgb = _on_emitter(obj, 'mcol_on_emitter', vcol_no=vcol) if vcol is not None else None
             if rgb is not None and len(rgb):
                 got = np.column_stack([_srgb_to_linear(rgb), np.ones(len(rgb), np.float32)])
         if got is not None and len(got):

@@ -82,15 +82,6 @@ def _smooth_triangles(tris):
     return smooth
 
 
-def mesh_texture_space(mesh):
-    """Cycles' mesh_texture_space (blender/util.h) in float32: (scale, loc) with Generated =
-    co * scale - loc (0.5 / size, 0 on a flat axis)."""
-    size = np.array(mesh.texspace_size, np.float32)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scale = np.where(size != 0, np.float32(0.5) / size, size)
-    return scale, np.array(mesh.texspace_location, np.float32) * scale - np.float32(0.5)
-
-
 def _sphere_tangents(mesh, warn):
     """Cycles 3.4's tangents on a mesh without UV maps (blender/mesh.cpp, MikkTSpace fed the loop
     triangles, each corner's UV its vertex's undeformed position mapped to a sphere): Blender's
@@ -109,8 +100,10 @@ def _sphere_tangents(mesh, warn):
     mesh.vertices.foreach_get("undeformed_co", undeformed)
     # Cycles' coordinates: the undeformed ones through its Generated attribute and back, in float32
     # (mesh_texture_space; the seam's u of 0 or 1 turns on the sign of what remains of x = 0).
-    scale, loc = mesh_texture_space(mesh)
+    size = np.array(mesh.texspace_size, np.float32)
     with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(size != 0, np.float32(0.5) / size, size)
+        loc = np.array(mesh.texspace_location, np.float32) * scale - np.float32(0.5)
         generated = undeformed.reshape(-1, 3) * scale - loc
         orco = (generated + loc) * (np.float32(1) / scale)
     try:
@@ -544,16 +537,14 @@ class MeshExporter:
             reads = set().union(*(self.materials.geometry_reads.get(m, ()) for m in material_ids))
             ids = self.materials.attributes.ids
             values = None, ()
-            generated = None
+            texspace = None
             if kind == 'HAIR':
                 arrays = particle_hair_arrays(obj, self.report)
                 args = arrays and (arrays[0], arrays[1], arrays[2])
                 if args and reads:
                     values = particle_hair_attributes(obj, reads, ids)
-                if args:
-                    # Cycles' sync_particle_hair: each strand's root through the emitter's texture space.
-                    scale, loc = mesh_texture_space(obj.data)
-                    generated = args[0][args[1][:-1].astype(np.int64), :3] * scale - loc
+                # Cycles' sync_particle_hair: Generated is each strand's root through the emitter's texture space.
+                texspace = tuple(obj.data.texspace_location), tuple(obj.data.texspace_size)
             elif kind == 'CURVES':
                 arrays = curves_arrays(obj.data)
                 args = arrays and (arrays[0], arrays[1], None)
@@ -571,7 +562,7 @@ class MeshExporter:
                 deform = self.motion.strand_deformation(obj, args[0])
             self.mesh_ids[geometry] = None if args is None else core_call(self.core_scene, self.report, subject,
                                                                           "add_curves", *args, motion=deform,
-                                                                          uvs=values[0], generated=generated,
+                                                                          uvs=values[0], texspace=texspace,
                                                                           attributes=values[1])
         mesh_id = self.mesh_ids[geometry]
         if mesh_id is None:

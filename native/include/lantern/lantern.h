@@ -58,7 +58,8 @@ extern "C" {
  * points (lt_curves_desc.motion_points and motion_step_count); 22: lt_image_desc.ocio_config and
  * ocio_space (byte images Blender loads in other colour spaces); 23: a perspective camera's zoom over
  * the shutter (lt_camera_desc.zoom_pre and zoom_post); 24: attributes, UVs and generated coordinates of
- * curves and points (lt_curves_desc.curve_uvs, curve_generated and attributes, lt_curves_attribute). */
+ * curves and points (lt_curves_desc.curve_uvs, generated_from_root, texspace_location and texspace_size, attributes,
+ * lt_curves_attribute). */
 #define LT_ABI_VERSION 24
 
 enum lt_status {
@@ -292,10 +293,13 @@ typedef struct lt_curves_desc {
   /* The default UV map (Texture Coordinate's UV), 2 finite floats per curve (Cycles' hair UV: the
    * emitter's UV at the root of particle hair, a Curves object's surface UV); NULL: (0, 0). */
   const float* curve_uvs;
-  /* Texture Coordinate's Generated, 3 finite floats per curve (Cycles' particle hair: the root
-   * through the emitter's texture space); NULL, and on points: the shading point in object space
-   * (Cycles' fallback where a geometry has no generated coordinates). */
-  const float* curve_generated;
+  /* Texture Coordinate's Generated. generated_from_root nonzero (Cycles' particle hair): each
+   * curve's root key through the emitter's texture space, (root - texspace_location) /
+   * (2 texspace_size) + 0.5, 0.5 on an axis of size 0. 0, and on points: the shading point in
+   * object space (Cycles' fallback where a geometry has no generated coordinates). */
+  int generated_from_root;
+  float texspace_location[3];
+  float texspace_size[3];
   const lt_curves_attribute* attributes; /* may be NULL when attribute_count is 0 */
   int attribute_count;
 } lt_curves_desc;

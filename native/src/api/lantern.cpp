@@ -79,9 +79,6 @@ lt::Transform to_transform(const float* m, const char* what) {
   return t;
 }
 
-// Motion blur steps (lt_mesh_desc, lt_instance_desc, lt_camera_desc): 0, or an odd count from 3 to
-// 129 (Cycles' 2^steps + 1 with steps 1 to 7; Embree's RTC_MAX_TIME_STEP_COUNT), so that the
-// centre step is the shutter's centre.
 // Attribute `name` of mesh m (lt_mesh_attribute, lt_curves_attribute), checked: `elements`
 // values of `components` floats each (one per `element`).
 lt::MeshAttribute checked_attribute(const lt::Mesh& m, const std::string& name, int id, int components,
@@ -103,6 +100,9 @@ lt::MeshAttribute checked_attribute(const lt::Mesh& m, const std::string& name, 
   return attr;
 }
 
+// Motion blur steps (lt_mesh_desc, lt_instance_desc, lt_camera_desc): 0, or an odd count from 3 to
+// 129 (Cycles' 2^steps + 1 with steps 1 to 7; Embree's RTC_MAX_TIME_STEP_COUNT), so that the
+// centre step is the shutter's centre.
 void require_motion_steps(int count, const void* data, const std::string& what) {
   require(count == 0 || (count >= 3 && count <= 129 && count % 2 == 1),
           what + ": " + std::to_string(count) + " motion steps; expected 0 or an odd count from 3 to 129");
@@ -579,13 +579,12 @@ int lt_scene_add_curves(lt_scene* scene, const lt_curves_desc* d, int* out_id) {
       for (size_t k = 0; k < d->curve_count; ++k)
         m.curves.uv[k] = lt::Vec2{d->curve_uvs[2 * k], d->curve_uvs[2 * k + 1]};
     }
-    if (d->curve_generated && d->curve_count) {
-      require(finite_array(d->curve_generated, 3 * size_t(d->curve_count)),
-              "curve generated coordinates must be finite");
-      m.curves.generated.resize(d->curve_count);
-      for (size_t k = 0; k < d->curve_count; ++k)
-        m.curves.generated[k] =
-            lt::Vec3(d->curve_generated[3 * k], d->curve_generated[3 * k + 1], d->curve_generated[3 * k + 2]);
+    if (d->generated_from_root && d->curve_count) {
+      require(finite_array(d->texspace_location, 3) && finite_array(d->texspace_size, 3),
+              "curve texture space must be finite");
+      m.curves.generated_from_root = true;
+      m.texspace_location = lt::Vec3(d->texspace_location[0], d->texspace_location[1], d->texspace_location[2]);
+      m.texspace_size = lt::Vec3(d->texspace_size[0], d->texspace_size[1], d->texspace_size[2]);
     }
     require_motion_steps(d->motion_step_count, d->motion_points, "curves");
     if (d->motion_step_count > 0) {

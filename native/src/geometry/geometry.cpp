@@ -371,14 +371,11 @@ int Geometry::add_curves(Mesh mesh, const std::vector<uint32_t>& offsets, std::v
       }
       a.values = std::move(v);
     }
-    auto kept_only = [&](auto& per_curve) {
-      if (per_curve.empty()) return;
-      std::remove_reference_t<decltype(per_curve)> kept_values;
-      for (uint32_t k : kept_curves) kept_values.push_back(per_curve[k]);
-      per_curve = std::move(kept_values);
-    };
-    kept_only(c.uv);
-    kept_only(c.generated);
+    if (!c.uv.empty()) {
+      std::vector<Vec2> uv;
+      for (uint32_t k : kept_curves) uv.push_back(c.uv[k]);
+      c.uv = std::move(uv);
+    }
     c.cps = std::move(cps);
     c.random = std::move(random);
     mesh.slots = std::move(slots);
@@ -989,8 +986,16 @@ SurfacePoint Geometry::curve_surface(const Hit& hit, const Instance& inst, const
   // Object space: the centre plus the radius along the normal (no inverse transform per hit).
   const Vec3 no = pose.normal_to_object(n);
   sp.po = length_squared(no) > 0 ? centre + normalize(no) * r : centre;
-  // Cycles: particle hair's per-curve Generated, else (svm_node_attr's fallback) object space.
-  sp.generated = m.kind == GeometryKind::Curves && !c.generated.empty() ? c.generated[size_t(curve)] : sp.po;
+  // Cycles: particle hair's Generated from the root (sync_particle_hair), else svm_node_attr's
+  // fallback to object space.
+  sp.generated = sp.po;
+  if (m.kind == GeometryKind::Curves && c.generated_from_root) {
+    const Vec3 root = c.point(c.segments[c.first_segment[size_t(curve)]] + 1);  // after the duplicated end
+    for (int k = 0; k < 3; ++k) {
+      const float size = m.texspace_size[k];
+      sp.generated[k] = size != 0 ? (root[k] - m.texspace_location[k]) / (2 * size) + 0.5f : 0.5f;
+    }
+  }
   sp.material = inst.material_for(slot);
   sp.instance = hit.instance;
   sp.primitive = hit.primitive;

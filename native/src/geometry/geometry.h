@@ -41,7 +41,9 @@ struct CurveData {
   std::vector<float> arc;               // curves: distance along the keys from the curve's root, per control point
   std::vector<float> random;            // per curve (points: per point): Cycles' hash_uint2_to_float(index, 0)
   std::vector<Vec2> uv;                 // curves: the default UV map per curve, or empty ((0, 0))
-  std::vector<Vec3> generated;          // curves: Generated per curve, or empty (the object-space point)
+  // Curves: Generated from each curve's root key through the mesh's texture space (particle
+  // hair); otherwise the object-space point.
+  bool generated_from_root = false;
   // Deformation motion blur: motion_steps (0, or 3 to 129) sets of control points laid out as
   // cps, equally spaced over the shutter, step by step; cps stays the centre step's. Embree
   // interpolates the keys linearly between steps, and so do key() and catmull_rom().
