@@ -2,7 +2,8 @@
 the native scene between frames and applies each frame's moves as edits (addon/lantern/scene_sync.py),
 against a full re-export of every frame; Cycles' own Persistent Data beside it.
 
-    blender -b --factory-startup --python bench/animation.py -- [--scene sponza|hair|hair_moving] [--strands 100000] \
+    blender -b --factory-startup --python bench/animation.py -- [--scene sponza|hair|hair_moving|hair_colour] \
+        [--strands 100000] \
         [--frames 6] [--samples 16] [--width 200] [--height 150] [--threads 2] [--engines LANTERN,CYCLES] \
         [--out FILE]
 
@@ -16,6 +17,8 @@ Scenes (scenes/build_scenes.py), every F-curve extrapolated so that each frame m
 - hair_moving: the same hair ball, the camera still and the ball (the emitter) moving 0.05 m and
   turning 10 degrees a frame: Blender flags each move of an emitter as a geometry update, and
   Lantern keeps the scene when the emitter's mesh and hair read as exported (scene_sync.py).
+- hair_colour: the same hair ball, nothing moving, the ball's Object colour (what Object Info's
+  Color reads) changing a little each frame: set on the kept instances in place.
 Each engine renders frames 1 .. --frames with Persistent Data on, then off, then on and off again
 (frame_set and the output's write included, PNG files in a temporary folder); a frame's time is
 from the previous frame's write to its own (render_write handlers). Reported per engine and
@@ -95,10 +98,13 @@ def main(args):
     else:
         scene = build_scenes.new_scene("hair_animation", (args.width, args.height), args.samples)
         build_scenes.build_hair_ball(scene, strands=args.strands // 4, children=4)
+        ball = scene.objects["Ball"]
         if args.scene == "hair":
             build_scenes.pan_camera(scene.camera, 4.0)
+        elif args.scene == "hair_moving":
+            build_scenes.move_and_turn(ball, 0.05, 10.0)
         else:
-            build_scenes.move_and_turn(scene.objects["Ball"], 0.05, 10.0)
+            build_scenes._keyframes(ball, "color", [(0.2, 0.4, 0.6, 1.0), (0.3, 0.4, 0.6, 1.0)])
     animate_every_frame(scene)
     results = []
     for engine_name in args.engines.split(","):
@@ -137,7 +143,7 @@ def main(args):
 
 if __name__ == "__main__":
     p = argparse.ArgumentParser()
-    p.add_argument("--scene", choices=("sponza", "hair", "hair_moving"), default="sponza")
+    p.add_argument("--scene", choices=("sponza", "hair", "hair_moving", "hair_colour"), default="sponza")
     p.add_argument("--strands", type=int, default=100000)
     p.add_argument("--frames", type=int, default=6)
     p.add_argument("--samples", type=int, default=16)

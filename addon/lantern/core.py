@@ -16,7 +16,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 24
+ABI_VERSION = 25
 
 # lt_status
 OK = 0
@@ -510,6 +510,8 @@ def _declare(lib, layout=True):
                                       ctypes.c_float, ctypes.c_float, P(VolumeDesc), c_int, P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
         "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
+        "lt_scene_set_instance_values": ([scene_p, c_int, ctypes.c_float * 4, c_int, P(c_int), P(ctypes.c_float),
+                                          c_int], c_int),
         "lt_scene_set_material": ([scene_p, c_int, P(ShaderProgram)], c_int),
         "lt_scene_set_material_displacement": ([scene_p, c_int, P(ShaderProgram), c_int], c_int),
         "lt_scene_clear_lights": ([scene_p], c_int),
@@ -719,6 +721,14 @@ def _f32(a, what, size_multiple=1):
 
 def _i32(a, what):
     return np.ascontiguousarray(a, dtype=np.int32).reshape(-1)
+
+
+def _object_attributes(attributes):
+    """(ids, 4 floats each) of [(id, up to 4 values)], or (None, None) for none."""
+    if not attributes:
+        return None, None
+    return (_i32([int(i) for i, _ in attributes], "attribute ids"),
+            _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values"))
 
 
 def _fptr(a):
@@ -956,10 +966,8 @@ class Scene:
         d.lightgroup = int(lightgroup)
         d.shadow_catcher = int(bool(shadow_catcher))
         d.shadow_terminator_geometry_offset, d.shadow_terminator_shading_offset = (float(x) for x in terminator)
-        if attributes:
-            ids = _i32([int(i) for i, _ in attributes], "attribute ids")
-            values = _f32([float(x) for _, v in attributes for x in (tuple(v) + (0.0,) * 4)[:4]], "attribute values")
-            d.attribute_ids, d.attribute_values, d.attribute_count = _iptr(ids), _fptr(values), len(attributes)
+        ids, values = _object_attributes(attributes)  # noqa: F841 (kept alive for the call)
+        d.attribute_ids, d.attribute_values, d.attribute_count = _iptr(ids), _fptr(values), len(attributes)
         motion_keep = _motion(d, motion)  # noqa: F841 (kept alive for the call)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_instance(self.handle, ctypes.byref(d), ctypes.byref(out)),
@@ -1100,6 +1108,15 @@ class Scene:
     def set_instance_transform(self, instance, transform):
         _check(self._lib.lt_scene_set_instance_transform(self.handle, int(instance), _transform(transform)),
                "lt_scene_set_instance_transform")
+
+    def set_instance_values(self, instance, color, pass_index, attributes=()):
+        """An instance's Object Info colour and pass index and its object attributes (as
+        add_instance's): nothing to commit again."""
+        ids, values = _object_attributes(attributes)
+        rgba = (ctypes.c_float * 4)(*[float(c) for c in (tuple(color) + (1.0,) * 4)[:4]])
+        _check(self._lib.lt_scene_set_instance_values(self.handle, int(instance), rgba, int(pass_index), _iptr(ids),
+                                                      _fptr(values), len(attributes)),
+               "lt_scene_set_instance_values")
 
     def set_material(self, material, program):
         d, _keep = _program(program)

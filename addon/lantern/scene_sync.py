@@ -36,7 +36,7 @@ class SceneSync:
         self.summary = {}          # export_scene's summary of the last full export
         # What each kind of update did (tests and benchmarks read these).
         self.counters = dict(full_exports=0, transform_updates=0, material_updates=0,
-                             light_updates=0)
+                             light_updates=0, value_updates=0)
 
     def sync_scene(self, depsgraph, camera_object=None):
         """Brings the core scene up to date with the depsgraph, committed. camera_object: the
@@ -111,10 +111,10 @@ class SceneSync:
         # Scene updates (render settings) need nothing here: renders take their settings anew.
         if not (transforms or lights or materials or camera_object is not None):
             return True
-        moves = self._moved_instances(depsgraph) if transforms else []
+        moves, values = self._moved_instances(depsgraph) if transforms else ([], [])
         if moves is None:
             return False
-        if not (moves or lights or materials or camera_object is not None):
+        if not (moves or values or lights or materials or camera_object is not None):
             return True  # e.g. a selection change: nothing to render again
         self._before_edit()
         if camera_object is not None:
@@ -125,6 +125,12 @@ class SceneSync:
             instances[key] = (core_id, matrix)
         if moves:
             self.counters["transform_updates"] += 1
+        for key, core_id, now in values:
+            _, color, pass_index, attributes = now
+            self.scene.set_instance_values(core_id, color, pass_index, attributes)
+            self.state["meshes"].record_values(key, core_id, now)
+        if values:
+            self.counters["value_updates"] += 1
         for m in materials:
             if m.original.as_pointer() in exporter.ids and not exporter.update(m):
                 return False
@@ -147,8 +153,9 @@ class SceneSync:
         return self.state["meshes"].emitter_unchanged(obj, obj.matrix_world)
 
     def _moved_instances(self, depsgraph):
-        """[(key, core id, new matrix)] of the exported instances that moved, or None when the
-        set of instances changed (a new scene is needed)."""
+        """([(key, core id, new matrix)] of the exported instances that moved, [(key, core id,
+        instance_values)] of those whose Object Info values or object attributes changed), or
+        (None, None) when the set of instances changed (a new scene is needed)."""
         instances = self.state["instances"]
         flags = self.state.get("flags", {})
         meshes = self.state["meshes"]
@@ -156,7 +163,7 @@ class SceneSync:
         view_layer = depsgraph.view_layer_eval
         groups = lightgroup_indices(view_layer)
         seen = 0
-        moves = []
+        moves, values = [], []
         for inst in depsgraph.object_instances:
             t = inst.object.type
             base = instance_key(inst)
@@ -165,15 +172,18 @@ class SceneSync:
             if inst.show_self and t in _TRACED_TYPES:
                 keys.append(base)
             if keys and instance_flags(inst, view_layer, groups) != flags.get(base, NO_FLAGS):
-                return None  # holdout, light group, catcher or terminator changed: the instance is added anew
-            if keys and not meshes.values_unchanged(inst, base, instancer_of(inst), object_keys):
-                return None  # an animated colour, pass index, ray visibility or object attribute
+                return None, None  # holdout, light group, catcher or terminator changed: the instance is added anew
+            if keys:  # the emitter's hair records its values under the emitter's key
+                edits = meshes.value_edits(inst, base, instancer_of(inst), object_keys)
+                if edits is None:
+                    return None, None  # a ray visibility changed
+                values += [(base, core_id, now) for core_id, now in edits]
             matrix = None
             for key in keys:
                 entry = instances.get(key)
                 if entry is None:
                     if t in _RECORDED_TYPES:
-                        return None  # an instance that was not exported
+                        return None, None  # an instance that was not exported
                     continue
                 seen += 1
                 core_id, old = entry
@@ -181,7 +191,9 @@ class SceneSync:
                     matrix = np.array(inst.matrix_world, dtype=np.float32)
                 if core_id is not None and not np.array_equal(matrix, old):
                     moves.append((key, core_id, matrix))
-        return moves if seen == len(instances) else None  # else: an exported instance is gone
+        if seen != len(instances):
+            return None, None  # an exported instance is gone
+        return moves, values
 
     def _close_scene(self):
         if self.scene is not None:

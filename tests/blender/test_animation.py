@@ -70,14 +70,17 @@ def _kept_animation(scene, tmp_path, samples, seed):
     return syncs, frames
 
 
-def _check_syncs(syncs, transform_updates, full_exports=1):
+def _check_syncs(syncs, transform_updates, full_exports=1, value_updates=0):
     """One export, then the moves as instance transforms (each frame one more top-level BVH build
-    and no mesh's: builds counted by the core), or `full_exports` exports."""
+    and no mesh's: builds counted by the core) and the changed Object Info values set in place (no
+    build), or `full_exports` exports."""
     sync = syncs[-1]
-    assert sync["full_exports"] == full_exports and sync["transform_updates"] == transform_updates, sync
+    assert (sync["full_exports"], sync["transform_updates"], sync["value_updates"]) == \
+        (full_exports, transform_updates, value_updates), sync
     if full_exports == 1:
         assert [s["mesh_bvh_builds"] for s in syncs] == [syncs[0]["mesh_bvh_builds"]] * len(syncs), syncs
-        assert [s["top_bvh_builds"] - syncs[0]["top_bvh_builds"] for s in syncs] == list(range(len(syncs))), syncs
+        tops = [s["top_bvh_builds"] - syncs[0]["top_bvh_builds"] for s in syncs]
+        assert tops == [i if transform_updates else 0 for i in range(len(syncs))], syncs
 
 
 def _alone(scene, frame, samples, seed):
@@ -87,11 +90,11 @@ def _alone(scene, frame, samples, seed):
     return out
 
 
-def _check_kept_between_frames(scene, tmp_path, transform_updates, full_exports=1):
+def _check_kept_between_frames(scene, tmp_path, transform_updates, full_exports=1, value_updates=0):
     """`blender -b -a` with Persistent Data (_check_syncs), each frame equal to the frame rendered
     on its own."""
     syncs, frames = _kept_animation(scene, tmp_path, 4, 7)
-    _check_syncs(syncs, transform_updates, full_exports)
+    _check_syncs(syncs, transform_updates, full_exports, value_updates)
     for frame, animated in zip(range(scene.frame_start, scene.frame_end + 1), frames):
         assert np.abs(animated - _alone(scene, frame, 4, 7)).max() < 1e-4, frame
 
@@ -203,9 +206,10 @@ def _keyframes(owner, path, values):
 def test_persistent_data_follows_animated_materials_and_object_values(scene_factory, tmp_path):
     """A keyframed Base Color is a material update: the material translated as the depsgraph
     evaluates it (bpy.data's is the original, which keeps frame 1's colour). Object Info's Color
-    and Object Index, ray visibility and a custom property the Attribute node reads, keyframed, are
-    values the core instance was added with: a new scene each frame. Each frame equals the frame
-    rendered alone (before, the kept scene rendered frame 1's values at every frame)."""
+    and Object Index and a custom property the Attribute node reads, keyframed, are set on the core
+    instance in place (as Cycles updates its objects); a keyframed ray visibility is a new scene
+    each frame. Each frame equals the frame rendered alone (before, the kept scene rendered frame
+    1's values at every frame)."""
     scene = scene_factory("cornell_area")
     _, _, bsdf = _animated_box_material(scene)
     _keyframes(bsdf.inputs["Base Color"], "default_value", [(1, 0, 0, 1), (0, 1, 0, 1), (0, 0, 1, 1)])
@@ -223,10 +227,10 @@ def test_persistent_data_follows_animated_materials_and_object_values(scene_fact
 
     scene, box = object_info("Color")
     _keyframes(box, "color", [(1, 0, 0, 1), (0, 1, 0, 1), (0, 0, 1, 1)])
-    _check_kept_between_frames(scene, tmp_path / "color", transform_updates=0, full_exports=3)
+    _check_kept_between_frames(scene, tmp_path / "color", transform_updates=0, value_updates=2)
     scene, box = object_info("Object Index")  # pass index 0, 1, 0: black, white, black
     _keyframes(box, "pass_index", [0, 1, 0])
-    _check_kept_between_frames(scene, tmp_path / "index", transform_updates=0, full_exports=3)
+    _check_kept_between_frames(scene, tmp_path / "index", transform_updates=0, value_updates=2)
     scene, box = object_info("Color")
     _keyframes(box, "visible_camera", [True, False, True])
     _check_kept_between_frames(scene, tmp_path / "visibility", transform_updates=0, full_exports=3)
@@ -240,4 +244,4 @@ def test_persistent_data_follows_animated_materials_and_object_values(scene_fact
     for frame, value in enumerate((0.1, 0.9, 0.4), start=1):
         box["tint"] = value
         box.keyframe_insert('["tint"]', frame=frame)
-    _check_kept_between_frames(scene, tmp_path / "attribute", transform_updates=0, full_exports=3)
+    _check_kept_between_frames(scene, tmp_path / "attribute", transform_updates=0, value_updates=2)

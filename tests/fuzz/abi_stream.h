@@ -31,7 +31,8 @@ enum Op : uint8_t {
   kCommit,
   kRender,
   kSetWorldProgram,
-  kSetCameraLens,  // kSetCamera's fields, then depth of field and panorama settings (ABI 9)
+  kSetCameraLens,      // kSetCamera's fields, then depth of field and panorama settings (ABI 9)
+  kSetInstanceValues,  // instance, colour, pass index, attributes (ABI 25)
   kOpCount
 };
 

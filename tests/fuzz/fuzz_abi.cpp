@@ -286,6 +286,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         check(lt_scene_set_instance_transform(scene, instance, xf));
         break;
       }
+      case lt_fuzz::kSetInstanceValues: {
+        const int instance = r.i8();
+        float color[4];
+        r.floats(color, 4);
+        const int pass_index = r.i8();
+        const int count = r.i8() % 3;  // negative counts too
+        std::vector<int> ids(2);
+        std::vector<float> values(8);
+        for (int& i : ids) i = r.i8();
+        r.floats(values.data(), 8);
+        check(lt_scene_set_instance_values(scene, instance, color, pass_index, ids.data(), values.data(), count));
+        break;
+      }
       case lt_fuzz::kClearLights:
         check(lt_scene_clear_lights(scene));
         break;

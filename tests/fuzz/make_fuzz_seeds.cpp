@@ -387,6 +387,14 @@ std::vector<uint8_t> seed_textures_edits() {
   w.op(lt_fuzz::kSetInstanceTransform);
   w.i8(0);
   translation(w, 0.5f, 0, 0);
+  w.op(lt_fuzz::kSetInstanceValues);
+  w.i8(0);
+  for (float c : {0.2f, 0.4f, 0.8f, 1.0f}) w.f32(c);
+  w.i8(3);
+  w.i8(1);
+  w.i8(5);
+  w.i8(6);
+  for (int k = 0; k < 8; ++k) w.f32(0.1f * float(k));
   w.op(lt_fuzz::kSetMaterial);
   w.i8(1);
   program(w, emission(2));

@@ -1,7 +1,8 @@
 // Incremental edits of a committed scene (the viewport's updates): moving an instance rebuilds
-// only the top-level BVH, a material or light edit only the light sampler, a camera change
-// nothing; and each edited scene renders bit for bit like a scene built from scratch in its final
-// state (a sample's random numbers depend only on seed, pixel and sample index).
+// only the top-level BVH, a material or light edit only the light sampler, a camera change or an
+// instance's Object Info values nothing; and each edited scene renders bit for bit like a scene
+// built from scratch in its final state (a sample's random numbers depend only on seed, pixel and
+// sample index).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,7 +21,15 @@ struct Params {
   float lamp_watts = 300;
   V3 eye{0.5f, -5, 2.5f};
   bool panel_emits = true;
+  // The box's Object Info colour and pass index and its object attribute 5, which its material
+  // reads when box_reads_object is set.
+  bool box_reads_object = false;
+  float box_object_color[4] = {0.2f, 0.6f, 0.9f, 1};
+  int box_pass_index = 1;
+  float box_tint[4] = {0.3f, 0.1f, 0.05f, 1};
 };
+
+constexpr int kTintId = 5;
 
 ShaderCode diffuse_program(V3 c) {
   ShaderCode p;
@@ -32,6 +41,18 @@ ShaderCode panel_program(bool emits) {
   if (!emits) return diffuse_program({0.5f, 0.5f, 0.5f});
   ShaderCode p;
   p.emission(p.one(), {1, 1, 1}, 5);
+  return p;
+}
+
+// Diffuse of Object Info's colour, emitting the object attribute kTintId's colour at a strength
+// of the object's pass index.
+ShaderCode object_program() {
+  ShaderCode p;
+  const std::vector<uint32_t> info = p.emit(lt::kOpObjectInfo, {}, {3, 3, 1, 1, 1});
+  const std::vector<uint32_t> tint = p.emit(lt::kOpAttribute, {}, {3, 1, 1}, {kTintId, 1, 0});
+  const uint32_t one = p.one();
+  p.emit(lt::kOpDiffuse, {one, p.c3({0, 0, 0}), info[1], p.c1(0)}, {});
+  p.emit(lt::kOpEmission, {one, tint[0], info[3]}, {});
   return p;
 }
 
@@ -52,8 +73,20 @@ ScenePtr build(const Params& p, Ids* ids) {
   ScenePtr sp = new_scene();
   lt_scene* s = sp.get();
   add_object(s, plane(20, 20), add_diffuse(s, {0.7f, 0.6f, 0.5f}));
-  ids->box_material = add_material(s, diffuse_program(p.box_color));
-  ids->box_instance = add_object(s, box({-0.5f, -0.5f, 0}, {0.5f, 0.5f, 1}), ids->box_material, translate(p.box_at));
+  ids->box_material = add_material(s, p.box_reads_object ? object_program() : diffuse_program(p.box_color));
+  lt_instance_desc box_desc{};
+  box_desc.mesh = add_mesh(s, box({-0.5f, -0.5f, 0}, {0.5f, 0.5f, 1}));
+  const Xform box_xf = translate(p.box_at);
+  std::copy(box_xf.begin(), box_xf.end(), box_desc.transform);
+  box_desc.materials = &ids->box_material;
+  box_desc.material_count = 1;
+  box_desc.visibility = LT_VISIBLE_ALL;
+  std::copy(p.box_object_color, p.box_object_color + 4, box_desc.color);
+  box_desc.pass_index = p.box_pass_index;
+  box_desc.attribute_ids = &kTintId;
+  box_desc.attribute_values = p.box_tint;
+  box_desc.attribute_count = 1;
+  check(lt_scene_add_instance(s, &box_desc, &ids->box_instance), "box");
   ids->panel_material = add_material(s, panel_program(p.panel_emits));
   ids->panel_instance = add_object(s, plane(0.6f, 0.6f), ids->panel_material, panel_xf(p.panel_at));
   add_light(s, lamp(p.lamp_watts));
@@ -150,6 +183,44 @@ TEST(ApiIncremental, CameraChangesNeedNoCommit) {
   const lt_scene_stats after = stats(s);
   EXPECT_EQ(after.top_bvh_builds, before.top_bvh_builds);
   EXPECT_EQ(after.light_sampler_builds, before.light_sampler_builds);
+}
+
+TEST(ApiIncremental, InstanceValuesAreSetInPlaceAndNeedNoCommit) {
+  Params p;
+  p.box_reads_object = true;
+  Ids ids;
+  ScenePtr sp = build(p, &ids);
+  lt_scene* s = sp.get();
+  const lt_scene_stats before = stats(s);
+  const std::vector<float> original = image(s);
+  const float color[4] = {0.9f, 0.3f, 0.1f, 0.5f}, tint[4] = {0.05f, 0.2f, 0.4f, 1};
+  std::copy(color, color + 4, p.box_object_color);
+  std::copy(tint, tint + 4, p.box_tint);
+  p.box_pass_index = 3;
+  // Refused as lt_scene_add_instance refuses them, and then nothing changes.
+  const float bad_color[4] = {0.9f, NAN, 0.1f, 1};
+  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, bad_color, 3, &kTintId, tint, 1),
+            LT_ERROR_INVALID_ARGUMENT);
+  const int bad_id = -1;
+  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, color, 3, &bad_id, tint, 1), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, color, 3, &kTintId, nullptr, 1),
+            LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_instance_values(s, 99, color, 3, &kTintId, tint, 1), LT_ERROR_INVALID_ARGUMENT);
+  const std::vector<float> refused = image(s);
+  EXPECT_EQ(0, std::memcmp(original.data(), refused.data(), original.size() * sizeof(float)));
+
+  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, color, 3, &kTintId, tint, 1), LT_OK) << lt_last_error();
+  const std::vector<float> edited = image(s);  // rendered without a new commit
+  EXPECT_NE(0, std::memcmp(original.data(), edited.data(), original.size() * sizeof(float)))
+      << "the new values changed nothing in the image";
+  expect_same_image(s, p);
+  const lt_scene_stats after = stats(s);
+  EXPECT_EQ(after.top_bvh_builds, before.top_bvh_builds);
+  EXPECT_EQ(after.light_sampler_builds, before.light_sampler_builds);
+  // Without attributes: Attribute reads none (0, emitting black), as in a scene built so.
+  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, color, 3, nullptr, nullptr, 0), LT_OK) << lt_last_error();
+  std::fill(p.box_tint, p.box_tint + 3, 0.0f);
+  expect_same_image(s, p);
 }
 
 TEST(ApiIncremental, EditsAreRefusedWhileARenderExistsAndRendersNeedACommit) {

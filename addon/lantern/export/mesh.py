@@ -436,8 +436,8 @@ class MeshExporter:
         # each particle-hair emitter, kept for emitter_unchanged (a dict when the scene is kept:
         # the viewport's, Persistent Data's), 16 bytes a hair key beside the core's copy.
         self.emitters = None
-        # instance_key -> [(how many object keys, instance_values)] of each core instance added for
-        # it, kept for values_unchanged (a dict when the scene is kept).
+        # instance_key -> [(how many object keys, instance_values, core id)] of each core instance
+        # added for it, kept for value_edits (a dict when the scene is kept).
         self.instance_values = None
 
     def _geometry_key(self, obj):
@@ -591,16 +591,27 @@ class MeshExporter:
         if instance is not None:
             self.instance_count += 1
             if self.instance_values is not None and key is not None:
-                self.instance_values.setdefault(key, []).append((len(object_keys), values))
+                self.instance_values.setdefault(key, []).append((len(object_keys), values, instance))
         return instance
 
-    def values_unchanged(self, inst, key, instancer, object_keys):
-        """Whether the object of depsgraph instance inst (instance_key key) still gives its core
-        instances the values they were added with (instance_values; object_keys: the materials'
-        attributes.object_keys()): the core cannot change them in place, so an animated one needs
-        a new scene."""
-        return all(instance_values(inst.object, object_keys[:n], instancer) == values
-                   for n, values in self.instance_values.get(key, ()))
+    def value_edits(self, inst, key, instancer, object_keys):
+        """What the object of depsgraph instance inst (instance_key key) now gives its core instances
+        (object_keys: the materials' attributes.object_keys()), against what they were added with:
+        [(core id, instance_values)] of those whose colour, pass index or object attributes changed
+        (the core sets them in place: set_instance_values, then record_values), or None when a ray
+        visibility changed (a new scene is needed)."""
+        edits = []
+        for n, values, core_id in self.instance_values.get(key, ()):
+            now = instance_values(inst.object, object_keys[:n], instancer)
+            if now[0] != values[0]:
+                return None
+            if now != values:
+                edits.append((core_id, now))
+        return edits
+
+    def record_values(self, key, core_id, values):
+        """The values value_edits found, once the core instance core_id of key has them."""
+        self.instance_values[key] = [(n, values if i == core_id else v, i) for n, v, i in self.instance_values[key]]
 
     def emitter_unchanged(self, obj, matrix_world):
         """Whether a particle-hair emitter's evaluated geometry is still what the export recorded,

@@ -60,7 +60,7 @@ extern "C" {
  * the shutter (lt_camera_desc.zoom_pre and zoom_post); 24: attributes, UVs and generated coordinates of
  * curves and points (lt_curves_desc.curve_uvs, generated_from_root, texspace_location and texspace_size, attributes,
  * lt_curves_attribute). */
-#define LT_ABI_VERSION 24
+#define LT_ABI_VERSION 25
 
 enum lt_status {
   LT_OK = 0,
@@ -558,10 +558,16 @@ LT_API int lt_scene_commit(lt_scene* scene);
  *                                              the light sampler (emissive triangles move);
  *   lt_scene_set_material, lt_scene_clear_lights / lt_scene_add_light, lt_scene_set_world
  *                                              the light sampler only;
- *   lt_scene_set_camera                        nothing, and needs no new commit (renders read the
- *                                              camera when they start).
+ *   lt_scene_set_camera, lt_scene_set_instance_values
+ *                                              nothing, and needs no new commit (renders read the
+ *                                              camera and the instances' values when they start).
  * Meshes' BVHs are never rebuilt: a changed mesh needs a new scene. */
 LT_API int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float transform[12]);
+/* Replaces an instance's Object Info colour and pass index and its object attributes (as the
+ * fields of lt_instance_desc: color, pass_index, attribute_ids, attribute_values, attribute_count);
+ * its geometry, materials, visibility and the rest stay. */
+LT_API int lt_scene_set_instance_values(lt_scene* scene, int instance, const float color[4], int pass_index,
+                                        const int* attribute_ids, const float* attribute_values, int attribute_count);
 /* Replaces material `material`'s surface program (as lt_scene_add_material); its volume
  * (lt_scene_set_material_volume) and displacement (lt_scene_set_material_displacement) are kept. */
 LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program* program);

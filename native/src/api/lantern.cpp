@@ -287,6 +287,24 @@ lt::Program image_world_program(const lt_scene* scene, int image, float rotation
   return lt::Program(std::move(code), std::move(k), 25, scene->scene.images.size());
 }
 
+// Object Info's colour and pass index and the object attributes, checked before any is set.
+void set_object_values(lt::Instance* inst, const float color[4], int pass_index, const int* ids, const float* values,
+                       int count) {
+  require(finite_array(color, 4), "instance colour must be finite");
+  require(count >= 0 && (count == 0 || (ids && values)), "instance attributes are NULL or their count negative");
+  require(finite_array(values, 4 * size_t(count)), "instance attribute values must be finite");
+  std::vector<lt::InstanceAttribute> attributes(static_cast<size_t>(count));
+  for (int i = 0; i < count; ++i) {
+    lt::InstanceAttribute& a = attributes[size_t(i)];
+    a.id = ids[i];
+    require(a.id >= 0 && a.id < lt::kMaxAttributeId, "instance attribute id " + std::to_string(a.id) + " out of range");
+    std::copy(values + 4 * i, values + 4 * i + 4, a.value);
+  }
+  std::copy(color, color + 4, inst->color);
+  inst->pass_index = float(pass_index);
+  inst->attributes = std::move(attributes);
+}
+
 }  // namespace
 
 extern "C" {
@@ -631,25 +649,11 @@ int lt_scene_add_instance(lt_scene* scene, const lt_instance_desc* d, int* out_i
     inst.terminator_frequency = 1 / (1 - 0.5f * d->shadow_terminator_shading_offset);
     require(d->lightgroup >= 0 && d->lightgroup <= kMaxLightgroups, "instance light group out of range");
     inst.lightgroup = d->lightgroup - 1;
-    require(finite_array(d->color, 4), "instance colour must be finite");
-    std::copy(d->color, d->color + 4, inst.color);
-    inst.pass_index = float(d->pass_index);
+    set_object_values(&inst, d->color, d->pass_index, d->attribute_ids, d->attribute_values, d->attribute_count);
     // Cycles' object random number (scene/object.cpp): the id over 0xFFFFFFFF, in floats.
     inst.random = float(d->random_id) * (1.0f / float(0xFFFFFFFFu));
     inst.crypto_object = d->cryptomatte_object ? lt::cryptomatte_id(d->cryptomatte_object) : 0.0f;
     inst.crypto_asset = d->cryptomatte_asset ? lt::cryptomatte_id(d->cryptomatte_asset) : 0.0f;
-    require(d->attribute_count >= 0 && (d->attribute_count == 0 || (d->attribute_ids && d->attribute_values)),
-            "instance attributes are NULL or their count negative");
-    require(finite_array(d->attribute_values, 4 * size_t(d->attribute_count)),
-            "instance attribute values must be finite");
-    for (int i = 0; i < d->attribute_count; ++i) {
-      lt::InstanceAttribute a;
-      a.id = d->attribute_ids[i];
-      require(a.id >= 0 && a.id < lt::kMaxAttributeId,
-              "instance attribute id " + std::to_string(a.id) + " out of range");
-      std::copy(d->attribute_values + 4 * i, d->attribute_values + 4 * i + 4, a.value);
-      inst.attributes.push_back(a);
-    }
     require_motion_steps(d->motion_step_count, d->motion_transforms, "instance");
     if (finite) inst.motion = motion_transforms(d->motion_transforms, d->motion_step_count);
     *out_id = scene->scene.geometry.add_instance(std::move(inst), scene->scene.warnings);
@@ -732,6 +736,19 @@ int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float t
     lt::Transform xf = to_transform(transform, "instance");
     begin_edit(scene);
     scene->scene.geometry.set_instance_transform(instance, xf);
+  });
+}
+
+int lt_scene_set_instance_values(lt_scene* scene, int instance, const float color[4], int pass_index,
+                                 const int* attribute_ids, const float* attribute_values, int attribute_count) {
+  return guarded([&] {
+    require(scene && color, "lt_scene_set_instance_values: NULL argument");
+    require(instance >= 0 && instance < int(scene->scene.geometry.instance_count()),
+            "instance " + std::to_string(instance) + " does not exist");
+    lt::Instance values;
+    set_object_values(&values, color, pass_index, attribute_ids, attribute_values, attribute_count);
+    begin_edit(scene, false);  // read only while shading: nothing to rebuild
+    scene->scene.geometry.set_instance_values(instance, std::move(values));
   });
 }
 

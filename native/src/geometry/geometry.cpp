@@ -575,6 +575,13 @@ void Geometry::set_instance_transform(int instance, const Transform& xf) {
   top_dirty_ = true;
 }
 
+void Geometry::set_instance_values(int instance, Instance&& values) {
+  Instance& inst = instances_.at(size_t(instance));
+  std::copy(values.color, values.color + 4, inst.color);
+  inst.pass_index = values.pass_index;
+  inst.attributes = std::move(values.attributes);
+}
+
 void Geometry::commit() {
   if (committed_ && !top_dirty_) return;
   if (!committed_) {

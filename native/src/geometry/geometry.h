@@ -188,6 +188,8 @@ class Geometry {
   // Moves an instance (also after commit): the next commit rebuilds only the top-level BVH over
   // the meshes' existing BVHs.
   void set_instance_transform(int instance, const Transform& xf);
+  // Object Info's colour and pass index and the object attributes of `values`; nothing else.
+  void set_instance_values(int instance, Instance&& values);
   // First call: builds every mesh's BVH and the top level; later calls rebuild the top level
   // if an instance moved, and nothing else.
   void commit();
