@@ -510,8 +510,8 @@ def _declare(lib, layout=True):
                                       ctypes.c_float, ctypes.c_float, P(VolumeDesc), c_int, P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
         "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
-        "lt_scene_set_instance_values": ([scene_p, c_int, ctypes.c_float * 4, c_int, P(c_int), P(ctypes.c_float),
-                                          c_int], c_int),
+        "lt_scene_set_instance_values": ([scene_p, c_int, ctypes.c_uint, ctypes.c_float * 4, c_int, P(c_int),
+                                          P(ctypes.c_float), c_int], c_int),
         "lt_scene_set_material": ([scene_p, c_int, P(ShaderProgram)], c_int),
         "lt_scene_set_material_displacement": ([scene_p, c_int, P(ShaderProgram), c_int], c_int),
         "lt_scene_clear_lights": ([scene_p], c_int),
@@ -1109,13 +1109,13 @@ class Scene:
         _check(self._lib.lt_scene_set_instance_transform(self.handle, int(instance), _transform(transform)),
                "lt_scene_set_instance_transform")
 
-    def set_instance_values(self, instance, color, pass_index, attributes=()):
-        """An instance's Object Info colour and pass index and its object attributes (as
-        add_instance's): nothing to commit again."""
+    def set_instance_values(self, instance, visibility, color, pass_index, attributes=()):
+        """An instance's ray visibility, Object Info colour and pass index and its object
+        attributes (as add_instance's): a changed visibility needs a commit."""
         ids, values = _object_attributes(attributes)
         rgba = (ctypes.c_float * 4)(*[float(c) for c in (tuple(color) + (1.0,) * 4)[:4]])
-        _check(self._lib.lt_scene_set_instance_values(self.handle, int(instance), rgba, int(pass_index), _iptr(ids),
-                                                      _fptr(values), len(attributes)),
+        _check(self._lib.lt_scene_set_instance_values(self.handle, int(instance), int(visibility), rgba,
+                                                      int(pass_index), _iptr(ids), _fptr(values), len(attributes)),
                "lt_scene_set_instance_values")
 
     def set_material(self, material, program):

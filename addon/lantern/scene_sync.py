@@ -126,8 +126,7 @@ class SceneSync:
         if moves:
             self.counters["transform_updates"] += 1
         for key, core_id, now in values:
-            _, color, pass_index, attributes = now
-            self.scene.set_instance_values(core_id, color, pass_index, attributes)
+            self.scene.set_instance_values(core_id, *now)
             self.state["meshes"].record_values(key, core_id, now)
         if values:
             self.counters["value_updates"] += 1
@@ -154,8 +153,8 @@ class SceneSync:
 
     def _moved_instances(self, depsgraph):
         """([(key, core id, new matrix)] of the exported instances that moved, [(key, core id,
-        instance_values)] of those whose Object Info values or object attributes changed), or
-        (None, None) when the set of instances changed (a new scene is needed)."""
+        instance_values)] of those whose ray visibility, Object Info values or object attributes
+        changed), or (None, None) when the set of instances changed (a new scene is needed)."""
         instances = self.state["instances"]
         flags = self.state.get("flags", {})
         meshes = self.state["meshes"]
@@ -174,10 +173,8 @@ class SceneSync:
             if keys and instance_flags(inst, view_layer, groups) != flags.get(base, NO_FLAGS):
                 return None, None  # holdout, light group, catcher or terminator changed: the instance is added anew
             if keys:  # the emitter's hair records its values under the emitter's key
-                edits = meshes.value_edits(inst, base, instancer_of(inst), object_keys)
-                if edits is None:
-                    return None, None  # a ray visibility changed
-                values += [(base, core_id, now) for core_id, now in edits]
+                values += [(base, core_id, now) for core_id, now in
+                           meshes.value_edits(inst, base, instancer_of(inst), object_keys)]
             matrix = None
             for key in keys:
                 entry = instances.get(key)

@@ -206,10 +206,9 @@ def _keyframes(owner, path, values):
 def test_persistent_data_follows_animated_materials_and_object_values(scene_factory, tmp_path):
     """A keyframed Base Color is a material update: the material translated as the depsgraph
     evaluates it (bpy.data's is the original, which keeps frame 1's colour). Object Info's Color
-    and Object Index and a custom property the Attribute node reads, keyframed, are set on the core
-    instance in place (as Cycles updates its objects); a keyframed ray visibility is a new scene
-    each frame. Each frame equals the frame rendered alone (before, the kept scene rendered frame
-    1's values at every frame)."""
+    and Object Index, ray visibility and a custom property the Attribute node reads, keyframed,
+    are set on the core instance in place (as Cycles updates its objects). Each frame equals the
+    frame rendered alone (before, the kept scene rendered frame 1's values at every frame)."""
     scene = scene_factory("cornell_area")
     _, _, bsdf = _animated_box_material(scene)
     _keyframes(bsdf.inputs["Base Color"], "default_value", [(1, 0, 0, 1), (0, 1, 0, 1), (0, 0, 1, 1)])
@@ -233,7 +232,15 @@ def test_persistent_data_follows_animated_materials_and_object_values(scene_fact
     _check_kept_between_frames(scene, tmp_path / "index", transform_updates=0, value_updates=2)
     scene, box = object_info("Color")
     _keyframes(box, "visible_camera", [True, False, True])
-    _check_kept_between_frames(scene, tmp_path / "visibility", transform_updates=0, full_exports=3)
+    syncs, frames = _kept_animation(scene, tmp_path / "visibility", 4, 7)
+    assert (syncs[-1]["full_exports"], syncs[-1]["value_updates"]) == (1, 2), syncs[-1]
+    # Each change rebuilds the top level; the first instance hidden from some rays (frame 2), the
+    # meshes' BVHs too, with Embree's filter.
+    assert [s["top_bvh_builds"] - syncs[0]["top_bvh_builds"] for s in syncs] == [0, 1, 2], syncs
+    meshes = [s["mesh_bvh_builds"] for s in syncs]
+    assert meshes == [meshes[0], 2 * meshes[0], 2 * meshes[0]], syncs
+    for frame, animated in zip((1, 2, 3), frames):
+        assert np.abs(animated - _alone(scene, frame, 4, 7)).max() < 1e-4, frame
 
     scene = scene_factory("cornell_area")
     box, tree, bsdf = _animated_box_material(scene)

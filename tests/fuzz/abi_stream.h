@@ -32,7 +32,7 @@ enum Op : uint8_t {
   kRender,
   kSetWorldProgram,
   kSetCameraLens,      // kSetCamera's fields, then depth of field and panorama settings (ABI 9)
-  kSetInstanceValues,  // instance, colour, pass index, attributes (ABI 25)
+  kSetInstanceValues,  // instance, visibility, colour, pass index, attributes (ABI 25)
   kOpCount
 };
 

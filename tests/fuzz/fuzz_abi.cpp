@@ -288,6 +288,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       }
       case lt_fuzz::kSetInstanceValues: {
         const int instance = r.i8();
+        const unsigned visibility = r.u8();
         float color[4];
         r.floats(color, 4);
         const int pass_index = r.i8();
@@ -296,7 +297,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         std::vector<float> values(8);
         for (int& i : ids) i = r.i8();
         r.floats(values.data(), 8);
-        check(lt_scene_set_instance_values(scene, instance, color, pass_index, ids.data(), values.data(), count));
+        check(lt_scene_set_instance_values(scene, instance, visibility, color, pass_index, ids.data(), values.data(),
+                                           count));
         break;
       }
       case lt_fuzz::kClearLights:

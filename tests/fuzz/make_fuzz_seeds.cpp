@@ -389,6 +389,7 @@ std::vector<uint8_t> seed_textures_edits() {
   translation(w, 0.5f, 0, 0);
   w.op(lt_fuzz::kSetInstanceValues);
   w.i8(0);
+  w.u8(LT_VISIBLE_ALL & ~LT_VISIBLE_SHADOW);
   for (float c : {0.2f, 0.4f, 0.8f, 1.0f}) w.f32(c);
   w.i8(3);
   w.i8(1);

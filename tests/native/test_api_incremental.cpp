@@ -1,6 +1,7 @@
 // Incremental edits of a committed scene (the viewport's updates): moving an instance rebuilds
 // only the top-level BVH, a material or light edit only the light sampler, a camera change or an
-// instance's Object Info values nothing; and each edited scene renders bit for bit like a scene
+// instance's Object Info values nothing (its ray visibility the top level); and each edited scene
+// renders bit for bit like a scene
 // built from scratch in its final state (a sample's random numbers depend only on seed, pixel and
 // sample index).
 #include <gtest/gtest.h>
@@ -27,6 +28,7 @@ struct Params {
   float box_object_color[4] = {0.2f, 0.6f, 0.9f, 1};
   int box_pass_index = 1;
   float box_tint[4] = {0.3f, 0.1f, 0.05f, 1};
+  unsigned box_visibility = LT_VISIBLE_ALL;
 };
 
 constexpr int kTintId = 5;
@@ -80,7 +82,7 @@ ScenePtr build(const Params& p, Ids* ids) {
   std::copy(box_xf.begin(), box_xf.end(), box_desc.transform);
   box_desc.materials = &ids->box_material;
   box_desc.material_count = 1;
-  box_desc.visibility = LT_VISIBLE_ALL;
+  box_desc.visibility = p.box_visibility;
   std::copy(p.box_object_color, p.box_object_color + 4, box_desc.color);
   box_desc.pass_index = p.box_pass_index;
   box_desc.attribute_ids = &kTintId;
@@ -199,17 +201,20 @@ TEST(ApiIncremental, InstanceValuesAreSetInPlaceAndNeedNoCommit) {
   p.box_pass_index = 3;
   // Refused as lt_scene_add_instance refuses them, and then nothing changes.
   const float bad_color[4] = {0.9f, NAN, 0.1f, 1};
-  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, bad_color, 3, &kTintId, tint, 1),
+  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, LT_VISIBLE_ALL, bad_color, 3, &kTintId, tint, 1),
             LT_ERROR_INVALID_ARGUMENT);
   const int bad_id = -1;
-  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, color, 3, &bad_id, tint, 1), LT_ERROR_INVALID_ARGUMENT);
-  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, color, 3, &kTintId, nullptr, 1),
+  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, LT_VISIBLE_ALL, color, 3, &bad_id, tint, 1),
             LT_ERROR_INVALID_ARGUMENT);
-  EXPECT_EQ(lt_scene_set_instance_values(s, 99, color, 3, &kTintId, tint, 1), LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_instance_values(s, ids.box_instance, LT_VISIBLE_ALL, color, 3, &kTintId, nullptr, 1),
+            LT_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(lt_scene_set_instance_values(s, 99, LT_VISIBLE_ALL, color, 3, &kTintId, tint, 1),
+            LT_ERROR_INVALID_ARGUMENT);
   const std::vector<float> refused = image(s);
   EXPECT_EQ(0, std::memcmp(original.data(), refused.data(), original.size() * sizeof(float)));
 
-  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, color, 3, &kTintId, tint, 1), LT_OK) << lt_last_error();
+  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, LT_VISIBLE_ALL, color, 3, &kTintId, tint, 1), LT_OK)
+      << lt_last_error();
   const std::vector<float> edited = image(s);  // rendered without a new commit
   EXPECT_NE(0, std::memcmp(original.data(), edited.data(), original.size() * sizeof(float)))
       << "the new values changed nothing in the image";
@@ -218,8 +223,42 @@ TEST(ApiIncremental, InstanceValuesAreSetInPlaceAndNeedNoCommit) {
   EXPECT_EQ(after.top_bvh_builds, before.top_bvh_builds);
   EXPECT_EQ(after.light_sampler_builds, before.light_sampler_builds);
   // Without attributes: Attribute reads none (0, emitting black), as in a scene built so.
-  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, color, 3, nullptr, nullptr, 0), LT_OK) << lt_last_error();
+  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, LT_VISIBLE_ALL, color, 3, nullptr, nullptr, 0), LT_OK)
+      << lt_last_error();
   std::fill(p.box_tint, p.box_tint + 3, 0.0f);
+  expect_same_image(s, p);
+  EXPECT_EQ(stats(s).mesh_bvh_builds, before.mesh_bvh_builds);
+}
+
+TEST(ApiIncremental, VisibilityEditsRebuildTheTopLevel) {
+  Params p;
+  Ids ids;
+  ScenePtr sp = build(p, &ids);
+  lt_scene* s = sp.get();
+  const lt_scene_stats before = stats(s);
+  // The first instance hidden from some rays: the meshes' BVHs again, with Embree's filter.
+  p.box_visibility = LT_VISIBLE_ALL & ~LT_VISIBLE_CAMERA;
+  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, p.box_visibility, p.box_object_color, p.box_pass_index,
+                                         &kTintId, p.box_tint, 1),
+            LT_OK)
+      << lt_last_error();
+  lt_render_settings rs = render_settings(8, 8, 1, 1);
+  lt_render* r = nullptr;
+  EXPECT_EQ(lt_render_start(s, &rs, &r), LT_ERROR_STATE) << "a changed visibility needs a commit";
+  check(lt_scene_commit(s), "recommit");
+  lt_scene_stats after = stats(s);
+  EXPECT_EQ(after.mesh_bvh_builds, 2 * before.mesh_bvh_builds);
+  EXPECT_EQ(after.top_bvh_builds, before.top_bvh_builds + 1);
+  expect_same_image(s, p);
+  // Another partial visibility: the top level only.
+  p.box_visibility = LT_VISIBLE_ALL & ~LT_VISIBLE_SHADOW;
+  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, p.box_visibility, p.box_object_color, p.box_pass_index,
+                                         &kTintId, p.box_tint, 1),
+            LT_OK);
+  check(lt_scene_commit(s), "recommit");
+  const lt_scene_stats last = stats(s);
+  EXPECT_EQ(last.mesh_bvh_builds, after.mesh_bvh_builds);
+  EXPECT_EQ(last.top_bvh_builds, after.top_bvh_builds + 1);
   expect_same_image(s, p);
 }
 

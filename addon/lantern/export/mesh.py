@@ -597,14 +597,11 @@ class MeshExporter:
     def value_edits(self, inst, key, instancer, object_keys):
         """What the object of depsgraph instance inst (instance_key key) now gives its core instances
         (object_keys: the materials' attributes.object_keys()), against what they were added with:
-        [(core id, instance_values)] of those whose colour, pass index or object attributes changed
-        (the core sets them in place: set_instance_values, then record_values), or None when a ray
-        visibility changed (a new scene is needed)."""
+        [(core id, instance_values)] of those whose ray visibility, colour, pass index or object
+        attributes changed (the core sets them in place: set_instance_values, then record_values)."""
         edits = []
         for n, values, core_id in self.instance_values.get(key, ()):
             now = instance_values(inst.object, object_keys[:n], instancer)
-            if now[0] != values[0]:
-                return None
             if now != values:
                 edits.append((core_id, now))
         return edits

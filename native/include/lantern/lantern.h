@@ -558,16 +558,20 @@ LT_API int lt_scene_commit(lt_scene* scene);
  *                                              the light sampler (emissive triangles move);
  *   lt_scene_set_material, lt_scene_clear_lights / lt_scene_add_light, lt_scene_set_world
  *                                              the light sampler only;
- *   lt_scene_set_camera, lt_scene_set_instance_values
- *                                              nothing, and needs no new commit (renders read the
- *                                              camera and the instances' values when they start).
+ *   lt_scene_set_instance_values               with a changed visibility the top-level BVH (and,
+ *                                              the first time an instance is hidden from some
+ *                                              rays, the meshes' BVHs), else nothing and needs no
+ *                                              new commit;
+ *   lt_scene_set_camera                        nothing, and needs no new commit (renders read the
+ *                                              camera when they start).
  * Meshes' BVHs are never rebuilt: a changed mesh needs a new scene. */
 LT_API int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float transform[12]);
-/* Replaces an instance's Object Info colour and pass index and its object attributes (as the
- * fields of lt_instance_desc: color, pass_index, attribute_ids, attribute_values, attribute_count);
- * its geometry, materials, visibility and the rest stay. */
-LT_API int lt_scene_set_instance_values(lt_scene* scene, int instance, const float color[4], int pass_index,
-                                        const int* attribute_ids, const float* attribute_values, int attribute_count);
+/* Replaces an instance's ray visibility, Object Info colour and pass index and its object
+ * attributes (as the fields of lt_instance_desc: visibility, color, pass_index, attribute_ids,
+ * attribute_values, attribute_count); its geometry, materials and the rest stay. */
+LT_API int lt_scene_set_instance_values(lt_scene* scene, int instance, unsigned visibility, const float color[4],
+                                        int pass_index, const int* attribute_ids, const float* attribute_values,
+                                        int attribute_count);
 /* Replaces material `material`'s surface program (as lt_scene_add_material); its volume
  * (lt_scene_set_material_volume) and displacement (lt_scene_set_material_displacement) are kept. */
 LT_API int lt_scene_set_material(lt_scene* scene, int material, const lt_shader_program* program);

@@ -739,15 +739,18 @@ int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float t
   });
 }
 
-int lt_scene_set_instance_values(lt_scene* scene, int instance, const float color[4], int pass_index,
-                                 const int* attribute_ids, const float* attribute_values, int attribute_count) {
+int lt_scene_set_instance_values(lt_scene* scene, int instance, unsigned visibility, const float color[4],
+                                 int pass_index, const int* attribute_ids, const float* attribute_values,
+                                 int attribute_count) {
   return guarded([&] {
     require(scene && color, "lt_scene_set_instance_values: NULL argument");
     require(instance >= 0 && instance < int(scene->scene.geometry.instance_count()),
             "instance " + std::to_string(instance) + " does not exist");
     lt::Instance values;
+    values.visibility = visibility & LT_VISIBLE_ALL;
     set_object_values(&values, color, pass_index, attribute_ids, attribute_values, attribute_count);
-    begin_edit(scene, false);  // read only while shading: nothing to rebuild
+    // The other values are read only while shading: nothing to rebuild for them.
+    begin_edit(scene, values.visibility != scene->scene.geometry.instance(instance).visibility);
     scene->scene.geometry.set_instance_values(instance, std::move(values));
   });
 }

@@ -580,11 +580,22 @@ void Geometry::set_instance_values(int instance, Instance&& values) {
   std::copy(values.color, values.color + 4, inst.color);
   inst.pass_index = values.pass_index;
   inst.attributes = std::move(values.attributes);
+  const unsigned vis = values.visibility & 31u;
+  if (vis == inst.visibility) return;
+  inst.visibility = vis;
+  instance_visibility_[size_t(instance)] = inst.shadow_catcher ? vis | catcher_only_visibility(vis) : vis;
+  top_dirty_ = true;  // the top level holds a copy (rtc_visibility_)
+  // The first instance some rays do not see: the meshes' scenes are built again with Embree's
+  // context filter, which visibility_filter needs.
+  if (vis != 31u && !partial_visibility_) {
+    partial_visibility_ = true;
+    filters_missing_ = committed_;
+  }
 }
 
 void Geometry::commit() {
   if (committed_ && !top_dirty_) return;
-  if (!committed_) {
+  if (!committed_ || filters_missing_) {
     for (auto& m : meshes_) {
       if (!m.rtc) continue;
       // Strands: Embree's compact curve leaves (indices into the control points, not copies of
@@ -595,6 +606,7 @@ void Geometry::commit() {
       rtcCommitScene(m.rtc);
       ++mesh_builds_;
     }
+    filters_missing_ = false;
   }
   build_top();
   committed_ = true;

@@ -188,7 +188,8 @@ class Geometry {
   // Moves an instance (also after commit): the next commit rebuilds only the top-level BVH over
   // the meshes' existing BVHs.
   void set_instance_transform(int instance, const Transform& xf);
-  // Object Info's colour and pass index and the object attributes of `values`; nothing else.
+  // The ray visibility, Object Info's colour and pass index and the object attributes of
+  // `values`; nothing else. A changed visibility rebuilds the top level at the next commit.
   void set_instance_values(int instance, Instance&& values);
   // First call: builds every mesh's BVH and the top level; later calls rebuild the top level
   // if an instance moved, and nothing else.
@@ -287,6 +288,7 @@ class Geometry {
   bool traceable(const Ray& r) const;
   Bounds bounds_;
   bool partial_visibility_ = false;
+  bool filters_missing_ = false;  // committed meshes' scenes built without the context filter
   bool has_shadow_catcher_ = false;
   bool committed_ = false, top_dirty_ = false;
   uint64_t mesh_builds_ = 0, top_builds_ = 0;
