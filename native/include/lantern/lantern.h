@@ -558,10 +558,8 @@ LT_API int lt_scene_commit(lt_scene* scene);
  *                                              the light sampler (emissive triangles move);
  *   lt_scene_set_material, lt_scene_clear_lights / lt_scene_add_light, lt_scene_set_world
  *                                              the light sampler only;
- *   lt_scene_set_instance_values               with a changed visibility the top-level BVH (and,
- *                                              the first time an instance is hidden from some
- *                                              rays, the meshes' BVHs), else nothing and needs no
- *                                              new commit;
+ *   lt_scene_set_instance_values               with a changed visibility the top-level BVH, else
+ *                                              nothing and needs no new commit;
  *   lt_scene_set_camera                        nothing, and needs no new commit (renders read the
  *                                              camera when they start).
  * Meshes' BVHs are never rebuilt: a changed mesh needs a new scene. */
