@@ -111,7 +111,7 @@ class SceneSync:
         # Scene updates (render settings) need nothing here: renders take their settings anew.
         if not (transforms or lights or materials or camera_object is not None):
             return True
-        moves, values = self._moved_instances(depsgraph) if transforms else ([], [])
+        moves, values = self._instance_edits(depsgraph) if transforms else ([], [])
         if moves is None:
             return False
         if not (moves or values or lights or materials or camera_object is not None):
@@ -151,7 +151,7 @@ class SceneSync:
         obj = obj.evaluated_get(depsgraph)
         return self.state["meshes"].emitter_unchanged(obj, obj.matrix_world)
 
-    def _moved_instances(self, depsgraph):
+    def _instance_edits(self, depsgraph):
         """([(key, core id, new matrix)] of the exported instances that moved, [(key, core id,
         instance_values)] of those whose ray visibility, Object Info values or object attributes
         changed), or (None, None) when the set of instances changed (a new scene is needed)."""

@@ -118,6 +118,12 @@ void expect_same_image(lt_scene* edited, const Params& final_state) {
       << "the edited scene does not render like a scene built in its final state";
 }
 
+// The box's values as p gives them.
+int set_box_values(lt_scene* s, const Ids& ids, const Params& p) {
+  return lt_scene_set_instance_values(s, ids.box_instance, p.box_visibility, p.box_object_color, p.box_pass_index,
+                                      &kTintId, p.box_tint, 1);
+}
+
 }  // namespace
 
 TEST(ApiIncremental, MovingAnInstanceRebuildsOnlyTheTopLevel) {
@@ -213,8 +219,7 @@ TEST(ApiIncremental, InstanceValuesAreSetInPlaceAndNeedNoCommit) {
   const std::vector<float> refused = image(s);
   EXPECT_EQ(0, std::memcmp(original.data(), refused.data(), original.size() * sizeof(float)));
 
-  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, LT_VISIBLE_ALL, color, 3, &kTintId, tint, 1), LT_OK)
-      << lt_last_error();
+  ASSERT_EQ(set_box_values(s, ids, p), LT_OK) << lt_last_error();
   const std::vector<float> edited = image(s);  // rendered without a new commit
   EXPECT_NE(0, std::memcmp(original.data(), edited.data(), original.size() * sizeof(float)))
       << "the new values changed nothing in the image";
@@ -238,10 +243,7 @@ TEST(ApiIncremental, VisibilityEditsRebuildTheTopLevel) {
   const lt_scene_stats before = stats(s);
   // The first instance hidden from some rays (Embree's context filter from now on).
   p.box_visibility = LT_VISIBLE_ALL & ~LT_VISIBLE_CAMERA;
-  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, p.box_visibility, p.box_object_color, p.box_pass_index,
-                                         &kTintId, p.box_tint, 1),
-            LT_OK)
-      << lt_last_error();
+  ASSERT_EQ(set_box_values(s, ids, p), LT_OK) << lt_last_error();
   lt_render_settings rs = render_settings(8, 8, 1, 1);
   lt_render* r = nullptr;
   EXPECT_EQ(lt_render_start(s, &rs, &r), LT_ERROR_STATE) << "a changed visibility needs a commit";
@@ -252,13 +254,16 @@ TEST(ApiIncremental, VisibilityEditsRebuildTheTopLevel) {
   expect_same_image(s, p);
   // Another partial visibility: the top level only.
   p.box_visibility = LT_VISIBLE_ALL & ~LT_VISIBLE_SHADOW;
-  ASSERT_EQ(lt_scene_set_instance_values(s, ids.box_instance, p.box_visibility, p.box_object_color, p.box_pass_index,
-                                         &kTintId, p.box_tint, 1),
-            LT_OK);
+  ASSERT_EQ(set_box_values(s, ids, p), LT_OK) << lt_last_error();
   check(lt_scene_commit(s), "recommit");
   const lt_scene_stats last = stats(s);
   EXPECT_EQ(last.mesh_bvh_builds, after.mesh_bvh_builds);
   EXPECT_EQ(last.top_bvh_builds, after.top_bvh_builds + 1);
+  expect_same_image(s, p);
+  // Seen by every ray again: as a scene built so, without the filter.
+  p.box_visibility = LT_VISIBLE_ALL;
+  ASSERT_EQ(set_box_values(s, ids, p), LT_OK) << lt_last_error();
+  check(lt_scene_commit(s), "recommit");
   expect_same_image(s, p);
 }
 

@@ -546,11 +546,8 @@ int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
   ++meshes_[size_t(inst.mesh)].users;
   instances_.push_back(inst);
   baked_.emplace_back();
-  // A shadow catcher is also seen by the catcher-only rays (catcher_only_visibility), as Cycles'
-  // SHADOW_CATCHER_OBJECT_VISIBILITY.
-  const unsigned vis = inst.visibility & 31u;
-  instance_visibility_.push_back(inst.shadow_catcher ? vis | catcher_only_visibility(vis) : vis);
-  if (vis != 31u || inst.shadow_catcher) partial_visibility_ = true;
+  instance_visibility_.push_back(0);
+  set_ray_visibility(size_t(id));
   has_shadow_catcher_ = has_shadow_catcher_ || inst.shadow_catcher;
   return id;
 }
@@ -583,25 +580,32 @@ void Geometry::set_instance_values(int instance, Instance&& values) {
   const unsigned vis = values.visibility & 31u;
   if (vis == inst.visibility) return;
   inst.visibility = vis;
-  instance_visibility_[size_t(instance)] = inst.shadow_catcher ? vis | catcher_only_visibility(vis) : vis;
+  set_ray_visibility(size_t(instance));
+  // Every ray seeing every instance again: no filter, the same hits as a scene built so (the
+  // meshes keep the flag, unread without a filter).
+  partial_visibility_ =
+      std::any_of(instance_visibility_.begin(), instance_visibility_.end(), [](unsigned v) { return v != 31u; });
   top_dirty_ = true;  // the top level holds a copy (rtc_visibility_)
-  if (vis != 31u && !partial_visibility_) {
-    partial_visibility_ = true;
-    filters_missing_ = committed_;
-  }
 }
 
-// The first instance some rays miss after the meshes' commit: their scenes take Embree's context
-// filter flag (Debian's Embree asserts it in the instanced scene when visibility_filter runs).
-// Their BVHs stay: the flag is read while tracing, and the commit finds nothing modified (Sponza's
-// 66k triangles: under 1 ms).
-void Geometry::add_context_filters() {
+// The ray kinds that see instance i. A shadow catcher is also seen by the catcher-only rays
+// (catcher_only_visibility), as Cycles' SHADOW_CATCHER_OBJECT_VISIBILITY. The first instance some
+// rays miss turns on Embree's context filter (visibility_filter); after the meshes' commit their
+// scenes take its flag too (Debian's Embree asserts it in the instanced scene), keeping their
+// BVHs: the flag is read while tracing, and the commit finds nothing modified (Sponza's 66k
+// triangles: under 1 ms).
+void Geometry::set_ray_visibility(size_t i) {
+  const Instance& inst = instances_[i];
+  const unsigned vis = inst.visibility & 31u;
+  instance_visibility_[i] = inst.shadow_catcher ? vis | catcher_only_visibility(vis) : vis;
+  if ((vis == 31u && !inst.shadow_catcher) || partial_visibility_) return;
+  partial_visibility_ = true;
+  if (!committed_) return;
   for (auto& m : meshes_) {
     if (!m.rtc) continue;
     rtcSetSceneFlags(m.rtc, RTCSceneFlags(rtcGetSceneFlags(m.rtc) | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
     rtcCommitScene(m.rtc);
   }
-  filters_missing_ = false;
 }
 
 void Geometry::commit() {
@@ -618,7 +622,6 @@ void Geometry::commit() {
       ++mesh_builds_;
     }
   }
-  if (filters_missing_) add_context_filters();
   build_top();
   committed_ = true;
   top_dirty_ = false;

@@ -286,10 +286,9 @@ class Geometry {
   // kMaxInverseNorm are baked instead, so the limits stay far beyond any scene's size).
   float ray_origin_limit_ = kTraceableRange, ray_direction_limit_ = kTraceableRange;
   bool traceable(const Ray& r) const;
-  void add_context_filters();
+  void set_ray_visibility(size_t i);
   Bounds bounds_;
   bool partial_visibility_ = false;
-  bool filters_missing_ = false;  // committed meshes' scenes without Embree's context filter flag
   bool has_shadow_catcher_ = false;
   bool committed_ = false, top_dirty_ = false;
   uint64_t mesh_builds_ = 0, top_builds_ = 0;
