@@ -65,9 +65,9 @@ float sample_trimmed_logistic(float u, float s, float c) {
 }
 // What d'Eon et al.'s Mp needs of a variance v alone (kept per lobe parameters: HairTerms).
 struct MpTerms {
-  float v, inv_v, tail;                 // tail: log(1 / (2 v)) for v <= 0.1, else 2 v sinh(1 / v)
-  float exp_m2v;                        // exp(-2 / v), for sampling
-  double inv_v_exact, log_v, log_norm;  // longitudinal_exact's 1 / v, log v, log(1 - exp(-2 / v))
+  float v, inv_v, tail;      // tail: log(1 / (2 v)) for v <= 0.1, else 2 v sinh(1 / v)
+  float exp_m2v;             // exp(-2 / v), for sampling
+  double inv_v_exact, norm;  // longitudinal_exact's 1 / v and 1 / (v (1 - exp(-2 / v)))
 };
 MpTerms mp_terms(float v) {
   MpTerms t;
@@ -76,8 +76,7 @@ MpTerms mp_terms(float v) {
   t.tail = v <= 0.1f ? std::log(0.5f * t.inv_v) : std::sinh(t.inv_v) * 2 * v;
   t.exp_m2v = std::exp(-2 / v);
   t.inv_v_exact = 1 / double(v);
-  t.log_v = std::log(double(v));
-  t.log_norm = std::log1p(-std::exp(-2 / double(v)));
+  t.norm = 1 / (double(v) * -std::expm1(-2 / double(v)));
   return t;
 }
 // d'Eon et al.'s Mp for variance v (the log form for small v avoids overflow).
@@ -86,14 +85,16 @@ float longitudinal(float sin_i, float cos_i, float sin_o, float cos_o, const MpT
   if (m.v <= 0.1f) return std::exp(log_bessel_I0(cos_arg) - sin_arg - m.inv_v + 0.6931f + m.tail);
   return std::exp(-sin_arg) * bessel_I0(cos_arg) / m.tail;
 }
-// log I0(|x|) to 5e-7 relative in I0 (Abramowitz and Stegun 9.8.1 and 9.8.2; measured
-// against std::cyl_bessel_i over 0 .. 700, which took 15 times as long: 14 % of a hair render).
-double log_bessel_I0_accurate(double x) {
+// I0(|x|) exp(-s) for s >= |x| (to rounding), with I0 to 5e-7 relative (Abramowitz and Stegun
+// 9.8.1 and 9.8.2; measured against std::cyl_bessel_i over 0 .. 700, which took 15 times as
+// long: 14 % of a hair render). The large-x form keeps exp(|x| - s) whole, so it cannot overflow.
+double bessel_I0_times_exp(double x, double s) {
   x = std::abs(x);  // I0 is even
   if (x <= 3.75) {
     const double t = (x / 3.75) * (x / 3.75);
-    return std::log1p(
-        t * (3.5156229 + t * (3.0899424 + t * (1.2067492 + t * (0.2659732 + t * (0.0360768 + t * 0.0045813))))));
+    return (1 +
+            t * (3.5156229 + t * (3.0899424 + t * (1.2067492 + t * (0.2659732 + t * (0.0360768 + t * 0.0045813)))))) *
+           std::exp(-s);
   }
   const double t = 3.75 / x;
   const double p =
@@ -102,13 +103,14 @@ double log_bessel_I0_accurate(double x) {
            t * (0.00225319 +
                 t * (-0.00157565 +
                      t * (0.00916281 + t * (-0.02057706 + t * (0.02635537 + t * (-0.01647633 + t * 0.00392377)))))));
-  return x - 0.5 * std::log(x) + std::log(p);
+  return p / std::sqrt(x) * std::exp(x - s);
 }
 // The same Mp with an accurate I0 (Cycles' series stops after 10 terms, a few percent low near
 // its switch to the asymptotic form at 12): the density d'Eon's sampling draws exactly, for pdfs.
+// x - b - 1 / v = (cos(theta_i + theta_o) - 1) / v <= 0 in double: no cancellation to float.
 float longitudinal_exact(float sin_i, float cos_i, float sin_o, float cos_o, const MpTerms& m) {
   const double x = double(cos_i) * cos_o / m.v, b = double(sin_i) * sin_o / m.v;
-  return float(std::exp(log_bessel_I0_accurate(x) - b - m.inv_v_exact - m.log_v - m.log_norm));
+  return float(bessel_I0_times_exp(x, b + m.inv_v_exact) * m.norm);
 }
 // The density over solid angle of the elevation principled_sample draws for a lobe: theta' from
 // Mp cos theta', then theta' + delta, folded back over the pole (sin kept, |cos|). Each theta'
