@@ -16,7 +16,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 25
+ABI_VERSION = 26
 
 # lt_status
 OK = 0
@@ -506,6 +506,7 @@ def _declare(lib, layout=True):
         "lt_scene_set_material_volume": ([scene_p, c_int, P(VolumeDesc), c_int, c_int], c_int),
         "lt_scene_set_world_volume": ([scene_p, P(VolumeDesc), c_int], c_int),
         "lt_scene_set_volume_grid_lightgroup": ([scene_p, c_int, c_int], c_int),
+        "lt_scene_set_volume_grid_motion": ([scene_p, c_int, _f_p, c_int], c_int),
         "lt_scene_add_volume_grid": ([scene_p, c_char_p, c_char_p, ctypes.c_float * 12, ctypes.c_float,
                                       ctypes.c_float, ctypes.c_float, P(VolumeDesc), c_int, P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
@@ -1083,11 +1084,12 @@ class Scene:
         _check(self._lib.lt_scene_set_world_volume(self.handle, arr, n), "lt_scene_set_world_volume")
 
     def add_volume_grid(self, path, grid, transform, components, step=0.0, clipping=0.001, face_offset=0.0,
-                        lightgroup=0):
+                        lightgroup=0, motion=None):
         """A Volume object's .vdb grid (step: ray-marching step in world units, 0 for the voxel
         size; clipping: the Volume's Render > Clipping, and face_offset: Cycles' shift of its volume
         mesh, which shape the region its emission fills; lightgroup: its emission's, 0 none, k the
-        light group k - 1); raises LanternError (LT_ERROR_IO) with the core's message."""
+        light group k - 1; motion: its transforms over the shutter, as an instance's); raises
+        LanternError (LT_ERROR_IO) with the core's message."""
         arr, n = self._volume_descs(components)
         out = ctypes.c_int(-1)
         _check(self._lib.lt_scene_add_volume_grid(self.handle, os.fsencode(path), grid.encode("utf-8"),
@@ -1098,6 +1100,10 @@ class Scene:
         if lightgroup:
             _check(self._lib.lt_scene_set_volume_grid_lightgroup(self.handle, out.value, int(lightgroup)),
                    "lt_scene_set_volume_grid_lightgroup")
+        if motion is not None and len(motion):
+            a = np.ascontiguousarray(np.asarray(motion, dtype=np.float32)[:, :3, :4])
+            _check(self._lib.lt_scene_set_volume_grid_motion(self.handle, out.value, _fptr(a), a.shape[0]),
+                   "lt_scene_set_volume_grid_motion")
         return out.value
 
     def commit(self):

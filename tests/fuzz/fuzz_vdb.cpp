@@ -1,8 +1,8 @@
 // libFuzzer target: the VDB loader. The input is written to a file and loaded as a Volume object
 // through the C ABI (lt_scene_add_volume_grid: OpenVDB's reader, Lantern's checks, the NanoVDB
 // conversion and the majorant grid); a grid that loads is rendered (2x2 pixels, one sample, by
-// tracking and by ray marching) with the camera aimed at its bounds. Every file must either load
-// or be refused with LT_ERROR_IO and a message.
+// tracking and by ray marching) with the camera aimed at its bounds, moving over the shutter for
+// inputs of odd size. Every file must either load or be refused with LT_ERROR_IO and a message.
 #include <unistd.h>
 
 #include <cmath>
@@ -95,6 +95,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     cam.clip_end = 1e30f;
     cam.pixel_aspect = 1;
     lt_world_desc world = {{1, 1, 1}, 1, -1, 0, LT_VISIBLE_ALL};
+    // Inputs of odd size also move the grid over the shutter (ABI 26), by its extent along x.
+    const float steps[36] = {1, 0, 0, -extent, 0, 1, 0, 0, 0, 0,      1, 0, 1, 0, 0, 0, 0, 1,
+                             0, 0, 0, 0,       1, 0, 1, 0, 0, extent, 0, 1, 0, 0, 0, 0, 1, 0};
+    if (size % 2 == 1 && std::isfinite(extent) && lt_scene_set_volume_grid_motion(scene, id, steps, 3) != LT_OK)
+      fail("volume motion");
     if (std::isfinite(cx + cy + cz + extent) && lt_scene_set_camera(scene, &cam) == LT_OK &&
         lt_scene_set_world(scene, &world) == LT_OK) {
       if (lt_scene_commit(scene) != LT_OK) fail("commit");

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <memory>
 
 #include "chi2.h"
@@ -878,6 +879,61 @@ TEST(MediaGrid, ValidationEmptinessBoundsAndTransforms) {
   EXPECT_NEAR(t0, 1, 1e-4);
   EXPECT_NEAR(t1, 13, 1e-4);
   EXPECT_GT(m.memory_bytes(), v.size() * sizeof(float));
+}
+
+// A Volume object moving over the shutter (Medium::set_motion): at each ray's time it is the still
+// medium placed at its pose then (the transform interpolated as instances'), in density, clipping
+// and transmittance; its bounds hold every pose. Fails if the ray's time is ignored.
+TEST(MediaGrid, AMovingGridIsTheStillGridAtItsPoseAtTheRaysTime) {
+  const RefGrid g = blob(4);
+  auto data = std::make_shared<const GridData>(GridData::from_dense(g.v, g.n[0], g.n[1], g.n[2]));
+  auto turned = [&](float x, float degrees) {
+    const float a = degrees * kPi / 180, c = std::cos(a), s = std::sin(a);
+    Transform m;  // a turn about z, then x along x
+    m.m[0] = c, m.m[1] = -s, m.m[4] = s, m.m[5] = c, m.m[3] = x;
+    return compose(m, g.index_to_world());
+  };
+  const std::vector<Transform> steps{turned(-0.6f, -40), turned(0, 0), turned(0.6f, 40)};
+  Medium moving = Medium::heterogeneous(data, Spectrum(0.5f), Spectrum(1.5f), 0, steps[1]);
+  moving.set_motion(steps);
+  EXPECT_TRUE(moving.moves());
+  const std::vector<DecomposedTransform> decomposed = decompose_motion(steps);
+  Sampler points(3, 0, 0);
+  for (float time : {0.0f, 0.2f, 0.5f, 0.9f, 1.0f}) {
+    const Medium still =
+        Medium::heterogeneous(data, Spectrum(0.5f), Spectrum(1.5f), 0, interpolate_motion(decomposed, time));
+    for (int i = 0; i < 200; ++i) {
+      const Vec3 p(points.next_1d() * 3 - 1.5f, points.next_1d() * 2 - 1, points.next_1d() * 2 - 1);
+      EXPECT_NEAR(moving.density(p, time), still.density(p), 1e-4) << "time " << time << " point " << i;
+    }
+    Ray r = make_ray(Vec3(-3, 0.1f, 0.05f), normalize(Vec3(1, 0.05f, 0.02f)));
+    r.time = time;
+    float a0 = 0, a1 = 10, b0 = 0, b1 = 10;
+    ASSERT_EQ(moving.clip(r, &a0, &a1), still.clip(r, &b0, &b1)) << time;
+    EXPECT_NEAR(a0, b0, 1e-4) << time;
+    EXPECT_NEAR(a1, b1, 1e-4) << time;
+    Sampler s1(7, 1, 2), s2(7, 1, 2);
+    const Spectrum tm = moving.transmittance(r, 0, 10, s1, kMarch, 0.02f);
+    const Spectrum ts = still.transmittance(r, 0, 10, s2, kMarch, 0.02f);
+    EXPECT_NEAR(tm.x, ts.x, 1e-4) << time;
+    EXPECT_LT(ts.x, 0.9f) << time;  // the ray crosses the blob
+  }
+  // The bounds hold the poses at the ends of the shutter.
+  Vec3 lo, hi, l0, h0, l1, h1;
+  ASSERT_TRUE(moving.bounds(&lo, &hi));
+  Medium::heterogeneous(data, Spectrum(1.0f), Spectrum(0.0f), 0, steps[0]).bounds(&l0, &h0);
+  Medium::heterogeneous(data, Spectrum(1.0f), Spectrum(0.0f), 0, steps[2]).bounds(&l1, &h1);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_LE(lo[a], std::min(l0[a], l1[a]) + 1e-5f) << a;
+    EXPECT_GE(hi[a], std::max(h0[a], h1[a]) - 1e-5f) << a;
+  }
+  // Bad input.
+  Medium homogeneous = Medium::homogeneous(Spectrum(1.0f), Spectrum(0.0f), 0);
+  EXPECT_THROW(homogeneous.set_motion(steps), InvalidArgument);
+  std::vector<Transform> bad = steps;
+  bad[2].m[5] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(moving.set_motion(bad), InvalidArgument);
+  EXPECT_THROW(moving.set_motion({steps[0]}), InvalidArgument);
 }
 
 // ---- the statistical checks can fail ------------------------------------------------------------

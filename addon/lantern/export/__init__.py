@@ -202,10 +202,10 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
                 lights += 1
                 light_kinds[obj.data.type] = light_kinds.get(obj.data.type, 0) + 1
         elif t == 'VOLUME':
-            if motion is not None and motion.volume_moves(instance_key(inst), matrix):
-                report({'WARNING'}, "Volume object '%s' moves over the shutter: Lantern renders it at the "
-                                    "shutter's centre, without the motion blur Cycles gives it" % obj.name)
-            added, emits = export_volume(obj, matrix, core_scene, report, materials, lightgroup)
+            steps = motion.transforms(instance_key(inst), matrix, obj.name) if motion is not None else None
+            if motion is not None and steps is motion.HIDDEN:  # a particle instance born or dying mid-shutter
+                continue
+            added, emits = export_volume(obj, matrix, core_scene, report, materials, lightgroup, motion=steps)
             volumes += added
             emissive_media += emits
         elif t in ('CURVES', 'POINTCLOUD'):

@@ -10,8 +10,8 @@ middle one at the shutter's centre; obj.cycles.use_motion_blur and use_deform_mo
 per object (and the instancer's, for instances). An object missing at a step keeps its centre
 transform there (Object::update_motion), a particle instance is hidden (hide_on_missing_motion);
 one missing at the centre is not rendered. Lights do not
-move (Cycles 3.4 has no light motion); Volume objects are rendered at the shutter's centre, with a
-warning when they move (Cycles 3.4 blurs them).
+move (Cycles 3.4 has no light motion); Volume objects move as instances do (the core looks their
+grid up at each ray's time), as Cycles 3.4 blurs them.
 
 The Vector pass with motion blur off samples the same way, as Cycles' motion pass
 (Scene::MOTION_PASS): a "shutter" of 2 frames around the frame, so the steps are the previous frame,
@@ -154,12 +154,6 @@ class Motion:
             return None
         self.moving_instances += 1
         return np.stack(out)
-
-    def volume_moves(self, key, centre):
-        """Whether a Volume object's transform changes over the shutter: Lantern renders it at the
-        shutter's centre, where Cycles 3.4 blurs it."""
-        centre = np.asarray(centre, dtype=np.float32)
-        return any(not np.array_equal(m, centre) for m in self.matrices.get(key, {}).values())
 
     def deformation(self, obj, centre_arrays):
         """(motion_positions, motion_corner_normals or None) of a deforming object, or None."""
@@ -332,7 +326,7 @@ def collect(engine, depsgraph, camera_object, report, vector_pass=False):
             motion.camera_steps = min(motion.camera_steps, 3)
     times = set()
     for inst in depsgraph.object_instances:
-        volume = inst.object.type == 'VOLUME' and not frames  # sampled only to say it does not blur
+        volume = inst.object.type == 'VOLUME' and not frames  # blurred; no Vector pass from media
         if not (inst.show_self or inst.show_particles) or (inst.object.type not in _MESH_TYPES and not volume):
             continue
         obj = inst.object

@@ -96,10 +96,10 @@ def _resolve_grids(desc, names, warn):
     return out, used
 
 
-def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0):
+def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0, motion=None):
     """Adds the object's density grid and the grids its emission reads; returns (1, whether it
     emits) if added, (0, False) if left out (with a report). lightgroup: its emission's (core
-    numbering)."""
+    numbering); motion: its transforms over the shutter (Motion.transforms), or None."""
     volume = obj.data
     material = obj.active_material
     path = _vdb_path(obj)
@@ -125,6 +125,8 @@ def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0):
     # convention): shift by half a voxel in object space.
     if half_voxel is not None:
         matrix = Matrix(matrix) @ Matrix.Translation(half_voxel)
+        if motion is not None:
+            motion = [Matrix(m) @ Matrix.Translation(half_voxel) for m in motion]
     desc = materials.volume(material, attributes=True) if material is not None else None
     if desc is None:
         desc = [_DEFAULT]
@@ -154,7 +156,7 @@ def export_volume(obj, matrix, core_scene, report, materials, lightgroup=0):
         # it (scene/volume.cpp, face_overlap_avoidance; the geometry's name is its data's).
         face_offset = 0.1 * hash_uint(hash_string(volume.name)) / 0xFFFFFFFF
         core_scene.add_volume_grid(path, grid_name, matrix, desc, step=step, clipping=render.clipping,
-                                   face_offset=face_offset, lightgroup=lightgroup)
+                                   face_offset=face_offset, lightgroup=lightgroup, motion=motion)
     except core.LanternError as e:
         report({'WARNING'}, "Volume '%s' left out: %s" % (obj.name, e.detail))
         return 0, False

@@ -59,8 +59,8 @@ extern "C" {
  * ocio_space (byte images Blender loads in other colour spaces); 23: a perspective camera's zoom over
  * the shutter (lt_camera_desc.zoom_pre and zoom_post); 24: attributes, UVs and generated coordinates of
  * curves and points (lt_curves_desc.curve_uvs, generated_from_root, texspace_location and texspace_size, attributes,
- * lt_curves_attribute). */
-#define LT_ABI_VERSION 25
+ * lt_curves_attribute); 25: lt_scene_set_instance_values; 26: lt_scene_set_volume_grid_motion. */
+#define LT_ABI_VERSION 26
 
 enum lt_status {
   LT_OK = 0,
@@ -543,6 +543,15 @@ LT_API int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const cha
 /* The light group of a Volume object's emission (out_id of lt_scene_add_volume_grid): 0 none, k > 0
  * light group k - 1 (lt_instance_desc.lightgroup). */
 LT_API int lt_scene_set_volume_grid_lightgroup(lt_scene* scene, int volume, int lightgroup);
+/* A Volume object's motion blur (out_id of lt_scene_add_volume_grid): `steps` (0: none, else 3 to
+ * 129, odd) object-to-world transforms of 12 floats, equally spaced over the shutter, placed as
+ * lt_scene_add_volume_grid's `transform` (the centre one equal to it) and interpolated as
+ * lt_instance_desc.motion_transforms. Each ray looks the grid up through the transform at its
+ * time, as Cycles 3.4 blurs a moving Volume object; exact for rigid motion (a scale that changes
+ * over the shutter keeps the density per world unit of lt_scene_add_volume_grid). Errors:
+ * LT_ERROR_INVALID_ARGUMENT for another kind of volume, a bad count or a step that is not finite
+ * or singular. */
+LT_API int lt_scene_set_volume_grid_motion(lt_scene* scene, int volume, const float* transforms, int steps);
 
 /* Builds acceleration structures and light samplers. Must be called before rendering. After a
  * commit, adding images, materials, meshes, instances or volumes is refused with LT_ERROR_STATE;

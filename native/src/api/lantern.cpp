@@ -999,6 +999,22 @@ int lt_scene_set_volume_grid_lightgroup(lt_scene* scene, int volume, int lightgr
   });
 }
 
+int lt_scene_set_volume_grid_motion(lt_scene* scene, int volume, const float* transforms, int steps) {
+  return guarded([&] {
+    require(scene != nullptr, "lt_scene_set_volume_grid_motion: NULL scene");
+    scene->scene.require_editable();
+    lt::Scene& sc = scene->scene;
+    require(volume >= 0 && volume < int(sc.media.size()) && !sc.media[size_t(volume)].is_homogeneous(),
+            "volume " + std::to_string(volume) + " is not a Volume object's grid");
+    require_motion_steps(steps, transforms, "volume");
+    const std::vector<lt::Transform> xfs = motion_transforms(transforms, steps);
+    for (const lt::Transform& m : xfs)
+      require(finite_array(m.m, 12) && std::abs(m.determinant()) > 1e-30f,
+              "volume: a motion step is not finite or is singular");
+    if (steps > 0) sc.media[size_t(volume)].set_motion(xfs);
+  });
+}
+
 int lt_scene_commit(lt_scene* scene) {
   return guarded([&] {
     require(scene != nullptr, "lt_scene_commit: NULL scene");

@@ -216,7 +216,7 @@ int sample_media(const Scene& scene, const VolumeStack& stack, const Ray& ray, f
     if (!(end > t0)) return;
     if (scene.media[m].sample_distance(ray, t0, end, sampler, est, step, &cur)) {
       if (winner >= 0) {  // the previous collision lies beyond: it survived to cur.t
-        Spectrum st = scene.media[winner].sigma_t(mi->p);
+        Spectrum st = scene.media[winner].sigma_t(mi->p, ray.time);
         for (int k = 0; k < 3; ++k) w[k] *= mi->sigma_s[k] > 0 ? mi->weight[k] * st[k] / mi->sigma_s[k] : 0.0f;
       }
       winner = m;

@@ -42,7 +42,7 @@ struct HeteroRay {
 };
 
 HeteroRay hetero_ray(const Medium& m, const Ray& ray, float len) {
-  const Transform& w2i = m.world_to_index();
+  const Transform w2i = m.world_to_index(ray.time);
   HeteroRay r{w2i.point(ray.o),
               w2i.vector(ray.d),
               len,
@@ -160,6 +160,8 @@ Medium::Medium(const Medium& o)
       emissive_(o.emissive_),
       grid_(o.grid_),
       world_to_index_(o.world_to_index_),
+      object_to_index_(o.object_to_index_),
+      motion_(o.motion_),
       majorant_(o.majorant_),
       voxel_size_(o.voxel_size_),
       march_step_(o.march_step_),
@@ -177,6 +179,8 @@ Medium& Medium::operator=(const Medium& o) {
   emissive_ = o.emissive_;
   grid_ = o.grid_;
   world_to_index_ = o.world_to_index_;
+  object_to_index_ = o.object_to_index_;
+  motion_ = o.motion_;
   majorant_ = o.majorant_;
   voxel_size_ = o.voxel_size_;
   march_step_ = o.march_step_;
@@ -206,10 +210,10 @@ void Medium::set_grid_emission(std::shared_ptr<const GridEmission> e) {
   if (!inside) majorant_ = MajorantGrid::build(*grid_, majorant_cell_, lo, hi);
 }
 
-Spectrum Medium::emission_at(const Vec3& p) const {
+Spectrum Medium::emission_at(const Vec3& p, float time) const {
   if (!grid_) return emission_;
   if (!grid_emission_ || !majorant_.valid()) return Spectrum(0.0f);
-  Vec3 q = world_to_index_.point(p);
+  Vec3 q = world_to_index(time).point(p);
   for (int a = 0; a < 3; ++a)
     if (!(q[a] >= majorant_.lo()[a] && q[a] <= majorant_.hi()[a])) return Spectrum(0.0f);
   GridEmission::Lookup lookup(*grid_emission_);
@@ -243,6 +247,7 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
   m.grid_ = grid;
   Transform index_to_world = compose(object_to_world, grid->index_to_object);
   m.world_to_index_ = affine_inverse(index_to_world);
+  m.object_to_index_ = affine_inverse(grid->index_to_object);
   m.voxel_size_ =
       std::min({length(index_to_world.column(0)), length(index_to_world.column(1)), length(index_to_world.column(2))});
   m.march_step_ = m.voxel_size_;
@@ -252,15 +257,16 @@ Medium Medium::heterogeneous(std::shared_ptr<const GridData> grid, const Spectru
   return m;
 }
 
-float Medium::density(const Vec3& p) const {
+float Medium::density(const Vec3& p, float time) const {
   if (!grid_) return 1;
   if (!majorant_.valid()) return 0;
-  Vec3 q = world_to_index_.point(p);
+  Vec3 q = world_to_index(time).point(p);
   for (int a = 0; a < 3; ++a)
     if (!(q[a] >= majorant_.lo()[a] && q[a] <= majorant_.hi()[a])) return 0;
   return grid_->interpolate(q);
 }
 
+// A moving medium's: over its steps and 8 times between each two (a turn's arc leaves its chord).
 bool Medium::bounds(Vec3* lo, Vec3* hi) const {
   if (!grid_) return false;
   if (!majorant_.valid()) {
@@ -269,15 +275,40 @@ bool Medium::bounds(Vec3* lo, Vec3* hi) const {
   }
   const int* a = majorant_.lo();
   const int* b = majorant_.hi();
-  affine_inverse(world_to_index_)
-      .map_box(Vec3(float(a[0]), float(a[1]), float(a[2])), Vec3(float(b[0]), float(b[1]), float(b[2])), lo, hi);
+  const Vec3 ia{float(a[0]), float(a[1]), float(a[2])}, ib{float(b[0]), float(b[1]), float(b[2])};
+  affine_inverse(world_to_index_).map_box(ia, ib, lo, hi);
+  const int n = motion_.empty() ? 0 : 8 * int(motion_.size() - 1);
+  for (int k = 0; k <= n && n > 0; ++k) {
+    Vec3 l, h;
+    affine_inverse(world_to_index(float(k) / float(n))).map_box(ia, ib, &l, &h);
+    *lo = vmin(*lo, l);
+    *hi = vmax(*hi, h);
+  }
   return true;
 }
 
 bool Medium::clip(const Ray& ray, float* t0, float* t1) const {
   if (empty_ || !(*t0 < *t1)) return false;
   if (!grid_) return true;
-  return majorant_.clip(world_to_index_.point(ray.o), world_to_index_.vector(ray.d), t0, t1);
+  const Transform w2i = world_to_index(ray.time);
+  return majorant_.clip(w2i.point(ray.o), w2i.vector(ray.d), t0, t1);
+}
+
+Transform Medium::world_to_index(float time) const {
+  if (motion_.empty()) return world_to_index_;
+  return compose(object_to_index_, affine_inverse(interpolate_motion(motion_, time)));
+}
+
+void Medium::set_motion(const std::vector<Transform>& object_to_world) {
+  if (!grid_) throw InvalidArgument("medium motion: only a Volume object's grid moves");
+  if (object_to_world.size() < 2) throw InvalidArgument("medium motion: at least 2 steps");
+  for (const Transform& m : object_to_world) {
+    bool finite = true;
+    for (float x : m.m) finite = finite && std::isfinite(x);
+    if (!finite || !(std::abs(m.determinant()) > 1e-30f))
+      throw InvalidArgument("medium motion: a step is not finite or not invertible");
+  }
+  motion_ = decompose_motion(object_to_world);
 }
 
 size_t Medium::memory_bytes() const {

@@ -45,6 +45,7 @@
 
 #include "core/math.h"
 #include "core/sampling.h"
+#include "geometry/motion.h"
 #include "media/density_grid.h"
 #include "media/grid_emission.h"
 #include "media/majorant_grid.h"
@@ -112,7 +113,7 @@ class Medium {
   void set_grid_emission(std::shared_ptr<const GridEmission> e);
   const GridEmission* grid_emission() const { return grid_emission_.get(); }
   // Emission per unit length at a world point (exact lookups; for tests and quadrature).
-  Spectrum emission_at(const Vec3& p) const;
+  Spectrum emission_at(const Vec3& p, float time = 0.5f) const;
   // A heterogeneous medium's emission reaching ray.o from [t0, t1]: an estimate of
   // integral E(s) T(t0, s) T_o(s) ds, T this medium's transmittance and T_o(s) =
   // exp(-sigma_other (s - t0) |ray.d|) x other(s) that of the media overlapping it (sigma_other the
@@ -125,9 +126,9 @@ class Medium {
   Spectrum emission_integral(const Ray& ray, float t0, float t1, Sampler& s, VolumeEstimator e, float step,
                              const Spectrum& sigma_other, const std::function<Spectrum(float)>* other) const;
   // Coefficients at a world point (exact lookups; for tests and quadrature).
-  Spectrum sigma_t(const Vec3& p) const { return (sigma_a_ + sigma_s_) * density(p); }
-  Spectrum sigma_s(const Vec3& p) const { return sigma_s_ * density(p); }
-  float density(const Vec3& p) const;  // 1 for homogeneous media
+  Spectrum sigma_t(const Vec3& p, float time = 0.5f) const { return (sigma_a_ + sigma_s_) * density(p, time); }
+  Spectrum sigma_s(const Vec3& p, float time = 0.5f) const { return sigma_s_ * density(p, time); }
+  float density(const Vec3& p, float time = 0.5f) const;  // 1 for homogeneous media
   const Spectrum& sigma_a_unit() const { return sigma_a_; }
   const Spectrum& sigma_s_unit() const { return sigma_s_; }
   // Smallest world-space edge of a voxel (0 for homogeneous media).
@@ -140,7 +141,16 @@ class Medium {
   // Drops the control (every cell's lower bound becomes 0): Tracking's transmittance then is plain
   // ratio tracking, the baseline that tests and comparisons measure against.
   void drop_control() { majorant_.clear_minima(); }
-  const Transform& world_to_index() const { return world_to_index_; }
+  // A Volume object's motion over the shutter: its object-to-world transforms at equally spaced
+  // times (at least 2, finite and invertible; interpolated as instances: core/motion.h). A ray
+  // then looks its grid up through the transform at the ray's time (every ray of a sample has
+  // one): the grid, its majorants and its march step stay as they are, in index space. Exact for
+  // rigid motion; a scale that changes over the shutter keeps the density per world unit given.
+  // Throws InvalidArgument for a homogeneous medium or bad steps.
+  void set_motion(const std::vector<Transform>& object_to_world);
+  bool moves() const { return !motion_.empty(); }
+  // World to the grid's index space at a shutter time (0 .. 1; any time for a still medium).
+  Transform world_to_index(float time) const;
   std::shared_ptr<const GridData> grid() const { return grid_; }
   // Bytes held for this medium's grid: NanoVDB buffer (or dense array) + majorant grid.
   size_t memory_bytes() const;
@@ -156,7 +166,9 @@ class Medium {
   std::shared_ptr<const GridEmission> grid_emission_;
   bool empty_ = true, emissive_ = false;
   std::shared_ptr<const GridData> grid_;
-  Transform world_to_index_;
+  Transform world_to_index_;                 // at the shutter's centre, or for a still medium
+  Transform object_to_index_;                // the grid's, for a moving medium's world_to_index(time)
+  std::vector<DecomposedTransform> motion_;  // object to world over the shutter (set_motion)
   MajorantGrid majorant_;
   float voxel_size_ = 0, march_step_ = 0;
   int majorant_cell_ = kDefaultMajorantCell;

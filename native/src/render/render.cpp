@@ -52,7 +52,9 @@ RenderJob::RenderJob(const Scene& scene, const RenderSettings& s)
           s.integrator, RenderContext{scene, camera_, filter_, with_passes(s), s.x0, s.y0, s.x1 - s.x0, s.y1 - s.y0})),
       film_(s.x1 - s.x0, s.y1 - s.y0, film_layout(s)),
       active_(size_t(film_.width()) * film_.height(), 1),
-      motion_(!s.motion_pass && (scene.geometry.has_motion() || camera_.has_motion())),
+      motion_(!s.motion_pass &&
+              (scene.geometry.has_motion() || camera_.has_motion() ||
+               std::any_of(scene.media.begin(), scene.media.end(), [](const Medium& m) { return m.moves(); }))),
       differentials_(std::any_of(scene.materials.begin(), scene.materials.end(),
                                  [](const Material& m) { return m.needs_differentials(); })) {
   active_pixels_.store(active_.size());
