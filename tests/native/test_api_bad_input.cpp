@@ -725,6 +725,43 @@ TEST(ApiBadInput, RenderBeforeCommitAndEditsAfterCommitAreStateErrors) {
   EXPECT_EQ(lt_scene_add_light(s, &l), LT_OK);
 }
 
+// lt_scene_set_volume_grid_motion (ABI 26): only a Volume object's grid moves, by 0 or an odd
+// count from 3 to 129 finite, invertible steps, before the commit.
+TEST(ApiBadInput, VolumeGridMotionIsRefusedUnlessItIsAGridsValidMotion) {
+  ScenePtr sp = new_scene();
+  lt_scene* s = sp.get();
+  lt_volume_desc d = {};
+  d.node = LT_VOLUME_SCATTER;
+  d.color[0] = d.color[1] = d.color[2] = 1;
+  d.density = 1;
+  const Xform id = identity();
+  int grid = -1;
+  ASSERT_EQ(lt_scene_add_volume_grid(s, (std::string(LANTERN_TEST_VDB_DIR) + "/cloud.vdb").c_str(), "density",
+                                     id.data(), 0, 0.001f, 0.0f, &d, 1, &grid),
+            LT_OK)
+      << lt_last_error();
+  float steps[36];
+  for (int k = 0; k < 3; ++k) {
+    const Xform m = translate({0.5f * float(k - 1), 0, 0});
+    std::copy(m.begin(), m.end(), steps + 12 * k);
+  }
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_set_volume_grid_motion(s, grid + 1, steps, 3)), "not a Volume object");
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_set_volume_grid_motion(s, grid, steps, 2)), "motion steps");
+  EXPECT_INVALID(lt_scene_set_volume_grid_motion(s, grid, nullptr, 3));
+  EXPECT_INVALID(lt_scene_set_volume_grid_motion(nullptr, grid, steps, 3));
+  float bad[36];
+  std::copy(steps, steps + 36, bad);
+  bad[12 + 5] = kNaN;
+  EXPECT_CONTAINS(EXPECT_INVALID(lt_scene_set_volume_grid_motion(s, grid, bad, 3)), "not finite");
+  std::fill(bad + 24, bad + 36, 0.0f);  // the last step scaled to nothing
+  std::copy(steps + 12, steps + 24, bad + 12);
+  EXPECT_INVALID(lt_scene_set_volume_grid_motion(s, grid, bad, 3));
+  EXPECT_EQ(lt_scene_set_volume_grid_motion(s, grid, steps, 3), LT_OK) << lt_last_error();
+  EXPECT_EQ(lt_scene_set_volume_grid_motion(s, grid, steps, 0), LT_OK) << lt_last_error();
+  ASSERT_EQ(lt_scene_commit(s), LT_OK);
+  EXPECT_FAILS(LT_ERROR_STATE, lt_scene_set_volume_grid_motion(s, grid, steps, 3));
+}
+
 TEST(ApiBadInput, ReadPassWithAWrongBufferSize) {
   ScenePtr sp = basic_scene();
   ASSERT_EQ(lt_scene_commit(sp.get()), LT_OK);

@@ -934,6 +934,8 @@ TEST(MediaGrid, AMovingGridIsTheStillGridAtItsPoseAtTheRaysTime) {
   bad[2].m[5] = std::numeric_limits<float>::quiet_NaN();
   EXPECT_THROW(moving.set_motion(bad), InvalidArgument);
   EXPECT_THROW(moving.set_motion({steps[0]}), InvalidArgument);
+  moving.set_motion({});  // still again
+  EXPECT_FALSE(moving.moves());
 }
 
 // ---- the statistical checks can fail ------------------------------------------------------------

@@ -986,13 +986,22 @@ int lt_scene_add_volume_grid(lt_scene* scene, const char* path, const char* grid
   });
 }
 
+namespace {
+// The editable scene whose medium `volume` is a Volume object's grid (lt_scene_add_volume_grid's
+// out_id), for the calls that set more of it.
+lt::Scene& volume_grid_scene(lt_scene* scene, int volume, const char* call) {
+  require(scene != nullptr, std::string(call) + ": NULL scene");
+  scene->scene.require_editable();
+  lt::Scene& sc = scene->scene;
+  require(volume >= 0 && volume < int(sc.media.size()) && !sc.media[size_t(volume)].is_homogeneous(),
+          "volume " + std::to_string(volume) + " is not a Volume object's grid");
+  return sc;
+}
+}  // namespace
+
 int lt_scene_set_volume_grid_lightgroup(lt_scene* scene, int volume, int lightgroup) {
   return guarded([&] {
-    require(scene != nullptr, "lt_scene_set_volume_grid_lightgroup: NULL scene");
-    scene->scene.require_editable();
-    lt::Scene& sc = scene->scene;
-    require(volume >= 0 && volume < int(sc.media.size()) && !sc.media[size_t(volume)].is_homogeneous(),
-            "volume " + std::to_string(volume) + " is not a Volume object's grid");
+    lt::Scene& sc = volume_grid_scene(scene, volume, "lt_scene_set_volume_grid_lightgroup");
     require(lightgroup >= 0 && lightgroup <= kMaxLightgroups, "volume light group out of range");
     sc.medium_groups.resize(sc.media.size(), -1);
     sc.medium_groups[size_t(volume)] = lightgroup - 1;
@@ -1001,17 +1010,10 @@ int lt_scene_set_volume_grid_lightgroup(lt_scene* scene, int volume, int lightgr
 
 int lt_scene_set_volume_grid_motion(lt_scene* scene, int volume, const float* transforms, int steps) {
   return guarded([&] {
-    require(scene != nullptr, "lt_scene_set_volume_grid_motion: NULL scene");
-    scene->scene.require_editable();
-    lt::Scene& sc = scene->scene;
-    require(volume >= 0 && volume < int(sc.media.size()) && !sc.media[size_t(volume)].is_homogeneous(),
-            "volume " + std::to_string(volume) + " is not a Volume object's grid");
+    lt::Scene& sc = volume_grid_scene(scene, volume, "lt_scene_set_volume_grid_motion");
     require_motion_steps(steps, transforms, "volume");
-    const std::vector<lt::Transform> xfs = motion_transforms(transforms, steps);
-    for (const lt::Transform& m : xfs)
-      require(finite_array(m.m, 12) && std::abs(m.determinant()) > 1e-30f,
-              "volume: a motion step is not finite or is singular");
-    if (steps > 0) sc.media[size_t(volume)].set_motion(xfs);
+    // Medium::set_motion refuses steps that are not finite or not invertible; none: still again.
+    sc.media[size_t(volume)].set_motion(motion_transforms(transforms, steps));
   });
 }
 

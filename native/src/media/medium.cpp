@@ -301,6 +301,10 @@ Transform Medium::world_to_index(float time) const {
 
 void Medium::set_motion(const std::vector<Transform>& object_to_world) {
   if (!grid_) throw InvalidArgument("medium motion: only a Volume object's grid moves");
+  if (object_to_world.empty()) {  // still again
+    motion_.clear();
+    return;
+  }
   if (object_to_world.size() < 2) throw InvalidArgument("medium motion: at least 2 steps");
   for (const Transform& m : object_to_world) {
     bool finite = true;

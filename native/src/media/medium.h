@@ -146,7 +146,7 @@ class Medium {
   // then looks its grid up through the transform at the ray's time (every ray of a sample has
   // one): the grid, its majorants and its march step stay as they are, in index space. Exact for
   // rigid motion; a scale that changes over the shutter keeps the density per world unit given.
-  // Throws InvalidArgument for a homogeneous medium or bad steps.
+  // No steps: still again. Throws InvalidArgument for a homogeneous medium or bad steps.
   void set_motion(const std::vector<Transform>& object_to_world);
   bool moves() const { return !motion_.empty(); }
   // World to the grid's index space at a shutter time (0 .. 1; any time for a still medium).
