@@ -16,7 +16,7 @@ import threading
 
 import numpy as np
 
-ABI_VERSION = 26
+ABI_VERSION = 27
 
 # lt_status
 OK = 0
@@ -443,6 +443,7 @@ class SceneStats(ctypes.Structure):
         ("motion_instances", ctypes.c_uint64),
         ("motion_meshes", ctypes.c_uint64),
         ("camera_motion_steps", ctypes.c_uint64),
+        ("moving_volumes", ctypes.c_uint64),
     ]
 
 

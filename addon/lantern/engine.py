@@ -401,8 +401,9 @@ def scene_report(summary, settings, warnings, st=None, pixels=0):
         lines.append("media: none")
     if "motion_instances" in summary:  # motion blur or the Vector pass asked for (final renders)
         lines.append(("Vector pass motion (frames -1, +1)" if summary.get("motion_vector_pass") else "motion blur") +
-                     ": %d moving object(s), %d deforming mesh(es), camera %s (counted by the core)"
-                     % (summary["motion_instances"], summary["motion_meshes"],
+                     ": %d moving object(s), %d deforming mesh(es), %d moving Volume object(s), camera %s "
+                     "(counted by the core)"
+                     % (summary["motion_instances"], summary["motion_meshes"], summary["moving_volumes"],
                         ("moving, %d steps" % summary["camera_motion_steps"] if summary["camera_motion_steps"]
                          else "still") + (", zooming" if summary.get("camera_zoom") else "")))
     if s.noise_target > 0 or s.time_limit > 0:
@@ -601,7 +602,8 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             if motion is not None:
                 summary.update(motion_vector_pass=motion.vector_pass,
                                motion_instances=stats["motion_instances"], motion_meshes=stats["motion_meshes"],
-                               camera_motion_steps=stats["camera_motion_steps"], camera_zoom=motion.zoom is not None)
+                               camera_motion_steps=stats["camera_motion_steps"], moving_volumes=stats["moving_volumes"],
+                               camera_zoom=motion.zoom is not None)
             if summary.get("world") == "nodes":
                 summary["world"] = ("nodes, sampling map %dx%d" % (stats["world_map_width"], stats["world_map_height"])
                                     if stats["world_map_width"] else "nodes, constant")

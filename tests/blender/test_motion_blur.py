@@ -15,8 +15,8 @@ from lantern import engine
 def _motion_line():
     report = engine.LAST_RENDER.get("report", "")
     m = re.search(r"motion blur: (\d+) moving object\(s\), (\d+) deforming mesh\(es\), "
-                  r"camera (still|moving, \d+ steps)", report)
-    return (int(m.group(1)), int(m.group(2)), m.group(3)) if m else None, report
+                  r"(\d+) moving Volume object\(s\), camera (still|moving, \d+ steps)", report)
+    return (int(m.group(1)), int(m.group(2)), int(m.group(3)), m.group(4)) if m else None, report
 
 
 def test_moving_scene_sends_its_motion_and_restores_the_frame(scene_factory):
@@ -29,7 +29,7 @@ def test_moving_scene_sends_its_motion_and_restores_the_frame(scene_factory):
         out = ru.render(scene, ru.LANTERN, 2, seed=0)
         assert np.isfinite(out.combined).all()
         line, report = _motion_line()
-        assert line == (2, 1, "moving, 3 steps"), report
+        assert line == (2, 1, 0, "moving, 3 steps"), report
         assert (scene.frame_current, scene.frame_subframe) == (1, 0.0)
     # Cycles' 2^steps + 1 time steps; an object with motion blur off does not move.
     scene.camera.cycles.motion_steps = 2
@@ -37,7 +37,7 @@ def test_moving_scene_sends_its_motion_and_restores_the_frame(scene_factory):
     scene.objects["Deforming"].cycles.use_deform_motion = False
     ru.render(scene, ru.LANTERN, 1, seed=0)
     line, report = _motion_line()
-    assert line == (1, 0, "moving, 5 steps"), report
+    assert line == (1, 0, 0, "moving, 5 steps"), report
 
 
 def test_scene_without_motion_sends_none_and_renders_the_same_bits(scene_factory):
@@ -50,7 +50,7 @@ def test_scene_without_motion_sends_none_and_renders_the_same_bits(scene_factory
     scene.render.motion_blur_shutter = 0.5
     on = ru.render(scene, ru.LANTERN, 4, seed=3).combined
     line, report = _motion_line()
-    assert line == (0, 0, "still"), report
+    assert line == (0, 0, 0, "still"), report
     assert np.array_equal(off, on)
 
 
@@ -101,8 +101,8 @@ def test_viewport_ignores_motion_blur_as_cycles(scene_factory):
     assert (scene.frame_current, scene.frame_subframe) == (1, 0.0)
 
 
-@pytest.mark.parametrize("name, motion", [("motion_blur_one", (1, 0, "still")),
-                                          ("motion_blur_sliding", (1, 1, "moving, 3 steps"))])
+@pytest.mark.parametrize("name, motion", [("motion_blur_one", (1, 0, 0, "still")),
+                                          ("motion_blur_sliding", (1, 1, 0, "moving, 3 steps"))])
 def test_partly_moving_scenes_agree_with_cycles(scene_factory, outdir, name, motion):
     """Per tile and the image mean against Cycles, PATH and BIDIRECTIONAL, on the two ways the core
     gives Embree part of motion_blur. motion_blur_one (only the turning box animated): a scene's one
@@ -154,7 +154,7 @@ def test_curves_and_text_deform_over_the_shutter_as_cycles(scene_factory, outdir
     scene.frame_set(1)
     cycles = [ru.render(scene, ru.CYCLES, 64, seed=seed).combined for seed in (0, 1)]
     lantern = [ru.render(scene, ru.LANTERN, 64, seed=seed).combined for seed in (0, 1)]
-    assert _motion_line()[0] == (0, 2, "still"), _motion_line()[1]
+    assert _motion_line()[0] == (0, 2, 0, "still"), _motion_line()[1]
     report, _ = ru.agreement_report("curve_deform", lantern, cycles, outdir, TILE, ROUNDING)
     assert report == "", report
 
@@ -205,7 +205,7 @@ def test_a_zoom_blurs_as_cycles(scene_factory, outdir):
     cycles = [ru.render(scene, ru.CYCLES, 64, seed=seed).combined for seed in (0, 1)]
     for integrator in ("PATH", "BIDIRECTIONAL"):
         lantern = [ru.render(scene, ru.LANTERN, 64, seed=seed, integrator=integrator).combined for seed in (0, 1)]
-        assert _motion_line()[0] == (0, 0, "still"), _motion_line()[1]
+        assert _motion_line()[0] == (0, 0, 0, "still"), _motion_line()[1]
         assert "camera still, zooming" in engine.LAST_RENDER["report"], engine.LAST_RENDER["report"]
         report, _ = ru.agreement_report("zoom_" + integrator.lower(), lantern, cycles, outdir, TILE, ROUNDING)
         assert report == "", report
@@ -232,6 +232,7 @@ def test_a_moving_volume_object_blurs_as_cycles(scene_factory, outdir):
     cycles = [ru.render(scene, ru.CYCLES, spp, seed=seed).combined for seed in (0, 1)]
     for integrator in ("VOLPATH", "BIDIRECTIONAL"):
         lantern = [ru.render(scene, ru.LANTERN, spp, seed=seed, integrator=integrator).combined for seed in (0, 1)]
+        assert _motion_line()[0] == (0, 0, 1, "still"), _motion_line()[1]
         report, _ = ru.agreement_report("moving_cloud_" + integrator.lower(), lantern, cycles, outdir, TILE, ROUNDING)
         assert report == "", report
     scene.render.use_motion_blur = False

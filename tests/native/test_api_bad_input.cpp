@@ -756,8 +756,13 @@ TEST(ApiBadInput, VolumeGridMotionIsRefusedUnlessItIsAGridsValidMotion) {
   std::fill(bad + 24, bad + 36, 0.0f);  // the last step scaled to nothing
   std::copy(steps + 12, steps + 24, bad + 12);
   EXPECT_INVALID(lt_scene_set_volume_grid_motion(s, grid, bad, 3));
+  lt_scene_stats st{};
   EXPECT_EQ(lt_scene_set_volume_grid_motion(s, grid, steps, 3), LT_OK) << lt_last_error();
+  ASSERT_EQ(lt_scene_get_stats(s, &st), LT_OK);
+  EXPECT_EQ(st.moving_volumes, 1u);
   EXPECT_EQ(lt_scene_set_volume_grid_motion(s, grid, steps, 0), LT_OK) << lt_last_error();
+  ASSERT_EQ(lt_scene_get_stats(s, &st), LT_OK);
+  EXPECT_EQ(st.moving_volumes, 0u);
   ASSERT_EQ(lt_scene_commit(s), LT_OK);
   EXPECT_FAILS(LT_ERROR_STATE, lt_scene_set_volume_grid_motion(s, grid, steps, 3));
 }

@@ -59,8 +59,9 @@ extern "C" {
  * ocio_space (byte images Blender loads in other colour spaces); 23: a perspective camera's zoom over
  * the shutter (lt_camera_desc.zoom_pre and zoom_post); 24: attributes, UVs and generated coordinates of
  * curves and points (lt_curves_desc.curve_uvs, generated_from_root, texspace_location and texspace_size, attributes,
- * lt_curves_attribute); 25: lt_scene_set_instance_values; 26: lt_scene_set_volume_grid_motion. */
-#define LT_ABI_VERSION 26
+ * lt_curves_attribute); 25: lt_scene_set_instance_values; 26: lt_scene_set_volume_grid_motion; 27:
+ * lt_scene_stats.moving_volumes. */
+#define LT_ABI_VERSION 27
 
 enum lt_status {
   LT_OK = 0,
@@ -597,9 +598,10 @@ typedef struct lt_scene_stats {
   uint64_t image_texels;                      /* and their texels, all images */
   uint64_t byte_images;                       /* images stored at 8 bits per channel */
   uint64_t world_map_width, world_map_height; /* the world's sampling map (0 x 0: none, a constant world) */
-  /* Motion blur: instances that move, meshes that deform, the camera's motion steps (0: still). A
-   * scene with none of them renders exactly as without motion blur. */
-  uint64_t motion_instances, motion_meshes, camera_motion_steps;
+  /* Motion blur: instances that move, meshes that deform, the camera's motion steps (0: still),
+   * Volume objects' grids that move (lt_scene_set_volume_grid_motion). A scene with none of them
+   * renders exactly as without motion blur. */
+  uint64_t motion_instances, motion_meshes, camera_motion_steps, moving_volumes;
 } lt_scene_stats;
 LT_API int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out);
 

@@ -259,6 +259,7 @@ const lt_abi_entry kLayout[] = {
     LT_FIELD(lt_scene_stats, motion_instances),
     LT_FIELD(lt_scene_stats, motion_meshes),
     LT_FIELD(lt_scene_stats, camera_motion_steps),
+    LT_FIELD(lt_scene_stats, moving_volumes),
 
     LT_CONST(lt_integrator, LT_INTEGRATOR_PATH),
     LT_CONST(lt_integrator, LT_INTEGRATOR_BIDIRECTIONAL),

@@ -774,6 +774,8 @@ int lt_scene_get_stats(const lt_scene* scene, lt_scene_stats* out) {
     out->motion_instances = scene->scene.geometry.motion_instances();
     out->motion_meshes = scene->scene.geometry.motion_meshes();
     out->camera_motion_steps = scene->scene.camera.motion.size();
+    out->moving_volumes = 0;
+    for (const lt::Medium& m : scene->scene.media) out->moving_volumes += m.moves() ? 1 : 0;
   });
 }
 
