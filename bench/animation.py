@@ -2,16 +2,17 @@
 the native scene between frames and applies each frame's moves as edits (addon/lantern/scene_sync.py),
 against a full re-export of every frame; Cycles' own Persistent Data beside it.
 
-    blender -b --factory-startup --python bench/animation.py -- [--scene sponza|hair|hair_moving|hair_colour] \
-        [--strands 100000] \
+    blender -b --factory-startup --python bench/animation.py -- \
+        [--scene sponza|sponza_blur|hair|hair_moving|hair_colour] [--strands 100000] \
         [--frames 6] [--samples 16] [--width 200] [--height 150] [--threads 2] [--engines LANTERN,CYCLES] \
         [--out FILE]
 
 Scenes (scenes/build_scenes.py), every F-curve extrapolated so that each frame moves something:
 - sponza: sponza_motion (the Sponza model from ../shared/assets, a box sliding, a box turning and
-  the camera panning) with motion blur off (a motion-blurred frame samples sub-frames and is
-  exported anew, in Lantern as in Cycles) and the bulging grid's shape key held still: a deforming
+  the camera panning) with motion blur off and the bulging grid's shape key held still: a deforming
   mesh is a geometry change, which makes Lantern export a new scene.
+- sponza_blur: the same with motion blur on (a shutter of 1 frame): each frame samples its
+  shutter's sub-frames, then the kept scene takes the frame's motion steps as edits.
 - hair: the hair ball with --strands strands (a quarter parents, 4 children each, as
   bench/hair_export.py) and the camera panning 4 degrees a frame: a heavy export kept.
 - hair_moving: the same hair ball, the camera still and the ball (the emitter) moving 0.05 m and
@@ -92,9 +93,9 @@ def main(args):
     import lantern
     lantern.register()
     build_scenes.reset_file()
-    if args.scene == "sponza":
+    if args.scene in ("sponza", "sponza_blur"):
         scene = build_scenes.build("sponza_motion", resolution=(args.width, args.height))
-        scene.render.use_motion_blur = False
+        scene.render.use_motion_blur = args.scene == "sponza_blur"
     else:
         scene = build_scenes.new_scene("hair_animation", (args.width, args.height), args.samples)
         build_scenes.build_hair_ball(scene, strands=args.strands // 4, children=4)
@@ -136,14 +137,15 @@ def main(args):
     out = args.out or os.path.join(BENCH, "results", "animation_%s.json" % args.scene)
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     with open(out, "w") as f:
-        json.dump(dict(scene=args.scene, strands=args.strands if args.scene != "sponza" else None,
+        json.dump(dict(scene=args.scene, strands=args.strands if args.scene.startswith("hair") else None,
                        frames=args.frames, samples=args.samples, width=args.width, height=args.height,
                        threads=args.threads, results=results), f, indent=1)
 
 
 if __name__ == "__main__":
     p = argparse.ArgumentParser()
-    p.add_argument("--scene", choices=("sponza", "hair", "hair_moving", "hair_colour"), default="sponza")
+    p.add_argument("--scene", choices=("sponza", "sponza_blur", "hair", "hair_moving", "hair_colour"),
+                   default="sponza")
     p.add_argument("--strands", type=int, default=100000)
     p.add_argument("--frames", type=int, default=6)
     p.add_argument("--samples", type=int, default=16)

@@ -512,6 +512,7 @@ def _declare(lib, layout=True):
                                       ctypes.c_float, ctypes.c_float, P(VolumeDesc), c_int, P(c_int)], c_int),
         "lt_scene_commit": ([scene_p], c_int),
         "lt_scene_set_instance_transform": ([scene_p, c_int, ctypes.c_float * 12], c_int),
+        "lt_scene_set_instance_motion": ([scene_p, c_int, _f_p, c_int], c_int),
         "lt_scene_set_instance_values": ([scene_p, c_int, ctypes.c_uint, ctypes.c_float * 4, c_int, P(c_int),
                                           P(ctypes.c_float), c_int], c_int),
         "lt_scene_set_material": ([scene_p, c_int, P(ShaderProgram)], c_int),
@@ -751,16 +752,23 @@ def _transform(m):
     return (ctypes.c_float * 12)(*a.reshape(-1).tolist())
 
 
-def _motion(desc, motion):
-    """Sets desc's motion_transforms and motion_step_count from a sequence of transforms (3x4 or
-    4x4 each; None or empty: no motion); returns the array the pointer refers to."""
+def _motion_array(motion):
+    """A sequence of transforms (3x4 or 4x4 each) as the core's (steps, 3, 4) float32 array; None
+    for None or empty (no motion)."""
     if motion is None or len(motion) == 0:
         return None
     a = np.asarray(motion, dtype=np.float32)
     if a.ndim != 3 or a.shape[1:] not in ((4, 4), (3, 4)):
         raise ValueError("motion: expected transforms of 3x4 or 4x4, got %s" % (a.shape,))
-    a = np.ascontiguousarray(a[:, :3, :4])
-    desc.motion_transforms, desc.motion_step_count = _fptr(a), a.shape[0]
+    return np.ascontiguousarray(a[:, :3, :4])
+
+
+def _motion(desc, motion):
+    """Sets desc's motion_transforms and motion_step_count from _motion_array(motion); returns the
+    array the pointer refers to."""
+    a = _motion_array(motion)
+    if a is not None:
+        desc.motion_transforms, desc.motion_step_count = _fptr(a), a.shape[0]
     return a
 
 
@@ -1101,8 +1109,8 @@ class Scene:
         if lightgroup:
             _check(self._lib.lt_scene_set_volume_grid_lightgroup(self.handle, out.value, int(lightgroup)),
                    "lt_scene_set_volume_grid_lightgroup")
-        if motion is not None and len(motion):
-            a = np.ascontiguousarray(np.asarray(motion, dtype=np.float32)[:, :3, :4])
+        a = _motion_array(motion)
+        if a is not None:
             _check(self._lib.lt_scene_set_volume_grid_motion(self.handle, out.value, _fptr(a), a.shape[0]),
                    "lt_scene_set_volume_grid_motion")
         return out.value
@@ -1115,6 +1123,13 @@ class Scene:
     def set_instance_transform(self, instance, transform):
         _check(self._lib.lt_scene_set_instance_transform(self.handle, int(instance), _transform(transform)),
                "lt_scene_set_instance_transform")
+
+    def set_instance_motion(self, instance, motion):
+        """An instance's transforms over the shutter, as add_instance's motion (None: still)."""
+        a = _motion_array(motion)
+        _check(self._lib.lt_scene_set_instance_motion(self.handle, int(instance), _fptr(a),
+                                                      0 if a is None else a.shape[0]),
+               "lt_scene_set_instance_motion")
 
     def set_instance_values(self, instance, visibility, color, pass_index, attributes=()):
         """An instance's ray visibility, Object Info colour and pass index and its object

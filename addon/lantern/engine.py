@@ -13,7 +13,7 @@ from .export import cryptomatte
 from .export.motion import collect as collect_motion
 from .export.world import ao_distance
 from .export.camera import export_camera
-from .scene_sync import SceneSync
+from .scene_sync import SceneSync, depsgraph_updates
 from .viewport import ViewportSession, view_camera, with_camera_lens, with_camera_panorama
 
 REDRAW_SECONDS = 0.05      # while a viewport refines, it is redrawn this often
@@ -559,36 +559,39 @@ class LanternRenderEngine(bpy.types.RenderEngine):
             warnings.append(message)
             self.report(level, message)
         camera = self.camera_override or depsgraph.scene_eval.camera
-        # Motion blur samples sub-frames with frame_set, which a kept scene would take for edits:
-        # with it, every frame is exported anew.
         vector = vector_from_frames(scene, view_layer) and not self.is_preview
-        persistent = (scene.render.use_persistent_data and not self.is_preview and camera is not None
-                      and not scene.render.use_motion_blur and not vector)
+        persistent = scene.render.use_persistent_data and not self.is_preview and camera is not None
         try:
             t0 = time.monotonic()
-            if persistent:
-                # Persistent Data (as Cycles): the scene stays between frames; each frame applies
-                # the depsgraph's updates to it (scene_sync.py).
-                if self._kept is None:
-                    self._kept = SceneSync(report)
-                self._kept.report = report
-                self._kept.sync_scene(depsgraph, camera)
-                core_scene, summary = self._kept.scene, dict(self._kept.summary)
-                motion = None
-            else:
+            if not persistent:
                 self._close_kept()
                 core_scene = core.Scene()
-                # Motion blur (final renders; previews and the viewport render without it, as
-                # Cycles'): the shutter's sub-frames sampled first, the scene exported at the
-                # shutter's centre, then the frame being rendered restored.
-                motion, restore = (None, None) if self.is_preview else \
-                    collect_motion(self, depsgraph, self.camera_override, report, vector_pass=vector)
-                try:
+            # The frame's depsgraph updates, which a kept scene applies, read before motion blur's
+            # sub-frames evaluate the depsgraph again.
+            updates = depsgraph_updates(depsgraph) if persistent else None
+            # Motion blur (final renders; previews and the viewport render without it, as
+            # Cycles'): the shutter's sub-frames sampled first, the scene exported at the
+            # shutter's centre, then the frame being rendered restored.
+            motion, restore = (None, None) if self.is_preview else \
+                collect_motion(self, depsgraph, self.camera_override, report, vector_pass=vector)
+            try:
+                if persistent:
+                    # Persistent Data (as Cycles): the scene stays between frames; each frame applies
+                    # the depsgraph's updates and its shutter's motion to it (scene_sync.py).
+                    if self._kept is None:
+                        self._kept = SceneSync(report)
+                    self._kept.report = report
+                    self._kept.sync_scene(depsgraph, camera, updates, motion)
+                    core_scene, summary = self._kept.scene, dict(self._kept.summary)
+                    # This frame's, whether exported or edited.
+                    summary["camera_motion"] = motion is not None and motion.camera_moves
+                else:
                     summary = export_scene(depsgraph, core_scene, report, camera_object=self.camera_override,
                                            motion=motion)
-                finally:
-                    if restore is not None:
-                        restore()
+            finally:
+                if restore is not None:
+                    restore()
+            if not persistent:
                 if self.test_break():
                     return
                 self.update_stats("", "Building acceleration structures")

@@ -275,8 +275,8 @@ class ViewportSession(SceneSync):
             self.render = None
             self._shown = None
 
-    def _full_export(self, depsgraph, camera_object):
-        super()._full_export(depsgraph, camera_object)
+    def _full_export(self, depsgraph, camera_object, motion):
+        super()._full_export(depsgraph, camera_object, motion)
         self.camera = None  # the new scene has none yet
 
     def _close_scene(self):

@@ -47,10 +47,10 @@ def _animated_scene(scene_factory):
     return scene
 
 
-def _kept_animation(scene, tmp_path, samples, seed):
+def _kept_animation(scene, tmp_path, samples, seed, integrator="PATH", pass_name="Combined"):
     """`blender -b -a` over the scene's frames with Persistent Data: each frame's scene_sync
-    counters and Combined image."""
-    ru.configure(scene, ru.LANTERN, samples, seed)
+    counters and its pass_name pass."""
+    ru.configure(scene, ru.LANTERN, samples, seed, integrator=integrator)
     ru._exr_settings(scene)
     scene.render.use_persistent_data = True
     scene.render.filepath = str(tmp_path / ("anim_%d_" % seed))
@@ -65,7 +65,7 @@ def _kept_animation(scene, tmp_path, samples, seed):
         bpy.app.handlers.render_write.remove(written)
     scene.render.use_persistent_data = False
     bpy.context.window.scene = scene  # see _frame
-    frames = [ru.read_multilayer_exr(str(tmp_path / ("anim_%d_%04d.exr" % (seed, f))))["Combined"]
+    frames = [ru.read_multilayer_exr(str(tmp_path / ("anim_%d_%04d.exr" % (seed, f))))[pass_name]
               for f in range(scene.frame_start, scene.frame_end + 1)]
     return syncs, frames
 
@@ -83,20 +83,21 @@ def _check_syncs(syncs, transform_updates, full_exports=1, value_updates=0):
         assert tops == [i if transform_updates else 0 for i in range(len(syncs))], syncs
 
 
-def _alone(scene, frame, samples, seed):
+def _alone(scene, frame, samples, seed, integrator="PATH"):
     scene.frame_set(frame)
-    out = ru.render(scene, ru.LANTERN, samples, seed=seed).combined
+    out = ru.render(scene, ru.LANTERN, samples, seed=seed, integrator=integrator).combined
     assert engine.LAST_RENDER["scene_sync"] is None
     return out
 
 
-def _check_kept_between_frames(scene, tmp_path, transform_updates, full_exports=1, value_updates=0):
+def _check_kept_between_frames(scene, tmp_path, transform_updates, full_exports=1, value_updates=0,
+                               integrator="PATH"):
     """`blender -b -a` with Persistent Data (_check_syncs), each frame equal to the frame rendered
     on its own."""
-    syncs, frames = _kept_animation(scene, tmp_path, 4, 7)
+    syncs, frames = _kept_animation(scene, tmp_path, 4, 7, integrator)
     _check_syncs(syncs, transform_updates, full_exports, value_updates)
     for frame, animated in zip(range(scene.frame_start, scene.frame_end + 1), frames):
-        assert np.abs(animated - _alone(scene, frame, 4, 7)).max() < 1e-4, frame
+        assert np.abs(animated - _alone(scene, frame, 4, 7, integrator)).max() < 1e-4, frame
 
 
 def test_persistent_data_animation_reuses_the_scene_and_equals_single_frames(scene_factory, tmp_path):
@@ -281,3 +282,68 @@ def test_persistent_data_edits_visibility_and_colour_on_sponza(scene_factory, tm
     assert (syncs[-1]["full_exports"], syncs[-1]["value_updates"]) == (1, 2), syncs[-1]
     for frame, kept in zip((1, 2, 3), frames):
         assert np.array_equal(kept, _alone(scene, frame, 16, 7)), frame
+
+
+def test_persistent_data_exports_a_moving_or_recoloured_volume_object_anew(scene_factory, tmp_path):
+    """vdb_cloud's Volume object: its grid's transform and its material's medium are set by its
+    export (export/volume.py), so a keyed move, then a keyed Principled Volume density, each make
+    every frame a new export, equal to the frame rendered alone (VOLPATH). Before, the kept scene
+    rendered the cloud where frame 1 had it, and at frame 1's density."""
+    scene = scene_factory("vdb_cloud", resolution=(48, 36))
+    scene.frame_start, scene.frame_end = 1, 3
+    cloud = scene.objects["Cloud"]
+    x, y, z = cloud.location
+    for frame, dx in ((1, -0.6), (3, 0.6)):
+        cloud.location = (x + dx, y, z)
+        cloud.keyframe_insert("location", frame=frame)
+    _check_kept_between_frames(scene, tmp_path / "move", transform_updates=0, full_exports=3, integrator="VOLPATH")
+    cloud.animation_data_clear()
+    density = cloud.active_material.node_tree.nodes["Principled Volume"].inputs["Density"]
+    for frame, value in ((1, 2.0), (3, 8.0)):
+        density.default_value = value
+        density.keyframe_insert("default_value", frame=frame)
+    _check_kept_between_frames(scene, tmp_path / "density", transform_updates=0, full_exports=3,
+                               integrator="VOLPATH")
+
+
+def test_persistent_data_keeps_the_scene_with_motion_blur(scene_factory, tmp_path):
+    """motion_blur with motion blur on (a shutter of 1 frame) and its boxes and camera moving
+    every frame: each frame samples its shutter, then edits the kept scene's transforms and motion
+    steps in place (lt_scene_set_instance_motion; the camera's motion is set with the camera),
+    one export for three frames, each frame the same image as the frame rendered alone. With the
+    grid's shape key animated too (deformation blur), its mesh changes every frame: three exports."""
+    from test_motion_blur import _motion_line
+    scene = scene_factory("motion_blur")
+    keys = scene.objects["Deforming"].data.shape_keys
+    grid_action = keys.animation_data.action
+    keys.animation_data_clear()
+    _moving_every_frame(scene, ["Translating", "Rotating", scene.camera.name])
+    syncs, frames = _kept_animation(scene, tmp_path / "kept", 4, 7)
+    _check_syncs(syncs, transform_updates=2)
+    assert syncs[-1]["motion_updates"] == 2, syncs[-1]
+    for frame, animated in zip((1, 2, 3), frames):
+        alone = _alone(scene, frame, 4, 7)
+        assert _motion_line()[0] == (2, 0, 0, "moving, 3 steps"), _motion_line()[1]
+        assert np.abs(animated - alone).max() < 1e-4, frame
+    keys.animation_data_create().action = grid_action
+    _check_kept_between_frames(scene, tmp_path / "deforming", transform_updates=0, full_exports=3)
+
+
+def test_persistent_data_keeps_the_scene_with_the_vector_pass(scene_factory, tmp_path):
+    """The Vector pass with motion blur off samples the neighbouring frames (export/motion.py): the
+    kept scene takes each frame's motion steps as edits too, one export for three frames, and
+    each frame's Vector pass is the one of the frame rendered alone (cornell_area's sliding box)."""
+    scene = _animated_scene(scene_factory)
+    build_scenes.extrapolate_motion(next(o for o in scene.objects if o.animation_data))
+    scene.view_layers[0].use_pass_vector = True
+    syncs, frames = _kept_animation(scene, tmp_path, 4, 7, pass_name="Vector")
+    # The box moves without turning: the core traces it as its triangles baked in world space at
+    # each step (geometry.cpp, bakes_motion), a copy built anew when its motion changes.
+    assert [(s["full_exports"], s["transform_updates"], s["motion_updates"]) for s in syncs] == \
+        [(1, 0, 0), (1, 1, 1), (1, 2, 2)], syncs
+    assert [s["mesh_bvh_builds"] - syncs[0]["mesh_bvh_builds"] for s in syncs] == [0, 1, 2], syncs
+    assert all(np.abs(f).max() > 0.5 for f in frames)  # the box moves in every frame
+    for frame, kept in zip((1, 2, 3), frames):
+        scene.frame_set(frame)
+        alone = ru.render(scene, ru.LANTERN, 4, seed=7)["Vector"]
+        assert np.abs(kept - alone).max() < 1e-4, frame

@@ -33,6 +33,7 @@ enum Op : uint8_t {
   kSetWorldProgram,
   kSetCameraLens,      // kSetCamera's fields, then depth of field and panorama settings (ABI 9)
   kSetInstanceValues,  // instance, visibility, colour, pass index, attributes (ABI 25)
+  kSetInstanceMotion,  // instance, step count (i8, any), 5 transforms (ABI 27)
   kOpCount
 };
 

@@ -301,6 +301,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                                            count));
         break;
       }
+      case lt_fuzz::kSetInstanceMotion: {
+        const int instance = r.i8();
+        const int steps = r.i8() % 6;  // 3 or 5 are motion, 0 none, the others refused
+        float xf[5 * 12];
+        r.floats(xf, 5 * 12);
+        check(lt_scene_set_instance_motion(scene, instance, xf, steps));
+        break;
+      }
       case lt_fuzz::kClearLights:
         check(lt_scene_clear_lights(scene));
         break;

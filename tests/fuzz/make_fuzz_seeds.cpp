@@ -396,6 +396,10 @@ std::vector<uint8_t> seed_textures_edits() {
   w.i8(5);
   w.i8(6);
   for (int k = 0; k < 8; ++k) w.f32(0.1f * float(k));
+  w.op(lt_fuzz::kSetInstanceMotion);  // sliding over the shutter
+  w.i8(0);
+  w.i8(5);
+  for (int k = 0; k < 5; ++k) translation(w, 0.1f * float(k), 0, 0);
   w.op(lt_fuzz::kSetMaterial);
   w.i8(1);
   program(w, emission(2));

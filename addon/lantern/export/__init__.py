@@ -122,6 +122,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     if state is not None:
         meshes.emitters = {}
         meshes.instance_values = {}
+        meshes.instance_motion = {}
     materials.aovs = aov_indices(depsgraph.view_layer_eval)
     try:
         summary["world"] = export_world(depsgraph, core_scene, report, images, camera=materials.camera,
@@ -147,6 +148,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
     # MESH instance of their evaluated geometry: export the latter, convert only if it is absent.
     deferred = []
     instances = {}  # instance_key -> (core instance id or None for no geometry, matrix)
+    volume_objects = {}  # instance_key -> (matrix, its material's pointer or None, motion): kept for edits
     has_mesh_instance = set()
     hair = 0
     flags = {}  # instance_key -> instance_flags where not NO_FLAGS
@@ -205,6 +207,9 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             steps = motion.transforms(instance_key(inst), matrix, obj.name) if motion is not None else None
             if motion is not None and steps is motion.HIDDEN:  # a particle instance born or dying mid-shutter
                 continue
+            material = obj.active_material
+            volume_objects[instance_key(inst)] = (matrix, None if material is None else material.original.as_pointer(),
+                                                  steps)
             added, emits = export_volume(obj, matrix, core_scene, report, materials, lightgroup, motion=steps)
             volumes += added
             emissive_media += emits
@@ -229,7 +234,7 @@ def export_scene(depsgraph, core_scene, report, camera_object=None, state=None, 
             instances[key] = (meshes.export_instance(obj, matrix, warn_empty=False, key=key, holdout=holdout,
                                                      shadow_catcher=catcher, lightgroup=lightgroup), matrix)
     if state is not None:
-        state.update(materials=materials, meshes=meshes, instances=instances, flags=flags)
+        state.update(materials=materials, meshes=meshes, instances=instances, flags=flags, volumes=volume_objects)
 
     summary.update(shadow_catchers=catchers, meshes=meshes.mesh_count, instances=meshes.instance_count,
                    materials=len(materials.ids), images=sum(1 for v in images.ids.values()

@@ -439,6 +439,9 @@ class MeshExporter:
         # instance_key -> [(how many object keys, instance_values, core id)] of each core instance
         # added for it, kept for value_edits (a dict when the scene is kept).
         self.instance_values = None
+        # Core id -> the motion steps it was added with (None: still), kept for the kept scene's
+        # motion edits (a dict when the scene is kept with motion blur).
+        self.instance_motion = None
 
     def _geometry_key(self, obj):
         if obj.type == 'MESH' and obj.data is not None:
@@ -590,6 +593,8 @@ class MeshExporter:
                              lightgroup=lightgroup)
         if instance is not None:
             self.instance_count += 1
+            if self.instance_motion is not None:
+                self.instance_motion[instance] = motion
             if self.instance_values is not None and key is not None:
                 self.instance_values.setdefault(key, []).append((len(object_keys), values, instance))
         return instance

@@ -60,7 +60,7 @@ extern "C" {
  * the shutter (lt_camera_desc.zoom_pre and zoom_post); 24: attributes, UVs and generated coordinates of
  * curves and points (lt_curves_desc.curve_uvs, generated_from_root, texspace_location and texspace_size, attributes,
  * lt_curves_attribute); 25: lt_scene_set_instance_values; 26: lt_scene_set_volume_grid_motion; 27:
- * lt_scene_stats.moving_volumes. */
+ * lt_scene_stats.moving_volumes, lt_scene_set_instance_motion. */
 #define LT_ABI_VERSION 27
 
 enum lt_status {
@@ -564,8 +564,8 @@ LT_API int lt_scene_commit(lt_scene* scene);
  * Allowed before and after lt_scene_commit, but refused (LT_ERROR_STATE) while the scene has a
  * render that is not destroyed: its threads read the scene. After such an edit the scene must be
  * committed again before lt_render_start. What the next commit rebuilds:
- *   lt_scene_set_instance_transform            the top-level BVH (over the meshes' own BVHs) and
- *                                              the light sampler (emissive triangles move);
+ *   lt_scene_set_instance_transform,           the top-level BVH (over the meshes' own BVHs) and
+ *   lt_scene_set_instance_motion               the light sampler (emissive triangles move);
  *   lt_scene_set_material, lt_scene_clear_lights / lt_scene_add_light, lt_scene_set_world
  *                                              the light sampler only;
  *   lt_scene_set_instance_values               with a changed visibility the top-level BVH, else
@@ -574,6 +574,11 @@ LT_API int lt_scene_commit(lt_scene* scene);
  *                                              camera when they start).
  * Meshes' BVHs are never rebuilt: a changed mesh needs a new scene. */
 LT_API int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float transform[12]);
+/* Replaces an instance's transform motion blur: `steps` transforms of 12 floats over the shutter
+ * (as lt_instance_desc.motion_transforms and motion_step_count; 0: none, the instance still at its
+ * transform). A step that is not finite or not invertible leaves the instance without motion (a
+ * warning), as lt_scene_add_instance does. */
+LT_API int lt_scene_set_instance_motion(lt_scene* scene, int instance, const float* transforms, int steps);
 /* Replaces an instance's ray visibility, Object Info colour and pass index and its object
  * attributes (as the fields of lt_instance_desc: visibility, color, pass_index, attribute_ids,
  * attribute_values, attribute_count); its geometry, materials and the rest stay. */

@@ -739,6 +739,17 @@ int lt_scene_set_instance_transform(lt_scene* scene, int instance, const float t
   });
 }
 
+int lt_scene_set_instance_motion(lt_scene* scene, int instance, const float* transforms, int steps) {
+  return guarded([&] {
+    require(scene, "lt_scene_set_instance_motion: NULL scene");
+    require(instance >= 0 && instance < int(scene->scene.geometry.instance_count()),
+            "instance " + std::to_string(instance) + " does not exist");
+    require_motion_steps(steps, transforms, "instance");
+    begin_edit(scene);
+    scene->scene.geometry.set_instance_motion(instance, motion_transforms(transforms, steps), scene->scene.warnings);
+  });
+}
+
 int lt_scene_set_instance_values(lt_scene* scene, int instance, unsigned visibility, const float color[4],
                                  int pass_index, const int* attribute_ids, const float* attribute_values,
                                  int attribute_count) {

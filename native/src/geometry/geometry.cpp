@@ -519,30 +519,36 @@ void drop_redundant_steps(Instance& inst) {
   inst.motion = std::move(kept);
   inst.motion_decomposed = decompose_motion(inst.motion);
 }
+
+// Decomposes the instance's motion steps (add_instance, set_instance_motion), or clears them and
+// says why when one cannot be used.
+void prepare_motion(Instance& inst, int id, std::vector<std::string>& warnings) {
+  inst.motion_decomposed.clear();
+  if (inst.motion.empty()) return;
+  bool usable = inst.motion.size() >= 2 && finite_transform(inst.xf) && instanceable(inst.xf);
+  // A step may scale the object to nothing (growing from or shrinking to nothing, as Cycles
+  // blurs it): Embree inverts the interpolated transform only at rays' times, where it has
+  // an inverse but at that step's instant.
+  for (const Transform& m : inst.motion)
+    usable = usable && finite_transform(m) && (instanceable(m) || scaled_to_nothing(m));
+  if (usable) {
+    inst.motion_decomposed = decompose_motion(inst.motion);
+    drop_redundant_steps(inst);
+  } else {
+    warnings.push_back("instance " + std::to_string(id) +
+                       ": a motion step's transform is not finite or not invertible; rendered without motion "
+                       "blur at its centre transform");
+    inst.motion.clear();
+  }
+}
 }  // namespace
 
 int Geometry::add_instance(Instance inst, std::vector<std::string>& warnings) {
   if (committed_) throw StateError("the scene is committed; instances can no longer be added");
   const int id = int(instances_.size());
   set_transform(inst, inst.xf);
-  if (!inst.motion.empty()) {
-    bool usable = inst.motion.size() >= 2 && finite_transform(inst.xf) && instanceable(inst.xf);
-    // A step may scale the object to nothing (growing from or shrinking to nothing, as Cycles
-    // blurs it): Embree inverts the interpolated transform only at rays' times, where it has
-    // an inverse but at that step's instant.
-    for (const Transform& m : inst.motion)
-      usable = usable && finite_transform(m) && (instanceable(m) || scaled_to_nothing(m));
-    if (usable) {
-      inst.motion_decomposed = decompose_motion(inst.motion);
-      drop_redundant_steps(inst);
-      ++motion_instances_;
-    } else {
-      warnings.push_back("instance " + std::to_string(id) +
-                         ": a motion step's transform is not finite or not invertible; rendered without motion "
-                         "blur at its centre transform");
-      inst.motion.clear();
-    }
-  }
+  prepare_motion(inst, id, warnings);
+  motion_instances_ += !inst.motion.empty();
   ++meshes_[size_t(inst.mesh)].users;
   instances_.push_back(inst);
   baked_.emplace_back();
@@ -568,6 +574,16 @@ void Geometry::set_displaced(int id, std::vector<Vec3> positions, std::vector<Ve
 
 void Geometry::set_instance_transform(int instance, const Transform& xf) {
   set_transform(instances_.at(size_t(instance)), xf);
+  generation_ = next_motion_generation();
+  top_dirty_ = true;
+}
+
+void Geometry::set_instance_motion(int instance, std::vector<Transform> motion, std::vector<std::string>& warnings) {
+  Instance& inst = instances_.at(size_t(instance));
+  motion_instances_ -= !inst.motion.empty();
+  inst.motion = std::move(motion);
+  prepare_motion(inst, instance, warnings);
+  motion_instances_ += !inst.motion.empty();
   generation_ = next_motion_generation();
   top_dirty_ = true;
 }

@@ -188,6 +188,9 @@ class Geometry {
   // Moves an instance (also after commit): the next commit rebuilds only the top-level BVH over
   // the meshes' existing BVHs.
   void set_instance_transform(int instance, const Transform& xf);
+  // Replaces an instance's motion steps (also after commit; none: still at its transform), checked
+  // as add_instance checks them; the next commit rebuilds the top level.
+  void set_instance_motion(int instance, std::vector<Transform> motion, std::vector<std::string>& warnings);
   // The ray visibility, Object Info's colour and pass index and the object attributes of
   // `values`; nothing else. A changed visibility rebuilds the top level at the next commit.
   void set_instance_values(int instance, Instance&& values);
