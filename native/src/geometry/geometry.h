@@ -211,13 +211,20 @@ class Geometry {
   bool occluded(const Ray& ray, unsigned visibility = 16u) const;
   // The hits of a ray on one instance alone, nearest first, whatever else the ray meets (Cycles'
   // scene_intersect_local: the object's own BVH; hits at the same distance count once); stops
-  // when visit(hit) returns false or after 256 hits.
+  // when visit(hit) returns false or after 256 queries. Embree tests a triangle's distance
+  // against tmin before rounding it, so it may report a crossing at or below tmin again: such a
+  // hit is not visited, and tmin moves on from where it was (before, a ray could meet one
+  // crossing 256 times: a Burley disk probe then weighed its exit 64 times over).
   template <class Visit>
   void local_hits(Ray ray, int instance, Visit visit) const {
     Hit hit;
+    float last = -INFINITY;
     for (int k = 0; k < 256 && intersect_instance(ray, instance, &hit); ++k) {
-      if (!visit(hit)) return;
-      ray.tmin = std::nextafter(hit.t, ray.tmax);
+      if (hit.t > last) {
+        if (!visit(hit)) return;
+        last = hit.t;
+      }
+      ray.tmin = std::nextafter(std::max(hit.t, ray.tmin), ray.tmax);
     }
   }
   // Closest hit on one instance alone (local_hits' step).
