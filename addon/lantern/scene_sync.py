@@ -87,11 +87,10 @@ class SceneSync:
         """Applies the depsgraph's updates in place; False when they need a new scene."""
         if motion is not None:
             motion.report = self.report
-        # With motion blur, or a scene that has motion (blur since turned off), every frame's
-        # motion is compared with the scene's.
-        transforms = motion is not None or any(
-            m is not None for m in self.state["meshes"].instance_motion.values()) or any(
-            v[2] is not None for v in self.state["volumes"].values())
+        # With motion blur, or a scene that has motion (blur since turned off; counted by the
+        # core), every frame's motion is compared with the scene's.
+        stats = self.scene.stats()
+        transforms = motion is not None or stats["motion_instances"] > 0 or stats["moving_volumes"] > 0
         lights = False
         materials = []
         for idb, geometry in updates:

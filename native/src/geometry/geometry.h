@@ -213,8 +213,8 @@ class Geometry {
   // scene_intersect_local: the object's own BVH; hits at the same distance count once); stops
   // when visit(hit) returns false or after 256 queries. Embree tests a triangle's distance
   // against tmin before rounding it, so it may report a crossing at or below tmin again: such a
-  // hit is not visited, and tmin moves on from where it was (before, a ray could meet one
-  // crossing 256 times: a Burley disk probe then weighed its exit 64 times over).
+  // hit is not visited again (a Burley disk probe would weigh that exit once per visit), and tmin
+  // moves on from where it was.
   template <class Visit>
   void local_hits(Ray ray, int instance, Visit visit) const {
     Hit hit;
