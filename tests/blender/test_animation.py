@@ -329,6 +329,36 @@ def test_persistent_data_keeps_the_scene_with_motion_blur(scene_factory, tmp_pat
     _check_kept_between_frames(scene, tmp_path / "deforming", transform_updates=0, full_exports=3)
 
 
+def test_persistent_data_clears_the_motion_when_motion_blur_is_switched_off(scene_factory, tmp_path):
+    """use_motion_blur cannot be keyframed, but a frame handler may switch it: motion_blur moving
+    every frame with blur on at frame 1 and 3 and off at frame 2. The kept scene's instances and
+    camera lose their motion steps at frame 2 (an edit, not a new export) and get them back at
+    frame 3; each frame is the frame rendered alone."""
+    from test_motion_blur import _motion_line
+    scene = scene_factory("motion_blur")
+    scene.objects["Deforming"].data.shape_keys.animation_data_clear()
+    _moving_every_frame(scene, ["Translating", "Rotating", scene.camera.name])
+
+    def blur_but_at_frame_2(s, *_):
+        if s == scene:
+            s.render.use_motion_blur = s.frame_current != 2
+    bpy.app.handlers.frame_change_pre.append(blur_but_at_frame_2)
+    try:
+        syncs, frames = _kept_animation(scene, tmp_path, 4, 7)
+        assert [(s["full_exports"], s["transform_updates"], s["motion_updates"], s["top_bvh_builds"])
+                for s in syncs] == [(1, 0, 0, 1), (1, 1, 1, 2), (1, 2, 2, 3)], syncs
+        # Beside the turning box's motion the still meshes are traced as world-space copies
+        # (geometry.cpp, flattens_beside_motion): dropped at frame 2, built again at frame 3.
+        assert [s["mesh_bvh_builds"] - syncs[0]["mesh_bvh_builds"] for s in syncs] == [0, 0, 3], syncs
+        for frame, animated in zip((1, 2, 3), frames):
+            alone = _alone(scene, frame, 4, 7)
+            assert _motion_line()[0] == ((2, 0, 0, "moving, 3 steps") if frame != 2 else None), _motion_line()[1]
+            assert np.abs(animated - alone).max() < 1e-4, frame
+    finally:
+        bpy.app.handlers.frame_change_pre.remove(blur_but_at_frame_2)
+        scene.render.use_motion_blur = True
+
+
 def test_persistent_data_keeps_the_scene_with_the_vector_pass(scene_factory, tmp_path):
     """The Vector pass with motion blur off samples the neighbouring frames (export/motion.py): the
     kept scene takes each frame's motion steps as edits too, one export for three frames, and
