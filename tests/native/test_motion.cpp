@@ -360,6 +360,42 @@ TEST(Motion, ObjectsThatDoNotTurnAreBakedOnlyWhenNoneTurns) {
   }
 }
 
+// Copies baked into world space (a sliding strip's motion, a strip flattened onto z = 0) are
+// Embree scenes of their own: when a visibility edit after the commit first hides an instance
+// from some rays, they take Embree's context filter flag as the meshes' scenes do (Debian's
+// Embree asserts it in every instanced scene a filtered ray enters; found by fuzz_abi).
+TEST(Motion, BakedCopiesKeepBeingHitAfterAVisibilityEdit) {
+  Geometry g;
+  std::vector<std::string> warnings;
+  Instance sliding;
+  sliding.mesh = g.add_mesh(strip(), warnings);
+  sliding.motion = {rot_z(0, 1, Vec3(-1, 0, 0)), rot_z(0, 1, Vec3(1, 0, 0))};
+  sliding.xf = rot_z(0);
+  g.add_instance(sliding, warnings);
+  Instance flat;  // no inverse: baked
+  flat.mesh = g.add_mesh(strip(), warnings);
+  flat.xf = rot_z(0, 1, Vec3(0, -5, 0));
+  flat.xf.m[10] = 0;
+  g.add_instance(flat, warnings);
+  Instance plain;
+  plain.mesh = g.add_mesh(strip(), warnings);
+  plain.xf = rot_z(0, 1, Vec3(10, 0, 0));
+  const int hidden = g.add_instance(plain, warnings);
+  g.commit();
+  Instance values;
+  values.visibility = 31u & ~1u;  // hidden from camera rays from now on
+  g.set_instance_values(hidden, std::move(values));
+  g.commit();
+  Hit h;
+  ASSERT_TRUE(hit_down(g, 1.5f, 0, 1.0f, &h)) << "the sliding strip at its end, to camera rays";
+  EXPECT_EQ(h.instance, 0);
+  ASSERT_TRUE(g.intersect(down(0.5f, -5.03f, 0.5f), 1u, &h)) << "the flat strip, to camera rays";
+  EXPECT_EQ(h.instance, 1);
+  EXPECT_FALSE(g.intersect(down(10.5f, 0, 0.5f), 1u, &h)) << "camera rays no longer see the third";
+  ASSERT_TRUE(g.intersect(down(10.5f, 0, 0.5f), 2u, &h)) << "other rays do";
+  EXPECT_EQ(h.instance, hidden);
+}
+
 // Vertex motion: a quad rising from z = 0 to z = 1 over the shutter.
 TEST(Motion, DeformingMeshHitsAtTheRaysTime) {
   Geometry g;
