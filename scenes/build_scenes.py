@@ -838,6 +838,27 @@ def build_subsurface(scene, method="RANDOM_WALK"):
     add_camera(scene, (0, -3.6, 1.4), (0, 0, 0.4), lens=40.0)
 
 
+def build_resting(scene):
+    """Glass resting on a floor as users place it: a Glass BSDF box and a rough Principled glass
+    box (Transmission 1) whose bottom faces lie in the floor's plane (origin at the bottom,
+    location z = 0), under an area light and a grey world that also lights the floor's underside.
+    Seen through the glass, the bottom face meets the floor it touches; a ray origin offset
+    forwards stepped over it and saw the world under the floor (4 % bright image mean)."""
+    set_world(scene, (0.25, 0.25, 0.3), 1.0)
+    floor = add_object(scene, "Floor", mesh_plane("Floor", 8.0))
+    assign(floor, diffuse("RestingFloor", (0.5, 0.5, 0.5)))
+    block = add_object(scene, "GlassBlock", mesh_box("GlassBlock", (0.7, 0.7, 0.7)), (0.55, 0.1, 0.0),
+                       rotation=(0, 0, 30))
+    assign(block, glass("RestingGlass", (1.0, 1.0, 1.0), 0.0, ior=1.45))
+    slab = add_object(scene, "PrincipledSlab", mesh_box("PrincipledSlab", (0.6, 0.5, 0.3)), (-0.55, -0.1, 0.0),
+                      rotation=(0, 0, -20))
+    mat = principled("RestingPrincipledGlass", (0.9, 0.95, 1.0), 0.2)
+    mat.node_tree.nodes["Principled BSDF"].inputs["Transmission"].default_value = 1.0
+    assign(slab, mat)
+    add_light(scene, "Key", "AREA", 150.0, (1.2, -1.0, 2.2), rotation=(40, 0, 50), size=0.8)
+    add_camera(scene, (0, -3.6, 1.4), (0, 0, 0.3), lens=40.0)
+
+
 def _node_group(name, inputs, outputs, build):
     """A shader node group with (type, name) inputs and outputs; build(tree, group input node)
     returns {output name: socket} to link to the Group Output."""
@@ -2523,6 +2544,7 @@ SCENES = {
     "metal_box": (build_metal_box, (64, 64), 512),
     "principled_ground": (build_principled_ground, (96, 64), 128),
     "subsurface": (build_subsurface, (64, 48), 128),
+    "resting": (build_resting, (64, 48), 128),
     "subsurface_burley": (lambda scene: build_subsurface(scene, "BURLEY"), (64, 48), 128),
     "subsurface_fixed": (lambda scene: build_subsurface(scene, "RANDOM_WALK_FIXED_RADIUS"), (64, 48), 128),
     "layered_material": (build_layered_material, (96, 64), 128),

@@ -39,10 +39,12 @@ WORLD_SCENES = ["hdri_world", "light_path_world", "procedural_world"]
 # cornell_dof: depth of field (a focus object, 6 blades, anamorphic; issue 15). motion_blur: a
 # translating and a rotating box, a deforming grid and a panning camera over a shutter of 1 frame
 # (issue 15; tests/blender/test_motion_blur.py checks its export). point_cloud: geometry-nodes
-# points as spheres (issue 15; the hair scenes have their own test).
+# points as spheres (issue 15; the hair scenes have their own test). resting: glass blocks resting
+# on a floor, bottom faces in its plane (surfaces in contact: 1.04 of Cycles' image mean before
+# rays leaving a touching triangle met what touches it, geometry/hit.h).
 PATH_SCENES = ["cornell_area", "cornell_point", "lamp_near_ceiling", "area_spread", "cornell_spot",
                "cornell_mesh_light", "glossy_glass", "sun_world",
-               "textured", "instanced", "cornell_dof", "motion_blur", "point_cloud"] + WORLD_SCENES
+               "textured", "instanced", "cornell_dof", "motion_blur", "point_cloud", "resting"] + WORLD_SCENES
 # Issue 15's panoramic cameras, one small render each for path tracing; BIDIRECTIONAL's light
 # tracing to panoramas is held to path tracing by tests/native/test_bdpt.cpp (a 400-degree
 # fisheye and an equirectangular film: K BDPT renders here would cost about 18 s).

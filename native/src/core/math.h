@@ -177,6 +177,11 @@ struct Ray {
   // Motion blur: the time in the shutter (0 to 1) of the camera sample the ray belongs to; the
   // shutter's centre in a scene without motion.
   float time = 0.5f;
+  // The triangle the ray leaves (instance and primitive; -1: none), which it must not meet again,
+  // and the distance within which its instance's triangles crossed from behind are not met
+  // either (geometry/hit.h, leave).
+  int self_instance = -1, self_primitive = -1;
+  float self_tmax = 0;
 };
 
 }  // namespace lt

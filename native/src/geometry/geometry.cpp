@@ -1,7 +1,9 @@
 #include "geometry/geometry.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <unordered_map>
 
 #include "core/error.h"
 #include "geometry/terminator.h"
@@ -10,32 +12,79 @@ namespace lt {
 
 namespace {
 
-struct VisibilityContext {
-  RTCIntersectContext ctx;  // must be first: Embree hands this pointer back to the filter
-  const unsigned* visibility;
+struct QueryContext {
+  RTCIntersectContext ctx;     // must be first: Embree hands this pointer back to the filter
+  const unsigned* visibility;  // per Embree instance id; null: every instance seen
   unsigned mask;
+  // What the ray skips (Ray::self_*): its instance as Embree names it (the id of a flattened
+  // mesh's geometry, or a motion segment's id past `instances`, mapped by segment_instance); an
+  // instance's own scene (intersect_instance) names only the primitive.
+  int self_instance, self_primitive;
+  float self_tmax;
+  bool own_scene;
+  const std::vector<unsigned>* segment_instance;
+  unsigned instances;
+  const Geometry* geometry;
+  Vec3 dir;  // the ray's, in world space
+  float time;
 };
 
-// Rejects hits on instances that this kind of ray must not see (Cycles' ray visibility). Only
-// installed when some instance hides from some ray kind, so other scenes pay nothing.
-void visibility_filter(const RTCFilterFunctionNArguments* args) {
-  const auto* c = reinterpret_cast<const VisibilityContext*>(args->context);
+// Whether a hit on the left triangle's own object, nearer than self_tmax, is one the ray's origin
+// (drawn back behind the triangle's plane, hit.h) made: the ray then passes the other triangle in the
+// sense it leaves its own (a neighbour in or near its plane, crossed from behind), or the other
+// lies in its plane facing the other way (a face doubled back to back, a mesh flattened by a zero
+// scale), where a neighbour it truly meets (a concave corner) faces it from another plane.
+// World-space corners at the ray's time.
+bool made_by_the_origin(const QueryContext& c, int primitive) {
+  Vec3 a[3], b[3];
+  c.geometry->triangle(c.self_instance, c.self_primitive, &a[0], &a[1], &a[2], c.time);
+  c.geometry->triangle(c.self_instance, primitive, &b[0], &b[1], &b[2], c.time);
+  const Vec3 na = cross(a[1] - a[0], a[2] - a[0]), nb = cross(b[1] - b[0], b[2] - b[0]);
+  if ((dot(c.dir, na) > 0) == (dot(c.dir, nb) > 0)) return true;
+  return length_squared(cross(na, nb)) <= 1e-6f * length_squared(na) * length_squared(nb);
+}
+
+// Rejects hits on instances that this kind of ray must not see (Cycles' ray visibility) and what
+// a ray leaving a triangle skips (hit.h, leave): Embree sets tfar to the hit's distance first.
+// Only installed when some instance hides from some ray kind or the ray leaves a triangle.
+void query_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* c = reinterpret_cast<const QueryContext*>(args->context);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     unsigned inst = RTCHitN_instID(args->hit, args->N, i, 0);
     if (inst == RTC_INVALID_GEOMETRY_ID) inst = RTCHitN_geomID(args->hit, args->N, i);  // flattened (build_top)
-    if (!(c->visibility[inst] & c->mask)) args->valid[i] = 0;
+    if (c->visibility && !(c->visibility[inst] & c->mask)) {
+      args->valid[i] = 0;
+      continue;
+    }
+    if (c->self_primitive < 0) continue;
+    if (!c->own_scene && inst >= c->instances) inst = (*c->segment_instance)[inst - c->instances];
+    if (!c->own_scene && int(inst) != c->self_instance) continue;
+    const int prim = int(RTCHitN_primID(args->hit, args->N, i));
+    if (prim == c->self_primitive ||
+        (RTCRayN_tfar(args->ray, args->N, i) < c->self_tmax && made_by_the_origin(*c, prim)))
+      args->valid[i] = 0;
   }
 }
 
-// A query's context: with per-instance visibility (null: every instance seen), visibility_filter
-// keeps the instances rays of kind `mask` see.
-void init_visibility(VisibilityContext* c, const unsigned* visibility, unsigned mask) {
+// A query's context: with per-instance visibility (null: every instance seen) and what the ray
+// skips, query_filter keeps what rays of kind `mask` see.
+void init_query(QueryContext* c, const Geometry* geometry, const unsigned* visibility, unsigned mask, const Ray& ray,
+                const std::vector<unsigned>& segment_instance, size_t instances, bool own_scene = false) {
   rtcInitIntersectContext(&c->ctx);
-  if (!visibility) return;
-  c->ctx.filter = visibility_filter;
+  if (!visibility && ray.self_primitive < 0) return;
+  c->ctx.filter = query_filter;
   c->visibility = visibility;
   c->mask = mask;
+  c->self_instance = ray.self_instance;
+  c->self_primitive = ray.self_primitive;
+  c->self_tmax = ray.self_tmax;
+  c->own_scene = own_scene;
+  c->segment_instance = &segment_instance;
+  c->instances = unsigned(instances);
+  c->geometry = geometry;
+  c->dir = ray.d;
+  c->time = ray.time;
 }
 
 // Curves and spheres are entered, never left: a hit where the ray leaves the tube (the normal
@@ -606,24 +655,12 @@ void Geometry::set_instance_values(int instance, Instance&& values) {
 
 // The ray kinds that see instance i. A shadow catcher is also seen by the catcher-only rays
 // (catcher_only_visibility), as Cycles' SHADOW_CATCHER_OBJECT_VISIBILITY. The first instance some
-// rays miss turns on Embree's context filter (visibility_filter); after the commit the meshes'
-// scenes and the baked copies take its flag too (Debian's Embree asserts it in every instanced
-// scene), keeping their BVHs: the flag is read while tracing, and the commit finds nothing
-// modified (Sponza's 66k triangles: under 1 ms).
+// rays miss turns on query_filter's visibility test.
 void Geometry::set_ray_visibility(size_t i) {
   const Instance& inst = instances_[i];
   const unsigned vis = inst.visibility & 31u;
   instance_visibility_[i] = inst.shadow_catcher ? vis | catcher_only_visibility(vis) : vis;
-  if ((vis == 31u && !inst.shadow_catcher) || partial_visibility_) return;
-  partial_visibility_ = true;
-  if (!committed_) return;
-  const auto filtered = [](RTCScene scene) {
-    if (!scene) return;
-    rtcSetSceneFlags(scene, RTCSceneFlags(rtcGetSceneFlags(scene) | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
-    rtcCommitScene(scene);
-  };
-  for (const auto& m : meshes_) filtered(m.rtc);
-  for (const Baked& b : baked_) filtered(b.rtc);
+  if (vis != 31u || inst.shadow_catcher) partial_visibility_ = true;
 }
 
 void Geometry::commit() {
@@ -634,8 +671,7 @@ void Geometry::commit() {
       // Strands: Embree's compact curve leaves (indices into the control points, not copies of
       // them), as Cycles' memory implies: 42 against 118 bytes a segment (bench/README.md, hair).
       const int compact = m.kind == GeometryKind::Curves ? RTC_SCENE_FLAG_COMPACT : RTC_SCENE_FLAG_NONE;
-      rtcSetSceneFlags(m.rtc, RTCSceneFlags(compact | (partial_visibility_ ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION
-                                                                           : RTC_SCENE_FLAG_NONE)));
+      rtcSetSceneFlags(m.rtc, RTCSceneFlags(compact | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
       rtcCommitScene(m.rtc);
       ++mesh_builds_;
     }
@@ -650,7 +686,9 @@ void Geometry::commit() {
 void Geometry::build_top() {
   if (top_) rtcReleaseScene(top_);
   top_ = rtcNewScene(device_);
-  if (partial_visibility_) rtcSetSceneFlags(top_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  // Every scene a ray enters carries the flag: most rays leave a triangle (query_filter), and
+  // Debian's Embree asserts it in every scene a filtered ray enters.
+  rtcSetSceneFlags(top_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   bounds_ = Bounds();
   segment_instance_.clear();
   rtc_visibility_ = instance_visibility_;
@@ -745,11 +783,95 @@ void Geometry::build_top() {
   }
   rtcCommitScene(top_);
   ++top_builds_;
+  find_contacts();
   // |L^-1 o + L^-1 t| <= norm |o| + |L^-1 t| (the latter <= half the range): origins within half the
   // range over the norm stay traceable in every instance, directions within the range over it.
   const float norm = std::max(largest, 1.0f);
   ray_origin_limit_ = largest > 0 ? kTraceableRange / 2 / norm : kTraceableRange;
   ray_direction_limit_ = largest > 0 ? kTraceableRange / norm : kTraceableRange;
+}
+
+// Triangles of different still instances in one plane whose extents overlap there (their boxes
+// in the plane's two widest axes, shrunk by the tolerance so that tiles meeting at an edge do not
+// count): world-space planes hashed by their normal (to 1e-4) and offset (to 1e-5 of the scene's
+// size, with the next cell), then swept along one axis. Linear in the triangles but for planes
+// many objects share. A moving or deforming object is not looked at (its rays keep the offset).
+void Geometry::find_contacts() {
+  contacts_.assign(instances_.size(), {});
+  struct Tri {
+    int instance, prim;
+    float lo[2], hi[2];
+    Bounds box;  // in world space
+  };
+  const float scale = std::max(1.0f, length(bounds_.hi - bounds_.lo)), tol = 1e-5f * scale;
+  std::unordered_map<uint64_t, std::vector<Tri>> planes;
+  const auto key = [](int axis, const Vec3& n, long d) {
+    uint64_t k = uint64_t(axis);
+    for (int i = 0; i < 3; ++i) k = k * 20011u + uint64_t(int64_t(std::lround(n[i] * 1e4f)) + 10001);
+    return k * 1000003u + uint64_t(d);
+  };
+  for (size_t i = 0; i < instances_.size(); ++i) {
+    const Instance& inst = instances_[i];
+    const Mesh& m = meshes_[inst.mesh];
+    if (!m.rtc || !m.is_triangles() || !inst.motion.empty() || m.motion_steps > 1 || !finite_transform(inst.xf))
+      continue;
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+      const Vec3 p0 = inst.xf.point(m.positions[m.indices[3 * t]]),
+                 p1 = inst.xf.point(m.positions[m.indices[3 * t + 1]]),
+                 p2 = inst.xf.point(m.positions[m.indices[3 * t + 2]]);
+      Vec3 n = cross(p1 - p0, p2 - p0);
+      const float len = length(n);
+      if (!(len > 0) || !is_finite(n)) continue;
+      n = n / len;
+      int axis = 0;  // the normal's largest component, made positive: one key for both windings
+      for (int k = 1; k < 3; ++k)
+        if (std::abs(n[k]) > std::abs(n[axis])) axis = k;
+      if (n[axis] < 0) n = -n;
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      Tri tri{int(i),
+              int(t),
+              {std::min({p0[u], p1[u], p2[u]}) + tol, std::min({p0[v], p1[v], p2[v]}) + tol},
+              {std::max({p0[u], p1[u], p2[u]}) - tol, std::max({p0[v], p1[v], p2[v]}) - tol},
+              Bounds()};
+      tri.box.extend(p0);
+      tri.box.extend(p1);
+      tri.box.extend(p2);
+      if (!(tri.lo[0] < tri.hi[0] && tri.lo[1] < tri.hi[1])) continue;
+      const double d = double(dot(n, p0)) / double(tol);
+      if (!(std::abs(d) < 1e15)) continue;
+      planes[key(axis, n, long(std::floor(d)))].push_back(tri);
+    }
+  }
+  std::vector<std::pair<std::pair<int, int>, Bounds>> found;  // (instance, primitive), where
+  for (auto& [k, tris] : planes) {
+    // A plane's triangles and the next offset cell's (a plane rounded across the cell's edge).
+    const uint64_t next = k + 1;
+    std::vector<Tri> all = tris;
+    const auto it = planes.find(next);
+    if (it != planes.end()) all.insert(all.end(), it->second.begin(), it->second.end());
+    if (all.size() < 2) continue;
+    std::sort(all.begin(), all.end(), [](const Tri& a, const Tri& b) { return a.lo[0] < b.lo[0]; });
+    for (size_t a = 0; a < all.size(); ++a)
+      for (size_t b = a + 1; b < all.size() && all[b].lo[0] < all[a].hi[0]; ++b) {
+        if (all[a].instance == all[b].instance) continue;
+        if (all[b].lo[1] >= all[a].hi[1] || all[a].lo[1] >= all[b].hi[1]) continue;
+        Bounds where;  // the two boxes' overlap, grown by the tolerance
+        where.lo = vmax(all[a].box.lo, all[b].box.lo) - Vec3(tol);
+        where.hi = vmin(all[a].box.hi, all[b].box.hi) + Vec3(tol);
+        found.push_back({{all[a].instance, all[a].prim}, where});
+        found.push_back({{all[b].instance, all[b].prim}, where});
+      }
+  }
+  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [id, where] : found) {
+    auto& c = contacts_[size_t(id.first)];
+    if (!c.empty() && c.back().first == id.second) {  // one box around all of the triangle's overlaps
+      c.back().second.extend(where.lo);
+      c.back().second.extend(where.hi);
+    } else {
+      c.push_back({id.second, where});
+    }
+  }
 }
 
 // A moving instance: its motion steps, as Cycles gives them to Embree. One alone in its motion
@@ -829,7 +951,7 @@ RTCScene Geometry::baked_scene(int instance) {
     if (!(length(cross(p1 - p0, p2 - p0)) > 0)) indices[3 * t + 1] = indices[3 * t + 2] = indices[3 * t];
   }
   b.rtc = triangle_scene(positions, indices, int(steps.size()));
-  if (partial_visibility_) rtcSetSceneFlags(b.rtc, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  rtcSetSceneFlags(b.rtc, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   rtcCommitScene(b.rtc);
   ++mesh_builds_;  // a BVH over the mesh: moving such an object costs a mesh build
   b.steps = steps;
@@ -879,8 +1001,9 @@ bool closest_hit(RTCScene scene, RTCIntersectContext* ctx, const Ray& ray, const
 
 bool Geometry::intersect(const Ray& ray, unsigned visibility, Hit* hit) const {
   if (!traceable(ray)) return false;
-  VisibilityContext c;
-  init_visibility(&c, partial_visibility_ ? rtc_visibility_.data() : nullptr, visibility);
+  QueryContext c;
+  init_query(&c, this, partial_visibility_ ? rtc_visibility_.data() : nullptr, visibility, ray, segment_instance_,
+             instances_.size());
   if (!closest_hit(top_, &c.ctx, ray, ray.o, ray.d, hit)) return false;
   if (size_t(hit->instance) >= instances_.size())  // a motion segment's own id
     hit->instance = int(segment_instance_[size_t(hit->instance) - instances_.size()]);
@@ -900,17 +1023,20 @@ bool Geometry::intersect_instance(const Ray& ray, int instance, Hit* hit) const 
     d = inv.vector(d);
   }
   if (!scene) return false;
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  if (!closest_hit(scene, &ctx, ray, o, d, hit)) return false;
+  QueryContext c;
+  Ray own = ray;  // skips its triangle only if it leaves this instance
+  if (own.self_instance != instance) own.self_primitive = -1;
+  init_query(&c, this, nullptr, 0, own, segment_instance_, instances_.size(), true);
+  if (!closest_hit(scene, &c.ctx, ray, o, d, hit)) return false;
   hit->instance = instance;
   return true;
 }
 
 bool Geometry::occluded(const Ray& ray, unsigned visibility) const {
   if (!traceable(ray)) return true;
-  VisibilityContext c;
-  init_visibility(&c, partial_visibility_ ? rtc_visibility_.data() : nullptr, visibility);
+  QueryContext c;
+  init_query(&c, this, partial_visibility_ ? rtc_visibility_.data() : nullptr, visibility, ray, segment_instance_,
+             instances_.size());
   RTCRay r;
   r.org_x = ray.o.x;
   r.org_y = ray.o.y;
@@ -1073,15 +1199,15 @@ Vec3 Geometry::shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& 
   const Instance& inst = instances_[size_t(sp.instance)];
   const Mesh& m = meshes_[size_t(inst.mesh)];
   const float cutoff = inst.terminator_geometry;
-  if (!(cutoff > 0) || !m.is_triangles() || m.corner_normals.empty()) return spawn_origin(sp, wi);
+  if (!(cutoff > 0) || !m.is_triangles() || m.corner_normals.empty()) return leave_origin(sp, wi);
   Vec3 cn[3];
   object_corner_normals(m, sp.primitive, sp.time, cn);
   // Flat faces (the add-on gives their three corners the face's normal) keep the triangle.
-  if (same_vector(cn[0], cn[1]) && same_vector(cn[1], cn[2])) return spawn_origin(sp, wi);
+  if (same_vector(cn[0], cn[1]) && same_vector(cn[1], cn[2])) return leave_origin(sp, wi);
   float nl = dot(n, wi);
   const Vec3 side = nl < 0 ? -ng : ng;
   const float amount = terminator_offset_amount(cutoff, std::abs(nl), dot(side, wi));
-  if (!(amount > 0)) return spawn_origin(sp, wi);
+  if (!(amount > 0)) return leave_origin(sp, wi);
   Vec3 v[3];
   object_corners(m, sp.primitive, sp.time, &v[0], &v[1], &v[2]);
   const Pose pose = inst.motion.empty() ? Pose(inst) : this->pose(sp.instance, sp.time);
@@ -1101,7 +1227,7 @@ Vec3 Geometry::shadow_origin(const SurfacePoint& sp, const Vec3& n, const Vec3& 
     offset = pose.xf.vector(smooth_surface_offset(v, cn, sp.bary.x, sp.bary.y, side_object));
   }
   const Vec3 p = sp.p + offset * amount;
-  if (!is_finite(p)) return spawn_origin(sp, wi);
+  if (!is_finite(p)) return leave_origin(sp, wi);
   if (moved) *moved = true;
   return offset_ray_origin(p, dot(wi, sp.ng) >= 0 ? sp.ng : -sp.ng);
 }
@@ -1142,6 +1268,7 @@ SurfacePoint Geometry::surface(const Hit& hit) const {
   sp.material = inst.material_for(slot_of(m, t));
   sp.instance = hit.instance;
   sp.primitive = t;
+  sp.touching = touches(hit.instance, t, sp.p);
   return sp;
 }
 

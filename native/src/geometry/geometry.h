@@ -4,6 +4,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -231,10 +232,22 @@ class Geometry {
   bool intersect_instance(const Ray& ray, int instance, Hit* hit) const;
   // The hit's surface at the hit's time.
   SurfacePoint surface(const Hit& hit) const;
+  // Whether the triangle touches another object's at p (find_contacts: in the box where they
+  // overlap).
+  bool touches(int instance, int primitive, const Vec3& p) const {
+    const auto& c = contacts_[size_t(instance)];
+    if (c.empty()) return false;
+    const auto it = std::lower_bound(c.begin(), c.end(), primitive,
+                                     [](const std::pair<int, Bounds>& e, int prim) { return e.first < prim; });
+    if (it == c.end() || it->first != primitive) return false;
+    const Bounds& b = it->second;
+    return p.x >= b.lo.x && p.y >= b.lo.y && p.z >= b.lo.z && p.x <= b.hi.x && p.y <= b.hi.y && p.z <= b.hi.z;
+  }
   // The hit's material alone (surface(hit).material): whether a point needs shading at all is
   // asked before its surface is worked out (an opaque occluder of a shadow ray, a medium boundary).
   int material(const Hit& hit) const;
-  // The origin of a next-event shadow ray from sp towards wi: spawn_origin, moved first by the
+  // The origin of a next-event shadow ray from sp towards wi (the ray skips what hit.h's
+  // skip_self says): leave_origin, or spawn_origin from the point moved first by the
   // instance's shadow terminator Geometry Offset on smooth-shaded triangles (Cycles'
   // shadow_ray_offset, geometry/terminator.h). n, ng: the shading normal (after a displacement's
   // bump) and geometric normal facing the incoming ray (Cycles' sd->N, sd->Ng). *moved: whether
@@ -305,6 +318,12 @@ class Geometry {
   size_t motion_instances_ = 0, motion_meshes_ = 0;
   uint64_t generation_;  // pose()'s per-thread cache key: new for each geometry and edit
   void build_top();
+  // The triangles that lie in another object's triangle's plane and overlap it (in contact: a
+  // glass resting on a table, the table under it), per instance (empty: none), sorted by
+  // primitive, each with the box where they overlap; rays leaving them there meet what touches
+  // them (hit.h, leave). Found at each top-level build (find_contacts).
+  std::vector<std::vector<std::pair<int, Bounds>>> contacts_;
+  void find_contacts();
   // steps sets of positions (vertex_count each, step by step): Embree's vertex motion, from
   // every stride-th step.
   RTCScene triangle_scene(const std::vector<Vec3>& positions, const std::vector<uint32_t>& indices, int steps = 1,

@@ -482,7 +482,7 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       min_pdf = std::min(min_pdf, pdf_dir);
       if (mode == Mode::Radiance && count == 2) first_walk_.set_volume();
       visibility = kVisDiffuse;
-      ray.o = mi.p;
+      start_at(mi.p, &ray);
     } else {
       BsdfSample bs;
       float u_lobe = sampler_.next_1d();
@@ -519,7 +519,8 @@ int Bdpt::random_walk(Ray ray, Spectrum beta, int max_depth, Mode mode, VolumeSt
       if (!is_transparent(bs.flags, bs.eta)) visibility = visibility_of(bs.flags);
       if (media_ && !reflect_geo) cross_boundary(scene_, sp, wi, &stack);  // into / out of a medium
       footprint += (hit.t - ray.tmin) * length(ray.d) * cs_.dD;
-      ray.o = spawn_origin(sp, wi);
+      ray.d = wi;
+      leave(sp, &ray);
     }
     ray.d = wi;
     ray.tmin = 0;
@@ -757,7 +758,9 @@ Spectrum Bdpt::connect(std::vector<PathVertex>& light, std::vector<PathVertex>& 
         pt.type == VertexType::Surface ? scene_.geometry.shadow_origin(pt.sp, pt.ns, pt.n, ls.wi, &offset) : pt.p;
     Spectrum c = pt.beta * f_cos(pt, ls.wi, Mode::Radiance, excluded_kinds(sampled.vis), offset) * sampled.beta;
     if (is_black(c)) return c;
-    c *= transmittance(pt, shadow_ray(origin, ls, time_), kVisShadow);
+    Ray shadow = shadow_ray(origin, ls, time_);
+    if (pt.type == VertexType::Surface) skip_self(pt.sp, &shadow);
+    c *= transmittance(pt, shadow, kVisShadow);
     if (is_black(c)) return c;
     sampled.pdf_fwd = pdf_light_origin(sampled, pt);
     if (s_.light_passes && t == 2) first_connect_ = split_at(pt, ls.wi);

@@ -213,9 +213,10 @@ class Bdpt {
     float dist = length(d);
     if (!(dist > 0)) return Spectrum(0.0f);
     r.d = d / dist;
-    r.o = a.type == VertexType::Surface ? spawn_origin(a.sp, r.d) : a.p;
+    r.o = a.type == VertexType::Surface ? leave_origin(a.sp, r.d) : a.p;
     r.tmin = 0;
     if (!b.infinite) r = spawn_ray_to(r.o, b.type == VertexType::Surface ? spawn_origin(b.sp, -r.d) : b.p, time_);
+    if (a.type == VertexType::Surface) skip_self(a.sp, &r);
     return transmittance(a, r, visibility);
   }
   // The same along a ray leaving a: a's volume stack is the side a was reached from. `visibility`:

@@ -79,8 +79,8 @@ Spectrum ambient_occlusion(const Scene& scene, const IntegratorSettings& s, cons
   sampler.next_1d();
   const Vec3 d = Frame(n).to_world(sample_cosine_hemisphere(sampler.next_2d()));
   Ray ray;
-  ray.o = spawn_origin(sp, d);
   ray.d = d;
+  leave(sp, &ray);
   ray.tmin = 0;
   ray.tmax = s.ao_distance;
   ray.time = sp.time;

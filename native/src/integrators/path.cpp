@@ -139,7 +139,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
     float scatter_pdf;
     Spectrum fv = f(ls.wi, &scatter_pdf, excluded_kinds(scene.light_visibility(li)), offset);
     if (is_black(fv)) return;
-    const Ray shadow = shadow_ray(origin, ls, time);
+    Ray shadow = shadow_ray(origin, ls, time);
+    if (sp) skip_self(*sp, &shadow);
     Spectrum T(1.0f);
     if constexpr (kMedia) {
       VolumeStack shadow_stack = st;
@@ -232,7 +233,7 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
         prev_p = mi.p;
         prev_n = Vec3(0.0f);
         t_prev = 0;
-        ray.o = mi.p;
+        start_at(mi.p, &ray);
         ray.d = wi;
         ray.tmin = 0;
         ray.tmax = INFINITY;
@@ -415,8 +416,8 @@ SampleValue trace(const Scene& scene, const Camera& camera, const IntegratorSett
           prev_n = ng;
           t_prev = 0;
           footprint = footprint_here;
-          ray.o = spawn_origin(sp, wi);
           ray.d = wi;
+          leave(sp, &ray);
           ray.tmin = 0;
           ray.tmax = INFINITY;
           alive = true;
