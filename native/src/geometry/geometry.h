@@ -235,6 +235,7 @@ class Geometry {
   // Whether the triangle touches another object's at p (find_contacts: in the box where they
   // overlap).
   bool touches(int instance, int primitive, const Vec3& p) const {
+    if (size_t(instance) >= contacts_.size()) return false;  // before the first commit
     const auto& c = contacts_[size_t(instance)];
     if (c.empty()) return false;
     const auto it = std::lower_bound(c.begin(), c.end(), primitive,
