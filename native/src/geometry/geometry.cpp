@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <unordered_map>
 
 #include "core/error.h"
 #include "geometry/terminator.h"
@@ -792,74 +791,68 @@ void Geometry::build_top() {
 }
 
 // Triangles of different still instances in one plane whose extents overlap there (their boxes
-// in the plane's two widest axes, shrunk by the tolerance so that tiles meeting at an edge do not
-// count): world-space planes hashed by their normal (to 1e-4) and offset (to 1e-5 of the scene's
-// size, with the next cell), then swept along one axis. Linear in the triangles but for planes
-// many objects share. A moving or deforming object is not looked at (its rays keep the offset).
+// in the plane's other two axes, shrunk by the tolerance so that tiles meeting at an edge do not
+// count): world-space triangles keyed by their plane's normal (to 1e-4) and offset (to 1e-5 of the
+// scene's size), sorted by key, each key's run swept along one axis with the next key's (a plane
+// rounded across the offset cell's edge). A moving or deforming object is not looked at (its rays
+// keep the offset).
 void Geometry::find_contacts() {
   contacts_.assign(instances_.size(), {});
   struct Tri {
-    int instance, prim;
-    float lo[2], hi[2];
-    Bounds box;  // in world space
+    uint64_t key;
+    int instance, prim, axis;  // axis: the normal's largest component
+    Bounds box;                // in world space
   };
   const float scale = std::max(1.0f, length(bounds_.hi - bounds_.lo)), tol = 1e-5f * scale;
-  std::unordered_map<uint64_t, std::vector<Tri>> planes;
-  const auto key = [](int axis, const Vec3& n, long d) {
-    uint64_t k = uint64_t(axis);
-    for (int i = 0; i < 3; ++i) k = k * 20011u + uint64_t(int64_t(std::lround(n[i] * 1e4f)) + 10001);
-    return k * 1000003u + uint64_t(d);
-  };
+  std::vector<Tri> tris;
+  size_t count = 0;
+  for (const Instance& inst : instances_) count += meshes_[inst.mesh].triangle_count();
+  tris.reserve(count);
   for (size_t i = 0; i < instances_.size(); ++i) {
     const Instance& inst = instances_[i];
     const Mesh& m = meshes_[inst.mesh];
     if (!m.rtc || !m.is_triangles() || !inst.motion.empty() || m.motion_steps > 1 || !finite_transform(inst.xf))
       continue;
     for (size_t t = 0; t < m.triangle_count(); ++t) {
-      const Vec3 p0 = inst.xf.point(m.positions[m.indices[3 * t]]),
-                 p1 = inst.xf.point(m.positions[m.indices[3 * t + 1]]),
-                 p2 = inst.xf.point(m.positions[m.indices[3 * t + 2]]);
-      Vec3 n = cross(p1 - p0, p2 - p0);
+      Tri tri{0, int(i), int(t), 0, Bounds()};
+      Vec3 p[3];
+      for (int k = 0; k < 3; ++k) tri.box.extend(p[k] = inst.xf.point(m.positions[m.indices[3 * t + size_t(k)]]));
+      Vec3 n = cross(p[1] - p[0], p[2] - p[0]);
       const float len = length(n);
       if (!(len > 0) || !is_finite(n)) continue;
       n = n / len;
-      int axis = 0;  // the normal's largest component, made positive: one key for both windings
       for (int k = 1; k < 3; ++k)
-        if (std::abs(n[k]) > std::abs(n[axis])) axis = k;
-      if (n[axis] < 0) n = -n;
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      Tri tri{int(i),
-              int(t),
-              {std::min({p0[u], p1[u], p2[u]}) + tol, std::min({p0[v], p1[v], p2[v]}) + tol},
-              {std::max({p0[u], p1[u], p2[u]}) - tol, std::max({p0[v], p1[v], p2[v]}) - tol},
-              Bounds()};
-      tri.box.extend(p0);
-      tri.box.extend(p1);
-      tri.box.extend(p2);
-      if (!(tri.lo[0] < tri.hi[0] && tri.lo[1] < tri.hi[1])) continue;
-      const double d = double(dot(n, p0)) / double(tol);
+        if (std::abs(n[k]) > std::abs(n[tri.axis])) tri.axis = k;
+      if (n[tri.axis] < 0) n = -n;  // one key for both windings
+      const double d = double(dot(n, p[0])) / double(tol);
       if (!(std::abs(d) < 1e15)) continue;
-      planes[key(axis, n, long(std::floor(d)))].push_back(tri);
+      uint64_t key = uint64_t(tri.axis);
+      for (int k = 0; k < 3; ++k) key = key * 20011u + uint64_t(std::lround(n[k] * 1e4f) + 10001);
+      tri.key = key * 1000003u + uint64_t(int64_t(std::floor(d)));  // the next offset cell: key + 1
+      tris.push_back(tri);
     }
   }
+  std::sort(tris.begin(), tris.end(), [](const Tri& a, const Tri& b) { return a.key < b.key; });
   std::vector<std::pair<std::pair<int, int>, Bounds>> found;  // (instance, primitive), where
-  for (auto& [k, tris] : planes) {
-    // A plane's triangles and the next offset cell's (a plane rounded across the cell's edge).
-    const uint64_t next = k + 1;
-    std::vector<Tri> all = tris;
-    const auto it = planes.find(next);
-    if (it != planes.end()) all.insert(all.end(), it->second.begin(), it->second.end());
-    if (all.size() < 2) continue;
-    std::sort(all.begin(), all.end(), [](const Tri& a, const Tri& b) { return a.lo[0] < b.lo[0]; });
-    for (size_t a = 0; a < all.size(); ++a)
-      for (size_t b = a + 1; b < all.size() && all[b].lo[0] < all[a].hi[0]; ++b) {
-        if (all[a].instance == all[b].instance) continue;
-        if (all[b].lo[1] >= all[a].hi[1] || all[a].lo[1] >= all[b].hi[1]) continue;
+  std::vector<Tri> run;
+  for (size_t a = 0, b; a < tris.size(); a = b) {
+    for (b = a + 1; b < tris.size() && tris[b].key == tris[a].key;) ++b;
+    size_t c = b;
+    while (c < tris.size() && tris[c].key == tris[a].key + 1) ++c;
+    if (c - a < 2) continue;
+    run.assign(tris.begin() + long(a), tris.begin() + long(c));
+    const int u = (run[0].axis + 1) % 3, v = (run[0].axis + 2) % 3;
+    std::sort(run.begin(), run.end(), [u](const Tri& x, const Tri& y) { return x.box.lo[u] < y.box.lo[u]; });
+    for (size_t x = 0; x < run.size(); ++x)
+      for (size_t y = x + 1; y < run.size() && run[y].box.lo[u] + tol < run[x].box.hi[u] - tol; ++y) {
+        const Tri &p = run[x], &q = run[y];
+        if (p.instance == q.instance || p.axis != q.axis) continue;
+        if (!(std::max(p.box.lo[v], q.box.lo[v]) + tol < std::min(p.box.hi[v], q.box.hi[v]) - tol)) continue;
         Bounds where;  // the two boxes' overlap, grown by the tolerance
-        where.lo = vmax(all[a].box.lo, all[b].box.lo) - Vec3(tol);
-        where.hi = vmin(all[a].box.hi, all[b].box.hi) + Vec3(tol);
-        found.push_back({{all[a].instance, all[a].prim}, where});
-        found.push_back({{all[b].instance, all[b].prim}, where});
+        where.lo = vmax(p.box.lo, q.box.lo) - Vec3(tol);
+        where.hi = vmin(p.box.hi, q.box.hi) + Vec3(tol);
+        found.push_back({{p.instance, p.prim}, where});
+        found.push_back({{q.instance, q.prim}, where});
       }
   }
   std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });

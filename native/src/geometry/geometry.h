@@ -153,6 +153,9 @@ struct Bounds {
     hi = vmax(hi, p);
   }
   bool empty() const { return lo.x > hi.x; }
+  bool contains(const Vec3& p) const {
+    return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= hi.x && p.y <= hi.y && p.z <= hi.z;
+  }
 };
 
 // Embree 3 traverses only rays whose origin and direction components lie within FLT_LARGE
@@ -240,9 +243,7 @@ class Geometry {
     if (c.empty()) return false;
     const auto it = std::lower_bound(c.begin(), c.end(), primitive,
                                      [](const std::pair<int, Bounds>& e, int prim) { return e.first < prim; });
-    if (it == c.end() || it->first != primitive) return false;
-    const Bounds& b = it->second;
-    return p.x >= b.lo.x && p.y >= b.lo.y && p.z >= b.lo.z && p.x <= b.hi.x && p.y <= b.hi.y && p.z <= b.hi.z;
+    return it != c.end() && it->first == primitive && it->second.contains(p);
   }
   // The hit's material alone (surface(hit).material): whether a point needs shading at all is
   // asked before its surface is worked out (an opaque occluder of a shadow ray, a medium boundary).
